@@ -1,0 +1,60 @@
+# One-command set-up, tests, demo and benchmarks (Debian 12, run as root).
+#   make demo   installs what is missing, builds, runs the main demo
+#   make test   installs what is missing, builds, runs the C++ and Python tests
+SHELL := /bin/bash
+.ONESHELL:
+.SHELLFLAGS := -euo pipefail -c
+
+VENV    := .venv
+PY      := $(VENV)/bin/python
+DEBS    := python3-dolfinx python3-petsc4py python3-mpi4py python3-gmsh \
+           python3-scipy python3-sympy python3-matplotlib python3-pytest \
+           python3-pybind11 pybind11-dev libeigen3-dev libgtest-dev cmake g++ make \
+           python3-venv python3-setuptools python3-wheel python3-pip python3-tqdm \
+           python3-slepc4py openmpi-bin
+CXX_BUILD := build/cpp
+SOURCES := $(wildcard bem_cpp/src/*.cpp bem_cpp/include/bem/*.hpp) bem_cpp/bindings.cpp setup.py pyproject.toml
+
+.PHONY: setup debs venv build test test-cpp test-py demo bench study clean
+
+setup: debs build
+
+debs:
+	missing=$$(for p in $(DEBS); do dpkg-query -W -f='$${Status}\n' $$p 2>/dev/null | grep -q "install ok installed" || echo $$p; done)
+	if [ -n "$$missing" ]; then
+	  echo "installing Debian packages:" $$missing
+	  export DEBIAN_FRONTEND=noninteractive
+	  apt-get update -q
+	  apt-get install -y -q --no-install-recommends $$missing
+	fi
+
+$(PY):
+	/usr/bin/python3 -m venv --system-site-packages $(VENV)
+
+venv: $(PY)
+
+# Editable install; the stamp is rebuilt whenever a C++ source or the build files change.
+$(VENV)/.built: $(PY) $(SOURCES)
+	$(PY) -m pip install --no-build-isolation --no-deps --no-index -q -e .
+	touch $@
+
+build: debs $(VENV)/.built
+
+test: setup test-cpp test-py
+
+test-cpp:
+	cmake -S bem_cpp -B $(CXX_BUILD) -DCMAKE_BUILD_TYPE=Release > /dev/null
+	cmake --build $(CXX_BUILD) -j 2 > /dev/null
+	ctest --test-dir $(CXX_BUILD) --output-on-failure
+
+test-py:
+	$(PY) -m pytest -q
+
+demo: setup
+	$(PY) demos/demo_signorini_square.py
+
+bench: setup
+	$(PY) bench/bem_assembly.py
+
+clean:
+	rm -rf build $(VENV) *.egg-info bem_cpp/*.so

@@ -1,0 +1,5 @@
+#pragma once
+namespace bem {
+/// Library version string.
+const char* version();
+}  // namespace bem

@@ -1,0 +1,4 @@
+#include "bem/version.hpp"
+namespace bem {
+const char* version() { return "0.1.0"; }
+}  // namespace bem

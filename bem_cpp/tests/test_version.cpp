@@ -1,0 +1,3 @@
+#include <gtest/gtest.h>
+#include "bem/version.hpp"
+TEST(Version, NonEmpty) { EXPECT_STRNE(bem::version(), ""); }

@@ -1,0 +1,1 @@
+"""DOLFINx side of the coupling: geometry, materials, expressions, interior forms, boundary map."""

@@ -1,0 +1,24 @@
+"""Build of the compiled part of bem_cpp (``bem_cpp._bem``).
+
+Everything else lives in pyproject.toml. The C++ sources are globbed so that the
+CMake build of the GoogleTest suite (bem_cpp/CMakeLists.txt) and this build always
+compile the same files.
+"""
+from pathlib import Path
+
+from pybind11.setup_helpers import Pybind11Extension, build_ext
+from setuptools import setup
+
+root = Path(__file__).parent
+sources = sorted(str(p.relative_to(root)) for p in (root / "bem_cpp" / "src").glob("*.cpp"))
+
+bem = Pybind11Extension(
+    "bem_cpp._bem",
+    ["bem_cpp/bindings.cpp", *sources],
+    include_dirs=["bem_cpp/include", "/usr/include/eigen3"],
+    cxx_std=17,
+    extra_compile_args=["-O3", "-fopenmp", "-DNDEBUG"],
+    extra_link_args=["-fopenmp"],
+)
+
+setup(ext_modules=[bem], cmdclass={"build_ext": build_ext})
