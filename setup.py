@@ -19,6 +19,10 @@ bem = Pybind11Extension(
     cxx_std=17,
     extra_compile_args=["-O3", "-fopenmp", "-DNDEBUG"],
     extra_link_args=["-fopenmp"],
+    # Dense Cholesky, triangular solve and rank-k update of S_h (bem/linear_algebra.hpp)
+    # call LAPACK/BLAS directly; on Debian these resolve to OpenBLAS (libopenblas-dev).
+    # libmvec (glibc) provides the vector log of the far-field kernel (src/far_field.cpp).
+    libraries=["lapack", "blas", "mvec"],
 )
 
 setup(ext_modules=[bem], cmdclass={"build_ext": build_ext})

@@ -1,8 +1,49 @@
 // pybind11 bindings of the bem_cpp core: no logic and no defaults here; those live
-// in the Python wrapper bem_cpp/__init__.py.
+// in the Python wrapper bem_cpp/__init__.py. Eigen::Ref arguments map C-contiguous
+// float64 numpy arrays without copies; matrices are returned by value (moved).
+#include <pybind11/eigen.h>
 #include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include "bem/operators.hpp"
+#include "bem/potentials.hpp"
+#include "bem/steklov_poincare.hpp"
 #include "bem/version.hpp"
+
 namespace py = pybind11;
+using bem::Points;
+using bem::Space;
+using bem::Vector;
+using NodesRef = const Eigen::Ref<const Points>&;
+using VectorRef = const Eigen::Ref<const Vector>&;
+using Release = py::call_guard<py::gil_scoped_release>;
+
 PYBIND11_MODULE(_bem, m) {
+  m.doc() = "Compiled core of bem_cpp; use the documented wrappers in bem_cpp.";
+  py::enum_<Space>(m, "Space").value("P0", Space::P0).value("P1", Space::P1);
+  py::class_<bem::StageTimes>(m, "StageTimes")
+      .def_readonly("assembly", &bem::StageTimes::assembly)
+      .def_readonly("cholesky", &bem::StageTimes::cholesky)
+      .def_readonly("triangular_solve", &bem::StageTimes::triangular_solve)
+      .def_readonly("rank_update", &bem::StageTimes::rank_update);
+
   m.def("version", &bem::version);
+  m.def("single_layer", py::overload_cast<NodesRef, Space>(&bem::single_layer), py::arg("nodes"),
+        py::arg("space"), Release());
+  m.def("double_layer", py::overload_cast<NodesRef, Space>(&bem::double_layer), py::arg("nodes"),
+        py::arg("space"), Release());
+  m.def("hypersingular", py::overload_cast<NodesRef>(&bem::hypersingular), py::arg("nodes"), Release());
+  m.def("mass", py::overload_cast<NodesRef, Space>(&bem::mass), py::arg("nodes"), py::arg("space"),
+        Release());
+  m.def("steklov_poincare", py::overload_cast<NodesRef, Space>(&bem::steklov_poincare),
+        py::arg("nodes"), py::arg("flux"), Release());
+  m.def("steklov_poincare_timed", &bem::steklov_poincare_timed, py::arg("nodes"), py::arg("flux"),
+        Release());
+  m.def("exterior_flux", py::overload_cast<NodesRef, VectorRef, double, Space>(&bem::exterior_flux),
+        py::arg("nodes"), py::arg("dirichlet"), py::arg("a"), py::arg("flux"), Release());
+  m.def("exterior_potential",
+        py::overload_cast<NodesRef, VectorRef, VectorRef, NodesRef, double, Space>(
+            &bem::exterior_potential),
+        py::arg("nodes"), py::arg("dirichlet"), py::arg("flux_coefficients"), py::arg("points"),
+        py::arg("a"), py::arg("flux"), Release());
 }

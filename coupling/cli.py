@@ -1,18 +1,139 @@
-"""Command line ``fembem``."""
+"""Command line ``fembem``.
+
+Exit codes: 0 success, 1 a check failed (check-jacobian), 2 bad input (one line on
+stderr naming the problem and the fix; a traceback only with --debug), 3 the solver
+did not converge (outputs are still written).
+"""
 from __future__ import annotations
 
 import argparse
+import json
 import sys
+from pathlib import Path
+
+import numpy as np
+
+EXIT_OK, EXIT_CHECK_FAILED, EXIT_BAD_INPUT, EXIT_NOT_CONVERGED = 0, 1, 2, 3
 
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="fembem",
         description="Nonlinear FEM-BEM coupling with Signorini contact, solved by the "
-        "preconditioned projection-gradient method (Hu & Yu, Sci China Math 2010).",
+        "preconditioned projection-gradient method with a substructuring preconditioner "
+        "(Hu & Yu, Sci China Math 2010). Run under mpirun for MPI.",
     )
-    parser.add_subparsers(dest="command", metavar="COMMAND")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+
+    def common(p: argparse.ArgumentParser) -> None:
+        p.add_argument("--set", action="append", default=[], metavar="SECTION.KEY=VALUE",
+                       help="override a configuration key (TOML value; repeatable)")
+        p.add_argument("--debug", action="store_true", help="show tracebacks on errors")
+
+    solve = sub.add_parser("solve", help="solve the problem of a TOML configuration",
+                           description="Solve the coupled problem described by CONFIG "
+                           "and write summary.json, fields.npz, solution.xdmf and plots.")
+    solve.add_argument("config", metavar="CONFIG.toml")
+    solve.add_argument("--out", metavar="DIR", help="output folder (default: [output] dir)")
+    solve.add_argument("--force", action="store_true", help="overwrite a non-empty DIR")
+    solve.add_argument("--quiet", action="store_true", help="no progress lines")
+    common(solve)
+
+    ext = sub.add_parser("exterior", help="u_e at exterior points from a finished run",
+                         description="Evaluate the exterior solution u_e at the points of "
+                         "a CSV file (two columns x, y; an optional header line) by the "
+                         "representation formula, from the fields.npz of RESULT_DIR.")
+    ext.add_argument("result_dir", metavar="RESULT_DIR")
+    ext.add_argument("--points", required=True, metavar="FILE.csv")
+    ext.add_argument("--out", metavar="FILE.csv", help="write x,y,ue here (default: stdout)")
+    ext.add_argument("--debug", action="store_true", help="show tracebacks on errors")
+
+    check = sub.add_parser("check-jacobian",
+                           help="compare the UFL and handwritten Jacobians (Taylor test)",
+                           description="Assemble both Jacobians of the interior energy at "
+                           "several smooth random states; exit 0 when they agree to 1e-10 "
+                           "relative and the Taylor remainder slope is 2 +- 0.1, else 1.")
+    check.add_argument("config", metavar="CONFIG.toml")
+    check.add_argument("--json", action="store_true", help="print the report as JSON")
+    common(check)
     return parser
+
+
+def _solve(args: argparse.Namespace) -> int:
+    from mpi4py import MPI
+
+    from coupling.config import load_config
+    from coupling.outputs import prepare_output_dir, write_outputs
+    from coupling.problem import problem_from_config
+
+    comm = MPI.COMM_WORLD
+    config = load_config(args.config, args.set)
+    out = Path(args.out if args.out is not None else config["output"]["dir"])
+    prepare_output_dir(comm, out, force=args.force)
+    problem = problem_from_config(comm, config)
+    result = problem.solve(progress=not args.quiet)
+    write_outputs(comm, out, problem, result, config)
+    if comm.rank == 0 and not args.quiet:
+        state = "converged" if result.converged else "did NOT converge"
+        print(f"fembem: {state} after {result.iterations} iterations ({result.reason}); "
+              f"outputs in {out}")
+    return EXIT_OK if result.converged else EXIT_NOT_CONVERGED
+
+
+def _read_points(path: Path) -> np.ndarray:
+    if not path.is_file():
+        raise FileNotFoundError(f"points file {str(path)!r} not found; give a CSV file of "
+                                "x,y rows")
+    lines = [ln for ln in path.read_text().splitlines() if ln.strip()]
+    if lines and not lines[0].lstrip()[0] in "+-.0123456789":
+        lines = lines[1:]
+    try:
+        points = np.array([[float(v) for v in ln.split(",")] for ln in lines], dtype=float)
+    except ValueError:
+        raise ValueError(f"{path}: every row must be two numbers x,y") from None
+    if points.ndim != 2 or points.shape[1] != 2 or not np.isfinite(points).all():
+        raise ValueError(f"{path}: every row must be two finite numbers x,y")
+    return points
+
+
+def _exterior(args: argparse.Namespace) -> int:
+    import bem_cpp
+    from coupling.outputs import load_fields
+
+    fields = load_fields(Path(args.result_dir))
+    points = _read_points(Path(args.points))
+    ue = bem_cpp.exterior_potential(fields["boundary_x"], fields["ue"], fields["dn_ue"],
+                                    points, a=float(fields["a"]),
+                                    flux=str(fields["flux_space"]))
+    table = "x,y,ue\n" + "".join(f"{x:.17g},{y:.17g},{v:.17g}\n" for (x, y), v in zip(points, ue))
+    if args.out:
+        out = Path(args.out)
+        tmp = out.with_name(f".{out.name}.tmp")
+        tmp.write_text(table)
+        tmp.replace(out)
+    else:
+        sys.stdout.write(table)
+    return EXIT_OK
+
+
+def _check_jacobian(args: argparse.Namespace) -> int:
+    from mpi4py import MPI
+
+    from coupling.config import load_config
+    from coupling.problem import domain_from_config, material_from_config
+    from fem_py.jacobian_check import check_jacobian
+
+    comm = MPI.COMM_WORLD
+    config = load_config(args.config, args.set)
+    domain = domain_from_config(comm, config)
+    report = check_jacobian(domain, material_from_config(config))
+    if comm.rank == 0:
+        if args.json:
+            print(json.dumps(report, indent=2, default=float))
+        else:
+            for key, value in report.items():
+                print(f"{key}: {value}")
+    return EXIT_OK if report["passed"] else EXIT_CHECK_FAILED
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -20,8 +141,19 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.command is None:
         parser.print_help()
-        return 0
-    return 0
+        return EXIT_OK
+    handler = {"solve": _solve, "exterior": _exterior,
+               "check-jacobian": _check_jacobian}[args.command]
+    try:
+        return handler(args)
+    except (ValueError, FileNotFoundError, FileExistsError, NotADirectoryError) as err:
+        if args.debug:
+            raise
+        from mpi4py import MPI
+        if MPI.COMM_WORLD.rank == 0:
+            message = str(err).splitlines()[0] if str(err) else type(err).__name__
+            print(f"fembem: error: {message}", file=sys.stderr)
+        return EXIT_BAD_INPUT
 
 
 if __name__ == "__main__":

@@ -1,0 +1,26 @@
+#pragma once
+// Thin wrappers of the dense LAPACK/BLAS kernels (dpotrf, dpotrs, dtrsm, dsyrk) used
+// by the Steklov-Poincare operator. They run on the row-major matrices in place;
+// OpenBLAS (what libblas.so.3/liblapack.so.3 point to) parallelises them.
+#include "bem/geometry.hpp"
+
+namespace bem {
+
+/// Cholesky factorisation V = L L^T in place (V symmetric, n x n, only its upper
+/// triangle is read). Returns 0 on success, otherwise the order k of the first leading
+/// minor that is not positive definite (LAPACK's info). Afterwards the buffer holds the
+/// factor in LAPACK's layout; use it only through the functions below.
+int cholesky_in_place(Matrix& V);
+
+/// b := V^{-1} b, with `factor` the output of cholesky_in_place(V).
+void cholesky_solve_in_place(const Matrix& factor, Vector& b);
+
+/// A := L^{-1} A (triangular solve with n right-hand sides), L L^T = V the Cholesky
+/// factorisation held in `factor`.
+void lower_solve_in_place(const Matrix& factor, Matrix& A);
+
+/// C := scale * (C + Y^T Y), computed on the upper triangle by a rank-k update and
+/// mirrored, so C is exactly symmetric on return (only C's upper triangle is read).
+void add_gram_symmetric(const Matrix& Y, double scale, Matrix& C);
+
+}  // namespace bem

@@ -1,0 +1,398 @@
+#include "bem/log_integrals.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <vector>
+
+namespace bem {
+
+namespace {
+
+GaussRule compute_gauss_legendre(int p) {
+  GaussRule rule;
+  rule.size = p;
+  const double pi = 3.14159265358979323846;
+  for (int i = 0; i < p; ++i) {
+    // Newton's method on P_p from the Tricomi initial guess (node i, descending in x).
+    double x = std::cos(pi * (i + 0.75) / (p + 0.5));
+    double dp = 1.0;
+    for (int it = 0; it < 100; ++it) {
+      double p0 = 1.0, p1 = x;
+      for (int k = 2; k <= p; ++k) {
+        const double p2 = ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p0) / k;
+        p0 = p1;
+        p1 = p2;
+      }
+      const double pp = p == 1 ? x : p1;
+      const double pm = p == 1 ? 1.0 : p0;
+      dp = p * (x * pp - pm) / (x * x - 1.0);
+      const double dx = pp / dp;
+      x -= dx;
+      if (std::abs(dx) <= 1e-17) break;
+    }
+    {  // derivative at the converged node for the weight
+      double p0 = 1.0, p1 = x;
+      for (int k = 2; k <= p; ++k) {
+        const double p2 = ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p0) / k;
+        p0 = p1;
+        p1 = p2;
+      }
+      const double pp = p == 1 ? x : p1;
+      const double pm = p == 1 ? 1.0 : p0;
+      dp = p * (x * pp - pm) / (x * x - 1.0);
+    }
+    // Map [-1, 1] -> [0, 1]: ascending nodes, weights summing to 1.
+    rule.x[static_cast<std::size_t>(i)] = 0.5 * (1.0 - x);
+    rule.w[static_cast<std::size_t>(i)] = 1.0 / ((1.0 - x * x) * dp * dp);
+  }
+  return rule;
+}
+
+/// Thresholds y_p = (rho_p - 1/rho_p)/2 with rho_p = tol^(-1/(2p)): p points suffice
+/// when y = 2 distance/length >= y_p.
+struct Thresholds {
+  std::array<double, kMaxGaussPoints + 1> y{};
+  Thresholds() {
+    for (int p = 1; p <= kMaxGaussPoints; ++p) {
+      const double rho = std::pow(kQuadratureTolerance, -1.0 / (2.0 * p));
+      y[static_cast<std::size_t>(p)] = 0.5 * (rho - 1.0 / rho);
+    }
+  }
+};
+
+const Thresholds& thresholds() {
+  static const Thresholds t;
+  return t;
+}
+
+/// int_0^a s^q log s ds.
+double power_log_integral(int q, double a) {
+  const double q1 = q + 1.0;
+  return std::pow(a, q1) / q1 * (std::log(a) - 1.0 / q1);
+}
+
+void clear(double (&m)[2][2]) { m[0][0] = m[0][1] = m[1][0] = m[1][1] = 0.0; }
+
+/// Outer integration over panel `outer` of f(s, w) (s the local coordinate, w the
+/// weight including the length) for an inner integral over `inner`: the panel is
+/// bisected until each piece is at least its own length away from `inner`, then each
+/// piece gets the Gauss rule that the distance/length ratio requires.
+template <class F>
+void near_outer(const Panel& outer, const Panel& inner, F&& f) {
+  struct Piece {
+    double s0, s1;
+    int depth;
+  };
+  Piece stack[128];
+  int top = 0;
+  stack[top++] = {0.0, outer.h, 0};
+  while (top > 0) {
+    const Piece piece = stack[--top];
+    const double len = piece.s1 - piece.s0;
+    const Panel sub = make_panel(outer.a + piece.s0 * outer.t, outer.a + piece.s1 * outer.t);
+    const double dist = distance(sub, inner);
+    if (dist < len && piece.depth < 60) {
+      const double mid = 0.5 * (piece.s0 + piece.s1);
+      stack[top++] = {piece.s0, mid, piece.depth + 1};
+      stack[top++] = {mid, piece.s1, piece.depth + 1};
+      continue;
+    }
+    int p = gauss_points_for(dist, len, kMaxGaussPoints);
+    if (p == 0) p = kMaxGaussPoints;
+    const GaussRule& g = gauss_legendre(p);
+    for (int q = 0; q < p; ++q)
+      f(piece.s0 + len * g.x[static_cast<std::size_t>(q)], len * g.w[static_cast<std::size_t>(q)]);
+  }
+}
+
+template <int P, bool WithK>
+void far_blocks_fixed(const Panel& pi, const Panel& pj, PairBlocks& out) {
+  const GaussRule& g = gauss_legendre(P);
+  double si[P], tj[P], wi0[P], wi1[P], wj0[P], wj1[P];
+  for (int q = 0; q < P; ++q) {
+    const double x = g.x[static_cast<std::size_t>(q)], w = g.w[static_cast<std::size_t>(q)];
+    si[q] = x * pi.h;
+    tj[q] = x * pj.h;
+    wi0[q] = w * (1.0 - x) * pi.h;
+    wi1[q] = w * x * pi.h;
+    wj0[q] = w * (1.0 - x) * pj.h;
+    wj1[q] = w * x * pj.h;
+  }
+  const Vec2 d0 = pi.a - pj.a;
+  // Numerators as affine functions of the local coordinate: accurate even when tiny.
+  const double dj0 = dot(d0, pj.n), dj1 = dot(pi.t, pj.n);   // (x - a_j).n_j
+  const double di0 = -dot(d0, pi.n), di1 = dot(pj.t, pi.n);  // (y - a_i).n_i
+  double v00 = 0, v01 = 0, v10 = 0, v11 = 0;
+  double k00 = 0, k01 = 0, k10 = 0, k11 = 0;
+  double q0[P] = {}, q1[P] = {};
+  for (int a = 0; a < P; ++a) {
+    const Vec2 xa = d0 + si[a] * pi.t;
+    double g0 = 0, g1 = 0, c0 = 0, c1 = 0;
+    for (int b = 0; b < P; ++b) {
+      const double rx = xa.x - tj[b] * pj.t.x, ry = xa.y - tj[b] * pj.t.y;
+      const double r2 = rx * rx + ry * ry;
+      const double f = 0.5 * std::log(r2);
+      g0 += wj0[b] * f;
+      g1 += wj1[b] * f;
+      if constexpr (WithK) {
+        const double inv = 1.0 / r2;
+        c0 += wj0[b] * inv;
+        c1 += wj1[b] * inv;
+        q0[b] += wi0[a] * inv;
+        q1[b] += wi1[a] * inv;
+      }
+    }
+    v00 += wi0[a] * g0;
+    v01 += wi0[a] * g1;
+    v10 += wi1[a] * g0;
+    v11 += wi1[a] * g1;
+    if constexpr (WithK) {
+      const double dj = dj0 + si[a] * dj1;
+      k00 += wi0[a] * dj * c0;
+      k01 += wi0[a] * dj * c1;
+      k10 += wi1[a] * dj * c0;
+      k11 += wi1[a] * dj * c1;
+    }
+  }
+  out.v[0][0] = v00;
+  out.v[0][1] = v01;
+  out.v[1][0] = v10;
+  out.v[1][1] = v11;
+  if constexpr (WithK) {
+    out.kij[0][0] = k00;
+    out.kij[0][1] = k01;
+    out.kij[1][0] = k10;
+    out.kij[1][1] = k11;
+    double m00 = 0, m01 = 0, m10 = 0, m11 = 0;
+    for (int b = 0; b < P; ++b) {
+      const double di = di0 + tj[b] * di1;
+      m00 += wj0[b] * di * q0[b];
+      m01 += wj0[b] * di * q1[b];
+      m10 += wj1[b] * di * q0[b];
+      m11 += wj1[b] * di * q1[b];
+    }
+    out.kji[0][0] = m00;
+    out.kji[0][1] = m01;
+    out.kji[1][0] = m10;
+    out.kji[1][1] = m11;
+  }
+}
+
+template <bool WithK>
+void far_blocks_dispatch(const Panel& pi, const Panel& pj, int p, PairBlocks& out) {
+  switch (p) {
+    case 1: return far_blocks_fixed<1, WithK>(pi, pj, out);
+    case 2: return far_blocks_fixed<2, WithK>(pi, pj, out);
+    case 3: return far_blocks_fixed<3, WithK>(pi, pj, out);
+    case 4: return far_blocks_fixed<4, WithK>(pi, pj, out);
+    case 5: return far_blocks_fixed<5, WithK>(pi, pj, out);
+    case 6: return far_blocks_fixed<6, WithK>(pi, pj, out);
+    case 7: return far_blocks_fixed<7, WithK>(pi, pj, out);
+    case 8: return far_blocks_fixed<8, WithK>(pi, pj, out);
+    case 10: return far_blocks_fixed<10, WithK>(pi, pj, out);
+    case 12: return far_blocks_fixed<12, WithK>(pi, pj, out);
+    case 16: return far_blocks_fixed<16, WithK>(pi, pj, out);
+    case 20: return far_blocks_fixed<20, WithK>(pi, pj, out);
+    case 24: return far_blocks_fixed<24, WithK>(pi, pj, out);
+    default: throw std::invalid_argument("far_blocks: unsupported number of Gauss points");
+  }
+}
+
+}  // namespace
+
+const GaussRule& gauss_legendre(int p) {
+  static const std::vector<GaussRule> rules = [] {
+    std::vector<GaussRule> r(kMaxGaussPoints + 1);
+    for (int q = 1; q <= kMaxGaussPoints; ++q) r[static_cast<std::size_t>(q)] = compute_gauss_legendre(q);
+    return r;
+  }();
+  if (p < 1 || p > kMaxGaussPoints) throw std::invalid_argument("gauss_legendre: p out of range");
+  return rules[static_cast<std::size_t>(p)];
+}
+
+int gauss_points_for(double distance, double length, int max_points) {
+  const Thresholds& t = thresholds();
+  const double y = 2.0 * distance / length;
+  for (int p = 1; p <= max_points; ++p)
+    if (y >= t.y[static_cast<std::size_t>(p)]) return p;
+  return 0;
+}
+
+SegmentMoments segment_moments(Vec2 p, Vec2 a, Vec2 e, double h, Vec2 nu) {
+  const Vec2 q = p - a;
+  const double tau = dot(q, e), d = dot(q, nu);
+  const double u0 = -tau, u1 = h - tau;
+  const double r0s = u0 * u0 + d * d, r1s = u1 * u1 + d * d;
+  // r^2 log r^2 -> 0 and u log r^2 -> 0 at an endpoint (r = 0 forces u = d = 0).
+  const double l0 = r0s > 0 ? std::log(r0s) : 0.0;
+  const double l1 = r1s > 0 ? std::log(r1s) : 0.0;
+  // Signed angle subtended by the segment: atan2(cross, dot) of the vectors p->a, p->b.
+  const double theta = d != 0 ? std::atan2(d * h, d * d + u0 * u1) : 0.0;
+  SegmentMoments m;
+  // int (1/2) log(u^2 + d^2) du = (1/2) u log(u^2 + d^2) - u + d atan(u/d)
+  m.log0 = 0.5 * (u1 * l1 - u0 * l0) - h + d * theta;
+  // int (u + tau)(1/2) log(u^2 + d^2) du, with int u log(u^2+d^2)/2 = ((u^2+d^2) log(u^2+d^2) - u^2)/4
+  m.log1 = 0.25 * (r1s * l1 - r0s * l0 - h * (u1 + u0)) + tau * m.log0;
+  const double d_ell = d != 0 ? d * (l1 - l0) : 0.0;  // d log(r1^2/r0^2)
+  m.ang0 = theta;
+  m.ang1 = 0.5 * d_ell + tau * theta;
+  m.ang2 = d * h + tau * d_ell + (tau * tau - d * d) * theta;
+  return m;
+}
+
+void coincident_blocks(const Panel& p, PairBlocks& out) {
+  // int_0^1 int_0^1 log|s - t| phi_a(s) phi_b(t) = -7/16 (a = b), -5/16 (a != b);
+  // scaling by h adds (1/4) log h times h^2.
+  const double h2 = p.h * p.h, lh = std::log(p.h);
+  out.v[0][0] = out.v[1][1] = h2 * (0.25 * lh - 7.0 / 16.0);
+  out.v[0][1] = out.v[1][0] = h2 * (0.25 * lh - 5.0 / 16.0);
+  clear(out.kij);  // (x - y).n = 0 on a straight panel
+  clear(out.kji);
+}
+
+void adjacent_blocks(const Panel& pi, const Panel& pj, PairRelation relation, PairBlocks& out) {
+  // Common node O at the origin, x = s e1 on panel i (s in [0, a]), y = t e2 on
+  // panel j (t in [0, b]). Duffy split: t = r s w (r = b/a) on the triangle t <= r s
+  // and s = r' t w (r' = a/b) on the other one, w in [0, 1]. Then
+  //   log|x - y| = log s + (1/2) log|e1 - r w e2|^2   (and symmetrically),
+  // and every w-integral is a moment of a segment of length r seen from the point e1
+  // (or of length r' seen from e2), see segment_moments.
+  const bool i_vertex_at_end = relation == PairRelation::EndToStart;
+  const Vec2 e1 = i_vertex_at_end ? -1.0 * pi.t : pi.t;
+  const Vec2 e2 = i_vertex_at_end ? pj.t : -1.0 * pj.t;
+  const double a = pi.h, b = pj.h, r = b / a, rp = a / b;
+  const Vec2 origin{0.0, 0.0};
+  const SegmentMoments s1 = segment_moments(e1, origin, e2, r, rotate_cw(e2));
+  const SegmentMoments s2 = segment_moments(e2, origin, e1, rp, rotate_cw(e1));
+  const double s1log[2] = {s1.log0, s1.log1}, s2log[2] = {s2.log0, s2.log1};
+  const double s1ang[3] = {s1.ang0, s1.ang1, s1.ang2}, s2ang[3] = {s2.ang0, s2.ang1, s2.ang2};
+  // The normals of the panels are +-rotate_cw(e): the angle moments change sign with them.
+  const double sj = dot(pj.n, rotate_cw(e2)), si = dot(pi.n, rotate_cw(e1));
+
+  // Monomial moments: I[k][m] = int int s^k t^m log|x - y|,
+  // KIJ[k][m] = int int s^k t^m (x - y).n_j/|x - y|^2, KJI[k][m] = int int t^k s^m (y - x).n_i/|x - y|^2.
+  double I[2][2], KIJ[2][2], KJI[2][2];
+  for (int k = 0; k < 2; ++k)
+    for (int m = 0; m < 2; ++m) {
+      const int q = k + m + 1;
+      I[k][m] = std::pow(r, m + 1) * power_log_integral(q, a) / (m + 1) +
+                std::pow(a, q + 1) / (q + 1) * s1log[m] +
+                std::pow(rp, k + 1) * power_log_integral(q, b) / (k + 1) +
+                std::pow(b, q + 1) / (q + 1) * s2log[k];
+      // (x - y).n_j = s (e1.n_j): the kernel is homogeneous of degree -1, the Duffy
+      // Jacobian removes the singularity and leaves angle moments.
+      KIJ[k][m] = std::pow(a, q) / q * sj * s1ang[m] - std::pow(b, q) / q * sj * s2ang[k + 1];
+      KJI[k][m] = std::pow(b, q) / q * si * s2ang[m] - std::pow(a, q) / q * si * s1ang[k + 1];
+    }
+
+  // Shape functions as c0 + c1 * (distance from the common node).
+  const double ci[2][2] = {i_vertex_at_end ? 0.0 : 1.0, i_vertex_at_end ? 1.0 / a : -1.0 / a,
+                           i_vertex_at_end ? 1.0 : 0.0, i_vertex_at_end ? -1.0 / a : 1.0 / a};
+  const double cj[2][2] = {i_vertex_at_end ? 1.0 : 0.0, i_vertex_at_end ? -1.0 / b : 1.0 / b,
+                           i_vertex_at_end ? 0.0 : 1.0, i_vertex_at_end ? 1.0 / b : -1.0 / b};
+  for (int al = 0; al < 2; ++al)
+    for (int be = 0; be < 2; ++be) {
+      double v = 0, kij = 0, kji = 0;
+      for (int k = 0; k < 2; ++k)
+        for (int m = 0; m < 2; ++m) {
+          v += ci[al][k] * cj[be][m] * I[k][m];
+          kij += ci[al][k] * cj[be][m] * KIJ[k][m];
+          kji += cj[be][k] * ci[al][m] * KJI[k][m];
+        }
+      out.v[al][be] = v;
+      out.kij[al][be] = kij;
+      out.kji[be][al] = kji;
+    }
+}
+
+void near_blocks(const Panel& pi, const Panel& pj, bool with_k, PairBlocks& out) {
+  clear(out.v);
+  clear(out.kij);
+  clear(out.kji);
+  // Outer on panel i, analytic inner on panel j: v and kij.
+  near_outer(pi, pj, [&](double s, double w) {
+    const SegmentMoments m = segment_moments(pi.a + s * pi.t, pj.a, pj.t, pj.h, pj.n);
+    const double phi[2] = {w * (1.0 - s / pi.h), w * (s / pi.h)};
+    const double lg[2] = {m.log0 - m.log1 / pj.h, m.log1 / pj.h};
+    const double an[2] = {m.ang0 - m.ang1 / pj.h, m.ang1 / pj.h};
+    for (int al = 0; al < 2; ++al)
+      for (int be = 0; be < 2; ++be) {
+        out.v[al][be] += phi[al] * lg[be];
+        out.kij[al][be] += phi[al] * an[be];
+      }
+  });
+  if (!with_k) return;
+  // Outer on panel j, analytic inner on panel i: kji.
+  near_outer(pj, pi, [&](double t, double w) {
+    const SegmentMoments m = segment_moments(pj.a + t * pj.t, pi.a, pi.t, pi.h, pi.n);
+    const double phi[2] = {w * (1.0 - t / pj.h), w * (t / pj.h)};
+    const double an[2] = {m.ang0 - m.ang1 / pi.h, m.ang1 / pi.h};
+    for (int be = 0; be < 2; ++be)
+      for (int al = 0; al < 2; ++al) out.kji[be][al] += phi[be] * an[al];
+  });
+}
+
+void far_blocks(const Panel& pi, const Panel& pj, int p, bool with_k, PairBlocks& out) {
+  if (with_k)
+    far_blocks_dispatch<true>(pi, pj, p, out);
+  else
+    far_blocks_dispatch<false>(pi, pj, p, out);
+}
+
+int far_field_points(const Panel& pi, const Panel& pj) {
+  // Lower bound of the distance between the panels from their midpoints.
+  const Vec2 c = 0.5 * (pi.a + pi.b) - 0.5 * (pj.a + pj.b);
+  const double separation = std::sqrt(dot(c, c)) - 0.5 * (pi.h + pj.h);
+  return separation > 0 ? gauss_points_for(separation, std::max(pi.h, pj.h), kMaxFarPoints) : 0;
+}
+
+void pair_blocks(const Panel& pi, const Panel& pj, PairRelation relation, bool with_k,
+                 PairBlocks& out) {
+  switch (relation) {
+    case PairRelation::Coincident:
+      return coincident_blocks(pi, out);
+    case PairRelation::EndToStart:
+    case PairRelation::StartToEnd:
+      return adjacent_blocks(pi, pj, relation, out);
+    case PairRelation::Separated:
+      break;
+  }
+  const int p = far_field_points(pi, pj);
+  if (p > 0)
+    far_blocks(pi, pj, p, with_k, out);
+  else
+    near_blocks(pi, pj, with_k, out);
+}
+
+PointPanelMoments point_panel_moments(Vec2 z, const Panel& p) {
+  PointPanelMoments out;
+  const Vec2 c = 0.5 * (p.a + p.b);
+  const double separation = std::sqrt(dot(z - c, z - c)) - 0.5 * p.h;
+  const int q = separation > 0 ? gauss_points_for(separation, p.h, kMaxFarPoints) : 0;
+  if (q == 0) {
+    const SegmentMoments m = segment_moments(z, p.a, p.t, p.h, p.n);
+    out.log[0] = m.log0 - m.log1 / p.h;
+    out.log[1] = m.log1 / p.h;
+    out.dl[0] = m.ang0 - m.ang1 / p.h;
+    out.dl[1] = m.ang1 / p.h;
+    return out;
+  }
+  const GaussRule& g = gauss_legendre(q);
+  const Vec2 d0 = z - p.a;
+  const double dn = dot(d0, p.n);  // (z - y).n is the same for all y on the panel
+  out.log[0] = out.log[1] = out.dl[0] = out.dl[1] = 0.0;
+  for (int k = 0; k < q; ++k) {
+    const double x = g.x[static_cast<std::size_t>(k)], w = g.w[static_cast<std::size_t>(k)] * p.h;
+    const Vec2 r = d0 - (x * p.h) * p.t;
+    const double r2 = dot(r, r);
+    const double f = 0.5 * std::log(r2), kd = dn / r2;
+    out.log[0] += w * (1.0 - x) * f;
+    out.log[1] += w * x * f;
+    out.dl[0] += w * (1.0 - x) * kd;
+    out.dl[1] += w * x * kd;
+  }
+  return out;
+}
+
+}  // namespace bem

@@ -1,0 +1,219 @@
+"""Run configuration: the TOML schema, its defaults (stated once, here) and validation.
+
+A configuration has five sections; every key has a default, so an empty file is a
+valid (linear, contact-free) problem. Unknown sections or keys, wrong types and
+out-of-range values raise :class:`ConfigError`, a ``ValueError`` whose one-line
+message names the key and says what to do.
+"""
+from __future__ import annotations
+
+import copy
+import dataclasses
+import math
+import tomllib
+from pathlib import Path
+from typing import Any
+
+__all__ = ["ConfigError", "DEFAULTS", "CHOICES", "load_config", "parse_config", "apply_override"]
+
+
+class ConfigError(ValueError):
+    """A configuration error; the message names the key and the fix."""
+
+
+#: Every key of the schema with its default value. The type of the default is the
+#: expected type (ints are accepted where floats are expected).
+DEFAULTS: dict[str, dict[str, Any]] = {
+    "geometry": {
+        "shape": "square",
+        "center": [0.0, 0.0],
+        "width": 0.5,
+        "vertices": [],
+        "h": 1.0 / 32,
+        "subdomain_size": 1.0 / 8,
+        "structured": True,
+        "signorini": [],
+        "allow_large": False,
+    },
+    "material": {"rho": "linear", "p": 2.0, "eps": 1.0},
+    "data": {"f": "0", "u0": "0", "t0": "0", "a": 0.0},
+    "solver": {
+        "preconditioner": "substructuring",
+        "tol": 1e-8,
+        "max_iterations": 2000,
+        "step": "auto",
+        "projection": "exact",
+        "projection_tol": 0.5,
+        "projection_max_iterations": 1000,
+        "edge_form": "paper",
+        "flux_space": "p1",
+        "jacobian": "ufl",
+        "signorini_weight": 0.25,
+    },
+    "output": {"dir": "fembem-out", "xdmf": True, "plots": True},
+}
+
+#: Keys whose value must be one of a fixed set of strings.
+CHOICES: dict[tuple[str, str], tuple[str, ...]] = {
+    ("geometry", "shape"): ("square", "lshape", "polygon"),
+    ("solver", "preconditioner"): ("substructuring", "identity", "exact"),
+    ("solver", "projection"): ("inexact", "exact"),
+    ("solver", "edge_form"): ("paper", "sqrt-laplacian"),
+    ("solver", "flux_space"): ("p1", "p0"),
+    ("solver", "jacobian"): ("ufl", "handwritten"),
+}
+
+_POSITIVE = {("geometry", "h"), ("geometry", "subdomain_size"), ("geometry", "width"),
+             ("solver", "tol"), ("solver", "max_iterations"),
+             ("solver", "projection_max_iterations"), ("solver", "signorini_weight"),
+             ("material", "eps")}
+
+
+def _type_name(value: Any) -> str:
+    return {bool: "a boolean", int: "an integer", float: "a number", str: "a string",
+            list: "a list"}[type(value)]
+
+
+def _check_value(section: str, key: str, value: Any) -> Any:
+    """Return ``value`` converted to the schema type of ``section.key`` or raise."""
+    default = DEFAULTS[section][key]
+    name = f"{section}.{key}"
+    if (section, key) == ("solver", "step"):
+        if value == "auto":
+            return value
+        if isinstance(value, (int, float)) and not isinstance(value, bool) and value > 0 \
+                and math.isfinite(value):
+            return float(value)
+        raise ConfigError(f"{name} must be \"auto\" or a positive number, got {value!r}")
+    if (section, key) == ("geometry", "signorini"):
+        return _check_signorini(value)
+    if isinstance(default, bool):
+        if not isinstance(value, bool):
+            raise ConfigError(f"{name} must be true or false, got {value!r}")
+    elif isinstance(default, float):
+        if isinstance(value, bool) or not isinstance(value, (int, float)) \
+                or not math.isfinite(value):
+            raise ConfigError(f"{name} must be a finite number, got {value!r}")
+        value = float(value)
+    elif isinstance(default, int):
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise ConfigError(f"{name} must be an integer, got {value!r}")
+    elif not isinstance(value, type(default)):
+        raise ConfigError(f"{name} must be {_type_name(default)}, got {value!r}")
+    if (section, key) in CHOICES and value not in CHOICES[section, key]:
+        options = ", ".join(f'"{c}"' for c in CHOICES[section, key])
+        raise ConfigError(f"{name} must be one of {options}, got {value!r}")
+    if (section, key) in _POSITIVE and not value > 0:
+        raise ConfigError(f"{name} must be positive, got {value!r}")
+    if (section, key) == ("geometry", "center"):
+        value = _point(name, value)
+    if (section, key) == ("geometry", "vertices"):
+        value = [_point(f"{name}[{i}]", v) for i, v in enumerate(value)]
+    if (section, key) == ("solver", "projection_tol") and not 0 <= value < 1:
+        raise ConfigError(f"{name} (rho_in of (3.6)) must lie in [0, 1), got {value!r}")
+    return value
+
+
+def _point(name: str, value: Any) -> list[float]:
+    if (not isinstance(value, list) or len(value) != 2
+            or not all(isinstance(c, (int, float)) and not isinstance(c, bool)
+                       and math.isfinite(c) for c in value)):
+        raise ConfigError(f"{name} must be a point [x, y] of two numbers, got {value!r}")
+    return [float(value[0]), float(value[1])]
+
+
+def _check_signorini(value: Any) -> str | list:
+    """``"all"``, or a list whose items are side names or arcs [[x0, y0], [x1, y1]]."""
+    name = "geometry.signorini"
+    if value == "all":
+        return value
+    if not isinstance(value, list):
+        raise ConfigError(f'{name} must be "all" or a list of arcs [[x0, y0], [x1, y1]] '
+                          f"or side names, got {value!r}")
+    arcs: list = []
+    for i, arc in enumerate(value):
+        if isinstance(arc, str):
+            arcs.append(arc)
+        elif isinstance(arc, list) and len(arc) == 2:
+            arcs.append((tuple(_point(f"{name}[{i}][0]", arc[0])),
+                         tuple(_point(f"{name}[{i}][1]", arc[1]))))
+        else:
+            raise ConfigError(f"{name}[{i}] must be a side name or an arc "
+                              f"[[x0, y0], [x1, y1]], got {arc!r}")
+    return arcs
+
+
+def parse_config(raw: dict[str, Any]) -> dict[str, dict[str, Any]]:
+    """Validate a raw configuration mapping and fill in the defaults.
+
+    Parameters
+    ----------
+    raw
+        Mapping section -> {key: value}, as read from TOML.
+
+    Returns
+    -------
+    dict
+        A new mapping with all sections and keys of :data:`DEFAULTS`.
+    """
+    config = copy.deepcopy(DEFAULTS)
+    for section, table in raw.items():
+        if section not in DEFAULTS:
+            known = ", ".join(f"[{s}]" for s in DEFAULTS)
+            raise ConfigError(f"unknown section [{section}]; the sections are {known}")
+        if not isinstance(table, dict):
+            raise ConfigError(f"[{section}] must be a table of keys")
+        for key, value in table.items():
+            if key not in DEFAULTS[section]:
+                known = ", ".join(DEFAULTS[section])
+                raise ConfigError(f"unknown key {section}.{key}; the keys of [{section}] "
+                                  f"are {known}")
+            config[section][key] = _check_value(section, key, value)
+    geometry = config["geometry"]
+    if geometry["shape"] == "polygon" and len(geometry["vertices"]) < 3:
+        raise ConfigError("geometry.vertices must list at least 3 points [x, y] in "
+                          'counter-clockwise order when geometry.shape = "polygon"')
+    return config
+
+
+def apply_override(raw: dict[str, Any], assignment: str) -> None:
+    """Apply one ``section.key=value`` override (value in TOML syntax) to ``raw``.
+
+    A value that is not valid TOML is taken as a string, so ``--set material.rho=carstensen``
+    works without quotes.
+    """
+    lhs, sep, rhs = assignment.partition("=")
+    section, dot, key = lhs.strip().partition(".")
+    if not sep or not dot or not section or not key:
+        raise ConfigError(f"--set expects section.key=value, got {assignment!r}")
+    try:
+        value = tomllib.loads(f"v = {rhs.strip()}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = rhs.strip()
+    raw.setdefault(section, {})
+    if not isinstance(raw[section], dict):
+        raise ConfigError(f"[{section}] must be a table of keys")
+    raw[section][key] = value
+
+
+def load_config(path: str | Path | None, overrides: list[str] = ()) -> dict[str, dict[str, Any]]:
+    """Read a TOML file (or nothing), apply ``section.key=value`` overrides, validate."""
+    raw: dict[str, Any] = {}
+    if path is not None:
+        path = Path(path)
+        if not path.is_file():
+            raise ConfigError(f"configuration file {str(path)!r} not found; give the path "
+                              "of an existing TOML file")
+        try:
+            raw = tomllib.loads(path.read_text())
+        except tomllib.TOMLDecodeError as err:
+            raise ConfigError(f"{path}: invalid TOML ({err}); fix the syntax") from None
+    for assignment in overrides:
+        apply_override(raw, assignment)
+    return parse_config(raw)
+
+
+def as_dataclass_kwargs(cls: type, section: dict[str, Any]) -> dict[str, Any]:
+    """The entries of ``section`` that are fields of the dataclass ``cls``."""
+    names = {f.name for f in dataclasses.fields(cls)}
+    return {k: v for k, v in section.items() if k in names}

@@ -1,0 +1,77 @@
+"""The coupled functional J_h of METHOD.md section 4, (2.4)-(2.5).
+
+    J_h(u, phi) = G(u) + 1/2 z^T S_h z - b_f^T u - (m_t + s_0)^T z,   z = T u + E phi
+    grad_u J    = A(u) + T^T (S_h z - m_t - s_0) - b_f
+    grad_phi J  = E^T (S_h z - m_t - s_0)
+
+u lives in a distributed PETSc vector (the DOLFINx P1 layout, owned entries then
+ghosts), phi and the boundary block z are small and replicated on every rank, S_h is
+dense and replicated. The trace T and its transpose (``fem_py.boundary.BoundaryMap``)
+are index operations on the owned boundary dofs plus one Allreduce.
+"""
+from __future__ import annotations
+
+import numpy as np
+from petsc4py import PETSc
+
+__all__ = ["CoupledFunctional"]
+
+
+class CoupledFunctional:
+    """J_h(u, phi), its gradient and its Hessian action (METHOD.md (2.4)-(2.5)).
+
+    Parameters
+    ----------
+    forms
+        Interior forms (``fem_py.forms.InteriorForms``): G(u), DG(u, .), D^2 G(u).
+    boundary
+        ``fem_py.boundary.BoundaryMap``: T, T^T and the positions of the phi unknowns (E).
+    steklov_poincare
+        Dense S_h (n_gamma x n_gamma), replicated.
+    load
+        b_f (PETSc vector in the layout of u).
+    boundary_load
+        m_t + s_0 in boundary order (n_gamma,), replicated.
+    """
+
+    def __init__(self, forms, boundary, steklov_poincare: np.ndarray, load: PETSc.Vec,
+                 boundary_load: np.ndarray):
+        self.forms = forms
+        self.boundary = boundary
+        self.signorini = np.asarray(boundary.signorini, dtype=np.int64)
+        self.S = steklov_poincare
+        self.load = load
+        self.boundary_load = np.asarray(boundary_load, dtype=float)
+        self.comm = forms.comm
+
+    # -- the boundary block -------------------------------------------------------
+    def boundary_block(self, u: PETSc.Vec, phi: np.ndarray) -> np.ndarray:
+        """z = T u + E phi."""
+        z = self.boundary.gather(u)
+        z[self.signorini] += phi
+        return z
+
+    # -- J_h and its derivatives --------------------------------------------------
+    def energy(self, u_function, phi: np.ndarray) -> float:
+        """J_h(u, phi) (collective); ``u_function`` is the dolfinx Function holding u."""
+        u = u_function.vector
+        z = self.boundary_block(u, phi)
+        interior = self.forms.energy(u_function) - u.dot(self.load)
+        return interior + 0.5 * z @ (self.S @ z) - self.boundary_load @ z
+
+    def gradient(self, u_function, phi: np.ndarray, grad_u: PETSc.Vec) -> np.ndarray:
+        """Fill ``grad_u`` with grad_u J and return grad_phi J (collective)."""
+        u = u_function.vector
+        y = self.S @ self.boundary_block(u, phi) - self.boundary_load
+        self.forms.assemble_residual(u_function, grad_u)
+        grad_u.axpy(-1.0, self.load)
+        self.boundary.scatter_add(y, grad_u, refresh_ghosts=False)
+        return y[self.signorini].copy()
+
+    def hessian_action(self, jacobian: PETSc.Mat, e_u: PETSc.Vec, e_phi: np.ndarray,
+                       out_u: PETSc.Vec) -> np.ndarray:
+        """(out_u, return) = D^2 J_h (e_u, e_phi), with D^2 G given as the matrix ``jacobian``."""
+        y = self.S @ self.boundary_block(e_u, e_phi)
+        jacobian.mult(e_u, out_u)
+        self.boundary.scatter_add(y, out_u, refresh_ghosts=False)
+        return y[self.signorini].copy()

@@ -1,0 +1,226 @@
+"""Manufactured solutions with a known contact set (METHOD.md section 8).
+
+Recipe: pick a smooth u in Omega and u_e = a + b log|x - x0| + c.(x - x0)/|x - x0|^2.
+On each Signorini arc (a straight side with arc coordinate xi in [-L/2, L/2] measured
+counter-clockwise from its midpoint, and inward distance eta) take
+
+    gap    g*(xi) = G max(0, xi)^3 (L/2 - xi)       (zero at both ends, > 0 for xi > 0)
+    flux   du/dn  = -K max(0, -xi)^3                 (< 0 exactly where g* = 0)
+
+so that rho(|grad u|) du/dn <= 0 on the arc and vanishes where the gap is open:
+u contains the term K eta max(0, -xi)^3 (times a factor with zero normal derivative
+on the other arcs). Then
+
+    f  = -div(rho(|grad u|) grad u)                    (UFL, exact at quadrature points)
+    t0 = rho(|grad u|) du/dn - du_e/dn                  on all of Gamma (UFL, FacetNormal)
+    u0 = u - u_e + g*                                   (g* = 0 on Gamma_t)
+
+The exact solution has gap g*, contact set {xi < 0} on every arc, exterior field u_e.
+Two cases are provided: the square [-1/4, 1/4]^2 with the bottom side as Signorini
+arc, and the L-shape [-1/4, 1/4]^2 minus [0, 1/4]^2 with the bottom side and the
+inner horizontal side y = 0, 0 <= x <= 1/4, as arcs.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable
+
+import numpy as np
+import ufl
+
+from fem_py.expressions import numpy_function, parse_expression
+
+__all__ = ["ManufacturedSolution", "square_contact", "lshape_contact", "MANUFACTURED"]
+
+_A, _B, _C = 0.5, 0.2, (0.05, -0.03)
+_K, _G = 20.0, 100.0
+
+
+def exterior_field(x0: tuple[float, float]) -> str:
+    """u_e = a + b log|x - x0| + c.(x - x0)/|x - x0|^2 (x0 inside Omega, well away from
+    Gamma: u_e varies on the length scale |x - x0| along Gamma)."""
+    rx, ry = f"(x - ({x0[0]}))", f"(y - ({x0[1]}))"
+    return (f"{_A} + {_B}*0.5*log({rx}**2 + {ry}**2)"
+            f" + ({_C[0]}*{rx} + ({_C[1]})*{ry})/({rx}**2 + {ry}**2)")
+
+
+@dataclass(frozen=True)
+class Arc:
+    """A straight Signorini arc: end points (counter-clockwise) and its gap formula."""
+
+    start: tuple[float, float]
+    end: tuple[float, float]
+    gap: str  # g* in x, y (parser language)
+
+
+@dataclass(frozen=True)
+class ManufacturedSolution:
+    """Exact data and solution of one manufactured contact problem.
+
+    Attributes
+    ----------
+    shape, width, center
+        The geometry (fem_py.geometry.build_domain arguments).
+    arcs
+        The Signorini arcs, counter-clockwise end points.
+    u, ue
+        Exact interior solution and exterior field, expressions in x, y.
+    a
+        The constant a of (1.3).
+    """
+
+    shape: str
+    width: float
+    center: tuple[float, float]
+    arcs: tuple[Arc, ...]
+    u: str
+    ue: str
+    a: float = _A
+
+    @property
+    def signorini(self) -> list[tuple[tuple[float, float], tuple[float, float]]]:
+        return [(arc.start, arc.end) for arc in self.arcs]
+
+    def exact_u(self) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+        return numpy_function(self.u, ("x", "y"))
+
+    def exact_ue(self) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+        return numpy_function(self.ue, ("x", "y"))
+
+    def exact_gap(self, points: np.ndarray) -> np.ndarray:
+        """g* at boundary points (m, 2): the arc's formula on its arc, 0 elsewhere."""
+        gap = np.zeros(len(points))
+        for arc, on in zip(self.arcs, self._on_arcs(points)):
+            gap[on] = numpy_function(arc.gap, ("x", "y"))(*points[on].T)
+        return gap
+
+    def _on_arcs(self, points: np.ndarray) -> list[np.ndarray]:
+        masks = []
+        for arc in self.arcs:
+            p0, p1 = np.array(arc.start), np.array(arc.end)
+            t = p1 - p0
+            rel = points - p0
+            along = rel @ t / (t @ t)
+            across = np.abs(rel[:, 0] * t[1] - rel[:, 1] * t[0]) / np.linalg.norm(t)
+            masks.append((across < 1e-12) & (along >= -1e-12) & (along <= 1 + 1e-12))
+        return masks
+
+    def u0(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """u0 = u - u_e + g* at boundary points (numpy)."""
+        points = np.column_stack([x, y])
+        return self.exact_u()(x, y) - self.exact_ue()(x, y) + self.exact_gap(points)
+
+    def data(self, mesh: Any, material) -> dict[str, Any]:
+        """UFL f and t0 on ``mesh`` and the callable u0, for :class:`SignoriniProblem`."""
+        X = ufl.SpatialCoordinate(mesh)
+        n = ufl.FacetNormal(mesh)
+        variables = {"x": X[0], "y": X[1]}
+        u = parse_expression(self.u, variables)
+        ue = parse_expression(self.ue, variables)
+        flux = material.flux(ufl.grad(u))
+        return {"f": -ufl.div(flux), "t0": ufl.dot(flux - ufl.grad(ue), n), "u0": self.u0,
+                "a": self.a}
+
+
+def _flux_term(eta: str, xi: str) -> str:
+    """K eta max(0, -xi)^3: du/dn = -K max(0, -xi)^3 on the arc where eta = 0."""
+    return f"{_K}*({eta})*max(0, -({xi}))**3"
+
+
+def square_contact() -> ManufacturedSolution:
+    """Square [-1/4, 1/4]^2, Signorini arc = bottom side (contact for x < 0)."""
+    # The smooth part has du/dy = 0 on y = -1/4 and |du/dx| >= 0.09 > 0 in Omega.
+    smooth = "0.2 + 3*x + 0.2*cos(pi*(y + 0.25))*sin(pi*x) + 0.3*(x + 0.1)**2"
+    u = f"{smooth} + {_flux_term('y + 0.25', 'x')}"
+    arc = Arc((-0.25, -0.25), (0.25, -0.25), f"{_G}*max(0, x)**3*(0.25 - x)")
+    return ManufacturedSolution("square", 0.5, (0.0, 0.0), (arc,), u,
+                                exterior_field((0.03, -0.02)))
+
+
+def lshape_contact() -> ManufacturedSolution:
+    """L-shape [-1/4, 1/4]^2 minus [0, 1/4]^2 with two arcs: the bottom side (contact for
+    x < 0) and the inner side y = 0 from (1/4, 0) to (0, 0) (xi = 1/8 - x; contact for
+    x > 1/8). The second flux term carries (1 + 4y)^2, whose y-derivative vanishes on
+    the bottom side, so each term only acts on its own arc."""
+    # cos(4 pi (y + 1/4)) has zero y-derivative on both y = -1/4 and y = 0.
+    smooth = "0.2 + 3*x + 0.05*cos(4*pi*(y + 0.25))*sin(pi*x) + 0.3*(x + 0.1)**2"
+    bottom = _flux_term("y + 0.25", "x")
+    inner = f"{_flux_term('-y', '0.125 - x')}*(1 + 4*y)**2"
+    u = f"{smooth} + {bottom} + {inner}"
+    arcs = (Arc((-0.25, -0.25), (0.25, -0.25), f"{_G}*max(0, x)**3*(0.25 - x)"),
+            Arc((0.25, 0.0), (0.0, 0.0), f"{_G}*max(0, 0.125 - x)**3*x"))
+    return ManufacturedSolution("lshape", 0.5, (0.0, 0.0), arcs, u,
+                                exterior_field((-0.1, -0.1)))
+
+
+MANUFACTURED = {"square": square_contact, "lshape": lshape_contact}
+
+
+def manufactured_problem(comm, solution: ManufacturedSolution, material, *, cells: int,
+                         d_over_h: int = 4, structured: bool = True, **options):
+    """The :class:`coupling.problem.SignoriniProblem` of ``solution`` on a mesh with
+    ``cells`` cells per side of the bounding square (h = width / cells) and subdomains
+    of d = d_over_h * h; ``options`` are :class:`coupling.problem.SolverOptions` fields."""
+    from fem_py.geometry import build_domain
+    from coupling.problem import SignoriniProblem, SolverOptions
+
+    h = solution.width / cells
+    domain = build_domain(comm, solution.shape, h=h, subdomain_size=d_over_h * h,
+                          center=solution.center, width=solution.width,
+                          signorini=solution.signorini, structured=structured)
+    data = solution.data(domain.mesh, material)
+    return SignoriniProblem(domain, material, f=data["f"], u0=data["u0"], t0=data["t0"],
+                            a=data["a"], options=SolverOptions(**options))
+
+
+def solution_errors(problem, solution: ManufacturedSolution, result,
+                    exterior_points: np.ndarray | None = None) -> dict[str, float]:
+    """Errors of a computed ``result`` against the exact ``solution`` (collective).
+
+    Returns the H^1 seminorm ("energy") error |u_h - u|_1, the largest nodal error of
+    u_h, of the gap phi_h and of u_e on Gamma, the largest error of u_e at
+    ``exterior_points`` (default: 8 points on the circle of radius 0.6), and the
+    number of Signorini nodes whose contact state differs from the exact one away from
+    the switch points of the exact contact set.
+
+    Near a switch point both the exact gap (G xi^3 (L/2 - xi) with G L/2 >= 12.5) and the
+    exact multiplier (rho K xi^3 with rho K >= 40) vanish like |xi|^3, so within
+    |xi| < (e / 12.5)^(1/3), e the measured largest gap error, the contact state is not
+    decided by the discretisation; nodes there (or within one mesh size) are ignored.
+    """
+    from dolfinx import fem
+    from mpi4py import MPI
+
+    from fem_py.forms import compile_form
+
+    mesh = problem.domain.mesh
+    X = ufl.SpatialCoordinate(mesh)
+    u_exact = parse_expression(solution.u, {"x": X[0], "y": X[1]})
+    e = result.u - u_exact
+    h1 = mesh.comm.allreduce(fem.assemble_scalar(compile_form(ufl.inner(ufl.grad(e), ufl.grad(e))
+                                                              * ufl.dx)), op=MPI.SUM)
+    index_map = problem.V.dofmap.index_map
+    x = problem.V.tabulate_dof_coordinates()[:index_map.size_local]
+    nodal = np.abs(result.u.x.array[:index_map.size_local] - solution.exact_u()(x[:, 0], x[:, 1]))
+    nodal = mesh.comm.allreduce(float(nodal.max(initial=0.0)), op=MPI.MAX)
+    b = problem.boundary
+    s_nodes = b.nodes[b.signorini]
+    gap = solution.exact_gap(s_nodes)
+    ue = solution.exact_ue()(*b.nodes.T)
+    if exterior_points is None:
+        theta = np.linspace(0, 2 * np.pi, 9)[:-1]
+        exterior_points = 0.6 * np.column_stack([np.cos(theta), np.sin(theta)])
+    ue_points = problem.exterior(result, exterior_points)
+    # switch points of the exact contact set: where the contact state changes along an arc
+    exact_contact = gap <= 0.0
+    gap_error = float(np.abs(result.phi - gap).max(initial=0.0))
+    radius = max(1.01 * problem.domain.h, (gap_error / (_G * 0.125)) ** (1 / 3))
+    wrong = np.flatnonzero(exact_contact != result.contact)
+    same_arc = np.diff(b.arc_of_signorini) == 0
+    switches = s_nodes[np.flatnonzero((np.diff(exact_contact.astype(int)) != 0) & same_arc)]
+    far = [np.min(np.linalg.norm(switches - s_nodes[i], axis=1), initial=np.inf) > radius
+           for i in wrong]
+    return {"energy": float(np.sqrt(h1)), "nodal_u": nodal, "gap": gap_error,
+            "ue_gamma": float(np.abs(result.ue - ue).max()),
+            "ue_exterior": float(np.abs(ue_points - solution.exact_ue()(*exterior_points.T)).max()),
+            "contact_mismatch": int(np.count_nonzero(far))}

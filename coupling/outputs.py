@@ -1,0 +1,147 @@
+"""Outputs of a run: summary.json, fields.npz, solution.xdmf and PNG plots.
+
+Every file is written atomically: to a temporary name in the output folder, then
+renamed, so an interrupted run never leaves a half-written file under its final
+name. Rank 0 writes the gathered files; the XDMF file is written collectively.
+"""
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import tempfile
+from pathlib import Path
+
+import numpy as np
+from mpi4py import MPI
+
+__all__ = ["prepare_output_dir", "write_outputs", "gather_p1", "load_fields"]
+
+
+def prepare_output_dir(comm: MPI.Comm, out: Path, *, force: bool) -> None:
+    """Create ``out``; refuse an existing non-empty folder unless ``force`` (collective)."""
+    error = None
+    if comm.rank == 0:
+        if out.exists() and not out.is_dir():
+            error = f"output path {str(out)!r} exists and is not a folder; choose another --out"
+        elif out.is_dir() and any(out.iterdir()) and not force:
+            error = (f"output folder {str(out)!r} is not empty; pass --force to overwrite "
+                     "it or choose another --out")
+        else:
+            out.mkdir(parents=True, exist_ok=True)
+    error = comm.bcast(error, root=0)
+    if error:
+        raise FileExistsError(error)
+
+
+def _atomic_write(path: Path, write) -> None:
+    """Call ``write(tmp_path)`` and rename the result to ``path``."""
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=path.suffix)
+    os.close(fd)
+    try:
+        write(Path(tmp))
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def gather_p1(u) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """Gather a P1 Function to rank 0 in global dof order.
+
+    Returns (x (N, 2), values (N,), triangles (n_cells, 3)) on rank 0, None elsewhere.
+    """
+    V = u.function_space
+    comm = V.mesh.comm
+    index_map = V.dofmap.index_map
+    n_owned = index_map.size_local
+    start = index_map.local_range[0]
+    x = V.tabulate_dof_coordinates()[:n_owned, :2]
+    values = u.x.array[:n_owned].real
+    n_cells = V.mesh.topology.index_map(V.mesh.topology.dim).size_local
+    cells = V.dofmap.list.array.reshape(-1, 3)[:n_cells]
+    cells = index_map.local_to_global(cells.ravel().astype(np.int32)).reshape(-1, 3)
+    parts = comm.gather((start, x, values, cells), root=0)
+    if comm.rank != 0:
+        return None
+    N = index_map.size_global
+    X, U = np.empty((N, 2)), np.empty(N)
+    for s, xi, ui, _ in parts:
+        X[s:s + len(ui)], U[s:s + len(ui)] = xi, ui
+    return X, U, np.concatenate([c for *_, c in parts])
+
+
+def _summary(problem, result) -> dict:
+    return {
+        "converged": bool(result.converged),
+        "reason": result.reason,
+        "iterations": int(result.iterations),
+        "energy": float(result.energy),
+        "dofs": int(problem.V.dofmap.index_map.size_global),
+        "boundary_dofs": int(problem.boundary.dofs.size),
+        "signorini_dofs": int(problem.n_signorini),
+        "contact_nodes": int(np.count_nonzero(result.contact)),
+        "tau": float(result.tau),
+        "C0_estimate": float(result.C0),
+        "energy_increases": int(result.energy_increases),
+        "mpi_ranks": int(problem.comm.size),
+        "timings": {k: float(v) for k, v in result.timings.items()},
+        "history": [{"iteration": r.iteration, "energy": r.energy, "step_norm": r.step_norm,
+                     "contact": r.contact, "inner": r.inner, "tau": r.tau}
+                    for r in result.history],
+    }
+
+
+def write_outputs(comm: MPI.Comm, out: Path, problem, result, config: dict) -> None:
+    """Write summary.json, fields.npz, and (per ``config["output"]``) XDMF and plots."""
+    gathered = gather_p1(result.u)
+    if config["output"]["xdmf"]:
+        _write_xdmf(comm, out, problem, result)
+    if comm.rank == 0:
+        x, u, triangles = gathered
+        boundary = problem.boundary
+        fields = dict(x=x, u=u, triangles=triangles, boundary_x=boundary.nodes,
+                      boundary_u=result.boundary_u, phi=result.phi,
+                      signorini=boundary.signorini, ue=result.ue, dn_ue=result.flux,
+                      active=result.contact, a=np.array(problem.a),
+                      flux_space=np.array(problem.options.flux_space))
+        _atomic_write(out / "fields.npz", lambda p: np.savez(p.open("wb"), **fields))
+        summary = _summary(problem, result)
+        summary["config"] = config
+        _atomic_write(out / "summary.json",
+                      lambda p: p.write_text(json.dumps(summary, indent=2, default=str)))
+        if config["output"]["plots"]:
+            from coupling.plots import write_plots
+            write_plots(out, problem, result, fields, _atomic_write)
+
+
+def _write_xdmf(comm: MPI.Comm, out: Path, problem, result) -> None:
+    """solution.xdmf/.h5 written in a temporary subfolder, then moved (the .xdmf names
+    its .h5 relatively, so both keep their final names)."""
+    from dolfinx import io
+
+    tmp = out / ".xdmf-tmp"
+    if comm.rank == 0:
+        tmp.mkdir(exist_ok=True)
+    comm.barrier()
+    with io.XDMFFile(comm, str(tmp / "solution.xdmf"), "w") as xdmf:
+        xdmf.write_mesh(problem.domain.mesh)
+        problem.domain.cell_tags.name = "subdomains"
+        xdmf.write_meshtags(problem.domain.cell_tags)
+        xdmf.write_function(result.u)
+    comm.barrier()
+    if comm.rank == 0:
+        for name in ("solution.h5", "solution.xdmf"):
+            os.replace(tmp / name, out / name)
+        shutil.rmtree(tmp, ignore_errors=True)
+    comm.barrier()
+
+
+def load_fields(result_dir: Path) -> dict:
+    """Read fields.npz of a finished run (rank-independent)."""
+    path = Path(result_dir) / "fields.npz"
+    if not path.is_file():
+        raise FileNotFoundError(f"{str(path)!r} not found; give the output folder of a "
+                                "finished `fembem solve` run")
+    with np.load(path) as data:
+        return {k: data[k] for k in data.files}

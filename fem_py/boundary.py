@@ -1,0 +1,253 @@
+"""The boundary map of METHOD.md section 4: ordered boundary nodes, T and E.
+
+Gamma_h is the closed polygon of the boundary nodes of the fine mesh. ``BoundaryMap``
+lists them counter-clockwise (Omega on the left), which is the order of every boundary
+vector of the coupling (``V_h(Gamma)``: continuous P1 on that polygon), and defines
+
+    T : R^N -> R^{N_Gamma},   (T u)_i = u(node_i)          (trace, picks boundary dofs)
+    E : R^{N_s} -> R^{N_Gamma}, (E phi)_{signorini[j]} = phi_j (extension by zero)
+
+so that z = T u + E phi (METHOD.md section 4). The phi unknowns are the nodes interior
+to the Signorini arcs: a node is one when both boundary panels at it carry the same
+Signorini tag 100 + k. Arc end points (where the tag changes) are excluded, so phi
+vanishes there; with Gamma_s = Gamma (one closed arc, tag 100 everywhere) every node is
+a phi unknown.
+
+Panel i joins node i to node i+1 (mod N_Gamma); its outward unit normal is
+(dy, -dx)/|panel| (counter-clockwise orientation). The normal at a node, used for
+``nx, ny`` in boundary data, is the normalised average of the two adjacent panel
+normals (at a corner of angle theta it bisects the exterior angle; on a straight side
+it is the side's normal).
+
+DOLFINx 0.5.2 gives no facet orientation, and ``exterior_facet_indices`` returns owned
+facets only: each rank orients its exterior facets with its cell on the left, rank 0
+gathers them as global dof pairs, walks the cycle, checks it is one closed polygon with
+positive shoelace area, and broadcasts. The map is identical on every rank.
+"""
+from __future__ import annotations
+
+import inspect
+from typing import Any, Callable
+
+import numpy as np
+import scipy.sparse as sp
+from dolfinx import fem
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from fem_py.expressions import Expression
+from fem_py.geometry import GAMMA_T_TAG, SIGNORINI_TAG0
+from fem_py.meshdata import exterior_facets, facet_data, gather_facet_data, p1_topology, tag_array
+
+__all__ = ["BoundaryMap"]
+
+
+class BoundaryMap:
+    """Boundary nodes in counter-clockwise order and the maps T, E (METHOD.md section 4).
+
+    ``BoundaryMap(V, domain)`` (collective) with ``V = fem_py.forms.p1_space(mesh)`` and
+    a :class:`fem_py.geometry.Domain` (the walk starts at its first polygon vertex), or
+    ``BoundaryMap(V, facet_tags, start=point)`` with the facet tags alone (default
+    start: the boundary node with the smallest y, then x - a corner of Omega). Every
+    rank holds the same arrays.
+
+    Attributes
+    ----------
+    nodes : (n_gamma, 2) float
+        Boundary nodes, counter-clockwise, first node not repeated.
+    dofs : (n_gamma,) int64
+        Global P1 dofs of ``nodes`` (numbering of ``fem_py.forms.p1_space``).
+    s : (n_gamma,) float
+        Arc length from ``nodes[0]`` counter-clockwise; ``length`` is |Gamma_h|.
+    panel_tags : (n_gamma,) int
+        Facet tag of panel i = [node i, node i+1]: 1 on Gamma_t, 100 + k on arc k.
+    panel_normals, node_normals : (n_gamma, 2) float
+        Outward unit normals of the panels and at the nodes (module docstring).
+    signorini : (n_s,) int
+        Indices into the boundary order of the phi unknowns.
+    arc_of_signorini : (n_s,) int
+        Arc index k of each phi unknown.
+    n_dofs : int
+        Global number of P1 dofs N (columns of T).
+    """
+
+    nodes: np.ndarray
+    dofs: np.ndarray
+    s: np.ndarray
+    length: float
+    panel_tags: np.ndarray
+    panel_normals: np.ndarray
+    node_normals: np.ndarray
+    signorini: np.ndarray
+    arc_of_signorini: np.ndarray
+    n_dofs: int
+
+    def __init__(self, V: fem.FunctionSpace, domain_or_facet_tags: Any, *, start: Any = None):
+        if hasattr(domain_or_facet_tags, "facet_tags") and hasattr(domain_or_facet_tags, "vertices"):
+            facet_tags = domain_or_facet_tags.facet_tags
+            if start is None:
+                start = domain_or_facet_tags.vertices[0]
+        else:
+            facet_tags = domain_or_facet_tags
+        msh = V.mesh
+        comm = msh.comm
+        topo = p1_topology(V)
+        n_facets = msh.topology.index_map(1).size_local + msh.topology.index_map(1).num_ghosts
+        n_cells = msh.topology.index_map(2).size_local + msh.topology.index_map(2).num_ghosts
+        ftag = tag_array(facet_tags, n_facets, default=0)
+        fd = gather_facet_data(comm, [facet_data(topo, exterior_facets(msh), ftag,
+                                                 np.zeros(n_cells, np.int32), True)])
+        n_dofs = V.dofmap.index_map.size_global
+        result, error = None, None
+        if comm.rank == 0:
+            try:
+                result = _walk(fd, n_dofs, start)
+            except Exception as err:  # report on every rank instead of deadlocking
+                error = f"{type(err).__name__}: {err}"
+        error = comm.bcast(error, root=0)
+        if error is not None:
+            raise RuntimeError(f"boundary map: {error}")
+        for key, value in comm.bcast(result, root=0).items():
+            setattr(self, key, value)
+
+    @classmethod
+    def from_domain(cls, domain: Any, V: fem.FunctionSpace | None = None) -> "BoundaryMap":
+        """Collective: ``BoundaryMap(p1_space(domain.mesh), domain)``."""
+        from fem_py.forms import p1_space
+
+        return cls(p1_space(domain.mesh) if V is None else V, domain)
+
+    # ------------------------------------------------------------ sizes
+    @property
+    def n_gamma(self) -> int:
+        return len(self.dofs)
+
+    @property
+    def n_signorini(self) -> int:
+        return len(self.signorini)
+
+    @property
+    def panel_lengths(self) -> np.ndarray:
+        return np.linalg.norm(np.roll(self.nodes, -1, axis=0) - self.nodes, axis=1)
+
+    def on_gamma_t(self) -> np.ndarray:
+        """Panel mask of Gamma_t (tag 1)."""
+        return self.panel_tags == GAMMA_T_TAG
+
+    # ------------------------------------------------------------ matrices
+    def trace_matrix(self) -> sp.csr_matrix:
+        """T (n_gamma x N): T[i, dofs[i]] = 1 (global dof columns)."""
+        n = self.n_gamma
+        return sp.csr_matrix((np.ones(n), (np.arange(n), self.dofs)), shape=(n, self.n_dofs))
+
+    def extension_matrix(self) -> sp.csr_matrix:
+        """E (n_gamma x n_s): E[signorini[j], j] = 1."""
+        m = self.n_signorini
+        return sp.csr_matrix((np.ones(m), (self.signorini, np.arange(m))), shape=(self.n_gamma, m))
+
+    # ------------------------------------------------------------ PETSc vectors
+    def _owned(self, vec: PETSc.Vec) -> tuple[np.ndarray, np.ndarray]:
+        """(boundary positions, local indices) of the boundary dofs owned by this rank
+        in the layout of ``vec`` (computed once per ownership range)."""
+        key = vec.getOwnershipRange()
+        cached = self.__dict__.setdefault("_owned_cache", {})
+        if key not in cached:
+            mine = np.flatnonzero((self.dofs >= key[0]) & (self.dofs < key[1]))
+            cached[key] = (mine, (self.dofs[mine] - key[0]).astype(np.int32))
+        return cached[key]
+
+    def gather(self, vec: PETSc.Vec) -> np.ndarray:
+        """T u for a distributed PETSc Vec u: boundary-order values on every rank (collective)."""
+        positions, local = self._owned(vec)
+        out = np.zeros(self.n_gamma)
+        out[positions] = vec.array_r[local]
+        comm = vec.comm.tompi4py()
+        if comm.size > 1:
+            comm.Allreduce(MPI.IN_PLACE, out, op=MPI.SUM)
+        return out
+
+    def scatter_add(self, values: np.ndarray, vec: PETSc.Vec, *, refresh_ghosts: bool = True) -> PETSc.Vec:
+        """vec += T^T values (each rank adds to the entries it owns; ``values`` must be
+        the same on every rank). With ``refresh_ghosts`` the ghost entries of a ghosted
+        ``vec`` are refreshed (collective); without, only owned entries are valid."""
+        values = np.asarray(values, dtype=float)
+        if values.shape != (self.n_gamma,):
+            raise ValueError(f"values must have shape ({self.n_gamma},), got {values.shape}")
+        positions, local = self._owned(vec)
+        owned = vec.getArray()
+        owned[local] += values[positions]
+        if refresh_ghosts:
+            try:
+                vec.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+            except PETSc.Error:  # not a ghosted Vec: nothing to refresh
+                pass
+        return vec
+
+    # ------------------------------------------------------------ data
+    def interpolate_boundary(self, expr: str | Callable | float) -> np.ndarray:
+        """Nodal values (boundary order) of boundary data such as u0.
+
+        ``expr`` is text in x, y, nx, ny (fem_py.expressions), a number, or a callable
+        ``f(x, y)`` or ``f(x, y, nx, ny)`` on arrays. (nx, ny) is the node normal of the
+        module docstring.
+        """
+        x, y = self.nodes[:, 0], self.nodes[:, 1]
+        nx, ny = self.node_normals[:, 0], self.node_normals[:, 1]
+        if isinstance(expr, str):
+            out = Expression(expr, ("x", "y", "nx", "ny")).evaluate({"x": x, "y": y, "nx": nx, "ny": ny}, "numpy")
+        elif callable(expr):
+            try:
+                nargs = len(inspect.signature(expr).parameters)
+            except (TypeError, ValueError):
+                nargs = 4
+            out = expr(x, y) if nargs == 2 else expr(x, y, nx, ny)
+        elif isinstance(expr, (int, float, np.floating, np.integer)) and not isinstance(expr, bool):
+            out = float(expr)
+        else:
+            raise ValueError(f"boundary data must be text, a number or a callable, got {type(expr).__name__}")
+        out = np.broadcast_to(np.asarray(out, dtype=float), (self.n_gamma,)).copy()
+        if not np.all(np.isfinite(out)):
+            raise ValueError("boundary data is not finite at some boundary node; check the expression")
+        return out
+
+
+def _walk(fd: Any, n_dofs: int, start: Any) -> dict:
+    """Rank 0: order the gathered exterior facets (oriented, Omega on the left) into the
+    counter-clockwise cycle of boundary nodes and derive the boundary-map arrays."""
+    a, b = fd.dofs[:, 0], fd.dofs[:, 1]
+    nf = len(a)
+    if nf < 3:
+        raise RuntimeError(f"only {nf} boundary facets")
+    order = np.argsort(a)
+    a_sorted = a[order]
+    if np.any(np.diff(a_sorted) == 0) or not np.array_equal(a_sorted, np.sort(b)):
+        raise RuntimeError("the boundary is not a closed curve with consistently oriented facets")
+    if start is None:
+        xy = fd.coords[:, 0]
+        f0 = int(np.lexsort((xy[:, 0], xy[:, 1]))[0])
+    else:
+        f0 = int(np.argmin(np.linalg.norm(fd.coords[:, 0] - np.asarray(start, float)[None, :2], axis=1)))
+    facets = np.empty(nf, dtype=np.int64)
+    f = f0
+    for i in range(nf):
+        facets[i] = f
+        f = int(order[np.searchsorted(a_sorted, b[f])])  # the facet leaving the end node
+        if f == f0 and i != nf - 1:
+            raise RuntimeError(f"the boundary has several components ({i + 1} of {nf} facets in the first); "
+                               "Omega must be simply connected")
+    nodes = fd.coords[facets, 0].astype(float)
+    x, y = nodes[:, 0], nodes[:, 1]
+    area = 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
+    if area <= 0:
+        raise RuntimeError(f"boundary walk has shoelace area {area:g} <= 0 (expected counter-clockwise)")
+    tags = fd.tag[facets].astype(np.int64)
+    seg = np.roll(nodes, -1, axis=0) - nodes
+    plen = np.linalg.norm(seg, axis=1)
+    pn = np.stack([seg[:, 1], -seg[:, 0]], axis=1) / plen[:, None]
+    nn = pn + np.roll(pn, 1, axis=0)
+    nn /= np.linalg.norm(nn, axis=1)[:, None]
+    sig = np.flatnonzero((tags >= SIGNORINI_TAG0) & (tags == np.roll(tags, 1)))
+    return dict(nodes=nodes, dofs=a[facets].astype(np.int64), s=np.concatenate([[0.0], np.cumsum(plen)[:-1]]),
+                length=float(plen.sum()), panel_tags=tags, panel_normals=pn, node_normals=nn,
+                signorini=sig.astype(np.int64), arc_of_signorini=(tags[sig] - SIGNORINI_TAG0).astype(np.int64),
+                n_dofs=int(n_dofs))

@@ -1,0 +1,258 @@
+"""Interior energy G, residual DG and Jacobians D^2 G (METHOD.md sections 3, 4, 6).
+
+With V_h the continuous P1 space and u in V_h,
+
+    G(u)            = int_Omega g(|grad u|) dx                           (2.1)
+    A(u)_i          = DG(u, v_i) = int rho(|grad u|) grad u . grad v_i     (2.1), section 4
+    D^2G(u)_{ij}    = int (rho^(grad u) grad v_j) . grad v_i               (4.1)
+    b_f,i           = int f v_i dx,        m_t,j = int_Gamma t0 v_j ds      section 4
+    A_lap,ij        = int grad v_j . grad v_i                             (4.2), section 6
+
+The residual is ``ufl.derivative`` of the energy. The Jacobian is either
+``ufl.derivative`` of the residual (``"ufl"``) or the hand-written tangent rho^ of
+METHOD.md section 6 (``"handwritten"``); see :mod:`fem_py.materials` for how both stay
+finite at grad u = 0.
+
+:func:`p1_space` is the only place the P1 space is created, so that every module sees
+the same global dof numbering.
+"""
+from __future__ import annotations
+
+import contextlib
+import logging
+from typing import Any, Iterator
+
+import numpy as np
+import ufl
+from dolfinx import fem
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from fem_py.expressions import parse_expression
+from fem_py.materials import Material
+
+__all__ = [
+    "p1_space",
+    "spatial_variables",
+    "as_ufl_data",
+    "quiet_jit",
+    "compile_form",
+    "InteriorForms",
+    "assemble_boundary_load",
+    "JACOBIANS",
+]
+
+JACOBIANS = ("ufl", "handwritten")
+
+
+def p1_space(mesh: Any) -> fem.FunctionSpace:
+    """The continuous P1 space V_h(Omega) on ``mesh`` (the single place it is created).
+
+    The dofmap construction is deterministic, so every call on the same mesh gives the
+    same global dof numbering (CoarseStructure and BoundaryMap rely on this; checked
+    in parallel by tests/test_fem_mpi.py).
+    """
+    with quiet_jit():
+        return fem.FunctionSpace(mesh, ("Lagrange", 1))
+
+
+def spatial_variables(mesh: Any, *, boundary: bool = False) -> dict[str, Any]:
+    """UFL values of the expression variables: x, y (and nx, ny, the outward unit normal)."""
+    X = ufl.SpatialCoordinate(mesh)
+    out = {"x": X[0], "y": X[1]}
+    if boundary:
+        n = ufl.FacetNormal(mesh)
+        out.update(nx=n[0], ny=n[1])
+    return out
+
+
+def as_ufl_data(value: Any, mesh: Any, *, boundary: bool = False, what: str = "data") -> Any:
+    """Turn data given as text (x, y[, nx, ny]), a number or a UFL expression into UFL."""
+    if isinstance(value, str):
+        return parse_expression(value, spatial_variables(mesh, boundary=boundary), backend="ufl")
+    if isinstance(value, (int, float, np.floating, np.integer)) and not isinstance(value, bool):
+        return ufl.as_ufl(float(value))
+    if isinstance(value, ufl.core.expr.Expr):
+        return value
+    raise ValueError(f"{what} must be a string expression, a number or a UFL expression, "
+                     f"got {type(value).__name__}")
+
+
+@contextlib.contextmanager
+def quiet_jit() -> Iterator[None]:
+    """Silence the INFO lines of cold FFCx/CFFI compiles for the duration of the block.
+
+    distutils raises the root logger to INFO and ffcx installs a root handler, so cold
+    compiles print gcc command lines. The handler levels are raised to WARNING and
+    restored afterwards (no lasting change of the global logging state).
+    """
+    handlers = list(logging.getLogger().handlers)
+    saved = [h.level for h in handlers]
+    try:
+        for h in handlers:
+            h.setLevel(max(h.level, logging.WARNING))
+        yield
+    finally:
+        for h, lvl in zip(handlers, saved):
+            h.setLevel(lvl)
+
+
+def compile_form(form: Any, jit_params: dict | None = None) -> fem.FormMetaClass:
+    """``fem.form`` with quiet JIT output."""
+    with quiet_jit():
+        return fem.form(form, jit_params=dict(jit_params or {}))
+
+
+class InteriorForms:
+    """Compiled interior forms of one material on one P1 space.
+
+    Parameters
+    ----------
+    V
+        The space from :func:`p1_space`.
+    material
+        A :class:`fem_py.materials.Material`.
+    f
+        Volume load: text in x, y, a number, a UFL expression, or None (zero).
+    jacobian
+        Default Jacobian kind of :meth:`assemble_jacobian`: ``"ufl"`` or ``"handwritten"``.
+    jit_params
+        Passed to ``fem.form`` (e.g. ``{"cache_dir": ...}``).
+
+    Notes
+    -----
+    ``u`` arguments may be a ``fem.Function`` on ``V`` or a PETSc Vec with the layout of
+    :meth:`create_vector`; the value is copied into an internal state function (ghosts
+    updated), so the caller's object is never modified.
+    """
+
+    def __init__(self, V: fem.FunctionSpace, material: Material, f: Any = None, *,
+                 jacobian: str = "ufl", jit_params: dict | None = None):
+        if jacobian not in JACOBIANS:
+            raise ValueError(f"jacobian must be one of {JACOBIANS}, got {jacobian!r}")
+        if not isinstance(material, Material):
+            raise ValueError(f"material must be a fem_py.materials.Material, got {type(material).__name__}; "
+                             "use make_material")
+        self.V = V
+        self.mesh = V.mesh
+        self.comm = V.mesh.comm
+        self.material = material
+        self.jacobian_kind = jacobian
+        self._jit = dict(jit_params or {})
+        self._u = fem.Function(V, name="u_state")
+        u, v, w = self._u, ufl.TestFunction(V), ufl.TrialFunction(V)
+        grad_u = ufl.grad(u)
+        energy = material.energy_density_sq(ufl.inner(grad_u, grad_u)) * ufl.dx
+        residual = ufl.derivative(energy, u, v)
+        self._ufl = {
+            "energy": energy,
+            "residual": residual,
+            "ufl": ufl.derivative(residual, u, w),
+            "handwritten": ufl.inner(ufl.dot(material.tangent(grad_u), ufl.grad(w)), ufl.grad(v)) * ufl.dx,
+            "stiffness": ufl.inner(ufl.grad(w), ufl.grad(v)) * ufl.dx,
+        }
+        if f is not None:
+            self._ufl["load"] = ufl.inner(as_ufl_data(f, self.mesh, what="f"), v) * ufl.dx
+        self._compiled: dict[str, Any] = {}
+        for key in ("energy", "residual", jacobian):
+            self._form(key)
+
+    # ------------------------------------------------------------ helpers
+    def _form(self, key: str) -> Any:
+        if key not in self._compiled:
+            self._compiled[key] = compile_form(self._ufl[key], self._jit)
+        return self._compiled[key]
+
+    def set_state(self, u: Any) -> fem.Function:
+        """Copy ``u`` (Function or PETSc Vec) into the internal state; return the state."""
+        if isinstance(u, fem.Function):
+            if u is not self._u:
+                self._u.x.array[:] = u.x.array
+        elif isinstance(u, PETSc.Vec):
+            u.copy(self._u.vector)
+            self._u.x.scatter_forward()
+        else:
+            raise ValueError(f"u must be a dolfinx Function or a PETSc Vec, got {type(u).__name__}")
+        return self._u
+
+    # ------------------------------------------------------------ public
+    def energy(self, u: Any) -> float:
+        """G(u) = int g(|grad u|) dx (2.1), summed over all ranks."""
+        self.set_state(u)
+        return self.comm.allreduce(fem.assemble_scalar(self._form("energy")), op=MPI.SUM)
+
+    def create_vector(self) -> PETSc.Vec:
+        """A ghosted PETSc Vec with the layout of V (caller destroys it)."""
+        return fem.petsc.create_vector(self._form("residual"))
+
+    def create_matrix(self) -> PETSc.Mat:
+        """A PETSc Mat with the P1 sparsity (caller destroys it)."""
+        return fem.petsc.create_matrix(self._form(self.jacobian_kind))
+
+    def assemble_residual(self, u: Any, b: PETSc.Vec) -> PETSc.Vec:
+        """b_i = DG(u, v_i) = int rho(|grad u|) grad u . grad v_i dx; ghosts summed (REVERSE)
+        and then refreshed (FORWARD). Returns ``b``."""
+        self.set_state(u)
+        with b.localForm() as bl:
+            bl.set(0.0)
+        fem.petsc.assemble_vector(b, self._form("residual"))
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        b.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        return b
+
+    def assemble_jacobian(self, u: Any, A: PETSc.Mat, kind: str | None = None) -> PETSc.Mat:
+        """A_ij = D^2G(u)(v_j, v_i) (4.1), ``kind`` ``"ufl"`` or ``"handwritten"``
+        (default: the constructor's). Returns the assembled ``A``."""
+        kind = self.jacobian_kind if kind is None else kind
+        if kind not in JACOBIANS:
+            raise ValueError(f"kind must be one of {JACOBIANS}, got {kind!r}")
+        self.set_state(u)
+        A.zeroEntries()
+        fem.petsc.assemble_matrix(A, self._form(kind))
+        A.assemble()
+        return A
+
+    def assemble_load(self) -> PETSc.Vec:
+        """b_f,i = int f v_i dx (a new Vec; zero when f is None)."""
+        b = self.create_vector()
+        with b.localForm() as bl:
+            bl.set(0.0)
+        if "load" in self._ufl:
+            fem.petsc.assemble_vector(b, self._form("load"))
+            b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+            b.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        return b
+
+    def boundary_load(self, t0: Any, boundary: Any) -> np.ndarray:
+        """m_t = int_Gamma t0 v_j ds in boundary order (``boundary``: a
+        :class:`fem_py.boundary.BoundaryMap`), the same array on every rank."""
+        b = assemble_boundary_load(self.V, t0, jit_params=self._jit)
+        try:
+            return boundary.gather(b)
+        finally:
+            b.destroy()
+
+    def assemble_stiffness(self) -> PETSc.Mat:
+        """The Laplace stiffness matrix int grad v_j . grad v_i dx (a new, assembled Mat)."""
+        A = fem.petsc.assemble_matrix(self._form("stiffness"))
+        A.assemble()
+        return A
+
+
+def assemble_boundary_load(V: fem.FunctionSpace, t0: Any, *, jit_params: dict | None = None) -> PETSc.Vec:
+    """m_t,j = int_Gamma t0 v_j ds over the whole boundary (METHOD.md section 4).
+
+    ``t0`` is text in x, y, nx, ny (outward unit normal, ``ufl.FacetNormal``), a number
+    or a UFL expression. Returns a new ghosted Vec (caller destroys it); its
+    boundary-order values are ``BoundaryMap.gather(m_t)``.
+    """
+    mesh = V.mesh
+    v = ufl.TestFunction(V)
+    form = compile_form(ufl.inner(as_ufl_data(t0, mesh, boundary=True, what="t0"), v) * ufl.ds, jit_params)
+    b = fem.petsc.create_vector(form)
+    with b.localForm() as bl:
+        bl.set(0.0)
+    fem.petsc.assemble_vector(b, form)
+    b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    b.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+    return b

@@ -1,0 +1,949 @@
+"""Meshes of Omega with a coarse subdomain partition (METHOD.md sections 1, 4 and 6).
+
+``build_domain`` makes a polygon Omega (square, L-shape or a given polygon), a coarse
+partition of Omega into L subdomains of size about d (coarse squares for the square and
+the L-shape, coarse triangles of a gmsh mesh of size d for a polygon), and a fine P1
+mesh of size h that resolves every coarse edge. Each coarse cell is its own gmsh plane
+surface, sharing the coarse edges with its neighbours, with its own physical group, so
+the fine mesh is conforming and every fine cell carries its subdomain id.
+
+``structured=True`` refines every coarse cell uniformly instead: n = max(2, round(d/h))
+segments per coarse edge; a coarse square becomes an n x n grid of squares split into
+right triangles along the (i,j)-(i+1,j+1) diagonal, a coarse triangle becomes n^2
+similar triangles. These nodes and triangles are written down directly (no gmsh), so
+that h-studies at fixed d/h are exact.
+
+Tags
+----
+- cell tags: subdomain id 0 .. L-1 (``Domain.cell_tags``, dim 2);
+- facet tags (dim 1, exterior facets): 1 on Gamma_t, 100 + k on the k-th Signorini arc.
+
+Signorini arcs (``signorini``)
+------------------------------
+A sequence of arcs, each one of
+
+- a pair of boundary points ``((x0, y0), (x1, y1))``: the part of Gamma from the first
+  point to the second, going counter-clockwise (Omega on the left);
+- a side name. Square: ``bottom, right, top, left``. L-shape, with the square
+  [x0, x1] x [y0, y1] of width w centred at ``center`` and its upper-right quarter
+  removed (vertices (x0,y0), (x1,y0), (x1,cy), (cx,cy), (cx,y1), (x0,y1), CCW):
+  ``bottom`` (x0,y0)-(x1,y0), ``right`` (x1,y0)-(x1,cy), ``notch_bottom`` (x1,cy)-(cx,cy)
+  and ``notch_left`` (cx,cy)-(cx,y1) (the bottom and left sides of the removed quarter),
+  ``top`` (cx,y1)-(x0,y1), ``left`` (x0,y1)-(x0,y0). Polygon: ``side<i>`` from vertex i to
+  vertex i+1 (any shape accepts ``side<i>``);
+- ``"all"``: the whole boundary as one closed arc (alone).
+
+Arc end points become coarse vertices (inserted into the coarse mesh when needed; with
+``structured=True`` on the square or L-shape they must already be coarse grid vertices),
+so every coarse boundary edge lies in Gamma_t or in one arc (METHOD.md section 6).
+
+Parallel use: all ranks call ``build_domain`` with the same arguments. Arguments are
+validated identically on every rank before any collective call; gmsh runs on rank 0
+only, and the mesh is distributed the way ``gmshio.model_to_mesh`` does it
+(``create_mesh`` + ``distribute_entity_data`` + ``meshtags_from_entities``, see
+``_distribute_mesh``), reading the gmsh arrays per surface because
+``model_to_mesh``'s per-physical-group queries cost 20 s for 3000 subdomains.
+``build_domain`` initialises and finalises gmsh itself (do not call it inside a gmsh
+session of your own).
+"""
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+from typing import Any, Sequence
+
+import numpy as np
+from dolfinx import mesh as dmesh
+from mpi4py import MPI
+
+from fem_py.forms import p1_space
+from fem_py.meshdata import (FacetData, exterior_facets, facet_data, gather_facet_data, p1_topology,
+                             tag_array)
+
+__all__ = ["Arc", "CoarseStructure", "Domain", "build_domain", "compute_coarse_structure",
+           "GAMMA_T_TAG", "SIGNORINI_TAG0", "SHAPES"]
+
+GAMMA_T_TAG = 1
+SIGNORINI_TAG0 = 100
+SHAPES = ("square", "lshape", "polygon")
+SQUARE_SIDES = ("bottom", "right", "top", "left")
+LSHAPE_SIDES = ("bottom", "right", "notch_bottom", "notch_left", "top", "left")
+_COLLINEAR_TOL = 1e-9
+
+
+# ============================================================================ data
+@dataclass(frozen=True)
+class Arc:
+    """A Signorini arc: the part of Gamma from ``start`` to ``end`` counter-clockwise.
+
+    ``s0``/``length`` are the arc-length position of ``start`` (measured from the first
+    polygon vertex, counter-clockwise) and the arc length; ``whole`` marks Gamma_s = Gamma
+    (then start = end = the first polygon vertex and length = |Gamma|).
+    """
+
+    start: tuple[float, float]
+    end: tuple[float, float]
+    s0: float
+    length: float
+    whole: bool = False
+    name: str = ""
+
+
+@dataclass(frozen=True, eq=False)
+class CoarseStructure:
+    """The coarse partition as seen by the fine mesh (identical on every rank).
+
+    Dof numbers are global dofs of ``fem_py.forms.p1_space(mesh)``.
+
+    Attributes
+    ----------
+    vertex_coords : (n_v, 2) float
+        Coarse vertices (subdomain corners, arc end points), sorted by (y, x).
+    vertex_dofs : (n_v,) int64
+    vertex_on_boundary : (n_v,) bool
+    edge_vertices : (n_e, 2) int
+        Coarse vertex indices of the edge ends. Boundary edges run counter-clockwise along
+        Gamma; interior edges from the lower to the higher vertex index.
+    edge_dofs : tuple of n_e int64 arrays
+        Dofs of the fine nodes along each edge from end 0 to end 1, ends included.
+    edge_coords : tuple of n_e (m, 2) float arrays
+        Coordinates of those nodes.
+    edge_on_boundary : (n_e,) bool
+    edge_arc : (n_e,) int
+        k if the edge lies in the k-th Signorini arc, -1 otherwise.
+    edge_subdomains : (n_e, 2) int
+        Subdomain ids on both sides (-1 for the exterior side of a boundary edge).
+    skeleton_dofs : sorted int64
+        Dofs on the union of the subdomain boundaries (Gamma included).
+    interior_dofs : sorted int64
+        All other dofs.
+    subdomain_of_interior_dof : int, aligned with ``interior_dofs``
+    n_subdomains : int
+    n_dofs : int
+        Global number of P1 dofs.
+    n_skeleton_facets : int
+        Number of fine facets on the skeleton.
+    """
+
+    vertex_coords: np.ndarray
+    vertex_dofs: np.ndarray
+    vertex_on_boundary: np.ndarray
+    edge_vertices: np.ndarray
+    edge_dofs: tuple
+    edge_coords: tuple
+    edge_on_boundary: np.ndarray
+    edge_arc: np.ndarray
+    edge_subdomains: np.ndarray
+    skeleton_dofs: np.ndarray
+    interior_dofs: np.ndarray
+    subdomain_of_interior_dof: np.ndarray
+    n_subdomains: int
+    n_dofs: int
+    n_skeleton_facets: int
+
+    @property
+    def n_vertices(self) -> int:
+        return len(self.vertex_coords)
+
+    @property
+    def n_edges(self) -> int:
+        return len(self.edge_vertices)
+
+    def edge_segments(self) -> np.ndarray:
+        """Number of fine segments on each coarse edge."""
+        return np.array([len(d) - 1 for d in self.edge_dofs], dtype=np.int64)
+
+
+@dataclass(frozen=True, eq=False)
+class Domain:
+    """A meshed Omega with its coarse partition (see the module docstring).
+
+    Attributes
+    ----------
+    mesh, cell_tags, facet_tags
+        DOLFINx mesh; subdomain id of each cell (dim 2); 1 / 100+k on exterior facets.
+    coarse : CoarseStructure
+    arcs : tuple of Arc
+    h, subdomain_size
+        The requested fine and coarse sizes.
+    shape : str
+    vertices : (m, 2) float
+        Polygon vertices of Omega, counter-clockwise (the first one is a corner).
+    signorini_is_whole_boundary : bool
+    structured : bool
+    coarse_size : float
+        Actual coarse size (coarse square side, or mean coarse edge length for a polygon).
+    h_max : float
+        Longest fine facet.
+    """
+
+    mesh: Any
+    cell_tags: Any
+    facet_tags: Any
+    coarse: CoarseStructure
+    arcs: tuple
+    h: float
+    subdomain_size: float
+    shape: str
+    vertices: np.ndarray
+    signorini_is_whole_boundary: bool
+    structured: bool
+    coarse_size: float
+    h_max: float
+
+    @property
+    def comm(self) -> Any:
+        return self.mesh.comm
+
+    @property
+    def diameter(self) -> float:
+        return _diameter(self.vertices)
+
+
+# ======================================================================= helpers
+def _diameter(P: np.ndarray) -> float:
+    d = P[:, None, :] - P[None, :, :]
+    return float(np.sqrt((d**2).sum(-1)).max())
+
+
+def _signed_area(P: np.ndarray) -> float:
+    x, y = P[:, 0], P[:, 1]
+    return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
+
+
+def _segments_intersect(p1, p2, q1, q2, tol) -> bool:
+    """Closed segments p1p2 and q1q2 intersect (touching counts)."""
+    def orient(a, b, c):
+        v = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+        return 0 if abs(v) <= tol else (1 if v > 0 else -1)
+
+    def on_seg(a, b, c):
+        return min(a[0], b[0]) - tol <= c[0] <= max(a[0], b[0]) + tol and \
+            min(a[1], b[1]) - tol <= c[1] <= max(a[1], b[1]) + tol
+
+    o1, o2, o3, o4 = orient(p1, p2, q1), orient(p1, p2, q2), orient(q1, q2, p1), orient(q1, q2, p2)
+    if o1 * o2 < 0 and o3 * o4 < 0:
+        return True
+    return (o1 == 0 and on_seg(p1, p2, q1)) or (o2 == 0 and on_seg(p1, p2, q2)) \
+        or (o3 == 0 and on_seg(q1, q2, p1)) or (o4 == 0 and on_seg(q1, q2, p2))
+
+
+def _check_polygon(P: np.ndarray) -> None:
+    m = len(P)
+    if m < 3:
+        raise ValueError(f"vertices: a polygon needs at least 3 vertices, got {m}")
+    if not np.all(np.isfinite(P)):
+        raise ValueError("vertices: coordinates must be finite numbers")
+    scale = _diameter(P)
+    if scale == 0.0:
+        raise ValueError("vertices: all vertices coincide; give a non-degenerate polygon")
+    tol = 1e-12 * scale**2
+    for i in range(m):
+        if np.linalg.norm(P[(i + 1) % m] - P[i]) <= 1e-12 * scale:
+            raise ValueError(f"vertices: vertex {i} repeats vertex {(i + 1) % m}; remove duplicates")
+    for i in range(m):
+        for j in range(i + 1, m):
+            adjacent = j == i + 1 or (i == 0 and j == m - 1)
+            a1, a2, b1, b2 = P[i], P[(i + 1) % m], P[j], P[(j + 1) % m]
+            if adjacent:
+                # adjacent sides meet at one vertex only: reject a fold-back (collinear overlap)
+                shared = a2 if j == i + 1 else a1
+                u = (a1 if j == i + 1 else a2) - shared
+                w = (b2 if j == i + 1 else b1) - shared
+                cross = u[0] * w[1] - u[1] * w[0]
+                if abs(cross) <= tol and float(np.dot(u, w)) > 0:
+                    raise ValueError(f"vertices: sides {i} and {j} fold back onto each other; "
+                                     "the polygon must be simple")
+                continue
+            if _segments_intersect(a1, a2, b1, b2, tol):
+                raise ValueError(f"vertices: sides {i} and {j} intersect; the polygon must be simple "
+                                 "(non-self-intersecting)")
+    if _signed_area(P) <= 0:
+        raise ValueError("vertices: the polygon is clockwise; list the vertices counter-clockwise")
+
+
+class _Boundary:
+    """Arc-length parametrisation of the polygon boundary (counter-clockwise)."""
+
+    def __init__(self, P: np.ndarray):
+        self.P = P
+        self.m = len(P)
+        self.seg = np.roll(P, -1, axis=0) - P
+        self.len = np.linalg.norm(self.seg, axis=1)
+        self.S = np.concatenate([[0.0], np.cumsum(self.len)])
+        self.L = float(self.S[-1])
+        self.tol = 1e-8 * _diameter(P)
+
+    def locate(self, q: np.ndarray) -> tuple[float, float, np.ndarray]:
+        """(distance to Gamma, arc-length position, projected point)."""
+        r = q[None, :] - self.P
+        tau = np.clip((r * self.seg).sum(1) / self.len**2, 0.0, 1.0)
+        proj = self.P + tau[:, None] * self.seg
+        dist = np.linalg.norm(proj - q[None, :], axis=1)
+        i = int(np.argmin(dist))
+        return float(dist[i]), float(self.S[i] + tau[i] * self.len[i]) % self.L, proj[i]
+
+    def point(self, s: float) -> np.ndarray:
+        s = s % self.L
+        i = min(int(np.searchsorted(self.S, s, side="right")) - 1, self.m - 1)
+        return self.P[i] + (s - self.S[i]) / self.len[i] * self.seg[i]
+
+    def inside(self, s: float | np.ndarray, arc: Arc) -> Any:
+        """s lies strictly inside the arc (away from its ends by more than tol)."""
+        if arc.whole:
+            return np.ones_like(np.asarray(s), dtype=bool)
+        r = (np.asarray(s) - arc.s0) % self.L
+        return (r > self.tol) & (r < arc.length - self.tol)
+
+
+def _side_names(shape: str, m: int) -> dict[str, int]:
+    names = {f"side{i}": i for i in range(m)}
+    if shape == "square":
+        names.update({n: i for i, n in enumerate(SQUARE_SIDES)})
+    elif shape == "lshape":
+        names.update({n: i for i, n in enumerate(LSHAPE_SIDES)})
+    return names
+
+
+def _parse_arcs(signorini: Any, shape: str, B: _Boundary) -> tuple[tuple[Arc, ...], bool]:
+    if isinstance(signorini, str):
+        signorini = (signorini,)
+    try:
+        items = list(signorini)
+    except TypeError:
+        raise ValueError("signorini must be a sequence of arcs (point pairs or side names), 'all' or ()") from None
+    if any(isinstance(a, str) and a == "all" for a in items):
+        if len(items) != 1:
+            raise ValueError("signorini: 'all' (the whole boundary) cannot be combined with other arcs")
+        return (Arc(tuple(map(float, B.P[0])), tuple(map(float, B.P[0])), 0.0, B.L, True, "all"),), True
+    sides = _side_names(shape, B.m)
+    arcs: list[Arc] = []
+    for k, a in enumerate(items):
+        if isinstance(a, str):
+            if a not in sides:
+                named = [n for n in sides if not re.fullmatch(r"side\d+", n)]
+                raise ValueError(f"signorini arc {k}: unknown side {a!r}; use one of "
+                                 f"{', '.join(named + ['side<i>'])}, 'all' or a pair of points")
+            i = sides[a]
+            arcs.append(Arc(tuple(map(float, B.P[i])), tuple(map(float, B.P[(i + 1) % B.m])),
+                            float(B.S[i]), float(B.len[i]), False, a))
+            continue
+        try:
+            pts = np.asarray(a, dtype=float)
+        except (TypeError, ValueError):
+            raise ValueError(f"signorini arc {k}: expected ((x0, y0), (x1, y1)) or a side name, got {a!r}") from None
+        if pts.shape != (2, 2) or not np.all(np.isfinite(pts)):
+            raise ValueError(f"signorini arc {k}: expected ((x0, y0), (x1, y1)) or a side name, got {a!r}")
+        ends = []
+        for q in pts:
+            dist, s, proj = B.locate(q)
+            if dist > B.tol:
+                raise ValueError(f"signorini arc {k}: point ({q[0]:g}, {q[1]:g}) is not on the boundary "
+                                 f"(distance {dist:.3g}); give points on Gamma")
+            # snap onto a polygon vertex when within tolerance
+            dv = np.linalg.norm(B.P - proj, axis=1)
+            if dv.min() <= B.tol:
+                proj = B.P[int(np.argmin(dv))]
+                s = float(B.S[int(np.argmin(dv))]) % B.L
+            ends.append((s, proj))
+        length = (ends[1][0] - ends[0][0]) % B.L
+        if length <= B.tol or length >= B.L - B.tol:
+            raise ValueError(f"signorini arc {k}: its end equals its start; give two different points "
+                             "(or 'all' for the whole boundary)")
+        arcs.append(Arc(tuple(map(float, ends[0][1])), tuple(map(float, ends[1][1])), ends[0][0], length,
+                        False, f"arc{k}"))
+    for i in range(len(arcs)):
+        for j in range(i + 1, len(arcs)):
+            a, b = arcs[i], arcs[j]
+            if B.inside(b.s0, a) or B.inside(a.s0, b) or abs(((a.s0 - b.s0 + B.L / 2) % B.L) - B.L / 2) <= B.tol:
+                raise ValueError(f"signorini arcs {i} and {j} overlap; arcs may only touch at end points")
+    return tuple(arcs), False
+
+
+# ============================================================ coarse partitions
+def _grid_partition(shape: str, center: Sequence[float], width: float, d: float):
+    """Coarse squares of the square / L-shape: (polygon, coarse vertices, cells, n_c)."""
+    cx, cy = float(center[0]), float(center[1])
+    x0, x1, y0, y1 = cx - width / 2, cx + width / 2, cy - width / 2, cy + width / 2
+    if shape == "square":
+        nc = max(1, int(round(width / d)))
+    else:
+        nc = max(2, 2 * int(round(width / (2 * d))))
+    xs, ys = np.linspace(x0, x1, nc + 1), np.linspace(y0, y1, nc + 1)
+    half = nc // 2
+    keep = np.ones((nc, nc), dtype=bool)  # keep[j, i]: coarse square i (x), j (y)
+    if shape == "lshape":
+        keep[half:, half:] = False
+    vid = -np.ones((nc + 1, nc + 1), dtype=np.int64)
+    verts, cells = [], []
+    for j in range(nc):
+        for i in range(nc):
+            if not keep[j, i]:
+                continue
+            corners = [(i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)]
+            for (a, b) in corners:
+                if vid[b, a] < 0:
+                    vid[b, a] = len(verts)
+                    verts.append((xs[a], ys[b]))
+            cells.append([int(vid[b, a]) for (a, b) in corners])
+    if shape == "square":
+        P = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
+    else:
+        xm, ym = xs[half], ys[half]
+        P = np.array([[x0, y0], [x1, y0], [x1, ym], [xm, ym], [xm, y1], [x0, y1]])
+    return P, np.array(verts, dtype=float), cells, width / nc
+
+
+def _insert_boundary_points(V: np.ndarray, cells: list[list[int]], points: list[np.ndarray], tol: float):
+    """Insert points lying on coarse boundary edges into the cells owning those edges."""
+    V = [np.asarray(v, dtype=float) for v in V]
+    new = []
+    for q in points:
+        dv = np.linalg.norm(np.asarray(V) - q, axis=1)
+        if dv.min() <= tol:
+            continue
+        if any(np.linalg.norm(V[n] - q) <= tol for n in new):
+            continue
+        new.append(len(V))
+        V.append(np.asarray(q, dtype=float))
+    if not new:
+        return np.asarray(V), cells
+    out = []
+    for c in cells:
+        loop = []
+        for a, b in zip(c, c[1:] + c[:1]):
+            loop.append(a)
+            pa, pb = V[a], V[b]
+            e = pb - pa
+            ins = []
+            for n in new:
+                r = V[n] - pa
+                t = float(np.dot(r, e) / np.dot(e, e))
+                if 0 < t < 1 and abs(e[0] * r[1] - e[1] * r[0]) <= tol * np.linalg.norm(e):
+                    ins.append((t, n))
+            loop.extend(n for _, n in sorted(ins))
+        out.append(loop)
+    return np.asarray(V), out
+
+
+def _polygon_partition_gmsh(P: np.ndarray, extra: list[np.ndarray], d: float, tol: float):
+    """Coarse triangles: a gmsh mesh of size d of the polygon with ``extra`` boundary points."""
+    import gmsh
+
+    B = _Boundary(P)
+    pts = [(float(B.S[i]), P[i]) for i in range(len(P))]
+    for q in extra:
+        _, s, proj = B.locate(q)
+        if min(np.linalg.norm(P - proj, axis=1)) > tol:
+            pts.append((s, proj))
+    pts.sort(key=lambda x: x[0])
+    geo = gmsh.model.geo
+    ptags = [geo.addPoint(float(p[0]), float(p[1]), 0.0, d) for _, p in pts]
+    lines = [geo.addLine(ptags[i], ptags[(i + 1) % len(ptags)]) for i in range(len(ptags))]
+    loop = geo.addCurveLoop(lines)
+    surf = geo.addPlaneSurface([loop])
+    geo.synchronize()
+    gmsh.model.addPhysicalGroup(2, [surf], 1)
+    gmsh.model.mesh.generate(2)
+    tags, x, _ = gmsh.model.mesh.getNodes()
+    x = x.reshape(-1, 3)[:, :2]
+    order = np.argsort(tags)
+    tags, x = tags[order], x[order]
+    _, elem_nodes = gmsh.model.mesh.getElementsByType(2)
+    tri = np.searchsorted(tags, elem_nodes.reshape(-1, 3))
+    used = np.unique(tri)
+    remap = -np.ones(len(tags), dtype=np.int64)
+    remap[used] = np.arange(len(used))
+    V = x[used]
+    tri = remap[tri]
+    a, b, c = V[tri[:, 0]], V[tri[:, 1]], V[tri[:, 2]]
+    neg = ((b - a)[:, 0] * (c - a)[:, 1] - (b - a)[:, 1] * (c - a)[:, 0]) < 0
+    tri[neg] = tri[neg][:, [0, 2, 1]]
+    return V, [list(map(int, t)) for t in tri]
+
+
+# ============================================================== fine gmsh model
+def _edge_key(a: int, b: int) -> tuple[int, int]:
+    return (a, b) if a < b else (b, a)
+
+
+def _boundary_edges(cells: list[list[int]]) -> dict[tuple[int, int], int]:
+    count: dict[tuple[int, int], int] = {}
+    for c in cells:
+        for a, b in zip(c, c[1:] + c[:1]):
+            k = _edge_key(a, b)
+            count[k] = count.get(k, 0) + 1
+    return count
+
+
+def _edge_tag(V: np.ndarray, a: int, b: int, B: _Boundary, arcs: tuple[Arc, ...]) -> int:
+    _, s, _ = B.locate(0.5 * (V[a] + V[b]))
+    for k, arc in enumerate(arcs):
+        if B.inside(s, arc):
+            return SIGNORINI_TAG0 + k
+    return GAMMA_T_TAG
+
+
+def _build_fine_geo(V: np.ndarray, cells: list[list[int]], h: float, B: _Boundary, arcs: tuple[Arc, ...]):
+    """Unstructured fine mesh: one gmsh plane surface per coarse cell (its own physical
+    group), coarse lines shared between neighbours, mesh size h.
+
+    Returns the mesh as arrays (x, cells, cell subdomain ids, boundary facets, facet tags).
+    The arrays are read per surface and per line rather than through
+    ``gmshio.extract_topology_and_markers``, whose per-physical-group queries are
+    quadratic in the number of groups (7 s for 3000 subdomains).
+    """
+    import gmsh
+
+    geo = gmsh.model.geo
+    ptags = [geo.addPoint(float(x), float(y), 0.0, h) for x, y in V]
+    count = _boundary_edges(cells)
+    line_of: dict[tuple[int, int], int] = {}
+    for (a, b) in sorted(count):
+        line_of[(a, b)] = geo.addLine(ptags[a], ptags[b])
+    surfs = []
+    for c in cells:
+        loop = []
+        for a, b in zip(c, c[1:] + c[:1]):
+            tag = line_of[_edge_key(a, b)]
+            loop.append(tag if a < b else -tag)
+        surfs.append(geo.addPlaneSurface([geo.addCurveLoop(loop)]))
+    geo.synchronize()
+    for i, s in enumerate(surfs):  # every surface needs a physical group (else dolfinx segfaults)
+        gmsh.model.addPhysicalGroup(2, [s], i + 1)
+    groups: dict[int, list[int]] = {}
+    for (a, b), n in count.items():
+        if n == 1:
+            groups.setdefault(_edge_tag(V, a, b, B, arcs), []).append(line_of[(a, b)])
+    for tag, lines in sorted(groups.items()):
+        gmsh.model.addPhysicalGroup(1, lines, tag)
+    gmsh.option.setNumber("Mesh.MeshSizeMax", h)
+    gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
+    gmsh.model.mesh.generate(2)
+
+    node_tags, xyz, _ = gmsh.model.mesh.getNodes()
+    order = np.argsort(node_tags)
+    node_tags = node_tags[order]
+    x = xyz.reshape(-1, 3)[order, :2]
+    tri, tri_id = [], []
+    for i, s in enumerate(surfs):
+        _, enodes = gmsh.model.mesh.getElementsByType(2, s)
+        tri.append(enodes)
+        tri_id.append(np.full(len(enodes) // 3, i, dtype=np.int32))
+    seg, seg_tag = [], []
+    for tag, lines in sorted(groups.items()):
+        for line in lines:
+            _, enodes = gmsh.model.mesh.getElementsByType(1, line)
+            seg.append(enodes)
+            seg_tag.append(np.full(len(enodes) // 2, tag, dtype=np.int32))
+    cells_arr = np.searchsorted(node_tags, np.concatenate(tri)).reshape(-1, 3)
+    facets_arr = np.searchsorted(node_tags, np.concatenate(seg)).reshape(-1, 2)
+    return x, cells_arr, np.concatenate(tri_id), facets_arr, np.concatenate(seg_tag)
+
+
+def _structured_nodes(V: np.ndarray, cells: list[list[int]], n: int):
+    """Uniform refinement of the coarse cells: node coordinates, per-cell triangles and
+    the fine boundary segments of every coarse edge (as node index chains)."""
+    nv = len(V)
+    keys = sorted({_edge_key(a, b) for c in cells for a, b in zip(c, c[1:] + c[:1])})
+    edge_index = {k: i for i, k in enumerate(keys)}
+    X = [V]
+    # interior nodes of coarse edge (a<b): k = 1..n-1 from a
+    t = np.arange(1, n)[:, None] / n
+    for (a, b) in keys:
+        X.append(V[a] + t * (V[b] - V[a]))
+    offset = nv + len(keys) * (n - 1)
+
+    def edge_node(a: int, b: int, k: int) -> int:
+        """Node at k/n along a -> b (k = 0..n)."""
+        if k == 0:
+            return a
+        if k == n:
+            return b
+        e = edge_index[_edge_key(a, b)]
+        kk = k if a < b else n - k
+        return nv + e * (n - 1) + kk - 1
+
+    tris_per_cell = []
+    for c in cells:
+        if len(c) == 4:
+            v0, v1, v2, v3 = c
+            idx = np.empty((n + 1, n + 1), dtype=np.int64)  # idx[j, i]
+            for k in range(n + 1):
+                idx[0, k] = edge_node(v0, v1, k)
+                idx[k, n] = edge_node(v1, v2, k)
+                idx[n, n - k] = edge_node(v2, v3, k)
+                idx[n - k, 0] = edge_node(v3, v0, k)
+            ii, jj = np.meshgrid(np.arange(1, n), np.arange(1, n))
+            s, r = ii.ravel() / n, jj.ravel() / n
+            pts = ((1 - s) * (1 - r))[:, None] * V[v0] + (s * (1 - r))[:, None] * V[v1] \
+                + (s * r)[:, None] * V[v2] + ((1 - s) * r)[:, None] * V[v3]
+            idx[jj.ravel(), ii.ravel()] = offset + np.arange(len(pts))
+            offset += len(pts)
+            X.append(pts)
+            a, b = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel()
+            cc, dd = idx[1:, 1:].ravel(), idx[1:, :-1].ravel()
+            tris = np.concatenate([np.stack([a, b, cc], 1), np.stack([a, cc, dd], 1)])
+        else:
+            v0, v1, v2 = c
+            idx = -np.ones((n + 1, n + 1), dtype=np.int64)  # idx[i, j], i + j <= n
+            for k in range(n + 1):
+                idx[k, 0] = edge_node(v0, v1, k)
+                idx[n - k, k] = edge_node(v1, v2, k)
+                idx[0, n - k] = edge_node(v2, v0, k)
+            inner = [(i, j) for i in range(1, n) for j in range(1, n - i)]
+            if inner:
+                ij = np.array(inner)
+                pts = V[v0] + (ij[:, 0:1] / n) * (V[v1] - V[v0]) + (ij[:, 1:2] / n) * (V[v2] - V[v0])
+                idx[ij[:, 0], ij[:, 1]] = offset + np.arange(len(pts))
+                offset += len(pts)
+                X.append(pts)
+            tl = []
+            for i in range(n):
+                for j in range(n - i):
+                    tl.append((idx[i, j], idx[i + 1, j], idx[i, j + 1]))
+                    if i + j < n - 1:
+                        tl.append((idx[i + 1, j], idx[i + 1, j + 1], idx[i, j + 1]))
+            tris = np.array(tl, dtype=np.int64)
+        tris_per_cell.append(tris)
+    X = np.concatenate(X)
+
+    def chain(a: int, b: int) -> np.ndarray:
+        return np.array([edge_node(a, b, k) for k in range(n + 1)], dtype=np.int64)
+
+    return X, tris_per_cell, chain
+
+
+def _build_fine_structured(V: np.ndarray, cells: list[list[int]], n: int, B: _Boundary, arcs: tuple[Arc, ...]):
+    """Structured fine mesh as arrays (x, cells, cell subdomain ids, boundary facets, tags)."""
+    X, tris, chain = _structured_nodes(V, cells, n)
+    seg, seg_tag = [], []
+    for (a, b), cnt in sorted(_boundary_edges(cells).items()):
+        if cnt == 1:
+            ch = chain(a, b)
+            seg.append(np.stack([ch[:-1], ch[1:]], 1))
+            seg_tag.append(np.full(n, _edge_tag(V, a, b, B, arcs), dtype=np.int32))
+    ids = np.concatenate([np.full(len(t), i, dtype=np.int32) for i, t in enumerate(tris)])
+    return X, np.concatenate(tris), ids, np.concatenate(seg), np.concatenate(seg_tag)
+
+
+def _distribute_mesh(comm: Any, arrays: tuple | None):
+    """Distribute a triangle mesh held on rank 0 (what ``gmshio.model_to_mesh`` does, with
+    the arrays already extracted): returns (mesh, cell tags, facet tags)."""
+    from dolfinx import cpp
+    from dolfinx.io import gmshio
+
+    if comm.rank == 0:
+        x, cells, cell_values, facets, facet_values = arrays
+    else:
+        x, cells = np.zeros((0, 2)), np.zeros((0, 3), dtype=np.int64)
+        cell_values = np.zeros(0, dtype=np.int32)
+        facets, facet_values = np.zeros((0, 2), dtype=np.int64), np.zeros(0, dtype=np.int32)
+    domain = gmshio.ufl_mesh(2, 2)  # gmsh element type 2: 3-node triangle
+    cells = np.asarray(cells, dtype=np.int64)
+    msh = dmesh.create_mesh(comm, cells, np.ascontiguousarray(x, dtype=np.float64), domain)
+    ents, vals = cpp.io.distribute_entity_data(msh._mesh, 2, cells, np.asarray(cell_values, dtype=np.int32))
+    msh.topology.create_connectivity(2, 0)
+    ct = dmesh.meshtags_from_entities(msh, 2, cpp.graph.AdjacencyList_int32(ents), vals.astype(np.int32))
+    ents, vals = cpp.io.distribute_entity_data(msh._mesh, 1, np.asarray(facets, dtype=np.int64),
+                                               np.asarray(facet_values, dtype=np.int32))
+    msh.topology.create_connectivity(1, 2)
+    ft = dmesh.meshtags_from_entities(msh, 1, cpp.graph.AdjacencyList_int32(ents), vals.astype(np.int32))
+    ct.name, ft.name = "subdomains", "boundary"
+    return msh, ct, ft
+
+
+# ============================================================ coarse structure
+def compute_coarse_structure(msh: Any, cell_tags: Any, facet_tags: Any) -> CoarseStructure:
+    """Recover the coarse partition from the distributed mesh (collective).
+
+    Skeleton facets are the exterior facets and the facets whose two cells carry
+    different subdomain tags. On rank 0 the skeleton graph is built from global P1 dof
+    pairs; coarse vertices are the skeleton nodes of degree != 2, or where the two
+    skeleton facets are not collinear, or where the exterior facet tag changes (arc
+    ends). Chains between coarse vertices are the coarse edges. The result is broadcast.
+    """
+    comm = msh.comm
+    V = p1_space(msh)
+    topo = p1_topology(V)
+    tdim = msh.topology.dim
+    n_cells = msh.topology.index_map(tdim).size_local + msh.topology.index_map(tdim).num_ghosts
+    n_facets = msh.topology.index_map(tdim - 1).size_local + msh.topology.index_map(tdim - 1).num_ghosts
+    ctag = tag_array(cell_tags, n_cells)
+    ftag = tag_array(facet_tags, n_facets, default=0)
+    ext = exterior_facets(msh)
+    ncell = np.diff(topo.f2c_offsets)
+    two = np.flatnonzero(ncell == 2)
+    c0 = topo.f2c_array[topo.f2c_offsets[two]]
+    c1 = topo.f2c_array[topo.f2c_offsets[two] + 1]
+    iface = two[(ctag[c0] != ctag[c1]) & (ctag[c0] >= 0) & (ctag[c1] >= 0)]
+    parts = [facet_data(topo, ext, ftag, ctag, True), facet_data(topo, iface, ftag, ctag, False)]
+    fd = gather_facet_data(comm, parts)
+    # subdomain of every owned dof (any cell containing it; unique for interior dofs)
+    dof_tag = np.full(topo.dof_coords.shape[0], -1, dtype=np.int32)
+    dof_tag[topo.dofmap.ravel()] = np.repeat(ctag[: topo.dofmap.shape[0]], 3)
+    owned = np.arange(topo.n_owned_dofs)
+    gathered = comm.gather((topo.local_to_global(owned), dof_tag[owned]), root=0)
+    n_dofs = V.dofmap.index_map.size_global
+    n_sub = comm.allreduce(int(ctag.max(initial=-1)) + 1, op=MPI.MAX)
+    result = None
+    error = None
+    if comm.rank == 0:
+        try:
+            tag_global = np.full(n_dofs, -1, dtype=np.int32)
+            for g, t in gathered:
+                tag_global[g] = t
+            result = _coarse_from_skeleton(fd, tag_global, n_dofs, n_sub)
+        except Exception as err:  # report on every rank instead of deadlocking
+            error = f"{type(err).__name__}: {err}"
+    error = comm.bcast(error, root=0)
+    if error is not None:
+        raise RuntimeError(f"coarse structure: {error}")
+    return comm.bcast(result, root=0)
+
+
+def _coarse_from_skeleton(fd: FacetData, tag_global: np.ndarray, n_dofs: int, n_sub: int) -> CoarseStructure:
+    nodes, inv = np.unique(fd.dofs, return_inverse=True)
+    inv = inv.reshape(-1, 2)
+    nn, nf = len(nodes), len(inv)
+    X = np.zeros((nn, 2))
+    X[inv[:, 0]] = fd.coords[:, 0]
+    X[inv[:, 1]] = fd.coords[:, 1]
+    # adjacency lists: node -> incident facets
+    inc: list[list[int]] = [[] for _ in range(nn)]
+    for f, (a, b) in enumerate(inv.tolist()):
+        inc[a].append(f)
+        inc[b].append(f)
+    deg = np.array([len(x) for x in inc])
+    is_vertex = deg != 2
+    i2 = np.flatnonzero(deg == 2)
+    if len(i2):
+        fg = np.array([inc[i] for i in i2.tolist()], dtype=np.int64)
+        f, g = fg[:, 0], fg[:, 1]
+        a = np.where(inv[f, 1] == i2, inv[f, 0], inv[f, 1])
+        b = np.where(inv[g, 1] == i2, inv[g, 0], inv[g, 1])
+        u, w = X[i2] - X[a], X[b] - X[i2]
+        cross = np.abs(u[:, 0] * w[:, 1] - u[:, 1] * w[:, 0])
+        bent = (cross > _COLLINEAR_TOL * np.linalg.norm(u, axis=1) * np.linalg.norm(w, axis=1)) \
+            | ((u * w).sum(1) <= 0)
+        tag_change = (fd.exterior[f] != fd.exterior[g]) | (fd.exterior[f] & (fd.tag[f] != fd.tag[g]))
+        is_vertex[i2[bent | tag_change]] = True
+    vidx = np.flatnonzero(is_vertex)
+    # sort keys rounded far above round-off, so that coordinate noise (gmsh leaves ~1e-18
+    # instead of 0) cannot reorder vertices between runs
+    scale = float(np.ptp(X, axis=0).max())
+    K = np.round(X / scale, 9)
+    order = np.lexsort((K[vidx, 0], K[vidx, 1]))  # sort by y, then x
+    vidx = vidx[order]
+    vnum = -np.ones(nn, dtype=np.int64)
+    vnum[vidx] = np.arange(len(vidx))
+    visited = np.zeros(nf, dtype=bool)
+    edges = []
+    for v in vidx.tolist():
+        for f0 in inc[v]:
+            if visited[f0]:
+                continue
+            chain, facets = [v], []
+            cur, f = v, f0
+            while True:
+                visited[f] = True
+                facets.append(f)
+                nxt = int(inv[f, 0] if inv[f, 1] == cur else inv[f, 1])
+                chain.append(nxt)
+                if is_vertex[nxt]:
+                    break
+                g = inc[nxt][0] if inc[nxt][0] != f else inc[nxt][1]
+                cur, f = nxt, g
+            edges.append((chain, facets))
+    if not visited.all():
+        raise RuntimeError(f"{int((~visited).sum())} skeleton facets form closed loops without coarse vertices")
+    records = []
+    for chain, facets in edges:
+        f0 = facets[0]
+        ext = bool(fd.exterior[f0])
+        tags = fd.tag[facets]
+        if ext and not np.all(tags == tags[0]):
+            raise RuntimeError("a coarse boundary edge carries two facet tags")
+        a, b = vnum[chain[0]], vnum[chain[-1]]
+        if ext:
+            forward = inv[f0, 0] == chain[0] and inv[f0, 1] == chain[1]  # exterior facets are CCW
+            if not forward:
+                chain = chain[::-1]
+        elif a > b:
+            chain = chain[::-1]
+        arc = int(tags[0]) - SIGNORINI_TAG0 if ext and tags[0] >= SIGNORINI_TAG0 else -1
+        cells = fd.cells[f0]
+        sub = (int(cells[0]), -1) if ext else tuple(sorted((int(cells[0]), int(cells[1]))))
+        records.append((chain, ext, arc, sub))
+    ev = np.array([[vnum[r[0][0]], vnum[r[0][-1]]] for r in records], dtype=np.int64).reshape(-1, 2)
+    mid = np.array([K[r[0][len(r[0]) // 2]] for r in records]).reshape(-1, 2)
+    eorder = np.lexsort((mid[:, 0], mid[:, 1], ev.max(1), ev.min(1)))
+    records = [records[i] for i in eorder]
+    ev = ev[eorder]
+    skeleton = np.sort(nodes)
+    interior = np.setdiff1d(np.arange(n_dofs, dtype=np.int64), skeleton)
+    sub_of_interior = tag_global[interior]
+    if (sub_of_interior < 0).any():
+        raise RuntimeError("some interior dofs have no subdomain tag")
+    on_bnd = np.zeros(nn, dtype=bool)
+    on_bnd[inv[fd.exterior].ravel()] = True
+    return CoarseStructure(
+        vertex_coords=X[vidx],
+        vertex_dofs=nodes[vidx].astype(np.int64),
+        vertex_on_boundary=on_bnd[vidx],
+        edge_vertices=ev,
+        edge_dofs=tuple(nodes[np.array(r[0])].astype(np.int64) for r in records),
+        edge_coords=tuple(X[np.array(r[0])] for r in records),
+        edge_on_boundary=np.array([r[1] for r in records], dtype=bool),
+        edge_arc=np.array([r[2] for r in records], dtype=np.int64),
+        edge_subdomains=np.array([r[3] for r in records], dtype=np.int64).reshape(-1, 2),
+        skeleton_dofs=skeleton.astype(np.int64),
+        interior_dofs=interior,
+        subdomain_of_interior_dof=sub_of_interior.astype(np.int64),
+        n_subdomains=int(n_sub),
+        n_dofs=int(n_dofs),
+        n_skeleton_facets=int(nf),
+    )
+
+
+# ================================================================= entry point
+def _validate(shape, h, subdomain_size, center, width, vertices):
+    """Scalar and polygon checks (identical on every rank, no communication)."""
+    if shape not in SHAPES:
+        raise ValueError(f"shape must be one of {SHAPES}, got {shape!r}")
+    for name, val in (("h", h), ("subdomain_size", subdomain_size)):
+        if isinstance(val, bool) or not isinstance(val, (int, float, np.floating, np.integer)) \
+                or not math.isfinite(val) or val <= 0:
+            raise ValueError(f"{name} must be a positive number, got {val!r}")
+    h, d = float(h), float(subdomain_size)
+    if d < 2 * h:
+        raise ValueError(f"subdomain_size d={d:g} is smaller than 2h={2 * h:g}; increase subdomain_size "
+                         "or decrease h")
+    if shape == "polygon":
+        if vertices is None:
+            raise ValueError("shape 'polygon' needs vertices=[(x0, y0), (x1, y1), ...] (counter-clockwise)")
+        try:
+            P = np.asarray(vertices, dtype=float)
+        except (TypeError, ValueError):
+            raise ValueError("vertices must be a list of (x, y) pairs") from None
+        if P.ndim != 2 or P.shape[1] != 2:
+            raise ValueError(f"vertices must be a list of (x, y) pairs, got shape {P.shape}")
+        _check_polygon(P)
+        cx = cy = None
+    else:
+        if vertices is not None:
+            raise ValueError(f"vertices are only used by shape 'polygon'; drop them for shape {shape!r}")
+        try:
+            cx, cy = (float(c) for c in center)
+        except (TypeError, ValueError):
+            raise ValueError(f"center must be a pair (x, y), got {center!r}") from None
+        if not (math.isfinite(cx) and math.isfinite(cy)):
+            raise ValueError(f"center must be finite, got {center!r}")
+        if isinstance(width, bool) or not isinstance(width, (int, float, np.floating, np.integer)) \
+                or not math.isfinite(width) or width <= 0:
+            raise ValueError(f"width must be a positive number, got {width!r}")
+        P = None
+    return h, d, P, (cx, cy)
+
+
+def build_domain(comm: Any, shape: str, *, h: float, subdomain_size: float,
+                 center: Sequence[float] = (0.0, 0.0), width: float = 0.5,
+                 vertices: Sequence[Sequence[float]] | None = None, signorini: Any = (),
+                 structured: bool = False, allow_large: bool = False) -> Domain:
+    """Mesh Omega with a coarse partition into subdomains of size about ``subdomain_size``.
+
+    Parameters
+    ----------
+    comm
+        MPI communicator (all its ranks call with the same arguments).
+    shape
+        ``"square"`` (``center``, ``width``), ``"lshape"`` (``center``, ``width``: the square
+        of that width minus its upper-right quarter) or ``"polygon"`` (``vertices``, CCW).
+    h
+        Fine mesh size (structured: h = coarse edge / round(d/h)).
+    subdomain_size
+        Coarse size d >= 2h.
+    signorini
+        Signorini arcs (module docstring); () for none.
+    structured
+        Uniform refinement of the coarse cells instead of an unstructured gmsh mesh.
+    allow_large
+        Allow diam(Omega) >= 1 (then V is not guaranteed elliptic, METHOD.md section 2).
+
+    Returns
+    -------
+    Domain
+
+    Raises
+    ------
+    ValueError
+        Invalid parameters (raised identically on every rank before any collective).
+    """
+    h, d, P, (cx, cy) = _validate(shape, h, subdomain_size, center, width, vertices)
+    if shape != "polygon":
+        P, cV, ccells, csize = _grid_partition(shape, (cx, cy), float(width), d)
+    diam = _diameter(P)
+    if diam >= 1.0 and not allow_large:
+        raise ValueError(f"diam(Omega) = {diam:.4g} >= 1: the single-layer operator may not be elliptic "
+                         "(METHOD.md section 2); shrink the domain or pass allow_large=True")
+    B = _Boundary(P)
+    arcs, whole = _parse_arcs(signorini, shape, B)
+    ends = [] if whole else [np.asarray(p) for a in arcs for p in (a.start, a.end)]
+    if shape != "polygon":
+        if structured:
+            for q in ends:
+                if np.linalg.norm(cV - q, axis=1).min() > B.tol:
+                    raise ValueError(f"signorini: arc end ({q[0]:g}, {q[1]:g}) is not a coarse grid vertex, "
+                                     "which structured=True requires; move it to a multiple of the coarse "
+                                     f"size {csize:g} or use structured=False")
+        else:
+            cV, ccells = _insert_boundary_points(cV, ccells, ends, B.tol)
+
+    # ---- rank 0 builds the mesh arrays (gmsh); errors are broadcast so no rank waits forever.
+    error, arrays = None, None
+    if shape == "polygon":
+        csize = None  # known after the coarse gmsh mesh on rank 0
+    if comm.rank == 0:
+        try:
+            if shape == "polygon" or not structured:
+                import gmsh
+
+                gmsh.initialize(readConfigFiles=False)
+                gmsh.option.setNumber("General.Terminal", 0)
+                try:
+                    if shape == "polygon":
+                        gmsh.model.add("fembem_coarse")
+                        cV, ccells = _polygon_partition_gmsh(P, ends, d, B.tol)
+                        gmsh.model.remove()
+                        csize = float(np.mean([np.linalg.norm(cV[a] - cV[b]) for c in ccells
+                                               for a, b in zip(c, c[1:] + c[:1])]))
+                    if not structured:
+                        gmsh.model.add("fembem_domain")
+                        arrays = _build_fine_geo(cV, ccells, h, B, arcs)
+                finally:
+                    gmsh.finalize()
+            if structured:
+                n = max(2, int(round((d if shape == "polygon" else csize) / h)))
+                arrays = _build_fine_structured(cV, ccells, n, B, arcs)
+        except Exception as err:
+            error = f"{type(err).__name__}: {err}"
+    error = comm.bcast(error, root=0)
+    if error is not None:
+        raise RuntimeError(f"meshing the domain failed: {error}")
+    if shape == "polygon":
+        csize = comm.bcast(csize, root=0)
+    msh, ct0, ft = _distribute_mesh(comm, arrays)
+    coarse = compute_coarse_structure(msh, ct0, ft)
+    h_max = _max_facet_length(msh)
+    return Domain(mesh=msh, cell_tags=ct0, facet_tags=ft, coarse=coarse, arcs=arcs, h=h, subdomain_size=d,
+                  shape=shape, vertices=P.copy(), signorini_is_whole_boundary=whole, structured=bool(structured),
+                  coarse_size=float(csize), h_max=h_max)
+
+
+def _max_facet_length(msh: Any) -> float:
+    V = p1_space(msh)
+    topo = p1_topology(V)
+    p = topo.dof_coords[topo.v2dof[topo.f2v]]
+    loc = float(np.linalg.norm(p[:, 1] - p[:, 0], axis=1).max(initial=0.0))
+    return msh.comm.allreduce(loc, op=MPI.MAX)

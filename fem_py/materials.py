@@ -1,0 +1,259 @@
+"""Nonlinear materials rho of METHOD.md section 1 and their energy densities (2.1).
+
+A material is the coefficient rho in ``-div(rho(|grad u|) grad u) = f`` (1.1). From rho
+we need
+
+- ``g(t) = int_0^t s rho(s) ds``           the energy density of G(w) = int g(|grad w|) (2.1),
+- ``rho'(t)``                               for the tangent rho^(x) of METHOD.md section 6 (4.1),
+- ``rho^(x) = rho(|x|) I + rho'(|x|) x x^T / |x|``, ``rho^(0) = rho(0) I``.
+
+Every material is held as sympy expressions in the symbol t, translated to UFL or numpy
+on demand. Built-ins (``make_material``):
+
+=============  ==================================  ==========================================
+name           rho(t)                              g(t)
+=============  ==================================  ==========================================
+linear         1                                   t^2/2
+carstensen     2 + 1/(1+t)                         t^2 + t - ln(1+t)
+power          (eps^2+t^2)^((p-2)/2), p>1, eps>0   ((eps^2+t^2)^(p/2) - eps^p)/p
+expression     any string in t (fem_py.expressions) sympy: int_0^t s rho(s) ds (closed form)
+=============  ==================================  ==========================================
+
+Safety at grad u = 0 (what is done, and why). The energy is written as a function of
+s = |grad u|^2, ``G2(s) = g(sqrt(s))``, so that linear and power materials involve no
+square root of s at all. For a general material (carstensen: G2(s) = s + sqrt(s) -
+ln(1 + sqrt(s))) the UFL derivatives of sqrt(s) are 0/0 at s = 0, so the UFL energy is
+
+    conditional(s > S0, G2(s), rho(0) s / 2),      S0 = 1e-40 (|grad u| = 1e-20),
+
+and the tangent is ``conditional(s > S0, rho(t), rho(0)) I + conditional(s > S0,
+rho'(t)/t, 0) x x^T``. Below S0 the quadratic branch differs from g by
+|rho'(0)| t^3/3, a relative 1e-20 - far below round-off - so the branch is exact in
+double precision, yet its derivatives at s = 0 are the finite limits (rho(0) grad u,
+rho(0) I). FFCx emits the conditional as a C ternary that selects one branch, so the
+NaN of the unused branch never propagates (tests/test_fem_forms.py assembles both
+Jacobians at grad u = 0 and checks every entry is finite).
+
+Structural condition (METHOD.md section 1), checked numerically on
+t in [0, 1e3] (1001 uniform points on [0, 1] and 601 log-spaced on [1, 1e3]):
+rho finite and > 0 (the condition with s = 0 gives rho(t) >= alpha > 0; a material
+with rho(0) = 0 would have a singular tangent at grad u = 0), and t rho(t) strictly
+increasing. ``alpha`` and ``beta`` are the smallest and largest difference quotients
+of t rho(t) on that grid (estimates of the constants of section 1 on bounded
+gradients).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import numpy as np
+import sympy
+
+from fem_py.expressions import Expression, from_sympy
+
+__all__ = ["Material", "make_material", "BUILTIN_MATERIALS", "S0", "check_grid"]
+
+#: Threshold on s = |grad u|^2 below which the quadratic branch is used (see module docstring).
+S0 = 1e-40
+BUILTIN_MATERIALS = ("linear", "carstensen", "power")
+
+_T = sympy.Symbol("t", positive=True)
+_S = sympy.Symbol("s", positive=True)
+
+
+def check_grid() -> np.ndarray:
+    """The grid of t values on which the structural condition is checked."""
+    return np.unique(np.concatenate([np.linspace(0.0, 1.0, 1001), np.logspace(0.0, 3.0, 601)]))
+
+
+def _is_ufl(x: Any) -> bool:
+    import ufl
+
+    return isinstance(x, ufl.core.expr.Expr)
+
+
+@dataclass(frozen=True)
+class Material:
+    """A material rho with its energy density g and derivative rho' (METHOD.md 1, 2.1, 4.1).
+
+    Attributes
+    ----------
+    name
+        ``"linear"``, ``"carstensen"``, ``"power(p=..,eps=..)"`` or the user expression.
+    rho_sym, g_sym, drho_sym
+        sympy expressions in the positive symbol ``t``.
+    rho0
+        rho(0) (the tangent at grad u = 0 is rho(0) I).
+    alpha, beta
+        smallest and largest difference quotient of t rho(t) on :func:`check_grid`.
+    """
+
+    name: str
+    rho_sym: Any
+    g_sym: Any
+    drho_sym: Any
+    rho0: float
+    alpha: float
+    beta: float
+    _g2_sym: Any = field(repr=False, compare=False, default=None)
+
+    # ------------------------------------------------------ dispatching API
+    def rho(self, t: Any) -> Any:
+        """rho(t) for a UFL expression t (UFL result) or an array/float t (numpy)."""
+        return self._eval(self.rho_sym, t)
+
+    def drho(self, t: Any) -> Any:
+        """rho'(t), UFL or numpy like :meth:`rho`."""
+        return self._eval(self.drho_sym, t)
+
+    def energy_density(self, t: Any) -> Any:
+        """g(t) = int_0^t s rho(s) ds (2.1), UFL or numpy like :meth:`rho`.
+
+        For UFL use on |grad u| prefer :meth:`energy_density_sq`, which is safe at 0.
+        """
+        return self._eval(self.g_sym, t)
+
+    def rho_np(self, t: Any) -> np.ndarray:
+        """numpy rho(t)."""
+        return self._eval(self.rho_sym, np.asarray(t, dtype=float))
+
+    def drho_np(self, t: Any) -> np.ndarray:
+        """numpy rho'(t)."""
+        return self._eval(self.drho_sym, np.asarray(t, dtype=float))
+
+    def g_np(self, t: Any) -> np.ndarray:
+        """numpy g(t)."""
+        return self._eval(self.g_sym, np.asarray(t, dtype=float))
+
+    def _eval(self, e: Any, t: Any) -> Any:
+        if _is_ufl(t):
+            return from_sympy(e, {"t": t}, "ufl")
+        t = np.asarray(t, dtype=float)
+        with np.errstate(all="ignore"):
+            v = from_sympy(e, {"t": t}, "numpy")
+        return np.broadcast_to(np.asarray(v, dtype=float), t.shape).copy() if t.shape else float(v)
+
+    # ------------------------------------------------------ UFL building blocks
+    def energy_density_sq(self, s: Any) -> Any:
+        """UFL ``G2(s) = g(sqrt(s))`` for s = |grad u|^2, safe at s = 0 (module docstring)."""
+        import ufl
+
+        g2 = from_sympy(self._g2_sym, {"s": s}, "ufl")
+        return ufl.conditional(ufl.gt(s, S0), g2, 0.5 * self.rho0 * s)
+
+    def tangent(self, x: Any) -> Any:
+        """UFL 2x2 tangent rho^(x) = rho(|x|) I + rho'(|x|) x x^T / |x| (4.1); rho(0) I at x = 0."""
+        import ufl
+
+        s = ufl.inner(x, x)
+        t = ufl.sqrt(s)
+        c1 = ufl.conditional(ufl.gt(s, S0), self.rho(t), self.rho0)
+        c2 = ufl.conditional(ufl.gt(s, S0), self.drho(t) / t, 0.0)
+        return c1 * ufl.Identity(2) + c2 * ufl.outer(x, x)
+
+    def flux(self, x: Any) -> Any:
+        """UFL rho(|x|) x (the flux of (1.1)), safe at x = 0."""
+        import ufl
+
+        s = ufl.inner(x, x)
+        return ufl.conditional(ufl.gt(s, S0), self.rho(ufl.sqrt(s)), self.rho0) * x
+
+
+def _check_structure(name: str, rho_np: Callable[[np.ndarray], np.ndarray]) -> tuple[float, float]:
+    t = check_grid()
+    with np.errstate(all="ignore"):
+        r = np.asarray(rho_np(t), dtype=float) * np.ones_like(t)
+    bad = ~np.isfinite(r)
+    if bad.any():
+        raise ValueError(f"material {name!r}: rho is not finite at t = {t[bad][0]:.6g}; "
+                         "rho must be finite on [0, inf)")
+    if (r <= 0).any():
+        i = int(np.argmax(r <= 0))
+        raise ValueError(f"material {name!r}: rho({t[i]:.6g}) = {r[i]:.6g} <= 0; METHOD.md section 1 implies "
+                         "rho(t) >= alpha > 0, make rho positive")
+    q = np.diff(t * r) / np.diff(t)
+    if not (q > 0).all():
+        i = int(np.argmax(q <= 0))
+        raise ValueError(f"material {name!r}: t*rho(t) is not strictly increasing near t = {t[i]:.6g}; "
+                         "METHOD.md section 1 needs alpha (t-s) <= t rho(t) - s rho(s)")
+    return float(q.min()), float(q.max())
+
+
+def _rational(v: float) -> Any:
+    return sympy.Rational(repr(float(v)))
+
+
+def _build(name: str, rho: Any, g: Any | None) -> Material:
+    """Complete a material from sympy rho (and g if known in closed form)."""
+    rho = sympy.sympify(rho)
+    rho_np = lambda tt: from_sympy(rho, {"t": tt}, "numpy")  # noqa: E731
+    alpha, beta = _check_structure(name, rho_np)
+    if g is None:
+        anti = sympy.integrate(_T * rho, _T)
+        if anti.has(sympy.Integral) or anti.has(sympy.Piecewise):
+            raise ValueError(f"material {name!r}: sympy cannot integrate t*rho(t) in closed form; "
+                             "give a rho with an elementary antiderivative")
+        at0 = anti.subs(_T, 0)
+        if not at0.is_finite:
+            at0 = sympy.limit(anti, _T, 0, "+")
+        if not at0.is_finite:
+            raise ValueError(f"material {name!r}: int_0^t s rho(s) ds diverges at 0; rho must be finite at 0")
+        g = anti - at0
+    drho = sympy.diff(rho, _T)
+    g2 = g.subs(_T, sympy.sqrt(_S))
+    rho0 = float(np.broadcast_to(rho_np(np.zeros(1)), (1,))[0])
+    for e, what in ((g, "g(t)"), (drho, "rho'(t)")):  # fail here, not at form compilation
+        try:
+            from_sympy(e, {"t": np.ones(1), "s": np.ones(1)}, "numpy")
+        except ValueError as err:
+            raise ValueError(f"material {name!r}: {what} = {e} cannot be evaluated ({err})") from None
+    return Material(name=name, rho_sym=rho, g_sym=g, drho_sym=drho, rho0=rho0, alpha=alpha, beta=beta,
+                    _g2_sym=g2)
+
+
+def make_material(name_or_expression: str, *, p: float | None = None, eps: float | None = None) -> Material:
+    """Build a material by name (``linear``, ``carstensen``, ``power``) or from rho(t) as text.
+
+    Parameters
+    ----------
+    name_or_expression
+        A built-in name, or an expression in ``t`` for rho(t) (fem_py.expressions
+        grammar), e.g. ``"2 + 1/(1+t)"``; sympy derives g and rho'.
+    p, eps
+        Exponent (> 1) and regularisation (> 0) of ``power``: rho = (eps^2+t^2)^((p-2)/2).
+        Required for ``power`` and ignored by the other materials (so that a
+        configuration may always carry them).
+
+    Raises
+    ------
+    ValueError
+        Missing or invalid p/eps, a bad expression, a rho violating METHOD.md section 1
+        (rho < 0 or t rho(t) not strictly increasing on [0, 1e3]) or a rho whose energy
+        has no closed form.
+    """
+    if not isinstance(name_or_expression, str) or not name_or_expression.strip():
+        raise ValueError("material must be a non-empty string: linear, carstensen, power or an expression in t")
+    key = name_or_expression.strip()
+    t = _T
+    if key == "linear":
+        return _build("linear", sympy.Integer(1), t**2 / 2)
+    if key == "carstensen":
+        return _build("carstensen", 2 + 1 / (1 + t), t**2 + t - sympy.log(1 + t))
+    if key == "power":
+        if p is None or eps is None:
+            raise ValueError("material 'power' needs both p > 1 and eps > 0, e.g. p=1.5, eps=0.1")
+        try:
+            p, eps = float(p), float(eps)
+        except (TypeError, ValueError):
+            raise ValueError(f"material 'power' needs numbers p and eps, got p={p!r}, eps={eps!r}") from None
+        if not (np.isfinite(p) and p > 1):
+            raise ValueError(f"material 'power' needs p > 1, got p={p}")
+        if not (np.isfinite(eps) and eps > 0):
+            raise ValueError(f"material 'power' needs eps > 0, got eps={eps}")
+        ps, es = _rational(p), _rational(eps)
+        rho = (es**2 + t**2) ** ((ps - 2) / 2)
+        g = ((es**2 + t**2) ** (ps / 2) - es**ps) / ps
+        return _build(f"power(p={float(p):g},eps={float(eps):g})", rho, g)
+    rho = Expression(key, ("t",)).evaluate({"t": t}, "sympy")
+    return _build(key, rho, None)

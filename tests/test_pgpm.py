@@ -1,0 +1,147 @@
+"""The PGPM solver against exact answers (METHOD.md sections 4, 5, 7, 8).
+
+Tolerances: the stopping rule ||xi_k+1 - xi_k||_B <= tol ||xi_k+1||_B bounds the error
+of the iterate by about tol / (1 - contraction), i.e. kappa * tol with kappa <= 100
+here; comparisons with other solvers use tol = 1e-12 so that 1e-9 is met with margin.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from coupling.manufactured import manufactured_problem, square_contact
+from coupling.problem import SignoriniProblem, SolverOptions, _to_scipy
+from fem_py.geometry import build_domain
+from fem_py.materials import make_material
+
+COMM = MPI.COMM_WORLD
+
+
+def linear_transmission_problem(cells: int = 16, **options) -> SignoriniProblem:
+    domain = build_domain(COMM, "square", h=0.5 / cells, subdomain_size=2.0 / cells,
+                          signorini=[], structured=True)
+    return SignoriniProblem(domain, make_material("linear"), f="1 + x", u0="x*y",
+                            t0="0.3*nx - y", a=0.2, options=SolverOptions(**options))
+
+
+def test_linear_problem_without_contact_equals_the_direct_solve():
+    problem = linear_transmission_problem(tol=1e-12, max_iterations=5000)
+    result = problem.solve()
+    assert result.converged
+    # (K + T^T S_h T) u = b_f + T^T (m_t + s_0): the optimality system of J_h with no phi
+    K = problem.forms.assemble_stiffness()
+    T = problem.boundary.trace_matrix()
+    matrix = (_to_scipy(K) + T.T @ sp.csr_matrix(problem.S) @ T).tocsc()
+    rhs = problem.functional.load.array_r + T.T @ problem.functional.boundary_load
+    direct = spla.spsolve(matrix, rhs)
+    u = result.u.x.array[:direct.size]
+    assert np.linalg.norm(u - direct) <= 1e-9 * np.linalg.norm(direct)
+
+
+@pytest.fixture(scope="module")
+def carstensen():
+    return make_material("carstensen")
+
+
+def solve_tao(problem: SignoriniProblem, *, tol: float) -> tuple[np.ndarray, np.ndarray]:
+    """min J_h(u, phi) s.t. phi >= 0 by PETSc TAO BQNLS (bound-constrained quasi-Newton
+    line search), an independent solver. (BLMVM stalls between gatol 1e-8 and 1e-9 here.)"""
+    from dolfinx import fem
+
+    u_fun = fem.Function(problem.V)
+    n_u = u_fun.x.array.size
+    n_s = problem.n_signorini
+    grad_u = problem.forms.create_vector()
+
+    def objective_gradient(tao, x, g):
+        u_fun.x.array[:] = x.array_r[:n_u]
+        energy = problem.functional.energy(u_fun, x.array_r[n_u:])
+        g.array[n_u:] = problem.functional.gradient(u_fun, x.array_r[n_u:], grad_u)
+        g.array[:n_u] = grad_u.array_r
+        return energy
+
+    x = PETSc.Vec().createSeq(n_u + n_s)
+    x.set(0.0)
+    lower, upper = x.duplicate(), x.duplicate()
+    lower.array[:n_u] = PETSc.NINFINITY
+    lower.array[n_u:] = 0.0
+    upper.set(PETSc.INFINITY)
+    tao = PETSc.TAO().create(PETSc.COMM_SELF)
+    tao.setType("bqnls")
+    tao.setObjectiveGradient(objective_gradient, x.duplicate())
+    tao.setVariableBounds(lower, upper)
+    tao.setTolerances(gatol=tol, grtol=0.0, gttol=0.0)
+    tao.setMaximumIterations(20000)
+    tao.setMaximumFunctionEvaluations(100000)
+    tao.solve(x)
+    assert tao.getConvergedReason() > 0, (tao.getConvergedReason(), tao.getIterationNumber())
+    u, phi = x.array_r[:n_u].copy(), x.array_r[n_u:].copy()
+    for obj in (tao, x, lower, upper, grad_u):
+        obj.destroy()
+    return u, phi
+
+
+@pytest.mark.skipif(COMM.size > 1, reason="serial comparison")
+def test_pgpm_minimiser_equals_tao_bqnls(carstensen):
+    solution = square_contact()
+    problem = manufactured_problem(COMM, solution, carstensen, cells=16, tol=1e-12,
+                                   max_iterations=5000, projection="exact")
+    result = problem.solve()
+    assert result.converged and result.contact.any() and not result.contact.all()
+    u_tao, phi_tao = solve_tao(problem, tol=1e-11)
+    u = result.u.x.array
+    assert np.linalg.norm(u - u_tao) <= 1e-7 * np.linalg.norm(u)
+    assert np.linalg.norm(result.phi - phi_tao) <= 1e-7 * np.linalg.norm(result.phi)
+
+
+@pytest.fixture(scope="module")
+def runs(carstensen):
+    """(cells, iterations, result, problem) for the square at fixed d/h = 4."""
+    out = []
+    for cells in (8, 16, 32):
+        problem = manufactured_problem(COMM, square_contact(), carstensen, cells=cells)
+        out.append((cells, problem.solve(), problem))
+    return out
+
+
+def test_iterations_bounded_at_fixed_d_over_h(runs):
+    counts = np.array([r.iterations for _, r, _ in runs])
+    assert all(r.converged for _, r, _ in runs)
+    assert counts.max() / counts.min() <= 1.5, counts
+
+
+def test_energy_decreases_monotonically(runs):
+    for _, result, _ in runs:
+        energy = np.array([result.history[0].energy] + [h.energy for h in result.history])
+        # the energy after each step never exceeds the previous one beyond round-off
+        assert np.all(np.diff(energy) <= 1e-13 * np.abs(energy[1:])), np.diff(energy).max()
+        assert result.energy_increases == 0
+
+
+def test_identity_preconditioner_count_grows_like_h_minus_2(carstensen):
+    counts = []
+    for cells in (4, 8):
+        problem = manufactured_problem(COMM, square_contact(), carstensen, cells=cells,
+                                       d_over_h=2, preconditioner="identity", tol=1e-6,
+                                       max_iterations=100000)
+        result = problem.solve()
+        assert result.converged
+        counts.append(result.iterations)
+    # Remark 2.1: cond(D^2 J_h) = O(h^-2); halving h multiplies the count by about 4
+    assert counts[1] / counts[0] > 2.5, counts
+
+
+def test_inexact_and_exact_projection_reach_the_same_solution(carstensen):
+    results = {}
+    for projection in ("inexact", "exact"):
+        problem = manufactured_problem(COMM, square_contact(), carstensen, cells=16,
+                                       projection=projection, tol=1e-12, max_iterations=5000)
+        results[projection] = problem.solve()
+    a, b = results["inexact"], results["exact"]
+    assert np.linalg.norm(a.u.x.array - b.u.x.array) <= 1e-8 * np.linalg.norm(b.u.x.array)
+    assert np.linalg.norm(a.phi - b.phi) <= 1e-8 * np.linalg.norm(b.phi)
+    assert np.array_equal(a.contact, b.contact)

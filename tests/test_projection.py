@@ -1,0 +1,84 @@
+"""P_s: the M_s-orthogonal projection onto {phi >= 0} (METHOD.md (3.19), (3.20), (3.6))."""
+import numpy as np
+import pytest
+import scipy.optimize
+
+from coupling.projection import SignoriniProjection
+
+
+def h12_like_matrix(n: int) -> np.ndarray:
+    """A dense SPD matrix that is not an M-matrix, like M_s (a discrete H^1/2_00 form)."""
+    i = np.arange(1, n + 1)
+    distance = (i[:, None] - i[None, :]).astype(float)
+    np.fill_diagonal(distance, np.inf)
+    M = -1.0 / distance**2
+    np.fill_diagonal(M, -M.sum(axis=1) + 1.0 / i + 1.0 / (n + 1 - i))
+    rng = np.random.default_rng(1)
+    Q = np.eye(n) + 0.3 * rng.standard_normal((n, n)) / np.sqrt(n)
+    return Q @ M @ Q.T
+
+
+def kkt_residual(M, target, psi):
+    lam = M @ (psi - target)
+    return max(np.abs(np.minimum(psi, 0)).max(), np.abs(np.minimum(lam, 0)).max(),
+               np.abs(psi * lam).max() / np.abs(M).max())
+
+
+@pytest.mark.parametrize("n", [5, 40, 120])
+def test_exact_projection_solves_the_qp_to_round_off(n):
+    M = h12_like_matrix(n)
+    rng = np.random.default_rng(n)
+    projection = SignoriniProjection(M, "exact")
+    for _ in range(5):
+        target = rng.standard_normal(n)
+        psi = projection(target, np.zeros(n)).phi
+        # KKT: psi >= 0, lambda = M (psi - target) >= 0, psi * lambda = 0
+        assert kkt_residual(M, target, psi) < 1e-12 * np.abs(target).max() * n
+        L = np.linalg.cholesky(M)
+        reference, _ = scipy.optimize.nnls(L.T, L.T @ target)
+        assert np.allclose(psi, reference, atol=1e-10 * np.abs(target).max())
+
+
+def test_inexact_projection_converges_to_the_exact_one():
+    n = 30
+    M = h12_like_matrix(n)
+    rng = np.random.default_rng(3)
+    target = rng.standard_normal(n)
+    exact = SignoriniProjection(M, "exact")(target, np.zeros(n)).phi
+    inexact = SignoriniProjection(M, "inexact", rho_in=0.0, max_iterations=200000)
+    result = inexact(target, np.zeros(n))
+    # rho_in = 0 runs the projected iteration (a contraction in the M norm for
+    # theta = 1/lambda_max) to its fixed point, which is the exact projection.
+    assert result.iterations > 1
+    assert np.linalg.norm(result.phi - exact) < 1e-8 * np.linalg.norm(exact)
+
+
+def test_inexact_projection_satisfies_the_accuracy_condition_3_6():
+    n = 30
+    M = h12_like_matrix(n)
+    rng = np.random.default_rng(4)
+    exact = SignoriniProjection(M, "exact")
+    rho = 0.5
+    inexact = SignoriniProjection(M, "inexact", rho_in=rho, max_iterations=10000)
+    norm = inexact.norm
+    for _ in range(10):
+        start = np.maximum(rng.standard_normal(n), 0)
+        target = start + 0.3 * rng.standard_normal(n)
+        approx = inexact(target, start).phi
+        best = exact(target, start).phi
+        assert approx.min() >= 0
+        lhs = norm(approx - target) ** 2
+        rhs = rho * norm(target - start) ** 2 + (1 - rho) * norm(best - target) ** 2
+        assert lhs <= rhs * (1 + 1e-12)
+
+
+def test_feasible_target_is_a_fixed_point():
+    M = h12_like_matrix(10)
+    target = np.linspace(0.1, 1.0, 10)
+    for method in ("exact", "inexact"):
+        assert np.allclose(SignoriniProjection(M, method)(target, target).phi, target)
+
+
+def test_unknown_method_is_rejected():
+    with pytest.raises(ValueError, match="projection must be"):
+        SignoriniProjection(np.eye(2), "approximate")
