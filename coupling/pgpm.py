@@ -72,11 +72,11 @@ def estimate_step(functional: CoupledFunctional, preconditioner, jacobian: PETSc
     """
     comm = functional.comm
     work = jacobian.createVecRight()
-    n_u = work.getLocalSize()
-    rng = np.random.default_rng(seed + comm.rank)
-    p_u, p_phi = rng.standard_normal(n_u), rng.standard_normal(n_phi)
-    if n_phi:
-        p_phi = comm.bcast(p_phi, root=0)
+    r0, r1 = work.getOwnershipRange()
+    # the same start vector for any number of ranks (iterates independent of P)
+    rng = np.random.default_rng(seed)
+    p_u = rng.standard_normal(work.getSize())[r0:r1]
+    p_phi = rng.standard_normal(n_phi)
     q_u, q_phi = preconditioner.apply_omega(p_u), preconditioner.apply_signorini(p_phi)
     norm = np.sqrt(_dot(comm, q_u, p_u) + q_phi @ p_phi)
     q_u, q_phi, p_u, p_phi = q_u / norm, q_phi / norm, p_u / norm, p_phi / norm
@@ -86,7 +86,6 @@ def estimate_step(functional: CoupledFunctional, preconditioner, jacobian: PETSc
     e_u = jacobian.createVecRight()
     for _ in range(steps):
         e_u.array[:] = q_u
-        e_u.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         h_phi = functional.hessian_action(jacobian, e_u, q_phi, work)
         h_u = work.array_r.copy()
         alpha = _dot(comm, q_u, h_u) + q_phi @ h_phi
@@ -161,6 +160,8 @@ def projection_gradient(functional: CoupledFunctional, preconditioner,
             u.array[:] = u_old - tau * r_u
             u.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
             projected = projection(phi - tau * r_phi, phi)
+            if comm.size > 1:  # one copy of phi: rank 0's (round-off may differ by rank)
+                projected = comm.bcast(projected, root=0)
             new_energy = functional.energy(u_function, projected.phi)
             increased = new_energy - energy > 1e-13 * (abs(energy) + abs(new_energy))
             if increased:

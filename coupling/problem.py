@@ -29,6 +29,7 @@ import bem_cpp
 from coupling.config import DEFAULTS, as_dataclass_kwargs
 from coupling.functional import CoupledFunctional
 from coupling.pgpm import IterationRecord, PGPMResult, estimate_step, projection_gradient
+from coupling.distributed import RootPreconditioner, gather_matrix, gather_rows
 from coupling.exact_preconditioner import ExactPreconditioner
 from coupling.preconditioner import (IdentityPreconditioner, SignoriniArc,
                                      SubstructuringPreconditioner)
@@ -172,21 +173,31 @@ class SignoriniProblem:
         return arcs
 
     def _make_preconditioner(self):
-        """B of the ``preconditioner`` option (METHOD.md sections 5-6), factored once."""
-        kind = self.options.preconditioner
+        """B of the ``preconditioner`` option (METHOD.md sections 5-6), factored once.
+
+        The substructuring and exact preconditioners are built from the gathered
+        stiffness matrix; under MPI they run on rank 0 (:mod:`coupling.distributed`).
+        """
+        kind, comm = self.options.preconditioner, self.comm
         n_owned = self.V.dofmap.index_map.size_local
         if kind == "identity":
             return IdentityPreconditioner(n_owned, self.n_signorini)
         stiffness = self.forms.assemble_stiffness()
-        csr = _to_scipy(stiffness)
+        csr = gather_matrix(stiffness)
         stiffness.destroy()
-        if kind == "exact":
-            return ExactPreconditioner(csr, self.boundary.dofs, self.boundary.signorini, self.S)
-        x = self.V.tabulate_dof_coordinates()[:n_owned, :2]
-        return SubstructuringPreconditioner(
-            csr, self.domain.coarse, x, self.domain.subdomain_size, self._signorini_arcs(),
-            edge_form=self.options.edge_form,
-            signorini_weight=self.options.signorini_weight)
+        x = gather_rows(comm, self.V.tabulate_dof_coordinates()[:n_owned, :2])
+        arcs = self._signorini_arcs()
+
+        def build():
+            if kind == "exact":
+                return ExactPreconditioner(csr, self.boundary.dofs, self.boundary.signorini,
+                                           self.S)
+            return SubstructuringPreconditioner(
+                csr, self.domain.coarse, x, self.domain.subdomain_size, arcs,
+                edge_form=self.options.edge_form,
+                signorini_weight=self.options.signorini_weight)
+
+        return build() if comm.size == 1 else RootPreconditioner(comm, n_owned, build)
 
     @property
     def n_signorini(self) -> int:
@@ -243,14 +254,6 @@ class SignoriniProblem:
         return bem_cpp.exterior_potential(self.boundary.nodes, solution.ue, solution.flux,
                                           np.asarray(points, dtype=float), a=self.a,
                                           flux=self.options.flux_space)
-
-
-def _to_scipy(matrix: PETSc.Mat):
-    """A serial PETSc AIJ matrix as scipy CSR."""
-    import scipy.sparse
-
-    indptr, indices, data = matrix.getValuesCSR()
-    return scipy.sparse.csr_matrix((data, indices, indptr), shape=matrix.getSize())
 
 
 def domain_from_config(comm: MPI.Comm, config: dict):

@@ -14,7 +14,8 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from coupling.manufactured import manufactured_problem, square_contact
-from coupling.problem import SignoriniProblem, SolverOptions, _to_scipy
+from coupling.distributed import gather_matrix
+from coupling.problem import SignoriniProblem, SolverOptions
 from fem_py.geometry import build_domain
 from fem_py.materials import make_material
 
@@ -35,7 +36,7 @@ def test_linear_problem_without_contact_equals_the_direct_solve():
     # (K + T^T S_h T) u = b_f + T^T (m_t + s_0): the optimality system of J_h with no phi
     K = problem.forms.assemble_stiffness()
     T = problem.boundary.trace_matrix()
-    matrix = (_to_scipy(K) + T.T @ sp.csr_matrix(problem.S) @ T).tocsc()
+    matrix = (gather_matrix(K) + T.T @ sp.csr_matrix(problem.S) @ T).tocsc()
     rhs = problem.functional.load.array_r + T.T @ problem.functional.boundary_load
     direct = spla.spsolve(matrix, rhs)
     u = result.u.x.array[:direct.size]

@@ -38,7 +38,8 @@ namespace {
 
 template <bool WithK>
 inline __attribute__((always_inline)) void far_batch(const Panel& pi, const PanelArrays& panels,
-                                                     const Index* js, int m, int p, PairBlocks* out) {
+                                                     const Index* js, int m, int p,
+                                                     const PairBlockColumns& out) {
   constexpr int B = kFarBatch;
   const GaussRule& g = gauss_legendre(p);
   // Panel j data, contiguous for the vector loops.
@@ -57,14 +58,26 @@ inline __attribute__((always_inline)) void far_batch(const Panel& pi, const Pane
     di0[k] = -(dx0[k] * pi.n.x + dy0[k] * pi.n.y);
     di1[k] = tx[k] * pi.n.x + ty[k] * pi.n.y;
   }
-  double v00[B] = {}, v01[B] = {}, v10[B] = {}, v11[B] = {};
-  double k00[B] = {}, k01[B] = {}, k10[B] = {}, k11[B] = {};
-  double q0[kMaxFarPoints][B] = {}, q1[kMaxFarPoints][B] = {};
+  // Accumulators; only the used parts are cleared (clearing whole arrays per batch
+  // cost more than the arithmetic).
+  double v00[B], v01[B], v10[B], v11[B], k00[B], k01[B], k10[B], k11[B];
+  double q0[kMaxFarPoints][B], q1[kMaxFarPoints][B];
+#pragma omp simd
+  for (int k = 0; k < m; ++k) {
+    v00[k] = v01[k] = v10[k] = v11[k] = 0.0;
+    k00[k] = k01[k] = k10[k] = k11[k] = 0.0;
+  }
+  if constexpr (WithK)
+    for (int b = 0; b < p; ++b)
+#pragma omp simd
+      for (int k = 0; k < m; ++k) q0[b][k] = q1[b][k] = 0.0;
   for (int a = 0; a < p; ++a) {
     const double xa = g.x[static_cast<std::size_t>(a)], wa = g.w[static_cast<std::size_t>(a)];
     const double si = xa * pi.h, wi0 = wa * (1.0 - xa) * pi.h, wi1 = wa * xa * pi.h;
     const double sx = si * pi.t.x, sy = si * pi.t.y;
-    double g0[B] = {}, g1[B] = {}, c0[B] = {}, c1[B] = {};
+    double g0[B], g1[B], c0[B], c1[B];
+#pragma omp simd
+    for (int k = 0; k < m; ++k) g0[k] = g1[k] = c0[k] = c1[k] = 0.0;
     for (int b = 0; b < p; ++b) {
       const double xb = g.x[static_cast<std::size_t>(b)], wb = g.w[static_cast<std::size_t>(b)];
       double* qb0 = q0[b];
@@ -102,7 +115,9 @@ inline __attribute__((always_inline)) void far_batch(const Panel& pi, const Pane
       }
     }
   }
-  double m00[B] = {}, m01[B] = {}, m10[B] = {}, m11[B] = {};
+  double m00[B], m01[B], m10[B], m11[B];
+#pragma omp simd
+  for (int k = 0; k < m; ++k) m00[k] = m01[k] = m10[k] = m11[k] = 0.0;
   if constexpr (WithK) {
     for (int b = 0; b < p; ++b) {
       const double xb = g.x[static_cast<std::size_t>(b)], wb = g.w[static_cast<std::size_t>(b)];
@@ -120,38 +135,40 @@ inline __attribute__((always_inline)) void far_batch(const Panel& pi, const Pane
     }
   }
   for (int k = 0; k < m; ++k) {
-    PairBlocks& o = out[k];
-    o.v[0][0] = v00[k];
-    o.v[0][1] = v01[k];
-    o.v[1][0] = v10[k];
-    o.v[1][1] = v11[k];
+    const Index j = js[k];
+    out.v[0][0][j] = v00[k];
+    out.v[0][1][j] = v01[k];
+    out.v[1][0][j] = v10[k];
+    out.v[1][1][j] = v11[k];
     if constexpr (WithK) {
-      o.kij[0][0] = k00[k];
-      o.kij[0][1] = k01[k];
-      o.kij[1][0] = k10[k];
-      o.kij[1][1] = k11[k];
-      o.kji[0][0] = m00[k];
-      o.kji[0][1] = m01[k];
-      o.kji[1][0] = m10[k];
-      o.kji[1][1] = m11[k];
+      out.kij[0][0][j] = k00[k];
+      out.kij[0][1][j] = k01[k];
+      out.kij[1][0][j] = k10[k];
+      out.kij[1][1][j] = k11[k];
+      out.kji[0][0][j] = m00[k];
+      out.kji[0][1][j] = m01[k];
+      out.kji[1][0][j] = m10[k];
+      out.kji[1][1][j] = m11[k];
     }
   }
 }
 
 __attribute__((target_clones("avx2", "default"))) void far_batch_v(
-    const Panel& pi, const PanelArrays& panels, const Index* js, int m, int p, PairBlocks* out) {
+    const Panel& pi, const PanelArrays& panels, const Index* js, int m, int p,
+    const PairBlockColumns& out) {
   far_batch<false>(pi, panels, js, m, p, out);
 }
 
 __attribute__((target_clones("avx2", "default"))) void far_batch_vk(
-    const Panel& pi, const PanelArrays& panels, const Index* js, int m, int p, PairBlocks* out) {
+    const Panel& pi, const PanelArrays& panels, const Index* js, int m, int p,
+    const PairBlockColumns& out) {
   far_batch<true>(pi, panels, js, m, p, out);
 }
 
 }  // namespace
 
 void far_blocks_batch(const Panel& pi, const PanelArrays& panels, const Index* js, int m, int p,
-                      bool with_k, PairBlocks* out) {
+                      bool with_k, const PairBlockColumns& out) {
   if (m < 1 || m > kFarBatch || p < 1 || p > kMaxFarPoints)
     throw std::invalid_argument("far_blocks_batch: batch size or number of points out of range");
   if (with_k)

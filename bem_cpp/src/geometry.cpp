@@ -43,7 +43,7 @@ Panel make_panel(Vec2 a, Vec2 b) {
   const Vec2 d = b - a;
   const double h = norm(d);
   const Vec2 t = (1.0 / h) * d;
-  return {a, b, t, rotate_cw(t), h};
+  return {a, b, t, rotate_cw(t), 0.5 * (a + b), h};
 }
 
 double distance(const Panel& p, Vec2 z) {

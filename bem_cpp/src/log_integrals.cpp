@@ -49,23 +49,6 @@ GaussRule compute_gauss_legendre(int p) {
   return rule;
 }
 
-/// Thresholds y_p = (rho_p - 1/rho_p)/2 with rho_p = tol^(-1/(2p)): p points suffice
-/// when y = 2 distance/length >= y_p.
-struct Thresholds {
-  std::array<double, kMaxGaussPoints + 1> y{};
-  Thresholds() {
-    for (int p = 1; p <= kMaxGaussPoints; ++p) {
-      const double rho = std::pow(kQuadratureTolerance, -1.0 / (2.0 * p));
-      y[static_cast<std::size_t>(p)] = 0.5 * (rho - 1.0 / rho);
-    }
-  }
-};
-
-const Thresholds& thresholds() {
-  static const Thresholds t;
-  return t;
-}
-
 /// int_0^a s^q log s ds.
 double power_log_integral(int q, double a) {
   const double q1 = q + 1.0;
@@ -211,11 +194,23 @@ const GaussRule& gauss_legendre(int p) {
   return rules[static_cast<std::size_t>(p)];
 }
 
+const std::array<double, kMaxGaussPoints + 1>& gauss_thresholds() {
+  static const std::array<double, kMaxGaussPoints + 1> y = [] {
+    std::array<double, kMaxGaussPoints + 1> t{};
+    for (int p = 1; p <= kMaxGaussPoints; ++p) {
+      const double rho = std::pow(kQuadratureTolerance, -1.0 / (2.0 * p));
+      t[static_cast<std::size_t>(p)] = 0.5 * (rho - 1.0 / rho);
+    }
+    return t;
+  }();
+  return y;
+}
+
 int gauss_points_for(double distance, double length, int max_points) {
-  const Thresholds& t = thresholds();
+  const auto& t = gauss_thresholds();
   const double y = 2.0 * distance / length;
   for (int p = 1; p <= max_points; ++p)
-    if (y >= t.y[static_cast<std::size_t>(p)]) return p;
+    if (y >= t[static_cast<std::size_t>(p)]) return p;
   return 0;
 }
 
@@ -340,13 +335,6 @@ void far_blocks(const Panel& pi, const Panel& pj, int p, bool with_k, PairBlocks
     far_blocks_dispatch<false>(pi, pj, p, out);
 }
 
-int far_field_points(const Panel& pi, const Panel& pj) {
-  // Lower bound of the distance between the panels from their midpoints.
-  const Vec2 c = 0.5 * (pi.a + pi.b) - 0.5 * (pj.a + pj.b);
-  const double separation = std::sqrt(dot(c, c)) - 0.5 * (pi.h + pj.h);
-  return separation > 0 ? gauss_points_for(separation, std::max(pi.h, pj.h), kMaxFarPoints) : 0;
-}
-
 void pair_blocks(const Panel& pi, const Panel& pj, PairRelation relation, bool with_k,
                  PairBlocks& out) {
   switch (relation) {
@@ -367,8 +355,7 @@ void pair_blocks(const Panel& pi, const Panel& pj, PairRelation relation, bool w
 
 PointPanelMoments point_panel_moments(Vec2 z, const Panel& p) {
   PointPanelMoments out;
-  const Vec2 c = 0.5 * (p.a + p.b);
-  const double separation = std::sqrt(dot(z - c, z - c)) - 0.5 * p.h;
+  const double separation = std::sqrt(dot(z - p.m, z - p.m)) - 0.5 * p.h;
   const int q = separation > 0 ? gauss_points_for(separation, p.h, kMaxFarPoints) : 0;
   if (q == 0) {
     const SegmentMoments m = segment_moments(z, p.a, p.t, p.h, p.n);

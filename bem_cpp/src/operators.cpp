@@ -1,11 +1,9 @@
 #include "bem/operators.hpp"
 
 #include <algorithm>
-#include <cstdint>
 #include <vector>
-#if defined(__linux__)
-#include <sys/mman.h>
-#endif
+
+#include <omp.h>
 
 #include "bem/log_integrals.hpp"
 
@@ -23,21 +21,22 @@ PairRelation relation(Index i, Index j, Index n) {
   return PairRelation::Separated;
 }
 
-/// n x n matrix, zero, first touched in parallel (pages spread over the threads) and,
-/// on Linux, backed by transparent huge pages where available: fewer page faults and
-/// TLB misses in the transposing passes.
+/// n x n zero matrix, first touched in parallel (the page faults are shared out).
 Matrix zeros(Index n) {
   Matrix A(n, n);
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
-  constexpr std::uintptr_t huge = std::uintptr_t{1} << 21;
-  const auto begin = reinterpret_cast<std::uintptr_t>(A.data());
-  const auto end = begin + static_cast<std::uintptr_t>(A.size()) * sizeof(double);
-  const std::uintptr_t first = (begin + huge - 1) & ~(huge - 1), last = end & ~(huge - 1);
-  if (last > first) madvise(reinterpret_cast<void*>(first), last - first, MADV_HUGEPAGE);
-#endif
 #pragma omp parallel for schedule(static)
   for (Index r = 0; r < n; ++r) A.row(r).setZero();
   return A;
+}
+
+/// row[j] += s (start[j] + end[j - 1]) for j in [i, n) (end[i - 1] taken as 0), and
+/// row[0] += s end[n - 1]: adds the blocks of the pairs (i, j >= i), stored by columns
+/// j, for the start node j and the end node j + 1 of panel j.
+void add_shifted(double* row, double s, const double* start, const double* end, Index i, Index n) {
+  row[i] += s * start[i];
+#pragma omp simd
+  for (Index j = i + 1; j < n; ++j) row[j] += s * (start[j] + end[j - 1]);
+  row[0] += s * end[n - 1];
 }
 
 /// Calls f(i) for every panel i, in parallel, such that panels processed at the same
@@ -134,64 +133,100 @@ Operators assemble(const Polygon& polygon, const OperatorRequest& request) {
   }
 
   const PanelArrays arrays(polygon);
+  const auto& thresholds = gauss_thresholds();
+  // Per thread: the blocks of all pairs (i, j >= i) of the current panel i, by columns j.
+  std::vector<std::vector<double>> column_store(static_cast<std::size_t>(omp_get_max_threads()));
+
   for_each_panel_coloured(n, [&](Index i) {
+    std::vector<double>& store = column_store[static_cast<std::size_t>(omp_get_thread_num())];
+    store.resize(static_cast<std::size_t>(12 * n));
+    PairBlockColumns col;
+    for (int a = 0; a < 2; ++a)
+      for (int b = 0; b < 2; ++b) {
+        col.v[a][b] = store.data() + (0 + 2 * a + b) * n;
+        col.kij[a][b] = store.data() + (4 + 2 * a + b) * n;
+        col.kji[a][b] = store.data() + (8 + 2 * a + b) * n;
+      }
+
+    // 1. Blocks of every pair (i, j >= i); far pairs are queued by number of Gauss
+    //    points and evaluated in vector batches.
     const Panel& pi = polygon.panel(i);
-    const Index i1 = (i + 1) % n;
-    auto scatter = [&](Index j, const PairBlocks& B) {
-      const Index j1 = (j + 1) % n;
-      if (v_p1) {
-        const double w = j == i ? -0.5 * kInvPi : -kInvPi;  // diagonal pairs count twice
-        U(i, j) += w * B.v[0][0];
-        U(i, j1) += w * B.v[0][1];
-        U(i1, j) += w * B.v[1][0];
-        U(i1, j1) += w * B.v[1][1];
-      }
-      if (need_v0) V0(i, j) = -kInvPi * (B.v[0][0] + B.v[0][1] + B.v[1][0] + B.v[1][1]);
-      if (k_p1) {
-        Kup(i, j) += kInvPi * B.kij[0][0];
-        Kup(i, j1) += kInvPi * B.kij[0][1];
-        Kup(i1, j) += kInvPi * B.kij[1][0];
-        Kup(i1, j1) += kInvPi * B.kij[1][1];
-        if (j != i) {  // T[node a of i, node b of j] += kji[b][a]
-          T(i, j) += kInvPi * B.kji[0][0];
-          T(i, j1) += kInvPi * B.kji[1][0];
-          T(i1, j) += kInvPi * B.kji[0][1];
-          T(i1, j1) += kInvPi * B.kji[1][1];
-        }
-      }
-      if (k_p0) {
-        Kup(i, j) += kInvPi * (B.kij[0][0] + B.kij[1][0]);
-        Kup(i, j1) += kInvPi * (B.kij[0][1] + B.kij[1][1]);
-        if (j != i) {  // T[node a of i, panel j] += sum_b kji[b][a]
-          T(i, j) += kInvPi * (B.kji[0][0] + B.kji[1][0]);
-          T(i1, j) += kInvPi * (B.kji[0][1] + B.kji[1][1]);
-        }
-      }
-    };
-    // Far pairs are queued by number of Gauss points and evaluated in vector batches.
     Index queue[kMaxFarPoints + 1][kFarBatch];
     int queued[kMaxFarPoints + 1] = {};
-    PairBlocks batch[kFarBatch];
     auto flush = [&](int p) {
-      far_blocks_batch(pi, arrays, queue[p], queued[p], p, with_k, batch);
-      for (int k = 0; k < queued[p]; ++k) scatter(queue[p][k], batch[k]);
+      far_blocks_batch(pi, arrays, queue[p], queued[p], p, with_k, col);
       queued[p] = 0;
     };
     PairBlocks B;
     for (Index j = i; j < n; ++j) {
       const Panel& pj = polygon.panel(j);
       const PairRelation rel = relation(i, j, n);
-      const int p = rel == PairRelation::Separated ? far_field_points(pi, pj) : 0;
-      if (p == 0) {
-        pair_blocks(pi, pj, rel, with_k, B);
-        scatter(j, B);
+      const int p = rel == PairRelation::Separated ? far_field_points(pi, pj, thresholds) : 0;
+      if (p > 0) {
+        queue[p][queued[p]++] = j;
+        if (queued[p] == kFarBatch) flush(p);
         continue;
       }
-      queue[p][queued[p]++] = j;
-      if (queued[p] == kFarBatch) flush(p);
+      pair_blocks(pi, pj, rel, with_k, B);
+      for (int a = 0; a < 2; ++a)
+        for (int b = 0; b < 2; ++b) {
+          col.v[a][b][j] = B.v[a][b];
+          if (with_k) {
+            col.kij[a][b][j] = B.kij[a][b];
+            col.kji[a][b][j] = B.kji[a][b];
+          }
+        }
     }
     for (int p = 1; p <= kMaxFarPoints; ++p)
       if (queued[p] > 0) flush(p);
+
+    // 2. Add them to the rows of panel i (its start node i and end node i1). The block
+    //    of pair (i, j) meets columns j (start of j) and j1 = j + 1 (end of j, 0 for
+    //    j = n - 1). The coincident pair counts half in U (U + U^T doubles it) and has
+    //    no mirrored part in T.
+    const Index i1 = (i + 1) % n;
+    double* const* v = &col.v[0][0];  // v[2a + b]
+    if (v_p1 || need_v0) {
+      // Coincident block halved once, used by U and (doubled back) by V0.
+      for (int k = 0; k < 4; ++k) v[k][i] *= 0.5;
+    }
+    if (v_p1) {
+      add_shifted(U.row(i).data(), -kInvPi, v[0], v[1], i, n);
+      add_shifted(U.row(i1).data(), -kInvPi, v[2], v[3], i, n);
+    }
+    if (need_v0) {
+      double* r = V0.row(i).data();
+#pragma omp simd
+      for (Index j = i; j < n; ++j) r[j] = -kInvPi * (v[0][j] + v[1][j] + v[2][j] + v[3][j]);
+      r[i] *= 2.0;
+    }
+    if (with_k) {
+      double* const* kij = &col.kij[0][0];
+      double* const* kji = &col.kji[0][0];
+      for (int k = 0; k < 4; ++k) kji[k][i] = 0.0;  // the pair (i, i) is not mirrored
+      if (k_p1) {
+        add_shifted(Kup.row(i).data(), kInvPi, kij[0], kij[1], i, n);
+        add_shifted(Kup.row(i1).data(), kInvPi, kij[2], kij[3], i, n);
+        // T[node a of i, node b of j] += kji[b][a]
+        add_shifted(T.row(i).data(), kInvPi, kji[0], kji[2], i, n);
+        add_shifted(T.row(i1).data(), kInvPi, kji[1], kji[3], i, n);
+      } else {
+        // P0 rows: K[i, node b of j] += sum_a kij[a][b]; T[node a of i, j] += sum_b kji[b][a]
+#pragma omp simd
+        for (Index j = i; j < n; ++j) {
+          kij[0][j] += kij[2][j];
+          kij[1][j] += kij[3][j];
+        }
+        add_shifted(Kup.row(i).data(), kInvPi, kij[0], kij[1], i, n);
+        double* t0 = T.row(i).data();
+        double* t1 = T.row(i1).data();
+#pragma omp simd
+        for (Index j = i; j < n; ++j) {
+          t0[j] += kInvPi * (kji[0][j] + kji[2][j]);
+          t1[j] += kInvPi * (kji[1][j] + kji[3][j]);
+        }
+      }
+    }
   });
 
   Operators ops;

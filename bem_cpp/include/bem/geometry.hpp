@@ -29,10 +29,10 @@ inline double norm(Vec2 a) { return std::hypot(a.x, a.y); }
 /// the outward normal (t_y, -t_x).
 inline Vec2 rotate_cw(Vec2 t) { return {t.y, -t.x}; }
 
-/// Straight panel a -> b with length h, unit tangent t = (b - a)/h and outward
-/// normal n = (t_y, -t_x) (outward for a counter-clockwise polygon).
+/// Straight panel a -> b with length h, unit tangent t = (b - a)/h, outward normal
+/// n = (t_y, -t_x) (outward for a counter-clockwise polygon) and midpoint m.
 struct Panel {
-  Vec2 a, b, t, n;
+  Vec2 a, b, t, n, m;
   double h;
 };
 

@@ -92,10 +92,28 @@ void near_blocks(const Panel& pi, const Panel& pj, bool with_k, PairBlocks& out)
 /// Tensor Gauss rule with p points on each panel (1 <= p <= kMaxGaussPoints).
 void far_blocks(const Panel& pi, const Panel& pj, int p, bool with_k, PairBlocks& out);
 
+/// y_p = (rho_p - 1/rho_p)/2 with rho_p = kQuadratureTolerance^(-1/(2p)), p = 1 ...
+/// kMaxGaussPoints: p Gauss points suffice at distance/length >= y_p/2.
+const std::array<double, kMaxGaussPoints + 1>& gauss_thresholds();
+
 /// Number of points of the tensor Gauss rule for a separated pair, from a lower bound
 /// of the panel distance (midpoint distance minus half lengths) and the larger length;
-/// 0 if the pair is too close for kMaxFarPoints points (near field).
-int far_field_points(const Panel& pi, const Panel& pj);
+/// 0 if the pair is too close for kMaxFarPoints points (near field). y = gauss_thresholds().
+inline int far_field_points(const Panel& pi, const Panel& pj,
+                            const std::array<double, kMaxGaussPoints + 1>& y) {
+  const Vec2 d = pi.m - pj.m;
+  const double d2 = dot(d, d), half_sum = 0.5 * (pi.h + pj.h);
+  const double half_h = 0.5 * (pi.h > pj.h ? pi.h : pj.h);
+  for (int p = 1; p <= kMaxFarPoints; ++p) {
+    // separation = |d| - half_sum >= y_p * half_h, compared without a square root
+    const double bound = half_sum + y[static_cast<std::size_t>(p)] * half_h;
+    if (d2 >= bound * bound) return p;
+  }
+  return 0;
+}
+inline int far_field_points(const Panel& pi, const Panel& pj) {
+  return far_field_points(pi, pj, gauss_thresholds());
+}
 
 /// Panel data as structure of arrays, for the vectorised far-field kernel.
 struct PanelArrays {
@@ -106,10 +124,18 @@ struct PanelArrays {
 /// Largest batch of far-field pairs evaluated together.
 constexpr int kFarBatch = 32;
 
+/// Blocks of the pairs (i, j) for one panel i, stored by columns: v[a][b][j] etc.
+struct PairBlockColumns {
+  double* v[2][2];
+  double* kij[2][2];
+  double* kji[2][2];
+};
+
 /// far_blocks for the pairs (pi, panel js[k]), k < m <= kFarBatch, all with the same
-/// number of points p <= kMaxFarPoints, vectorised over k (src/far_field.cpp).
+/// number of points p <= kMaxFarPoints, vectorised over k (src/far_field.cpp); the
+/// results go to out.*[js[k]] (kij, kji only if with_k).
 void far_blocks_batch(const Panel& pi, const PanelArrays& panels, const Index* js, int m, int p,
-                      bool with_k, PairBlocks* out);
+                      bool with_k, const PairBlockColumns& out);
 
 /// Integrals of one panel seen from a point z off the panel, trial shape b = 0, 1:
 ///   log[b] = int_p log|z - y| phi_b(y) ds_y,   dl[b] = int_p (z - y).n/|z - y|^2 phi_b(y) ds_y.
