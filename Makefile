@@ -55,6 +55,7 @@ demo: setup
 
 bench: setup
 	$(PY) bench/bem_assembly.py
+	$(PY) bench/pgpm_profile.py
 
 clean:
 	rm -rf build $(VENV) *.egg-info bem_cpp/*.so

@@ -52,21 +52,22 @@ class CoupledFunctional:
         return z
 
     # -- J_h and its derivatives --------------------------------------------------
-    def energy(self, u_function, phi: np.ndarray) -> float:
-        """J_h(u, phi) (collective); ``u_function`` is the dolfinx Function holding u."""
+    def value_and_gradient(self, u_function, phi: np.ndarray,
+                           grad_u: PETSc.Vec) -> tuple[float, np.ndarray]:
+        """J_h(u, phi), with ``grad_u`` filled with grad_u J; returns (J_h, grad_phi J).
+
+        One S_h product serves both: with y = S_h z - m_t - s_0,
+        J_h = G(u) - b_f^T u + 1/2 z^T (y - m_t - s_0), grad_u J = A(u) - b_f + T^T y.
+        """
         u = u_function.vector
         z = self.boundary_block(u, phi)
-        interior = self.forms.energy(u_function) - u.dot(self.load)
-        return interior + 0.5 * z @ (self.S @ z) - self.boundary_load @ z
-
-    def gradient(self, u_function, phi: np.ndarray, grad_u: PETSc.Vec) -> np.ndarray:
-        """Fill ``grad_u`` with grad_u J and return grad_phi J (collective)."""
-        u = u_function.vector
-        y = self.S @ self.boundary_block(u, phi) - self.boundary_load
+        y = self.S @ z - self.boundary_load
+        value = (self.forms.energy(u_function) - u.dot(self.load)
+                 + 0.5 * z @ (y - self.boundary_load))
         self.forms.assemble_residual(u_function, grad_u)
         grad_u.axpy(-1.0, self.load)
         self.boundary.scatter_add(y, grad_u, refresh_ghosts=False)
-        return y[self.signorini].copy()
+        return value, y[self.signorini].copy()
 
     def hessian_action(self, jacobian: PETSc.Mat, e_u: PETSc.Vec, e_phi: np.ndarray,
                        out_u: PETSc.Vec) -> np.ndarray:

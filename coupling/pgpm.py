@@ -142,8 +142,7 @@ def projection_gradient(functional: CoupledFunctional, preconditioner,
     u = u_function.vector
     phi = np.maximum(np.asarray(phi0, dtype=float), 0.0)
     grad = u.duplicate()
-    energy = functional.energy(u_function, phi)
-    grad_phi = functional.gradient(u_function, phi, grad)
+    energy, grad_phi = functional.value_and_gradient(u_function, phi, grad)
     # B_Omega u is updated by the recurrence B u_{k+1} = B u_k - tau grad_u (exact by (3.21)).
     b_u = preconditioner.matvec_omega(u.array_r.copy())
     history: list[IterationRecord] = []
@@ -152,7 +151,7 @@ def projection_gradient(functional: CoupledFunctional, preconditioner,
     converged = False
     k = 0
     for k in range(1, max_iterations + 1):
-        g_u = grad.array_r.copy()
+        g_u = grad.array_r.copy()  # grad is overwritten at every trial point
         r_u = preconditioner.apply_omega(g_u)
         r_phi = preconditioner.apply_signorini(grad_phi)
         u_old = u.array_r.copy()
@@ -162,7 +161,8 @@ def projection_gradient(functional: CoupledFunctional, preconditioner,
             projected = projection(phi - tau * r_phi, phi)
             if comm.size > 1:  # one copy of phi: rank 0's (round-off may differ by rank)
                 projected = comm.bcast(projected, root=0)
-            new_energy = functional.energy(u_function, projected.phi)
+            new_energy, new_grad_phi = functional.value_and_gradient(u_function,
+                                                                     projected.phi, grad)
             increased = new_energy - energy > 1e-13 * (abs(energy) + abs(new_energy))
             if increased:
                 increases += 1
@@ -175,8 +175,7 @@ def projection_gradient(functional: CoupledFunctional, preconditioner,
         step2 = tau * tau * _dot(comm, r_u, g_u) + d_phi @ preconditioner.matvec_signorini(d_phi)
         norm2 = _dot(comm, u.array_r, b_u) + phi @ preconditioner.matvec_signorini(phi)
         relative = float(np.sqrt(max(step2, 0.0) / norm2)) if norm2 > 0 else 0.0
-        energy = new_energy
-        grad_phi = functional.gradient(u_function, phi, grad)
+        energy, grad_phi = new_energy, new_grad_phi
         record = IterationRecord(k, energy, relative, int(np.count_nonzero(phi <= 0.0)),
                                  projected.iterations, tau)
         history.append(record)

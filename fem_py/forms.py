@@ -44,6 +44,17 @@ __all__ = [
 
 JACOBIANS = ("ufl", "handwritten")
 
+#: Quadrature of the interior energy, residual and Jacobians. For P1, grad u is
+#: constant on each cell, so every integrand g(|grad u|), rho(|grad u|) grad u . grad v
+#: and (rho^(grad u) grad w) . grad v is cellwise constant and one point integrates it
+#: exactly (UFL's estimate for the nonpolynomial rho would use several).
+P1_EXACT = {"quadrature_degree": 0}
+#: Quadrature of the data integrals int f v and int_Gamma t0 v: degree 6 integrates
+#: smooth data against P1 test functions with an error O(h^7) per cell, far below the
+#: O(h^2) discretisation error; UFL's own estimate for composite expressions (e.g. the
+#: manufactured f = -div(rho(|grad u|) grad u)) can exceed 1000 points per cell.
+DATA_QUADRATURE = {"quadrature_degree": 6}
+
 
 def p1_space(mesh: Any) -> fem.FunctionSpace:
     """The continuous P1 space V_h(Omega) on ``mesh`` (the single place it is created).
@@ -142,17 +153,19 @@ class InteriorForms:
         self._u = fem.Function(V, name="u_state")
         u, v, w = self._u, ufl.TestFunction(V), ufl.TrialFunction(V)
         grad_u = ufl.grad(u)
-        energy = material.energy_density_sq(ufl.inner(grad_u, grad_u)) * ufl.dx
+        dx = ufl.dx(metadata=P1_EXACT)
+        energy = material.energy_density_sq(ufl.inner(grad_u, grad_u)) * dx
         residual = ufl.derivative(energy, u, v)
         self._ufl = {
             "energy": energy,
             "residual": residual,
             "ufl": ufl.derivative(residual, u, w),
-            "handwritten": ufl.inner(ufl.dot(material.tangent(grad_u), ufl.grad(w)), ufl.grad(v)) * ufl.dx,
-            "stiffness": ufl.inner(ufl.grad(w), ufl.grad(v)) * ufl.dx,
+            "handwritten": ufl.inner(ufl.dot(material.tangent(grad_u), ufl.grad(w)), ufl.grad(v)) * dx,
+            "stiffness": ufl.inner(ufl.grad(w), ufl.grad(v)) * dx,
         }
         if f is not None:
-            self._ufl["load"] = ufl.inner(as_ufl_data(f, self.mesh, what="f"), v) * ufl.dx
+            self._ufl["load"] = (ufl.inner(as_ufl_data(f, self.mesh, what="f"), v)
+                                 * ufl.dx(metadata=DATA_QUADRATURE))
         self._compiled: dict[str, Any] = {}
         for key in ("energy", "residual", jacobian):
             self._form(key)
@@ -248,7 +261,8 @@ def assemble_boundary_load(V: fem.FunctionSpace, t0: Any, *, jit_params: dict | 
     """
     mesh = V.mesh
     v = ufl.TestFunction(V)
-    form = compile_form(ufl.inner(as_ufl_data(t0, mesh, boundary=True, what="t0"), v) * ufl.ds, jit_params)
+    form = compile_form(ufl.inner(as_ufl_data(t0, mesh, boundary=True, what="t0"), v)
+                        * ufl.ds(metadata=DATA_QUADRATURE), jit_params)
     b = fem.petsc.create_vector(form)
     with b.localForm() as bl:
         bl.set(0.0)

@@ -60,8 +60,8 @@ def solve_tao(problem: SignoriniProblem, *, tol: float) -> tuple[np.ndarray, np.
 
     def objective_gradient(tao, x, g):
         u_fun.x.array[:] = x.array_r[:n_u]
-        energy = problem.functional.energy(u_fun, x.array_r[n_u:])
-        g.array[n_u:] = problem.functional.gradient(u_fun, x.array_r[n_u:], grad_u)
+        energy, g.array[n_u:] = problem.functional.value_and_gradient(u_fun, x.array_r[n_u:],
+                                                                       grad_u)
         g.array[:n_u] = grad_u.array_r
         return energy
 

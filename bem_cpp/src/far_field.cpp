@@ -71,6 +71,19 @@ inline __attribute__((always_inline)) void far_batch(const Panel& pi, const Pane
     for (int b = 0; b < p; ++b)
 #pragma omp simd
       for (int k = 0; k < m; ++k) q0[b][k] = q1[b][k] = 0.0;
+  // Quantities of the Gauss points on panel j: y_b - a_i relative offsets and weights.
+  double ox[kMaxFarPoints][B], oy[kMaxFarPoints][B], w0[kMaxFarPoints][B], w1[kMaxFarPoints][B];
+  for (int b = 0; b < p; ++b) {
+    const double xb = g.x[static_cast<std::size_t>(b)], wb = g.w[static_cast<std::size_t>(b)];
+#pragma omp simd
+    for (int k = 0; k < m; ++k) {
+      const double t = xb * hj[k];
+      ox[b][k] = dx0[k] - t * tx[k];  // (a_i - y_b) = ox, oy
+      oy[b][k] = dy0[k] - t * ty[k];
+      w0[b][k] = wb * (1.0 - xb) * hj[k];
+      w1[b][k] = wb * xb * hj[k];
+    }
+  }
   for (int a = 0; a < p; ++a) {
     const double xa = g.x[static_cast<std::size_t>(a)], wa = g.w[static_cast<std::size_t>(a)];
     const double si = xa * pi.h, wi0 = wa * (1.0 - xa) * pi.h, wi1 = wa * xa * pi.h;
@@ -79,22 +92,23 @@ inline __attribute__((always_inline)) void far_batch(const Panel& pi, const Pane
 #pragma omp simd
     for (int k = 0; k < m; ++k) g0[k] = g1[k] = c0[k] = c1[k] = 0.0;
     for (int b = 0; b < p; ++b) {
-      const double xb = g.x[static_cast<std::size_t>(b)], wb = g.w[static_cast<std::size_t>(b)];
+      const double* oxb = ox[b];
+      const double* oyb = oy[b];
+      const double* w0b = w0[b];
+      const double* w1b = w1[b];
       double* qb0 = q0[b];
       double* qb1 = q1[b];
 #pragma omp simd
       for (int k = 0; k < m; ++k) {
-        const double t = xb * hj[k];
-        const double wj0 = wb * (1.0 - xb) * hj[k], wj1 = wb * xb * hj[k];
-        const double rx = dx0[k] + sx - t * tx[k], ry = dy0[k] + sy - t * ty[k];
+        const double rx = oxb[k] + sx, ry = oyb[k] + sy;
         const double r2 = rx * rx + ry * ry;
         const double f = 0.5 * log(r2);
-        g0[k] += wj0 * f;
-        g1[k] += wj1 * f;
+        g0[k] += w0b[k] * f;
+        g1[k] += w1b[k] * f;
         if constexpr (WithK) {
           const double inv = 1.0 / r2;
-          c0[k] += wj0 * inv;
-          c1[k] += wj1 * inv;
+          c0[k] += w0b[k] * inv;
+          c1[k] += w1b[k] * inv;
           qb0[k] += wi0 * inv;
           qb1[k] += wi1 * inv;
         }
@@ -120,13 +134,15 @@ inline __attribute__((always_inline)) void far_batch(const Panel& pi, const Pane
   for (int k = 0; k < m; ++k) m00[k] = m01[k] = m10[k] = m11[k] = 0.0;
   if constexpr (WithK) {
     for (int b = 0; b < p; ++b) {
-      const double xb = g.x[static_cast<std::size_t>(b)], wb = g.w[static_cast<std::size_t>(b)];
+      const double xb = g.x[static_cast<std::size_t>(b)];
       const double* qb0 = q0[b];
       const double* qb1 = q1[b];
+      const double* w0b = w0[b];
+      const double* w1b = w1[b];
 #pragma omp simd
       for (int k = 0; k < m; ++k) {
         const double di = di0[k] + xb * hj[k] * di1[k];
-        const double wj0 = wb * (1.0 - xb) * hj[k] * di, wj1 = wb * xb * hj[k] * di;
+        const double wj0 = w0b[k] * di, wj1 = w1b[k] * di;
         m00[k] += wj0 * qb0[k];
         m01[k] += wj0 * qb1[k];
         m10[k] += wj1 * qb0[k];
@@ -134,22 +150,31 @@ inline __attribute__((always_inline)) void far_batch(const Panel& pi, const Pane
       }
     }
   }
-  for (int k = 0; k < m; ++k) {
-    const Index j = js[k];
-    out.v[0][0][j] = v00[k];
-    out.v[0][1][j] = v01[k];
-    out.v[1][0][j] = v10[k];
-    out.v[1][1][j] = v11[k];
-    if constexpr (WithK) {
-      out.kij[0][0][j] = k00[k];
-      out.kij[0][1][j] = k01[k];
-      out.kij[1][0][j] = k10[k];
-      out.kij[1][1][j] = k11[k];
-      out.kji[0][0][j] = m00[k];
-      out.kji[0][1][j] = m01[k];
-      out.kji[1][0][j] = m10[k];
-      out.kji[1][1][j] = m11[k];
+  // Results to the columns: contiguous runs of j (the common case on a polygon, as
+  // far pairs of one panel come in order) as vector copies, otherwise scattered.
+  const bool contiguous = js[m - 1] - js[0] == m - 1;
+  auto put = [&](double* column, const double* values) {
+    if (contiguous) {
+      double* dst = column + js[0];
+#pragma omp simd
+      for (int k = 0; k < m; ++k) dst[k] = values[k];
+    } else {
+      for (int k = 0; k < m; ++k) column[js[k]] = values[k];
     }
+  };
+  put(out.v[0][0], v00);
+  put(out.v[0][1], v01);
+  put(out.v[1][0], v10);
+  put(out.v[1][1], v11);
+  if constexpr (WithK) {
+    put(out.kij[0][0], k00);
+    put(out.kij[0][1], k01);
+    put(out.kij[1][0], k10);
+    put(out.kij[1][1], k11);
+    put(out.kji[0][0], m00);
+    put(out.kji[0][1], m01);
+    put(out.kji[1][0], m10);
+    put(out.kji[1][1], m11);
   }
 }
 

@@ -70,6 +70,34 @@ void for_each_upper_tiled(Index n, F&& f) {
         for (Index c = std::max(J * kTile, r + 1); c < std::min(n, (J + 1) * kTile); ++c) f(r, c);
 }
 
+/// K += T^T, by pairs of square tiles (I, J), (J, I) owned by one thread.
+void add_transpose_in_place(const Matrix& T, Matrix& K) {
+  const Index n = K.rows(), nb = (n + kTile - 1) / kTile;
+#pragma omp parallel for schedule(dynamic, 1)
+  for (Index I = 0; I < nb; ++I) {
+    const Index r0 = I * kTile, r1 = std::min(n, r0 + kTile);
+    for (Index J = I; J < nb; ++J) {
+      const Index c0 = J * kTile, c1 = std::min(n, c0 + kTile);
+      if (I == J) {
+        double tile[kTile][kTile];  // T's diagonal tile, before K is changed
+        for (Index r = r0; r < r1; ++r)
+          for (Index c = c0; c < c1; ++c) tile[r - r0][c - c0] = T(r, c);
+        for (Index r = r0; r < r1; ++r)
+          for (Index c = c0; c < c1; ++c) K(r, c) += tile[c - c0][r - r0];
+        continue;
+      }
+      for (Index r = r0; r < r1; ++r) {
+        const double* t_row = &T(r, 0);
+        double* k_row = &K(r, 0);
+        for (Index c = c0; c < c1; ++c) {
+          k_row[c] += T(c, r);
+          K(c, r) += t_row[c];
+        }
+      }
+    }
+  }
+}
+
 void mirror_upper_in_place(Matrix& A) {
   for_each_upper_tiled(A.rows(), [&A](Index r, Index c) { A(c, r) = A(r, c); });
 }
@@ -236,12 +264,7 @@ Operators assemble(const Polygon& polygon, const OperatorRequest& request) {
     ops.single_layer = std::move(U);
   }
   if (with_k) {
-    // K = Kup + T^T: both are zero below the subdiagonal except in column 0.
-    for_each_upper_tiled(n, [&](Index r, Index c) {
-      Kup(r, c) += T(c, r);
-      Kup(c, r) += T(r, c);
-    });
-    for (Index r = 0; r < n; ++r) Kup(r, r) += T(r, r);
+    add_transpose_in_place(T, Kup);
     ops.double_layer = std::move(Kup);
   }
   if (request.hypersingular) {
