@@ -59,20 +59,46 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _problem_inputs(args: argparse.Namespace) -> dict:
+    """The validated configuration of ``args``: schema, data expressions and material.
+
+    Everything here is cheap and identical on every rank, so a bad input fails fast and
+    on all ranks alike (no rank waits in a collective call for another).
+    """
+    from coupling.config import check_data_and_material, load_config
+
+    config = load_config(args.config, args.set)
+    check_data_and_material(config)
+    return config
+
+
+def _with_geometry_key(build, *args):
+    """Call ``build(*args)``; a geometry error is re-raised naming its [geometry] key."""
+    from coupling.config import geometry_error
+
+    try:
+        return build(*args)
+    except ValueError as err:
+        named = geometry_error(err)
+        if named is err:
+            raise
+        raise named from None
+
+
 def _solve(args: argparse.Namespace) -> int:
     from mpi4py import MPI
 
-    from coupling.config import load_config
+    comm = MPI.COMM_WORLD
+    config = _problem_inputs(args)
+    out = Path(args.out if args.out is not None else config["output"]["dir"])
     from coupling.outputs import prepare_output_dir, write_outputs
     from coupling.problem import problem_from_config
 
-    comm = MPI.COMM_WORLD
-    config = load_config(args.config, args.set)
-    out = Path(args.out if args.out is not None else config["output"]["dir"])
     prepare_output_dir(comm, out, force=args.force)
-    problem = problem_from_config(comm, config)
+    problem = _with_geometry_key(problem_from_config, comm, config)
     result = problem.solve(progress=not args.quiet)
-    write_outputs(comm, out, problem, result, config)
+    write_outputs(comm, out, problem, result, xdmf=config["output"]["xdmf"],
+                  plots=config["output"]["plots"], config=config)
     if comm.rank == 0 and not args.quiet:
         state = "converged" if result.converged else "did NOT converge"
         print(f"fembem: {state} after {result.iterations} iterations ({result.reason}); "
@@ -81,8 +107,9 @@ def _solve(args: argparse.Namespace) -> int:
 
 
 def _read_points(path: Path) -> np.ndarray:
+    """The (m, 2) points of a CSV file of x,y rows (an optional header line)."""
     if not path.is_file():
-        raise FileNotFoundError(f"points file {str(path)!r} not found; give a CSV file of "
+        raise FileNotFoundError(f"--points: file {str(path)!r} not found; give a CSV file of "
                                 "x,y rows")
     lines = [ln for ln in path.read_text().splitlines() if ln.strip()]
     if lines and not lines[0].lstrip()[0] in "+-.0123456789":
@@ -90,42 +117,44 @@ def _read_points(path: Path) -> np.ndarray:
     try:
         points = np.array([[float(v) for v in ln.split(",")] for ln in lines], dtype=float)
     except ValueError:
-        raise ValueError(f"{path}: every row must be two numbers x,y") from None
+        raise ValueError(f"--points {path}: every row must be two numbers x,y") from None
     if points.ndim != 2 or points.shape[1] != 2 or not np.isfinite(points).all():
-        raise ValueError(f"{path}: every row must be two finite numbers x,y")
+        raise ValueError(f"--points {path}: every row must be two finite numbers x,y")
     return points
 
 
 def _exterior(args: argparse.Namespace) -> int:
     import bem_cpp
-    from coupling.outputs import load_fields
+    from mpi4py import MPI
+
+    from coupling.outputs import atomic_write, load_fields
 
     fields = load_fields(Path(args.result_dir))
     points = _read_points(Path(args.points))
-    ue = bem_cpp.exterior_potential(fields["boundary_x"], fields["ue"], fields["dn_ue"],
-                                    points, a=float(fields["a"]),
-                                    flux=str(fields["flux_space"]))
+    try:
+        ue = bem_cpp.exterior_potential(fields["boundary_x"], fields["ue"], fields["dn_ue"],
+                                        points, a=float(fields["a"]),
+                                        flux=str(fields["flux_space"]))
+    except ValueError as err:  # a point inside Omega or on Gamma
+        raise ValueError(f"--points {args.points}: {err}") from None
     table = "x,y,ue\n" + "".join(f"{x:.17g},{y:.17g},{v:.17g}\n" for (x, y), v in zip(points, ue))
-    if args.out:
-        out = Path(args.out)
-        tmp = out.with_name(f".{out.name}.tmp")
-        tmp.write_text(table)
-        tmp.replace(out)
-    else:
-        sys.stdout.write(table)
+    if MPI.COMM_WORLD.rank == 0:  # every rank computed the same table
+        if args.out:
+            atomic_write(Path(args.out), lambda p: p.write_text(table))
+        else:
+            sys.stdout.write(table)
     return EXIT_OK
 
 
 def _check_jacobian(args: argparse.Namespace) -> int:
     from mpi4py import MPI
 
-    from coupling.config import load_config
     from coupling.problem import domain_from_config, material_from_config
     from fem_py.jacobian_check import check_jacobian
 
     comm = MPI.COMM_WORLD
-    config = load_config(args.config, args.set)
-    domain = domain_from_config(comm, config)
+    config = _problem_inputs(args)
+    domain = _with_geometry_key(domain_from_config, comm, config)
     report = check_jacobian(domain, material_from_config(config))
     if comm.rank == 0:
         if args.json:
@@ -146,7 +175,7 @@ def main(argv: list[str] | None = None) -> int:
                "check-jacobian": _check_jacobian}[args.command]
     try:
         return handler(args)
-    except (ValueError, FileNotFoundError, FileExistsError, NotADirectoryError) as err:
+    except (ValueError, OSError) as err:  # bad input: configuration, files, folders
         if args.debug:
             raise
         from mpi4py import MPI

@@ -10,11 +10,13 @@ from __future__ import annotations
 import copy
 import dataclasses
 import math
+import re
 import tomllib
 from pathlib import Path
 from typing import Any
 
-__all__ = ["ConfigError", "DEFAULTS", "CHOICES", "load_config", "parse_config", "apply_override"]
+__all__ = ["ConfigError", "DEFAULTS", "CHOICES", "DATA_VARIABLES", "load_config", "parse_config",
+           "apply_override", "check_data_and_material", "geometry_error"]
 
 
 class ConfigError(ValueError):
@@ -38,6 +40,7 @@ DEFAULTS: dict[str, dict[str, Any]] = {
     "material": {"rho": "linear", "p": 2.0, "eps": 1.0},
     "data": {"f": "0", "u0": "0", "t0": "0", "a": 0.0},
     "solver": {
+        "method": "pgpm",
         "preconditioner": "substructuring",
         "tol": 1e-8,
         "max_iterations": 2000,
@@ -56,12 +59,18 @@ DEFAULTS: dict[str, dict[str, Any]] = {
 #: Keys whose value must be one of a fixed set of strings.
 CHOICES: dict[tuple[str, str], tuple[str, ...]] = {
     ("geometry", "shape"): ("square", "lshape", "polygon"),
+    ("solver", "method"): ("pgpm", "apgpm"),
     ("solver", "preconditioner"): ("substructuring", "identity", "exact"),
     ("solver", "projection"): ("inexact", "exact"),
     ("solver", "edge_form"): ("paper", "sqrt-laplacian"),
     ("solver", "flux_space"): ("p1", "p0"),
     ("solver", "jacobian"): ("ufl", "handwritten"),
 }
+
+#: The variables each expression of [data] may use: boundary data also see the outward
+#: unit normal (nx, ny). ``a`` is a number, not an expression.
+DATA_VARIABLES: dict[str, tuple[str, ...]] = {
+    "f": ("x", "y"), "u0": ("x", "y", "nx", "ny"), "t0": ("x", "y", "nx", "ny")}
 
 _POSITIVE = {("geometry", "h"), ("geometry", "subdomain_size"), ("geometry", "width"),
              ("solver", "tol"), ("solver", "max_iterations"),
@@ -211,6 +220,60 @@ def load_config(path: str | Path | None, overrides: list[str] = ()) -> dict[str,
     for assignment in overrides:
         apply_override(raw, assignment)
     return parse_config(raw)
+
+
+def check_data_and_material(config: dict[str, dict[str, Any]]) -> None:
+    """Parse the [data] expressions and build the material of a validated configuration.
+
+    Cheap (no mesh, no MPI): run it before the mesh is built so that a misspelt
+    function or a material violating the structure condition of METHOD.md section 1
+    fails at once. The expressions are evaluated symbolically with UFL on an abstract
+    triangle domain, the code path of ``fem_py.forms``, so constant sub-expressions
+    that cannot be evaluated (``1/0``, ``log(-1)``) are caught too.
+
+    Raises
+    ------
+    ConfigError
+        The fem_py message, prefixed with the key (``data.f: unknown function ...``).
+    """
+    import ufl
+
+    from fem_py.expressions import parse_expression
+    from fem_py.materials import make_material
+
+    domain = ufl.Mesh(ufl.VectorElement("Lagrange", ufl.triangle, 1))
+    x, n = ufl.SpatialCoordinate(domain), ufl.FacetNormal(domain)
+    values = {"x": x[0], "y": x[1], "nx": n[0], "ny": n[1]}
+    for key, names in DATA_VARIABLES.items():
+        try:
+            parse_expression(config["data"][key], {name: values[name] for name in names})
+        except ValueError as err:
+            raise ConfigError(f"data.{key}: {err}") from None
+    material = config["material"]
+    try:
+        make_material(material["rho"], p=material["p"], eps=material["eps"])
+    except ValueError as err:
+        # the power law's own parameters are named in its messages ("needs p > 1")
+        key = next((k for k in ("p", "eps") if material["rho"] == "power"
+                    and f"needs {k} " in str(err)), "rho")
+        raise ConfigError(f"material.{key}: {err}") from None
+
+
+def geometry_error(err: ValueError) -> ValueError:
+    """Name the [geometry] key of an error raised by ``fem_py.geometry.build_domain``.
+
+    Its messages start with the name of the argument at fault, which is the key of the
+    same name (``signorini arc 0: point ... is not on the boundary``); a too large
+    domain is fixed by shrinking it or by ``allow_large``. Other errors are returned
+    unchanged.
+    """
+    message = str(err)
+    word = re.match(r"[A-Za-z_()]+", message)
+    word = word.group(0) if word else ""
+    key = "allow_large" if word == "diam(Omega)" else word
+    if key not in DEFAULTS["geometry"]:
+        return err
+    return ConfigError(f"geometry.{key}: {message}")
 
 
 def as_dataclass_kwargs(cls: type, section: dict[str, Any]) -> dict[str, Any]:

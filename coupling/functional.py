@@ -52,22 +52,36 @@ class CoupledFunctional:
         return z
 
     # -- J_h and its derivatives --------------------------------------------------
-    def value_and_gradient(self, u_function, phi: np.ndarray,
-                           grad_u: PETSc.Vec) -> tuple[float, np.ndarray]:
-        """J_h(u, phi), with ``grad_u`` filled with grad_u J; returns (J_h, grad_phi J).
-
-        One S_h product serves both: with y = S_h z - m_t - s_0,
-        J_h = G(u) - b_f^T u + 1/2 z^T (y - m_t - s_0), grad_u J = A(u) - b_f + T^T y.
-        """
-        u = u_function.vector
+    def _boundary_terms(self, u: PETSc.Vec, phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """z = T u + E phi and y = S_h z - m_t - s_0 (one S_h product)."""
         z = self.boundary_block(u, phi)
-        y = self.S @ z - self.boundary_load
-        value = (self.forms.energy(u_function) - u.dot(self.load)
-                 + 0.5 * z @ (y - self.boundary_load))
+        return z, self.S @ z - self.boundary_load
+
+    def _value(self, u_function, z: np.ndarray, y: np.ndarray) -> float:
+        """J_h = G(u) - b_f^T u + 1/2 z^T (y - m_t - s_0)."""
+        return (self.forms.energy(u_function) - u_function.vector.dot(self.load)
+                + 0.5 * z @ (y - self.boundary_load))
+
+    def _gradient(self, u_function, y: np.ndarray, grad_u: PETSc.Vec) -> np.ndarray:
+        """grad_u J = A(u) - b_f + T^T y into ``grad_u``; returns grad_phi J = E^T y."""
         self.forms.assemble_residual(u_function, grad_u)
         grad_u.axpy(-1.0, self.load)
         self.boundary.scatter_add(y, grad_u, refresh_ghosts=False)
-        return value, y[self.signorini].copy()
+        return y[self.signorini].copy()
+
+    def value(self, u_function, phi: np.ndarray) -> float:
+        """J_h(u, phi) (collective)."""
+        return self._value(u_function, *self._boundary_terms(u_function.vector, phi))
+
+    def gradient(self, u_function, phi: np.ndarray, grad_u: PETSc.Vec) -> np.ndarray:
+        """Fill ``grad_u`` with grad_u J_h and return grad_phi J_h (collective)."""
+        return self._gradient(u_function, self._boundary_terms(u_function.vector, phi)[1], grad_u)
+
+    def value_and_gradient(self, u_function, phi: np.ndarray,
+                           grad_u: PETSc.Vec) -> tuple[float, np.ndarray]:
+        """(J_h, grad_phi J_h) with ``grad_u`` filled, sharing one S_h product."""
+        z, y = self._boundary_terms(u_function.vector, phi)
+        return self._value(u_function, z, y), self._gradient(u_function, y, grad_u)
 
     def hessian_action(self, jacobian: PETSc.Mat, e_u: PETSc.Vec, e_phi: np.ndarray,
                        out_u: PETSc.Vec) -> np.ndarray:

@@ -1,5 +1,13 @@
 """Outputs of a run: summary.json, fields.npz, solution.xdmf and PNG plots.
 
+fields.npz holds, in global dof order, ``x`` (N, 2), ``u`` (N,) and ``triangles``
+(n_cells, 3); along Gamma, counter-clockwise from the first polygon vertex,
+``boundary_x`` (n, 2), ``boundary_u``, the gap ``phi`` (0 on Gamma_t), ``ue`` = u + phi - u0,
+``active`` (bool: Signorini node in contact), ``signorini`` (bool: node carrying a phi
+unknown), all (n,); ``dn_ue``, the coefficients of du_e/dn in the flux space (n nodal
+values for "p1", n panel values for "p0", panel i = [node i, node i+1]); and the
+scalars ``a`` and ``flux_space`` that ``fembem exterior`` needs.
+
 Every file is written atomically: to a temporary name in the output folder, then
 renamed, so an interrupted run never leaves a half-written file under its final
 name. Rank 0 writes the gathered files; the XDMF file is written collectively.
@@ -11,15 +19,25 @@ import os
 import shutil
 import tempfile
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 from mpi4py import MPI
 
-__all__ = ["prepare_output_dir", "write_outputs", "gather_p1", "load_fields"]
+__all__ = ["DATA_FILES", "atomic_write", "prepare_output_dir", "write_outputs", "boundary_fields",
+           "gather_p1", "load_fields"]
+
+#: The files of a run besides the plots (coupling.plots.PLOT_FILES).
+DATA_FILES = ("summary.json", "fields.npz", "solution.xdmf", "solution.h5")
 
 
 def prepare_output_dir(comm: MPI.Comm, out: Path, *, force: bool) -> None:
-    """Create ``out``; refuse an existing non-empty folder unless ``force`` (collective)."""
+    """Create ``out``; refuse an existing non-empty folder unless ``force`` (collective).
+
+    With ``force`` the files of the earlier run stay until :func:`write_outputs`
+    replaces or removes them, so a run that fails on bad input destroys nothing.
+    """
+    out = Path(out)
     error = None
     if comm.rank == 0:
         if out.exists() and not out.is_dir():
@@ -28,14 +46,18 @@ def prepare_output_dir(comm: MPI.Comm, out: Path, *, force: bool) -> None:
             error = (f"output folder {str(out)!r} is not empty; pass --force to overwrite "
                      "it or choose another --out")
         else:
-            out.mkdir(parents=True, exist_ok=True)
+            try:
+                out.mkdir(parents=True, exist_ok=True)
+            except OSError as err:  # reported on every rank, not raised on rank 0 alone
+                error = f"cannot create output folder {str(out)!r} ({err.strerror}); choose another --out"
     error = comm.bcast(error, root=0)
     if error:
         raise FileExistsError(error)
 
 
-def _atomic_write(path: Path, write) -> None:
-    """Call ``write(tmp_path)`` and rename the result to ``path``."""
+def atomic_write(path: Path, write: Callable[[Path], object]) -> None:
+    """Call ``write(tmp_path)`` on a temporary file next to ``path``, then rename it to
+    ``path`` (readers see the old file or the complete new one, never a partial one)."""
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=path.suffix)
     os.close(fd)
     try:
@@ -93,27 +115,62 @@ def _summary(problem, result) -> dict:
     }
 
 
-def write_outputs(comm: MPI.Comm, out: Path, problem, result, config: dict) -> None:
-    """Write summary.json, fields.npz, and (per ``config["output"]``) XDMF and plots."""
+def boundary_fields(problem, result) -> dict[str, np.ndarray]:
+    """The boundary arrays of fields.npz, all in the counter-clockwise boundary order.
+
+    ``phi`` is the gap on every node (0 on Gamma_t and at arc end points), ``active``
+    marks the Signorini nodes in contact (phi_h = 0), ``signorini`` the nodes that carry
+    a phi unknown (interior nodes of the Signorini arcs).
+    """
+    boundary = problem.boundary
+    n = boundary.n_gamma
+    phi, active, signorini = np.zeros(n), np.zeros(n, bool), np.zeros(n, bool)
+    phi[boundary.signorini] = result.phi
+    active[boundary.signorini] = result.contact
+    signorini[boundary.signorini] = True
+    return dict(boundary_x=boundary.nodes, boundary_u=result.boundary_u, phi=phi,
+                ue=result.ue, dn_ue=result.flux, active=active, signorini=signorini)
+
+
+def write_outputs(comm: MPI.Comm, out: Path, problem, result, *, xdmf: bool = True,
+                  plots: bool = True, config: dict | None = None) -> list[str]:
+    """Write summary.json, fields.npz and, on request, solution.xdmf/.h5 and the plots.
+
+    Collective. Files of an earlier run in ``out`` that this run does not write (plots
+    when ``plots`` is false now, ...) are removed, so the folder never mixes two runs.
+    ``config`` (the validated configuration) is stored in summary.json.
+
+    Returns
+    -------
+    list of str
+        The names of the files written (the same on every rank).
+    """
+    out = Path(out)
     gathered = gather_p1(result.u)
-    if config["output"]["xdmf"]:
+    written = []
+    if xdmf:
         _write_xdmf(comm, out, problem, result)
+        written += ["solution.xdmf", "solution.h5"]
     if comm.rank == 0:
         x, u, triangles = gathered
-        boundary = problem.boundary
-        fields = dict(x=x, u=u, triangles=triangles, boundary_x=boundary.nodes,
-                      boundary_u=result.boundary_u, phi=result.phi,
-                      signorini=boundary.signorini, ue=result.ue, dn_ue=result.flux,
-                      active=result.contact, a=np.array(problem.a),
-                      flux_space=np.array(problem.options.flux_space))
-        _atomic_write(out / "fields.npz", lambda p: np.savez(p.open("wb"), **fields))
+        fields = dict(x=x, u=u, triangles=triangles, **boundary_fields(problem, result),
+                      a=np.array(problem.a), flux_space=np.array(problem.options.flux_space))
+        atomic_write(out / "fields.npz", lambda p: np.savez(p, **fields))  # p ends in .npz
+        written.append("fields.npz")
+        from coupling.plots import PLOT_FILES, write_plots
+        if plots:
+            written += write_plots(out, fields, result.history, tol=problem.options.tol)
         summary = _summary(problem, result)
-        summary["config"] = config
-        _atomic_write(out / "summary.json",
+        if config is not None:
+            summary["config"] = config
+        summary["files"] = sorted(written + ["summary.json"])
+        # last, so that a summary.json names a complete set of files
+        atomic_write(out / "summary.json",
                       lambda p: p.write_text(json.dumps(summary, indent=2, default=str)))
-        if config["output"]["plots"]:
-            from coupling.plots import write_plots
-            write_plots(out, problem, result, fields, _atomic_write)
+        written.append("summary.json")
+        for name in set(DATA_FILES + PLOT_FILES) - set(written):
+            (out / name).unlink(missing_ok=True)
+    return comm.bcast(written, root=0)
 
 
 def _write_xdmf(comm: MPI.Comm, out: Path, problem, result) -> None:

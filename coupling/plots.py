@@ -1,7 +1,23 @@
-"""PNG figures of a solved problem (matplotlib, Agg backend), written on rank 0."""
+"""PNG figures of a solved problem (matplotlib, Agg backend), written on rank 0.
+
+Every figure is drawn from the arrays of fields.npz (:mod:`coupling.outputs`) and the
+iteration history alone, so it can be redrawn from the outputs of a finished run:
+
+- ``u.png``: u_h over Omega; Gamma_s drawn thick, its nodes marked in contact / open.
+- ``boundary.png``: the gap phi_h, the exterior flux du_e/dn and the contact set
+  against the arc length s along Gamma (counter-clockwise from ``boundary_x[0]``),
+  with Gamma_s shaded and the corners of Omega marked.
+- ``whole_plane.png``: u_h in Omega and u_e outside (representation formula,
+  METHOD.md section 2) in one colour scale; they differ across Gamma by u0 - phi.
+- ``history.png``: the relative B-norm step and the relative energy excess of each
+  PGPM iteration against the tolerance, and the size of the contact set.
+
+The problem is dimensionless, so the axes carry no units.
+"""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Sequence
 
 import matplotlib
 
@@ -12,8 +28,16 @@ from matplotlib.path import Path as PolygonPath  # noqa: E402
 from matplotlib.tri import Triangulation  # noqa: E402
 
 import bem_cpp  # noqa: E402
+from coupling.outputs import atomic_write  # noqa: E402
 
-__all__ = ["write_plots", "arc_length"]
+__all__ = ["PLOT_FILES", "write_plots", "arc_length"]
+
+#: The figures, in the order they are written.
+PLOT_FILES = ("u.png", "boundary.png", "whole_plane.png", "history.png")
+
+_GAMMA_S = dict(color="tab:orange", lw=3.0, solid_capstyle="butt")
+_CONTACT = dict(ls="none", marker="o", ms=3.5, color="tab:red")
+_OPEN = dict(ls="none", marker="o", ms=3.5, mfc="white", mec="tab:blue", mew=1.0)
 
 
 def arc_length(nodes: np.ndarray) -> np.ndarray:
@@ -22,95 +46,210 @@ def arc_length(nodes: np.ndarray) -> np.ndarray:
     return np.concatenate([[0.0], np.cumsum(seg)])
 
 
-def _save(fig, path: Path, atomic_write) -> None:
-    atomic_write(path, lambda p: fig.savefig(p, dpi=130, bbox_inches="tight", format="png"))
-    plt.close(fig)
+def _closed(a: np.ndarray) -> np.ndarray:
+    return np.concatenate([a, a[:1]])
 
 
-def _mark_contact(ax, fields: dict) -> None:
+def _signorini_panels(fields: dict) -> np.ndarray:
+    """Panel i = [node i, node i+1] lies on Gamma_s when one of its nodes carries phi
+    (every arc has interior nodes: d >= 2h)."""
+    s = fields["signorini"]
+    return s | np.roll(s, -1)
+
+
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """Maximal runs [i, j) of True in a cyclic boolean array (panels along Gamma)."""
+    n = len(mask)
+    if mask.all():
+        return [(0, n)]
+    start = int(np.flatnonzero(~mask)[0])  # begin the scan on a panel off the runs
+    runs, i = [], None
+    for k in range(start + 1, start + n + 1):
+        on = mask[k % n]
+        if on and i is None:
+            i = k
+        elif not on and i is not None:
+            runs.append((i, k))
+            i = None
+    return runs
+
+
+def _corners(nodes: np.ndarray) -> np.ndarray:
+    """Indices of the boundary nodes where Gamma turns (corners of Omega)."""
+    t = np.diff(_closed(nodes), axis=0)
+    t /= np.linalg.norm(t, axis=1)[:, None]
+    t_in = np.roll(t, 1, axis=0)
+    return np.flatnonzero(np.abs(t_in[:, 0] * t[:, 1] - t_in[:, 1] * t[:, 0]) > 1e-8)
+
+
+def _draw_boundary(ax, fields: dict) -> None:
+    """Gamma (thin), Gamma_s (thick) and the Signorini nodes, in contact or open."""
     nodes = fields["boundary_x"]
-    closed = np.vstack([nodes, nodes[:1]])
+    closed = _closed(nodes)
     ax.plot(closed[:, 0], closed[:, 1], "k-", lw=0.8)
-    s_nodes = nodes[fields["signorini"]]
-    active = fields["active"]
-    ax.plot(*s_nodes[~active].T, "o", ms=2.5, color="tab:blue", label="Signorini: gap > 0")
-    ax.plot(*s_nodes[active].T, "o", ms=2.5, color="tab:red", label="Signorini: contact")
-    if len(s_nodes):
-        ax.legend(loc="upper right", fontsize=7)
+    for k, (i, j) in enumerate(_runs(_signorini_panels(fields))):
+        arc = closed[np.arange(i, j + 1) % len(nodes)] if j - i < len(nodes) else closed
+        ax.plot(arc[:, 0], arc[:, 1], label=r"$\Gamma_s$" if k == 0 else None, **_GAMMA_S)
+    sig, active = fields["signorini"], fields["active"]
+    if sig.any():
+        ax.plot(*nodes[sig & active].T, label="contact ($\\phi_h = 0$)", **_CONTACT)
+        ax.plot(*nodes[sig & ~active].T, label="open ($\\phi_h > 0$)", **_OPEN)
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=3, fontsize=8,
+                  frameon=False)
 
 
-def write_plots(out: Path, problem, result, fields: dict, atomic_write) -> None:
-    """u over Omega, boundary quantities, the whole-plane picture and the history."""
-    tri = Triangulation(fields["x"][:, 0], fields["x"][:, 1], fields["triangles"])
-
-    fig, ax = plt.subplots(figsize=(5.5, 4.5))
+def _figure_u(fields: dict, tri: Triangulation):
+    fig, ax = plt.subplots(figsize=(5.6, 5.2))
     im = ax.tripcolor(tri, fields["u"], shading="gouraud", cmap="viridis")
-    fig.colorbar(im, ax=ax, label="u_h")
-    _mark_contact(ax, fields)
-    ax.set_aspect("equal")
-    ax.set_title("u_h in Omega; Signorini nodes marked")
-    _save(fig, out / "u.png", atomic_write)
+    fig.colorbar(im, ax=ax, shrink=0.85, label="$u_h$")
+    _draw_boundary(ax, fields)
+    ax.set(aspect="equal", xlabel="$x$", ylabel="$y$", title=r"$u_h$ in $\Omega$")
+    return fig
 
+
+def _figure_boundary(fields: dict):
     nodes = fields["boundary_x"]
-    s = arc_length(np.vstack([nodes, nodes[:1]]))
-    fig, axes = plt.subplots(3, 1, figsize=(7, 6.5), sharex=True)
-    gap = np.zeros(len(nodes))
-    gap[fields["signorini"]] = fields["phi"]
-    axes[0].plot(s[:-1], gap, ".-", ms=2)
-    axes[0].set_ylabel("gap phi_h")
+    n = len(nodes)
+    s = arc_length(_closed(nodes))
+    fig, axes = plt.subplots(3, 1, figsize=(7.5, 6.5), sharex=True,
+                             gridspec_kw=dict(height_ratios=[3, 3, 1.3]))
+    for ax in axes:
+        for k, (i, j) in enumerate(_runs(_signorini_panels(fields))):
+            # a run may wrap past node 0: shade its two pieces
+            for a, b in ((i, min(j, n)), (0, j - n)) if j > n else ((i, j),):
+                if b > a:
+                    ax.axvspan(s[a], s[b], color="tab:orange", alpha=0.15, lw=0,
+                               label=r"$\Gamma_s$" if k == 0 and a == i else None)
+        for c in _corners(nodes):
+            ax.axvline(s[c], color="0.6", lw=0.6, ls=":")
+        ax.grid(alpha=0.3, lw=0.5)
+    axes[0].plot(s, _closed(fields["phi"]), ".-", ms=3, lw=1)
+    axes[0].set_ylabel(r"gap $\phi_h$")
     flux = fields["dn_ue"]
-    s_flux = s[:-1] if flux.size == len(nodes) and str(fields["flux_space"]) == "p1" \
-        else 0.5 * (s[:-1] + s[1:])
-    axes[1].plot(s_flux, flux, ".-", ms=2, color="tab:green")
-    axes[1].set_ylabel("du_e/dn")
-    contact = np.zeros(len(nodes))
-    contact[fields["signorini"][fields["active"]]] = 1
-    axes[2].step(s[:-1], contact, where="mid", color="tab:red")
-    axes[2].set_ylabel("contact")
-    axes[2].set_xlabel("arc length along Gamma (counter-clockwise)")
-    fig.suptitle("Boundary quantities")
-    _save(fig, out / "boundary.png", atomic_write)
+    if str(fields["flux_space"]) == "p0":
+        axes[1].stairs(flux, s, color="tab:green", lw=1)
+    else:
+        axes[1].plot(s, _closed(flux), ".-", ms=3, lw=1, color="tab:green")
+    axes[1].set_ylabel(r"$\partial u_e / \partial n$")
+    sig, active = fields["signorini"], fields["active"]
+    axes[2].plot(s[:-1][sig & active], np.ones(np.count_nonzero(sig & active)), **_CONTACT)
+    axes[2].plot(s[:-1][sig & ~active], np.zeros(np.count_nonzero(sig & ~active)), **_OPEN)
+    axes[2].set(yticks=[0, 1], yticklabels=["open", "contact"], ylim=(-0.5, 1.5))
+    x0, y0 = nodes[0]
+    axes[2].set_xlabel(f"arc length $s$ along $\\Gamma$, counter-clockwise from "
+                       f"$({x0:.3g}, {y0:.3g})$ (dotted: corners)")
+    axes[2].set_xlim(0, s[-1])
+    if sig.any():
+        axes[0].legend(loc="upper right", fontsize=8)
+    fig.suptitle(r"Along $\Gamma$: gap, exterior flux and contact set")
+    fig.tight_layout()
+    return fig
 
+
+def _distance_to_polygon(points: np.ndarray, nodes: np.ndarray, chunk: int = 4096) -> np.ndarray:
+    """Distance of each point (m, 2) to the closed polygon through ``nodes``."""
+    a, b = nodes, np.roll(nodes, -1, axis=0)
+    ab = b - a
+    ab2 = np.einsum("ij,ij->i", ab, ab)
+    out = np.empty(len(points))
+    for k in range(0, len(points), chunk):
+        p = points[k:k + chunk, None, :]
+        t = np.clip(np.einsum("mij,ij->mi", p - a, ab) / ab2, 0.0, 1.0)
+        out[k:k + chunk] = np.linalg.norm(p - a - t[..., None] * ab, axis=2).min(axis=1)
+    return out
+
+
+def _figure_whole_plane(fields: dict, tri: Triangulation, resolution: int = 161):
+    """u_h inside and u_e outside. Outside, u_e is evaluated on a grid and at the boundary
+    nodes (its discrete trace ``ue``) and drawn on their Delaunay triangulation, so the
+    colour reaches Gamma with no band: exterior_potential integrates the panels near a
+    point analytically and is accurate at any distance from Gamma (its docstring);
+    grid points closer than h/20 are left out only to avoid slivers."""
+    nodes = fields["boundary_x"]
     lo, hi = nodes.min(axis=0), nodes.max(axis=0)
-    centre, half = 0.5 * (lo + hi), 1.0 * (hi - lo).max()
-    g = np.linspace(-1, 1, 121) * half
+    centre, half = 0.5 * (lo + hi), (hi - lo).max()
+    g = np.linspace(-1, 1, resolution) * half
     X, Y = np.meshgrid(centre[0] + g, centre[1] + g)
-    points = np.column_stack([X.ravel(), Y.ravel()])
-    outside = ~PolygonPath(nodes).contains_points(points, radius=-1e-9)
-    # Keep a margin of about one panel so the picture shows u_e, not quadrature noise.
-    h = np.linalg.norm(np.diff(np.vstack([nodes, nodes[:1]]), axis=0), axis=1).max()
-    dist = np.min(np.linalg.norm(points[:, None, :] - nodes[None, ::max(1, len(nodes) // 400)],
-                                 axis=2), axis=1)
-    outside &= dist > h
-    ue = np.full(points.shape[0], np.nan)
-    ue[outside] = bem_cpp.exterior_potential(nodes, fields["ue"], flux, points[outside],
-                                             a=float(fields["a"]),
-                                             flux=str(fields["flux_space"]))
-    vmin = np.nanmin([np.nanmin(ue), fields["u"].min()])
-    vmax = np.nanmax([np.nanmax(ue), fields["u"].max()])
-    fig, ax = plt.subplots(figsize=(6, 5))
-    ax.pcolormesh(X, Y, ue.reshape(X.shape), shading="auto", cmap="viridis", vmin=vmin,
-                  vmax=vmax)
-    im = ax.tripcolor(tri, fields["u"], shading="gouraud", cmap="viridis", vmin=vmin,
-                      vmax=vmax)
-    fig.colorbar(im, ax=ax, label="u_h inside, u_e outside")
-    _mark_contact(ax, fields)
-    ax.set_aspect("equal")
-    ax.set_title("Whole plane: u_h in Omega, u_e (representation formula) outside")
-    _save(fig, out / "whole_plane.png", atomic_write)
+    grid = np.column_stack([X.ravel(), Y.ravel()])
+    h = np.linalg.norm(np.diff(_closed(nodes), axis=0), axis=1).max()
+    outside = ~PolygonPath(nodes).contains_points(grid)
+    outside[outside] = _distance_to_polygon(grid[outside], nodes) > h / 20
+    grid = grid[outside]
+    ue_grid = bem_cpp.exterior_potential(nodes, fields["ue"], fields["dn_ue"], grid,
+                                         a=float(fields["a"]), flux=str(fields["flux_space"]))
+    points = np.vstack([grid, nodes])
+    ue = np.concatenate([ue_grid, fields["ue"]])
+    ext = Triangulation(points[:, 0], points[:, 1])
+    centroids = points[ext.triangles].mean(axis=1)
+    ext.set_mask(PolygonPath(nodes).contains_points(centroids))
 
-    history = result.history
-    if history:
-        it = np.array([r.iteration for r in history])
-        energy = np.array([r.energy for r in history])
-        step = np.array([r.step_norm for r in history])
-        fig, ax = plt.subplots(figsize=(6, 4))
-        ax.semilogy(it, step, label="||xi_k+1 - xi_k||_B / ||xi_k+1||_B")
-        excess = energy - energy.min()
-        keep = excess > 0
-        ax.semilogy(it[keep], excess[keep] / max(abs(energy.min()), 1e-300),
-                    label="(J_h - min J_h) / |min J_h|")
-        ax.set_xlabel("PGPM iteration")
-        ax.legend()
-        ax.set_title("Convergence history")
-        _save(fig, out / "history.png", atomic_write)
+    u = fields["u"]
+    vmin, vmax = min(ue.min(), u.min()), max(ue.max(), u.max())
+    levels = np.linspace(vmin, vmax, 17)[1:-1]
+    fig, ax = plt.subplots(figsize=(6.2, 5.6))
+    ax.tripcolor(ext, ue, shading="gouraud", cmap="viridis", vmin=vmin, vmax=vmax)
+    im = ax.tripcolor(tri, u, shading="gouraud", cmap="viridis", vmin=vmin, vmax=vmax)
+    for t, v in ((ext, ue), (tri, u)):
+        ax.tricontour(t, v, levels=levels, colors="white", linewidths=0.5, alpha=0.6)
+    fig.colorbar(im, ax=ax, shrink=0.85, label=r"$u_h$ in $\Omega$, $u_e$ outside")
+    _draw_boundary(ax, fields)
+    ax.set(aspect="equal", xlabel="$x$", ylabel="$y$", xlim=(X.min(), X.max()),
+           ylim=(Y.min(), Y.max()))
+    ax.set_title(r"Whole plane: $u_h$ in $\Omega$, $u_e$ (representation formula) outside;"
+                 "\n" r"across $\Gamma$ they differ by $u_0 - \phi_h$", fontsize=10)
+    return fig
+
+
+def _figure_history(history: Sequence, tol: float):
+    it = np.array([r.iteration for r in history])
+    energy = np.array([r.energy for r in history])
+    step = np.array([r.step_norm for r in history])
+    contact = np.array([r.contact for r in history])
+    fig, axes = plt.subplots(2, 1, figsize=(6.5, 5.5), sharex=True,
+                             gridspec_kw=dict(height_ratios=[3, 1.3]))
+    ax = axes[0]
+    ax.semilogy(it, step, label=r"$\|\xi_{k+1} - \xi_k\|_B \,/\, \|\xi_{k+1}\|_B$")
+    excess = energy - energy.min()
+    keep = excess > 0
+    ax.semilogy(it[keep], excess[keep] / max(abs(energy.min()), 1e-300),
+                label=r"$(J_h(\xi_k) - \min_k J_h) \,/\, |\min_k J_h|$")
+    ax.axhline(tol, color="0.4", ls="--", lw=0.8, label=f"tol = {tol:g}")
+    ax.set_ylabel("relative size")
+    ax.grid(alpha=0.3, lw=0.5, which="both")
+    ax.legend(fontsize=8)
+    ax.set_title(f"PGPM convergence ({len(history)} iterations)")
+    axes[1].step(it, contact, where="post", color="tab:red")
+    axes[1].set(xlabel="PGPM iteration $k$", ylabel="contact nodes")
+    axes[1].grid(alpha=0.3, lw=0.5)
+    fig.tight_layout()
+    return fig
+
+
+def write_plots(out: Path, fields: dict, history: Sequence, *, tol: float) -> list[str]:
+    """Write the figures of :data:`PLOT_FILES` into ``out`` and return their names.
+
+    Parameters
+    ----------
+    fields
+        The arrays of fields.npz (:func:`coupling.outputs.write_outputs`).
+    history
+        The PGPM iteration records (``iteration``, ``energy``, ``step_norm``,
+        ``contact``); no history.png when empty.
+    tol
+        The PGPM tolerance, drawn in history.png.
+    """
+    tri = Triangulation(fields["x"][:, 0], fields["x"][:, 1], fields["triangles"])
+    figures = {"u.png": lambda: _figure_u(fields, tri),
+               "boundary.png": lambda: _figure_boundary(fields),
+               "whole_plane.png": lambda: _figure_whole_plane(fields, tri),
+               "history.png": lambda: _figure_history(history, tol) if len(history) else None}
+    written = []
+    for name in PLOT_FILES:
+        fig = figures[name]()
+        if fig is None:
+            continue
+        atomic_write(Path(out) / name, lambda p: fig.savefig(p, dpi=110, bbox_inches="tight",
+                                                       format="png"))
+        plt.close(fig)
+        written.append(name)
+    return written

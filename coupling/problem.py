@@ -48,6 +48,7 @@ def _solver_default(key: str) -> Any:
 class SolverOptions:
     """The ``[solver]`` section (defaults in :data:`coupling.config.DEFAULTS`)."""
 
+    method: str = _solver_default("method")
     preconditioner: str = _solver_default("preconditioner")
     tol: float = _solver_default("tol")
     max_iterations: int = _solver_default("max_iterations")
@@ -232,7 +233,8 @@ class SignoriniProblem:
 
         run: PGPMResult = projection_gradient(
             self.functional, self.preconditioner, self.projection, u, phi0, tau=tau,
-            tol=opts.tol, max_iterations=opts.max_iterations, monitor=monitor)
+            tol=opts.tol, max_iterations=opts.max_iterations,
+            accelerated=opts.method == "apgpm", monitor=monitor)
         timings["solve"] = run.solve_time
         if run.energy_increases and progress and comm.rank == 0:
             print(f"  note: J_h increased {run.energy_increases} times; tau was halved "
