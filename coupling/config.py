@@ -59,7 +59,7 @@ DEFAULTS: dict[str, dict[str, Any]] = {
 #: Keys whose value must be one of a fixed set of strings.
 CHOICES: dict[tuple[str, str], tuple[str, ...]] = {
     ("geometry", "shape"): ("square", "lshape", "polygon"),
-    ("solver", "method"): ("pgpm", "apgpm"),
+    ("solver", "method"): ("pgpm", "apgpm", "ssn"),
     ("solver", "preconditioner"): ("substructuring", "identity", "exact"),
     ("solver", "projection"): ("inexact", "exact"),
     ("solver", "edge_form"): ("paper", "sqrt-laplacian"),
@@ -189,7 +189,8 @@ def apply_override(raw: dict[str, Any], assignment: str) -> None:
     """Apply one ``section.key=value`` override (value in TOML syntax) to ``raw``.
 
     A value that is not valid TOML is taken as a string, so ``--set material.rho=carstensen``
-    works without quotes.
+    works without quotes; so is any value of a string key (expressions, names), so that
+    ``--set data.f=2`` means the expression "2".
     """
     lhs, sep, rhs = assignment.partition("=")
     section, dot, key = lhs.strip().partition(".")
@@ -198,6 +199,9 @@ def apply_override(raw: dict[str, Any], assignment: str) -> None:
     try:
         value = tomllib.loads(f"v = {rhs.strip()}")["v"]
     except tomllib.TOMLDecodeError:
+        value = rhs.strip()
+    if isinstance(DEFAULTS.get(section, {}).get(key), str) and not isinstance(value, str) \
+            and (section, key) != ("solver", "step"):  # step: "auto" or a number
         value = rhs.strip()
     raw.setdefault(section, {})
     if not isinstance(raw[section], dict):

@@ -23,7 +23,7 @@ from petsc4py import PETSc
 from coupling.functional import CoupledFunctional
 from coupling.projection import SignoriniProjection
 
-__all__ = ["IterationRecord", "PGPMResult", "estimate_step", "projection_gradient"]
+__all__ = ["IterationRecord", "RunResult", "estimate_step", "projection_gradient"]
 
 
 @dataclass(frozen=True)
@@ -40,8 +40,8 @@ class IterationRecord:
 
 
 @dataclass
-class PGPMResult:
-    """Outcome of :func:`projection_gradient` (u is left in the Function passed in)."""
+class RunResult:
+    """Outcome of an iterative solve (u is left in the Function passed in)."""
 
     phi: np.ndarray
     converged: bool
@@ -116,7 +116,7 @@ def projection_gradient(functional: CoupledFunctional, preconditioner,
                         projection: SignoriniProjection, u_function, phi0: np.ndarray, *,
                         tau: float, tol: float = 1e-8, max_iterations: int = 2000,
                         accelerated: bool = False, backtrack: bool = True,
-                        monitor: Callable[[IterationRecord], None] | None = None) -> PGPMResult:
+                        monitor: Callable[[IterationRecord], None] | None = None) -> RunResult:
     """Run Algorithm 3.1 ((3.3)-(3.4), in the block form (3.21)-(3.22)), or its
     accelerated variant.
 
@@ -230,6 +230,6 @@ def projection_gradient(functional: CoupledFunctional, preconditioner,
             converged, reason = True, f"||xi_k+1 - xi_k||_B <= {tol:g} ||xi_k+1||_B"
             break
     grad.destroy()
-    return PGPMResult(phi=phi_k, converged=converged, reason=reason, iterations=k,
+    return RunResult(phi=phi_k, converged=converged, reason=reason, iterations=k,
                       energy=energy, tau=tau, history=history, energy_increases=increases,
                       solve_time=time.perf_counter() - start)

@@ -113,13 +113,13 @@ def _figure_boundary(fields: dict):
     s = arc_length(_closed(nodes))
     fig, axes = plt.subplots(3, 1, figsize=(7.5, 6.5), sharex=True,
                              gridspec_kw=dict(height_ratios=[3, 3, 1.3]))
+    # a run of Signorini panels may wrap past node 0: shade its pieces on either side
+    spans = [(s[a], s[b]) for i, j in _runs(_signorini_panels(fields))
+             for a, b in ((i, min(j, n)), (max(i, n) - n, j - n)) if b > a]
     for ax in axes:
-        for k, (i, j) in enumerate(_runs(_signorini_panels(fields))):
-            # a run may wrap past node 0: shade its two pieces
-            for a, b in ((i, min(j, n)), (0, j - n)) if j > n else ((i, j),):
-                if b > a:
-                    ax.axvspan(s[a], s[b], color="tab:orange", alpha=0.15, lw=0,
-                               label=r"$\Gamma_s$" if k == 0 and a == i else None)
+        for k, span in enumerate(spans):
+            ax.axvspan(*span, color="tab:orange", alpha=0.15, lw=0,
+                       label=r"$\Gamma_s$" if k == 0 else None)
         for c in _corners(nodes):
             ax.axvline(s[c], color="0.6", lw=0.6, ls=":")
         ax.grid(alpha=0.3, lw=0.5)
@@ -190,7 +190,8 @@ def _figure_whole_plane(fields: dict, tri: Triangulation, resolution: int = 161)
     ax.tripcolor(ext, ue, shading="gouraud", cmap="viridis", vmin=vmin, vmax=vmax)
     im = ax.tripcolor(tri, u, shading="gouraud", cmap="viridis", vmin=vmin, vmax=vmax)
     for t, v in ((ext, ue), (tri, u)):
-        ax.tricontour(t, v, levels=levels, colors="white", linewidths=0.5, alpha=0.6)
+        ax.tricontour(t, v, levels=levels, colors="white", linewidths=0.5, alpha=0.6,
+                      linestyles="solid")
     fig.colorbar(im, ax=ax, shrink=0.85, label=r"$u_h$ in $\Omega$, $u_e$ outside")
     _draw_boundary(ax, fields)
     ax.set(aspect="equal", xlabel="$x$", ylabel="$y$", xlim=(X.min(), X.max()),
@@ -208,11 +209,11 @@ def _figure_history(history: Sequence, tol: float):
     fig, axes = plt.subplots(2, 1, figsize=(6.5, 5.5), sharex=True,
                              gridspec_kw=dict(height_ratios=[3, 1.3]))
     ax = axes[0]
-    ax.semilogy(it, step, label=r"$\|\xi_{k+1} - \xi_k\|_B \,/\, \|\xi_{k+1}\|_B$")
-    excess = energy - energy.min()
-    keep = excess > 0
-    ax.semilogy(it[keep], excess[keep] / max(abs(energy.min()), 1e-300),
-                label=r"$(J_h(\xi_k) - \min_k J_h) \,/\, |\min_k J_h|$")
+    ax.semilogy(it, step, label=r"$\Vert\xi_{k+1} - \xi_k\Vert_B \,/\, \Vert\xi_{k+1}\Vert_B$")
+    best = energy.min()  # J* below: the lowest energy reached
+    keep = energy > best
+    ax.semilogy(it[keep], (energy[keep] - best) / max(abs(best), 1e-300),
+                label=r"$(J_h(\xi_k) - J^*) \,/\, |J^*|$,  $J^* = \min_k J_h(\xi_k)$")
     ax.axhline(tol, color="0.4", ls="--", lw=0.8, label=f"tol = {tol:g}")
     ax.set_ylabel("relative size")
     ax.grid(alpha=0.3, lw=0.5, which="both")

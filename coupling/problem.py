@@ -28,7 +28,8 @@ from petsc4py import PETSc
 import bem_cpp
 from coupling.config import DEFAULTS, as_dataclass_kwargs
 from coupling.functional import CoupledFunctional
-from coupling.pgpm import IterationRecord, PGPMResult, estimate_step, projection_gradient
+from coupling.newton import semismooth_newton
+from coupling.pgpm import IterationRecord, RunResult, estimate_step, projection_gradient
 from coupling.distributed import RootPreconditioner, gather_matrix, gather_rows
 from coupling.exact_preconditioner import ExactPreconditioner
 from coupling.preconditioner import (IdentityPreconditioner, SignoriniArc,
@@ -231,10 +232,15 @@ class SignoriniProblem:
                       f"step = {record.step_norm:.3e}  contact = {record.contact}  "
                       f"inner = {record.inner}", file=sys.stdout, flush=True)
 
-        run: PGPMResult = projection_gradient(
-            self.functional, self.preconditioner, self.projection, u, phi0, tau=tau,
-            tol=opts.tol, max_iterations=opts.max_iterations,
-            accelerated=opts.method == "apgpm", monitor=monitor)
+        if opts.method == "ssn":
+            run: RunResult = semismooth_newton(
+                self.functional, self.preconditioner, self.projection, self.forms, u, phi0,
+                tau=tau, tol=opts.tol, max_iterations=opts.max_iterations, monitor=monitor)
+        else:
+            run = projection_gradient(
+                self.functional, self.preconditioner, self.projection, u, phi0, tau=tau,
+                tol=opts.tol, max_iterations=opts.max_iterations,
+                accelerated=opts.method == "apgpm", monitor=monitor)
         timings["solve"] = run.solve_time
         if run.energy_increases and progress and comm.rank == 0:
             print(f"  note: J_h increased {run.energy_increases} times; tau was halved "

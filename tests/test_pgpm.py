@@ -99,7 +99,7 @@ def test_pgpm_minimiser_equals_tao_bqnls(carstensen):
     assert np.linalg.norm(result.phi - phi_tao) <= 1e-7 * np.linalg.norm(result.phi)
 
 
-METHODS = ("pgpm", "apgpm")
+METHODS = ("pgpm", "apgpm", "ssn")
 
 
 @pytest.fixture(scope="module")
@@ -151,9 +151,10 @@ def test_identity_preconditioner_count_grows_like_h_minus_2(carstensen):
     assert counts[1] / counts[0] > 2.5, counts
 
 
-@pytest.mark.parametrize("variant", [{"projection": "inexact"}, {"method": "apgpm"}])
+@pytest.mark.parametrize("variant", [{"projection": "inexact"}, {"method": "apgpm"},
+                                     {"method": "ssn"}])
 def test_variants_reach_the_same_solution(carstensen, variant):
-    """The inexact projection and the accelerated method reach the PGPM solution."""
+    """The inexact projection and the other methods reach the PGPM solution."""
     results = []
     for options in (variant, {}):
         problem = manufactured_problem(COMM, square_contact(), carstensen, cells=16,

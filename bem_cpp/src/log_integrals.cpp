@@ -246,7 +246,86 @@ void coincident_blocks(const Panel& p, PairBlocks& out) {
   clear(out.kji);
 }
 
+namespace {
+
+/// The part [s0, s1] of panel p (same tangent and normal, no re-rounding).
+Panel sub_panel(const Panel& p, double s0, double s1) {
+  Panel q = p;
+  q.a = p.a + s0 * p.t;
+  q.b = p.a + s1 * p.t;
+  q.m = 0.5 * (q.a + q.b);
+  q.h = s1 - s0;
+  return q;
+}
+
+/// out += blocks of a sub-pair mapped to the full panels: on the part [s0, s1] of a
+/// panel of length h, phi_k = sum_l R[k][l] psi_l with psi the shapes of the part and
+/// R[k][l] = phi_k(endpoint l) (ri for panel i, rj for panel j).
+void add_restricted(const PairBlocks& sub, const double (&ri)[2][2], const double (&rj)[2][2],
+                    PairBlocks& out) {
+  for (int a = 0; a < 2; ++a)
+    for (int b = 0; b < 2; ++b)
+      for (int l = 0; l < 2; ++l)
+        for (int m = 0; m < 2; ++m) {
+          const double w = ri[a][l] * rj[b][m];
+          out.v[a][b] += w * sub.v[l][m];
+          out.kij[a][b] += w * sub.kij[l][m];
+          out.kji[b][a] += w * sub.kji[m][l];
+        }
+}
+
+void restriction(double h, double s0, double s1, double (&r)[2][2]) {
+  r[0][0] = 1.0 - s0 / h;
+  r[0][1] = 1.0 - s1 / h;
+  r[1][0] = s0 / h;
+  r[1][1] = s1 / h;
+}
+
+void adjacent_equal_blocks(const Panel& pi, const Panel& pj, PairRelation relation, PairBlocks& out);
+
+}  // namespace
+
 void adjacent_blocks(const Panel& pi, const Panel& pj, PairRelation relation, PairBlocks& out) {
+  // The Duffy formulas see a segment of length b/a from unit distance; for very unequal
+  // lengths they lose digits to cancellation. Then the longer panel is split at the
+  // shorter length from the common node: an adjacent pair of equal lengths plus a
+  // separated pair, mapped back to the full panels' shape functions.
+  constexpr double kMaxRatio = 2.0;
+  if (pi.h <= kMaxRatio * pj.h && pj.h <= kMaxRatio * pi.h) return adjacent_equal_blocks(pi, pj, relation, out);
+  const bool i_vertex_at_end = relation == PairRelation::EndToStart;
+  const bool split_i = pi.h > pj.h;
+  const Panel& longer = split_i ? pi : pj;
+  const double m = split_i ? pj.h : pi.h;
+  // Part of the longer panel next to the common node, and the rest.
+  const bool vertex_at_end = split_i ? i_vertex_at_end : !i_vertex_at_end;
+  const double near0 = vertex_at_end ? longer.h - m : 0.0, near1 = vertex_at_end ? longer.h : m;
+  const double far0 = vertex_at_end ? 0.0 : m, far1 = vertex_at_end ? longer.h - m : longer.h;
+  const Panel near_part = sub_panel(longer, near0, near1), far_part = sub_panel(longer, far0, far1);
+  double r_near[2][2], r_far[2][2];
+  restriction(longer.h, near0, near1, r_near);
+  restriction(longer.h, far0, far1, r_far);
+  const double identity[2][2] = {{1.0, 0.0}, {0.0, 1.0}};
+
+  clear(out.v);
+  clear(out.kij);
+  clear(out.kji);
+  PairBlocks sub;
+  if (split_i) {
+    adjacent_equal_blocks(near_part, pj, relation, sub);
+    add_restricted(sub, r_near, identity, out);
+    pair_blocks(far_part, pj, PairRelation::Separated, true, sub);
+    add_restricted(sub, r_far, identity, out);
+  } else {
+    adjacent_equal_blocks(pi, near_part, relation, sub);
+    add_restricted(sub, identity, r_near, out);
+    pair_blocks(pi, far_part, PairRelation::Separated, true, sub);
+    add_restricted(sub, identity, r_far, out);
+  }
+}
+
+namespace {
+
+void adjacent_equal_blocks(const Panel& pi, const Panel& pj, PairRelation relation, PairBlocks& out) {
   // Common node O at the origin, x = s e1 on panel i (s in [0, a]), y = t e2 on
   // panel j (t in [0, b]). Duffy split: t = r s w (r = b/a) on the triangle t <= r s
   // and s = r' t w (r' = a/b) on the other one, w in [0, 1]. Then
@@ -301,30 +380,30 @@ void adjacent_blocks(const Panel& pi, const Panel& pj, PairRelation relation, Pa
     }
 }
 
+}  // namespace
+
 void near_blocks(const Panel& pi, const Panel& pj, bool with_k, PairBlocks& out) {
   clear(out.v);
   clear(out.kij);
   clear(out.kji);
-  // Outer on panel i, analytic inner on panel j: v and kij.
+  // Outer on panel i, inner on panel j (analytic near it, Gauss where panel j is short
+  // compared with the distance, to avoid the cancellation of the closed forms there).
   near_outer(pi, pj, [&](double s, double w) {
-    const SegmentMoments m = segment_moments(pi.a + s * pi.t, pj.a, pj.t, pj.h, pj.n);
+    const PointPanelMoments m = point_panel_moments(pi.a + s * pi.t, pj);
     const double phi[2] = {w * (1.0 - s / pi.h), w * (s / pi.h)};
-    const double lg[2] = {m.log0 - m.log1 / pj.h, m.log1 / pj.h};
-    const double an[2] = {m.ang0 - m.ang1 / pj.h, m.ang1 / pj.h};
     for (int al = 0; al < 2; ++al)
       for (int be = 0; be < 2; ++be) {
-        out.v[al][be] += phi[al] * lg[be];
-        out.kij[al][be] += phi[al] * an[be];
+        out.v[al][be] += phi[al] * m.log[be];
+        out.kij[al][be] += phi[al] * m.dl[be];
       }
   });
   if (!with_k) return;
-  // Outer on panel j, analytic inner on panel i: kji.
+  // Outer on panel j, inner on panel i: kji.
   near_outer(pj, pi, [&](double t, double w) {
-    const SegmentMoments m = segment_moments(pj.a + t * pj.t, pi.a, pi.t, pi.h, pi.n);
+    const PointPanelMoments m = point_panel_moments(pj.a + t * pj.t, pi);
     const double phi[2] = {w * (1.0 - t / pj.h), w * (t / pj.h)};
-    const double an[2] = {m.ang0 - m.ang1 / pi.h, m.ang1 / pi.h};
     for (int be = 0; be < 2; ++be)
-      for (int al = 0; al < 2; ++al) out.kji[be][al] += phi[be] * an[al];
+      for (int al = 0; al < 2; ++al) out.kji[be][al] += phi[be] * m.dl[al];
   });
 }
 

@@ -1,0 +1,171 @@
+"""Semismooth Newton (primal-dual active set) for the discrete problem (2.3): our extension.
+
+Optimality system of min J_h(u, phi) over phi >= 0 (METHOD.md section 4):
+
+    grad_u J = 0,   min(phi, c grad_phi J) = 0   (componentwise, c > 0).
+
+At each outer step the Signorini nodes split into the active set
+A = {phi - c grad_phi J <= 0} (the gap is closed: phi_A = 0) and the inactive set I
+(grad_phi J_I = 0). The Newton step solves, with H = D^2 J_h at the iterate,
+
+    H_[(u,I),(u,I)] (du, dphi_I) = -(grad_u J, grad_phi J_I) - H_[(u,I),A] dphi_A,
+    dphi_A = -phi_A,
+
+by preconditioned CG: H is applied as a product (the interior Jacobian, assembled once
+per step, plus the dense S_h on the boundary block), the preconditioner is the
+substructuring B restricted to the inactive set (B_Omega^{-1} for u, M_s[I, I]^{-1} for
+phi_I). The CG tolerance follows the Newton residual (inexact Newton, forcing term
+min(0.1, sqrt(r_k / r_0))). Globalisation: backtracking on J_h along the projected
+path (u + a du, max(0, phi + a dphi)); a step that does not decrease J_h after 30
+halvings is replaced by a PGPM step. A few PGPM steps start the iteration, so the first
+active set is close to the final one and does not crawl node by node under refinement.
+"""
+from __future__ import annotations
+
+import time
+from typing import Callable
+
+import numpy as np
+import scipy.linalg
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from coupling.functional import CoupledFunctional
+from coupling.pgpm import IterationRecord, RunResult, _dot, _set_owned, projection_gradient
+from coupling.projection import SignoriniProjection
+
+__all__ = ["semismooth_newton"]
+
+
+def _pcg(apply_h: Callable, apply_b_inv: Callable, rhs: tuple[np.ndarray, np.ndarray],
+         comm: MPI.Comm, *, rtol: float, max_iterations: int):
+    """Preconditioned CG on the pair (u owned entries, phi_I replicated)."""
+    dot = lambda a, b: _dot(comm, a[0], b[0]) + a[1] @ b[1]  # noqa: E731
+    x = (np.zeros_like(rhs[0]), np.zeros_like(rhs[1]))
+    r = (rhs[0].copy(), rhs[1].copy())
+    z = apply_b_inv(r)
+    p = z
+    rz = dot(r, z)
+    stop = rtol * np.sqrt(max(rz, 0.0))
+    for it in range(1, max_iterations + 1):
+        hp = apply_h(p)
+        alpha = rz / dot(p, hp)
+        x = (x[0] + alpha * p[0], x[1] + alpha * p[1])
+        r = (r[0] - alpha * hp[0], r[1] - alpha * hp[1])
+        z = apply_b_inv(r)
+        rz_new = dot(r, z)
+        if np.sqrt(max(rz_new, 0.0)) <= stop:
+            return x, it
+        p = (z[0] + rz_new / rz * p[0], z[1] + rz_new / rz * p[1])
+        rz = rz_new
+    return x, max_iterations
+
+
+def semismooth_newton(functional: CoupledFunctional, preconditioner,
+                      projection: SignoriniProjection, forms, u_function, phi0: np.ndarray, *,
+                      tau: float, tol: float = 1e-8, max_iterations: int = 100,
+                      start_steps: int = 5, cg_max_iterations: int = 500,
+                      monitor: Callable[[IterationRecord], None] | None = None) -> RunResult:
+    """Semismooth Newton on the optimality system, started by ``start_steps`` PGPM steps.
+
+    Stops when ||xi_{k+1} - xi_k||_B <= tol ||xi_{k+1}||_B (the rule of the PGPM) with
+    an unchanged active set. ``IterationRecord.inner`` holds the CG iterations of the
+    step and ``IterationRecord.tau`` the line-search length.
+    """
+    start = time.perf_counter()
+    comm = functional.comm
+    history: list[IterationRecord] = []
+    warm = projection_gradient(functional, preconditioner, projection, u_function, phi0,
+                               tau=tau, tol=tol, max_iterations=start_steps, monitor=monitor)
+    history.extend(warm.history)
+    if warm.converged:
+        warm.solve_time = time.perf_counter() - start
+        return warm
+    phi = warm.phi
+    grad = u_function.vector.duplicate()
+    jacobian = forms.create_matrix()
+    e_u, h_u = jacobian.createVecRight(), jacobian.createVecRight()
+    energy, g_phi = functional.value_and_gradient(u_function, phi, grad)
+    c = 1.0 / max(np.max(np.abs(np.diag(preconditioner.signorini_metric)), initial=1.0), 1e-300)
+    residual0 = None
+    increases = warm.energy_increases
+    active = np.zeros(phi.size, dtype=bool)
+    reason, converged, k = f"reached max_iterations = {max_iterations}", False, warm.iterations
+    for k in range(warm.iterations + 1, warm.iterations + max_iterations + 1):
+        g_u = grad.array_r.copy()
+        new_active = phi - c * g_phi <= 0.0
+        active_changed = not np.array_equal(new_active, active)
+        active, free = new_active, ~new_active
+        kkt = np.concatenate([g_phi[free], np.minimum(phi[active], c * g_phi[active])])
+        residual = np.sqrt(_dot(comm, g_u, preconditioner.apply_omega(g_u)) + kkt @ kkt)
+        residual0 = residual if residual0 is None else residual0
+        forms.assemble_jacobian(u_function, jacobian)
+        metric_free = preconditioner.signorini_metric[np.ix_(free, free)]
+        factor = scipy.linalg.cho_factor(metric_free) if free.any() else None
+
+        def hessian(e_u_owned: np.ndarray, e_phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            e_u.array[:] = e_u_owned
+            h_phi = functional.hessian_action(jacobian, e_u, e_phi, h_u)
+            return h_u.array_r.copy(), h_phi
+
+        def apply_h(p):
+            e_phi = np.zeros(phi.size)
+            e_phi[free] = p[1]
+            h_u_owned, h_phi = hessian(p[0], e_phi)
+            return h_u_owned, h_phi[free]
+
+        def apply_b_inv(r):
+            return (preconditioner.apply_omega(r[0]),
+                    scipy.linalg.cho_solve(factor, r[1]) if factor is not None else r[1])
+
+        d_phi = np.zeros(phi.size)
+        d_phi[active] = -phi[active]
+        h_a_u, h_a_phi = hessian(np.zeros_like(g_u), d_phi)
+        rhs = (-g_u - h_a_u, -g_phi[free] - h_a_phi[free])
+        forcing = min(0.1, np.sqrt(residual / residual0))
+        (d_u, d_phi_free), cg_its = _pcg(apply_h, apply_b_inv, rhs, comm, rtol=forcing,
+                                         max_iterations=cg_max_iterations)
+        d_phi[free] = d_phi_free
+        if comm.size > 1:  # one copy of the replicated unknowns
+            d_phi = comm.bcast(d_phi, root=0)
+
+        u_old = u_function.vector.array_r.copy()
+        step = 1.0
+        for _ in range(30):
+            _set_owned(u_function, u_old + step * d_u)
+            trial_phi = np.maximum(0.0, phi + step * d_phi)
+            trial_energy, trial_g_phi = functional.value_and_gradient(u_function, trial_phi, grad)
+            if trial_energy - energy <= 1e-13 * (abs(energy) + abs(trial_energy)):
+                break
+            increases += 1
+            step *= 0.5
+        else:  # no decrease along the Newton path: fall back to one PGPM step
+            _set_owned(u_function, u_old)
+            run = projection_gradient(functional, preconditioner, projection, u_function, phi,
+                                      tau=tau, tol=0.0, max_iterations=1)
+            trial_phi, trial_energy = run.phi, run.energy
+            trial_g_phi = functional.gradient(u_function, trial_phi, grad)
+            step = 0.0
+        d_u_taken = u_function.vector.array_r - u_old
+        d_phi_taken = trial_phi - phi
+        step2 = (_dot(comm, d_u_taken, preconditioner.matvec_omega(d_u_taken))
+                 + d_phi_taken @ preconditioner.matvec_signorini(d_phi_taken))
+        u_now = u_function.vector.array_r
+        norm2 = (_dot(comm, u_now, preconditioner.matvec_omega(u_now))
+                 + trial_phi @ preconditioner.matvec_signorini(trial_phi))
+        phi, energy, g_phi = trial_phi, trial_energy, trial_g_phi
+        relative = float(np.sqrt(max(step2, 0.0) / norm2)) if norm2 > 0 else 0.0
+        record = IterationRecord(k, energy, relative, int(np.count_nonzero(phi <= 0.0)),
+                                 cg_its, step)
+        history.append(record)
+        if monitor is not None:
+            monitor(record)
+        if relative <= tol and not active_changed:
+            converged = True
+            reason = f"||xi_k+1 - xi_k||_B <= {tol:g} ||xi_k+1||_B, active set settled"
+            break
+    for obj in (grad, jacobian, e_u, h_u):
+        obj.destroy()
+    return RunResult(phi=phi, converged=converged, reason=reason, iterations=k, energy=energy,
+                     tau=tau, history=history, energy_increases=increases,
+                     solve_time=time.perf_counter() - start)
