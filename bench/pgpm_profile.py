@@ -45,7 +45,6 @@ def main() -> None:
 
     f, u, pre = problem.functional, result.u, problem.preconditioner
     grad = problem.forms.create_vector()
-    z = f.boundary_block(u.vector, result.phi)
     g_u = grad.array_r.copy()
     g_phi = np.ones(problem.n_signorini)
     parts = {

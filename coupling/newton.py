@@ -28,7 +28,6 @@ from typing import Callable
 import numpy as np
 import scipy.linalg
 from mpi4py import MPI
-from petsc4py import PETSc
 
 from coupling.functional import CoupledFunctional
 from coupling.pgpm import IterationRecord, RunResult, _dot, _set_owned, projection_gradient

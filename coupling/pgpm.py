@@ -80,7 +80,6 @@ def estimate_step(functional: CoupledFunctional, preconditioner, jacobian: PETSc
     q_u, q_phi = preconditioner.apply_omega(p_u), preconditioner.apply_signorini(p_phi)
     norm = np.sqrt(_dot(comm, q_u, p_u) + q_phi @ p_phi)
     q_u, q_phi, p_u, p_phi = q_u / norm, q_phi / norm, p_u / norm, p_phi / norm
-    q_prev_u, q_prev_phi = np.zeros_like(q_u), np.zeros_like(q_phi)
     p_prev_u, p_prev_phi = np.zeros_like(p_u), np.zeros_like(p_phi)
     alphas, betas, beta = [], [], 0.0
     e_u = jacobian.createVecRight()
@@ -98,7 +97,7 @@ def estimate_step(functional: CoupledFunctional, preconditioner, jacobian: PETSc
         if beta < 1e-12 * abs(alpha):
             break
         betas.append(beta)
-        q_prev_u, q_prev_phi, p_prev_u, p_prev_phi = q_u, q_phi, p_u, p_phi
+        p_prev_u, p_prev_phi = p_u, p_phi
         q_u, q_phi, p_u, p_phi = r_u / beta, r_phi / beta, bu / beta, bphi / beta
     ritz = scipy.linalg.eigvalsh_tridiagonal(np.array(alphas), np.array(betas[:len(alphas) - 1]))
     e_u.destroy(), work.destroy()

@@ -23,7 +23,6 @@ from typing import Any
 
 import numpy as np
 from mpi4py import MPI
-from petsc4py import PETSc
 
 import bem_cpp
 from coupling.config import DEFAULTS, as_dataclass_kwargs
@@ -287,6 +286,11 @@ def problem_from_config(comm: MPI.Comm, config: dict) -> SignoriniProblem:
     """A :class:`SignoriniProblem` from a validated configuration (coupling.config)."""
     data = config["data"]
     options = SolverOptions(**as_dataclass_kwargs(SolverOptions, config["solver"]))
-    return SignoriniProblem(domain_from_config(comm, config), material_from_config(config),
-                            f=data["f"], u0=data["u0"], t0=data["t0"], a=data["a"],
-                            options=options)
+    material = material_from_config(config)
+    tic = time.perf_counter()
+    domain = domain_from_config(comm, config)
+    mesh_time = time.perf_counter() - tic
+    problem = SignoriniProblem(domain, material, f=data["f"], u0=data["u0"], t0=data["t0"],
+                               a=data["a"], options=options)
+    problem.timings = {"mesh": mesh_time, **problem.timings}
+    return problem
