@@ -1,8 +1,13 @@
-"""Command line ``fembem``.
+"""Command line ``fembem``: ``solve``, ``exterior`` and ``check-jacobian`` (README.md).
 
 Exit codes: 0 success, 1 a check failed (check-jacobian), 2 bad input (one line on
-stderr naming the problem and the fix; a traceback only with --debug), 3 the solver
-did not converge (outputs are still written).
+stderr naming the configuration key or file and the fix; a traceback only with
+--debug), 3 the solver did not converge (outputs are still written).
+
+Under mpirun every rank runs the same command on MPI.COMM_WORLD. The inputs are
+validated identically on every rank before the first collective call, errors raised
+inside collective steps are broadcast by them (fem_py.geometry, coupling.outputs), and
+only rank 0 prints, so a bad input ends every rank with exit code 2 and one message.
 """
 from __future__ import annotations
 
@@ -35,7 +40,9 @@ def build_parser() -> argparse.ArgumentParser:
                            "and write summary.json, fields.npz, solution.xdmf and plots.")
     solve.add_argument("config", metavar="CONFIG.toml")
     solve.add_argument("--out", metavar="DIR", help="output folder (default: [output] dir)")
-    solve.add_argument("--force", action="store_true", help="overwrite a non-empty DIR")
+    solve.add_argument("--force", action="store_true",
+                       help="write into a non-empty DIR, replacing the files of an earlier "
+                       "run and deleting those this run does not write")
     solve.add_argument("--quiet", action="store_true", help="no progress lines")
     common(solve)
 
@@ -90,10 +97,10 @@ def _solve(args: argparse.Namespace) -> int:
 
     comm = MPI.COMM_WORLD
     config = _problem_inputs(args)
-    out = Path(args.out if args.out is not None else config["output"]["dir"])
     from coupling.outputs import prepare_output_dir, write_outputs
     from coupling.problem import problem_from_config
 
+    out = Path(args.out if args.out is not None else config["output"]["dir"])
     prepare_output_dir(comm, out, force=args.force)
     problem = _with_geometry_key(problem_from_config, comm, config)
     result = problem.solve(progress=not args.quiet)

@@ -49,7 +49,8 @@ def prepare_output_dir(comm: MPI.Comm, out: Path, *, force: bool) -> None:
             try:
                 out.mkdir(parents=True, exist_ok=True)
             except OSError as err:  # reported on every rank, not raised on rank 0 alone
-                error = f"cannot create output folder {str(out)!r} ({err.strerror}); choose another --out"
+                error = (f"cannot create output folder {str(out)!r} ({err.strerror}); "
+                         "choose another --out")
     error = comm.bcast(error, root=0)
     if error:
         raise FileExistsError(error)

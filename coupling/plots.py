@@ -3,14 +3,14 @@
 Every figure is drawn from the arrays of fields.npz (:mod:`coupling.outputs`) and the
 iteration history alone, so it can be redrawn from the outputs of a finished run:
 
-- ``u.png``: u_h over Omega; Gamma_s drawn thick, its nodes marked in contact / open.
+- ``u.png``: u_h over Omega; Gamma_s drawn thick, red where in contact, blue where open.
 - ``boundary.png``: the gap phi_h, the exterior flux du_e/dn and the contact set
   against the arc length s along Gamma (counter-clockwise from ``boundary_x[0]``),
   with Gamma_s shaded and the corners of Omega marked.
 - ``whole_plane.png``: u_h in Omega and u_e outside (representation formula,
   METHOD.md section 2) in one colour scale; they differ across Gamma by u0 - phi.
 - ``history.png``: the relative B-norm step and the relative energy excess of each
-  PGPM iteration against the tolerance, and the size of the contact set.
+  iteration against the tolerance, and the size of the contact set.
 
 The problem is dimensionless, so the axes carry no units.
 """
@@ -24,6 +24,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.collections import LineCollection  # noqa: E402
 from matplotlib.path import Path as PolygonPath  # noqa: E402
 from matplotlib.tri import Triangulation  # noqa: E402
 
@@ -35,7 +36,6 @@ __all__ = ["PLOT_FILES", "write_plots", "arc_length"]
 #: The figures, in the order they are written.
 PLOT_FILES = ("u.png", "boundary.png", "whole_plane.png", "history.png")
 
-_GAMMA_S = dict(color="tab:orange", lw=3.0, solid_capstyle="butt")
 _CONTACT = dict(ls="none", marker="o", ms=3.5, color="tab:red")
 _OPEN = dict(ls="none", marker="o", ms=3.5, mfc="white", mec="tab:blue", mew=1.0)
 
@@ -83,19 +83,28 @@ def _corners(nodes: np.ndarray) -> np.ndarray:
 
 
 def _draw_boundary(ax, fields: dict) -> None:
-    """Gamma (thin), Gamma_s (thick) and the Signorini nodes, in contact or open."""
+    """Gamma (thin black) and Gamma_s (thick): red where in contact (phi_h = 0 at both
+    ends of a panel), blue where the gap is open; the Signorini nodes as dots when
+    there are few enough to tell apart."""
     nodes = fields["boundary_x"]
     closed = _closed(nodes)
-    ax.plot(closed[:, 0], closed[:, 1], "k-", lw=0.8)
-    for k, (i, j) in enumerate(_runs(_signorini_panels(fields))):
-        arc = closed[np.arange(i, j + 1) % len(nodes)] if j - i < len(nodes) else closed
-        ax.plot(arc[:, 0], arc[:, 1], label=r"$\Gamma_s$" if k == 0 else None, **_GAMMA_S)
+    ax.plot(closed[:, 0], closed[:, 1], "k-", lw=0.8, zorder=4)
+    panels = _signorini_panels(fields)
+    if not panels.any():
+        return
+    shut = fields["phi"] == 0.0
+    contact = panels & shut & np.roll(shut, -1)
+    segments = np.stack([nodes, np.roll(nodes, -1, axis=0)], axis=1)
+    for mask, color, label in ((contact, "tab:red", r"$\Gamma_s$ in contact ($\phi_h = 0$)"),
+                               (panels & ~contact, "tab:blue", r"$\Gamma_s$ open ($\phi_h > 0$)")):
+        ax.add_collection(LineCollection(segments[mask], colors=color, linewidths=3.0,
+                                         capstyle="butt", label=label, zorder=5))
     sig, active = fields["signorini"], fields["active"]
-    if sig.any():
-        ax.plot(*nodes[sig & active].T, label="contact ($\\phi_h = 0$)", **_CONTACT)
-        ax.plot(*nodes[sig & ~active].T, label="open ($\\phi_h > 0$)", **_OPEN)
-        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=3, fontsize=8,
-                  frameon=False)
+    if sig.sum() <= 64:
+        ax.plot(*nodes[sig & active].T, zorder=6, **_CONTACT)
+        ax.plot(*nodes[sig & ~active].T, zorder=6, **_OPEN)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2, fontsize=8,
+              frameon=False)
 
 
 def _figure_u(fields: dict, tri: Triangulation):
@@ -146,20 +155,15 @@ def _figure_boundary(fields: dict):
     return fig
 
 
-def _distance_to_polygon(points: np.ndarray, nodes: np.ndarray, chunk: int = 4096) -> np.ndarray:
-    """Distance of each point (m, 2) to the closed polygon through ``nodes``."""
-    a, b = nodes, np.roll(nodes, -1, axis=0)
-    ab = b - a
-    ab2 = np.einsum("ij,ij->i", ab, ab)
-    out = np.empty(len(points))
-    for k in range(0, len(points), chunk):
-        p = points[k:k + chunk, None, :]
-        t = np.clip(np.einsum("mij,ij->mi", p - a, ab) / ab2, 0.0, 1.0)
-        out[k:k + chunk] = np.linalg.norm(p - a - t[..., None] * ab, axis=2).min(axis=1)
-    return out
+def _distance_to_polygon(points: np.ndarray, vertices: np.ndarray) -> np.ndarray:
+    """Distance of each point (m, 2) to the closed polygon through ``vertices`` (k, 2)."""
+    a, ab = vertices, np.roll(vertices, -1, axis=0) - vertices
+    rel = points[:, None, :] - a  # (m, k, 2)
+    t = np.clip(np.einsum("mkj,kj->mk", rel, ab) / np.einsum("kj,kj->k", ab, ab), 0.0, 1.0)
+    return np.linalg.norm(rel - t[..., None] * ab, axis=2).min(axis=1)
 
 
-def _figure_whole_plane(fields: dict, tri: Triangulation, resolution: int = 161):
+def _figure_whole_plane(fields: dict, tri: Triangulation, resolution: int = 121):
     """u_h inside and u_e outside. Outside, u_e is evaluated on a grid and at the boundary
     nodes (its discrete trace ``ue``) and drawn on their Delaunay triangulation, so the
     colour reaches Gamma with no band: exterior_potential integrates the panels near a
@@ -173,25 +177,29 @@ def _figure_whole_plane(fields: dict, tri: Triangulation, resolution: int = 161)
     grid = np.column_stack([X.ravel(), Y.ravel()])
     h = np.linalg.norm(np.diff(_closed(nodes), axis=0), axis=1).max()
     outside = ~PolygonPath(nodes).contains_points(grid)
-    outside[outside] = _distance_to_polygon(grid[outside], nodes) > h / 20
+    outside[outside] = _distance_to_polygon(grid[outside], nodes[_corners(nodes)]) > h / 20
     grid = grid[outside]
     ue_grid = bem_cpp.exterior_potential(nodes, fields["ue"], fields["dn_ue"], grid,
                                          a=float(fields["a"]), flux=str(fields["flux_space"]))
     points = np.vstack([grid, nodes])
     ue = np.concatenate([ue_grid, fields["ue"]])
     ext = Triangulation(points[:, 0], points[:, 1])
+    # Omega is covered by the triangles of boundary nodes alone whose centroid is inside;
+    # a triangle with a grid vertex is exterior even where it cuts a corner of Omega
+    # (u_h is drawn over it)
+    on_gamma = np.all(ext.triangles >= len(grid), axis=1)
     centroids = points[ext.triangles].mean(axis=1)
-    ext.set_mask(PolygonPath(nodes).contains_points(centroids))
+    ext.set_mask(on_gamma & PolygonPath(nodes).contains_points(centroids))
 
     u = fields["u"]
     vmin, vmax = min(ue.min(), u.min()), max(ue.max(), u.max())
     levels = np.linspace(vmin, vmax, 17)[1:-1]
     fig, ax = plt.subplots(figsize=(6.2, 5.6))
-    ax.tripcolor(ext, ue, shading="gouraud", cmap="viridis", vmin=vmin, vmax=vmax)
-    im = ax.tripcolor(tri, u, shading="gouraud", cmap="viridis", vmin=vmin, vmax=vmax)
-    for t, v in ((ext, ue), (tri, u)):
+    for z, (t, v) in enumerate(((ext, ue), (tri, u))):  # Omega's layers over the exterior's
+        im = ax.tripcolor(t, v, shading="gouraud", cmap="viridis", vmin=vmin, vmax=vmax,
+                          zorder=2 * z)
         ax.tricontour(t, v, levels=levels, colors="white", linewidths=0.5, alpha=0.6,
-                      linestyles="solid")
+                      linestyles="solid", zorder=2 * z + 1)
     fig.colorbar(im, ax=ax, shrink=0.85, label=r"$u_h$ in $\Omega$, $u_e$ outside")
     _draw_boundary(ax, fields)
     ax.set(aspect="equal", xlabel="$x$", ylabel="$y$", xlim=(X.min(), X.max()),
@@ -213,14 +221,14 @@ def _figure_history(history: Sequence, tol: float):
     best = energy.min()  # J* below: the lowest energy reached
     keep = energy > best
     ax.semilogy(it[keep], (energy[keep] - best) / max(abs(best), 1e-300),
-                label=r"$(J_h(\xi_k) - J^*) \,/\, |J^*|$,  $J^* = \min_k J_h(\xi_k)$")
+                label=r"$(J_h(\xi_k) - J^*) \,/\, |J^*|$,  $J^*$: lowest $J_h$ reached")
     ax.axhline(tol, color="0.4", ls="--", lw=0.8, label=f"tol = {tol:g}")
     ax.set_ylabel("relative size")
     ax.grid(alpha=0.3, lw=0.5, which="both")
     ax.legend(fontsize=8)
-    ax.set_title(f"PGPM convergence ({len(history)} iterations)")
+    ax.set_title(f"Convergence ({len(history)} iterations)")
     axes[1].step(it, contact, where="post", color="tab:red")
-    axes[1].set(xlabel="PGPM iteration $k$", ylabel="contact nodes")
+    axes[1].set(xlabel="iteration $k$", ylabel="contact nodes")
     axes[1].grid(alpha=0.3, lw=0.5)
     fig.tight_layout()
     return fig

@@ -24,7 +24,7 @@ from typing import Any, Iterator
 
 import numpy as np
 import ufl
-from dolfinx import fem
+from dolfinx import fem, la
 from mpi4py import MPI
 from petsc4py import PETSc
 
@@ -165,7 +165,7 @@ class InteriorForms:
         }
         if f is not None:
             self._ufl["load"] = (ufl.inner(as_ufl_data(f, self.mesh, what="f"), v)
-                                 * ufl.dx(metadata=DATA_QUADRATURE))
+                                 * ufl.dx(domain=self.mesh, metadata=DATA_QUADRATURE))
         self._compiled: dict[str, Any] = {}
         for key in ("energy", "residual", jacobian):
             self._form(key)
@@ -226,15 +226,8 @@ class InteriorForms:
         return A
 
     def assemble_load(self) -> PETSc.Vec:
-        """b_f,i = int f v_i dx (a new Vec; zero when f is None)."""
-        b = self.create_vector()
-        with b.localForm() as bl:
-            bl.set(0.0)
-        if "load" in self._ufl:
-            fem.petsc.assemble_vector(b, self._form("load"))
-            b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-            b.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-        return b
+        """b_f,i = int f v_i dx (a new Vec; zero when f is None or zero)."""
+        return assemble_linear_form(self.V, self._ufl.get("load"), self._jit)
 
     def boundary_load(self, t0: Any, boundary: Any) -> np.ndarray:
         """m_t = int_Gamma t0 v_j ds in boundary order (``boundary``: a
@@ -252,6 +245,22 @@ class InteriorForms:
         return A
 
 
+def assemble_linear_form(V: fem.FunctionSpace, form: Any, jit_params: dict | None = None) -> PETSc.Vec:
+    """A new ghosted Vec on V holding the assembled linear ``form`` (ghosts summed and
+    refreshed). ``None``, or a form whose integrands UFL simplified to zero (zero data,
+    e.g. f = "0"), gives zeros."""
+    index_map = V.dofmap.index_map
+    b = la.create_petsc_vector(index_map, V.dofmap.index_map_bs)
+    with b.localForm() as bl:
+        bl.set(0.0)
+    if form is not None and not all(isinstance(i.integrand(), ufl.constantvalue.Zero)
+                                    for i in form.integrals()):
+        fem.petsc.assemble_vector(b, compile_form(form, jit_params))
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        b.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+    return b
+
+
 def assemble_boundary_load(V: fem.FunctionSpace, t0: Any, *, jit_params: dict | None = None) -> PETSc.Vec:
     """m_t,j = int_Gamma t0 v_j ds over the whole boundary (METHOD.md section 4).
 
@@ -260,13 +269,6 @@ def assemble_boundary_load(V: fem.FunctionSpace, t0: Any, *, jit_params: dict | 
     boundary-order values are ``BoundaryMap.gather(m_t)``.
     """
     mesh = V.mesh
-    v = ufl.TestFunction(V)
-    form = compile_form(ufl.inner(as_ufl_data(t0, mesh, boundary=True, what="t0"), v)
-                        * ufl.ds(metadata=DATA_QUADRATURE), jit_params)
-    b = fem.petsc.create_vector(form)
-    with b.localForm() as bl:
-        bl.set(0.0)
-    fem.petsc.assemble_vector(b, form)
-    b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-    b.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-    return b
+    form = (ufl.inner(as_ufl_data(t0, mesh, boundary=True, what="t0"), ufl.TestFunction(V))
+            * ufl.ds(domain=mesh, metadata=DATA_QUADRATURE))
+    return assemble_linear_form(V, form, jit_params)

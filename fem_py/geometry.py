@@ -665,7 +665,8 @@ def build_domain(comm: Any, shape: str, *, h: float, subdomain_size: float,
     diam = _diameter(P)
     if diam >= 1.0 and not allow_large:
         raise ValueError(f"diam(Omega) = {diam:.4g} >= 1: the single-layer operator may not be elliptic "
-                         "(METHOD.md section 2); shrink the domain or pass allow_large=True")
+                         "(METHOD.md section 2); shrink the domain, or opt out with allow_large "
+                         "(geometry.allow_large = true) at your own risk")
     B = _Boundary(P)
     arcs, whole = _parse_arcs(signorini, shape, B)
     ends = [] if whole else [np.asarray(p) for a in arcs for p in (a.start, a.end)]

@@ -1,0 +1,122 @@
+"""The demos, run at a small size, and the README's Python example.
+
+Each demo writes the numbers it prints to results.json in its --out folder; the tests
+assert them: errors below bounds from measured convergence orders, rates, iteration
+counts, agreement between variants. The bounds:
+
+- PGPM stops when ||xi_k+1 - xi_k||_B <= tol ||xi_k+1||_B (tol = 1e-8), which leaves
+  the iterate within about kappa * tol <= 100 tol = 1e-6 of the minimiser (see
+  tests/test_pgpm.py); two runs that differ by round-off only agree to that.
+- Rates are fitted from two mesh sizes a factor 2 apart on coarse meshes; the
+  measured pre-asymptotic values are quoted next to each bound.
+"""
+from __future__ import annotations
+
+import json
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from conftest import ROOT, run_mpi
+
+DEMOS = ROOT / "demos"
+
+
+def run_demo(name: str, out: Path, *args: str, nprocs: int | None = None) -> tuple[dict, str]:
+    """Run demos/<name>.py with --out ``out``; return (results.json, stdout)."""
+    argv = [str(DEMOS / f"{name}.py"), "--out", str(out), *args]
+    if nprocs:
+        proc = run_mpi(nprocs, *argv)
+    else:
+        proc = subprocess.run([sys.executable, *argv], capture_output=True, text=True,
+                              timeout=300, cwd=ROOT)
+        assert proc.returncode == 0, proc.stderr[-4000:]
+    return json.loads((out / "results.json").read_text()), proc.stdout
+
+
+def test_every_demo_is_a_percent_script_with_a_size_argument():
+    demos = sorted(DEMOS.glob("demo_*.py"))
+    assert {p.stem for p in demos} >= {"demo_linear_transmission", "demo_signorini_square",
+                                       "demo_lshape", "demo_jacobians", "demo_mpi"}
+    for path in demos:
+        text = path.read_text()
+        assert text.startswith("# %% [markdown]\n# # "), path.name
+        assert "--cells" in text and "--out" in text, path.name
+        # library code takes the communicator as an argument: COMM_WORLD only at top level
+        assert all(not line.startswith((" ", "\t")) for line in text.splitlines()
+                   if "COMM_WORLD" in line and not line.lstrip().startswith("#")), path.name
+
+
+def test_linear_transmission_converges_at_the_expected_rates(tmp_path):
+    results, _ = run_demo("demo_linear_transmission", tmp_path, "--cells", "16")
+    assert all(r["converged"] for r in results["rows"])
+    rates = results["rates"]
+    # measured (h = 1/8, 1/16, 1/32): energy 0.93, 0.98; nodal 1.72, 1.76; u_e 1.93, 1.98
+    assert min(rates["energy"]) >= 0.85
+    assert min(rates["nodal_u"]) >= 1.6
+    assert min(rates["ue_exterior"]) >= 1.8
+
+
+def test_signorini_square_demo_finds_the_contact_set(tmp_path):
+    results, stdout = run_demo("demo_signorini_square", tmp_path, "--cells", "16")
+    rows = results["rows"]
+    assert all(r["converged"] for r in rows)
+    assert all(r["contact_mismatch"] == 0 for r in rows)
+    assert all(0 < r["contact_nodes"] < r["signorini_nodes"] for r in rows)
+    assert results["energy_rate"] >= 0.9  # O(h); measured 0.99 (h = 1/16, 1/32)
+    # fixed d/h: the count does not grow (measured 173, 189)
+    its = [r["iterations"] for r in rows]
+    assert max(its) <= 1.5 * min(its)
+    # it tells where its outputs are, and they are there
+    for name in ("u.png", "boundary.png", "whole_plane.png", "history.png", "fields.npz",
+                 "solution.xdmf", "summary.json"):
+        assert (tmp_path / name).is_file(), name
+    assert f"plots:  {tmp_path / 'u.png'}" in stdout
+    assert f"fields: {tmp_path / 'fields.npz'}" in stdout
+
+
+def test_lshape_demo_two_arcs(tmp_path):
+    results, _ = run_demo("demo_lshape", tmp_path, "--cells", "16")
+    assert results["converged"] and results["errors"]["contact_mismatch"] == 0
+    h = 0.5 / 16
+    # |u - u_h|_1 = 0.70 h measured at h = 1/32, 1/64, 1/128 (order 1)
+    assert results["errors"]["energy"] <= 0.8 * h
+    bottom, notch = results["arcs"]
+    # exact contact sets: x <= 0 on the bottom arc, x >= 1/8 on the notch arc
+    assert 0 < bottom["contact"] < bottom["nodes"] and bottom["computed"][1] <= 1e-12
+    assert 0 < notch["contact"] < notch["nodes"] and notch["computed"][0] >= 0.125 - 1e-12
+    assert (tmp_path / "whole_plane.png").is_file()
+
+
+def test_jacobians_demo_same_matrix_and_iterates(tmp_path):
+    results, _ = run_demo("demo_jacobians", tmp_path, "--cells", "16", "--repeat", "2")
+    # entries agree to round-off (sums of a few products of O(1) numbers)
+    assert results["matrix_rel_diff"] <= 1e-13
+    assert results["taylor_passed"]
+    assert results["iterations"]["ufl"] == results["iterations"]["handwritten"]
+    assert results["energy_rel_diff"] <= 1e-13 and results["u_rel_diff"] <= 1e-13
+    assert results["same_contact"]
+    assert results["seconds"]["ufl"] > 0 and results["seconds"]["handwritten"] > 0
+
+
+@pytest.mark.mpi
+def test_mpi_demo_matches_the_serial_solve(tmp_path):
+    results, _ = run_demo("demo_mpi", tmp_path, "--cells", "16", nprocs=2)
+    assert results["ranks"] == 2 and min(results["owned"]) > 0
+    assert results["converged"]
+    assert results["iterations"] == results["serial_iterations"]
+    assert results["u_rel_diff"] <= 1e-6 and results["phi_rel_diff"] <= 1e-6
+
+
+def test_readme_python_example_runs(tmp_path):
+    readme = (ROOT / "README.md").read_text()
+    blocks = re.findall(r"```python\n(.*?)```", readme, re.S)
+    assert blocks, "the README has no python example"
+    proc = subprocess.run([sys.executable, "-c", blocks[0]], capture_output=True, text=True,
+                          timeout=300, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr[-4000:]
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["converged"] and 0 < summary["contact_nodes"] <= summary["signorini_dofs"]
