@@ -56,6 +56,10 @@ demo: setup
 bench: setup
 	$(PY) bench/bem_assembly.py
 	$(PY) bench/pgpm_profile.py
+	$(PY) bench/peers.py
+
+study: setup
+	$(PY) -m coupling.cli study
 
 clean:
 	rm -rf build $(VENV) *.egg-info bem_cpp/*.so

@@ -5,6 +5,7 @@
 
 #include <omp.h>
 
+#include "bem/far_field.hpp"
 #include "bem/log_integrals.hpp"
 
 namespace bem {
@@ -14,13 +15,6 @@ namespace {
 constexpr double kInvPi = 0.318309886183790671537767526745;
 constexpr Index kTile = 32;
 
-PairRelation relation(Index i, Index j, Index n) {
-  if (j == i) return PairRelation::Coincident;
-  if (j == i + 1) return PairRelation::EndToStart;
-  if (i == 0 && j == n - 1) return PairRelation::StartToEnd;
-  return PairRelation::Separated;
-}
-
 /// n x n zero matrix, first touched in parallel (the page faults are shared out).
 Matrix zeros(Index n) {
   Matrix A(n, n);
@@ -29,14 +23,15 @@ Matrix zeros(Index n) {
   return A;
 }
 
-/// row[j] += s (start[j] + end[j - 1]) for j in [i, n) (end[i - 1] taken as 0), and
-/// row[0] += s end[n - 1]: adds the blocks of the pairs (i, j >= i), stored by columns
-/// j, for the start node j and the end node j + 1 of panel j.
-void add_shifted(double* row, double s, const double* start, const double* end, Index i, Index n) {
-  row[i] += s * start[i];
+/// Adds the blocks of the pairs (i, j), j in [j0, n), stored by columns j, to a row:
+/// the value for the start node of panel j goes to column j, the one for its end node to
+/// column j + 1 (0 for j = n - 1): row[j] += start[j] + end[j - 1] for j in [j0, n)
+/// (end[j0 - 1] taken as 0, or end[n - 1] if j0 = 0), row[0] += end[n - 1] if j0 > 0.
+void add_shifted(double* row, const double* start, const double* end, Index j0, Index n) {
+  row[j0] += start[j0] + (j0 == 0 ? end[n - 1] : 0.0);
 #pragma omp simd
-  for (Index j = i + 1; j < n; ++j) row[j] += s * (start[j] + end[j - 1]);
-  row[0] += s * end[n - 1];
+  for (Index j = j0 + 1; j < n; ++j) row[j] += start[j] + end[j - 1];
+  if (j0 > 0) row[0] += end[n - 1];
 }
 
 /// Calls f(i) for every panel i, in parallel, such that panels processed at the same
@@ -70,34 +65,6 @@ void for_each_upper_tiled(Index n, F&& f) {
         for (Index c = std::max(J * kTile, r + 1); c < std::min(n, (J + 1) * kTile); ++c) f(r, c);
 }
 
-/// K += T^T, by pairs of square tiles (I, J), (J, I) owned by one thread.
-void add_transpose_in_place(const Matrix& T, Matrix& K) {
-  const Index n = K.rows(), nb = (n + kTile - 1) / kTile;
-#pragma omp parallel for schedule(dynamic, 1)
-  for (Index I = 0; I < nb; ++I) {
-    const Index r0 = I * kTile, r1 = std::min(n, r0 + kTile);
-    for (Index J = I; J < nb; ++J) {
-      const Index c0 = J * kTile, c1 = std::min(n, c0 + kTile);
-      if (I == J) {
-        double tile[kTile][kTile];  // T's diagonal tile, before K is changed
-        for (Index r = r0; r < r1; ++r)
-          for (Index c = c0; c < c1; ++c) tile[r - r0][c - c0] = T(r, c);
-        for (Index r = r0; r < r1; ++r)
-          for (Index c = c0; c < c1; ++c) K(r, c) += tile[c - c0][r - r0];
-        continue;
-      }
-      for (Index r = r0; r < r1; ++r) {
-        const double* t_row = &T(r, 0);
-        double* k_row = &K(r, 0);
-        for (Index c = c0; c < c1; ++c) {
-          k_row[c] += T(c, r);
-          K(c, r) += t_row[c];
-        }
-      }
-    }
-  }
-}
-
 void mirror_upper_in_place(Matrix& A) {
   for_each_upper_tiled(A.rows(), [&A](Index r, Index c) { A(c, r) = A(r, c); });
 }
@@ -113,147 +80,136 @@ void complete_upper_from_pairs(Matrix& U) {
   for (Index c = 2; c < n; ++c) U(0, c) += U(c, 0);
 }
 
-/// W = D^T V0 D (upper triangle; V0 read from its upper triangle):
-/// W[r, c] = Z[r, c] - Z[r, c-1] - Z[r-1, c] + Z[r-1, c-1], Z[i, j] = V0[i, j]/(h_i h_j),
-/// indices mod n.
-void maue_upper(const Vector& h, const Matrix& V0, Matrix& W) {
-  const Index n = V0.rows();
-  auto z = [&](Index i, Index j) {
-    i = (i + n) % n;
-    j = (j + n) % n;
-    return (i <= j ? V0(i, j) : V0(j, i)) / (h(i) * h(j));
-  };
-#pragma omp parallel for schedule(dynamic, 16)
-  for (Index r = 0; r < n; ++r) {
-    if (r == 0) {
-      for (Index c = 0; c < n; ++c) W(0, c) = z(0, c) - z(0, c - 1) - z(-1, c) + z(-1, c - 1);
-      continue;
-    }
-    // Interior of the row: all four entries in the upper triangle, no wrap-around.
-    W(r, r) = z(r, r) - z(r, r - 1) - z(r - 1, r) + z(r - 1, r - 1);
-    const double hr = 1.0 / h(r), hq = 1.0 / h(r - 1);
-    for (Index c = r + 1; c < n; ++c) {
-      const double hc = 1.0 / h(c), hp = 1.0 / h(c - 1);
-      W(r, c) = hr * (hc * V0(r, c) - hp * V0(r, c - 1)) - hq * (hc * V0(r - 1, c) - hp * V0(r - 1, c - 1));
-    }
-  }
-}
-
 }  // namespace
 
 Operators assemble(const Polygon& polygon, const OperatorRequest& request) {
   const Index n = polygon.size();
   const bool v_p1 = request.single_layer == Space::P1;
   const bool v_p0 = request.single_layer == Space::P0;
-  const bool need_v0 = v_p0 || request.hypersingular;
+  const bool w = request.hypersingular;
   const bool k_p1 = request.double_layer == Space::P1;
   const bool k_p0 = request.double_layer == Space::P0;
+  const bool with_v = v_p1 || v_p0 || w;
   const bool with_k = k_p1 || k_p0;
 
-  // U: P1 single layer from the pairs (i, j >= i); V0: P0 single layer (upper
-  // triangle); Kup: pairs (i, j >= i) of K; T: transposed contributions of pairs (j, i).
-  Matrix U, V0, Kup, T;
+  // V and W (symmetric) from the pairs (i, j >= i): U for V (P1) and UW for
+  // W = D^T V0 D accumulate the blocks in the rows of panel i, the mirrored pairs
+  // follow from symmetry (complete_upper_from_pairs); V0 (P0) is written directly on
+  // its upper triangle. K (not symmetric) from all pairs (i, j): the pairs j < i need
+  // only the double-layer kernel, which is cheap (no logarithm).
+  Matrix U, V0, UW, K;
   if (v_p1) U = zeros(n);
-  if (need_v0) V0.resize(n, n);
-  if (with_k) {
-    Kup = zeros(n);
-    T = zeros(n);
-  }
+  if (v_p0) V0.resize(n, n);
+  if (w) UW = zeros(n);
+  if (with_k) K = zeros(n);
 
   const PanelArrays arrays(polygon);
-  const auto& thresholds = gauss_thresholds();
-  // Per thread: the blocks of all pairs (i, j >= i) of the current panel i, by columns j.
-  std::vector<std::vector<double>> column_store(static_cast<std::size_t>(omp_get_max_threads()));
+  const Vector h = polygon.lengths();
+  // Per thread: the blocks of the pairs (i, j) of the current panel i by columns j, and
+  // the number of far-field Gauss points of each pair.
+  const auto threads = static_cast<std::size_t>(omp_get_max_threads());
+  std::vector<std::vector<double>> column_store(threads);
+  std::vector<std::vector<int>> points_store(threads);
 
   for_each_panel_coloured(n, [&](Index i) {
-    std::vector<double>& store = column_store[static_cast<std::size_t>(omp_get_thread_num())];
-    store.resize(static_cast<std::size_t>(12 * n));
+    const auto thread = static_cast<std::size_t>(omp_get_thread_num());
+    std::vector<double>& store = column_store[thread];
+    store.resize(static_cast<std::size_t>(9 * n));
+    points_store[thread].resize(static_cast<std::size_t>(n));
+    int* points = points_store[thread].data();
     PairBlockColumns col;
     for (int a = 0; a < 2; ++a)
       for (int b = 0; b < 2; ++b) {
-        col.v[a][b] = store.data() + (0 + 2 * a + b) * n;
+        col.v[a][b] = store.data() + (2 * a + b) * n;
         col.kij[a][b] = store.data() + (4 + 2 * a + b) * n;
-        col.kji[a][b] = store.data() + (8 + 2 * a + b) * n;
       }
+    double* z = store.data() + 8 * n;  // scratch column
 
-    // 1. Blocks of every pair (i, j >= i); far pairs are queued by number of Gauss
-    //    points and evaluated in vector batches.
+    // 1. Blocks of the pairs (i, j) for j in [j0, j1), with the factors -1/pi (V) and
+    //    1/pi (K) of the operators: far pairs are queued by number of Gauss points and
+    //    evaluated in vector batches, the others one by one.
     const Panel& pi = polygon.panel(i);
-    Index queue[kMaxFarPoints + 1][kFarBatch];
-    int queued[kMaxFarPoints + 1] = {};
-    auto flush = [&](int p) {
-      far_blocks_batch(pi, arrays, queue[p], queued[p], p, with_k, col);
-      queued[p] = 0;
-    };
-    PairBlocks B;
-    for (Index j = i; j < n; ++j) {
-      const Panel& pj = polygon.panel(j);
-      const PairRelation rel = relation(i, j, n);
-      const int p = rel == PairRelation::Separated ? far_field_points(pi, pj, thresholds) : 0;
-      if (p > 0) {
-        queue[p][queued[p]++] = j;
-        if (queued[p] == kFarBatch) flush(p);
-        continue;
-      }
-      pair_blocks(pi, pj, rel, with_k, B);
-      for (int a = 0; a < 2; ++a)
-        for (int b = 0; b < 2; ++b) {
-          col.v[a][b][j] = B.v[a][b];
-          if (with_k) {
-            col.kij[a][b][j] = B.kij[a][b];
-            col.kji[a][b][j] = B.kji[a][b];
-          }
+    const Index i1 = (i + 1) % n, i0 = (i + n - 1) % n;
+    auto compute = [&](Index j0, Index j1, bool v, bool k) {
+      far_field_points(pi, arrays, j0, j1, points);
+      Index queue[kMaxFarPoints + 1][kFarBatch];
+      int queued[kMaxFarPoints + 1] = {};
+      auto flush = [&](int p) {
+        far_blocks_batch(pi, arrays, queue[p], queued[p], p, v, k, col, -kInvPi, kInvPi);
+        queued[p] = 0;
+      };
+      PairBlocks B;
+      for (Index j = j0; j < j1; ++j) {
+        const PairRelation rel = j == i    ? PairRelation::Coincident
+                                 : j == i1 ? PairRelation::EndToStart
+                                 : j == i0 ? PairRelation::StartToEnd
+                                           : PairRelation::Separated;
+        const int p = rel == PairRelation::Separated ? points[j] : 0;
+        if (p > 0) {
+          queue[p][queued[p]++] = j;
+          if (queued[p] == kFarBatch) flush(p);
+          continue;
         }
-    }
-    for (int p = 1; p <= kMaxFarPoints; ++p)
-      if (queued[p] > 0) flush(p);
+        pair_blocks(pi, polygon.panel(j), rel, k, B);
+        for (int a = 0; a < 2; ++a)
+          for (int b = 0; b < 2; ++b) {
+            if (v) col.v[a][b][j] = -kInvPi * B.v[a][b];
+            if (k) col.kij[a][b][j] = kInvPi * B.kij[a][b];
+          }
+      }
+      for (int p = 1; p <= kMaxFarPoints; ++p)
+        if (queued[p] > 0) flush(p);
+    };
+    if (with_v || with_k) compute(i, n, with_v, with_k);
+    if (with_k) compute(0, i, false, true);
 
-    // 2. Add them to the rows of panel i (its start node i and end node i1). The block
-    //    of pair (i, j) meets columns j (start of j) and j1 = j + 1 (end of j, 0 for
-    //    j = n - 1). The coincident pair counts half in U (U + U^T doubles it) and has
-    //    no mirrored part in T.
-    const Index i1 = (i + 1) % n;
+    // 2. Add them to the rows of panel i: its start node i and end node i1.
     double* const* v = &col.v[0][0];  // v[2a + b]
-    if (v_p1 || need_v0) {
-      // Coincident block halved once, used by U and (doubled back) by V0.
+    if (with_v) {
+      // The pair (i, i) is mirrored onto itself: it counts half in U and UW.
       for (int k = 0; k < 4; ++k) v[k][i] *= 0.5;
     }
     if (v_p1) {
-      add_shifted(U.row(i).data(), -kInvPi, v[0], v[1], i, n);
-      add_shifted(U.row(i1).data(), -kInvPi, v[2], v[3], i, n);
+      add_shifted(U.row(i).data(), v[0], v[1], i, n);
+      add_shifted(U.row(i1).data(), v[2], v[3], i, n);
     }
-    if (need_v0) {
+    if (v_p0) {
       double* r = V0.row(i).data();
 #pragma omp simd
-      for (Index j = i; j < n; ++j) r[j] = -kInvPi * (v[0][j] + v[1][j] + v[2][j] + v[3][j]);
+      for (Index j = i; j < n; ++j) r[j] = v[0][j] + v[1][j] + v[2][j] + v[3][j];
       r[i] *= 2.0;
     }
-    if (with_k) {
-      double* const* kij = &col.kij[0][0];
-      double* const* kji = &col.kji[0][0];
-      for (int k = 0; k < 4; ++k) kji[k][i] = 0.0;  // the pair (i, i) is not mirrored
-      if (k_p1) {
-        add_shifted(Kup.row(i).data(), kInvPi, kij[0], kij[1], i, n);
-        add_shifted(Kup.row(i1).data(), kInvPi, kij[2], kij[3], i, n);
-        // T[node a of i, node b of j] += kji[b][a]
-        add_shifted(T.row(i).data(), kInvPi, kji[0], kji[2], i, n);
-        add_shifted(T.row(i1).data(), kInvPi, kji[1], kji[3], i, n);
-      } else {
-        // P0 rows: K[i, node b of j] += sum_a kij[a][b]; T[node a of i, j] += sum_b kji[b][a]
+    if (w) {
+      // W = sum over pairs of V0[i, j] D_i^T D_j, D_i = (-1/h_i, +1/h_i) on the nodes of
+      // panel i: rows i and i1 get -+ (z[j] - z[j-1]), z[j] = V0[i, j]/(h_i h_j).
+      const double* hj = h.data();
+      const double s = 1.0 / h(i);
 #pragma omp simd
-        for (Index j = i; j < n; ++j) {
-          kij[0][j] += kij[2][j];
-          kij[1][j] += kij[3][j];
-        }
-        add_shifted(Kup.row(i).data(), kInvPi, kij[0], kij[1], i, n);
-        double* t0 = T.row(i).data();
-        double* t1 = T.row(i1).data();
+      for (Index j = i; j < n; ++j) z[j] = s * (v[0][j] + v[1][j] + v[2][j] + v[3][j]) / hj[j];
+      double* r0 = UW.row(i).data();
+      double* r1 = UW.row(i1).data();
+      r0[i] += z[i];
+      r1[i] -= z[i];
 #pragma omp simd
-        for (Index j = i; j < n; ++j) {
-          t0[j] += kInvPi * (kji[0][j] + kji[2][j]);
-          t1[j] += kInvPi * (kji[1][j] + kji[3][j]);
-        }
+      for (Index j = i + 1; j < n; ++j) {
+        r0[j] += z[j] - z[j - 1];
+        r1[j] -= z[j] - z[j - 1];
       }
+      r0[0] -= z[n - 1];
+      r1[0] += z[n - 1];
+    }
+    if (k_p1) {
+      add_shifted(K.row(i).data(), col.kij[0][0], col.kij[0][1], 0, n);
+      add_shifted(K.row(i1).data(), col.kij[1][0], col.kij[1][1], 0, n);
+    }
+    if (k_p0) {
+      // P0 row of panel i: K[i, node b of j] += sum_a kij[a][b].
+#pragma omp simd
+      for (Index j = 0; j < n; ++j) {
+        col.kij[0][0][j] += col.kij[1][0][j];
+        col.kij[0][1][j] += col.kij[1][1][j];
+      }
+      add_shifted(K.row(i).data(), col.kij[0][0], col.kij[0][1], 0, n);
     }
   });
 
@@ -263,20 +219,16 @@ Operators assemble(const Polygon& polygon, const OperatorRequest& request) {
     if (request.full_symmetric) mirror_upper_in_place(U);
     ops.single_layer = std::move(U);
   }
-  if (with_k) {
-    add_transpose_in_place(T, Kup);
-    ops.double_layer = std::move(Kup);
-  }
-  if (request.hypersingular) {
-    Matrix W = with_k ? std::move(T) : Matrix(n, n);  // T's storage is free again
-    maue_upper(polygon.lengths(), V0, W);
-    if (request.full_symmetric) mirror_upper_in_place(W);
-    ops.hypersingular = std::move(W);
-  }
   if (v_p0) {
     if (request.full_symmetric) mirror_upper_in_place(V0);
     ops.single_layer = std::move(V0);
   }
+  if (w) {
+    complete_upper_from_pairs(UW);
+    if (request.full_symmetric) mirror_upper_in_place(UW);
+    ops.hypersingular = std::move(UW);
+  }
+  if (with_k) ops.double_layer = std::move(K);
   return ops;
 }
 

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "bem/far_field.hpp"
 #include "bem/log_integrals.hpp"
 
 namespace bem {
@@ -50,23 +51,50 @@ Vector exterior_potential(const Polygon& polygon, const Eigen::Ref<const Vector>
     throw std::invalid_argument(s.str());
   }
 
-  const Vector w = dirichlet.array() - a;
+  // Per panel j: coefficients of its integrals in pi (K w - V psi)(z), w = v - a:
+  // the log moments carry psi (start/end shape, or the panel value for P0), the
+  // double-layer moments carry w at the start and end node.
+  std::vector<double> l0(static_cast<std::size_t>(n)), l1(l0), d0(l0), d1(l0);
+  for (Index j = 0; j < n; ++j) {
+    const Index j1 = (j + 1) % n;
+    const auto k = static_cast<std::size_t>(j);
+    l0[k] = flux_coefficients(j);
+    l1[k] = flux == Space::P1 ? flux_coefficients(j1) : flux_coefficients(j);
+    d0[k] = dirichlet(j) - a;
+    d1[k] = dirichlet(j1) - a;
+  }
+  const PanelArrays arrays(polygon);
   Vector u(m);
-#pragma omp parallel for schedule(dynamic, 16)
-  for (Index k = 0; k < m; ++k) {
-    const Vec2 z{points(k, 0), points(k, 1)};
-    double sum = 0.0;  // pi * (K w - V psi)(z)
-    for (Index j = 0; j < n; ++j) {
-      const Index j1 = (j + 1) % n;
-      const PointPanelMoments q = point_panel_moments(z, polygon.panel(j));
-      sum += w(j) * q.dl[0] + w(j1) * q.dl[1];
-      // -V psi = (1/pi) int log|z - y| psi(y) ds_y
-      if (flux == Space::P1)
-        sum += flux_coefficients(j) * q.log[0] + flux_coefficients(j1) * q.log[1];
-      else
-        sum += flux_coefficients(j) * (q.log[0] + q.log[1]);
+#pragma omp parallel
+  {
+    std::vector<int> rule(static_cast<std::size_t>(n));  // Gauss points per panel, 0: closed form
+#pragma omp for schedule(dynamic, 16)
+    for (Index i = 0; i < m; ++i) {
+      const Vec2 z{points(i, 0), points(i, 1)};
+      point_far_field_points(z, arrays, rule.data());
+      double sum = 0.0;  // pi (K w - V psi)(z)
+      Index queue[kMaxFarPoints + 1][kFarBatch];
+      int queued[kMaxFarPoints + 1] = {};
+      auto flush = [&](int p) {
+        sum += far_point_sum(z, arrays, queue[p], queued[p], p, l0.data(), l1.data(), d0.data(), d1.data());
+        queued[p] = 0;
+      };
+      for (Index j = 0; j < n; ++j) {
+        const int p = rule[static_cast<std::size_t>(j)];
+        if (p > 0) {
+          queue[p][queued[p]++] = j;
+          if (queued[p] == kFarBatch) flush(p);
+          continue;
+        }
+        const PointPanelMoments q = point_panel_moments(z, polygon.panel(j));  // closed form
+        const auto k = static_cast<std::size_t>(j);
+        sum += l0[k] * q.log[0] + l1[k] * q.log[1] + d0[k] * q.dl[0] + d1[k] * q.dl[1];
+      }
+      for (int p = 1; p <= kMaxFarPoints; ++p)
+        if (queued[p] > 0) flush(p);
+      // u = a + (K w - V psi)/2, -V psi = (1/pi) int log|z - y| psi, K w = (1/pi) int ... w
+      u(i) = a + 0.5 * kInvPi * sum;
     }
-    u(k) = a + 0.5 * kInvPi * sum;
   }
   return u;
 }

@@ -24,7 +24,7 @@ inline Vec2 operator*(double s, Vec2 a) { return {s * a.x, s * a.y}; }
 inline double dot(Vec2 a, Vec2 b) { return a.x * b.x + a.y * b.y; }
 /// z-component of the cross product a x b.
 inline double cross(Vec2 a, Vec2 b) { return a.x * b.y - a.y * b.x; }
-inline double norm(Vec2 a) { return std::hypot(a.x, a.y); }
+inline double norm(Vec2 a) { return std::sqrt(a.x * a.x + a.y * a.y); }
 /// Rotation by -90 degrees: for a unit tangent t of a counter-clockwise panel this is
 /// the outward normal (t_y, -t_x).
 inline Vec2 rotate_cw(Vec2 t) { return {t.y, -t.x}; }

@@ -14,15 +14,18 @@
 //               the log kernel separates into log(s) + log q(w) and the double-layer
 //               kernel into a bounded function of w; the w-integrals are the analytic
 //               point-segment moments below (no quadrature at all);
-//   near        analytic inner integral over panel j + Gauss-Legendre outer rule on
-//               panel i, subdivided until each piece lies at least its own length away
-//               from panel j, with the number of points chosen from that ratio;
+//   near        inner integral over panel j (closed form when x is within 2.5 lengths
+//               of panel j, Gauss-Legendre beyond, where the closed forms would lose
+//               digits to cancellation) + Gauss-Legendre outer rule on panel i,
+//               subdivided until each piece lies at least its own length away from
+//               panel j, with the number of points chosen from that ratio; an adjacent
+//               pair with length ratio > 2 is split into an equal-length adjacent pair
+//               and a near pair;
 //   far         tensor Gauss-Legendre, p points per panel chosen from distance/length
 //               (the integrand is analytic on a Bernstein ellipse of parameter rho and
 //               the error is O(rho^(-2p)); far away the analytic inner integrals would
 //               lose digits to cancellation, the tensor rule does not).
 #include <array>
-#include <vector>
 
 #include "bem/geometry.hpp"
 
@@ -114,28 +117,6 @@ inline int far_field_points(const Panel& pi, const Panel& pj,
 inline int far_field_points(const Panel& pi, const Panel& pj) {
   return far_field_points(pi, pj, gauss_thresholds());
 }
-
-/// Panel data as structure of arrays, for the vectorised far-field kernel.
-struct PanelArrays {
-  explicit PanelArrays(const Polygon& polygon);
-  std::vector<double> ax, ay, tx, ty, nx, ny, h;
-};
-
-/// Largest batch of far-field pairs evaluated together.
-constexpr int kFarBatch = 32;
-
-/// Blocks of the pairs (i, j) for one panel i, stored by columns: v[a][b][j] etc.
-struct PairBlockColumns {
-  double* v[2][2];
-  double* kij[2][2];
-  double* kji[2][2];
-};
-
-/// far_blocks for the pairs (pi, panel js[k]), k < m <= kFarBatch, all with the same
-/// number of points p <= kMaxFarPoints, vectorised over k (src/far_field.cpp); the
-/// results go to out.*[js[k]] (kij, kji only if with_k).
-void far_blocks_batch(const Panel& pi, const PanelArrays& panels, const Index* js, int m, int p,
-                      bool with_k, const PairBlockColumns& out);
 
 /// Integrals of one panel seen from a point z off the panel, trial shape b = 0, 1:
 ///   log[b] = int_p log|z - y| phi_b(y) ds_y,   dl[b] = int_p (z - y).n/|z - y|^2 phi_b(y) ds_y.

@@ -33,12 +33,12 @@ struct Operators {
   Matrix single_layer, double_layer, hypersingular;  ///< empty if not requested
 };
 
-/// One OpenMP-parallel pass over the panel pairs (i, j >= i): each pair's local 2x2
-/// blocks (log_integrals.hpp) are scattered into rows owned by panel i only (rows i and
-/// i+1, processed in two colours of panels so no two threads share a row). The
-/// contributions of the mirrored pair (j, i) follow from symmetry for V (only a band
-/// and column 0 need it) and from one transpose for K (K = K_upper + T^T). Far pairs
-/// are evaluated in vectorised batches. W_h = D^T V0_h D is formed afterwards.
+/// One OpenMP-parallel pass over the panels i: the local 2x2 blocks of the pairs (i, j)
+/// (log_integrals.hpp) are stored by columns j and added to the rows owned by panel i
+/// only (rows i and i+1; panels are processed in two colours so no two threads share a
+/// row). V and W = D^T V0 D use the pairs j >= i, the mirrored pairs follow from
+/// symmetry (a band and column 0 need it); K uses all pairs, the pairs j < i with the
+/// double-layer kernel only (no logarithm). Far pairs are evaluated in vector batches.
 Operators assemble(const Polygon& polygon, const OperatorRequest& request);
 
 Matrix single_layer(const Polygon& polygon, Space space);
