@@ -7,7 +7,9 @@ square  energy 0.99, 1.00; nodal u 1.85, 1.68; gap 1.88, 2.00; u_e exterior 1.95
 L-shape energy 0.98, 1.00; nodal u 1.88, 1.98; gap 1.26, 1.48; u_e exterior 2.18, 2.17
 The gap on the L-shape converges more slowly in the max norm: its largest error sits
 next to the re-entrant corner (0, 0), an end point of the inner arc, where the exterior
-normal derivative jumps and the Galerkin flux is polluted (P0 flux measures the same).
+normal derivative jumps, which a continuous P1 flux cannot follow (P0 flux measures
+the same on these coarse meshes; the study, docs/study/errors.md, finds P0 recovering
+order 2 on finer ones).
 The bounds below sit under the measured orders with a margin for round-off in the fit.
 """
 from __future__ import annotations
