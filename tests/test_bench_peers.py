@@ -1,0 +1,131 @@
+"""The peer benchmark (bench/peers.py) and the PETSc peers (coupling/peers.py).
+
+The quick benchmark checks that every solver reaches the PGPM solution, not the
+timings. Tolerances: PGPM stops at its default tol = 1e-8 on the B-norm step, which
+leaves an error of about 1e-8 (u) and 2e-6 (phi) relative to the exact minimiser
+(the Newton solvers below reach it to round-off); the benchmark's agreement test
+(1e-6 in u, 1e-5 in phi) has a factor of 5-100 of margin over that.
+"""
+from __future__ import annotations
+
+import importlib.util
+import json
+import sys
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+from mpi4py import MPI
+
+from conftest import ROOT
+
+COMM = MPI.COMM_WORLD
+pytestmark = pytest.mark.skipif(COMM.size > 1, reason="the peer benchmark is serial")
+
+
+def _bench_module():
+    if "bench_peers" not in sys.modules:  # registered first: dataclasses look it up
+        spec = importlib.util.spec_from_file_location("bench_peers", ROOT / "bench" / "peers.py")
+        module = importlib.util.module_from_spec(spec)
+        sys.modules["bench_peers"] = module
+        spec.loader.exec_module(module)
+    return sys.modules["bench_peers"]
+
+
+@pytest.fixture(scope="module")
+def small_problem():
+    from coupling.manufactured import manufactured_problem, square_contact
+    from fem_py.materials import make_material
+
+    return manufactured_problem(COMM, square_contact(), make_material("carstensen"), cells=16)
+
+
+def test_hessian_matrix_equals_the_hessian_action(small_problem):
+    """CoupledHessian (one AIJ matrix) against CoupledFunctional.hessian_action
+    (D^2G matrix + dense S_h product) at a nonlinear state: equal to round-off."""
+    from dolfinx import fem
+
+    from coupling.peers import CoupledHessian
+
+    p = small_problem
+    u = fem.Function(p.V)
+    x = p.V.tabulate_dof_coordinates()
+    u.x.array[:] = np.sin(3 * x[:, 0]) + x[:, 1] ** 2
+    hessian = CoupledHessian(p)
+    H = hessian.assemble(u)
+    rng = np.random.default_rng(1)
+    n_u, n_s = u.x.array.size, p.n_signorini
+    e = rng.standard_normal(n_u + n_s)
+    jac = p.forms.create_matrix()
+    p.forms.assemble_jacobian(u, jac)
+    e_u, out_u = jac.createVecRight(), jac.createVecRight()
+    e_u.array[:] = e[:n_u]
+    out_phi = p.functional.hessian_action(jac, e_u, e[n_u:], out_u)
+    expected = np.concatenate([out_u.array_r, out_phi])
+    xv, yv = H.createVecs()
+    xv.array[:] = e
+    H.mult(xv, yv)
+    assert np.linalg.norm(yv.array_r - expected) <= 1e-12 * np.linalg.norm(expected)
+    # symmetric: the dense block is P^T (S_h + S_h^T)/2 P
+    indptr, indices, data = H.getValuesCSR()
+    csr = sp.csr_matrix((data, indices, indptr), shape=H.getSize())
+    assert abs(csr - csr.T).max() <= 1e-12 * abs(csr).max()
+    for obj in (jac, e_u, out_u, xv, yv):
+        obj.destroy()
+    hessian.destroy()
+
+
+def test_peers_reach_the_pgpm_minimiser(small_problem):
+    """SNES VI (direct and CG + substructuring) and TAO BNLS reach the minimiser of J_h
+    that PGPM reaches; the Newton solvers converge in a handful of steps."""
+    from coupling import peers
+
+    ref = peers.solve_project(small_problem, "pgpm", tol=1e-12, max_iterations=5000)
+    assert ref.converged
+    runs = [peers.solve_snes_vi(small_problem, linear_solver="mumps-cholesky"),
+            peers.solve_snes_vi(small_problem, linear_solver="substructuring"),
+            peers.solve_tao(small_problem, "bnls", linear_solver="mumps-cholesky")]
+    for run in runs:
+        assert run.converged, run.reason
+        assert run.iterations <= 10
+        # PGPM at tol 1e-12: error <= ~kappa * 1e-12 (tests/test_pgpm.py)
+        assert np.linalg.norm(run.u - ref.u) <= 1e-9 * np.linalg.norm(ref.u)
+        assert np.linalg.norm(run.phi - ref.phi) <= 1e-8 * np.linalg.norm(ref.phi)
+        assert np.all(run.phi >= 0.0)
+    # CG with B needs few iterations per Newton step (B spectrally equivalent, Thm 4.1)
+    assert runs[1].linear_iterations <= 60 * runs[1].iterations
+
+
+def test_budget_stops_a_solver(small_problem):
+    from coupling import peers
+
+    run = peers.solve_tao(small_problem, "blmvm", gttol=1e-30, budget=0.2)
+    assert not run.converged and "budget" in run.reason
+
+
+def test_quick_benchmark_solvers_agree(tmp_path, capsys):
+    bench = _bench_module()
+    code = bench.main(["--quick", "--json", "--out", str(tmp_path)])
+    result = json.loads(capsys.readouterr().out)
+    solves = [r for r in result["records"] if r["type"] == "solve"]
+    assert not [r for r in result["records"] if r["type"] == "crash"]
+    names = {r["solver"] for r in solves}
+    assert {"pgpm", "apgpm", "ssn", "snes-substructuring", "snes-mumps-cholesky",
+            "tao-bnls", "poisson"} <= names
+    sizes = sorted({r["dofs"] for r in solves})
+    assert sizes[0] >= 1e4 and sizes[-1] >= 4e4
+    for r in solves:
+        assert r["status"] == "ok", (r["problem"], r["dofs"], r["solver"], r.get("reason"))
+        if r["solver"] not in ("pgpm", "poisson"):
+            assert r["du"] <= bench.TOL_U and r["dphi"] <= bench.TOL_PHI
+    assert code == 0
+    assert (tmp_path / "peers.png").stat().st_size > 0
+    assert "| / (a) |" in (tmp_path / "results.md").read_text()
+
+
+def test_benchmark_refuses_mpirun():
+    from conftest import run_mpi
+
+    proc = run_mpi(2, str(ROOT / "bench" / "peers.py"), "--quick", check=False, timeout=120)
+    assert proc.returncode == 2
+    assert "serial" in proc.stderr and "without mpirun" in proc.stderr
