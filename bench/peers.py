@@ -21,12 +21,14 @@ its own window for wall time and peak memory (the Linux high-water mark VmHWM is
 through /proc/self/clear_refs before each solver). Solutions are compared with PGPM's.
 
     .venv/bin/python bench/peers.py [--quick] [--json] [--sizes 100,250,500,1000]
-                                    [--out DIR] [--budget SECONDS]
+                                    [--out DIR] [--budget SECONDS] [--report-from FILE]
 
 ``--quick`` (sizes 100 and 200, a handful of solvers, under two minutes) prints the
-table and writes results only when ``--out`` is given; the full run writes
-``bench/results.md`` and ``bench/peers.png``. Serial: under mpirun it exits with a
-message.
+table and writes results only when ``--out`` is given; the full run (about 35 minutes
+on 2 cores) writes ``bench/results.md``, ``bench/peers.png`` and the raw records
+``bench/results.json``, from which ``--report-from`` rewrites the first two without
+rerunning. Exit code 0, or 1 when a worker process crashed. Serial: under mpirun it
+exits with code 2 and a message.
 """
 from __future__ import annotations
 
@@ -41,7 +43,7 @@ import subprocess
 import sys
 import threading
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -210,7 +212,6 @@ def _profile_pgpm(problem, u: np.ndarray, phi: np.ndarray, repeat: int = 5) -> d
         "S_h product (+ trace T u)": best(lambda: f.S @ f.boundary_block(u_fun.vector, phi)),
         "B_Omega^-1 (local solves, edges, coarse)": best(lambda: pre.apply_omega(g_u)),
         "M_s^-1": best(lambda: pre.apply_signorini(g_phi)),
-        "B_Omega u (norm of the step)": best(lambda: pre.matvec_omega(g_u)),
         "projection (exact)": best(lambda: problem.projection(phi - 1e-3 * g_phi, phi)),
     }
     grad.destroy()
@@ -424,7 +425,8 @@ def machine_info() -> dict[str, Any]:
     try:
         commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
                                 text=True, cwd=ROOT, check=True).stdout.strip()
-        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
+        # modified or untracked sources (this benchmark itself may be untracked)
+        dirty = subprocess.run(["git", "status", "--porcelain", "--", "*.py", "*.cpp", "*.hpp"],
                                capture_output=True, text=True, cwd=ROOT).stdout.strip()
         commit += " (with uncommitted changes)" if dirty else ""
     except (OSError, subprocess.CalledProcessError):
@@ -516,42 +518,52 @@ def markdown_table(result: dict[str, Any], problem: str, names=None) -> list[str
     return lines
 
 
+#: The solvers of the main tables and the plot: all but the SNES VI linear-solver
+#: candidates that were not kept.
+MAIN = tuple(s.name for s in SOLVERS if not s.selection
+             or s.name in ("snes-substructuring", "snes-mumps-cholesky"))
+
+
 def plot(result: dict[str, Any], path: Path) -> None:
+    """Set-up + solve time against N, log-log, one panel per problem (failed solves as x)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
 
-    table, poisson = _index(result["records"])
+    table, _ = _index(result["records"])
     problems = [p for p in PROBLEMS if any(k[0] == p for k in table)]
     fig, axes = plt.subplots(1, len(problems), figsize=(6.5 * len(problems), 5), squeeze=False)
     markers = dict(a="o", b="s", c="^", d="v", e="D")
+    handles = {}
     for ax, problem in zip(axes[0], problems):
-        for i, solver in enumerate(SOLVERS):
+        for i, solver in enumerate(s for s in SOLVERS if s.name in MAIN):
             rows = [table.get(("poisson" if solver.kind == "poisson" else problem, c, solver.name))
                     for c in result["sizes"]]
             rows = [r for r in rows if r and r.get("total")]
             if not rows:
                 continue
-            ok = [r for r in rows if r["status"] == "ok"]
-            style = dict(marker=markers[solver.group], color=plt.cm.tab20(i % 20),
+            color = "black" if solver.kind == "poisson" else plt.cm.tab10(i % 10)
+            style = dict(marker=markers[solver.group], color=color,
                          linestyle="--" if solver.kind == "poisson" else "-",
                          linewidth=2.5 if solver.name == "pgpm" else 1.2)
+            ok = [r for r in rows if r["status"] == "ok"]
             if ok:
-                ax.loglog([r["dofs"] for r in ok], [r["total"] for r in ok],
-                          label=f"{solver.group}: {solver.label}", **style)
+                ax.loglog([r["dofs"] for r in ok], [r["total"] for r in ok], **style)
             bad = [r for r in rows if r["status"] != "ok"]
             if bad:
                 ax.loglog([r["dofs"] for r in bad], [r["total"] for r in bad], "x",
-                          color=style["color"], markersize=9,
-                          label=None if ok else f"{solver.group}: {solver.label} (failed)")
+                          color=style["color"], markersize=10, markeredgewidth=2)
+            handles.setdefault(solver.name, Line2D([], [], label=f"{solver.group}: {solver.label}",
+                                                   **style))
         ax.set_xlabel("N (dofs of u)")
         ax.set_ylabel("set-up + solve [s]")
         ax.set_title(PROBLEMS[problem]["label"])
         ax.grid(True, which="both", alpha=0.3)
-    axes[0][-1].legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0))
-    fig.suptitle("Peer benchmark: wall time vs N (x: not converged / budget)")
-    fig.tight_layout()
+    fig.legend(handles=list(handles.values()), fontsize=8, loc="center right")
+    fig.suptitle("Peer benchmark: wall time vs N (x: not converged within the budget or failed)")
+    fig.tight_layout(rect=(0, 0, 0.8, 1))
     fig.savefig(path, dpi=120)
     plt.close(fig)
 
@@ -565,7 +577,10 @@ def report(result: dict[str, Any], command: str) -> str:
         "# Peer benchmark: PGPM against PETSc's VI and bound-constrained solvers",
         "",
         f"Generated by `{command}` on {m['date']} in {result['wall_time'] / 60:.1f} min "
-        "(do not edit by hand; rerun to update).",
+        "(do not edit by hand; rerun to update"
+        + (f"; text and tables rewritten on {result['regenerated']} from this run's "
+           "records, `bench/peers.py --report-from bench/results.json`"
+           if result.get("regenerated") else "") + ").",
         "",
         f"- Machine: {m['cpu']}, {m['cores']} cores (shared with other jobs; load average "
         f"{m['load']:.1f} at the start), {m['platform']}; one process, {m['threads']}.",
@@ -645,8 +660,7 @@ def report(result: dict[str, Any], command: str) -> str:
     out += markdown_table(result, "manufactured", names=selection)
     out += ["", *_selection_text(result), ""]
     # main tables
-    main = [s.name for s in SOLVERS if not s.selection or s.name in (
-        "snes-substructuring", "snes-mumps-cholesky")]
+    main = MAIN
     for problem in PROBLEMS:
         if not any(k[0] == problem for k in table):
             continue
@@ -674,22 +688,47 @@ def _selection_text(result) -> list[str]:
         if len(rows) > 2 and ok:
             order = ", ".join(f"{BY_NAME[n].label.split(', ', 1)[1]} {t:.2f} s" for t, n in ok)
             lines.append(f"- N = {rows[0][1]['dofs']}: {order}.")
+    def pick(name):
+        return [table[k] for k in sorted(table, key=lambda k: k[1])
+                if k[0] == "manufactured" and k[2] == name and table[k]["status"] == "ok"]
+
+    def per_step(rows):
+        return ", ".join(f"{r['linear_iterations'] / max(r['iterations'], 1):.0f}" for r in rows)
+
+    def speed(slow, fast):
+        pairs = [(a["total"] / b["total"]) for a in pick(slow) for b in pick(fast)
+                 if a["cells"] == b["cells"]]
+        if not pairs:
+            return "-"
+        lo, hi = f"{min(pairs):.1f}", f"{max(pairs):.1f}"
+        return f"{lo}x" if lo == hi else f"{lo}-{hi}x"
+
+    sub, amg, gamg = pick("snes-substructuring"), pick("snes-hypre"), pick("snes-gamg")
     lines += [
         "",
         "Choice: CG preconditioned by the project's substructuring preconditioner B "
         "restricted to the inactive set (PCSHELL: B_Omega^-1 on u, (omega M_s)[I, I]^-1 on "
         "the free phi; the inactive set from `SNES.getVIInactiveSet()` in the PC set-up) "
-        "is the fastest wherever all candidates ran, and the only one whose cost per Newton "
-        "step grows about linearly: its CG count per step stays nearly constant (B is "
-        "spectrally equivalent to the Hessian uniformly in h, Theorem 4.1) and it never "
-        "factors the dense block. MUMPS (Cholesky a little faster than LU) is the best "
-        "black-box choice and is kept as the second SNES peer; its factor pays for the "
-        "dense n_Gamma x n_Gamma block of S_h in every Newton step. BoomerAMG and GAMG "
-        "converge (GAMG needs a fresh PC per Newton step: PETSc 3.18's GAMG cannot be "
-        "re-set-up when SNES VI changes the size of the reduced system) but their "
-        "coarsening treats the dense block rows badly: more CG iterations and a costlier "
-        "set-up than with B. PETSc's own LU with nested dissection fills in far more than "
-        "MUMPS.",
+        "is the fastest wherever all candidates ran. Its CG count per Newton step stays "
+        f"nearly constant as h -> 0 ({per_step(sub)} for N = "
+        + ", ".join(str(r["dofs"]) for r in sub) + "; at fixed d/h, B is spectrally equivalent to "
+        "the Hessian uniformly in h, Theorem 4.1) and it never factors "
+        "the dense block. MUMPS is the best black-box choice and is kept as the second "
+        "SNES peer: Cholesky is "
+        f"{speed('snes-mumps', 'snes-mumps-cholesky')} faster than LU, and the AMD "
+        "ordering (ICNTL(7) = 0) "
+        f"{speed('snes-mumps-cholesky-auto', 'snes-mumps-cholesky')} faster than this "
+        "build's default (PORD; METIS and SCOTCH are absent); the factor still pays for "
+        "the dense n_Gamma x n_Gamma block at every Newton step. BoomerAMG needs "
+        f"{per_step(amg)} CG iterations per Newton step and GAMG {per_step(gamg)}, but "
+        "both are slower overall than CG + B ("
+        f"{speed('snes-hypre', 'snes-substructuring')} and "
+        f"{speed('snes-gamg', 'snes-substructuring')}): the AMG hierarchy is rebuilt for "
+        "every reduced Newton system, on a matrix with n_Gamma-long dense rows (GAMG must "
+        "be rebuilt: PETSc 3.18's GAMG cannot be set up again when SNES VI changes the size "
+        "of the reduced system). PETSc's own LU "
+        "(nested dissection) is "
+        f"{speed('snes-petsc-lu', 'snes-mumps')} slower than MUMPS LU.",
     ]
     return lines
 
@@ -742,6 +781,11 @@ def _targets_text(result) -> list[str]:
     return lines
 
 
+#: Profile entries that are not parts of a PGPM iteration: the measured total, and the
+#: B_Omega product of earlier runs (PGPM carries B_Omega u along without a product).
+_NOT_IN_ITERATION = ("one PGPM iteration (measured)", "B_Omega u (norm of the step)")
+
+
 def _profile_text(result) -> list[str]:
     profiled = [r for r in result["records"] if r.get("profile")]
     if not profiled:
@@ -755,7 +799,8 @@ def _profile_text(result) -> list[str]:
                   "part, at the final iterate):", "",
                   "| part | ms | / residual assembly |", "|---|---:|---:|"]
         for name, t in prof.items():
-            lines.append(f"| {name} | {1e3 * t:.2f} | {t / unit:.2f} |")
+            if name not in _NOT_IN_ITERATION[1:]:
+                lines.append(f"| {name} | {1e3 * t:.2f} | {t / unit:.2f} |")
         lines.append("")
     table, poisson = _index(result["records"])
     for r in profiled:
@@ -787,8 +832,7 @@ def _discussion(result) -> list[str]:
     e = poisson.get(r["cells"])
     t_iter = prof["one PGPM iteration (measured)"]
     t_res, t_energy = prof["residual assembly DG(u)"], prof["energy assembly G(u)"]
-    t_norm = prof["B_Omega u (norm of the step)"]
-    listed = sum(v for k, v in prof.items() if k != "one PGPM iteration (measured)")
+    listed = sum(v for k, v in prof.items() if k not in _NOT_IN_ITERATION)
     lines = [
         "## Reading the numbers, and what would close the gaps", "",
         f"- PGPM's iteration count is h-independent, as the paper claims: {min(its)}-"
@@ -808,7 +852,7 @@ def _discussion(result) -> list[str]:
     increases = sum(q.get("details", {}).get("energy_increases", 0) for q in pgpm)
     if e and e.get("total"):
         units = e["total"] / t_res
-        lean = r["setup"] + r["iterations"] * (t_iter - t_energy - t_norm)
+        lean = r["setup"] + r["iterations"] * (t_iter - t_energy)
         lines.append(
             f"- The Poisson yardstick at this size costs {e['total']:.1f} s, about {units:.0f} "
             f"residual assemblies (assembly, GAMG set-up and {e['iterations']} CG iterations). "
@@ -818,8 +862,7 @@ def _discussion(result) -> list[str]:
             "energy assembly from the step (J_h is only needed for the monotonicity check "
             f"that triggers backtracking, which fired {increases} times in this run: "
             "evaluate it every k steps or test descent with the gradient already computed) "
-            "and the B_Omega product "
-            "for the stopping test (check it every few steps) would bring this run to about "
+            "would bring this run to about "
             f"{lean:.0f} s, {lean / e['total']:.1f}x the Poisson solve. Fusing the energy "
             "into the residual kernel (one pass over the cells computes rho(|grad u|) once) "
             "is the alternative if J_h must be evaluated at every step.")
@@ -839,8 +882,10 @@ def _discussion(result) -> list[str]:
                   and table.get((p, q["cells"], "pgpm"), {}).get("status") == "ok"]
         if ratios:
             shrink.append(f"{p} " + ", ".join(f"{x:.2f} (N = {d})" for d, x in ratios))
-    newton = [q["iterations"] for q in table.values()
-              if q["solver"] == "snes-substructuring" and q.get("status") == "ok"]
+    sub = [q for q in table.values()
+           if q["solver"] == "snes-substructuring" and q.get("status") == "ok"]
+    newton = [q["iterations"] for q in sub]
+    cg = [q["linear_iterations"] / max(q["iterations"], 1) for q in sub]
     fast = [q["total"] / table[q["problem"], q["cells"], "pgpm"]["total"]
             for q in table.values() if q["solver"] in ("apgpm", "ssn") and q.get("status") == "ok"
             and table.get((q["problem"], q["cells"], "pgpm"), {}).get("status") == "ok"]
@@ -850,7 +895,8 @@ def _discussion(result) -> list[str]:
         lines.append(
             "- Against SNES VI + CG/B the gap is the iteration count, not the preconditioner: "
             f"Newton needs {min(newton)}-{max(newton)} outer steps, each one Hessian assembly "
-            "and ~30 CG iterations of a sparse product and one B^-1, instead of ~170 "
+            f"and {min(cg):.0f}-{max(cg):.0f} CG iterations of a sparse product and one B^-1, "
+            "instead of ~170 "
             "nonlinear evaluations. SNES pays for the dense S_h block as "
             f"{(r['n_gamma'] + r['n_signorini']) ** 2:.1e} AIJ entries at N = {r['dofs']} "
             "(every CG product and the inactive-set submatrix of every Newton step go "
@@ -877,8 +923,10 @@ def _discussion(result) -> list[str]:
             "PGPM's accuracy by their own test and run out of budget early (tables).")
     lines += [
         f"- Timing noise: the machine was shared (load average {result['machine']['load']:.1f} "
-        "at the start on 2 cores); repeated runs of the same solve differed by up to "
-        f"~{100 * TIE:.0f}% (more for sub-second solves), so close calls are marked as ties.",
+        "at the start on 2 cores). Two full runs of the same PGPM code during development "
+        "differed by 2-5% at N = 1e6 and up to 16% at N = 2.5e5 (more for sub-second "
+        f"solves), so differences within {100 * TIE:.0f}% of the fastest peer are marked "
+        "as ties.",
     ]
     return lines
 
@@ -898,8 +946,9 @@ def main(argv: list[str] | None = None) -> int:
                         help="sizes 100 and 200 cells per side, a handful of solvers (< 2 min)")
     parser.add_argument("--json", action="store_true", help="print the results as JSON")
     parser.add_argument("--sizes", help="comma-separated cells per side, e.g. 100,250,500,1000")
-    parser.add_argument("--out", help="directory for results.md and peers.png (default: bench/ "
-                                      "for the full run, none for --quick)")
+    parser.add_argument("--out", help="directory for results.md, peers.png and the raw "
+                                      "results.json (default: bench/ for the full run, none "
+                                      "for --quick)")
     parser.add_argument("--budget", type=float,
                         help="wall-time budget per solve in seconds (default 300, --quick 60)")
     parser.add_argument("--report-from", metavar="FILE",
@@ -934,6 +983,7 @@ def main(argv: list[str] | None = None) -> int:
 
     if args.report_from:
         result = json.loads(Path(args.report_from).read_text())
+        result["regenerated"] = time.strftime("%Y-%m-%d %H:%M")
         args.quick = result["quick"]
         default = QUICK_SIZES if args.quick else FULL_SIZES
         args.sizes = None if result["sizes"] == list(default) else ",".join(
@@ -947,6 +997,8 @@ def main(argv: list[str] | None = None) -> int:
         command = "fembem bench" + (" --quick" if args.quick else "") + (
             f" --sizes {args.sizes}" if args.sizes else "")
         (out / "results.md").write_text(report(result, command))
+        if not args.report_from:  # the raw records, for --report-from
+            (out / "results.json").write_text(json.dumps(result, indent=1) + "\n")
         plot(result, out / "peers.png")
         log(f"wrote {out / 'results.md'} and {out / 'peers.png'}")
     if args.json:
