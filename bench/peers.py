@@ -192,13 +192,10 @@ def _profile_pgpm(problem, u: np.ndarray, phi: np.ndarray, repeat: int = 5) -> d
     of ``repeat`` calls each (the least disturbed by other load)."""
     from dolfinx import fem
 
+    from coupling.timing import best_of
+
     def best(fn) -> float:
-        times = []
-        for _ in range(repeat):
-            tic = time.perf_counter()
-            fn()
-            times.append(time.perf_counter() - tic)
-        return min(times)
+        return best_of(fn, repeat)
 
     f, pre = problem.functional, problem.preconditioner
     u_fun = fem.Function(problem.V)

@@ -16,17 +16,13 @@ import numpy as np
 from mpi4py import MPI
 
 from coupling.manufactured import manufactured_problem, square_contact
+from coupling.timing import best_of as _best_of
 from fem_py.materials import make_material
 
 
-def best_of(fn, repeat: int = 7) -> float:
-    """Smallest wall time of ``repeat`` calls (the least disturbed by other load)."""
-    times = []
-    for _ in range(repeat):
-        tic = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - tic)
-    return min(times)
+def best_of(fn) -> float:
+    """Best of 7 wall times (see coupling.timing.best_of)."""
+    return _best_of(fn, repeat=7)
 
 
 def main() -> None:

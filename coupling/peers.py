@@ -102,9 +102,31 @@ class Budget:
         self.seconds = seconds
         self.start = time.perf_counter()
 
+    @property
+    def spent(self) -> bool:
+        return self.seconds is not None and time.perf_counter() - self.start > self.seconds
+
     def check(self) -> None:
-        if self.seconds is not None and time.perf_counter() - self.start > self.seconds:
+        if self.spent:
             raise BudgetExceeded(f"not converged within the budget of {self.seconds:g} s")
+
+    def run(self, solve: Callable[[], Any], reason_code: Callable[[], int],
+            describe: Callable[[int], str]) -> tuple[bool, str, float]:
+        """Call ``solve()``; return (converged, reason, wall time). A PETSc error raised
+        after the budget is spent (a callback's BudgetExceeded surfacing through PETSc)
+        counts as running out of budget."""
+        tic = time.perf_counter()
+        try:
+            solve()
+            code = reason_code()
+            converged, reason = code > 0, describe(code)
+        except BudgetExceeded as err:
+            converged, reason = False, str(err)
+        except PETSc.Error as err:
+            converged = False
+            reason = (f"not converged within the budget of {self.seconds:g} s" if self.spent
+                      else f"PETSc error {err.ierr}")
+        return converged, reason, time.perf_counter() - tic
 
 
 @dataclass
@@ -582,21 +604,8 @@ def solve_snes_vi(problem, *, linear_solver: str = "mumps", rtol: float = 1e-12,
     krylov = _count_krylov(ksp)
     setup = time.perf_counter() - tic
 
-    tic = time.perf_counter()
-    reason_text = None
-    try:
-        snes.solve(None, x)
-        code = snes.getConvergedReason()
-        converged = code > 0
-        reason_text = _snes_reason(code)
-    except BudgetExceeded as err:
-        converged, reason_text = False, str(err)
-    except PETSc.Error as err:
-        if clock.seconds is not None and time.perf_counter() - clock.start > clock.seconds:
-            converged, reason_text = False, f"not converged within the budget of {clock.seconds:g} s"
-        else:
-            converged, reason_text = False, f"PETSc error {err.ierr}"
-    solve = time.perf_counter() - tic
+    converged, reason_text, solve = clock.run(lambda: snes.solve(None, x),
+                                              snes.getConvergedReason, _snes_reason)
     u, phi = ev.split(x)
     result = PeerResult(u=u, phi=phi, converged=converged, reason=reason_text,
                         iterations=snes.getIterationNumber(), linear_iterations=krylov[0],
@@ -690,19 +699,8 @@ def solve_tao(problem, kind: str, *, gttol: float = 1e-10, linear_solver: str = 
         krylov = _count_krylov(tao.getKSP())
     setup = time.perf_counter() - tic
 
-    tic = time.perf_counter()
-    try:
-        tao.solve(x)
-        code = tao.getConvergedReason()
-        converged, reason_text = code > 0, _tao_reason(code)
-    except BudgetExceeded as err:
-        converged, reason_text = False, str(err)
-    except PETSc.Error as err:
-        if clock.seconds is not None and time.perf_counter() - clock.start > clock.seconds:
-            converged, reason_text = False, f"not converged within the budget of {clock.seconds:g} s"
-        else:
-            converged, reason_text = False, f"PETSc error {err.ierr}"
-    solve = time.perf_counter() - tic
+    converged, reason_text, solve = clock.run(lambda: tao.solve(x), tao.getConvergedReason,
+                                              _tao_reason)
     u, phi = ev.split(x)
     result = PeerResult(u=u, phi=phi, converged=converged, reason=reason_text,
                         iterations=tao.getIterationNumber(), linear_iterations=krylov[0],

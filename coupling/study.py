@@ -68,6 +68,8 @@ import scipy.linalg as sla  # noqa: E402
 import scipy.sparse as sp  # noqa: E402
 import scipy.sparse.linalg as spla  # noqa: E402
 
+from coupling.timing import best_of  # noqa: E402
+
 __all__ = ["main", "Sizes", "FULL", "QUICK", "PARTS", "ResultWriter", "run_iterations",
            "run_spectrum", "run_projection", "run_errors", "run_variants"]
 
@@ -1250,15 +1252,6 @@ def md_errors(summary) -> str:
 
 
 # ================================================================== part: variants
-def _best_of(fn: Callable[[], Any], repeat: int = 5) -> float:
-    times = []
-    for _ in range(repeat):
-        tic = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - tic)
-    return min(times)
-
-
 def run_variants(comm, sizes: Sizes) -> list[Table]:
     """Edge forms (paper vs sqrt-laplacian) and Jacobians (ufl vs handwritten)."""
     k = sizes.d_subdomains
@@ -1295,9 +1288,9 @@ def run_variants(comm, sizes: Sizes) -> list[Table]:
         timing = {}
         for kind, mat in mats.items():
             forms.assemble_jacobian(result.u, mat, kind)  # compile (JIT) outside the timing
-            timing[kind] = _best_of(lambda: forms.assemble_jacobian(result.u, mat, kind))
+            timing[kind] = best_of(lambda: forms.assemble_jacobian(result.u, mat, kind))
         residual = forms.create_vector()
-        t_residual = _best_of(lambda: forms.assemble_residual(result.u, residual))
+        t_residual = best_of(lambda: forms.assemble_residual(result.u, residual))
         residual.destroy()
         J_ufl, J_hw = (_scipy_matrix(mats[kind]) for kind in ("ufl", "handwritten"))
         for mat in mats.values():

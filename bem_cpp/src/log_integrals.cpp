@@ -3,11 +3,25 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 namespace bem {
 
 namespace {
+
+/// P_p(x) and P_p'(x) by the three-term recurrence.
+std::pair<double, double> legendre(int p, double x) {
+  double p0 = 1.0, p1 = x;
+  for (int k = 2; k <= p; ++k) {
+    const double p2 = ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p0) / k;
+    p0 = p1;
+    p1 = p2;
+  }
+  const double pp = p == 1 ? x : p1;
+  const double pm = p == 1 ? 1.0 : p0;
+  return {pp, p * (x * pp - pm) / (x * x - 1.0)};
+}
 
 GaussRule compute_gauss_legendre(int p) {
   GaussRule rule;
@@ -16,32 +30,13 @@ GaussRule compute_gauss_legendre(int p) {
   for (int i = 0; i < p; ++i) {
     // Newton's method on P_p from the Tricomi initial guess (node i, descending in x).
     double x = std::cos(pi * (i + 0.75) / (p + 0.5));
-    double dp = 1.0;
     for (int it = 0; it < 100; ++it) {
-      double p0 = 1.0, p1 = x;
-      for (int k = 2; k <= p; ++k) {
-        const double p2 = ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p0) / k;
-        p0 = p1;
-        p1 = p2;
-      }
-      const double pp = p == 1 ? x : p1;
-      const double pm = p == 1 ? 1.0 : p0;
-      dp = p * (x * pp - pm) / (x * x - 1.0);
-      const double dx = pp / dp;
+      const auto [value, slope] = legendre(p, x);
+      const double dx = value / slope;
       x -= dx;
       if (std::abs(dx) <= 1e-17) break;
     }
-    {  // derivative at the converged node for the weight
-      double p0 = 1.0, p1 = x;
-      for (int k = 2; k <= p; ++k) {
-        const double p2 = ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p0) / k;
-        p0 = p1;
-        p1 = p2;
-      }
-      const double pp = p == 1 ? x : p1;
-      const double pm = p == 1 ? 1.0 : p0;
-      dp = p * (x * pp - pm) / (x * x - 1.0);
-    }
+    const double dp = legendre(p, x).second;  // derivative at the converged node
     // Map [-1, 1] -> [0, 1]: ascending nodes, weights summing to 1.
     rule.x[static_cast<std::size_t>(i)] = 0.5 * (1.0 - x);
     rule.w[static_cast<std::size_t>(i)] = 1.0 / ((1.0 - x * x) * dp * dp);
