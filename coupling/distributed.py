@@ -1,4 +1,4 @@
-"""Running a serial preconditioner under MPI: gathered on rank 0, applied, scattered back.
+"""Serial pieces under MPI: a preconditioner gathered on rank 0, and S_h computed there once.
 
 The u block of the PGPM lives in a distributed PETSc vector whose owned entries are
 the contiguous global range [r0, r1) of each rank, in rank order. A preconditioner
@@ -13,6 +13,7 @@ stays on rank 0.
 """
 from __future__ import annotations
 
+import time
 from typing import Callable
 
 import numpy as np
@@ -20,7 +21,35 @@ import scipy.sparse as sp
 from mpi4py import MPI
 from petsc4py import PETSc
 
-__all__ = ["RootPreconditioner", "gather_matrix", "gather_rows"]
+__all__ = ["RootPreconditioner", "gather_matrix", "gather_rows", "computed_on_root"]
+
+
+def computed_on_root(comm: MPI.Comm, compute: Callable[[], np.ndarray]) -> np.ndarray:
+    """A dense array computed once, on rank 0, and broadcast to every rank.
+
+    For S_h: rank 0 runs the (OpenMP-threaded) assembly while the other ranks sleep
+    in a polled non-blocking barrier instead of spinning in MPI, so the assembly has
+    the machine's cores to itself. An exception on rank 0 is raised on every rank.
+    """
+    if comm.size == 1:
+        return compute()
+    result, error = None, None
+    if comm.rank == 0:
+        try:
+            result = np.ascontiguousarray(compute(), dtype=float)
+        except Exception as err:  # noqa: BLE001 - re-raised on every rank below
+            error = err
+    barrier = comm.Ibarrier()
+    while not barrier.Test():
+        time.sleep(0.002)
+    error, shape = comm.bcast((error, None if error is not None or comm.rank != 0 else result.shape),
+                              root=0)
+    if error is not None:
+        raise error
+    if comm.rank != 0:
+        result = np.empty(shape)
+    comm.Bcast(result, root=0)
+    return result
 
 
 def gather_rows(comm: MPI.Comm, owned: np.ndarray) -> np.ndarray | None:

@@ -356,8 +356,7 @@ def _skeleton_form(coarse: Any, x: np.ndarray, subdomain_size: float, n_nodes: i
             raise ValueError("every dof along a coarse edge must be a skeleton dof; check coarse.edge_dofs")
         count += np.bincount(inner.ravel(), minlength=n_sk)
         pts = x[dofs]
-        s = _arc_length(pts)
-        t = s[:, 1:-1] / s[:, -1:]
+        t = edge_weights(pts)
         rows += [inner.ravel(), inner.ravel()]
         cols += [np.repeat(ends[group, 0], length - 2), np.repeat(ends[group, 1], length - 2)]
         vals += [(1.0 - t).ravel(), t.ravel()]
@@ -369,11 +368,26 @@ def _skeleton_form(coarse: Any, x: np.ndarray, subdomain_size: float, n_nodes: i
         )
     interp = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n_sk, n_v))
     a0, a0_inv = _block_diagonal(groups, n_sk, kind)
+    return _TwoLevelForm(a0, a0_inv, interp, pos[vertex_dofs], coarse_matrix(coarse, subdomain_size))
+
+
+def coarse_matrix(coarse: Any, subdomain_size: float) -> sp.csc_matrix:
+    """C of METHOD.md section 6: the coarse graph Laplacian + d * sum over the coarse
+    vertices on Gamma, sum_{(v_i, v_j)} (u_i - u_j)^2 + d sum_{v on Gamma} u(v)^2."""
+    ends = np.asarray(coarse.edge_vertices, dtype=np.int64)
+    on_boundary = np.asarray(coarse.vertex_on_boundary, dtype=float)
+    n_e, n_v = len(ends), len(on_boundary)
     incidence = sp.csr_matrix(
         (np.tile([1.0, -1.0], n_e), (np.repeat(np.arange(n_e), 2), ends.ravel())), shape=(n_e, n_v)
     )
-    c = (incidence.T @ incidence + sp.diags(subdomain_size * on_boundary.astype(float))).tocsc()
-    return _TwoLevelForm(a0, a0_inv, interp, pos[vertex_dofs], c)
+    return (incidence.T @ incidence + sp.diags(subdomain_size * on_boundary)).tocsc()
+
+
+def edge_weights(points: np.ndarray) -> np.ndarray:
+    """Pi on the interior nodes of coarse edges (batch, n+1, dim): the arc-length position
+    t in (0, 1) of every interior node; its value is (1 - t) u(end 0) + t u(end 1)."""
+    s = _arc_length(points)
+    return s[:, 1:-1] / s[:, -1:]
 
 
 def _signorini_form(arcs: Sequence[SignoriniArc], subdomain_size: float, kind: str) -> _TwoLevelForm:
@@ -437,7 +451,50 @@ def _concat(parts: list[np.ndarray], dtype: type) -> np.ndarray:
     return np.concatenate(parts).astype(dtype) if parts else np.zeros(0, dtype=dtype)
 
 
-class SubstructuringPreconditioner:
+class SignoriniBlock:
+    """omega B_s of METHOD.md section 6 ("Signorini block"): the Signorini half of B.
+
+    Small (one unknown per Signorini node) and replicated on every rank; shared by the
+    serial and the distributed substructuring preconditioners.
+    """
+
+    def _init_signorini(self, arcs: Sequence[SignoriniArc], subdomain_size: float, kind: str,
+                        weight: float) -> None:
+        if not weight > 0.0:
+            raise ValueError(f"signorini_weight must be positive, got {weight}")
+        self.signorini_weight = float(weight)
+        self._signorini = _signorini_form(tuple(arcs), subdomain_size, kind)
+        self.n_signorini = self._signorini.n
+        self._lambda_max: float | None = None
+
+    def apply_signorini(self, g: np.ndarray) -> np.ndarray:
+        """phi = (omega M_s)^{-1} g with M_s^{-1} = (A^0_s)^{-1} + P_s C_s^{-1} P_s^T (exact)."""
+        return self._signorini.solve(_check_length(g, self.n_signorini, "g")) / self.signorini_weight
+
+    def matvec_signorini(self, phi: np.ndarray) -> np.ndarray:
+        """omega M_s phi, the matrix of omega B_s (METHOD.md section 6)."""
+        return self.signorini_weight * self._signorini.matvec(_check_length(phi, self.n_signorini, "phi"))
+
+    @property
+    def signorini_metric(self) -> np.ndarray:
+        """omega M_s as a dense n_s x n_s array (the metric of the projection (3.19)-(3.20))."""
+        return self.signorini_weight * self._signorini.matrix.toarray()
+
+    @property
+    def lambda_max_signorini(self) -> float:
+        """Largest eigenvalue of omega M_s (0 without Signorini unknowns); bounds theta in (3.20)."""
+        if self._lambda_max is None:  # of M_s, computed on first use
+            m = self._signorini.matrix
+            if m.shape[0] == 0:
+                self._lambda_max = 0.0
+            elif m.shape[0] <= 400:
+                self._lambda_max = float(sla.eigvalsh(m.toarray(), subset_by_index=[m.shape[0] - 1] * 2)[0])
+            else:
+                self._lambda_max = float(spla.eigsh(m, k=1, which="LA", return_eigenvectors=False, tol=1e-10)[0])
+        return self.signorini_weight * self._lambda_max
+
+
+class SubstructuringPreconditioner(SignoriniBlock):
     """The substructuring preconditioner B = B_Omega + omega B_s of METHOD.md section 6.
 
     Parameters
@@ -482,8 +539,6 @@ class SubstructuringPreconditioner:
                  signorini_weight: float = 1.0) -> None:
         if edge_form not in EDGE_FORMS:
             raise ValueError(f"edge_form must be one of {EDGE_FORMS}, got {edge_form!r}")
-        if not signorini_weight > 0.0:
-            raise ValueError(f"signorini_weight must be positive, got {signorini_weight}")
         if not subdomain_size > 0.0:
             raise ValueError(f"subdomain_size must be positive, got {subdomain_size}")
         a = sp.csr_matrix(stiffness, dtype=float)
@@ -503,7 +558,6 @@ class SubstructuringPreconditioner:
         self.n_omega = n
         self.edge_form = edge_form
         self.subdomain_size = float(subdomain_size)
-        self.signorini_weight = float(signorini_weight)
         self._interior = interior
         self._skeleton = skeleton
         a_i = a[interior]
@@ -512,9 +566,7 @@ class SubstructuringPreconditioner:
         self._a_si = self._a_is.T.tocsr()  # A is symmetric
         self._interior_factor = _SparseFactor(self._a_ii)
         self._skeleton_form = _skeleton_form(coarse, x, self.subdomain_size, n, edge_form)
-        self._signorini = _signorini_form(tuple(signorini_arcs), self.subdomain_size, edge_form)
-        self.n_signorini = self._signorini.n
-        self._lambda_max: float | None = None
+        self._init_signorini(signorini_arcs, self.subdomain_size, edge_form, signorini_weight)
 
     # -- the local Dirichlet problems (the one place to make rank-local under MPI) --
     def solve_interior(self, g_i: np.ndarray) -> np.ndarray:
@@ -558,33 +610,6 @@ class SubstructuringPreconditioner:
         harmonic = self.solve_interior(a_is)
         b[ss] = a_is.T @ harmonic + self._skeleton_form.matrix.toarray()
         return b
-
-    # -- omega * B_s --
-    def apply_signorini(self, g: np.ndarray) -> np.ndarray:
-        """phi = (omega M_s)^{-1} g with M_s^{-1} = (A^0_s)^{-1} + P_s C_s^{-1} P_s^T (exact)."""
-        return self._signorini.solve(_check_length(g, self.n_signorini, "g")) / self.signorini_weight
-
-    def matvec_signorini(self, phi: np.ndarray) -> np.ndarray:
-        """omega M_s phi, the matrix of omega B_s (METHOD.md section 6)."""
-        return self.signorini_weight * self._signorini.matvec(_check_length(phi, self.n_signorini, "phi"))
-
-    @property
-    def signorini_metric(self) -> np.ndarray:
-        """omega M_s as a dense n_s x n_s array (the metric of the projection (3.19)-(3.20))."""
-        return self.signorini_weight * self._signorini.matrix.toarray()
-
-    @property
-    def lambda_max_signorini(self) -> float:
-        """Largest eigenvalue of omega M_s (0 without Signorini unknowns); bounds theta in (3.20)."""
-        if self._lambda_max is None:  # of M_s, computed on first use
-            m = self._signorini.matrix
-            if m.shape[0] == 0:
-                self._lambda_max = 0.0
-            elif m.shape[0] <= 400:
-                self._lambda_max = float(sla.eigvalsh(m.toarray(), subset_by_index=[m.shape[0] - 1] * 2)[0])
-            else:
-                self._lambda_max = float(spla.eigsh(m, k=1, which="LA", return_eigenvectors=False, tol=1e-10)[0])
-        return self.signorini_weight * self._lambda_max
 
     def destroy(self) -> None:
         """Free the PETSc factors (call on every rank when done)."""

@@ -28,8 +28,11 @@ import bem_cpp
 from coupling.config import DEFAULTS, as_dataclass_kwargs
 from coupling.functional import CoupledFunctional
 from coupling.newton import semismooth_newton
-from coupling.pgpm import IterationRecord, RunResult, estimate_step, projection_gradient
-from coupling.distributed import RootPreconditioner, gather_matrix, gather_rows
+from coupling.pgpm import IterationRecord, RunResult, estimate_extremes, projection_gradient
+from coupling.distributed import (RootPreconditioner, computed_on_root, gather_matrix,
+                                  gather_rows)
+from coupling.distributed_substructuring import (DistributedSubstructuringPreconditioner,
+                                                 subdomain_ranks)
 from coupling.exact_preconditioner import ExactPreconditioner
 from coupling.preconditioner import (IdentityPreconditioner, SignoriniArc,
                                      SubstructuringPreconditioner)
@@ -128,7 +131,8 @@ class SignoriniProblem:
         timings["forms"] = time.perf_counter() - tic
 
         tic = time.perf_counter()
-        self.S = bem_cpp.steklov_poincare(self.boundary.nodes, flux=options.flux_space)
+        self.S = computed_on_root(self.comm, lambda: bem_cpp.steklov_poincare(
+            self.boundary.nodes, flux=options.flux_space))
         timings["steklov_poincare"] = time.perf_counter() - tic
 
         tic = time.perf_counter()
@@ -176,18 +180,34 @@ class SignoriniProblem:
     def _make_preconditioner(self):
         """B of the ``preconditioner`` option (METHOD.md sections 5-6), factored once.
 
-        The substructuring and exact preconditioners are built from the gathered
-        stiffness matrix; under MPI they run on rank 0 (:mod:`coupling.distributed`).
+        Under MPI the substructuring preconditioner is distributed by subdomains
+        (:mod:`coupling.distributed_substructuring`) when every subdomain lies on one
+        rank (``build_domain`` partitions so whenever there are at least as many
+        subdomains as ranks); otherwise, and for the exact preconditioner, B is built
+        from the gathered stiffness matrix and runs on rank 0 (:mod:`coupling.distributed`).
         """
         kind, comm = self.options.preconditioner, self.comm
         n_owned = self.V.dofmap.index_map.size_local
         if kind == "identity":
             return IdentityPreconditioner(n_owned, self.n_signorini)
         stiffness = self.forms.assemble_stiffness()
+        arcs = self._signorini_arcs()
+        if kind == "substructuring" and comm.size > 1:
+            domain = self.domain
+            ranks = subdomain_ranks(comm, domain.cell_tags,
+                                    domain.mesh.topology.index_map(2).size_local,
+                                    domain.coarse.n_subdomains)
+            if ranks is not None:  # whole subdomains per rank: no gathering
+                try:
+                    return DistributedSubstructuringPreconditioner(
+                        comm, stiffness, self.V.dofmap.index_map, domain.coarse, ranks,
+                        domain.subdomain_size, arcs, edge_form=self.options.edge_form,
+                        signorini_weight=self.options.signorini_weight)
+                finally:
+                    stiffness.destroy()
         csr = gather_matrix(stiffness)
         stiffness.destroy()
         x = gather_rows(comm, self.V.tabulate_dof_coordinates()[:n_owned, :2])
-        arcs = self._signorini_arcs()
 
         def build():
             if kind == "exact":
@@ -213,10 +233,12 @@ class SignoriniProblem:
         phi0 = np.zeros(self.n_signorini)
         timings = dict(self.timings)
         tic = time.perf_counter()
+        lambda_min = None  # the momentum of apgpm, from the same Lanczos run as C0
         if opts.step == "auto":
             jacobian = self.forms.create_matrix()
             self.forms.assemble_jacobian(u, jacobian)
-            C0 = estimate_step(self.functional, self.preconditioner, jacobian, phi0.size)
+            lambda_min, C0 = estimate_extremes(self.functional, self.preconditioner, jacobian,
+                                               phi0.size)
             jacobian.destroy()
             tau = 1.0 / C0
         else:
@@ -239,7 +261,8 @@ class SignoriniProblem:
             run = projection_gradient(
                 self.functional, self.preconditioner, self.projection, u, phi0, tau=tau,
                 tol=opts.tol, max_iterations=opts.max_iterations,
-                accelerated=opts.method == "apgpm", monitor=monitor)
+                accelerated=opts.method == "apgpm",
+                strong_convexity=lambda_min if opts.method == "apgpm" else None, monitor=monitor)
         timings["solve"] = run.solve_time
         if run.energy_increases and progress and comm.rank == 0:
             print(f"  note: J_h increased {run.energy_increases} times; tau was halved "

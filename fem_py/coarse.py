@@ -12,7 +12,9 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import scipy.sparse as sp
 from mpi4py import MPI
+from scipy.sparse.csgraph import connected_components
 
 from fem_py.forms import p1_space
 from fem_py.meshdata import FacetData, exterior_facets, facet_data, gather_facet_data, p1_topology, tag_array
@@ -134,7 +136,27 @@ def compute_coarse_structure(msh: Any, cell_tags: Any, facet_tags: Any) -> Coars
     error = comm.bcast(error, root=0)
     if error is not None:
         raise RuntimeError(f"coarse structure: {error}")
-    return comm.bcast(result, root=0)
+    if comm.size == 1:
+        return result
+    return _unpack(comm.bcast(_pack(result) if comm.rank == 0 else None, root=0))
+
+
+def _pack(coarse: CoarseStructure) -> dict:
+    """The fields as a few large arrays (the per-edge tuples concatenated): one pickle of
+    ~30 arrays instead of ~2 per coarse edge, which made the broadcast slow (1e5 edges)."""
+    fields = {name: getattr(coarse, name) for name in coarse.__dataclass_fields__}
+    fields["edge_dofs"] = np.concatenate(coarse.edge_dofs) if coarse.edge_dofs else np.zeros(0, np.int64)
+    fields["edge_coords"] = (np.concatenate(coarse.edge_coords) if coarse.edge_coords
+                             else np.zeros((0, 2)))
+    fields["edge_lengths"] = np.array([len(d) for d in coarse.edge_dofs], dtype=np.int64)
+    return fields
+
+
+def _unpack(fields: dict) -> CoarseStructure:
+    cut = np.cumsum(fields.pop("edge_lengths"))[:-1]
+    fields["edge_dofs"] = tuple(np.split(fields["edge_dofs"], cut))
+    fields["edge_coords"] = tuple(np.split(fields["edge_coords"], cut))
+    return CoarseStructure(**fields)
 
 
 def _coarse_from_skeleton(fd: FacetData, tag_global: np.ndarray, n_dofs: int, n_sub: int) -> CoarseStructure:
@@ -144,17 +166,16 @@ def _coarse_from_skeleton(fd: FacetData, tag_global: np.ndarray, n_dofs: int, n_
     X = np.zeros((nn, 2))
     X[inv[:, 0]] = fd.coords[:, 0]
     X[inv[:, 1]] = fd.coords[:, 1]
-    # adjacency lists: node -> incident facets
-    inc: list[list[int]] = [[] for _ in range(nn)]
-    for f, (a, b) in enumerate(inv.tolist()):
-        inc[a].append(f)
-        inc[b].append(f)
-    deg = np.array([len(x) for x in inc])
+    # incident facets of every node, in increasing facet order
+    end_node = inv.ravel()
+    by_node = np.argsort(end_node, kind="stable")
+    incident = by_node // 2
+    deg = np.bincount(end_node, minlength=nn)
+    first = np.concatenate([[0], np.cumsum(deg)[:-1]])
     is_vertex = deg != 2
     i2 = np.flatnonzero(deg == 2)
+    f, g = incident[first[i2]], incident[first[i2] + 1]
     if len(i2):
-        fg = np.array([inc[i] for i in i2.tolist()], dtype=np.int64)
-        f, g = fg[:, 0], fg[:, 1]
         a = np.where(inv[f, 1] == i2, inv[f, 0], inv[f, 1])
         b = np.where(inv[g, 1] == i2, inv[g, 0], inv[g, 1])
         u, w = X[i2] - X[a], X[b] - X[i2]
@@ -172,49 +193,43 @@ def _coarse_from_skeleton(fd: FacetData, tag_global: np.ndarray, n_dofs: int, n_
     vidx = vidx[order]
     vnum = -np.ones(nn, dtype=np.int64)
     vnum[vidx] = np.arange(len(vidx))
-    visited = np.zeros(nf, dtype=bool)
-    edges = []
-    for v in vidx.tolist():
-        for f0 in inc[v]:
-            if visited[f0]:
-                continue
-            chain, facets = [v], []
-            cur, f = v, f0
-            while True:
-                visited[f] = True
-                facets.append(f)
-                nxt = int(inv[f, 0] if inv[f, 1] == cur else inv[f, 1])
-                chain.append(nxt)
-                if is_vertex[nxt]:
-                    break
-                g = inc[nxt][0] if inc[nxt][0] != f else inc[nxt][1]
-                cur, f = nxt, g
-            edges.append((chain, facets))
-    if not visited.all():
-        raise RuntimeError(f"{int((~visited).sum())} skeleton facets form closed loops without coarse vertices")
-    records = []
-    for chain, facets in edges:
-        f0 = facets[0]
-        ext = bool(fd.exterior[f0])
-        tags = fd.tag[facets]
-        if ext and not np.all(tags == tags[0]):
-            raise RuntimeError("a coarse boundary edge carries two facet tags")
-        a, b = vnum[chain[0]], vnum[chain[-1]]
-        if ext:
-            forward = inv[f0, 0] == chain[0] and inv[f0, 1] == chain[1]  # exterior facets are CCW
-            if not forward:
-                chain = chain[::-1]
-        elif a > b:
-            chain = chain[::-1]
-        arc = int(tags[0]) - SIGNORINI_TAG0 if ext and tags[0] >= SIGNORINI_TAG0 else -1
-        cells = fd.cells[f0]
-        sub = (int(cells[0]), -1) if ext else tuple(sorted((int(cells[0]), int(cells[1]))))
-        records.append((chain, ext, arc, sub))
-    ev = np.array([[vnum[r[0][0]], vnum[r[0][-1]]] for r in records], dtype=np.int64).reshape(-1, 2)
-    mid = np.array([K[r[0][len(r[0]) // 2]] for r in records]).reshape(-1, 2)
+    # coarse edges: the facets joined at the non-vertex nodes (connected components)
+    join = ~is_vertex[i2]
+    graph = sp.csr_matrix((np.ones(int(join.sum())), (f[join], g[join])), shape=(nf, nf))
+    n_edges, comp = connected_components(graph, directed=False)
+    vertex_end = is_vertex[inv]  # (nf, 2)
+    ends_per_edge = np.bincount(np.repeat(comp, 2)[vertex_end.ravel()], minlength=n_edges)
+    if np.any(ends_per_edge != 2):
+        raise RuntimeError(f"{int(np.count_nonzero(ends_per_edge != 2))} chains of skeleton facets do "
+                           "not run between two coarse vertices (closed loops without coarse vertices)")
+    end_comp, end_nodes = np.repeat(comp, 2)[vertex_end.ravel()], end_node[vertex_end.ravel()]
+    pair = np.argsort(end_comp, kind="stable").reshape(-1, 2)
+    e0, e1 = end_nodes[pair[:, 0]], end_nodes[pair[:, 1]]
+    # a coarse edge is straight (a bend makes a coarse vertex): order its nodes by position
+    first_facet = np.full(n_edges, nf)
+    np.minimum.at(first_facet, comp, np.arange(nf))
+    ext = fd.exterior[first_facet]
+    along = X[e1] - X[e0]
+    facet_dir = X[inv[first_facet, 1]] - X[inv[first_facet, 0]]
+    reverse = np.where(ext, (facet_dir * along).sum(1) < 0, vnum[e0] > vnum[e1])
+    start, stop = np.where(reverse, e1, e0), np.where(reverse, e0, e1)
+    node_comp = np.unique(np.stack([np.repeat(comp, 2), end_node], 1), axis=0)  # (edge, node)
+    c, nd = node_comp[:, 0], node_comp[:, 1]
+    position = ((X[nd] - X[start[c]]) * (X[stop[c]] - X[start[c]])).sum(1)
+    chain_nodes = nd[np.lexsort((position, c))]
+    length = np.bincount(c, minlength=n_edges)
+    offsets = np.concatenate([[0], np.cumsum(length)])
+    if np.any(fd.exterior & (fd.tag != fd.tag[first_facet][comp])):
+        raise RuntimeError("a coarse boundary edge carries two facet tags")
+    ftag = fd.tag[first_facet]
+    arc = np.where(ext & (ftag >= SIGNORINI_TAG0), ftag - SIGNORINI_TAG0, -1)
+    cells = fd.cells[first_facet]
+    sub = np.where(ext[:, None], np.stack([cells[:, 0], np.full(n_edges, -1)], 1), np.sort(cells, axis=1))
+    ev = np.stack([vnum[start], vnum[stop]], 1)
+    mid = K[chain_nodes[offsets[:-1] + length // 2]]
     eorder = np.lexsort((mid[:, 0], mid[:, 1], ev.max(1), ev.min(1)))
-    records = [records[i] for i in eorder]
     ev = ev[eorder]
+    chains = [chain_nodes[offsets[k]:offsets[k + 1]] for k in eorder.tolist()]
     skeleton = np.sort(nodes)
     interior = np.setdiff1d(np.arange(n_dofs, dtype=np.int64), skeleton)
     sub_of_interior = tag_global[interior]
@@ -227,11 +242,11 @@ def _coarse_from_skeleton(fd: FacetData, tag_global: np.ndarray, n_dofs: int, n_
         vertex_dofs=nodes[vidx].astype(np.int64),
         vertex_on_boundary=on_bnd[vidx],
         edge_vertices=ev,
-        edge_dofs=tuple(nodes[np.array(r[0])].astype(np.int64) for r in records),
-        edge_coords=tuple(X[np.array(r[0])] for r in records),
-        edge_on_boundary=np.array([r[1] for r in records], dtype=bool),
-        edge_arc=np.array([r[2] for r in records], dtype=np.int64),
-        edge_subdomains=np.array([r[3] for r in records], dtype=np.int64).reshape(-1, 2),
+        edge_dofs=tuple(nodes[ch].astype(np.int64) for ch in chains),
+        edge_coords=tuple(X[ch] for ch in chains),
+        edge_on_boundary=ext[eorder].astype(bool),
+        edge_arc=arc[eorder].astype(np.int64),
+        edge_subdomains=sub[eorder].astype(np.int64).reshape(-1, 2),
         skeleton_dofs=skeleton.astype(np.int64),
         interior_dofs=interior,
         subdomain_of_interior_dof=sub_of_interior.astype(np.int64),

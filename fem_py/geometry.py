@@ -476,55 +476,58 @@ def _build_fine_geo(V: np.ndarray, cells: list[list[int]], h: float, B: _Boundar
 
 
 def _structured_nodes(V: np.ndarray, cells: list[list[int]], n: int):
-    """Uniform refinement of the coarse cells: node coordinates, per-cell triangles and
-    the fine boundary segments of every coarse edge (as node index chains)."""
+    """Uniform refinement of the coarse cells: node coordinates, the triangles with the
+    coarse cell of each, and the fine nodes of every coarse edge (as node index chains).
+
+    Nodes: the coarse vertices, then the n-1 interior nodes of every coarse edge (from
+    its lower to its higher vertex), then the interior nodes of every coarse cell in
+    cell order. Coarse squares are refined all at once (array operations over cells).
+    """
     nv = len(V)
-    keys = sorted({_edge_key(a, b) for c in cells for a, b in zip(c, c[1:] + c[:1])})
-    edge_index = {k: i for i, k in enumerate(keys)}
-    X = [V]
-    # interior nodes of coarse edge (a<b): k = 1..n-1 from a
+    keys = np.array(sorted({_edge_key(a, b) for c in cells for a, b in zip(c, c[1:] + c[:1])}),
+                    dtype=np.int64).reshape(-1, 2)
+    codes = keys[:, 0] * nv + keys[:, 1]
     t = np.arange(1, n)[:, None] / n
-    for (a, b) in keys:
-        X.append(V[a] + t * (V[b] - V[a]))
+    X = [V, (V[keys[:, 0]][:, None, :] + t[None] * (V[keys[:, 1]] - V[keys[:, 0]])[:, None, :]).reshape(-1, 2)]
     offset = nv + len(keys) * (n - 1)
 
-    def edge_node(a: int, b: int, k: int) -> int:
-        """Node at k/n along a -> b (k = 0..n)."""
-        if k == 0:
-            return a
-        if k == n:
-            return b
-        e = edge_index[_edge_key(a, b)]
-        kk = k if a < b else n - k
-        return nv + e * (n - 1) + kk - 1
+    def edge_nodes(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """(len(a), n+1) node numbers at k/n along a -> b, k = 0..n."""
+        a, b = np.atleast_1d(a), np.atleast_1d(b)
+        e = np.searchsorted(codes, np.minimum(a, b) * nv + np.maximum(a, b))
+        k = np.arange(n + 1)
+        kk = np.where((a < b)[:, None], k, n - k)
+        ids = nv + e[:, None] * (n - 1) + kk - 1
+        ids[:, 0], ids[:, n] = a, b
+        return ids
 
-    tris_per_cell = []
-    for c in cells:
-        if len(c) == 4:
-            v0, v1, v2, v3 = c
-            idx = np.empty((n + 1, n + 1), dtype=np.int64)  # idx[j, i]
-            for k in range(n + 1):
-                idx[0, k] = edge_node(v0, v1, k)
-                idx[k, n] = edge_node(v1, v2, k)
-                idx[n, n - k] = edge_node(v2, v3, k)
-                idx[n - k, 0] = edge_node(v3, v0, k)
-            ii, jj = np.meshgrid(np.arange(1, n), np.arange(1, n))
-            s, r = ii.ravel() / n, jj.ravel() / n
-            pts = ((1 - s) * (1 - r))[:, None] * V[v0] + (s * (1 - r))[:, None] * V[v1] \
-                + (s * r)[:, None] * V[v2] + ((1 - s) * r)[:, None] * V[v3]
-            idx[jj.ravel(), ii.ravel()] = offset + np.arange(len(pts))
-            offset += len(pts)
-            X.append(pts)
-            a, b = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel()
-            cc, dd = idx[1:, 1:].ravel(), idx[1:, :-1].ravel()
-            tris = np.concatenate([np.stack([a, b, cc], 1), np.stack([a, cc, dd], 1)])
-        else:
+    if all(len(c) == 4 for c in cells):
+        q = np.array(cells, dtype=np.int64).reshape(-1, 4)
+        m = len(q)
+        idx = np.empty((m, n + 1, n + 1), dtype=np.int64)  # idx[c, j, i]
+        idx[:, 0, :] = edge_nodes(q[:, 0], q[:, 1])
+        idx[:, :, n] = edge_nodes(q[:, 1], q[:, 2])
+        idx[:, n, ::-1] = edge_nodes(q[:, 2], q[:, 3])
+        idx[:, ::-1, 0] = edge_nodes(q[:, 3], q[:, 0])
+        jj, ii = np.meshgrid(np.arange(1, n), np.arange(1, n), indexing="ij")
+        s, r = (ii.ravel() / n)[None, :, None], (jj.ravel() / n)[None, :, None]
+        c0, c1, c2, c3 = (V[q[:, k]][:, None, :] for k in range(4))
+        pts = (1 - s) * (1 - r) * c0 + s * (1 - r) * c1 + s * r * c2 + (1 - s) * r * c3
+        idx[:, 1:n, 1:n] = (offset + np.arange(m * (n - 1) ** 2)).reshape(m, n - 1, n - 1)
+        X.append(pts.reshape(-1, 2))
+        a, b = idx[:, :-1, :-1].reshape(m, -1), idx[:, :-1, 1:].reshape(m, -1)
+        cc, dd = idx[:, 1:, 1:].reshape(m, -1), idx[:, 1:, :-1].reshape(m, -1)
+        tris = np.concatenate([np.stack([a, b, cc], 2), np.stack([a, cc, dd], 2)], 1)  # (m, 2n^2, 3)
+        cell_of = np.repeat(np.arange(m, dtype=np.int32), tris.shape[1])
+        tris = tris.reshape(-1, 3)
+    else:
+        tris_per_cell = []
+        for c in cells:
             v0, v1, v2 = c
             idx = -np.ones((n + 1, n + 1), dtype=np.int64)  # idx[i, j], i + j <= n
-            for k in range(n + 1):
-                idx[k, 0] = edge_node(v0, v1, k)
-                idx[n - k, k] = edge_node(v1, v2, k)
-                idx[0, n - k] = edge_node(v2, v0, k)
+            idx[:, 0] = edge_nodes(v0, v1)[0]
+            idx[np.arange(n, -1, -1), np.arange(n + 1)] = edge_nodes(v1, v2)[0]
+            idx[0, ::-1] = edge_nodes(v2, v0)[0]
             inner = [(i, j) for i in range(1, n) for j in range(1, n - i)]
             if inner:
                 ij = np.array(inner)
@@ -538,32 +541,92 @@ def _structured_nodes(V: np.ndarray, cells: list[list[int]], n: int):
                     tl.append((idx[i, j], idx[i + 1, j], idx[i, j + 1]))
                     if i + j < n - 1:
                         tl.append((idx[i + 1, j], idx[i + 1, j + 1], idx[i, j + 1]))
-            tris = np.array(tl, dtype=np.int64)
-        tris_per_cell.append(tris)
-    X = np.concatenate(X)
+            tris_per_cell.append(np.array(tl, dtype=np.int64))
+        cell_of = np.concatenate([np.full(len(t), i, dtype=np.int32) for i, t in enumerate(tris_per_cell)])
+        tris = np.concatenate(tris_per_cell)
 
     def chain(a: int, b: int) -> np.ndarray:
-        return np.array([edge_node(a, b, k) for k in range(n + 1)], dtype=np.int64)
+        return edge_nodes(a, b)[0]
 
-    return X, tris_per_cell, chain
+    return np.concatenate(X), tris, cell_of, chain
 
 
 def _build_fine_structured(V: np.ndarray, cells: list[list[int]], n: int, B: _Boundary, arcs: tuple[Arc, ...]):
     """Structured fine mesh as arrays (x, cells, cell subdomain ids, boundary facets, tags)."""
-    X, tris, chain = _structured_nodes(V, cells, n)
+    X, tris, ids, chain = _structured_nodes(V, cells, n)
     seg, seg_tag = [], []
     for (a, b), cnt in sorted(_boundary_edges(cells).items()):
         if cnt == 1:
             ch = chain(a, b)
             seg.append(np.stack([ch[:-1], ch[1:]], 1))
             seg_tag.append(np.full(n, _edge_tag(V, a, b, B, arcs), dtype=np.int32))
-    ids = np.concatenate([np.full(len(t), i, dtype=np.int32) for i, t in enumerate(tris)])
-    return X, np.concatenate(tris), ids, np.concatenate(seg), np.concatenate(seg_tag)
+    return X, tris, ids, np.concatenate(seg), np.concatenate(seg_tag)
+
+
+def subdomain_owners(x: np.ndarray, cells: np.ndarray, subdomain: np.ndarray, nparts: int) -> np.ndarray:
+    """The rank of every cell such that each subdomain lies whole on one rank.
+
+    Recursive coordinate bisection of the subdomain centroids, weighted by the cell
+    count: a group of subdomains for ``k`` ranks is cut across its longer extent at
+    the weighted position k//2 : k - k//2. The partition is deterministic (the same
+    for every run), and the local Dirichlet problems of METHOD.md section 6 become
+    rank-local.
+
+    Parameters
+    ----------
+    x : (n_nodes, 2) node coordinates; cells : (n_cells, 3) node numbers;
+    subdomain : (n_cells,) subdomain id of each cell (0 .. L-1); nparts : number of ranks.
+    """
+    subdomain = np.asarray(subdomain, dtype=np.int64)
+    n_sub = int(subdomain.max(initial=-1)) + 1
+    weight = np.bincount(subdomain, minlength=n_sub).astype(float)
+    centre = x[cells].mean(axis=1)
+    centroid = np.stack([np.bincount(subdomain, centre[:, i], minlength=n_sub) for i in range(2)], 1)
+    centroid /= np.maximum(weight, 1.0)[:, None]
+    part = np.zeros(n_sub, dtype=np.int32)
+
+    def bisect(ids: np.ndarray, first: int, count: int) -> None:
+        if count == 1 or ids.size < 2:
+            part[ids] = first
+            return
+        c = centroid[ids]
+        axis = int(np.argmax(np.ptp(c, axis=0)))
+        order = ids[np.lexsort((c[:, 1 - axis], c[:, axis]))]
+        left = count // 2
+        cum = np.cumsum(weight[order])  # cum[k]: weight of order[:k + 1]
+        cut = 1 + int(np.argmin(np.abs(cum[:-1] - cum[-1] * left / count)))
+        bisect(order[:cut], first, left)
+        bisect(order[cut:], first + left, count - left)
+
+    bisect(np.arange(n_sub), 0, nparts)
+    return part[subdomain]
+
+
+def _owner_and_ghosts(cells: np.ndarray, owner: np.ndarray):
+    """Rows of (owner, ranks ghosting the cell) for DOLFINx's shared-facet ghost mode:
+    a cell is ghosted on the owners of its facet neighbours."""
+    from dolfinx import cpp
+
+    n = len(cells)
+    facets = np.sort(cells[:, [[1, 2], [2, 0], [0, 1]]].reshape(-1, 2), axis=1)
+    code = facets[:, 0] * (int(cells.max(initial=0)) + 1) + facets[:, 1]
+    order = np.argsort(code)
+    same = np.flatnonzero(code[order][1:] == code[order][:-1])  # a facet seen from both cells
+    a, b = order[same] // 3, order[same + 1] // 3
+    cut = owner[a] != owner[b]
+    a, b = a[cut], b[cut]
+    links = np.unique(np.stack([np.concatenate([a, b]), owner[np.concatenate([b, a])]], 1), axis=0)
+    cell = np.concatenate([np.arange(n), links[:, 0]])
+    rank = np.concatenate([owner, links[:, 1]])
+    order = np.lexsort((np.arange(cell.size) >= n, cell))  # per cell: the owner first
+    offsets = np.concatenate([[0], np.cumsum(np.bincount(cell, minlength=n))])
+    return cpp.graph.AdjacencyList_int32(rank[order].astype(np.int32), offsets.astype(np.int32))
 
 
 def _distribute_mesh(comm: Any, arrays: tuple | None):
     """Distribute a triangle mesh held on rank 0 (what ``gmshio.model_to_mesh`` does, with
-    the arrays already extracted): returns (mesh, cell tags, facet tags)."""
+    the arrays already extracted), whole subdomains per rank (:func:`subdomain_owners`):
+    returns (mesh, cell tags, facet tags)."""
     from dolfinx import cpp
     from dolfinx.io import gmshio
 
@@ -575,10 +638,25 @@ def _distribute_mesh(comm: Any, arrays: tuple | None):
         facets, facet_values = np.zeros((0, 2), dtype=np.int64), np.zeros(0, dtype=np.int32)
     domain = gmshio.ufl_mesh(2, 2)  # gmsh element type 2: 3-node triangle
     cells = np.asarray(cells, dtype=np.int64)
-    msh = dmesh.create_mesh(comm, cells, np.ascontiguousarray(x, dtype=np.float64), domain)
-    ents, vals = cpp.io.distribute_entity_data(msh._mesh, 2, cells, np.asarray(cell_values, dtype=np.int32))
-    msh.topology.create_connectivity(2, 0)
-    ct = dmesh.meshtags_from_entities(msh, 2, cpp.graph.AdjacencyList_int32(ents), vals.astype(np.int32))
+    x = np.ascontiguousarray(x, dtype=np.float64)
+
+    def partitioner(comm_, nparts, tdim, local_cells, ghost_mode):
+        if len(cells) == 0:
+            return cpp.graph.AdjacencyList_int32(np.zeros(0, np.int32), np.zeros(1, np.int32))
+        return _owner_and_ghosts(cells, subdomain_owners(x, cells, cell_values, nparts))
+
+    # whole subdomains per rank when there are enough subdomains, else DOLFINx's graph
+    # partitioner (the preconditioner then runs on rank 0, coupling.distributed)
+    n_sub = comm.bcast(int(np.max(cell_values, initial=-1)) + 1 if comm.rank == 0 else None, root=0)
+    by_subdomain = comm.size > 1 and n_sub >= comm.size
+    msh = dmesh.create_mesh(comm, cells, x, domain,
+                            **({"partitioner": partitioner} if by_subdomain else {}))
+    # cell tags by the input index of every local cell (all cells were input on rank 0)
+    n_cells = msh.topology.index_map(2).size_local + msh.topology.index_map(2).num_ghosts
+    wanted = comm.gather(np.asarray(msh.topology.original_cell_index[:n_cells], dtype=np.int64), root=0)
+    values = comm.scatter([np.asarray(cell_values, dtype=np.int32)[w] for w in wanted]
+                          if comm.rank == 0 else None, root=0)
+    ct = dmesh.meshtags(msh, 2, np.arange(n_cells, dtype=np.int32), values)
     ents, vals = cpp.io.distribute_entity_data(msh._mesh, 1, np.asarray(facets, dtype=np.int64),
                                                np.asarray(facet_values, dtype=np.int32))
     msh.topology.create_connectivity(1, 2)

@@ -1,5 +1,6 @@
 """Solve the manufactured contact problem on the square and save what rank 0 gathers
-(iterations, energy, u at the nodes sorted by coordinates, phi) to the .npz in argv[1]."""
+(iterations, energy, u at the nodes sorted by coordinates, phi, the class of B) to the
+.npz in argv[1]."""
 import sys
 
 import numpy as np
@@ -20,4 +21,5 @@ if comm.rank == 0:
     key = np.round(x, 12)  # exact ties despite 1e-18 noise in mesh coordinates
     order = np.lexsort((key[:, 1], key[:, 0]))
     np.savez(sys.argv[1], iterations=result.iterations, energy=result.energy,
-             x=x[order], u=u[order], phi=result.phi, converged=result.converged)
+             x=x[order], u=u[order], phi=result.phi, converged=result.converged,
+             preconditioner_class=type(problem.preconditioner).__name__)

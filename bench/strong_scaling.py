@@ -1,0 +1,119 @@
+"""Strong scaling of the whole solve from P = 1 to P = 2 ranks (issue 7).
+
+The manufactured contact problem on the square (carstensen material, d/h = 4) with
+about 10^6 dofs is solved once per rank count, each in its own ``mpirun -n P``
+process; rank 0 reports the time of every phase (the slowest rank's, as every
+phase ends in a collective):
+
+- setup: the mesh (generated on rank 0 and distributed, whole subdomains per rank),
+  the coarse structure, the interior forms, the boundary map and the loads;
+- S_h: the Steklov-Poincare matrix (computed once on rank 0 and broadcast);
+- factorisations: the preconditioner set-up (A_II per rank, the coarse matrix);
+- iterations: the step estimate and the solver iterations.
+
+Prints a table of times and speed-ups (target: total speed-up >= 1.6 from P = 1 to 2
+on this 2-core machine) and writes it to ``--output`` (markdown) if given.
+
+    .venv/bin/python bench/strong_scaling.py [--cells 1000] [--ranks 1 2] [--method pgpm]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+PHASES = ("setup", "S_h", "factorisations", "iterations", "total")
+
+
+def worker(cells: int, method: str) -> None:
+    """Run in every rank of ``mpirun -n P``: solve once, print the phase times on rank 0."""
+    from mpi4py import MPI
+
+    from coupling.manufactured import manufactured_problem, square_contact
+    from fem_py.materials import make_material
+
+    comm = MPI.COMM_WORLD
+    comm.Barrier()
+    tic = time.perf_counter()
+    problem = manufactured_problem(comm, square_contact(), make_material("carstensen"),
+                                   cells=cells, method=method)
+    built = time.perf_counter() - tic
+    result = problem.solve()
+    total = time.perf_counter() - tic
+    t = result.timings
+    phases = {
+        "S_h": t["steklov_poincare"],
+        "factorisations": t["preconditioner"],
+        "iterations": t["step_estimate"] + t["solve"],
+    }
+    phases["setup"] = built - phases["S_h"] - phases["factorisations"]
+    phases["total"] = total
+    if comm.rank == 0:
+        print(json.dumps({
+            "ranks": comm.size, "dofs": problem.V.dofmap.index_map.size_global,
+            "boundary_dofs": problem.boundary.n_gamma, "method": method,
+            "subdomains": problem.domain.coarse.n_subdomains,
+            "preconditioner": type(problem.preconditioner).__name__,
+            "iterations_count": result.iterations, "converged": bool(result.converged),
+            "energy": result.energy, **phases}), flush=True)
+
+
+def run(ranks: int, cells: int, method: str) -> dict:
+    cmd = ["mpirun", "--allow-run-as-root", "--oversubscribe", "-n", str(ranks),
+           sys.executable, __file__, "--worker", "--cells", str(cells), "--method", method]
+    if ranks == 1:
+        cmd = cmd[cmd.index(sys.executable):]
+    out = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
+    if out.returncode != 0:
+        sys.exit(f"error: the run with {ranks} rank(s) failed:\n{out.stderr[-2000:]}")
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def table(runs: list[dict]) -> str:
+    base = runs[0]
+    head = (f"# Strong scaling: {base['dofs']} dofs, {base['boundary_dofs']} boundary dofs, "
+            f"{base['subdomains']} subdomains, method {base['method']}\n\n"
+            f"machine: {platform.node()}, {os.cpu_count()} cores, load average "
+            f"{os.getloadavg()[0]:.2f} at the end; times in s (slowest rank), speed-up "
+            f"relative to P = {base['ranks']}\n\n")
+    lines = ["| P | B | iterations | " + " | ".join(PHASES) + " |",
+             "|---|---|---|" + "---|" * len(PHASES)]
+    for r in runs:
+        cells = [f"{r[p]:.2f} ({base[p] / r[p]:.2f}x)" for p in PHASES]
+        lines.append(f"| {r['ranks']} | {r['preconditioner']} | {r['iterations_count']} | "
+                     + " | ".join(cells) + " |")
+    return head + "\n".join(lines) + "\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--cells", type=int, default=1000, help="cells per side (default 1000: 1.0e6 dofs)")
+    parser.add_argument("--ranks", type=int, nargs="+", default=[1, 2])
+    parser.add_argument("--method", default="pgpm", choices=["pgpm", "apgpm", "ssn"])
+    parser.add_argument("--output", type=Path, help="also write the table (markdown) here")
+    parser.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
+    args = parser.parse_args(argv)
+    if args.cells < 8 or any(p < 1 for p in args.ranks):
+        print("error: --cells must be >= 8 and --ranks >= 1", file=sys.stderr)
+        return 2
+    if args.worker:
+        worker(args.cells, args.method)
+        return 0
+    runs = [run(p, args.cells, args.method) for p in args.ranks]
+    text = table(runs)
+    print(text)
+    if args.output:
+        tmp = args.output.with_suffix(".tmp")
+        tmp.write_text(text)
+        tmp.replace(args.output)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

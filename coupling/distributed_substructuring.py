@@ -1,0 +1,262 @@
+"""The substructuring preconditioner of METHOD.md section 6, distributed by subdomains.
+
+With the mesh partitioned so that every subdomain lies whole on one rank
+(``fem_py.geometry.subdomain_owners``), B_Omega^{-1} g needs no gathering:
+
+1. x_I = A_II^{-1} g_I: the interior dofs of a subdomain are owned by its rank, so
+   each rank factors its own block of A_II (its subdomains' Dirichlet problems).
+2. r = g_Sk - A_SkI x_I: each rank adds A_IS^T x_I into its local (owned + ghost)
+   skeleton entries; one reverse scatter sums them on the owners.
+3. v = (A^0)^{-1} r + Pi C^{-1} Pi^T r: every coarse edge is solved on one rank, the
+   owner of the subdomain on its first side, which holds all nodes of the edge as
+   owned or ghost dofs (a forward scatter brings r there, a reverse scatter takes the
+   edge solutions back); Pi^T r is summed over owned rows (one Allreduce of n_v
+   numbers) and the small coarse system C is solved redundantly on every rank.
+4. u_I = x_I - A_II^{-1} A_IS v, after a forward scatter of v.
+
+So one application costs two local A_II solves, four neighbour scatters and one
+Allreduce of the coarse vector. B_Omega u (``matvec_omega``) is the same pattern:
+one forward scatter, one local A_II solve, one reverse scatter, two Allreduces. The
+Signorini block (a few hundred to a few thousand unknowns) is replicated on every
+rank (:class:`coupling.preconditioner.SignoriniBlock`).
+
+The result equals the serial :class:`coupling.preconditioner.SubstructuringPreconditioner`
+up to round-off (sums in another order), so the PGPM iterates do not depend on the
+number of ranks.
+"""
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+import numpy as np
+import scipy.sparse as sp
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from coupling.edge_forms import EDGE_FORMS
+from coupling.preconditioner import (SignoriniArc, SignoriniBlock, _block_diagonal, _SparseFactor,
+                                     coarse_matrix, edge_weights)
+
+__all__ = ["DistributedSubstructuringPreconditioner", "subdomain_ranks"]
+
+
+def subdomain_ranks(comm: MPI.Comm, cell_tags: Any, n_owned_cells: int,
+                    n_subdomains: int) -> np.ndarray | None:
+    """The rank owning each subdomain, or None if some subdomain is split between ranks.
+
+    Collective. ``cell_tags`` are the subdomain ids of the cells (dolfinx MeshTags);
+    only the first ``n_owned_cells`` (the owned cells) count.
+    """
+    owned = cell_tags.values[cell_tags.indices < n_owned_cells]
+    present = np.zeros(n_subdomains, dtype=np.int32)
+    present[np.unique(owned)] = 1
+    count = np.zeros_like(present)
+    comm.Allreduce(present, count, op=MPI.SUM)
+    rank = np.where(present == 1, comm.rank, 0).astype(np.int32)
+    owner = np.zeros_like(rank)
+    comm.Allreduce(rank, owner, op=MPI.SUM)
+    return owner if np.all(count == 1) else None
+
+
+class _GhostExchange:
+    """Owned <-> owned + ghost arrays of the P1 dof layout, through one ghosted PETSc Vec."""
+
+    def __init__(self, comm: MPI.Comm, n_owned: int, n_global: int, ghosts: np.ndarray):
+        self._vec = PETSc.Vec().createGhost(np.asarray(ghosts, dtype=PETSc.IntType),
+                                            (n_owned, n_global), comm=comm)
+        self.n_owned, self.n_local = n_owned, n_owned + len(ghosts)
+
+    def forward(self, owned: np.ndarray) -> np.ndarray:
+        """The owned values and the ghost values from their owners (length n_local)."""
+        self._vec.array[:] = owned
+        self._vec.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        with self._vec.localForm() as loc:
+            return loc.array_r.copy()
+
+    def reverse_add(self, local: np.ndarray) -> np.ndarray:
+        """Owned entries of the sum over ranks of the local contributions (length n_owned)."""
+        with self._vec.localForm() as loc:
+            loc.array[:] = local
+        self._vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        return self._vec.array_r.copy()
+
+    def destroy(self) -> None:
+        self._vec.destroy()
+
+
+class DistributedSubstructuringPreconditioner(SignoriniBlock):
+    """B = B_Omega + omega B_s of METHOD.md section 6 on a subdomain-aligned partition.
+
+    Parameters
+    ----------
+    comm
+        Communicator of the mesh.
+    stiffness
+        The distributed P1 Laplace matrix A (PETSc AIJ, rows in the dof ownership ranges).
+    index_map
+        The dof index map of the P1 space (owned range, ghosts).
+    coarse
+        ``fem_py.coarse.CoarseStructure`` (replicated, global dof numbers).
+    subdomain_rank
+        (L,) owner rank of each subdomain (:func:`subdomain_ranks`).
+    subdomain_size, signorini_arcs, edge_form, signorini_weight
+        As for :class:`coupling.preconditioner.SubstructuringPreconditioner`.
+
+    ``apply_omega`` and ``matvec_omega`` act on the owned entries of u.
+    """
+
+    def __init__(self, comm: MPI.Comm, stiffness: PETSc.Mat, index_map: Any, coarse: Any,
+                 subdomain_rank: np.ndarray, subdomain_size: float,
+                 signorini_arcs: Sequence[SignoriniArc] = (), *, edge_form: str = "paper",
+                 signorini_weight: float = 1.0) -> None:
+        if edge_form not in EDGE_FORMS:
+            raise ValueError(f"edge_form must be one of {EDGE_FORMS}, got {edge_form!r}")
+        if not subdomain_size > 0.0:
+            raise ValueError(f"subdomain_size must be positive, got {subdomain_size}")
+        self.comm = comm
+        self.edge_form, self.subdomain_size = edge_form, float(subdomain_size)
+        r0, r1 = index_map.local_range
+        n_owned, ghosts = r1 - r0, np.asarray(index_map.ghosts, dtype=np.int64)
+        self.n_omega = n_owned
+        self._exchange = _GhostExchange(comm, n_owned, index_map.size_global, ghosts)
+        n_local = self._exchange.n_local
+        to_local = _global_to_local(r0, r1, ghosts)
+
+        # skeleton (owned + ghost) and owned interior dofs, in local numbering
+        local_global = np.concatenate([np.arange(r0, r1), ghosts])
+        skeleton = np.asarray(coarse.skeleton_dofs, dtype=np.int64)
+        on_skeleton = np.isin(local_global, skeleton, assume_unique=True)
+        self._sk = np.flatnonzero(on_skeleton)
+        self._sk_owned = self._sk < n_owned
+        self._int = np.flatnonzero(~on_skeleton[:n_owned])
+        sk_pos = np.full(n_local, -1, dtype=np.int64)
+        sk_pos[self._sk] = np.arange(self._sk.size)
+        int_pos = np.full(n_local, -1, dtype=np.int64)
+        int_pos[self._int] = np.arange(self._int.size)
+
+        # A_II (rank-local by the partition) and A_IS, from the owned rows of A
+        indptr, indices, data = stiffness.getValuesCSR()
+        rows = np.repeat(np.arange(n_owned), np.diff(indptr))
+        cols = to_local(indices.astype(np.int64))
+        keep = int_pos[rows] >= 0
+        rows, cols, data = int_pos[rows[keep]], cols[keep], data[keep]
+        if np.any(cols < 0) or np.any((sk_pos[np.maximum(cols, 0)] < 0) & (int_pos[np.maximum(cols, 0)] < 0)):
+            raise ValueError("a subdomain interior dof couples to a dof owned by another rank: "
+                             "the mesh is not partitioned by subdomains (use fem_py.geometry.build_domain)")
+        is_int = int_pos[cols] >= 0
+        n_i, n_sk = self._int.size, self._sk.size
+        self._a_ii = sp.csr_matrix((data[is_int], (rows[is_int], int_pos[cols[is_int]])), shape=(n_i, n_i))
+        self._a_is = sp.csr_matrix((data[~is_int], (rows[~is_int], sk_pos[cols[~is_int]])), shape=(n_i, n_sk))
+        self._a_si = self._a_is.T.tocsr()
+        self._interior_factor = _SparseFactor(self._a_ii)
+
+        # the skeleton: edge forms of the edges this rank solves, Pi on all local skeleton dofs
+        subdomains = np.asarray(coarse.edge_subdomains, dtype=np.int64)
+        side = np.where(subdomains[:, 0] >= 0, subdomains[:, 0], subdomains[:, 1])
+        mine = np.asarray(subdomain_rank)[side] == comm.rank
+        ends = np.asarray(coarse.edge_vertices, dtype=np.int64)
+        vertex_local = to_local(np.asarray(coarse.vertex_dofs, dtype=np.int64))
+        vertex_sk = np.where(vertex_local >= 0, sk_pos[vertex_local], -1)
+        n_v = len(vertex_sk)
+        has = vertex_sk >= 0
+        p_rows, p_cols, p_vals = [vertex_sk[has]], [np.flatnonzero(has)], [np.ones(int(has.sum()))]
+        groups = []
+        lengths = np.fromiter((len(d) for d in coarse.edge_dofs), dtype=np.int64, count=len(ends))
+        for length in np.unique(lengths):
+            group = np.flatnonzero(lengths == length)
+            inner_global = np.stack([np.asarray(coarse.edge_dofs[k], dtype=np.int64)[1:-1] for k in group])
+            local = to_local(inner_global)
+            inner = np.where(local >= 0, sk_pos[np.maximum(local, 0)], -1)
+            pts = np.stack([np.asarray(coarse.edge_coords[k], dtype=float) for k in group])
+            t = edge_weights(pts)
+            for end, weight in ((0, 1.0 - t), (1, t)):
+                present = inner >= 0
+                p_rows.append(inner[present])
+                p_cols.append(np.broadcast_to(ends[group, end][:, None], inner.shape)[present])
+                p_vals.append(weight[present])
+            own = mine[group]
+            if np.any(inner[own] < 0):
+                raise ValueError("a coarse edge is not local to the rank owning its subdomain; "
+                                 "the mesh is not partitioned by subdomains")
+            groups.append((inner[own], pts[own]))
+        self._interp = sp.csr_matrix((np.concatenate(p_vals), (np.concatenate(p_rows), np.concatenate(p_cols))),
+                                     shape=(n_sk, n_v))
+        self._interp_owned_t = self._interp[self._sk_owned].T.tocsr()
+        self._interp_t = self._interp.T.tocsr()
+        self._a0, self._a0_inv = _block_diagonal(groups, n_sk, edge_form)
+        self._vertex_owned = np.flatnonzero(has & (vertex_local < n_owned))  # coarse vertices owned here
+        self._vertex_owned_dof = vertex_local[self._vertex_owned]
+        self._coarse_matrix = coarse_matrix(coarse, self.subdomain_size)
+        self._coarse = _SparseFactor(self._coarse_matrix)
+        self._init_signorini(signorini_arcs, self.subdomain_size, edge_form, signorini_weight)
+
+    def _sum(self, v: np.ndarray) -> np.ndarray:
+        out = np.empty_like(v)
+        self.comm.Allreduce(np.ascontiguousarray(v), out, op=MPI.SUM)
+        return out
+
+    def _on_skeleton(self, values_sk: np.ndarray) -> np.ndarray:
+        local = np.zeros(self._exchange.n_local)
+        local[self._sk] = values_sk
+        return local
+
+    def apply_omega(self, g: np.ndarray) -> np.ndarray:
+        """u = B_Omega^{-1} g on the owned entries: the four steps of the module docstring."""
+        g = np.asarray(g, dtype=float)
+        if g.shape != (self.n_omega,):
+            raise ValueError(f"g must have shape ({self.n_omega},), the owned entries, got {g.shape}")
+        x_i = self._interior_factor.solve(g[self._int])
+        r = g - self._exchange.reverse_add(self._on_skeleton(self._a_si @ x_i))
+        r_sk = self._exchange.forward(r)[self._sk]
+        c = self._coarse.solve(self._sum(self._interp_owned_t @ r_sk[self._sk_owned]))
+        v_owned = self._exchange.reverse_add(self._on_skeleton(self._a0_inv @ r_sk))
+        v_owned += self._on_skeleton(self._interp @ c)[:self.n_omega]
+        v_sk = self._exchange.forward(v_owned)[self._sk]
+        u = np.empty(self.n_omega)
+        u[self._int] = x_i - self._interior_factor.solve(self._a_is @ v_sk)
+        owned_sk = self._sk[self._sk_owned]
+        u[owned_sk] = v_owned[owned_sk]
+        return u
+
+    def matvec_omega(self, u: np.ndarray) -> np.ndarray:
+        """B_Omega u on the owned entries (METHOD.md section 6, B_Sk = Q^T A^0 Q + R^T C R)."""
+        u = np.asarray(u, dtype=float)
+        if u.shape != (self.n_omega,):
+            raise ValueError(f"u must have shape ({self.n_omega},), the owned entries, got {u.shape}")
+        u_sk = self._exchange.forward(u)[self._sk]
+        u_i = u[self._int]
+        y = self._a_is @ u_sk
+        coarse_u = np.zeros(self._coarse_matrix.shape[0])
+        coarse_u[self._vertex_owned] = u[self._vertex_owned_dof]
+        coarse_u = self._sum(coarse_u)  # R u
+        a_sk = self._a0 @ (u_sk - self._interp @ coarse_u)  # A^0 Q u on the edges of this rank
+        coarse_term = self._coarse_matrix @ coarse_u - self._sum(self._interp_t @ a_sk)  # C R u - Pi^T A^0 Q u
+        out = self._exchange.reverse_add(
+            self._on_skeleton(self._a_si @ (u_i + self._interior_factor.solve(y)) + a_sk))
+        out[self._int] = self._a_ii @ u_i + y
+        out[self._vertex_owned_dof] += coarse_term[self._vertex_owned]
+        return out
+
+    def destroy(self) -> None:
+        """Free the PETSc objects (call on every rank)."""
+        self._interior_factor.destroy()
+        self._coarse.destroy()
+        self._exchange.destroy()
+
+
+def _global_to_local(r0: int, r1: int, ghosts: np.ndarray):
+    """A vectorised map of global dof numbers to local ones (owned, then ghosts; -1 if absent)."""
+    order = np.argsort(ghosts)
+    sorted_ghosts = ghosts[order]
+
+    def to_local(g: np.ndarray) -> np.ndarray:
+        g = np.asarray(g, dtype=np.int64)
+        out = np.where((g >= r0) & (g < r1), g - r0, -1)
+        at = np.minimum(np.searchsorted(sorted_ghosts, g), max(len(ghosts) - 1, 0))
+        hit = (out < 0) & (len(ghosts) > 0)
+        if len(ghosts):
+            hit &= sorted_ghosts[at] == g
+            out = np.where(hit, (r1 - r0) + order[at], out)
+        return out
+
+    return to_local

@@ -1,0 +1,46 @@
+"""The distributed substructuring preconditioner (whole subdomains per rank) equals the
+serial one to round-off, on 2 and 3 ranks (tests/mpi/distributed_preconditioner_check.py)."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from conftest import ROOT, run_mpi
+from fem_py.geometry import _grid_partition, subdomain_owners
+
+SCRIPT = str(ROOT / "tests" / "mpi" / "distributed_preconditioner_check.py")
+
+
+@pytest.mark.mpi
+@pytest.mark.parametrize("nprocs", [2, 3])
+def test_distributed_equals_serial(tmp_path, nprocs):
+    out = tmp_path / "report.json"
+    run_mpi(nprocs, SCRIPT, str(out), timeout=300)
+    report = json.loads(out.read_text())
+    assert set(report) == {"square", "lshape-unstructured", "square-all"}
+    for name, r in report.items():
+        # the same operations summed in another order: agreement to a few ulps of the
+        # largest entry (1e-13 allows the A_II and coarse solves' round-off)
+        for key in ("apply", "matvec", "signorini"):
+            assert r[key] <= 1e-13, (name, key, r[key])
+        # every rank owns whole subdomains, and all ranks have some
+        assert sum(r["owned_subdomains"]) == r["subdomains"]
+        assert min(r["owned_subdomains"]) > 0, (name, r["owned_subdomains"])
+
+
+@pytest.mark.parametrize("nparts", [2, 3, 4, 7])
+def test_subdomain_owners_balances_whole_subdomains(nparts):
+    _, V, cells, _ = _grid_partition("lshape", (0.5, 0.5), 1.0, 1 / 12)
+    quads = np.array(cells)
+    tris = np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
+    subdomain = np.tile(np.arange(len(quads)), 2)
+    owner = subdomain_owners(V, tris, subdomain, nparts)
+    for s in range(len(quads)):
+        assert np.unique(owner[subdomain == s]).size == 1
+    cells_per_part = np.bincount(owner, minlength=nparts)
+    # recursive bisection of whole subdomains: parts differ by at most a few subdomains
+    assert cells_per_part.min() > 0
+    assert cells_per_part.max() - cells_per_part.min() <= 2 * 2 * np.ceil(np.log2(nparts))
+    np.testing.assert_array_equal(owner, subdomain_owners(V, tris, subdomain, nparts))
