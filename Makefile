@@ -11,7 +11,7 @@ DEBS    := python3-dolfinx python3-petsc4py python3-mpi4py python3-gmsh \
            python3-scipy python3-sympy python3-matplotlib python3-pytest \
            python3-pybind11 pybind11-dev libeigen3-dev libgtest-dev cmake g++ make \
            python3-venv python3-setuptools python3-wheel python3-pip python3-tqdm \
-           python3-slepc4py openmpi-bin libopenblas-dev
+           python3-slepc4py python3-threadpoolctl openmpi-bin libopenblas-dev
 CXX_BUILD := build/cpp
 SOURCES := $(wildcard bem_cpp/src/*.cpp bem_cpp/include/bem/*.hpp) bem_cpp/bindings.cpp setup.py pyproject.toml
 
@@ -57,6 +57,7 @@ bench: setup
 	$(PY) bench/bem_assembly.py
 	$(PY) bench/pgpm_profile.py
 	$(PY) bench/peers.py
+	$(PY) bench/strong_scaling.py --output bench/scaling.md
 
 study: setup
 	$(PY) -m coupling.cli study

@@ -204,12 +204,16 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_OK
     handler = {"solve": _solve, "exterior": _exterior,
                "check-jacobian": _check_jacobian}[args.command]
+    from mpi4py import MPI
+    from threadpoolctl import threadpool_limits
+
+    from coupling.distributed import threads_per_rank
     try:
-        return handler(args)
+        with threadpool_limits(threads_per_rank(MPI.COMM_WORLD)):  # no oversubscription
+            return handler(args)
     except (ValueError, OSError) as err:  # bad input: configuration, files, folders
         if args.debug:
             raise
-        from mpi4py import MPI
         if MPI.COMM_WORLD.rank == 0:
             message = str(err).splitlines()[0] if str(err) else type(err).__name__
             print(f"fembem: error: {message}", file=sys.stderr)

@@ -40,7 +40,7 @@ DEFAULTS: dict[str, dict[str, Any]] = {
     "material": {"rho": "linear", "p": 2.0, "eps": 1.0},
     "data": {"f": "0", "u0": "0", "t0": "0", "a": 0.0},
     "solver": {
-        "method": "pgpm",
+        "method": "ssn",
         "preconditioner": "substructuring",
         "tol": 1e-8,
         "max_iterations": 2000,

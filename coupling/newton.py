@@ -88,16 +88,18 @@ def semismooth_newton(functional: CoupledFunctional, preconditioner,
 
     The active set is predicted by a PGPM step in the M_s metric with the exact
     projection (module docstring). Stops when ||xi_{k+1} - xi_k||_B <= tol ||xi_{k+1}||_B
-    (the rule of the PGPM) with an unchanged active set. ``IterationRecord.inner`` holds
-    the CG iterations of the step and ``IterationRecord.tau`` the line-search length.
+    (the rule of the PGPM) with an unchanged active set, or after ``max_iterations``
+    outer steps in all (the PGPM steps included). ``IterationRecord.inner`` holds the CG
+    iterations of the step and ``IterationRecord.tau`` the line-search length.
     """
     start = time.perf_counter()
     comm = functional.comm
     history: list[IterationRecord] = []
     warm = projection_gradient(functional, preconditioner, projection, u_function, phi0,
-                               tau=tau, tol=tol, max_iterations=start_steps, monitor=monitor)
+                               tau=tau, tol=tol, max_iterations=min(start_steps, max_iterations),
+                               monitor=monitor)
     history.extend(warm.history)
-    if warm.converged:
+    if warm.converged or warm.iterations >= max_iterations:
         warm.solve_time = time.perf_counter() - start
         return warm
     phi = warm.phi
@@ -106,13 +108,12 @@ def semismooth_newton(functional: CoupledFunctional, preconditioner,
     e_u, h_u = jacobian.createVecRight(), jacobian.createVecRight()
     energy, g_phi = functional.value_and_gradient(u_function, phi, grad)
     # the exact M_s-projection predicts the active set (an inexact one would blur it)
-    predictor = SignoriniProjection(preconditioner.signorini_metric, "exact",
-                                    lambda_max=preconditioner.lambda_max_signorini)
+    predictor = SignoriniProjection(preconditioner.signorini_metric, "exact")
     residual0 = None
     increases = warm.energy_increases
     active = np.zeros(phi.size, dtype=bool)
     reason, converged, k = f"reached max_iterations = {max_iterations}", False, warm.iterations
-    for k in range(warm.iterations + 1, warm.iterations + max_iterations + 1):
+    for k in range(warm.iterations + 1, max_iterations + 1):
         g_u = grad.array_r.copy()
         predicted = predictor(phi - tau * preconditioner.apply_signorini(g_phi), phi).phi
         if comm.size > 1:  # one copy of the replicated unknowns

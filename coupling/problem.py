@@ -148,7 +148,7 @@ class SignoriniProblem:
         self.projection = SignoriniProjection(
             self.preconditioner.signorini_metric, options.projection,
             rho_in=options.projection_tol, max_iterations=options.projection_max_iterations,
-            lambda_max=self.preconditioner.lambda_max_signorini)
+            lambda_max=lambda: self.preconditioner.lambda_max_signorini)
         timings["preconditioner"] = time.perf_counter() - tic
         self.timings = timings
 
@@ -272,7 +272,10 @@ class SignoriniProblem:
         gap = np.zeros_like(boundary_u)
         gap[self.boundary.signorini] = run.phi
         ue = boundary_u + gap - self.u0
-        flux = bem_cpp.exterior_flux(self.boundary.nodes, ue, a=self.a, flux=opts.flux_space)
+        tic = time.perf_counter()
+        flux = computed_on_root(comm, lambda: bem_cpp.exterior_flux(
+            self.boundary.nodes, ue, a=self.a, flux=opts.flux_space))
+        timings["exterior_flux"] = time.perf_counter() - tic
         return Solution(u=u, phi=run.phi, contact=run.phi <= 0.0, boundary_u=boundary_u,
                         ue=ue, flux=flux, converged=run.converged, reason=run.reason,
                         iterations=run.iterations, energy=run.energy, tau=run.tau, C0=C0,

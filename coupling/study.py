@@ -557,10 +557,13 @@ def run_iterations(comm, sizes: Sizes, methods: Sequence[dict] = METHODS) -> lis
     return [Table("iterations", "Iterations to the tolerance",
                   "Square of width 0.5, Signorini arc = bottom side, material `carstensen`, "
                   "manufactured data (METHOD.md section 8), xi_0 = 0, stopping rule "
-                  "||xi_k+1 - xi_k||_B <= tol ||xi_k+1||_B. `method`: `pgpm` is the paper's "
-                  "Algorithm 3.1; `apgpm` (FISTA in the B metric with restarts) and `ssn` "
-                  "(semismooth Newton with B-preconditioned CG; `iterations` are Newton "
-                  "steps, `inner_total` their CG iterations) are our extensions. "
+                  "||xi_k+1 - y_k||_B <= tol ||xi_k+1||_B (y_k = xi_k except for apgpm). "
+                  "`method`: `pgpm` is the paper's Algorithm 3.1; `apgpm` (Nesterov's "
+                  "constant momentum in the B metric from the Lanczos estimate of lambda_min, "
+                  "with restarts; y_k its extrapolated point) and `ssn` (semismooth Newton "
+                  "with B-preconditioned CG, the active set predicted by one exact PGPM "
+                  "step; `iterations` include its 5 PGPM warm steps, `inner_total` is its "
+                  "CG iterations) are our extensions. "
                   "`identity` uses d/h = 2 (d is unused by it), `exact` d/h = 4. For "
                   "`identity`: `kappa_euclidean` = cond(D^2 J_h(xi_h)) in the Euclidean "
                   "metric (dense), `iterations_model` = ln(tau lambda_min / tol) / "
@@ -1504,7 +1507,7 @@ def _discuss_methods(it: dict) -> list[str]:
                         for k, s in fixed)
             + ". At fixed d the free fit gives iterations ~ (1 + ln(d/h))^p with p = "
             + "; ".join(f"{s['method']} {s['fit']['exponent']:.2f}" for _, s in vary)
-            + " (for ssn the Newton steps; its CG iterations carry the dependence on kappa)."]
+            + " (for ssn the outer steps, 5 PGPM warm steps and the Newton steps; its CG iterations carry the dependence on kappa)."]
     return out + [""]
 
 

@@ -13,8 +13,10 @@
 # nodal errors of u_h and the error of u_e (evaluated outside by the representation
 # formula of METHOD.md section 2) like h^2.
 #
-# Without contact J_h is a quadratic functional, so PGPM is a preconditioned
-# Richardson iteration for the FEM-BEM system (K + T^T S_h T) u = b.
+# Without contact J_h is a quadratic functional: PGPM would be a preconditioned
+# Richardson iteration for the FEM-BEM system (K + T^T S_h T) u = b, and the default
+# solver (`ssn`) solves that system by CG preconditioned with the substructuring B
+# after its 5 PGPM start steps.
 #
 # Run: `python demos/demo_linear_transmission.py [--cells N]` (N: finest mesh).
 

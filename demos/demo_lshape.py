@@ -59,7 +59,7 @@ errors = solution_errors(problem, solution, result)
 say(f"\nh = {0.5 / args.cells:.4g}, {problem.V.dofmap.index_map.size_global} dofs, "
     f"{problem.n_signorini} Signorini nodes: "
     f"{'converged' if result.converged else 'NOT converged'} after {result.iterations} "
-    f"PGPM iterations")
+    f"iterations of {problem.options.method}")
 say(f"|u - u_h|_1 = {errors['energy']:.3e}   max |u - u_h| = {errors['nodal_u']:.3e}   "
     f"max |gap error| = {errors['gap']:.3e}   max |u_e error| outside = "
     f"{errors['ue_exterior']:.3e}")

@@ -6,9 +6,11 @@
 # Everything in the Python API takes its communicator from the mesh: here the mesh is
 # built on MPI.COMM_WORLD, so DOLFINx distributes the cells and the P1 dofs over the
 # ranks. The boundary element part (S_h, dense, of the size of the boundary) is
-# replicated on every rank, and so is phi; the substructuring preconditioner is
-# factored on rank 0 from the gathered stiffness matrix. PGPM's reductions are
-# arranged so that its iterates do not depend on the number of ranks.
+# computed once on rank 0 and replicated, and so is phi. The mesh is partitioned by
+# whole subdomains, so the substructuring preconditioner is distributed: every rank
+# factors the Dirichlet problems of its own subdomains and the small coarse system is
+# solved on every rank. The solver's reductions are arranged so that its iterates do
+# not depend on the number of ranks.
 #
 # The demo solves the manufactured contact problem on the square on all ranks, then
 # solves it again on rank 0 alone (a communicator of one rank, MPI.COMM_SELF) and

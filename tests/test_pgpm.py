@@ -194,7 +194,7 @@ def test_identity_preconditioner_count_grows_like_h_minus_2(carstensen):
     for cells in (4, 8):
         problem = manufactured_problem(COMM, square_contact(), carstensen, cells=cells,
                                        d_over_h=2, preconditioner="identity", tol=1e-6,
-                                       max_iterations=100000)
+                                       max_iterations=100000, method="pgpm")
         result = problem.solve()
         assert result.converged
         counts.append(result.iterations)
