@@ -10,8 +10,8 @@ carstensen material), for two data sets:
 
 Solvers (``coupling.peers`` sets them all up):
 
-    (a) PGPM + substructuring preconditioner (the project's default)
-    (b) PGPM + identity (small sizes only), APGPM and SSN + substructuring
+    (a) PGPM + substructuring preconditioner (the paper's method)
+    (b) PGPM + identity (small sizes only), APGPM and SSN (the default method) + substructuring
     (c) PETSc SNES vinewtonrsls on the optimality system, with several linear solvers
     (d) PETSc TAO BLMVM, BQNLS (J_h and gradient), BNLS and BNTR (with the Hessian)
     (e) yardstick: one P1 Poisson solve, CG + GAMG to rtol 1e-8
@@ -599,9 +599,9 @@ def report(result: dict[str, Any], command: str) -> str:
         "known) and `load` (f = 2, t0 = -1, u0 = 0.1 x, a = 0; no exact solution, contact on "
         "most of the arc). All solvers start from x = 0.",
         "",
-        "- (a) PGPM + substructuring preconditioner: the project's defaults "
-        "(tol = 1e-8 on ||xi_k+1 - xi_k||_B / ||xi_k+1||_B, exact projection, tau = 1/C0 "
-        "from 20 Lanczos steps).",
+        "- (a) PGPM + substructuring preconditioner, the paper's method with the "
+        "project's default options (tol = 1e-8 on ||xi_k+1 - xi_k||_B / ||xi_k+1||_B, exact "
+        "projection, tau = 1/C0 from 20 Lanczos steps).",
         "- (b) PGPM + identity (Euclidean metric; smallest mesh and manufactured data "
         "only: its count grows like h^-2, Remark 2.1), APGPM and SSN with the "
         "substructuring preconditioner, same tol.",
@@ -902,15 +902,14 @@ def _discussion(result) -> list[str]:
             + "). SNES / PGPM time: " + "; ".join(shrink) + ".")
     if fast:
         lines.append(
-            "- The project's own answers are already in the tables: APGPM (momentum with "
-            "restarts, ~60 iterations, sqrt(kappa) scaling) and SSN (semismooth Newton with "
+            "- The project's own answers are in the tables: APGPM (Nesterov momentum in the "
+            "B metric with restarts, ~55 iterations) and SSN (semismooth Newton with "
             "B-preconditioned CG on the inactive set, the dense block applied as a dense "
-            f"product) take {min(fast):.2f}-{max(fast):.2f} of PGPM's time at every size; "
-            "Targets above lists where they beat every PETSc peer and stay within 10x of "
-            "the Poisson solve. Making one of them the default is the direct way to the "
-            "targets; "
-            "keeping PGPM (the paper's method) as the default needs the cheaper iteration "
-            "above and still leaves it near the 10x line.")
+            "product, 11-12 outer steps; the default method) take "
+            f"{min(fast):.2f}-{max(fast):.2f} of PGPM's time at every size; Targets above "
+            "lists where they beat every PETSc peer and stay within 10x of the Poisson "
+            "solve. PGPM (the paper's method) needs the cheaper iteration above to get near "
+            "the 10x line.")
     if mumps:
         lines.append(
             "- MUMPS-based peers (SNES VI and TAO BNLS/BNTR) factor the reduced Hessian with "

@@ -33,7 +33,6 @@ import scipy.sparse as sp
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from coupling.edge_forms import EDGE_FORMS
 from coupling.preconditioner import (SignoriniArc, SignoriniBlock, _block_diagonal, _SparseFactor,
                                      coarse_matrix, edge_weights)
 
@@ -109,12 +108,8 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
                  subdomain_rank: np.ndarray, subdomain_size: float,
                  signorini_arcs: Sequence[SignoriniArc] = (), *, edge_form: str = "paper",
                  signorini_weight: float = 1.0) -> None:
-        if edge_form not in EDGE_FORMS:
-            raise ValueError(f"edge_form must be one of {EDGE_FORMS}, got {edge_form!r}")
-        if not subdomain_size > 0.0:
-            raise ValueError(f"subdomain_size must be positive, got {subdomain_size}")
+        self._init_signorini(signorini_arcs, subdomain_size, edge_form, signorini_weight)
         self.comm = comm
-        self.edge_form, self.subdomain_size = edge_form, float(subdomain_size)
         r0, r1 = index_map.local_range
         n_owned, ghosts = r1 - r0, np.asarray(index_map.ghosts, dtype=np.int64)
         self.n_omega = n_owned
@@ -188,7 +183,6 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
         self._vertex_owned_dof = vertex_local[self._vertex_owned]
         self._coarse_matrix = coarse_matrix(coarse, self.subdomain_size)
         self._coarse = _SparseFactor(self._coarse_matrix)
-        self._init_signorini(signorini_arcs, self.subdomain_size, edge_form, signorini_weight)
 
     def _sum(self, v: np.ndarray) -> np.ndarray:
         out = np.empty_like(v)

@@ -460,8 +460,14 @@ class SignoriniBlock:
 
     def _init_signorini(self, arcs: Sequence[SignoriniArc], subdomain_size: float, kind: str,
                         weight: float) -> None:
+        """Check the options shared by B_Omega and B_s, and build omega M_s."""
+        if kind not in EDGE_FORMS:
+            raise ValueError(f"edge_form must be one of {EDGE_FORMS}, got {kind!r}")
+        if not subdomain_size > 0.0:
+            raise ValueError(f"subdomain_size must be positive, got {subdomain_size}")
         if not weight > 0.0:
             raise ValueError(f"signorini_weight must be positive, got {weight}")
+        self.edge_form, self.subdomain_size = kind, float(subdomain_size)
         self.signorini_weight = float(weight)
         self._signorini = _signorini_form(tuple(arcs), subdomain_size, kind)
         self.n_signorini = self._signorini.n
@@ -537,10 +543,7 @@ class SubstructuringPreconditioner(SignoriniBlock):
     def __init__(self, stiffness: sp.spmatrix, coarse: Any, x: np.ndarray, subdomain_size: float,
                  signorini_arcs: Sequence[SignoriniArc] = (), *, edge_form: str = "paper",
                  signorini_weight: float = 1.0) -> None:
-        if edge_form not in EDGE_FORMS:
-            raise ValueError(f"edge_form must be one of {EDGE_FORMS}, got {edge_form!r}")
-        if not subdomain_size > 0.0:
-            raise ValueError(f"subdomain_size must be positive, got {subdomain_size}")
+        self._init_signorini(signorini_arcs, subdomain_size, edge_form, signorini_weight)
         a = sp.csr_matrix(stiffness, dtype=float)
         n = a.shape[0]
         x = np.asarray(x, dtype=float)
@@ -556,8 +559,6 @@ class SubstructuringPreconditioner(SignoriniBlock):
         if n and abs(a - a.T).max() > 1e-12 * abs(a).max():
             raise ValueError("stiffness must be symmetric (the P1 Laplace matrix A); got a nonsymmetric matrix")
         self.n_omega = n
-        self.edge_form = edge_form
-        self.subdomain_size = float(subdomain_size)
         self._interior = interior
         self._skeleton = skeleton
         a_i = a[interior]
@@ -566,9 +567,8 @@ class SubstructuringPreconditioner(SignoriniBlock):
         self._a_si = self._a_is.T.tocsr()  # A is symmetric
         self._interior_factor = _SparseFactor(self._a_ii)
         self._skeleton_form = _skeleton_form(coarse, x, self.subdomain_size, n, edge_form)
-        self._init_signorini(signorini_arcs, self.subdomain_size, edge_form, signorini_weight)
 
-    # -- the local Dirichlet problems (the one place to make rank-local under MPI) --
+    # -- the local Dirichlet problems (rank-local in coupling.distributed_substructuring) --
     def solve_interior(self, g_i: np.ndarray) -> np.ndarray:
         """x_I = A_II^{-1} g_I: independent Dirichlet problems on all subdomains (step 1 and 4)."""
         return self._interior_factor.solve(g_i)
