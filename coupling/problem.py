@@ -2,7 +2,7 @@
 
 The pipeline, in the order of METHOD.md: interior forms (fem_py) -> boundary map ->
 S_h (bem_cpp) -> J_h (:mod:`coupling.functional`) -> preconditioner B
-(:mod:`coupling.preconditioner`) -> PGPM (:mod:`coupling.pgpm`) -> result.
+(:mod:`coupling.preconditioner`) -> solver (:mod:`coupling.newton`, :mod:`coupling.pgpm`) -> result.
 
 Example
 -------
@@ -225,7 +225,9 @@ class SignoriniProblem:
         return int(self.boundary.signorini.size)
 
     def solve(self, *, progress: bool = False, every: int = 25) -> Solution:
-        """Run PGPM from xi_0 = (0, 0); see :func:`coupling.pgpm.projection_gradient`."""
+        """Solve from xi_0 = (0, 0) with ``options.method``: ``ssn`` (default,
+        :func:`coupling.newton.semismooth_newton`), ``pgpm`` or ``apgpm``
+        (:func:`coupling.pgpm.projection_gradient`)."""
         from dolfinx import fem
 
         opts, comm = self.options, self.comm
