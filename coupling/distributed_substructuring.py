@@ -245,12 +245,14 @@ def _global_to_local(r0: int, r1: int, ghosts: np.ndarray):
 
     def to_local(g: np.ndarray) -> np.ndarray:
         g = np.asarray(g, dtype=np.int64)
-        out = np.where((g >= r0) & (g < r1), g - r0, -1)
-        at = np.minimum(np.searchsorted(sorted_ghosts, g), max(len(ghosts) - 1, 0))
-        hit = (out < 0) & (len(ghosts) > 0)
-        if len(ghosts):
-            hit &= sorted_ghosts[at] == g
-            out = np.where(hit, (r1 - r0) + order[at], out)
+        owned = (g >= r0) & (g < r1)
+        out = np.where(owned, g - r0, -1)
+        if len(ghosts):  # look up only the entries owned elsewhere
+            other = np.flatnonzero(~owned.ravel())
+            wanted = g.ravel()[other]
+            at = np.minimum(np.searchsorted(sorted_ghosts, wanted), len(ghosts) - 1)
+            found = sorted_ghosts[at] == wanted
+            out.ravel()[other[found]] = (r1 - r0) + order[at[found]]
         return out
 
     return to_local
