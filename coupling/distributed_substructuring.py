@@ -176,7 +176,9 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
             groups.append((inner[own], pts[own]))
         self._interp = sp.csr_matrix((np.concatenate(p_vals), (np.concatenate(p_rows), np.concatenate(p_cols))),
                                      shape=(n_sk, n_v))
-        self._interp_owned_t = self._interp[self._sk_owned].T.tocsr()
+        self._owned_sk = self._sk[self._sk_owned]  # local numbers of the owned skeleton dofs
+        self._interp_owned = self._interp[self._sk_owned].tocsr()
+        self._interp_owned_t = self._interp_owned.T.tocsr()
         self._interp_t = self._interp.T.tocsr()
         self._a0, self._a0_inv = _block_diagonal(groups, n_sk, edge_form)
         self._vertex_owned = np.flatnonzero(has & (vertex_local < n_owned))  # coarse vertices owned here
@@ -204,12 +206,11 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
         r_sk = self._exchange.forward(r)[self._sk]
         c = self._coarse.solve(self._sum(self._interp_owned_t @ r_sk[self._sk_owned]))
         v_owned = self._exchange.reverse_add(self._on_skeleton(self._a0_inv @ r_sk))
-        v_owned += self._on_skeleton(self._interp @ c)[:self.n_omega]
+        v_owned[self._owned_sk] += self._interp_owned @ c
         v_sk = self._exchange.forward(v_owned)[self._sk]
         u = np.empty(self.n_omega)
         u[self._int] = x_i - self._interior_factor.solve(self._a_is @ v_sk)
-        owned_sk = self._sk[self._sk_owned]
-        u[owned_sk] = v_owned[owned_sk]
+        u[self._owned_sk] = v_owned[self._owned_sk]
         return u
 
     def matvec_omega(self, u: np.ndarray) -> np.ndarray:

@@ -107,8 +107,10 @@ def semismooth_newton(functional: CoupledFunctional, preconditioner,
     jacobian = forms.create_matrix()
     e_u, h_u = jacobian.createVecRight(), jacobian.createVecRight()
     energy, g_phi = functional.value_and_gradient(u_function, phi, grad)
-    # the exact M_s-projection predicts the active set (an inexact one would blur it)
-    predictor = SignoriniProjection(preconditioner.signorini_metric, "exact")
+    # the exact M_s-projection predicts the active set (an inexact one would blur it); the
+    # solver's own projection serves when it is exact (one factor of M_s and of its inverse)
+    predictor = (projection if projection.method == "exact"
+                 else SignoriniProjection(preconditioner.signorini_metric, "exact"))
     residual0 = None
     increases = warm.energy_increases
     active = np.zeros(phi.size, dtype=bool)
