@@ -1,4 +1,5 @@
-"""Serial pieces under MPI: a preconditioner gathered on rank 0, and S_h computed there once.
+"""Serial pieces under MPI: a preconditioner gathered on rank 0, and S_h computed there once
+and kept by rows.
 
 The u block of the PGPM lives in a distributed PETSc vector whose owned entries are
 the contiguous global range [r0, r1) of each rank, in rank order. A preconditioner
@@ -23,7 +24,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 from threadpoolctl import threadpool_limits
 
-__all__ = ["RootPreconditioner", "gather_matrix", "gather_rows", "computed_on_root",
+__all__ = ["RootPreconditioner", "RowBlocks", "gather_matrix", "gather_rows", "computed_on_root",
            "threads_per_rank"]
 
 
@@ -41,16 +42,11 @@ def threads_per_rank(comm: MPI.Comm) -> int:
     return max(1, len(os.sched_getaffinity(0)) // ranks_here)
 
 
-def computed_on_root(comm: MPI.Comm, compute: Callable[[], np.ndarray]) -> np.ndarray:
-    """A dense array computed once, on rank 0, and broadcast to every rank.
-
-    For S_h: rank 0 runs the (OpenMP- and BLAS-threaded) assembly with as many threads
-    as it may use cores (see :func:`threads_per_rank`), while the other ranks sleep in
-    a polled non-blocking barrier instead of spinning in MPI. An exception on rank 0 is
-    raised on every rank.
-    """
-    if comm.size == 1:
-        return compute()
+def _on_root(comm: MPI.Comm, compute: Callable[[], np.ndarray]) -> tuple[np.ndarray | None, tuple]:
+    """(result on rank 0 / None elsewhere, its shape on every rank): rank 0 computes with
+    as many threads as it may use cores (see :func:`threads_per_rank`) while the other
+    ranks sleep in a polled non-blocking barrier instead of spinning in MPI. An exception
+    on rank 0 is raised on every rank."""
     result, error = None, None
     if comm.rank == 0:
         try:
@@ -65,10 +61,61 @@ def computed_on_root(comm: MPI.Comm, compute: Callable[[], np.ndarray]) -> np.nd
                               root=0)
     if error is not None:
         raise error
+    return result, shape
+
+
+def computed_on_root(comm: MPI.Comm, compute: Callable[[], np.ndarray]) -> np.ndarray:
+    """A dense array computed once, on rank 0 (:func:`_on_root`), and broadcast to every rank."""
+    if comm.size == 1:
+        return compute()
+    result, shape = _on_root(comm, compute)
     if comm.rank != 0:
         result = np.empty(shape)
     comm.Bcast(result, root=0)
     return result
+
+
+class RowBlocks:
+    """A dense square matrix held by rows across ``comm``: rank r keeps the contiguous
+    block of rows [r n / P, (r + 1) n / P) (S_h under MPI).
+
+    ``A @ z`` for a replicated vector z is the replicated product A z: every rank
+    multiplies its rows and one Allgatherv joins the pieces. The memory per rank is
+    n^2 / P, and the P products read disjoint rows, which matters because a dense
+    product is memory-bound (n = 4000 on 2 cores: 10.5 ms with every rank multiplying
+    the whole matrix, 3.5 ms by rows, 6.4 ms in serial).
+    """
+
+    def __init__(self, comm: MPI.Comm, block: np.ndarray, n: int):
+        self.comm, self.block, self.shape = comm, block, (n, n)
+        self._counts = np.array([(r + 1) * n // comm.size - r * n // comm.size for r in range(comm.size)])
+        self._offsets = np.concatenate([[0], np.cumsum(self._counts)[:-1]])
+
+    @classmethod
+    def from_root(cls, comm: MPI.Comm, compute: Callable[[], np.ndarray]) -> "RowBlocks":
+        """The square matrix ``compute()`` evaluated on rank 0 (:func:`_on_root`), scattered by rows."""
+        full, shape = _on_root(comm, compute)
+        n = shape[0]
+        matrix = cls(comm, np.empty((0, n)), n)
+        counts = matrix._counts * n
+        matrix.block = np.empty((matrix._counts[comm.rank], n))
+        comm.Scatterv([full, counts, matrix._offsets * n, MPI.DOUBLE], matrix.block, root=0)
+        return matrix
+
+    def __matmul__(self, z: np.ndarray) -> np.ndarray:
+        z = np.asarray(z, dtype=float)
+        if z.ndim != 1 or z.shape[0] != self.shape[1]:
+            raise ValueError(f"RowBlocks @ z needs a vector of length {self.shape[1]}, got shape {z.shape}")
+        y = np.empty(self.shape[0])
+        self.comm.Allgatherv(np.ascontiguousarray(self.block @ z), [y, self._counts, self._offsets, MPI.DOUBLE])
+        return y
+
+    def full(self) -> np.ndarray:
+        """The whole matrix on every rank (collective; for reference solvers and checks)."""
+        n = self.shape[1]
+        out = np.empty(self.shape)
+        self.comm.Allgatherv(np.ascontiguousarray(self.block), [out, self._counts * n, self._offsets * n, MPI.DOUBLE])
+        return out
 
 
 def gather_rows(comm: MPI.Comm, owned: np.ndarray) -> np.ndarray | None:

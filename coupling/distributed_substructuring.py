@@ -35,6 +35,7 @@ from petsc4py import PETSc
 
 from coupling.preconditioner import (SignoriniArc, SignoriniBlock, _block_diagonal, _SparseFactor,
                                      coarse_matrix, edge_weights)
+from fem_py.coarse import as_ragged
 
 __all__ = ["DistributedSubstructuringPreconditioner", "subdomain_ranks"]
 
@@ -156,13 +157,13 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
         has = vertex_sk >= 0
         p_rows, p_cols, p_vals = [vertex_sk[has]], [np.flatnonzero(has)], [np.ones(int(has.sum()))]
         groups = []
-        lengths = np.fromiter((len(d) for d in coarse.edge_dofs), dtype=np.int64, count=len(ends))
-        for length in np.unique(lengths):
-            group = np.flatnonzero(lengths == length)
-            inner_global = np.stack([np.asarray(coarse.edge_dofs[k], dtype=np.int64)[1:-1] for k in group])
+        edge_dofs = as_ragged(coarse.edge_dofs, dtype=np.int64)
+        edge_coords = as_ragged(coarse.edge_coords, dtype=float, item_shape=(2,))
+        for length, group in edge_dofs.length_groups():
+            inner_global = edge_dofs.rows(group)[:, 1:-1]
             local = to_local(inner_global)
             inner = np.where(local >= 0, sk_pos[np.maximum(local, 0)], -1)
-            pts = np.stack([np.asarray(coarse.edge_coords[k], dtype=float) for k in group])
+            pts = edge_coords.rows(group)
             t = edge_weights(pts)
             for end, weight in ((0, 1.0 - t), (1, t)):
                 present = inner >= 0

@@ -6,7 +6,8 @@
 
 u lives in a distributed PETSc vector (the DOLFINx P1 layout, owned entries then
 ghosts), phi and the boundary block z are small and replicated on every rank, S_h is
-dense and replicated. The trace T and its transpose (``fem_py.boundary.BoundaryMap``)
+dense: replicated in serial, held by rows under MPI (``coupling.distributed.RowBlocks``,
+whose product returns the replicated S_h z). The trace T and its transpose (``fem_py.boundary.BoundaryMap``)
 are index operations on the owned boundary dofs plus one Allreduce.
 """
 from __future__ import annotations
@@ -27,7 +28,8 @@ class CoupledFunctional:
     boundary
         ``fem_py.boundary.BoundaryMap``: T, T^T and the positions of the phi unknowns (E).
     steklov_poincare
-        Dense S_h (n_gamma x n_gamma), replicated.
+        Dense S_h (n_gamma x n_gamma): an array, or ``coupling.distributed.RowBlocks``
+        under MPI (anything with ``S @ z`` for a replicated vector z).
     load
         b_f (PETSc vector in the layout of u).
     boundary_load

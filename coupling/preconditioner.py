@@ -38,8 +38,9 @@ same edge inverses and one small dense Cholesky factor of C_s.
 Input data contract (produced by ``fem_py``): continuous P1 on a triangulation of
 Omega with nodes 0..N-1; ``stiffness`` the P1 Laplace matrix A; ``coarse`` an object
 with the numpy attributes ``vertex_coords (n_v, 2)``, ``vertex_dofs (n_v,)``,
-``vertex_on_boundary (n_v,)``, ``edge_vertices (n_e, 2)``, ``edge_dofs`` (tuple of
-n_e arrays of fine nodes along each coarse edge from end 0 to end 1, ends included),
+``vertex_on_boundary (n_v,)``, ``edge_vertices (n_e, 2)``, ``edge_dofs`` (a
+``fem_py.coarse.Ragged`` or any sequence of n_e arrays: the fine nodes along each
+coarse edge from end 0 to end 1, ends included),
 ``edge_on_boundary``, ``edge_arc``, ``skeleton_dofs`` (sorted), ``interior_dofs``,
 ``n_subdomains``, ``subdomain_of_interior_dof``; node coordinates ``x (N, 2)``; the
 subdomain size d; the Signorini arcs as :class:`SignoriniArc`.
@@ -54,8 +55,10 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from petsc4py import PETSc
+from threadpoolctl import threadpool_limits
 
 from coupling.edge_forms import EDGE_FORMS, closed_paper_form, edge_form, paper_edge_form
+from fem_py.coarse import as_ragged
 
 __all__ = [
     "SignoriniArc",
@@ -259,14 +262,19 @@ def _block_diagonal(groups: Sequence[tuple[np.ndarray, np.ndarray]], n: int,
     the (local) numbers of the interior nodes, ``pts (B, m+2, dim)`` the nodes with both ends.
     """
     rows, cols, vals, ivals = [], [], [], []
+    batches: dict[tuple, list] = {}  # one batch per shape: one edge_form call each
     for ix, pts in groups:
-        if ix.shape[1] == 0:
-            continue
-        a0, a0_inv = edge_form(pts, kind)
-        rows.append(np.broadcast_to(ix[:, :, None], a0.shape).ravel())
-        cols.append(np.broadcast_to(ix[:, None, :], a0.shape).ravel())
-        vals.append(a0.ravel())
-        ivals.append(a0_inv.ravel())
+        if ix.shape[1]:
+            batches.setdefault(pts.shape[1:], []).append((ix, pts))
+    # tiny batched LAPACK calls: threads only add overhead (11x slower with 2 threads)
+    with threadpool_limits(limits=1):
+        for batch in batches.values():
+            ix = np.concatenate([b[0] for b in batch])
+            a0, a0_inv = edge_form(np.concatenate([b[1] for b in batch]), kind)
+            rows.append(np.broadcast_to(ix[:, :, None], a0.shape).ravel())
+            cols.append(np.broadcast_to(ix[:, None, :], a0.shape).ravel())
+            vals.append(a0.ravel())
+            ivals.append(a0_inv.ravel())
     if not rows:
         return sp.csr_matrix((n, n)), sp.csr_matrix((n, n))
     r, c = np.concatenate(rows), np.concatenate(cols)
@@ -332,7 +340,8 @@ def _skeleton_form(coarse: Any, x: np.ndarray, subdomain_size: float, n_nodes: i
     vertex_dofs = np.asarray(coarse.vertex_dofs, dtype=np.int64)
     ends = np.asarray(coarse.edge_vertices, dtype=np.int64)
     on_boundary = np.asarray(coarse.vertex_on_boundary, dtype=bool)
-    n_v, n_e = len(vertex_dofs), len(coarse.edge_dofs)
+    edge_dofs = as_ragged(coarse.edge_dofs, dtype=np.int64)
+    n_v, n_e = len(vertex_dofs), len(edge_dofs)
     if ends.shape != (n_e, 2) or on_boundary.shape != (n_v,):
         raise ValueError(f"coarse.edge_vertices must be ({n_e}, 2) and coarse.vertex_on_boundary ({n_v},); check the coarse partition")
     if not on_boundary.any():
@@ -345,10 +354,8 @@ def _skeleton_form(coarse: Any, x: np.ndarray, subdomain_size: float, n_nodes: i
     count = np.bincount(pos[vertex_dofs], minlength=n_sk)
     rows, cols, vals = [pos[vertex_dofs]], [np.arange(n_v)], [np.ones(n_v)]
     groups = []
-    lengths = np.fromiter((len(dofs) for dofs in coarse.edge_dofs), dtype=np.int64, count=n_e)
-    for length in np.unique(lengths):
-        group = np.flatnonzero(lengths == length)
-        dofs = np.stack([np.asarray(coarse.edge_dofs[k], dtype=np.int64) for k in group])  # (B, n+1)
+    for length, group in edge_dofs.length_groups():
+        dofs = edge_dofs.rows(group)  # (B, n+1)
         if length < 2 or np.any(dofs[:, 0] != vertex_dofs[ends[group, 0]]) or np.any(dofs[:, -1] != vertex_dofs[ends[group, 1]]):
             raise ValueError("coarse.edge_dofs must run from the dof of edge_vertices[:, 0] to that of edge_vertices[:, 1]")
         inner = pos[dofs[:, 1:-1]]

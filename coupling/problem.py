@@ -29,7 +29,7 @@ from coupling.config import DEFAULTS, as_dataclass_kwargs
 from coupling.functional import CoupledFunctional
 from coupling.newton import semismooth_newton
 from coupling.pgpm import IterationRecord, RunResult, estimate_extremes, projection_gradient
-from coupling.distributed import (RootPreconditioner, computed_on_root, gather_matrix,
+from coupling.distributed import (RootPreconditioner, RowBlocks, computed_on_root, gather_matrix,
                                   gather_rows)
 from coupling.distributed_substructuring import (DistributedSubstructuringPreconditioner,
                                                  subdomain_ranks)
@@ -131,8 +131,9 @@ class SignoriniProblem:
         timings["forms"] = time.perf_counter() - tic
 
         tic = time.perf_counter()
-        self.S = computed_on_root(self.comm, lambda: bem_cpp.steklov_poincare(
-            self.boundary.nodes, flux=options.flux_space))
+        # S_h: dense, replicated in serial; under MPI computed on rank 0 and kept by rows
+        steklov = lambda: bem_cpp.steklov_poincare(self.boundary.nodes, flux=options.flux_space)  # noqa: E731
+        self.S = steklov() if self.comm.size == 1 else RowBlocks.from_root(self.comm, steklov)
         timings["steklov_poincare"] = time.perf_counter() - tic
 
         tic = time.perf_counter()
@@ -209,10 +210,11 @@ class SignoriniProblem:
         stiffness.destroy()
         x = gather_rows(comm, self.V.tabulate_dof_coordinates()[:n_owned, :2])
 
+        S = self.S if self.comm.size == 1 or kind != "exact" else self.S.full()
+
         def build():
             if kind == "exact":
-                return ExactPreconditioner(csr, self.boundary.dofs, self.boundary.signorini,
-                                           self.S)
+                return ExactPreconditioner(csr, self.boundary.dofs, self.boundary.signorini, S)
             return SubstructuringPreconditioner(
                 csr, self.domain.coarse, x, self.domain.subdomain_size, arcs,
                 edge_form=self.options.edge_form,

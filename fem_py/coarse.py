@@ -5,25 +5,195 @@ subdomain cell tags, the skeleton (subdomain boundaries, Gamma included), the co
 vertices and the coarse edges as chains of fine P1 dofs: the data the substructuring
 preconditioner needs. It is computed from the mesh itself, so it is right whatever
 mesh generator made the mesh.
+
+The chains are stored as :class:`Ragged` arrays (one flat array and offsets), not as
+one small array per coarse edge: a mesh of 10^6 dofs has ~10^5 coarse edges, and
+building, broadcasting and re-stacking that many small arrays dominated the cost.
+This module imports DOLFINx lazily (in :func:`compute_coarse_structure`), so the
+preconditioners can use :class:`Ragged` without loading it.
 """
 from __future__ import annotations
 
+import operator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import scipy.sparse as sp
 from mpi4py import MPI
 from scipy.sparse.csgraph import connected_components
 
-from fem_py.forms import p1_space
-from fem_py.meshdata import FacetData, exterior_facets, facet_data, gather_facet_data, p1_topology, tag_array
+if TYPE_CHECKING:
+    from fem_py.meshdata import FacetData
 
-__all__ = ["CoarseStructure", "compute_coarse_structure", "SIGNORINI_TAG0"]
+__all__ = ["CoarseStructure", "Ragged", "as_ragged", "compute_coarse_structure", "SIGNORINI_TAG0"]
 
 #: Facet tag of the first Signorini arc (arc k has tag SIGNORINI_TAG0 + k).
 SIGNORINI_TAG0 = 100
 _COLLINEAR_TOL = 1e-9
+
+
+class Ragged(Sequence):
+    """An immutable sequence of n arrays of different lengths, stored as one flat array.
+
+    Row k is the read-only view ``flat[offsets[k]:offsets[k + 1]]``; rows share the
+    trailing shape of ``flat`` (e.g. (m_k,) dofs or (m_k, 2) coordinates). It behaves
+    as a read-only sequence of arrays (``len``, indexing, negative indices, iteration,
+    ``np.concatenate``); slicing, :meth:`take` and ``+`` with another sequence of arrays
+    give a new ``Ragged``. :meth:`length_groups` and :meth:`rows` give the rows of equal
+    length as (B, L, ...) blocks without a Python loop over rows.
+
+    Parameters
+    ----------
+    flat : (N, ...) array
+        The rows one after the other.
+    offsets : (n + 1,) int
+        Row starts, non-decreasing, from 0 to N.
+
+    Attributes
+    ----------
+    flat : (N, ...) array, read-only
+    offsets : (n + 1,) int64, read-only
+    lengths : (n,) int64, read-only
+        ``np.diff(offsets)``.
+    """
+
+    __slots__ = ("flat", "offsets", "lengths")
+
+    def __init__(self, flat: np.ndarray, offsets: np.ndarray) -> None:
+        flat = np.asarray(flat).view()
+        offsets = np.array(offsets, dtype=np.int64)  # own copy: the caller's array stays writable
+        if flat.ndim < 1 or offsets.ndim != 1 or offsets.size < 1:
+            raise ValueError("Ragged needs a flat array with ndim >= 1 and 1-D offsets of length n + 1; "
+                             "build it with as_ragged from a sequence of arrays")
+        lengths = np.diff(offsets)
+        if offsets[0] != 0 or offsets[-1] != len(flat) or np.any(lengths < 0):
+            raise ValueError(f"Ragged offsets must rise from 0 to len(flat) = {len(flat)}; "
+                             f"got {offsets[0]} .. {offsets[-1]}, decreasing: {bool(np.any(lengths < 0))}")
+        for a in (flat, offsets, lengths):
+            a.flags.writeable = False
+        object.__setattr__(self, "flat", flat)
+        object.__setattr__(self, "offsets", offsets)
+        object.__setattr__(self, "lengths", lengths)
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        raise AttributeError("Ragged is immutable")
+
+    def __reduce__(self) -> tuple:
+        return Ragged, (self.flat, self.offsets)
+
+    def __len__(self) -> int:
+        return len(self.offsets) - 1
+
+    def __getitem__(self, key: Any) -> Any:
+        if isinstance(key, slice):
+            start, stop, step = key.indices(len(self))
+            if step != 1:
+                return self.take(np.arange(start, stop, step))
+            stop = max(start, stop)
+            a, b = self.offsets[start], self.offsets[stop]
+            return Ragged(self.flat[a:b], self.offsets[start:stop + 1] - a)
+        k = operator.index(key)
+        n = len(self)
+        if k < 0:
+            k += n
+        if not 0 <= k < n:
+            raise IndexError(f"Ragged index {key} out of range for {n} rows")
+        return self.flat[self.offsets[k]:self.offsets[k + 1]]
+
+    def __iter__(self) -> Iterator[np.ndarray]:
+        bounds = self.offsets.tolist()
+        flat = self.flat
+        for a, b in zip(bounds[:-1], bounds[1:]):
+            yield flat[a:b]
+
+    def __add__(self, other: Any) -> Ragged:
+        if not isinstance(other, (Ragged, tuple, list)):
+            return NotImplemented
+        return _concat(self, as_ragged(other, dtype=self.flat.dtype, item_shape=self.flat.shape[1:]))
+
+    def __radd__(self, other: Any) -> Ragged:
+        if not isinstance(other, (Ragged, tuple, list)):
+            return NotImplemented
+        return _concat(as_ragged(other, dtype=self.flat.dtype, item_shape=self.flat.shape[1:]), self)
+
+    def __repr__(self) -> str:
+        return f"Ragged({len(self)} rows, {len(self.flat)} entries of shape {self.flat.shape[1:]} {self.flat.dtype})"
+
+    def take(self, indices: Any) -> Ragged:
+        """The rows ``indices`` (any int array, repeats allowed) as a new ``Ragged``."""
+        indices = np.asarray(indices, dtype=np.int64).ravel()
+        n = len(self)
+        if indices.size and (indices.min() < -n or indices.max() >= n):
+            raise IndexError(f"Ragged.take: indices must lie in [-{n}, {n}); got {indices.min()} .. {indices.max()}")
+        indices = np.where(indices < 0, indices + n, indices)
+        lengths = self.lengths[indices]
+        offsets = np.zeros(len(indices) + 1, dtype=np.int64)
+        np.cumsum(lengths, out=offsets[1:])
+        source = np.repeat(self.offsets[indices] - offsets[:-1], lengths) + np.arange(offsets[-1])
+        return Ragged(self.flat.take(source, axis=0), offsets)
+
+    def length_groups(self) -> list[tuple[int, np.ndarray]]:
+        """The rows grouped by length: [(L, rows of length L in increasing order)], L increasing.
+
+        The same groups as ``[(L, np.flatnonzero(lengths == L)) for L in np.unique(lengths)]``,
+        with one sort instead of one pass per distinct length.
+        """
+        order = np.argsort(self.lengths, kind="stable")
+        sorted_lengths = self.lengths[order]
+        cut = np.flatnonzero(sorted_lengths[1:] != sorted_lengths[:-1]) + 1
+        starts = np.concatenate([[0], cut]).tolist() if len(order) else []
+        return [(int(sorted_lengths[a]), order[a:b])
+                for a, b in zip(starts, starts[1:] + [len(order)])]
+
+    def rows(self, group: Any) -> np.ndarray:
+        """Rows ``group`` of equal length L stacked into a (B, L, ...) array (a copy).
+
+        Equals ``np.stack([self[k] for k in group])``, by one fancy index
+        ``flat[offsets[group][:, None] + arange(L)]``.
+        """
+        group = np.asarray(group, dtype=np.int64).ravel()
+        if group.size == 0:
+            return np.zeros((0, 0) + self.flat.shape[1:], dtype=self.flat.dtype)
+        lengths = self.lengths[group]
+        if np.any(lengths != lengths[0]):
+            raise ValueError(f"Ragged.rows needs rows of equal length; got lengths {lengths.min()} .. {lengths.max()} "
+                             "(group them with length_groups)")
+        return self.flat.take(self.offsets[group][:, None] + np.arange(lengths[0]), axis=0)
+
+
+def _concat(a: Ragged, b: Ragged) -> Ragged:
+    return Ragged(np.concatenate([a.flat, b.flat]), np.concatenate([a.offsets, b.offsets[1:] + a.offsets[-1]]))
+
+
+def as_ragged(seq: Any, dtype: Any = None, item_shape: tuple = ()) -> Ragged:
+    """``seq`` (a :class:`Ragged` or any sequence of arrays) as a ``Ragged``.
+
+    Parameters
+    ----------
+    seq
+        A ``Ragged`` (returned as is unless ``dtype`` asks for a cast) or a sequence of
+        arrays sharing their trailing shape.
+    dtype
+        Cast the entries to this dtype (no copy if they have it already).
+    item_shape
+        Trailing shape of the rows, used only when ``seq`` is empty (e.g. (2,) for
+        coordinates).
+    """
+    if isinstance(seq, Ragged):
+        if dtype is None or seq.flat.dtype == np.dtype(dtype):
+            return seq
+        return Ragged(seq.flat.astype(dtype), seq.offsets)
+    arrays = [np.asarray(a, dtype=dtype) for a in seq]
+    if not arrays:
+        return Ragged(np.zeros((0,) + tuple(item_shape), dtype=dtype or np.float64), np.zeros(1, dtype=np.int64))
+    if any(a.ndim < 1 or a.shape[1:] != arrays[0].shape[1:] for a in arrays):
+        raise ValueError("as_ragged needs arrays with ndim >= 1 and equal trailing shapes; "
+                         f"got shapes {sorted({a.shape[1:] for a in arrays})} (ndim 0 items are not rows)")
+    offsets = np.zeros(len(arrays) + 1, dtype=np.int64)
+    np.cumsum([len(a) for a in arrays], out=offsets[1:])
+    return Ragged(np.concatenate(arrays), offsets)
 
 
 @dataclass(frozen=True, eq=False)
@@ -41,10 +211,12 @@ class CoarseStructure:
     edge_vertices : (n_e, 2) int
         Coarse vertex indices of the edge ends. Boundary edges run counter-clockwise along
         Gamma; interior edges from the lower to the higher vertex index.
-    edge_dofs : tuple of n_e int64 arrays
-        Dofs of the fine nodes along each edge from end 0 to end 1, ends included.
-    edge_coords : tuple of n_e (m, 2) float arrays
-        Coordinates of those nodes.
+    edge_dofs : Ragged of n_e int64 rows
+        Dofs of the fine nodes along each edge from end 0 to end 1, ends included
+        (``edge_dofs[k]`` is an (m_k,) array). A sequence of arrays given here is
+        converted with :func:`as_ragged`.
+    edge_coords : Ragged of n_e (m_k, 2) float rows
+        Coordinates of those nodes (same offsets as ``edge_dofs``).
     edge_on_boundary : (n_e,) bool
     edge_arc : (n_e,) int
         k if the edge lies in the k-th Signorini arc, -1 otherwise.
@@ -66,8 +238,8 @@ class CoarseStructure:
     vertex_dofs: np.ndarray
     vertex_on_boundary: np.ndarray
     edge_vertices: np.ndarray
-    edge_dofs: tuple
-    edge_coords: tuple
+    edge_dofs: Ragged
+    edge_coords: Ragged
     edge_on_boundary: np.ndarray
     edge_arc: np.ndarray
     edge_subdomains: np.ndarray
@@ -78,6 +250,10 @@ class CoarseStructure:
     n_dofs: int
     n_skeleton_facets: int
 
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "edge_dofs", as_ragged(self.edge_dofs, dtype=np.int64))
+        object.__setattr__(self, "edge_coords", as_ragged(self.edge_coords, dtype=np.float64, item_shape=(2,)))
+
     @property
     def n_vertices(self) -> int:
         return len(self.vertex_coords)
@@ -87,8 +263,8 @@ class CoarseStructure:
         return len(self.edge_vertices)
 
     def edge_segments(self) -> np.ndarray:
-        """Number of fine segments on each coarse edge."""
-        return np.array([len(d) - 1 for d in self.edge_dofs], dtype=np.int64)
+        """Number of fine segments on each coarse edge, (n_e,) int64."""
+        return self.edge_dofs.lengths - 1
 
 
 def compute_coarse_structure(msh: Any, cell_tags: Any, facet_tags: Any) -> CoarseStructure:
@@ -100,6 +276,9 @@ def compute_coarse_structure(msh: Any, cell_tags: Any, facet_tags: Any) -> Coars
     skeleton facets are not collinear, or where the exterior facet tag changes (arc
     ends). Chains between coarse vertices are the coarse edges. The result is broadcast.
     """
+    from fem_py.forms import p1_space
+    from fem_py.meshdata import exterior_facets, facet_data, gather_facet_data, p1_topology, tag_array
+
     comm = msh.comm
     V = p1_space(msh)
     topo = p1_topology(V)
@@ -142,26 +321,31 @@ def compute_coarse_structure(msh: Any, cell_tags: Any, facet_tags: Any) -> Coars
 
 
 def _pack(coarse: CoarseStructure) -> dict:
-    """The fields as a few large arrays (the per-edge tuples concatenated): one pickle of
-    ~30 arrays instead of ~2 per coarse edge, which made the broadcast slow (1e5 edges)."""
+    """The fields as a few large arrays (the ragged rows as flat arrays + offsets): one
+    pickle of ~30 arrays, whatever the number of coarse edges."""
     fields = {name: getattr(coarse, name) for name in coarse.__dataclass_fields__}
-    fields["edge_dofs"] = np.concatenate(coarse.edge_dofs) if coarse.edge_dofs else np.zeros(0, np.int64)
-    fields["edge_coords"] = (np.concatenate(coarse.edge_coords) if coarse.edge_coords
-                             else np.zeros((0, 2)))
-    fields["edge_lengths"] = np.array([len(d) for d in coarse.edge_dofs], dtype=np.int64)
+    fields["edge_dofs"] = coarse.edge_dofs.flat
+    fields["edge_coords"] = coarse.edge_coords.flat
+    fields["edge_offsets"] = coarse.edge_dofs.offsets
     return fields
 
 
 def _unpack(fields: dict) -> CoarseStructure:
-    cut = np.cumsum(fields.pop("edge_lengths"))[:-1]
-    fields["edge_dofs"] = tuple(np.split(fields["edge_dofs"], cut))
-    fields["edge_coords"] = tuple(np.split(fields["edge_coords"], cut))
+    offsets = fields.pop("edge_offsets")
+    fields["edge_dofs"] = Ragged(fields["edge_dofs"], offsets)
+    fields["edge_coords"] = Ragged(fields["edge_coords"], offsets)
     return CoarseStructure(**fields)
 
 
 def _coarse_from_skeleton(fd: FacetData, tag_global: np.ndarray, n_dofs: int, n_sub: int) -> CoarseStructure:
-    nodes, inv = np.unique(fd.dofs, return_inverse=True)
-    inv = inv.reshape(-1, 2)
+    # skeleton nodes = the dofs on skeleton facets, sorted (a mark array of n_dofs
+    # instead of np.unique: no sort)
+    on_skeleton = np.zeros(n_dofs, dtype=bool)
+    on_skeleton[fd.dofs.ravel()] = True
+    nodes = np.flatnonzero(on_skeleton)
+    node_of_dof = np.full(n_dofs, -1, dtype=np.intp)
+    node_of_dof[nodes] = np.arange(len(nodes))
+    inv = node_of_dof[fd.dofs]
     nn, nf = len(nodes), len(inv)
     X = np.zeros((nn, 2))
     X[inv[:, 0]] = fd.coords[:, 0]
@@ -178,7 +362,8 @@ def _coarse_from_skeleton(fd: FacetData, tag_global: np.ndarray, n_dofs: int, n_
     if len(i2):
         a = np.where(inv[f, 1] == i2, inv[f, 0], inv[f, 1])
         b = np.where(inv[g, 1] == i2, inv[g, 0], inv[g, 1])
-        u, w = X[i2] - X[a], X[b] - X[i2]
+        Xi = X.take(i2, axis=0)  # take: much faster than X[i2] for (n, 2) rows
+        u, w = Xi - X.take(a, axis=0), X.take(b, axis=0) - Xi
         cross = np.abs(u[:, 0] * w[:, 1] - u[:, 1] * w[:, 0])
         bent = (cross > _COLLINEAR_TOL * np.linalg.norm(u, axis=1) * np.linalg.norm(w, axis=1)) \
             | ((u * w).sum(1) <= 0)
@@ -187,7 +372,7 @@ def _coarse_from_skeleton(fd: FacetData, tag_global: np.ndarray, n_dofs: int, n_
     vidx = np.flatnonzero(is_vertex)
     # sort keys rounded far above round-off, so that coordinate noise (gmsh leaves ~1e-18
     # instead of 0) cannot reorder vertices between runs
-    scale = float(np.ptp(X, axis=0).max())
+    scale = float(max(np.ptp(X[:, 0]), np.ptp(X[:, 1])))
     K = np.round(X / scale, 9)
     order = np.lexsort((K[vidx, 0], K[vidx, 1]))  # sort by y, then x
     vidx = vidx[order]
@@ -197,28 +382,34 @@ def _coarse_from_skeleton(fd: FacetData, tag_global: np.ndarray, n_dofs: int, n_
     join = ~is_vertex[i2]
     graph = sp.csr_matrix((np.ones(int(join.sum())), (f[join], g[join])), shape=(nf, nf))
     n_edges, comp = connected_components(graph, directed=False)
-    vertex_end = is_vertex[inv]  # (nf, 2)
-    ends_per_edge = np.bincount(np.repeat(comp, 2)[vertex_end.ravel()], minlength=n_edges)
+    comp2 = np.repeat(comp, 2)
+    vertex_end = is_vertex[inv].ravel()  # (2 nf,)
+    end_comp, end_nodes = comp2[vertex_end], end_node[vertex_end]
+    ends_per_edge = np.bincount(end_comp, minlength=n_edges)
     if np.any(ends_per_edge != 2):
         raise RuntimeError(f"{int(np.count_nonzero(ends_per_edge != 2))} chains of skeleton facets do "
                            "not run between two coarse vertices (closed loops without coarse vertices)")
-    end_comp, end_nodes = np.repeat(comp, 2)[vertex_end.ravel()], end_node[vertex_end.ravel()]
     pair = np.argsort(end_comp, kind="stable").reshape(-1, 2)
     e0, e1 = end_nodes[pair[:, 0]], end_nodes[pair[:, 1]]
     # a coarse edge is straight (a bend makes a coarse vertex): order its nodes by position
-    first_facet = np.full(n_edges, nf)
-    np.minimum.at(first_facet, comp, np.arange(nf))
+    first_facet = _first_index(comp, n_edges)
     ext = fd.exterior[first_facet]
     along = X[e1] - X[e0]
     facet_dir = X[inv[first_facet, 1]] - X[inv[first_facet, 0]]
     reverse = np.where(ext, (facet_dir * along).sum(1) < 0, vnum[e0] > vnum[e1])
     start, stop = np.where(reverse, e1, e0), np.where(reverse, e0, e1)
-    node_comp = np.unique(np.stack([np.repeat(comp, 2), end_node], 1), axis=0)  # (edge, node)
-    c, nd = node_comp[:, 0], node_comp[:, 1]
-    position = ((X[nd] - X[start[c]]) * (X[stop[c]] - X[start[c]])).sum(1)
-    chain_nodes = nd[np.lexsort((position, c))]
+    # the (edge, node) pairs sorted by edge then node, as one int64 key (nn * n_edges < 2^63):
+    # a non-vertex node lies on one edge only (that of its two facets), plus the edge ends
+    inner = i2[join]
+    key = np.unique(np.concatenate([comp[f[join]].astype(np.int64) * nn + inner,
+                                    end_comp.astype(np.int64) * nn + end_nodes]))
+    c, nd = np.divmod(key, nn)
+    chord = (X[stop] - X[start]).take(c, axis=0)
+    offset = X.take(nd, axis=0) - X[start].take(c, axis=0)
+    position = offset[:, 0] * chord[:, 0] + offset[:, 1] * chord[:, 1]
     length = np.bincount(c, minlength=n_edges)
     offsets = np.concatenate([[0], np.cumsum(length)])
+    chain_nodes = _sort_rows(Ragged(nd, offsets), position)
     if np.any(fd.exterior & (fd.tag != fd.tag[first_facet][comp])):
         raise RuntimeError("a coarse boundary edge carries two facet tags")
     ftag = fd.tag[first_facet]
@@ -226,12 +417,11 @@ def _coarse_from_skeleton(fd: FacetData, tag_global: np.ndarray, n_dofs: int, n_
     cells = fd.cells[first_facet]
     sub = np.where(ext[:, None], np.stack([cells[:, 0], np.full(n_edges, -1)], 1), np.sort(cells, axis=1))
     ev = np.stack([vnum[start], vnum[stop]], 1)
-    mid = K[chain_nodes[offsets[:-1] + length // 2]]
+    mid = K[chain_nodes.flat[offsets[:-1] + length // 2]]
     eorder = np.lexsort((mid[:, 0], mid[:, 1], ev.max(1), ev.min(1)))
     ev = ev[eorder]
-    chains = [chain_nodes[offsets[k]:offsets[k + 1]] for k in eorder.tolist()]
-    skeleton = np.sort(nodes)
-    interior = np.setdiff1d(np.arange(n_dofs, dtype=np.int64), skeleton)
+    chains = chain_nodes.take(eorder)
+    interior = np.flatnonzero(~on_skeleton).astype(np.int64, copy=False)
     sub_of_interior = tag_global[interior]
     if (sub_of_interior < 0).any():
         raise RuntimeError("some interior dofs have no subdomain tag")
@@ -242,18 +432,46 @@ def _coarse_from_skeleton(fd: FacetData, tag_global: np.ndarray, n_dofs: int, n_
         vertex_dofs=nodes[vidx].astype(np.int64),
         vertex_on_boundary=on_bnd[vidx],
         edge_vertices=ev,
-        edge_dofs=tuple(nodes[ch].astype(np.int64) for ch in chains),
-        edge_coords=tuple(X[ch] for ch in chains),
+        edge_dofs=Ragged(nodes[chains.flat].astype(np.int64, copy=False), chains.offsets),
+        edge_coords=Ragged(X.take(chains.flat, axis=0), chains.offsets),
         edge_on_boundary=ext[eorder].astype(bool),
         edge_arc=arc[eorder].astype(np.int64),
         edge_subdomains=sub[eorder].astype(np.int64).reshape(-1, 2),
-        skeleton_dofs=skeleton.astype(np.int64),
+        skeleton_dofs=nodes.astype(np.int64),
         interior_dofs=interior,
         subdomain_of_interior_dof=sub_of_interior.astype(np.int64),
         n_subdomains=int(n_sub),
         n_dofs=int(n_dofs),
         n_skeleton_facets=int(nf),
     )
+
+
+def _first_index(labels: np.ndarray, n: int) -> np.ndarray:
+    """The first index of each label 0..n-1 in ``labels`` (each label present).
+
+    ``connected_components`` numbers the components in order of first appearance, so
+    the first indices are where the running maximum rises; that is checked, with
+    ``np.minimum.at`` as the general fallback.
+    """
+    rise = np.flatnonzero(np.diff(np.maximum.accumulate(labels), prepend=-1) > 0)
+    if len(rise) == n and np.array_equal(labels[rise], np.arange(n)):
+        return rise
+    first = np.full(n, len(labels))
+    np.minimum.at(first, labels, np.arange(len(labels)))
+    return first
+
+
+def _sort_rows(rows: Ragged, key: np.ndarray) -> Ragged:
+    """Each row of ``rows`` stably sorted by ``key`` (aligned with ``rows.flat``).
+
+    Equals ``flat[np.lexsort((key, row_of_entry))]``: one batched argsort per row length.
+    """
+    flat = rows.flat.copy()
+    for length, group in rows.length_groups():
+        start = rows.offsets[group][:, None]
+        index = start + np.arange(length)
+        flat[index] = rows.flat[start + np.argsort(key[index], axis=1, kind="stable")]
+    return Ragged(flat, rows.offsets)
 
 
 # ================================================================= entry point

@@ -38,8 +38,12 @@ Arc end points become coarse vertices (inserted into the coarse mesh when needed
 so every coarse boundary edge lies in Gamma_t or in one arc (METHOD.md section 6).
 
 Parallel use: all ranks call ``build_domain`` with the same arguments. Arguments are
-validated identically on every rank before any collective call; gmsh runs on rank 0
-only, and the mesh is distributed the way ``gmshio.model_to_mesh`` does it
+validated identically on every rank before any collective call. Whole subdomains are
+given to each rank (:func:`subdomain_owners`, passed to ``create_mesh`` as its
+partitioner). A structured mesh is written down in parallel (``fem_py.structured``):
+each rank makes the triangles of its own coarse cells and a block of the node
+coordinates, and the tags follow from the closed-form numbering. Otherwise gmsh runs on
+rank 0 only, and the mesh is distributed the way ``gmshio.model_to_mesh`` does it
 (``create_mesh`` + ``distribute_entity_data`` + ``meshtags_from_entities``, see
 ``_distribute_mesh``), reading the gmsh arrays per surface because
 ``model_to_mesh``'s per-physical-group queries cost 20 s for 3000 subdomains.
@@ -51,15 +55,14 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
 from fem_py.coarse import SIGNORINI_TAG0, CoarseStructure, compute_coarse_structure
-from fem_py.forms import p1_space
-from fem_py.meshdata import p1_topology
+from fem_py.structured import StructuredRefinement, refine
 
 __all__ = ["Arc", "CoarseStructure", "Domain", "build_domain", "compute_coarse_structure",
            "GAMMA_T_TAG", "SIGNORINI_TAG0", "SHAPES"]
@@ -308,18 +311,16 @@ def _grid_partition(shape: str, center: Sequence[float], width: float, d: float)
     keep = np.ones((nc, nc), dtype=bool)  # keep[j, i]: coarse square i (x), j (y)
     if shape == "lshape":
         keep[half:, half:] = False
-    vid = -np.ones((nc + 1, nc + 1), dtype=np.int64)
-    verts, cells = [], []
-    for j in range(nc):
-        for i in range(nc):
-            if not keep[j, i]:
-                continue
-            corners = [(i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)]
-            for (a, b) in corners:
-                if vid[b, a] < 0:
-                    vid[b, a] = len(verts)
-                    verts.append((xs[a], ys[b]))
-            cells.append([int(vid[b, a]) for (a, b) in corners])
+    # squares row by row (j, then i), corners counter-clockwise; vertices numbered in
+    # the order they first appear
+    jj, ii = np.nonzero(keep)
+    corner = (np.stack([jj, jj, jj + 1, jj + 1], 1) * (nc + 1) + np.stack([ii, ii + 1, ii + 1, ii], 1)).ravel()
+    grid_point, first = np.unique(corner, return_index=True)
+    grid_point = grid_point[np.argsort(first)]
+    vid = np.empty((nc + 1) ** 2, dtype=np.int64)
+    vid[grid_point] = np.arange(len(grid_point))
+    verts = np.stack([xs[grid_point % (nc + 1)], ys[grid_point // (nc + 1)]], 1)
+    cells = vid[corner].reshape(-1, 4).tolist()
     if shape == "square":
         P = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
     else:
@@ -475,94 +476,6 @@ def _build_fine_geo(V: np.ndarray, cells: list[list[int]], h: float, B: _Boundar
     return x, cells_arr, np.concatenate(tri_id), facets_arr, np.concatenate(seg_tag)
 
 
-def _structured_nodes(V: np.ndarray, cells: list[list[int]], n: int):
-    """Uniform refinement of the coarse cells: node coordinates, the triangles with the
-    coarse cell of each, and the fine nodes of every coarse edge (as node index chains).
-
-    Nodes: the coarse vertices, then the n-1 interior nodes of every coarse edge (from
-    its lower to its higher vertex), then the interior nodes of every coarse cell in
-    cell order. Coarse squares are refined all at once (array operations over cells).
-    """
-    nv = len(V)
-    keys = np.array(sorted({_edge_key(a, b) for c in cells for a, b in zip(c, c[1:] + c[:1])}),
-                    dtype=np.int64).reshape(-1, 2)
-    codes = keys[:, 0] * nv + keys[:, 1]
-    t = np.arange(1, n)[:, None] / n
-    X = [V, (V[keys[:, 0]][:, None, :] + t[None] * (V[keys[:, 1]] - V[keys[:, 0]])[:, None, :]).reshape(-1, 2)]
-    offset = nv + len(keys) * (n - 1)
-
-    def edge_nodes(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        """(len(a), n+1) node numbers at k/n along a -> b, k = 0..n."""
-        a, b = np.atleast_1d(a), np.atleast_1d(b)
-        e = np.searchsorted(codes, np.minimum(a, b) * nv + np.maximum(a, b))
-        k = np.arange(n + 1)
-        kk = np.where((a < b)[:, None], k, n - k)
-        ids = nv + e[:, None] * (n - 1) + kk - 1
-        ids[:, 0], ids[:, n] = a, b
-        return ids
-
-    if all(len(c) == 4 for c in cells):
-        q = np.array(cells, dtype=np.int64).reshape(-1, 4)
-        m = len(q)
-        idx = np.empty((m, n + 1, n + 1), dtype=np.int64)  # idx[c, j, i]
-        idx[:, 0, :] = edge_nodes(q[:, 0], q[:, 1])
-        idx[:, :, n] = edge_nodes(q[:, 1], q[:, 2])
-        idx[:, n, ::-1] = edge_nodes(q[:, 2], q[:, 3])
-        idx[:, ::-1, 0] = edge_nodes(q[:, 3], q[:, 0])
-        jj, ii = np.meshgrid(np.arange(1, n), np.arange(1, n), indexing="ij")
-        s, r = (ii.ravel() / n)[None, :, None], (jj.ravel() / n)[None, :, None]
-        c0, c1, c2, c3 = (V[q[:, k]][:, None, :] for k in range(4))
-        pts = (1 - s) * (1 - r) * c0 + s * (1 - r) * c1 + s * r * c2 + (1 - s) * r * c3
-        idx[:, 1:n, 1:n] = (offset + np.arange(m * (n - 1) ** 2)).reshape(m, n - 1, n - 1)
-        X.append(pts.reshape(-1, 2))
-        a, b = idx[:, :-1, :-1].reshape(m, -1), idx[:, :-1, 1:].reshape(m, -1)
-        cc, dd = idx[:, 1:, 1:].reshape(m, -1), idx[:, 1:, :-1].reshape(m, -1)
-        tris = np.concatenate([np.stack([a, b, cc], 2), np.stack([a, cc, dd], 2)], 1)  # (m, 2n^2, 3)
-        cell_of = np.repeat(np.arange(m, dtype=np.int32), tris.shape[1])
-        tris = tris.reshape(-1, 3)
-    else:
-        tris_per_cell = []
-        for c in cells:
-            v0, v1, v2 = c
-            idx = -np.ones((n + 1, n + 1), dtype=np.int64)  # idx[i, j], i + j <= n
-            idx[:, 0] = edge_nodes(v0, v1)[0]
-            idx[np.arange(n, -1, -1), np.arange(n + 1)] = edge_nodes(v1, v2)[0]
-            idx[0, ::-1] = edge_nodes(v2, v0)[0]
-            inner = [(i, j) for i in range(1, n) for j in range(1, n - i)]
-            if inner:
-                ij = np.array(inner)
-                pts = V[v0] + (ij[:, 0:1] / n) * (V[v1] - V[v0]) + (ij[:, 1:2] / n) * (V[v2] - V[v0])
-                idx[ij[:, 0], ij[:, 1]] = offset + np.arange(len(pts))
-                offset += len(pts)
-                X.append(pts)
-            tl = []
-            for i in range(n):
-                for j in range(n - i):
-                    tl.append((idx[i, j], idx[i + 1, j], idx[i, j + 1]))
-                    if i + j < n - 1:
-                        tl.append((idx[i + 1, j], idx[i + 1, j + 1], idx[i, j + 1]))
-            tris_per_cell.append(np.array(tl, dtype=np.int64))
-        cell_of = np.concatenate([np.full(len(t), i, dtype=np.int32) for i, t in enumerate(tris_per_cell)])
-        tris = np.concatenate(tris_per_cell)
-
-    def chain(a: int, b: int) -> np.ndarray:
-        return edge_nodes(a, b)[0]
-
-    return np.concatenate(X), tris, cell_of, chain
-
-
-def _build_fine_structured(V: np.ndarray, cells: list[list[int]], n: int, B: _Boundary, arcs: tuple[Arc, ...]):
-    """Structured fine mesh as arrays (x, cells, cell subdomain ids, boundary facets, tags)."""
-    X, tris, ids, chain = _structured_nodes(V, cells, n)
-    seg, seg_tag = [], []
-    for (a, b), cnt in sorted(_boundary_edges(cells).items()):
-        if cnt == 1:
-            ch = chain(a, b)
-            seg.append(np.stack([ch[:-1], ch[1:]], 1))
-            seg_tag.append(np.full(n, _edge_tag(V, a, b, B, arcs), dtype=np.int32))
-    return X, tris, ids, np.concatenate(seg), np.concatenate(seg_tag)
-
-
 def subdomain_owners(x: np.ndarray, cells: np.ndarray, subdomain: np.ndarray, nparts: int) -> np.ndarray:
     """The rank of every cell such that each subdomain lies whole on one rank.
 
@@ -602,20 +515,12 @@ def subdomain_owners(x: np.ndarray, cells: np.ndarray, subdomain: np.ndarray, np
     return part[subdomain]
 
 
-def _owner_and_ghosts(cells: np.ndarray, owner: np.ndarray):
-    """Rows of (owner, ranks ghosting the cell) for DOLFINx's shared-facet ghost mode:
-    a cell is ghosted on the owners of its facet neighbours."""
+def _destinations(owner: np.ndarray, links: np.ndarray):
+    """DOLFINx partitioner output: per local cell its owner, then the ranks ghosting it
+    (``links``: unique (cell, rank) rows)."""
     from dolfinx import cpp
 
-    n = len(cells)
-    facets = np.sort(cells[:, [[1, 2], [2, 0], [0, 1]]].reshape(-1, 2), axis=1)
-    code = facets[:, 0] * (int(cells.max(initial=0)) + 1) + facets[:, 1]
-    order = np.argsort(code)
-    same = np.flatnonzero(code[order][1:] == code[order][:-1])  # a facet seen from both cells
-    a, b = order[same] // 3, order[same + 1] // 3
-    cut = owner[a] != owner[b]
-    a, b = a[cut], b[cut]
-    links = np.unique(np.stack([np.concatenate([a, b]), owner[np.concatenate([b, a])]], 1), axis=0)
+    n = len(owner)
     cell = np.concatenate([np.arange(n), links[:, 0]])
     rank = np.concatenate([owner, links[:, 1]])
     order = np.lexsort((np.arange(cell.size) >= n, cell))  # per cell: the owner first
@@ -623,12 +528,67 @@ def _owner_and_ghosts(cells: np.ndarray, owner: np.ndarray):
     return cpp.graph.AdjacencyList_int32(rank[order].astype(np.int32), offsets.astype(np.int32))
 
 
+def _owner_and_ghosts(cells: np.ndarray, owner: np.ndarray):
+    """Rows of (owner, ranks ghosting the cell) for DOLFINx's shared-facet ghost mode:
+    a cell is ghosted on the owners of its facet neighbours. Only cells with two nodes
+    touched by several ranks can have a neighbour elsewhere, so only their facets are
+    matched."""
+    nparts = int(owner.max(initial=0)) + 1
+    n_nodes = int(cells.max(initial=0)) + 1
+    ranks_at = sum((np.bincount(cells[owner == r].ravel(), minlength=n_nodes) > 0).astype(np.int8)
+                   for r in range(nparts))
+    near = np.flatnonzero((ranks_at[cells] > 1).sum(1) >= 2)
+    facets = np.sort(cells[near][:, [[1, 2], [2, 0], [0, 1]]].reshape(-1, 2), axis=1)
+    code = facets[:, 0] * n_nodes + facets[:, 1]
+    order = np.argsort(code)
+    same = np.flatnonzero(code[order][1:] == code[order][:-1])  # a facet seen from both cells
+    a, b = near[order[same] // 3], near[order[same + 1] // 3]
+    cut = owner[a] != owner[b]
+    a, b = a[cut], b[cut]
+    links = np.unique(np.stack([np.concatenate([a, b]), owner[np.concatenate([b, a])]], 1), axis=0)
+    return _destinations(owner, links.reshape(-1, 2))
+
+
+def _tagged_mesh(msh: Any, cell_values: np.ndarray, facets: np.ndarray, facet_values: np.ndarray):
+    """(mesh, cell tags, facet tags): ``cell_values`` for the local cells (owned, then
+    ghosts), ``facets`` (input node numbers) and their values on any rank."""
+    from dolfinx import cpp
+
+    ct = dmesh.meshtags(msh, 2, np.arange(_n_local_cells(msh), dtype=np.int32),
+                        np.asarray(cell_values, dtype=np.int32))
+    ents, vals = cpp.io.distribute_entity_data(msh._mesh, 1, np.asarray(facets, dtype=np.int64).reshape(-1, 2),
+                                               np.asarray(facet_values, dtype=np.int32))
+    msh.topology.create_connectivity(1, 2)
+    ft = dmesh.meshtags_from_entities(msh, 1, cpp.graph.AdjacencyList_int32(ents), vals.astype(np.int32))
+    ct.name, ft.name = "subdomains", "boundary"
+    return msh, ct, ft
+
+
+def _ufl_triangle_mesh() -> Any:
+    """The UFL domain of a P1 triangle mesh in 2D (``gmshio.ufl_mesh(2, 2)`` without
+    importing gmsh, 0.3 s, where no gmsh is needed)."""
+    import ufl
+
+    cell = ufl.Cell("triangle", geometric_dimension=2)
+    return ufl.Mesh(ufl.VectorElement(ufl.FiniteElement("Lagrange", cell, 1, variant="equispaced")))
+
+
+def _n_local_cells(msh: Any) -> int:
+    """Number of local cells, owned and ghosts."""
+    cells = msh.topology.index_map(2)
+    return cells.size_local + cells.num_ghosts
+
+
+def _local_cells(msh: Any) -> np.ndarray:
+    """Input (global) index of every local cell, owned then ghosts."""
+    return np.asarray(msh.topology.original_cell_index[:_n_local_cells(msh)], dtype=np.int64)
+
+
 def _distribute_mesh(comm: Any, arrays: tuple | None):
     """Distribute a triangle mesh held on rank 0 (what ``gmshio.model_to_mesh`` does, with
     the arrays already extracted), whole subdomains per rank (:func:`subdomain_owners`):
     returns (mesh, cell tags, facet tags)."""
     from dolfinx import cpp
-    from dolfinx.io import gmshio
 
     if comm.rank == 0:
         x, cells, cell_values, facets, facet_values = arrays
@@ -636,7 +596,6 @@ def _distribute_mesh(comm: Any, arrays: tuple | None):
         x, cells = np.zeros((0, 2)), np.zeros((0, 3), dtype=np.int64)
         cell_values = np.zeros(0, dtype=np.int32)
         facets, facet_values = np.zeros((0, 2), dtype=np.int64), np.zeros(0, dtype=np.int32)
-    domain = gmshio.ufl_mesh(2, 2)  # gmsh element type 2: 3-node triangle
     cells = np.asarray(cells, dtype=np.int64)
     x = np.ascontiguousarray(x, dtype=np.float64)
 
@@ -648,19 +607,56 @@ def _distribute_mesh(comm: Any, arrays: tuple | None):
     # whole subdomains per rank when there are enough subdomains, else DOLFINx's graph
     # partitioner (the preconditioner then runs on rank 0, coupling.distributed)
     n_sub = comm.bcast(int(np.max(cell_values, initial=-1)) + 1 if comm.rank == 0 else None, root=0)
-    by_subdomain = comm.size > 1 and n_sub >= comm.size
-    msh = dmesh.create_mesh(comm, cells, x, domain,
+    by_subdomain = n_sub >= comm.size  # also in serial: no graph partitioner for one part
+    msh = dmesh.create_mesh(comm, cells, x, _ufl_triangle_mesh(),
                             **({"partitioner": partitioner} if by_subdomain else {}))
     # cell tags by the input index of every local cell (all cells were input on rank 0)
-    n_cells = msh.topology.index_map(2).size_local + msh.topology.index_map(2).num_ghosts
-    wanted = comm.gather(np.asarray(msh.topology.original_cell_index[:n_cells], dtype=np.int64), root=0)
+    wanted = comm.gather(_local_cells(msh), root=0)
     values = comm.scatter([np.asarray(cell_values, dtype=np.int32)[w] for w in wanted]
                           if comm.rank == 0 else None, root=0)
-    ct = dmesh.meshtags(msh, 2, np.arange(n_cells, dtype=np.int32), values)
-    ents, vals = cpp.io.distribute_entity_data(msh._mesh, 1, np.asarray(facets, dtype=np.int64),
-                                               np.asarray(facet_values, dtype=np.int32))
+    return _tagged_mesh(msh, values, facets, facet_values)
+
+
+def _distribute_structured(comm: Any, ref: StructuredRefinement, boundary_tag: Callable[[int, int], int]):
+    """Create the structured mesh in parallel: every rank writes down the triangles of its
+    own coarse cells (:func:`subdomain_owners` of the coarse cells) and an even block of
+    the node coordinates, so no rank holds the whole mesh. ``boundary_tag(a, b)`` is the
+    facet tag of the coarse boundary edge a-b. Returns (mesh, cell tags, facet tags)."""
+    nc, T = len(ref.cells), ref.triangles_per_cell
+    rank_of_cell = (subdomain_owners(ref.V, ref.cells, np.arange(nc), comm.size) if comm.size > 1
+                    else np.zeros(nc, dtype=np.int32))
+    mine = np.flatnonzero(rank_of_cell == comm.rank)
+    cells = ref.triangles(mine)
+    N = ref.n_nodes
+    x = ref.coordinates(comm.rank * N // comm.size, (comm.rank + 1) * N // comm.size)
+
+    def partitioner(comm_, nparts, tdim, local_cells, ghost_mode):
+        return _destinations(np.full(len(cells), comm.rank, dtype=np.int64),
+                             ref.ghost_ranks(mine, rank_of_cell, comm.rank))
+
+    # whole subdomains per rank when there are enough subdomains, else DOLFINx's graph
+    # partitioner (the preconditioner then runs on rank 0, coupling.distributed)
+    by_subdomain = nc >= comm.size  # also in serial: no graph partitioner for one part
+    msh = dmesh.create_mesh(comm, cells, x, _ufl_triangle_mesh(),
+                            **({"partitioner": partitioner} if by_subdomain else {}))
+    # input cells are numbered rank after rank, each rank's coarse cells in increasing order
+    by_rank = np.argsort(rank_of_cell, kind="stable")
+    ct = dmesh.meshtags(msh, 2, np.arange(_n_local_cells(msh), dtype=np.int32),
+                        by_rank[_local_cells(msh) // T].astype(np.int32))
+    # facet tags from the input numbers of the facet nodes: the coarse edge under each facet
+    tag_of_edge = np.full(len(ref.edges), -1, dtype=np.int32)
+    for e in np.flatnonzero(ref.edge_cells[:, 1] < 0):
+        tag_of_edge[e] = boundary_tag(int(ref.edges[e, 0]), int(ref.edges[e, 1]))
+    msh.topology.create_connectivity(1, 0)
     msh.topology.create_connectivity(1, 2)
-    ft = dmesh.meshtags_from_entities(msh, 1, cpp.graph.AdjacencyList_int32(ents), vals.astype(np.int32))
+    node_of_vertex = np.empty(msh.topology.index_map(0).size_local + msh.topology.index_map(0).num_ghosts,
+                              dtype=np.int64)
+    node_of_vertex[msh.topology.connectivity(2, 0).array] = msh.geometry.dofmap.array
+    ends = np.asarray(msh.geometry.input_global_indices, dtype=np.int64)[node_of_vertex[msh.topology.connectivity(1, 0).array]].reshape(-1, 2)
+    edge = ref.edge_of_segments(ends[:, 0], ends[:, 1])
+    tags = np.where(edge >= 0, tag_of_edge[np.maximum(edge, 0)], -1)
+    facets = np.flatnonzero(tags >= 0).astype(np.int32)
+    ft = dmesh.meshtags(msh, 1, facets, tags[facets])
     ct.name, ft.name = "subdomains", "boundary"
     return msh, ct, ft
 
@@ -758,40 +754,39 @@ def build_domain(comm: Any, shape: str, *, h: float, subdomain_size: float,
         else:
             cV, ccells = _insert_boundary_points(cV, ccells, ends, B.tol)
 
-    # ---- rank 0 builds the mesh arrays (gmsh); errors are broadcast so no rank waits forever.
+    # ---- gmsh runs on rank 0 (the polygon's coarse mesh, the unstructured fine mesh);
+    # errors are broadcast so no rank waits forever.
     error, arrays = None, None
-    if shape == "polygon":
-        csize = None  # known after the coarse gmsh mesh on rank 0
-    if comm.rank == 0:
+    if comm.rank == 0 and (shape == "polygon" or not structured):
         try:
-            if shape == "polygon" or not structured:
-                import gmsh
+            import gmsh
 
-                gmsh.initialize(readConfigFiles=False)
-                gmsh.option.setNumber("General.Terminal", 0)
-                try:
-                    if shape == "polygon":
-                        gmsh.model.add("fembem_coarse")
-                        cV, ccells = _polygon_partition_gmsh(P, ends, d, B.tol)
-                        gmsh.model.remove()
-                        csize = float(np.mean([np.linalg.norm(cV[a] - cV[b]) for c in ccells
-                                               for a, b in zip(c, c[1:] + c[:1])]))
-                    if not structured:
-                        gmsh.model.add("fembem_domain")
-                        arrays = _build_fine_geo(cV, ccells, h, B, arcs)
-                finally:
-                    gmsh.finalize()
-            if structured:
-                n = max(2, int(round((d if shape == "polygon" else csize) / h)))
-                arrays = _build_fine_structured(cV, ccells, n, B, arcs)
+            gmsh.initialize(readConfigFiles=False)
+            gmsh.option.setNumber("General.Terminal", 0)
+            try:
+                if shape == "polygon":
+                    gmsh.model.add("fembem_coarse")
+                    cV, ccells = _polygon_partition_gmsh(P, ends, d, B.tol)
+                    gmsh.model.remove()
+                if not structured:
+                    gmsh.model.add("fembem_domain")
+                    arrays = _build_fine_geo(cV, ccells, h, B, arcs)
+            finally:
+                gmsh.finalize()
         except Exception as err:
             error = f"{type(err).__name__}: {err}"
     error = comm.bcast(error, root=0)
     if error is not None:
         raise RuntimeError(f"meshing the domain failed: {error}")
     if shape == "polygon":
-        csize = comm.bcast(csize, root=0)
-    msh, ct0, ft = _distribute_mesh(comm, arrays)
+        cV, ccells = comm.bcast((cV, ccells) if comm.rank == 0 else None, root=0)
+        csize = float(np.mean([np.linalg.norm(cV[a] - cV[b]) for c in ccells for a, b in zip(c, c[1:] + c[:1])]))
+    if structured:  # every rank writes down its own part of the refinement
+        n = max(2, int(round((d if shape == "polygon" else csize) / h)))
+        msh, ct0, ft = _distribute_structured(comm, refine(cV, ccells, n),
+                                              lambda a, b: _edge_tag(cV, a, b, B, arcs))
+    else:
+        msh, ct0, ft = _distribute_mesh(comm, arrays)
     coarse = compute_coarse_structure(msh, ct0, ft)
     h_max = _max_facet_length(msh)
     return Domain(mesh=msh, cell_tags=ct0, facet_tags=ft, coarse=coarse, arcs=arcs, h=h, subdomain_size=d,
@@ -800,8 +795,8 @@ def build_domain(comm: Any, shape: str, *, h: float, subdomain_size: float,
 
 
 def _max_facet_length(msh: Any) -> float:
-    V = p1_space(msh)
-    topo = p1_topology(V)
-    p = topo.dof_coords[topo.v2dof[topo.f2v]]
-    loc = float(np.linalg.norm(p[:, 1] - p[:, 0], axis=1).max(initial=0.0))
+    """The longest fine facet: the longest side of the local triangles, maximised over ranks."""
+    x = msh.geometry.x[:, :2]
+    tri = x[msh.geometry.dofmap.array.reshape(-1, 3)]
+    loc = float(np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2).max(initial=0.0))
     return msh.comm.allreduce(loc, op=MPI.MAX)

@@ -119,8 +119,9 @@ def gather_facet_data(comm: Any, parts: list[FacetData]) -> FacetData | None:
     if comm.rank != 0:
         return None
     allp = {f: np.concatenate([g[f] for g in gathered]) for f in fields}
-    key = np.sort(allp["dofs"], axis=1)
-    _, first = np.unique(key, axis=0, return_index=True)
+    pair = np.sort(allp["dofs"], axis=1).astype(np.int64)
+    key = pair[:, 0] * (int(pair.max(initial=0)) + 1) + pair[:, 1]  # one int64 per facet
+    _, first = np.unique(key, return_index=True)
     first = np.sort(first)
     return FacetData(**{f: allp[f][first] for f in fields})
 

@@ -17,7 +17,7 @@ SCRIPT = str(ROOT / "bench" / "strong_scaling.py")
 def test_strong_scaling_small_run(tmp_path):
     out = tmp_path / "scaling.md"
     proc = subprocess.run([sys.executable, SCRIPT, "--cells", "32", "--ranks", "1", "2", "--method", "pgpm",
-                           "--output", str(out)], capture_output=True, text=True, timeout=300,
+                           "--repeat", "2", "--output", str(out)], capture_output=True, text=True, timeout=300,
                           cwd=ROOT, env=dict(os.environ))  # not MPI singleton variables
     assert proc.returncode == 0, proc.stderr
     rows = [line for line in out.read_text().splitlines() if line.startswith("| 1 |")
@@ -29,10 +29,13 @@ def test_strong_scaling_small_run(tmp_path):
     # the same iterates up to round-off (tests/test_mpi_pgpm.py); at tol = 1e-8 the last
     # step can land on either side of the tolerance (measured here: 195 and 194)
     assert abs(int(serial[3]) - int(parallel[3])) <= 1
+    assert "the fastest of 2 run(s) per P" in out.read_text()
+    every = out.read_text().split("totals of every run (s): ")[1]
+    assert every.count(",") == 2 and "P = 1:" in every and "P = 2:" in every  # two totals each
 
 
-def test_strong_scaling_rejects_bad_arguments():
-    proc = subprocess.run([sys.executable, SCRIPT, "--cells", "2"], capture_output=True,
-                          text=True, cwd=ROOT)
+@pytest.mark.parametrize("args", [["--cells", "2"], ["--repeat", "0"]])
+def test_strong_scaling_rejects_bad_arguments(args):
+    proc = subprocess.run([sys.executable, SCRIPT, *args], capture_output=True, text=True, cwd=ROOT)
     assert proc.returncode == 2
     assert proc.stderr.strip().startswith("error:") and len(proc.stderr.strip().splitlines()) == 1

@@ -1,0 +1,225 @@
+"""Uniform refinement of a coarse partition, written down piece by piece (no gmsh).
+
+Every coarse cell (all squares, or all triangles) is refined into n segments per side:
+a square into an n x n grid of squares split along the (i,j)-(i+1,j+1) diagonal, a
+triangle into n^2 similar triangles. The numbering is global and closed-form, so every
+rank can produce any part of the mesh without the rest: the triangles of its own coarse
+cells and any contiguous block of node coordinates (the layout ``dolfinx.mesh.create_mesh``
+takes as input). Nodes are numbered
+
+- ``[0, nv)``: the coarse vertices;
+- ``nv + e (n - 1) + k - 1``: the k-th interior node (k = 1 .. n-1) of coarse edge e, edges
+  sorted by their (lower, higher) vertex pair, nodes running from the lower vertex;
+- ``offset + c m + l``: the l-th of the m interior nodes of coarse cell c.
+
+The triangles of coarse cell c are rows ``c T .. (c + 1) T - 1`` in a fixed reference order
+(T = 2 n^2 for squares, n^2 for triangles).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["Lattice", "StructuredRefinement", "lattice", "refine"]
+
+
+@dataclass(frozen=True)
+class Lattice:
+    """The reference refinement of one coarse cell with n segments per side.
+
+    Attributes
+    ----------
+    sides : (k, n+1) int
+        Lattice points along side s (from corner s to corner s+1), corners included.
+    interior : (m,) int
+        Lattice points of the interior nodes, in their numbering order.
+    weights : (m, k) float
+        Coordinates of the interior nodes as weights of the k corners.
+    triangles : (T, 3) int
+        Lattice points of the fine triangles (counter-clockwise if the corners are).
+    side_triangles : tuple of k int arrays
+        The triangles with a facet on side s.
+    """
+
+    n: int
+    n_points: int
+    sides: np.ndarray
+    interior: np.ndarray
+    weights: np.ndarray
+    triangles: np.ndarray
+    side_triangles: tuple
+
+
+def lattice(corners: int, n: int) -> Lattice:
+    """The reference refinement of a square (``corners=4``) or triangle (``corners=3``)."""
+    if corners not in (3, 4) or n < 1:
+        raise ValueError(f"a lattice needs 3 or 4 corners and n >= 1, got {corners} and {n}")
+    k = np.arange(n + 1)
+    if corners == 4:  # point (j, i) -> j (n+1) + i, corners (0,0), (0,n), (n,n), (n,0)
+        p = lambda j, i: np.asarray(j) * (n + 1) + np.asarray(i)  # noqa: E731
+        sides = np.stack([p(0, k), p(k, n), p(n, n - k), p(n - k, 0)])
+        jj, ii = np.meshgrid(np.arange(1, n), np.arange(1, n), indexing="ij")
+        interior = p(jj, ii).ravel()
+        s, r = ii.ravel() / n, jj.ravel() / n
+        weights = np.stack([(1 - s) * (1 - r), s * (1 - r), s * r, (1 - s) * r], 1)
+        j, i = (a.ravel() for a in np.meshgrid(np.arange(n), np.arange(n), indexing="ij"))
+        a, b, c, d = p(j, i), p(j, i + 1), p(j + 1, i + 1), p(j + 1, i)
+        triangles = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
+    else:  # point (i, j), i + j <= n -> i (n+1) + j, corners (0,0), (n,0), (0,n)
+        p = lambda i, j: np.asarray(i) * (n + 1) + np.asarray(j)  # noqa: E731
+        sides = np.stack([p(k, 0), p(n - k, k), p(0, n - k)])
+        ij = np.array([(i, j) for i in range(1, n) for j in range(1, n - i)], dtype=np.int64).reshape(-1, 2)
+        interior = p(ij[:, 0], ij[:, 1])
+        s, r = ij[:, 0] / n, ij[:, 1] / n
+        weights = np.stack([1 - s - r, s, r], 1)
+        tl = []
+        for i in range(n):
+            for j in range(n - i):
+                tl.append((p(i, j), p(i + 1, j), p(i, j + 1)))
+                if i + j < n - 1:
+                    tl.append((p(i + 1, j), p(i + 1, j + 1), p(i, j + 1)))
+        triangles = np.array(tl, dtype=np.int64)
+    on_side = [np.isin(triangles, side).sum(1) == 2 for side in sides]
+    return Lattice(n=n, n_points=(n + 1) ** 2, sides=sides.astype(np.int64), interior=interior.astype(np.int64),
+                   weights=weights, triangles=triangles.astype(np.int64),
+                   side_triangles=tuple(np.flatnonzero(m) for m in on_side))
+
+
+@dataclass(frozen=True, eq=False)
+class StructuredRefinement:
+    """The refinement of coarse cells ``cells`` of vertices ``V`` (see the module docstring).
+
+    Attributes
+    ----------
+    edges : (ne, 2) int
+        Coarse edges as sorted vertex pairs, in numbering order.
+    cell_edges : (nc, k) int
+        The edge of side s (corner s to s+1) of every coarse cell.
+    edge_cells : (ne, 2) int
+        The coarse cells on both sides of every edge (-1 for none: a boundary edge).
+    """
+
+    V: np.ndarray
+    cells: np.ndarray
+    n: int
+    lattice: Lattice
+    edges: np.ndarray
+    cell_edges: np.ndarray
+    edge_cells: np.ndarray
+
+    @property
+    def n_nodes(self) -> int:
+        return self._offset + len(self.cells) * len(self.lattice.interior)
+
+    @property
+    def triangles_per_cell(self) -> int:
+        return len(self.lattice.triangles)
+
+    @property
+    def _offset(self) -> int:
+        return len(self.V) + len(self.edges) * (self.n - 1)
+
+    def edge_nodes(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """(len(a), n+1) node numbers at k/n along the coarse edges a -> b, k = 0..n."""
+        a, b = np.atleast_1d(np.asarray(a, dtype=np.int64)), np.atleast_1d(np.asarray(b, dtype=np.int64))
+        nv, n = len(self.V), self.n
+        codes = self.edges[:, 0] * nv + self.edges[:, 1]
+        e = np.searchsorted(codes, np.minimum(a, b) * nv + np.maximum(a, b))
+        k = np.arange(n + 1)
+        ids = nv + e[:, None] * (n - 1) + np.where((a < b)[:, None], k, n - k) - 1
+        ids[:, 0], ids[:, n] = a, b
+        return ids
+
+    def triangles(self, ids: np.ndarray) -> np.ndarray:
+        """(len(ids) T, 3) node numbers of the triangles of coarse cells ``ids``, cell by cell."""
+        ids = np.asarray(ids, dtype=np.int64)
+        lat, q = self.lattice, self.cells[ids]
+        k = q.shape[1]
+        node = np.empty((len(ids), lat.n_points), dtype=np.int64)
+        for s in range(k):
+            node[:, lat.sides[s]] = self.edge_nodes(q[:, s], q[:, (s + 1) % k])
+        m = len(lat.interior)
+        node[:, lat.interior] = self._offset + ids[:, None] * m + np.arange(m)
+        return node[:, lat.triangles].reshape(-1, 3)
+
+    def coordinates(self, lo: int, hi: int) -> np.ndarray:
+        """(hi - lo, 2) coordinates of the nodes lo .. hi-1."""
+        V, n, lat = self.V, self.n, self.lattice
+        nv, offset, m = len(V), self._offset, len(lat.interior)
+        g = np.arange(lo, hi, dtype=np.int64)
+        X = np.empty((len(g), 2))
+        vert = g < nv
+        X[vert] = V[g[vert]]
+        on_edge = (g >= nv) & (g < offset)
+        e, k = np.divmod(g[on_edge] - nv, n - 1)
+        a, b = V[self.edges[e, 0]], V[self.edges[e, 1]]
+        X[on_edge] = a + ((k + 1) / n)[:, None] * (b - a)
+        inside = g >= offset
+        c, l = np.divmod(g[inside] - offset, max(m, 1))
+        corners = V[self.cells[c]]  # (len, k, 2)
+        w = lat.weights[l]
+        if self.cells.shape[1] == 4:
+            X[inside] = (w[:, 0:1] * corners[:, 0] + w[:, 1:2] * corners[:, 1]
+                         + w[:, 2:3] * corners[:, 2] + w[:, 3:4] * corners[:, 3])
+        else:
+            c0 = corners[:, 0]
+            X[inside] = c0 + w[:, 1:2] * (corners[:, 1] - c0) + w[:, 2:3] * (corners[:, 2] - c0)
+        return X
+
+    def edge_of_segments(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """The coarse edge on which the fine segment a-b lies (node numbers), or -1."""
+        a, b = np.asarray(a, dtype=np.int64), np.asarray(b, dtype=np.int64)
+        nv, n = len(self.V), self.n
+
+        def edge(g: np.ndarray) -> np.ndarray:
+            return np.where((g >= nv) & (g < self._offset), (g - nv) // max(n - 1, 1), -1)
+
+        ea, eb = edge(a), edge(b)
+        e = np.maximum(ea, eb)  # every fine segment on a coarse edge has an interior node of it
+        ends = self.edges[np.maximum(e, 0)]
+        on_a = (ea == e) | (a == ends[:, 0]) | (a == ends[:, 1])
+        on_b = (eb == e) | (b == ends[:, 0]) | (b == ends[:, 1])
+        return np.where((e >= 0) & on_a & on_b, e, -1)
+
+    def ghost_ranks(self, ids: np.ndarray, rank_of_cell: np.ndarray, rank: int) -> np.ndarray:
+        """(g, 2) rows (triangle, rank): the local triangles (numbered as in
+        :meth:`triangles`) with a facet on a coarse edge whose other cell lies on another
+        rank, and that rank (DOLFINx's shared-facet ghosts)."""
+        ids = np.asarray(ids, dtype=np.int64)
+        T = self.triangles_per_cell
+        rows = []
+        for s, tris in enumerate(self.lattice.side_triangles):
+            pair = self.edge_cells[self.cell_edges[ids, s]]
+            other = np.where(pair[:, 0] == ids, pair[:, 1], pair[:, 0])
+            far = np.flatnonzero((other >= 0) & (rank_of_cell[np.maximum(other, 0)] != rank))
+            tri = (far[:, None] * T + tris[None, :]).ravel()
+            rows.append(np.stack([tri, np.repeat(rank_of_cell[other[far]], len(tris))], 1))
+        return np.unique(np.concatenate(rows), axis=0) if rows else np.zeros((0, 2), np.int64)
+
+
+def refine(V: np.ndarray, cells: np.ndarray, n: int) -> StructuredRefinement:
+    """The uniform refinement of the coarse cells (rows of ``cells``, counter-clockwise
+    vertex numbers into ``V``), with ``n`` >= 2 segments per coarse edge."""
+    cells = np.asarray(cells, dtype=np.int64)
+    if cells.ndim != 2 or cells.shape[1] not in (3, 4):
+        raise ValueError("coarse cells must be all triangles or all quadrilaterals")
+    if n < 2:
+        raise ValueError(f"a structured refinement needs n >= 2 segments per coarse edge, got {n}")
+    nc, k = cells.shape
+    a, b = cells, np.roll(cells, -1, axis=1)
+    lo, hi = np.minimum(a, b).ravel(), np.maximum(a, b).ravel()
+    nv = len(V)
+    codes, inverse = np.unique(lo * nv + hi, return_inverse=True)
+    edges = np.stack(np.divmod(codes, nv), 1)
+    cell_edges = inverse.reshape(nc, k)
+    edge_cells = np.full((len(edges), 2), -1, dtype=np.int64)
+    order = np.argsort(inverse, kind="stable")
+    e, cell = inverse[order], order // k
+    first = np.concatenate([[True], e[1:] != e[:-1]])
+    if np.any(np.bincount(e) > 2):
+        raise ValueError("a coarse edge is shared by more than two coarse cells")
+    edge_cells[e[first], 0] = cell[first]
+    edge_cells[e[~first], 1] = cell[~first]
+    return StructuredRefinement(V=np.asarray(V, dtype=float), cells=cells, n=int(n), lattice=lattice(k, int(n)),
+                                edges=edges, cell_edges=cell_edges, edge_cells=edge_cells)
