@@ -12,6 +12,14 @@ phase ends in a collective):
 - iterations: the step estimate and the solver iterations;
 - outputs: u_e on Gamma and its exterior normal derivative (one V_h solve on rank 0).
 
+The machine's own ceilings are measured in the same run, with the same ``mpirun`` and
+rank counts (:func:`ceiling_worker`): a memory-bound kernel (a STREAM-like triad on
+arrays far larger than the caches) and a compute-bound one (transcendental functions on
+an array that stays in L1/L2), each splitting a fixed amount of work over the ranks.
+Most of a P1 FEM solve is memory-bound (sparse assembly, sparse triangular solves and
+products, the dense S_h product), so the triad's speed-up bounds what those phases can
+reach from P = 1 to 2.
+
 Every rank count is run ``--repeat`` times, alternating between the rank counts, and the
 run with the smallest total is reported for each (the machine is shared: other load
 only ever adds time). Prints a table of times and speed-ups (target: total speed-up
@@ -73,9 +81,52 @@ def worker(cells: int, method: str) -> None:
             "energy": result.energy, **phases}), flush=True)
 
 
-def run(ranks: int, cells: int, method: str) -> dict:
+#: The ceiling kernels' fixed work: triad arrays of 2^25 doubles (3 x 256 MiB in all, far
+#: beyond the 32 MiB L3), and 2^26 transcendental evaluations on an array of 2^15 doubles.
+TRIAD_ENTRIES, COMPUTE_ENTRIES, COMPUTE_SWEEPS = 2 ** 25, 2 ** 15, 2 ** 11
+
+
+def ceiling_worker() -> None:
+    """Run in every rank of ``mpirun -n P``: the best of 10 times of a fixed amount of
+    memory-bound and of compute-bound work split evenly over the ranks (one thread each);
+    rank 0 prints them."""
+    import numpy as np
+    from mpi4py import MPI
+    from threadpoolctl import threadpool_limits
+
+    comm = MPI.COMM_WORLD
+    n = TRIAD_ENTRIES // comm.size
+    a, b, c = np.zeros(n), np.ones(n), np.ones(n)  # written once: pages are touched before timing
+    small = np.linspace(0.0, 1.0, COMPUTE_ENTRIES)
+    sweeps = COMPUTE_SWEEPS // comm.size
+
+    def triad() -> None:  # a = b + 3 c: 5 x 8 bytes an entry (multiply: c in, a out; add: a, b in, a out)
+        np.multiply(c, 3.0, out=a)
+        np.add(a, b, out=a)
+
+    def compute() -> None:
+        for _ in range(sweeps):
+            np.sin(np.exp(small), out=small)
+
+    times = {}
+    with threadpool_limits(1):
+        for name, kernel in (("triad", triad), ("compute", compute)):
+            best = float("inf")
+            for _ in range(10):
+                comm.Barrier()
+                tic = time.perf_counter()
+                kernel()
+                comm.Barrier()
+                best = min(best, time.perf_counter() - tic)
+            times[name] = best
+    if comm.rank == 0:
+        print(json.dumps({"ranks": comm.size, **times}), flush=True)
+
+
+def _mpirun(ranks: int, args: list[str]) -> dict:
+    """The last JSON line printed by ``mpirun -n ranks`` of this script with ``args``."""
     cmd = ["mpirun", "--allow-run-as-root", "--oversubscribe", "--bind-to", "none", "-n", str(ranks),
-           sys.executable, __file__, "--worker", "--cells", str(cells), "--method", method]
+           sys.executable, __file__, *args]
     if ranks == 1:
         cmd = cmd[cmd.index(sys.executable):]
     # os.environ, not the C environment: an MPI-initialised parent (a test process) has
@@ -84,6 +135,29 @@ def run(ranks: int, cells: int, method: str) -> dict:
     if out.returncode != 0:
         sys.exit(f"error: the run with {ranks} rank(s) failed:\n{(out.stdout + out.stderr)[-2000:]}")
     return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def run(ranks: int, cells: int, method: str) -> dict:
+    return _mpirun(ranks, ["--worker", "--cells", str(cells), "--method", method])
+
+
+def ceilings(ranks: list[int], repeat: int) -> str:
+    """The ceiling kernels on every rank count, ``repeat`` rounds alternating between the
+    rank counts (the bandwidth a VM gets varies with its neighbours' load): the best
+    times as a markdown table, and the triad speed-up of every round."""
+    rounds = [[_mpirun(p, ["--ceiling"]) for p in ranks] for _ in range(repeat)]
+    best = [{k: min(rnd[i][k] for rnd in rounds) for k in ("triad", "compute")} for i in range(len(ranks))]
+    base = best[0]
+    lines = [f"# Machine ceilings: fixed work split over P ranks (one thread per rank; best of "
+             f"10 times in each of {repeat} round(s), the best round shown)\n",
+             "| P | memory-bound triad | triad bandwidth | compute-bound kernel |", "|---|---|---|---|"]
+    for p, r in zip(ranks, best):
+        lines.append(f"| {p} | {r['triad']:.3f} s ({base['triad'] / r['triad']:.2f}x) | "
+                     f"{5 * 8 * TRIAD_ENTRIES / r['triad'] / 1e9:.1f} GB/s | "
+                     f"{r['compute']:.3f} s ({base['compute'] / r['compute']:.2f}x) |")
+    every = "; ".join(f"P = {p}: " + ", ".join(f"{rnd[0]['triad'] / rnd[i]['triad']:.2f}x" for rnd in rounds)
+                      for i, p in enumerate(ranks))
+    return "\n".join(lines) + f"\n\ntriad speed-up of every round: {every}\n"
 
 
 def best_runs(ranks: list[int], cells: int, method: str, repeat: int) -> tuple[list[dict], dict]:
@@ -128,6 +202,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--repeat", type=int, default=3, help="runs per rank count, the fastest reported (default 3)")
     parser.add_argument("--output", type=Path, help="also write the table (markdown) here")
     parser.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
+    parser.add_argument("--ceiling", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.cells < 8 or any(p < 1 for p in args.ranks) or args.repeat < 1:
         print("error: --cells must be >= 8, --ranks >= 1 and --repeat >= 1", file=sys.stderr)
@@ -135,7 +210,11 @@ def main(argv: list[str] | None = None) -> int:
     if args.worker:
         worker(args.cells, args.method[0])
         return 0
-    text = "\n".join(table(*best_runs(args.ranks, args.cells, method, args.repeat)) for method in args.method)
+    if args.ceiling:
+        ceiling_worker()
+        return 0
+    text = "\n".join([ceilings(args.ranks, args.repeat)] + [table(*best_runs(args.ranks, args.cells, method, args.repeat))
+                                              for method in args.method])
     print(text)
     if args.output:
         tmp = args.output.with_suffix(".tmp")

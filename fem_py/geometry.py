@@ -797,6 +797,7 @@ def build_domain(comm: Any, shape: str, *, h: float, subdomain_size: float,
 def _max_facet_length(msh: Any) -> float:
     """The longest fine facet: the longest side of the local triangles, maximised over ranks."""
     x = msh.geometry.x[:, :2]
-    tri = x[msh.geometry.dofmap.array.reshape(-1, 3)]
-    loc = float(np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2).max(initial=0.0))
-    return msh.comm.allreduce(loc, op=MPI.MAX)
+    corners = msh.geometry.dofmap.array.reshape(-1, 3)
+    p = [x.take(corners[:, k], axis=0) for k in range(3)]  # take: much faster than x[...] for (n, 2) rows
+    loc = max(float(np.einsum("ij,ij->i", d, d).max(initial=0.0)) for d in (p[1] - p[0], p[2] - p[1], p[0] - p[2]))
+    return math.sqrt(msh.comm.allreduce(loc, op=MPI.MAX))

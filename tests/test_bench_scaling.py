@@ -1,5 +1,5 @@
-"""bench/strong_scaling.py runs end to end at a small size (its figures are for people:
-no timing is asserted), and rejects bad arguments with exit code 2."""
+"""bench/strong_scaling.py runs end to end at a small size, the machine ceilings included
+(its figures are for people: no timing is asserted), and rejects bad arguments with exit code 2."""
 from __future__ import annotations
 
 import os
@@ -20,8 +20,8 @@ def test_strong_scaling_small_run(tmp_path):
                            "--repeat", "2", "--output", str(out)], capture_output=True, text=True, timeout=300,
                           cwd=ROOT, env=dict(os.environ))  # not MPI singleton variables
     assert proc.returncode == 0, proc.stderr
-    rows = [line for line in out.read_text().splitlines() if line.startswith("| 1 |")
-            or line.startswith("| 2 |")]
+    ceilings, scaling = out.read_text().split("# Strong scaling")
+    rows = [line for line in scaling.splitlines() if line.startswith("| 1 |") or line.startswith("| 2 |")]
     assert len(rows) == 2
     serial, parallel = (row.split("|") for row in rows)
     assert serial[2].strip() == "SubstructuringPreconditioner"
@@ -32,6 +32,9 @@ def test_strong_scaling_small_run(tmp_path):
     assert "the fastest of 2 run(s) per P" in out.read_text()
     every = out.read_text().split("totals of every run (s): ")[1]
     assert every.count(",") == 2 and "P = 1:" in every and "P = 2:" in every  # two totals each
+    # the machine's ceilings, measured in the same run: a row per rank count, P = 1 the reference
+    ceiling = [line.split("|") for line in ceilings.splitlines() if line.startswith("| 1 |") or line.startswith("| 2 |")]
+    assert len(ceiling) == 2 and "(1.00x)" in ceiling[0][2] and "GB/s" in ceiling[1][3]
 
 
 @pytest.mark.parametrize("args", [["--cells", "2"], ["--repeat", "0"]])
