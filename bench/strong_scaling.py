@@ -149,7 +149,7 @@ def ceilings(ranks: list[int], repeat: int) -> str:
     best = [{k: min(rnd[i][k] for rnd in rounds) for k in ("triad", "compute")} for i in range(len(ranks))]
     base = best[0]
     lines = [f"# Machine ceilings: fixed work split over P ranks (one thread per rank; best of "
-             f"10 times in each of {repeat} round(s), the best round shown)\n",
+             f"10 times in each of {repeat} round(s), the best over all rounds shown)\n",
              "| P | memory-bound triad | triad bandwidth | compute-bound kernel |", "|---|---|---|---|"]
     for p, r in zip(ranks, best):
         lines.append(f"| {p} | {r['triad']:.3f} s ({base['triad'] / r['triad']:.2f}x) | "
