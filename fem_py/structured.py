@@ -195,7 +195,7 @@ class StructuredRefinement:
             far = np.flatnonzero((other >= 0) & (rank_of_cell[np.maximum(other, 0)] != rank))
             tri = (far[:, None] * T + tris[None, :]).ravel()
             rows.append(np.stack([tri, np.repeat(rank_of_cell[other[far]], len(tris))], 1))
-        return np.unique(np.concatenate(rows), axis=0) if rows else np.zeros((0, 2), np.int64)
+        return np.unique(np.concatenate(rows), axis=0)  # one (possibly empty) block per side
 
 
 def refine(V: np.ndarray, cells: np.ndarray, n: int) -> StructuredRefinement:
