@@ -157,12 +157,12 @@ MANUFACTURED = {"square": square_contact, "lshape": lshape_contact}
 
 
 def manufactured_problem(comm, solution: ManufacturedSolution, material, *, cells: int,
-                         d_over_h: int = 4, structured: bool = True, **options):
+                         d_over_h: int = 4, structured: bool = True, **discretisation):
     """The :class:`coupling.problem.SignoriniProblem` of ``solution`` on a mesh with
     ``cells`` cells per side of the bounding square (h = width / cells) and subdomains
-    of d = d_over_h * h; ``options`` are :class:`coupling.problem.SolverOptions` fields."""
+    of d = d_over_h * h; ``discretisation``: ``flux_space``, ``jacobian`` of the problem."""
+    from coupling.problem import SignoriniProblem
     from fem_py.geometry import build_domain
-    from coupling.problem import SignoriniProblem, SolverOptions
 
     h = solution.width / cells
     domain = build_domain(comm, solution.shape, h=h, subdomain_size=d_over_h * h,
@@ -170,7 +170,7 @@ def manufactured_problem(comm, solution: ManufacturedSolution, material, *, cell
                           signorini=solution.signorini, structured=structured)
     data = solution.data(domain.mesh, material)
     return SignoriniProblem(domain, material, f=data["f"], u0=data["u0"], t0=data["t0"],
-                            a=data["a"], options=SolverOptions(**options))
+                            a=data["a"], **discretisation)
 
 
 def solution_errors(problem, solution: ManufacturedSolution, result,

@@ -1,4 +1,4 @@
-"""Run configuration: the TOML schema, its defaults (stated once, here) and validation.
+"""Run configuration: validation of the TOML schema of :mod:`coupling.options`.
 
 A configuration has five sections; every key has a default, so an empty file is a
 valid (linear, contact-free) problem. Unknown sections or keys, wrong types and
@@ -8,69 +8,21 @@ message names the key and says what to do.
 from __future__ import annotations
 
 import copy
-import dataclasses
 import math
 import re
 import tomllib
 from pathlib import Path
 from typing import Any
 
-__all__ = ["ConfigError", "DEFAULTS", "CHOICES", "DATA_VARIABLES", "load_config", "parse_config",
-           "apply_override", "check_data_and_material", "geometry_error"]
+from coupling.options import CHOICES, DATA_VARIABLES, DEFAULTS
+
+__all__ = ["ConfigError", "load_config", "parse_config", "apply_override",
+           "check_data_and_material", "geometry_error"]
 
 
 class ConfigError(ValueError):
     """A configuration error; the message names the key and the fix."""
 
-
-#: Every key of the schema with its default value. The type of the default is the
-#: expected type (ints are accepted where floats are expected).
-DEFAULTS: dict[str, dict[str, Any]] = {
-    "geometry": {
-        "shape": "square",
-        "center": [0.0, 0.0],
-        "width": 0.5,
-        "vertices": [],
-        "h": 1.0 / 32,
-        "subdomain_size": 1.0 / 8,
-        "structured": True,
-        "signorini": [],
-        "allow_large": False,
-    },
-    "material": {"rho": "linear", "p": 2.0, "eps": 1.0},
-    "data": {"f": "0", "u0": "0", "t0": "0", "a": 0.0},
-    "solver": {
-        "method": "ssn",
-        "preconditioner": "substructuring",
-        "tol": 1e-8,
-        "max_iterations": 2000,
-        "step": "auto",
-        "projection": "exact",
-        "projection_tol": 0.5,
-        "projection_max_iterations": 1000,
-        "edge_form": "paper",
-        "flux_space": "p1",
-        "jacobian": "ufl",
-        "signorini_weight": 0.25,
-    },
-    "output": {"dir": "fembem-out", "xdmf": True, "plots": True},
-}
-
-#: Keys whose value must be one of a fixed set of strings.
-CHOICES: dict[tuple[str, str], tuple[str, ...]] = {
-    ("geometry", "shape"): ("square", "lshape", "polygon"),
-    ("solver", "method"): ("pgpm", "apgpm", "ssn"),
-    ("solver", "preconditioner"): ("substructuring", "identity", "exact"),
-    ("solver", "projection"): ("inexact", "exact"),
-    ("solver", "edge_form"): ("paper", "sqrt-laplacian"),
-    ("solver", "flux_space"): ("p1", "p0"),
-    ("solver", "jacobian"): ("ufl", "handwritten"),
-}
-
-#: The variables each expression of [data] may use: boundary data also see the outward
-#: unit normal (nx, ny). ``a`` is a number, not an expression.
-DATA_VARIABLES: dict[str, tuple[str, ...]] = {
-    "f": ("x", "y"), "u0": ("x", "y", "nx", "ny"), "t0": ("x", "y", "nx", "ny")}
 
 _POSITIVE = {("geometry", "h"), ("geometry", "subdomain_size"), ("geometry", "width"),
              ("solver", "tol"), ("solver", "max_iterations"),
@@ -278,9 +230,3 @@ def geometry_error(err: ValueError) -> ValueError:
     if key not in DEFAULTS["geometry"]:
         return err
     return ConfigError(f"geometry.{key}: {message}")
-
-
-def as_dataclass_kwargs(cls: type, section: dict[str, Any]) -> dict[str, Any]:
-    """The entries of ``section`` that are fields of the dataclass ``cls``."""
-    names = {f.name for f in dataclasses.fields(cls)}
-    return {k: v for k, v in section.items() if k in names}

@@ -8,66 +8,30 @@ unknown), all (n,); ``dn_ue``, the coefficients of du_e/dn in the flux space (n 
 values for "p1", n panel values for "p0", panel i = [node i, node i+1]); and the
 scalars ``a`` and ``flux_space`` that ``fembem exterior`` needs.
 
-Every file is written atomically: to a temporary name in the output folder, then
-renamed, so an interrupted run never leaves a half-written file under its final
-name. Rank 0 writes the gathered files; the XDMF file is written collectively.
+Every file is written atomically (:mod:`coupling.io.atomic`), so an interrupted run
+never leaves a half-written file under its final name. Rank 0 writes the gathered
+files; the XDMF file is written collectively.
 """
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import shutil
-import tempfile
 from pathlib import Path
-from typing import Callable
+from typing import Mapping
 
 import numpy as np
 from mpi4py import MPI
 
-__all__ = ["DATA_FILES", "atomic_write", "prepare_output_dir", "write_outputs", "boundary_fields",
-           "gather_p1", "load_fields"]
+from coupling.io.atomic import atomic_write
+from coupling.io.plots import PLOT_FILES, write_plots
+
+__all__ = ["DATA_FILES", "write_outputs", "boundary_fields", "gather_p1", "load_fields",
+           "summary"]
 
 #: The files of a run besides the plots (coupling.plots.PLOT_FILES).
 DATA_FILES = ("summary.json", "fields.npz", "solution.xdmf", "solution.h5")
-
-
-def prepare_output_dir(comm: MPI.Comm, out: Path, *, force: bool) -> None:
-    """Create ``out``; refuse an existing non-empty folder unless ``force`` (collective).
-
-    With ``force`` the files of the earlier run stay until :func:`write_outputs`
-    replaces or removes them, so a run that fails on bad input destroys nothing.
-    """
-    out = Path(out)
-    error = None
-    if comm.rank == 0:
-        if out.exists() and not out.is_dir():
-            error = f"output path {str(out)!r} exists and is not a folder; choose another --out"
-        elif out.is_dir() and any(out.iterdir()) and not force:
-            error = (f"output folder {str(out)!r} is not empty; pass --force to overwrite "
-                     "it or choose another --out")
-        else:
-            try:
-                out.mkdir(parents=True, exist_ok=True)
-            except OSError as err:  # reported on every rank, not raised on rank 0 alone
-                error = (f"cannot create output folder {str(out)!r} ({err.strerror}); "
-                         "choose another --out")
-    error = comm.bcast(error, root=0)
-    if error:
-        raise FileExistsError(error)
-
-
-def atomic_write(path: Path, write: Callable[[Path], object]) -> None:
-    """Call ``write(tmp_path)`` on a temporary file next to ``path``, then rename it to
-    ``path`` (readers see the old file or the complete new one, never a partial one)."""
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=path.suffix)
-    os.close(fd)
-    try:
-        write(Path(tmp))
-        os.chmod(tmp, 0o644)  # mkstemp creates files readable by the owner only
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 def gather_p1(u) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
@@ -95,7 +59,8 @@ def gather_p1(u) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     return X, U, np.concatenate([c for *_, c in parts])
 
 
-def _summary(problem, result) -> dict:
+def summary(problem, result, timings: Mapping[str, float]) -> dict:
+    """The contents of summary.json (without ``config`` and ``files``)."""
     return {
         "converged": bool(result.converged),
         "reason": result.reason,
@@ -109,10 +74,8 @@ def _summary(problem, result) -> dict:
         "C0_estimate": float(result.C0),
         "energy_increases": int(result.energy_increases),
         "mpi_ranks": int(problem.comm.size),
-        "timings": {k: float(v) for k, v in result.timings.items()},
-        "history": [{"iteration": r.iteration, "energy": r.energy, "step_norm": r.step_norm,
-                     "contact": r.contact, "inner": r.inner, "tau": r.tau}
-                    for r in result.history],
+        "timings": {k: float(v) for k, v in timings.items()},
+        "history": [dataclasses.asdict(r) for r in result.history],
     }
 
 
@@ -133,13 +96,16 @@ def boundary_fields(problem, result) -> dict[str, np.ndarray]:
                 ue=result.ue, dn_ue=result.flux, active=active, signorini=signorini)
 
 
-def write_outputs(comm: MPI.Comm, out: Path, problem, result, *, xdmf: bool = True,
-                  plots: bool = True, config: dict | None = None) -> list[str]:
+def write_outputs(comm: MPI.Comm, out: Path, problem, result, *, tol: float,
+                  timings: Mapping[str, float], xdmf: bool, plots: bool,
+                  config: dict | None = None) -> list[str]:
     """Write summary.json, fields.npz and, on request, solution.xdmf/.h5 and the plots.
 
     Collective. Files of an earlier run in ``out`` that this run does not write (plots
     when ``plots`` is false now, ...) are removed, so the folder never mixes two runs.
-    ``config`` (the validated configuration) is stored in summary.json.
+    ``tol`` is the solver tolerance (drawn in history.png), ``timings`` the seconds per
+    stage of the whole run, ``config`` (the validated configuration) is stored in
+    summary.json.
 
     Returns
     -------
@@ -155,19 +121,18 @@ def write_outputs(comm: MPI.Comm, out: Path, problem, result, *, xdmf: bool = Tr
     if comm.rank == 0:
         x, u, triangles = gathered
         fields = dict(x=x, u=u, triangles=triangles, **boundary_fields(problem, result),
-                      a=np.array(problem.a), flux_space=np.array(problem.options.flux_space))
+                      a=np.array(problem.a), flux_space=np.array(problem.flux_space))
         atomic_write(out / "fields.npz", lambda p: np.savez(p, **fields))  # p ends in .npz
         written.append("fields.npz")
-        from coupling.plots import PLOT_FILES, write_plots
         if plots:
-            written += write_plots(out, fields, result.history, tol=problem.options.tol)
-        summary = _summary(problem, result)
+            written += write_plots(out, fields, result.history, tol=tol)
+        record = summary(problem, result, timings)
         if config is not None:
-            summary["config"] = config
-        summary["files"] = sorted(written + ["summary.json"])
+            record["config"] = config
+        record["files"] = sorted(written + ["summary.json"])
         # last, so that a summary.json names a complete set of files
         atomic_write(out / "summary.json",
-                      lambda p: p.write_text(json.dumps(summary, indent=2, default=str)))
+                     lambda p: p.write_text(json.dumps(record, indent=2, default=str)))
         written.append("summary.json")
         for name in set(DATA_FILES + PLOT_FILES) - set(written):
             (out / name).unlink(missing_ok=True)

@@ -10,11 +10,8 @@ accuracy condition (3.6) is certified, or at a cap. With q(psi) = ||psi - phi~||
 duality gives, for any lambda >= 0, q* >= -lambda^T phi~ - lambda^T M_s^{-1} lambda / 4;
 with lambda = max(0, 2 M_s (phi^i - phi~)) this lower bound tends to q* as phi^i
 converges, and using it in place of q* makes the test sufficient for (3.6). Theorem 3.1
-then keeps the outer rate independent of h. (A rule on the size of the inner step,
-||phi^{i+1} - phi^i|| <= rho_in ||phi~ - phi_k||, is not sufficient: the first step
-theta M_s (phi~ - phi_k) is short in the smooth modes of M_s, cond(M_s) = O(1/h)
-(Theorem 4.2), so that rule stops after one step, and in our runs the outer count then
-doubled with each refinement at fixed d/h: 401, 901, 1816, 3449 for h = 1/16 .. 1/128.)
+then keeps the outer rate independent of h. (A rule on the size of the inner step is
+not sufficient: docs/design/solvers.md.)
 ``exact`` solves the small dense QP to round-off by a primal-dual active-set
 (semismooth Newton) iteration warm-started from the previous active set, with the
 Lawson-Hanson NNLS method on the Cholesky factor as a fallback should it cycle.
@@ -57,8 +54,7 @@ class SignoriniProjection:
         M_s when not given, on first use by ``inexact``).
     """
 
-    def __init__(self, metric: np.ndarray, method: str = "inexact", *, rho_in: float = 0.5,
-                 max_iterations: int = 100,
+    def __init__(self, metric: np.ndarray, method: str, *, rho_in: float, max_iterations: int,
                  lambda_max: float | Callable[[], float] | None = None):
         if method not in ("inexact", "exact"):
             raise ValueError(f'projection must be "inexact" or "exact", got {method!r}')
@@ -72,6 +68,11 @@ class SignoriniProjection:
         self._factor = scipy.linalg.cho_factor(self.M) if n > 0 else None
         self._active = np.zeros(n, dtype=bool)
         self._inverse: np.ndarray | None = None  # M^{-1}, for the exact projection
+
+    @classmethod
+    def exact(cls, metric: np.ndarray) -> "SignoriniProjection":
+        """The exact projection (it has no tolerance or cap)."""
+        return cls(metric, "exact", rho_in=0.0, max_iterations=0)
 
     @property
     def theta(self) -> float:

@@ -18,9 +18,9 @@ So one application costs two local A_II solves, four neighbour scatters and one
 Allreduce of the coarse vector. B_Omega u (``matvec_omega``) is the same pattern:
 one forward scatter, one local A_II solve, one reverse scatter, two Allreduces. The
 Signorini block (a few hundred to a few thousand unknowns) is replicated on every
-rank (:class:`coupling.preconditioner.SignoriniBlock`).
+rank (:class:`coupling.preconditioners.signorini.SignoriniBlock`).
 
-The result equals the serial :class:`coupling.preconditioner.SubstructuringPreconditioner`
+The result equals the serial :class:`coupling.preconditioners.substructuring.SubstructuringPreconditioner`
 up to round-off (sums in another order), so the PGPM iterates do not depend on the
 number of ranks.
 """
@@ -33,8 +33,9 @@ import scipy.sparse as sp
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from coupling.preconditioner import (SignoriniArc, SignoriniBlock, _block_diagonal, _SparseFactor,
-                                     coarse_matrix, edge_weights)
+from coupling.preconditioners.kernels import (SparseFactor, block_diagonal_edge_forms,
+                                              coarse_matrix, edge_weights)
+from coupling.preconditioners.signorini import SignoriniArc, SignoriniBlock
 from fem_py.coarse import as_ragged
 
 __all__ = ["DistributedSubstructuringPreconditioner", "subdomain_ranks"]
@@ -100,15 +101,15 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
     subdomain_rank
         (L,) owner rank of each subdomain (:func:`subdomain_ranks`).
     subdomain_size, signorini_arcs, edge_form, signorini_weight
-        As for :class:`coupling.preconditioner.SubstructuringPreconditioner`.
+        As for :class:`coupling.preconditioners.substructuring.SubstructuringPreconditioner`.
 
     ``apply_omega`` and ``matvec_omega`` act on the owned entries of u.
     """
 
     def __init__(self, comm: MPI.Comm, stiffness: PETSc.Mat, index_map: Any, coarse: Any,
                  subdomain_rank: np.ndarray, subdomain_size: float,
-                 signorini_arcs: Sequence[SignoriniArc] = (), *, edge_form: str = "paper",
-                 signorini_weight: float = 1.0) -> None:
+                 signorini_arcs: Sequence[SignoriniArc], *, edge_form: str,
+                 signorini_weight: float) -> None:
         self._init_signorini(signorini_arcs, subdomain_size, edge_form, signorini_weight)
         self.comm = comm
         r0, r1 = index_map.local_range
@@ -144,7 +145,7 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
         self._a_ii = sp.csr_matrix((data[is_int], (rows[is_int], int_pos[cols[is_int]])), shape=(n_i, n_i))
         self._a_is = sp.csr_matrix((data[~is_int], (rows[~is_int], sk_pos[cols[~is_int]])), shape=(n_i, n_sk))
         self._a_si = self._a_is.T.tocsr()
-        self._interior_factor = _SparseFactor(self._a_ii)
+        self._interior_factor = SparseFactor(self._a_ii)
 
         # the skeleton: edge forms of the edges this rank solves, Pi on all local skeleton dofs
         subdomains = np.asarray(coarse.edge_subdomains, dtype=np.int64)
@@ -181,11 +182,11 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
         self._interp_owned = self._interp[self._sk_owned].tocsr()
         self._interp_owned_t = self._interp_owned.T.tocsr()
         self._interp_t = self._interp.T.tocsr()
-        self._a0, self._a0_inv = _block_diagonal(groups, n_sk, edge_form)
+        self._a0, self._a0_inv = block_diagonal_edge_forms(groups, n_sk, edge_form)
         self._vertex_owned = np.flatnonzero(has & (vertex_local < n_owned))  # coarse vertices owned here
         self._vertex_owned_dof = vertex_local[self._vertex_owned]
         self._coarse_matrix = coarse_matrix(coarse, self.subdomain_size)
-        self._coarse = _SparseFactor(self._coarse_matrix)
+        self._coarse = SparseFactor(self._coarse_matrix)
 
     def _sum(self, v: np.ndarray) -> np.ndarray:
         out = np.empty_like(v)

@@ -6,7 +6,7 @@ stderr naming the configuration key or file and the fix; a traceback only with
 
 Under mpirun every rank runs the same command on MPI.COMM_WORLD. The inputs are
 validated identically on every rank before the first collective call, errors raised
-inside collective steps are broadcast by them (fem_py.geometry, coupling.outputs), and
+inside collective steps are broadcast by them (fem_py.parallel, coupling.io), and
 only rank 0 prints, so a bad input ends every rank with exit code 2 and one message.
 """
 from __future__ import annotations
@@ -77,7 +77,7 @@ def _run_script_main(relative: str, argv: list[str]) -> int:
     """``main(argv)`` of a script of this source tree (bench/ is not an installed package)."""
     import runpy
 
-    path = Path(__file__).resolve().parents[1] / relative
+    path = Path(__file__).resolve().parents[2] / relative
     if not path.is_file():
         raise FileNotFoundError(f"{relative} not found: run `fembem bench` from an editable "
                                 "install of the source tree (make setup)")
@@ -90,7 +90,7 @@ def _problem_inputs(args: argparse.Namespace) -> dict:
     Everything here is cheap and identical on every rank, so a bad input fails fast and
     on all ranks alike (no rank waits in a collective call for another).
     """
-    from coupling.config import check_data_and_material, load_config
+    from coupling.app.config import check_data_and_material, load_config
 
     config = load_config(args.config, args.set)
     check_data_and_material(config)
@@ -99,7 +99,7 @@ def _problem_inputs(args: argparse.Namespace) -> dict:
 
 def _with_geometry_key(build, *args):
     """Call ``build(*args)``; a geometry error is re-raised naming its [geometry] key."""
-    from coupling.config import geometry_error
+    from coupling.app.config import geometry_error
 
     try:
         return build(*args)
@@ -115,14 +115,21 @@ def _solve(args: argparse.Namespace) -> int:
 
     comm = MPI.COMM_WORLD
     config = _problem_inputs(args)
-    from coupling.outputs import prepare_output_dir, write_outputs
-    from coupling.problem import problem_from_config
+    from coupling.app.from_config import problem_from_config
+    from coupling.app.progress import ProgressMonitor
+    from coupling.io.atomic import prepare_output_dir
+    from coupling.io.outputs import write_outputs
+    from coupling.solvers import solve
 
     out = Path(args.out if args.out is not None else config["output"]["dir"])
     prepare_output_dir(comm, out, force=args.force)
-    problem = _with_geometry_key(problem_from_config, comm, config)
-    result = problem.solve(progress=not args.quiet)
-    write_outputs(comm, out, problem, result, xdmf=config["output"]["xdmf"],
+    problem, options, timings = _with_geometry_key(problem_from_config, comm, config)
+    monitor = None if args.quiet else ProgressMonitor(comm)
+    result = solve(problem, options, monitor=monitor)
+    if monitor is not None:
+        monitor.finished(result)
+    write_outputs(comm, out, problem, result, tol=options.tol,
+                  timings={**timings, **result.timings}, xdmf=config["output"]["xdmf"],
                   plots=config["output"]["plots"], config=config)
     if comm.rank == 0 and not args.quiet:
         state = "converged" if result.converged else "did NOT converge"
@@ -152,7 +159,8 @@ def _exterior(args: argparse.Namespace) -> int:
     import bem_cpp
     from mpi4py import MPI
 
-    from coupling.outputs import atomic_write, load_fields
+    from coupling.io.atomic import atomic_write
+    from coupling.io.outputs import load_fields
 
     fields = load_fields(Path(args.result_dir))
     points = _read_points(Path(args.points))
@@ -174,7 +182,7 @@ def _exterior(args: argparse.Namespace) -> int:
 def _check_jacobian(args: argparse.Namespace) -> int:
     from mpi4py import MPI
 
-    from coupling.problem import domain_from_config, material_from_config
+    from coupling.app.from_config import domain_from_config, material_from_config
     from fem_py.jacobian_check import check_jacobian
 
     comm = MPI.COMM_WORLD
@@ -193,7 +201,7 @@ def _check_jacobian(args: argparse.Namespace) -> int:
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     if argv[:1] == ["study"]:
-        from coupling.study import main as study
+        from coupling.study import main as study  # loaded only when asked for
         return study(argv[1:])
     if argv[:1] == ["bench"]:
         return _run_script_main("bench/peers.py", argv[1:])
@@ -207,7 +215,7 @@ def main(argv: list[str] | None = None) -> int:
     from mpi4py import MPI
     from threadpoolctl import threadpool_limits
 
-    from coupling.distributed import threads_per_rank
+    from fem_py.parallel import threads_per_rank
     try:
         with threadpool_limits(threads_per_rank(MPI.COMM_WORLD)):  # no oversubscription
             return handler(args)

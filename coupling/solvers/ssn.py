@@ -22,35 +22,25 @@ forcing term min(0.1, sqrt(r_k / r_0))). Globalisation: backtracking on J_h alon
 projected path (u + a du, max(0, phi + a dphi)); a step that does not decrease J_h after
 30 halvings is replaced by a PGPM step. A few PGPM steps start the iteration.
 
-Why the prediction is made in the metric M_s and not by the componentwise rule
-A = {phi - c grad_phi J <= 0}: at a node with phi = 0 the componentwise rule keeps the
-node active iff grad_phi J >= 0, whatever c > 0 is. When A is too large, the contact
-pressure computed on it has the tension singularity of the nonlocal (H^{1/2}-type)
-Steklov-Poincare operator at the edge of A: grad_phi J < 0 only at the last one to three
-nodes, so the edge retreats by a bounded number of nodes per Newton step. The first
-Newton steps overshoot the contact zone by a fixed physical distance (where the gap is
-small), i.e. by O(1/h) nodes, so the outer count grew with refinement at fixed d/h
-(square, carstensen, tol 1e-8, cells 16 .. 512: 12, 11, 12, 14, 17, 18 iterations, the 5
-PGPM steps included; at 512 the edge retreated from node 274 to 250 by 1-5 nodes per
-step over 9 steps, with full steps and CG converged). The M_s
-projection of phi - tau M_s^{-1} grad_phi J is the active set of a PGPM step: M_s^{-1}
-spreads the edge tension over the nodes it comes from, and the projection releases them
-together (measured: 11, 11, 11, 11, 12, 12 steps). At the solution the prediction is
-exact, {phi = 0} (phi is the fixed point of the PGPM step), so the local convergence of
-the active-set Newton method is kept.
+The active set is predicted in the metric M_s, by the M_s projection of
+phi - tau M_s^{-1} grad_phi J (the active set of a PGPM step), not by the
+componentwise rule A = {phi - c grad_phi J <= 0}, whose edge retreats by a bounded
+number of nodes per step and so needs O(1/h) steps (docs/design/solvers.md). At the
+solution the prediction is exact, {phi = 0} (phi is the fixed point of the PGPM step),
+so the local convergence of the active-set Newton method is kept.
 """
 from __future__ import annotations
 
-import time
 from typing import Callable
 
 import numpy as np
 import scipy.linalg
 from mpi4py import MPI
 
-from coupling.functional import CoupledFunctional
-from coupling.pgpm import IterationRecord, RunResult, _dot, _set_owned, projection_gradient
-from coupling.projection import SignoriniProjection
+from coupling.solvers.pgpm import energy_increased, pgpm
+from coupling.solvers.projection import SignoriniProjection
+from coupling.solvers.records import (History, IterationRecord, Monitor, RunResult, b_norm2,
+                                      global_dot, relative_step, set_owned)
 
 __all__ = ["semismooth_newton"]
 
@@ -58,7 +48,7 @@ __all__ = ["semismooth_newton"]
 def _pcg(apply_h: Callable, apply_b_inv: Callable, rhs: tuple[np.ndarray, np.ndarray],
          comm: MPI.Comm, *, rtol: float, max_iterations: int):
     """Preconditioned CG on the pair (u owned entries, phi_I replicated)."""
-    dot = lambda a, b: _dot(comm, a[0], b[0]) + a[1] @ b[1]  # noqa: E731
+    dot = lambda a, b: global_dot(comm, a[0], b[0]) + a[1] @ b[1]  # noqa: E731
     x = (np.zeros_like(rhs[0]), np.zeros_like(rhs[1]))
     r = (rhs[0].copy(), rhs[1].copy())
     z = apply_b_inv(r)
@@ -81,26 +71,22 @@ def _pcg(apply_h: Callable, apply_b_inv: Callable, rhs: tuple[np.ndarray, np.nda
 
 def semismooth_newton(functional: CoupledFunctional, preconditioner,
                       projection: SignoriniProjection, forms, u_function, phi0: np.ndarray, *,
-                      tau: float, tol: float = 1e-8, max_iterations: int = 100,
-                      start_steps: int = 5, cg_max_iterations: int = 500,
-                      monitor: Callable[[IterationRecord], None] | None = None) -> RunResult:
+                      tau: float, tol: float, max_iterations: int, start_steps: int,
+                      cg_max_iterations: int, monitor: Monitor | None = None) -> RunResult:
     """Semismooth Newton on the optimality system, started by ``start_steps`` PGPM steps.
 
     The active set is predicted by a PGPM step in the M_s metric with the exact
     projection (module docstring). Stops when ||xi_{k+1} - xi_k||_B <= tol ||xi_{k+1}||_B
     (the rule of the PGPM) with an unchanged active set, or after ``max_iterations``
-    outer steps in all (the PGPM steps included). ``IterationRecord.inner`` holds the CG
-    iterations of the step and ``IterationRecord.tau`` the line-search length.
+    outer steps in all (the PGPM steps included). The records of the Newton steps hold
+    their CG iterations and the length taken along the Newton direction.
     """
-    start = time.perf_counter()
     comm = functional.comm
-    history: list[IterationRecord] = []
-    warm = projection_gradient(functional, preconditioner, projection, u_function, phi0,
-                               tau=tau, tol=tol, max_iterations=min(start_steps, max_iterations),
-                               monitor=monitor)
+    history = History(monitor)
+    warm = pgpm(functional, preconditioner, projection, u_function, phi0, tau=tau, tol=tol,
+                max_iterations=min(start_steps, max_iterations), monitor=monitor)
     history.extend(warm.history)
     if warm.converged or warm.iterations >= max_iterations:
-        warm.solve_time = time.perf_counter() - start
         return warm
     phi = warm.phi
     grad = u_function.vector.duplicate()
@@ -110,7 +96,7 @@ def semismooth_newton(functional: CoupledFunctional, preconditioner,
     # the exact M_s-projection predicts the active set (an inexact one would blur it); the
     # solver's own projection serves when it is exact (one factor of M_s and of its inverse)
     predictor = (projection if projection.method == "exact"
-                 else SignoriniProjection(preconditioner.signorini_metric, "exact"))
+                 else SignoriniProjection.exact(preconditioner.signorini_metric))
     residual0 = None
     increases = warm.energy_increases
     active = np.zeros(phi.size, dtype=bool)
@@ -124,7 +110,7 @@ def semismooth_newton(functional: CoupledFunctional, preconditioner,
         active_changed = not np.array_equal(new_active, active)
         active, free = new_active, ~new_active
         natural = phi - predicted  # tau times the projected B_s-gradient
-        residual = np.sqrt(_dot(comm, g_u, preconditioner.apply_omega(g_u))
+        residual = np.sqrt(global_dot(comm, g_u, preconditioner.apply_omega(g_u))
                            + natural @ preconditioner.matvec_signorini(natural) / tau ** 2)
         residual0 = residual if residual0 is None else residual0
         forms.assemble_jacobian(u_function, jacobian)
@@ -160,34 +146,31 @@ def semismooth_newton(functional: CoupledFunctional, preconditioner,
         u_old = u_function.vector.array_r.copy()
         step = 1.0
         for _ in range(30):
-            _set_owned(u_function, u_old + step * d_u)
+            set_owned(u_function, u_old + step * d_u)
             trial_phi = np.maximum(0.0, phi + step * d_phi)
             trial_energy, trial_g_phi = functional.value_and_gradient(u_function, trial_phi, grad)
-            if trial_energy - energy <= 1e-13 * (abs(energy) + abs(trial_energy)):
+            if not energy_increased(energy, trial_energy):
                 break
             increases += 1
             step *= 0.5
         else:  # no decrease along the Newton path: fall back to one PGPM step
-            _set_owned(u_function, u_old)
-            run = projection_gradient(functional, preconditioner, projection, u_function, phi,
-                                      tau=tau, tol=0.0, max_iterations=1)
+            set_owned(u_function, u_old)
+            run = pgpm(functional, preconditioner, projection, u_function, phi, tau=tau,
+                       tol=0.0, max_iterations=1)
             trial_phi, trial_energy = run.phi, run.energy
             trial_g_phi = functional.gradient(u_function, trial_phi, grad)
             step = 0.0
         d_u_taken = u_function.vector.array_r - u_old
         d_phi_taken = trial_phi - phi
-        step2 = (_dot(comm, d_u_taken, preconditioner.matvec_omega(d_u_taken))
-                 + d_phi_taken @ preconditioner.matvec_signorini(d_phi_taken))
+        step2 = b_norm2(comm, d_u_taken, preconditioner.matvec_omega(d_u_taken), d_phi_taken,
+                        preconditioner.matvec_signorini(d_phi_taken))
         u_now = u_function.vector.array_r
-        norm2 = (_dot(comm, u_now, preconditioner.matvec_omega(u_now))
-                 + trial_phi @ preconditioner.matvec_signorini(trial_phi))
+        norm2 = b_norm2(comm, u_now, preconditioner.matvec_omega(u_now), trial_phi,
+                        preconditioner.matvec_signorini(trial_phi))
         phi, energy, g_phi = trial_phi, trial_energy, trial_g_phi
-        relative = float(np.sqrt(max(step2, 0.0) / norm2)) if norm2 > 0 else 0.0
-        record = IterationRecord(k, energy, relative, int(np.count_nonzero(phi <= 0.0)),
-                                 cg_its, step)
-        history.append(record)
-        if monitor is not None:
-            monitor(record)
+        relative = relative_step(step2, norm2)
+        history.add(IterationRecord(k, energy, relative, int(np.count_nonzero(phi <= 0.0)), tau,
+                                    cg_iterations=cg_its, line_search=step))
         if relative <= tol and not active_changed:
             converged = True
             reason = f"||xi_k+1 - xi_k||_B <= {tol:g} ||xi_k+1||_B, active set settled"
@@ -195,5 +178,4 @@ def semismooth_newton(functional: CoupledFunctional, preconditioner,
     for obj in (grad, jacobian, e_u, h_u):
         obj.destroy()
     return RunResult(phi=phi, converged=converged, reason=reason, iterations=k, energy=energy,
-                     tau=tau, history=history, energy_increases=increases,
-                     solve_time=time.perf_counter() - start)
+                     tau=tau, history=list(history), energy_increases=increases)

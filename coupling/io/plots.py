@@ -1,6 +1,6 @@
 """PNG figures of a solved problem (matplotlib, Agg backend), written on rank 0.
 
-Every figure is drawn from the arrays of fields.npz (:mod:`coupling.outputs`) and the
+Every figure is drawn from the arrays of fields.npz (:mod:`coupling.io.outputs`) and the
 iteration history alone, so it can be redrawn from the outputs of a finished run:
 
 - ``u.png``: u_h over Omega; Gamma_s drawn thick, red where in contact, blue where open.
@@ -29,21 +29,16 @@ from matplotlib.path import Path as PolygonPath  # noqa: E402
 from matplotlib.tri import Triangulation  # noqa: E402
 
 import bem_cpp  # noqa: E402
-from coupling.outputs import atomic_write  # noqa: E402
+from coupling.io.atomic import atomic_write  # noqa: E402
+from fem_py.polyline import arc_length  # noqa: E402
 
-__all__ = ["PLOT_FILES", "write_plots", "arc_length"]
+__all__ = ["PLOT_FILES", "write_plots"]
 
 #: The figures, in the order they are written.
 PLOT_FILES = ("u.png", "boundary.png", "whole_plane.png", "history.png")
 
 _CONTACT = dict(ls="none", marker="o", ms=3.5, color="tab:red")
 _OPEN = dict(ls="none", marker="o", ms=3.5, mfc="white", mec="tab:blue", mew=1.0)
-
-
-def arc_length(nodes: np.ndarray) -> np.ndarray:
-    """Arc length s at each boundary node (s = 0 at the first node)."""
-    seg = np.linalg.norm(np.diff(nodes, axis=0), axis=1)
-    return np.concatenate([[0.0], np.cumsum(seg)])
 
 
 def _closed(a: np.ndarray) -> np.ndarray:

@@ -1,0 +1,48 @@
+"""From a validated configuration (:mod:`coupling.app.config`) to the objects of the
+library: the domain, the material, the assembled problem and the solver options."""
+from __future__ import annotations
+
+import time
+from typing import Any
+
+from mpi4py import MPI
+
+from coupling.options import SolverOptions, solver_options
+from coupling.problem import SignoriniProblem
+
+__all__ = ["domain_from_config", "material_from_config", "problem_from_config"]
+
+
+def domain_from_config(comm: MPI.Comm, config: dict) -> Any:
+    """The ``fem_py.geometry.Domain`` of a validated configuration (collective)."""
+    from fem_py.geometry import build_domain
+
+    g = config["geometry"]
+    return build_domain(comm, g["shape"], h=g["h"], subdomain_size=g["subdomain_size"],
+                        center=tuple(g["center"]), width=g["width"],
+                        vertices=g["vertices"] or None, signorini=g["signorini"],
+                        structured=g["structured"], allow_large=g["allow_large"])
+
+
+def material_from_config(config: dict) -> Any:
+    """The ``fem_py.materials.Material`` of a validated configuration."""
+    from fem_py.materials import make_material
+
+    m = config["material"]
+    return make_material(m["rho"], p=m["p"], eps=m["eps"])
+
+
+def problem_from_config(comm: MPI.Comm, config: dict
+                        ) -> tuple[SignoriniProblem, SolverOptions, dict[str, float]]:
+    """The assembled problem, the solver options and the set-up timings (``mesh`` and the
+    problem's stages) of a validated configuration (collective)."""
+    data = config["data"]
+    options = solver_options(config["solver"])
+    material = material_from_config(config)
+    tic = time.perf_counter()
+    domain = domain_from_config(comm, config)
+    mesh_time = time.perf_counter() - tic
+    problem = SignoriniProblem(domain, material, f=data["f"], u0=data["u0"], t0=data["t0"],
+                               a=data["a"], flux_space=options.flux_space,
+                               jacobian=options.jacobian)
+    return problem, options, {"mesh": mesh_time, **problem.timings}

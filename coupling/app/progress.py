@@ -1,0 +1,34 @@
+"""Progress lines of a solve: a monitor for :func:`coupling.solvers.solve`."""
+from __future__ import annotations
+
+import sys
+from typing import TextIO
+
+from mpi4py import MPI
+
+from coupling.solvers.records import IterationRecord
+
+__all__ = ["ProgressMonitor"]
+
+
+class ProgressMonitor:
+    """Print every ``every``-th iteration (and the first) on rank 0 of ``comm``."""
+
+    def __init__(self, comm: MPI.Comm, *, every: int = 25, stream: TextIO = sys.stdout):
+        self.comm, self.every, self.stream = comm, every, stream
+
+    def __call__(self, record: IterationRecord) -> None:
+        if self.comm.rank != 0 or not (record.iteration % self.every == 0
+                                       or record.iteration == 1):
+            return
+        inner = (f"cg = {record.cg_iterations}" if record.line_search is not None
+                 else f"projection = {record.projection_iterations}")
+        print(f"  it {record.iteration:5d}  J_h = {record.energy:.12e}  "
+              f"step = {record.step_norm:.3e}  contact = {record.contact}  {inner}",
+              file=self.stream, flush=True)
+
+    def finished(self, solution) -> None:
+        """A note when J_h increased during the solve (tau was halved)."""
+        if solution.energy_increases and self.comm.rank == 0:
+            print(f"  note: J_h increased {solution.energy_increases} times; tau was halved "
+                  f"to {solution.tau:.3e}", file=self.stream, flush=True)

@@ -1,0 +1,1 @@
+"""Outputs of a run: atomic files, summary.json / fields.npz / XDMF, plots."""

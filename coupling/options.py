@@ -1,0 +1,110 @@
+"""Every default and every choice of the project, stated once.
+
+:data:`DEFAULTS` is the TOML schema of ``fembem`` (section -> key -> default; the type
+of a default is the expected type), :data:`CHOICES` the keys restricted to a fixed set of
+strings. :class:`SolverOptions` is the ``[solver]`` section as a frozen dataclass: the
+one object a solve takes (:func:`coupling.solvers.solve`). The lower layers
+(preconditioners, solvers, projection) take their parameters as required arguments,
+so no default is written twice.
+"""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from typing import Any
+
+__all__ = ["DEFAULTS", "CHOICES", "DATA_VARIABLES", "SolverOptions", "solver_options"]
+
+#: Every key of the schema with its default value.
+DEFAULTS: dict[str, dict[str, Any]] = {
+    "geometry": {
+        "shape": "square",
+        "center": [0.0, 0.0],
+        "width": 0.5,
+        "vertices": [],
+        "h": 1.0 / 32,
+        "subdomain_size": 1.0 / 8,
+        "structured": True,
+        "signorini": [],
+        "allow_large": False,
+    },
+    "material": {"rho": "linear", "p": 2.0, "eps": 1.0},
+    "data": {"f": "0", "u0": "0", "t0": "0", "a": 0.0},
+    "solver": {
+        "method": "ssn",
+        "preconditioner": "substructuring",
+        "tol": 1e-8,
+        "max_iterations": 2000,
+        "step": "auto",
+        "projection": "exact",
+        "projection_tol": 0.5,
+        "projection_max_iterations": 1000,
+        "edge_form": "paper",
+        "flux_space": "p1",
+        "jacobian": "ufl",
+        "signorini_weight": 0.25,
+    },
+    "output": {"dir": "fembem-out", "xdmf": True, "plots": True},
+}
+
+#: Keys whose value must be one of a fixed set of strings.
+CHOICES: dict[tuple[str, str], tuple[str, ...]] = {
+    ("geometry", "shape"): ("square", "lshape", "polygon"),
+    ("solver", "method"): ("pgpm", "apgpm", "ssn"),
+    ("solver", "preconditioner"): ("substructuring", "identity", "exact"),
+    ("solver", "projection"): ("inexact", "exact"),
+    ("solver", "edge_form"): ("paper", "sqrt-laplacian"),
+    ("solver", "flux_space"): ("p1", "p0"),
+    ("solver", "jacobian"): ("ufl", "handwritten"),
+}
+
+#: The variables each expression of [data] may use: boundary data also see the outward
+#: unit normal (nx, ny). ``a`` is a number, not an expression.
+DATA_VARIABLES: dict[str, tuple[str, ...]] = {
+    "f": ("x", "y"), "u0": ("x", "y", "nx", "ny"), "t0": ("x", "y", "nx", "ny")}
+
+#: Steps of the semismooth Newton method that are not part of the schema.
+SSN_START_STEPS = 5  # PGPM steps before the first Newton step
+SSN_CG_MAX_ITERATIONS = 500  # cap on the CG iterations of one Newton step
+LANCZOS_STEPS = 20  # Lanczos steps of the step estimate C0 (and of lambda_min for apgpm)
+
+
+def _solver_default(key: str) -> Any:
+    return field(default=DEFAULTS["solver"][key])
+
+
+@dataclass(frozen=True)
+class SolverOptions:
+    """The ``[solver]`` section (defaults in :data:`DEFAULTS`; README, configuration).
+
+    ``flux_space`` and ``jacobian`` choose how the problem is discretised
+    (:class:`coupling.problem.SignoriniProblem` takes them); the rest choose how it is
+    solved (:func:`coupling.solvers.solve`).
+    """
+
+    method: str = _solver_default("method")
+    preconditioner: str = _solver_default("preconditioner")
+    tol: float = _solver_default("tol")
+    max_iterations: int = _solver_default("max_iterations")
+    step: Any = _solver_default("step")
+    projection: str = _solver_default("projection")
+    projection_tol: float = _solver_default("projection_tol")
+    projection_max_iterations: int = _solver_default("projection_max_iterations")
+    edge_form: str = _solver_default("edge_form")
+    flux_space: str = _solver_default("flux_space")
+    jacobian: str = _solver_default("jacobian")
+    signorini_weight: float = _solver_default("signorini_weight")
+
+    def __post_init__(self) -> None:
+        for name in ("method", "preconditioner", "projection", "edge_form", "flux_space",
+                     "jacobian"):
+            allowed = CHOICES["solver", name]
+            if getattr(self, name) not in allowed:
+                raise ValueError(f"SolverOptions.{name} must be one of {allowed}, "
+                                 f"got {getattr(self, name)!r}")
+
+
+def solver_options(section: dict[str, Any]) -> SolverOptions:
+    """:class:`SolverOptions` from a validated ``[solver]`` section."""
+    names = {f.name for f in dataclasses.fields(SolverOptions)}
+    return SolverOptions(**{k: v for k, v in section.items() if k in names})

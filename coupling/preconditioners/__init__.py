@@ -1,0 +1,80 @@
+"""The block preconditioners B = B_Omega + B_s of the iterations (METHOD.md sections 5-6).
+
+- :mod:`~coupling.preconditioners.base`: the interface, and B = identity;
+- :mod:`~coupling.preconditioners.edge_forms`: the discrete H^{1/2}_00 edge forms (5.1);
+- :mod:`~coupling.preconditioners.kernels`: factors, the two-level form, C and Pi;
+- :mod:`~coupling.preconditioners.signorini`: the Signorini arcs and omega B_s;
+- :mod:`~coupling.preconditioners.substructuring`: the serial substructuring B;
+- :mod:`~coupling.preconditioners.distributed`: the same B, distributed by subdomains;
+- :mod:`~coupling.preconditioners.root`: any serial B set up on rank 0 under MPI;
+- :mod:`~coupling.preconditioners.exact`: the diagonal blocks of (4.2), the reference.
+
+:func:`build_preconditioner` chooses and builds one for an assembled problem.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+from coupling.distributed import gather_matrix, gather_rows
+from coupling.options import SolverOptions
+from coupling.preconditioners.base import IdentityPreconditioner, Preconditioner
+from coupling.preconditioners.distributed import (DistributedSubstructuringPreconditioner,
+                                                  subdomain_ranks)
+from coupling.preconditioners.exact import ExactPreconditioner
+from coupling.preconditioners.root import RootPreconditioner
+from coupling.preconditioners.signorini import SignoriniArc, signorini_arcs
+from coupling.preconditioners.substructuring import SubstructuringPreconditioner
+from fem_py.geometry import GAMMA_T_TAG
+
+__all__ = ["Preconditioner", "IdentityPreconditioner", "SubstructuringPreconditioner",
+           "DistributedSubstructuringPreconditioner", "RootPreconditioner",
+           "ExactPreconditioner", "SignoriniArc", "build_preconditioner", "problem_arcs"]
+
+
+def problem_arcs(problem: Any) -> list[SignoriniArc]:
+    """The Signorini arcs of an assembled :class:`coupling.problem.SignoriniProblem`."""
+    return signorini_arcs(problem.boundary, problem.domain.coarse.vertex_dofs, GAMMA_T_TAG)
+
+
+def build_preconditioner(problem: Any, options: SolverOptions) -> Preconditioner:
+    """B of ``options.preconditioner`` for ``problem`` (METHOD.md sections 5-6), factored
+    once (collective). The caller owns it: call ``destroy()`` on every rank when done.
+
+    Under MPI the substructuring preconditioner is distributed by subdomains
+    (:class:`DistributedSubstructuringPreconditioner`) when every subdomain lies on one
+    rank (``fem_py.geometry.build_domain`` partitions so whenever there are at least as
+    many subdomains as ranks); otherwise, and for the exact preconditioner, B is built
+    from the gathered stiffness matrix and runs on rank 0 (:class:`RootPreconditioner`).
+    """
+    kind, comm, V = options.preconditioner, problem.comm, problem.V
+    n_owned = V.dofmap.index_map.size_local
+    if kind == "identity":
+        return IdentityPreconditioner(n_owned, problem.n_signorini)
+    domain = problem.domain
+    stiffness = problem.forms.assemble_stiffness()
+    arcs = problem_arcs(problem)
+    if kind == "substructuring" and comm.size > 1:
+        ranks = subdomain_ranks(comm, domain.cell_tags,
+                                domain.mesh.topology.index_map(2).size_local,
+                                domain.coarse.n_subdomains)
+        if ranks is not None:  # whole subdomains per rank: no gathering
+            try:
+                return DistributedSubstructuringPreconditioner(
+                    comm, stiffness, V.dofmap.index_map, domain.coarse, ranks,
+                    domain.subdomain_size, arcs, edge_form=options.edge_form,
+                    signorini_weight=options.signorini_weight)
+            finally:
+                stiffness.destroy()
+    csr = gather_matrix(stiffness)
+    stiffness.destroy()
+    x = gather_rows(comm, V.tabulate_dof_coordinates()[:n_owned, :2])
+    S = problem.S if comm.size == 1 or kind != "exact" else problem.S.full()
+
+    def build() -> Preconditioner:
+        if kind == "exact":
+            return ExactPreconditioner(csr, problem.boundary.dofs, problem.boundary.signorini, S)
+        return SubstructuringPreconditioner(
+            csr, domain.coarse, x, domain.subdomain_size, arcs, edge_form=options.edge_form,
+            signorini_weight=options.signorini_weight)
+
+    return build() if comm.size == 1 else RootPreconditioner(comm, n_owned, build)

@@ -1,0 +1,78 @@
+"""The interface of the block preconditioner B = B_Omega + B_s of the iterations
+(METHOD.md (3.18)-(3.22)), and B = identity (Remark 2.1).
+"""
+from __future__ import annotations
+
+from typing import Protocol
+
+import numpy as np
+
+__all__ = ["Preconditioner", "IdentityPreconditioner", "check_length"]
+
+
+class Preconditioner(Protocol):
+    """Interface of the block-diagonal preconditioner B = B_Omega + B_s used by the PGPM (3.21)-(3.22)."""
+
+    def apply_omega(self, g: np.ndarray) -> np.ndarray: ...  # B_Omega^{-1} g
+
+    def matvec_omega(self, u: np.ndarray) -> np.ndarray: ...  # B_Omega u
+
+    def apply_signorini(self, g: np.ndarray) -> np.ndarray: ...  # M_s^{-1} g
+
+    def matvec_signorini(self, phi: np.ndarray) -> np.ndarray: ...  # M_s phi
+
+    @property
+    def lambda_max_signorini(self) -> float: ...  # largest eigenvalue of M_s, for theta in (3.20)
+
+    @property
+    def signorini_metric(self) -> np.ndarray: ...  # M_s, dense (the metric of the projection (3.19))
+
+    def destroy(self) -> None: ...  # free solver objects (PETSc) on every rank
+
+
+class IdentityPreconditioner:
+    """B = Euclidean inner product on R^N x R^{n_s} (plain projection-gradient, Remark 2.1).
+
+    Parameters
+    ----------
+    n_omega : number N of fine nodes (length of u).
+    n_signorini : number n_s of phi unknowns.
+    """
+
+    def __init__(self, n_omega: int, n_signorini: int) -> None:
+        if n_omega < 1 or n_signorini < 0:
+            raise ValueError(f"need n_omega >= 1 and n_signorini >= 0, got {n_omega}, {n_signorini}")
+        self.n_omega = int(n_omega)
+        self.n_signorini = int(n_signorini)
+
+    def apply_omega(self, g: np.ndarray) -> np.ndarray:
+        return check_length(g, self.n_omega, "g").copy()
+
+    def matvec_omega(self, u: np.ndarray) -> np.ndarray:
+        return check_length(u, self.n_omega, "u").copy()
+
+    def apply_signorini(self, g: np.ndarray) -> np.ndarray:
+        return check_length(g, self.n_signorini, "g").copy()
+
+    def matvec_signorini(self, phi: np.ndarray) -> np.ndarray:
+        return check_length(phi, self.n_signorini, "phi").copy()
+
+    @property
+    def lambda_max_signorini(self) -> float:
+        return 1.0
+
+    @property
+    def signorini_metric(self) -> np.ndarray:
+        return np.eye(self.n_signorini)
+
+    def destroy(self) -> None:
+        pass
+
+
+def check_length(v: np.ndarray, n: int, name: str) -> np.ndarray:
+    v = np.asarray(v, dtype=float)
+    if v.ndim not in (1, 2) or v.shape[0] != n:
+        raise ValueError(f"{name} must have shape ({n},) or ({n}, k), got {v.shape}")
+    return v
+
+

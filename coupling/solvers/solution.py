@@ -1,0 +1,175 @@
+"""A solve of an assembled problem: :func:`solve` and the :class:`Solution` it returns.
+
+The way dolfinx separates ``NewtonSolver`` from the problem it solves: the problem
+(:class:`coupling.problem.SignoriniProblem`) is read, never changed; the preconditioner
+is built here unless one is passed in; progress goes to the caller's monitor.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+import bem_cpp
+from coupling.options import LANCZOS_STEPS, SSN_CG_MAX_ITERATIONS, SSN_START_STEPS, SolverOptions
+from coupling.preconditioners import Preconditioner, build_preconditioner
+from coupling.solvers.apgpm import apgpm
+from coupling.solvers.lanczos import extremes_at
+from coupling.solvers.pgpm import pgpm
+from coupling.solvers.projection import SignoriniProjection
+from coupling.solvers.records import IterationRecord, Monitor, RunResult, set_owned
+from coupling.solvers.ssn import semismooth_newton
+from fem_py.parallel import array_from_root
+
+__all__ = ["Solution", "solve"]
+
+
+@dataclass
+class Solution:
+    """What :func:`solve` returns.
+
+    Attributes
+    ----------
+    u
+        u_h (dolfinx Function on the P1 space of the problem).
+    phi
+        phi_h at the Signorini nodes (n_s,), the gap u_e + u0 - u there.
+    contact
+        (n_s,) bool, phi_h == 0: the discrete contact set.
+    boundary_u, ue, flux
+        u_h on Gamma, u_e = u + phi - u0 on Gamma (boundary order), and the
+        coefficients of the exterior normal derivative psi_h (flux space).
+    converged, reason, iterations, energy, history, energy_increases
+        The outcome of the iteration (:class:`coupling.solvers.records.RunResult`).
+    tau, C0
+        The step length at the end and the estimate C0 = 1/tau_0 it started from.
+    timings
+        Seconds per stage of the solve: ``preconditioner`` (when built here),
+        ``step_estimate``, ``solve``, ``exterior_flux``.
+    """
+
+    u: Any
+    phi: np.ndarray
+    contact: np.ndarray
+    boundary_u: np.ndarray
+    ue: np.ndarray
+    flux: np.ndarray
+    converged: bool
+    reason: str
+    iterations: int
+    energy: float
+    tau: float
+    C0: float
+    history: list[IterationRecord]
+    energy_increases: int
+    timings: dict[str, float]
+
+
+def _run(problem: Any, options: SolverOptions, preconditioner: Preconditioner,
+         projection: SignoriniProjection, u: Any, phi0: np.ndarray, tau: float,
+         lambda_min: float | None, monitor: Monitor | None) -> RunResult:
+    """The iteration of ``options.method`` from (u, phi0)."""
+    common = dict(tau=tau, tol=options.tol, max_iterations=options.max_iterations,
+                  monitor=monitor)
+    if options.method == "ssn":
+        return semismooth_newton(problem.functional, preconditioner, projection, problem.forms,
+                                 u, phi0, start_steps=SSN_START_STEPS,
+                                 cg_max_iterations=SSN_CG_MAX_ITERATIONS, **common)
+    if options.method == "apgpm":
+        if lambda_min is None:  # a given step: lambda_min at the start, as C0 would be
+            lambda_min = extremes_at(problem.functional, preconditioner, u, phi0.size,
+                                     steps=LANCZOS_STEPS)[0]
+        return apgpm(problem.functional, preconditioner, projection, u, phi0,
+                     strong_convexity=lambda_min, **common)
+    return pgpm(problem.functional, preconditioner, projection, u, phi0, **common)
+
+
+def solve(problem: Any, options: SolverOptions, *,
+          initial: tuple[np.ndarray, np.ndarray] | None = None,
+          preconditioner: Preconditioner | None = None,
+          monitor: Monitor | None = None) -> Solution:
+    """Solve the discrete problem (2.3) with ``options.method`` (collective).
+
+    ``ssn`` (default): semismooth Newton (:mod:`coupling.solvers.ssn`); ``pgpm``: the
+    paper's Algorithm 3.1 (:mod:`coupling.solvers.pgpm`); ``apgpm``: its accelerated
+    variant (:mod:`coupling.solvers.apgpm`). The step tau = 1/C0 comes from Lanczos at
+    the initial iterate (``options.step = "auto"``) or is given.
+
+    Parameters
+    ----------
+    problem
+        The assembled :class:`coupling.problem.SignoriniProblem` (read only).
+    options
+        :class:`coupling.options.SolverOptions`; ``flux_space`` and ``jacobian`` were
+        used to assemble the problem and are not read here.
+    initial
+        (u, phi): the owned entries of u (or a dolfinx Function on ``problem.V``) and
+        phi (n_s,), the iterate to start from; default xi_0 = (0, 0).
+    preconditioner
+        A B built by :func:`coupling.preconditioners.build_preconditioner` for this
+        problem, to reuse it (the caller destroys it); default: built for
+        ``options.preconditioner`` here and destroyed at the end.
+    monitor
+        Called with every :class:`coupling.solvers.records.IterationRecord`.
+    """
+    from dolfinx import fem
+
+    comm = problem.comm
+    timings: dict[str, float] = {}
+    owned = preconditioner is None
+    if owned:
+        tic = time.perf_counter()
+        preconditioner = build_preconditioner(problem, options)
+        timings["preconditioner"] = time.perf_counter() - tic
+    try:
+        pc = preconditioner
+        projection = SignoriniProjection(
+            pc.signorini_metric, options.projection, rho_in=options.projection_tol,
+            max_iterations=options.projection_max_iterations,
+            lambda_max=lambda: pc.lambda_max_signorini)
+        u = fem.Function(problem.V, name="u")
+        phi0 = np.zeros(problem.n_signorini)
+        if initial is not None:
+            u_start, phi_start = initial
+            n_owned = problem.V.dofmap.index_map.size_local
+            u_values = (u_start.x.array[:n_owned] if hasattr(u_start, "x")
+                        else np.asarray(u_start, dtype=float))
+            phi0 = np.asarray(phi_start, dtype=float).copy()
+            if u_values.shape != (n_owned,) or phi0.shape != (problem.n_signorini,):
+                raise ValueError(f"initial (u, phi) must have shapes ({n_owned},) (the owned "
+                                 f"entries) and ({problem.n_signorini},), got "
+                                 f"{u_values.shape} and {phi0.shape}")
+            set_owned(u, u_values)
+        tic = time.perf_counter()
+        lambda_min = None  # the momentum of apgpm, from the same Lanczos run as C0
+        if options.step == "auto":
+            lambda_min, C0 = extremes_at(problem.functional, pc, u, phi0.size,
+                                         steps=LANCZOS_STEPS)
+            tau = 1.0 / C0
+        else:
+            tau = float(options.step)
+            C0 = 1.0 / tau
+        timings["step_estimate"] = time.perf_counter() - tic
+        tic = time.perf_counter()
+        run = _run(problem, options, pc, projection, u, phi0, tau, lambda_min, monitor)
+        timings["solve"] = time.perf_counter() - tic
+    finally:
+        if owned:
+            preconditioner.destroy()
+
+    boundary = problem.boundary
+    boundary_u = boundary.gather(u.vector)
+    gap = np.zeros_like(boundary_u)
+    gap[boundary.signorini] = run.phi
+    ue = boundary_u + gap - problem.u0
+    tic = time.perf_counter()
+    flux = array_from_root(comm, lambda: bem_cpp.exterior_flux(
+        boundary.nodes, ue, a=problem.a, flux=problem.flux_space), all_cores=True)
+    timings["exterior_flux"] = time.perf_counter() - tic
+    return Solution(u=u, phi=run.phi, contact=run.phi <= 0.0, boundary_u=boundary_u, ue=ue,
+                    flux=flux, converged=run.converged, reason=run.reason,
+                    iterations=run.iterations, energy=run.energy, tau=run.tau, C0=C0,
+                    history=run.history, energy_increases=run.energy_increases,
+                    timings=timings)
