@@ -32,17 +32,20 @@ class RowBlocks:
     def __init__(self, comm: MPI.Comm, block: np.ndarray, n: int):
         self._counts, self._offsets = _row_blocks(comm.size, n)
         if block.shape != (self._counts[comm.rank], n):
-            raise ValueError(f"rank {comm.rank} must hold rows {self._offsets[comm.rank]} .. "
-                             f"{self._offsets[comm.rank] + self._counts[comm.rank] - 1} of the {n} x {n} "
-                             f"matrix, got a block of shape {block.shape}")
+            raise ValueError(
+                f"rank {comm.rank} must hold rows {self._offsets[comm.rank]} .. "
+                f"{self._offsets[comm.rank] + self._counts[comm.rank] - 1} of the {n} x {n} "
+                f"matrix, got a block of shape {block.shape}"
+            )
         self.comm, self.block, self.shape = comm, block, (n, n)
 
     @classmethod
     def from_root(cls, comm: MPI.Comm, compute: Callable[[], np.ndarray]) -> "RowBlocks":
         """The square matrix ``compute()`` evaluated on rank 0 with every core
         (:func:`fem_py.parallel.run_on_root`), scattered by rows."""
-        full = run_on_root(comm, lambda: np.ascontiguousarray(compute(), dtype=float),
-                           all_cores=True)
+        full = run_on_root(
+            comm, lambda: np.ascontiguousarray(compute(), dtype=float), all_cores=True
+        )
         n = comm.bcast(full.shape[0] if comm.rank == 0 else None, root=0)
         counts, offsets = _row_blocks(comm.size, n)
         block = np.empty((counts[comm.rank], n))
@@ -52,21 +55,28 @@ class RowBlocks:
     def __matmul__(self, z: np.ndarray) -> np.ndarray:
         z = np.asarray(z, dtype=float)
         if z.ndim != 1 or z.shape[0] != self.shape[1]:
-            raise ValueError(f"RowBlocks @ z needs a vector of length {self.shape[1]}, got shape {z.shape}")
+            raise ValueError(
+                f"RowBlocks @ z needs a vector of length {self.shape[1]}, got shape {z.shape}"
+            )
         y = np.empty(self.shape[0])
-        self.comm.Allgatherv(np.ascontiguousarray(self.block @ z), [y, self._counts, self._offsets, MPI.DOUBLE])
+        self.comm.Allgatherv(
+            np.ascontiguousarray(self.block @ z), [y, self._counts, self._offsets, MPI.DOUBLE]
+        )
         return y
 
     def full(self) -> np.ndarray:
         """The whole matrix on every rank (collective; for reference solvers and checks)."""
         n = self.shape[1]
         out = np.empty(self.shape)
-        self.comm.Allgatherv(np.ascontiguousarray(self.block), [out, self._counts * n, self._offsets * n, MPI.DOUBLE])
+        self.comm.Allgatherv(
+            np.ascontiguousarray(self.block), [out, self._counts * n, self._offsets * n, MPI.DOUBLE]
+        )
         return out
 
 
 def _row_blocks(ranks: int, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """(counts, offsets) of the contiguous row blocks [r n / P, (r + 1) n / P) of ``ranks`` ranks."""
+    """(counts, offsets) of the contiguous row blocks [r n / P, (r + 1) n / P) of ``ranks`` "
+    "ranks."""
     bounds = np.arange(ranks + 1) * n // ranks
     return np.diff(bounds), bounds[:-1]
 

@@ -7,8 +7,9 @@
 u lives in a distributed PETSc vector (the DOLFINx P1 layout, owned entries then
 ghosts), phi and the boundary block z are small and replicated on every rank, S_h is
 dense: replicated in serial, held by rows under MPI (``coupling.distributed.RowBlocks``,
-whose product returns the replicated S_h z). The trace T and its transpose (``fem_py.boundary.BoundaryMap``)
-are index operations on the owned boundary dofs plus one Allreduce.
+whose product returns the replicated S_h z). The trace T and its transpose
+(``fem_py.boundary.BoundaryMap``) are index operations on the owned boundary dofs plus one
+Allreduce.
 """
 from __future__ import annotations
 
@@ -36,8 +37,14 @@ class CoupledFunctional:
         m_t + s_0 in boundary order (n_gamma,), replicated.
     """
 
-    def __init__(self, forms, boundary, steklov_poincare: np.ndarray, load: PETSc.Vec,
-                 boundary_load: np.ndarray):
+    def __init__(
+        self,
+        forms,
+        boundary,
+        steklov_poincare: np.ndarray,
+        load: PETSc.Vec,
+        boundary_load: np.ndarray,
+    ):
         self.forms = forms
         self.boundary = boundary
         self.signorini = np.asarray(boundary.signorini, dtype=np.int64)
@@ -61,8 +68,11 @@ class CoupledFunctional:
 
     def _value(self, u_function, z: np.ndarray, y: np.ndarray) -> float:
         """J_h = G(u) - b_f^T u + 1/2 z^T (y - m_t - s_0)."""
-        return (self.forms.energy(u_function) - u_function.vector.dot(self.load)
-                + 0.5 * z @ (y - self.boundary_load))
+        return (
+            self.forms.energy(u_function)
+            - u_function.vector.dot(self.load)
+            + 0.5 * z @ (y - self.boundary_load)
+        )
 
     def _gradient(self, u_function, y: np.ndarray, grad_u: PETSc.Vec) -> np.ndarray:
         """grad_u J = A(u) - b_f + T^T y into ``grad_u``; returns grad_phi J = E^T y."""
@@ -79,14 +89,16 @@ class CoupledFunctional:
         """Fill ``grad_u`` with grad_u J_h and return grad_phi J_h (collective)."""
         return self._gradient(u_function, self._boundary_terms(u_function.vector, phi)[1], grad_u)
 
-    def value_and_gradient(self, u_function, phi: np.ndarray,
-                           grad_u: PETSc.Vec) -> tuple[float, np.ndarray]:
+    def value_and_gradient(
+        self, u_function, phi: np.ndarray, grad_u: PETSc.Vec
+    ) -> tuple[float, np.ndarray]:
         """(J_h, grad_phi J_h) with ``grad_u`` filled, sharing one S_h product."""
         z, y = self._boundary_terms(u_function.vector, phi)
         return self._value(u_function, z, y), self._gradient(u_function, y, grad_u)
 
-    def hessian_action(self, jacobian: PETSc.Mat, e_u: PETSc.Vec, e_phi: np.ndarray,
-                       out_u: PETSc.Vec) -> np.ndarray:
+    def hessian_action(
+        self, jacobian: PETSc.Mat, e_u: PETSc.Vec, e_phi: np.ndarray, out_u: PETSc.Vec
+    ) -> np.ndarray:
         """(out_u, return) = D^2 J_h (e_u, e_phi), with D^2 G given as the matrix ``jacobian``."""
         y = self.S @ self.boundary_block(e_u, e_phi)
         jacobian.mult(e_u, out_u)

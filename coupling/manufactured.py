@@ -40,8 +40,10 @@ def exterior_field(x0: tuple[float, float]) -> str:
     """u_e = a + b log|x - x0| + c.(x - x0)/|x - x0|^2 (x0 inside Omega, well away from
     Gamma: u_e varies on the length scale |x - x0| along Gamma)."""
     rx, ry = f"(x - ({x0[0]}))", f"(y - ({x0[1]}))"
-    return (f"{_A} + {_B}*0.5*log({rx}**2 + {ry}**2)"
-            f" + ({_C[0]}*{rx} + ({_C[1]})*{ry})/({rx}**2 + {ry}**2)")
+    return (
+        f"{_A} + {_B}*0.5*log({rx}**2 + {ry}**2)"
+        f" + ({_C[0]}*{rx} + ({_C[1]})*{ry})/({rx}**2 + {ry}**2)"
+    )
 
 
 @dataclass(frozen=True)
@@ -118,8 +120,12 @@ class ManufacturedSolution:
         u = parse_expression(self.u, variables)
         ue = parse_expression(self.ue, variables)
         flux = material.flux(ufl.grad(u))
-        return {"f": -ufl.div(flux), "t0": ufl.dot(flux - ufl.grad(ue), n), "u0": self.u0,
-                "a": self.a}
+        return {
+            "f": -ufl.div(flux),
+            "t0": ufl.dot(flux - ufl.grad(ue), n),
+            "u0": self.u0,
+            "a": self.a,
+        }
 
 
 def _flux_term(eta: str, xi: str) -> str:
@@ -133,8 +139,7 @@ def square_contact() -> ManufacturedSolution:
     smooth = "0.2 + 3*x + 0.2*cos(pi*(y + 0.25))*sin(pi*x) + 0.3*(x + 0.1)**2"
     u = f"{smooth} + {_flux_term('y + 0.25', 'x')}"
     arc = Arc((-0.25, -0.25), (0.25, -0.25), f"{_G}*max(0, x)**3*(0.25 - x)")
-    return ManufacturedSolution("square", 0.5, (0.0, 0.0), (arc,), u,
-                                exterior_field((0.03, -0.02)))
+    return ManufacturedSolution("square", 0.5, (0.0, 0.0), (arc,), u, exterior_field((0.03, -0.02)))
 
 
 def lshape_contact() -> ManufacturedSolution:
@@ -147,17 +152,26 @@ def lshape_contact() -> ManufacturedSolution:
     bottom = _flux_term("y + 0.25", "x")
     inner = f"{_flux_term('-y', '0.125 - x')}*(1 + 4*y)**2"
     u = f"{smooth} + {bottom} + {inner}"
-    arcs = (Arc((-0.25, -0.25), (0.25, -0.25), f"{_G}*max(0, x)**3*(0.25 - x)"),
-            Arc((0.25, 0.0), (0.0, 0.0), f"{_G}*max(0, 0.125 - x)**3*x"))
-    return ManufacturedSolution("lshape", 0.5, (0.0, 0.0), arcs, u,
-                                exterior_field((-0.1, -0.1)))
+    arcs = (
+        Arc((-0.25, -0.25), (0.25, -0.25), f"{_G}*max(0, x)**3*(0.25 - x)"),
+        Arc((0.25, 0.0), (0.0, 0.0), f"{_G}*max(0, 0.125 - x)**3*x"),
+    )
+    return ManufacturedSolution("lshape", 0.5, (0.0, 0.0), arcs, u, exterior_field((-0.1, -0.1)))
 
 
 MANUFACTURED = {"square": square_contact, "lshape": lshape_contact}
 
 
-def manufactured_problem(comm, solution: ManufacturedSolution, material, *, cells: int,
-                         d_over_h: int = 4, structured: bool = True, **discretisation):
+def manufactured_problem(
+    comm,
+    solution: ManufacturedSolution,
+    material,
+    *,
+    cells: int,
+    d_over_h: int = 4,
+    structured: bool = True,
+    **discretisation,
+):
     """The :class:`coupling.problem.SignoriniProblem` of ``solution`` on a mesh with
     ``cells`` cells per side of the bounding square (h = width / cells) and subdomains
     of d = d_over_h * h; ``discretisation``: ``flux_space``, ``jacobian`` of the problem."""
@@ -165,16 +179,25 @@ def manufactured_problem(comm, solution: ManufacturedSolution, material, *, cell
     from fem_py.geometry import build_domain
 
     h = solution.width / cells
-    domain = build_domain(comm, solution.shape, h=h, subdomain_size=d_over_h * h,
-                          center=solution.center, width=solution.width,
-                          signorini=solution.signorini, structured=structured)
+    domain = build_domain(
+        comm,
+        solution.shape,
+        h=h,
+        subdomain_size=d_over_h * h,
+        center=solution.center,
+        width=solution.width,
+        signorini=solution.signorini,
+        structured=structured,
+    )
     data = solution.data(domain.mesh, material)
-    return SignoriniProblem(domain, material, f=data["f"], u0=data["u0"], t0=data["t0"],
-                            a=data["a"], **discretisation)
+    return SignoriniProblem(
+        domain, material, f=data["f"], u0=data["u0"], t0=data["t0"], a=data["a"], **discretisation
+    )
 
 
-def solution_errors(problem, solution: ManufacturedSolution, result,
-                    exterior_points: np.ndarray | None = None) -> dict[str, float]:
+def solution_errors(
+    problem, solution: ManufacturedSolution, result, exterior_points: np.ndarray | None = None
+) -> dict[str, float]:
     """Errors of a computed ``result`` against the exact ``solution`` (collective).
 
     Returns the H^1 seminorm ("energy") error |u_h - u|_1, the largest nodal error of
@@ -197,11 +220,12 @@ def solution_errors(problem, solution: ManufacturedSolution, result,
     X = ufl.SpatialCoordinate(mesh)
     u_exact = parse_expression(solution.u, {"x": X[0], "y": X[1]})
     e = result.u - u_exact
-    h1 = mesh.comm.allreduce(fem.assemble_scalar(compile_form(ufl.inner(ufl.grad(e), ufl.grad(e))
-                                                              * ufl.dx)), op=MPI.SUM)
+    h1 = mesh.comm.allreduce(
+        fem.assemble_scalar(compile_form(ufl.inner(ufl.grad(e), ufl.grad(e)) * ufl.dx)), op=MPI.SUM
+    )
     index_map = problem.V.dofmap.index_map
-    x = problem.V.tabulate_dof_coordinates()[:index_map.size_local]
-    nodal = np.abs(result.u.x.array[:index_map.size_local] - solution.exact_u()(x[:, 0], x[:, 1]))
+    x = problem.V.tabulate_dof_coordinates()[: index_map.size_local]
+    nodal = np.abs(result.u.x.array[: index_map.size_local] - solution.exact_u()(x[:, 0], x[:, 1]))
     nodal = mesh.comm.allreduce(float(nodal.max(initial=0.0)), op=MPI.MAX)
     b = problem.boundary
     s_nodes = b.nodes[b.signorini]
@@ -218,9 +242,15 @@ def solution_errors(problem, solution: ManufacturedSolution, result,
     wrong = np.flatnonzero(exact_contact != result.contact)
     same_arc = np.diff(b.arc_of_signorini) == 0
     switches = s_nodes[np.flatnonzero((np.diff(exact_contact.astype(int)) != 0) & same_arc)]
-    far = [np.min(np.linalg.norm(switches - s_nodes[i], axis=1), initial=np.inf) > radius
-           for i in wrong]
-    return {"energy": float(np.sqrt(h1)), "nodal_u": nodal, "gap": gap_error,
-            "ue_gamma": float(np.abs(result.ue - ue).max()),
-            "ue_exterior": float(np.abs(ue_points - solution.exact_ue()(*exterior_points.T)).max()),
-            "contact_mismatch": int(np.count_nonzero(far))}
+    far = [
+        np.min(np.linalg.norm(switches - s_nodes[i], axis=1), initial=np.inf) > radius
+        for i in wrong
+    ]
+    return {
+        "energy": float(np.sqrt(h1)),
+        "nodal_u": nodal,
+        "gap": gap_error,
+        "ue_gamma": float(np.abs(result.ue - ue).max()),
+        "ue_exterior": float(np.abs(ue_points - solution.exact_ue()(*exterior_points.T)).max()),
+        "contact_mismatch": int(np.count_nonzero(far)),
+    }

@@ -61,7 +61,10 @@ CHOICES: dict[tuple[str, str], tuple[str, ...]] = {
 #: The variables each expression of [data] may use: boundary data also see the outward
 #: unit normal (nx, ny). ``a`` is a number, not an expression.
 DATA_VARIABLES: dict[str, tuple[str, ...]] = {
-    "f": ("x", "y"), "u0": ("x", "y", "nx", "ny"), "t0": ("x", "y", "nx", "ny")}
+    "f": ("x", "y"),
+    "u0": ("x", "y", "nx", "ny"),
+    "t0": ("x", "y", "nx", "ny"),
+}
 
 #: Steps of the semismooth Newton method that are not part of the schema.
 SSN_START_STEPS = 5  # PGPM steps before the first Newton step
@@ -96,12 +99,20 @@ class SolverOptions:
     signorini_weight: float = _solver_default("signorini_weight")
 
     def __post_init__(self) -> None:
-        for name in ("method", "preconditioner", "projection", "edge_form", "flux_space",
-                     "jacobian"):
+        for name in (
+            "method",
+            "preconditioner",
+            "projection",
+            "edge_form",
+            "flux_space",
+            "jacobian",
+        ):
             allowed = CHOICES["solver", name]
             if getattr(self, name) not in allowed:
-                raise ValueError(f"SolverOptions.{name} must be one of {allowed}, "
-                                 f"got {getattr(self, name)!r}")
+                raise ValueError(
+                    f"SolverOptions.{name} must be one of {allowed}, "
+                    f"got {getattr(self, name)!r}"
+                )
 
 
 def solver_options(section: dict[str, Any]) -> SolverOptions:

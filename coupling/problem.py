@@ -66,10 +66,18 @@ class SignoriniProblem:
         Seconds per assembly stage: ``forms``, ``steklov_poincare``, ``loads``.
     """
 
-    def __init__(self, domain: Any, material: Any, *, f: Any = "0", u0: Any = "0",
-                 t0: Any = "0", a: float = 0.0,
-                 flux_space: str = DEFAULTS["solver"]["flux_space"],
-                 jacobian: str = DEFAULTS["solver"]["jacobian"]):
+    def __init__(
+        self,
+        domain: Any,
+        material: Any,
+        *,
+        f: Any = "0",
+        u0: Any = "0",
+        t0: Any = "0",
+        a: float = 0.0,
+        flux_space: str = DEFAULTS["solver"]["flux_space"],
+        jacobian: str = DEFAULTS["solver"]["jacobian"],
+    ):
         from fem_py.boundary import BoundaryMap
         from fem_py.forms import InteriorForms, p1_space
 
@@ -97,17 +105,20 @@ class SignoriniProblem:
         self.u0 = self.boundary.interpolate_boundary(u0)
         m_t = self.forms.boundary_load(t0, self.boundary)
         s_0 = self.S @ (self.a + self.u0)
-        self.functional = CoupledFunctional(self.forms, self.boundary, self.S,
-                                            self.forms.assemble_load(), m_t + s_0)
+        self.functional = CoupledFunctional(
+            self.forms, self.boundary, self.S, self.forms.assemble_load(), m_t + s_0
+        )
         timings["loads"] = time.perf_counter() - tic
         self.timings: Mapping[str, float] = MappingProxyType(timings)
         self._sealed = True
 
     def __setattr__(self, name: str, value: Any) -> None:
         if getattr(self, "_sealed", False):
-            raise AttributeError(f"SignoriniProblem.{name}: the assembled problem is not "
-                                 "changed after construction; build a new one, or pass the "
-                                 "option to coupling.solvers.solve")
+            raise AttributeError(
+                f"SignoriniProblem.{name}: the assembled problem is not "
+                "changed after construction; build a new one, or pass the "
+                "option to coupling.solvers.solve"
+            )
         object.__setattr__(self, name, value)
 
     @property
@@ -117,6 +128,11 @@ class SignoriniProblem:
 
     def exterior(self, solution: Any, points: np.ndarray) -> np.ndarray:
         """u_e at exterior points (m, 2) by the representation formula (METHOD.md section 2)."""
-        return bem_cpp.exterior_potential(self.boundary.nodes, solution.ue, solution.flux,
-                                          np.asarray(points, dtype=float), a=self.a,
-                                          flux=self.flux_space)
+        return bem_cpp.exterior_potential(
+            self.boundary.nodes,
+            solution.ue,
+            solution.flux,
+            np.asarray(points, dtype=float),
+            a=self.a,
+            flux=self.flux_space,
+        )

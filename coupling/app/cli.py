@@ -31,45 +31,68 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
 
     def common(p: argparse.ArgumentParser) -> None:
-        p.add_argument("--set", action="append", default=[], metavar="SECTION.KEY=VALUE",
-                       help="override a configuration key (TOML value; repeatable)")
+        p.add_argument(
+            "--set",
+            action="append",
+            default=[],
+            metavar="SECTION.KEY=VALUE",
+            help="override a configuration key (TOML value; repeatable)",
+        )
         p.add_argument("--debug", action="store_true", help="show tracebacks on errors")
 
-    solve = sub.add_parser("solve", help="solve the problem of a TOML configuration",
-                           description="Solve the coupled problem described by CONFIG "
-                           "and write summary.json, fields.npz, solution.xdmf and plots.")
+    solve = sub.add_parser(
+        "solve",
+        help="solve the problem of a TOML configuration",
+        description="Solve the coupled problem described by CONFIG "
+        "and write summary.json, fields.npz, solution.xdmf and plots.",
+    )
     solve.add_argument("config", metavar="CONFIG.toml")
     solve.add_argument("--out", metavar="DIR", help="output folder (default: [output] dir)")
-    solve.add_argument("--force", action="store_true",
-                       help="write into a non-empty DIR, replacing the files of an earlier "
-                       "run and deleting those this run does not write")
+    solve.add_argument(
+        "--force",
+        action="store_true",
+        help="write into a non-empty DIR, replacing the files of an earlier "
+        "run and deleting those this run does not write",
+    )
     solve.add_argument("--quiet", action="store_true", help="no progress lines")
     common(solve)
 
-    ext = sub.add_parser("exterior", help="u_e at exterior points from a finished run",
-                         description="Evaluate the exterior solution u_e at the points of "
-                         "a CSV file (two columns x, y; an optional header line) by the "
-                         "representation formula, from the fields.npz of RESULT_DIR.")
+    ext = sub.add_parser(
+        "exterior",
+        help="u_e at exterior points from a finished run",
+        description="Evaluate the exterior solution u_e at the points of "
+        "a CSV file (two columns x, y; an optional header line) by the "
+        "representation formula, from the fields.npz of RESULT_DIR.",
+    )
     ext.add_argument("result_dir", metavar="RESULT_DIR")
     ext.add_argument("--points", required=True, metavar="FILE.csv")
     ext.add_argument("--out", metavar="FILE.csv", help="write x,y,ue here (default: stdout)")
     ext.add_argument("--debug", action="store_true", help="show tracebacks on errors")
 
-    check = sub.add_parser("check-jacobian",
-                           help="compare the UFL and handwritten Jacobians (Taylor test)",
-                           description="Assemble both Jacobians of the interior energy at "
-                           "several smooth random states; exit 0 when they agree to 1e-10 "
-                           "relative and the Taylor remainder slope is 2 +- 0.1, else 1.")
+    check = sub.add_parser(
+        "check-jacobian",
+        help="compare the UFL and handwritten Jacobians (Taylor test)",
+        description="Assemble both Jacobians of the interior energy at "
+        "several smooth random states; exit 0 when they agree to 1e-10 "
+        "relative and the Taylor remainder slope is 2 +- 0.1, else 1.",
+    )
     check.add_argument("config", metavar="CONFIG.toml")
     check.add_argument("--json", action="store_true", help="print the report as JSON")
     common(check)
 
     # the study and the benchmark have their own options: everything after the
     # subcommand is passed on (``fembem study --help`` shows them)
-    sub.add_parser("study", add_help=False, help="reproduce the paper's claims: tables and "
-                   "plots in docs/study (see `fembem study --help`)")
-    sub.add_parser("bench", add_help=False, help="benchmark against PETSc SNES VI and TAO "
-                   "(see `fembem bench --help`)")
+    sub.add_parser(
+        "study",
+        add_help=False,
+        help="reproduce the paper's claims: tables and "
+        "plots in docs/study (see `fembem study --help`)",
+    )
+    sub.add_parser(
+        "bench",
+        add_help=False,
+        help="benchmark against PETSc SNES VI and TAO " "(see `fembem bench --help`)",
+    )
     return parser
 
 
@@ -79,8 +102,10 @@ def _run_script_main(relative: str, argv: list[str]) -> int:
 
     path = Path(__file__).resolve().parents[2] / relative
     if not path.is_file():
-        raise FileNotFoundError(f"{relative} not found: run `fembem bench` from an editable "
-                                "install of the source tree (make setup)")
+        raise FileNotFoundError(
+            f"{relative} not found: run `fembem bench` from an editable "
+            "install of the source tree (make setup)"
+        )
     return runpy.run_path(str(path))["main"](argv)
 
 
@@ -128,21 +153,32 @@ def _solve(args: argparse.Namespace) -> int:
     result = solve(problem, options, monitor=monitor)
     if monitor is not None:
         monitor.finished(result)
-    write_outputs(comm, out, problem, result, tol=options.tol,
-                  timings={**timings, **result.timings}, xdmf=config["output"]["xdmf"],
-                  plots=config["output"]["plots"], config=config)
+    write_outputs(
+        comm,
+        out,
+        problem,
+        result,
+        tol=options.tol,
+        timings={**timings, **result.timings},
+        xdmf=config["output"]["xdmf"],
+        plots=config["output"]["plots"],
+        config=config,
+    )
     if comm.rank == 0 and not args.quiet:
         state = "converged" if result.converged else "did NOT converge"
-        print(f"fembem: {state} after {result.iterations} iterations ({result.reason}); "
-              f"outputs in {out}")
+        print(
+            f"fembem: {state} after {result.iterations} iterations ({result.reason}); "
+            f"outputs in {out}"
+        )
     return EXIT_OK if result.converged else EXIT_NOT_CONVERGED
 
 
 def _read_points(path: Path) -> np.ndarray:
     """The (m, 2) points of a CSV file of x,y rows (an optional header line)."""
     if not path.is_file():
-        raise FileNotFoundError(f"--points: file {str(path)!r} not found; give a CSV file of "
-                                "x,y rows")
+        raise FileNotFoundError(
+            f"--points: file {str(path)!r} not found; give a CSV file of " "x,y rows"
+        )
     lines = [ln for ln in path.read_text().splitlines() if ln.strip()]
     if lines and not lines[0].lstrip()[0] in "+-.0123456789":
         lines = lines[1:]
@@ -165,9 +201,14 @@ def _exterior(args: argparse.Namespace) -> int:
     fields = load_fields(Path(args.result_dir))
     points = _read_points(Path(args.points))
     try:
-        ue = bem_cpp.exterior_potential(fields["boundary_x"], fields["ue"], fields["dn_ue"],
-                                        points, a=float(fields["a"]),
-                                        flux=str(fields["flux_space"]))
+        ue = bem_cpp.exterior_potential(
+            fields["boundary_x"],
+            fields["ue"],
+            fields["dn_ue"],
+            points,
+            a=float(fields["a"]),
+            flux=str(fields["flux_space"]),
+        )
     except ValueError as err:  # a point inside Omega or on Gamma
         raise ValueError(f"--points {args.points}: {err}") from None
     table = "x,y,ue\n" + "".join(f"{x:.17g},{y:.17g},{v:.17g}\n" for (x, y), v in zip(points, ue))
@@ -202,6 +243,7 @@ def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     if argv[:1] == ["study"]:
         from coupling.study import main as study  # loaded only when asked for
+
         return study(argv[1:])
     if argv[:1] == ["bench"]:
         return _run_script_main("bench/peers.py", argv[1:])
@@ -210,12 +252,14 @@ def main(argv: list[str] | None = None) -> int:
     if args.command is None:
         parser.print_help()
         return EXIT_OK
-    handler = {"solve": _solve, "exterior": _exterior,
-               "check-jacobian": _check_jacobian}[args.command]
+    handler = {"solve": _solve, "exterior": _exterior, "check-jacobian": _check_jacobian}[
+        args.command
+    ]
     from mpi4py import MPI
     from threadpoolctl import threadpool_limits
 
     from fem_py.parallel import threads_per_rank
+
     try:
         with threadpool_limits(threads_per_rank(MPI.COMM_WORLD)):  # no oversubscription
             return handler(args)

@@ -16,23 +16,40 @@ from typing import Any
 
 from coupling.options import CHOICES, DATA_VARIABLES, DEFAULTS
 
-__all__ = ["ConfigError", "load_config", "parse_config", "apply_override",
-           "check_data_and_material", "geometry_error"]
+__all__ = [
+    "ConfigError",
+    "load_config",
+    "parse_config",
+    "apply_override",
+    "check_data_and_material",
+    "geometry_error",
+]
 
 
 class ConfigError(ValueError):
     """A configuration error; the message names the key and the fix."""
 
 
-_POSITIVE = {("geometry", "h"), ("geometry", "subdomain_size"), ("geometry", "width"),
-             ("solver", "tol"), ("solver", "max_iterations"),
-             ("solver", "projection_max_iterations"), ("solver", "signorini_weight"),
-             ("material", "eps")}
+_POSITIVE = {
+    ("geometry", "h"),
+    ("geometry", "subdomain_size"),
+    ("geometry", "width"),
+    ("solver", "tol"),
+    ("solver", "max_iterations"),
+    ("solver", "projection_max_iterations"),
+    ("solver", "signorini_weight"),
+    ("material", "eps"),
+}
 
 
 def _type_name(value: Any) -> str:
-    return {bool: "a boolean", int: "an integer", float: "a number", str: "a string",
-            list: "a list"}[type(value)]
+    return {
+        bool: "a boolean",
+        int: "an integer",
+        float: "a number",
+        str: "a string",
+        list: "a list",
+    }[type(value)]
 
 
 def _check_value(section: str, key: str, value: Any) -> Any:
@@ -42,18 +59,25 @@ def _check_value(section: str, key: str, value: Any) -> Any:
     if (section, key) == ("solver", "step"):
         if value == "auto":
             return value
-        if isinstance(value, (int, float)) and not isinstance(value, bool) and value > 0 \
-                and math.isfinite(value):
+        if (
+            isinstance(value, (int, float))
+            and not isinstance(value, bool)
+            and value > 0
+            and math.isfinite(value)
+        ):
             return float(value)
-        raise ConfigError(f"{name} must be \"auto\" or a positive number, got {value!r}")
+        raise ConfigError(f'{name} must be "auto" or a positive number, got {value!r}')
     if (section, key) == ("geometry", "signorini"):
         return _check_signorini(value)
     if isinstance(default, bool):
         if not isinstance(value, bool):
             raise ConfigError(f"{name} must be true or false, got {value!r}")
     elif isinstance(default, float):
-        if isinstance(value, bool) or not isinstance(value, (int, float)) \
-                or not math.isfinite(value):
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, (int, float))
+            or not math.isfinite(value)
+        ):
             raise ConfigError(f"{name} must be a finite number, got {value!r}")
         value = float(value)
     elif isinstance(default, int):
@@ -76,9 +100,14 @@ def _check_value(section: str, key: str, value: Any) -> Any:
 
 
 def _point(name: str, value: Any) -> list[float]:
-    if (not isinstance(value, list) or len(value) != 2
-            or not all(isinstance(c, (int, float)) and not isinstance(c, bool)
-                       and math.isfinite(c) for c in value)):
+    if (
+        not isinstance(value, list)
+        or len(value) != 2
+        or not all(
+            isinstance(c, (int, float)) and not isinstance(c, bool) and math.isfinite(c)
+            for c in value
+        )
+    ):
         raise ConfigError(f"{name} must be a point [x, y] of two numbers, got {value!r}")
     return [float(value[0]), float(value[1])]
 
@@ -89,18 +118,22 @@ def _check_signorini(value: Any) -> str | list:
     if value == "all":
         return value
     if not isinstance(value, list):
-        raise ConfigError(f'{name} must be "all" or a list of arcs [[x0, y0], [x1, y1]] '
-                          f"or side names, got {value!r}")
+        raise ConfigError(
+            f'{name} must be "all" or a list of arcs [[x0, y0], [x1, y1]] '
+            f"or side names, got {value!r}"
+        )
     arcs: list = []
     for i, arc in enumerate(value):
         if isinstance(arc, str):
             arcs.append(arc)
         elif isinstance(arc, list) and len(arc) == 2:
-            arcs.append((tuple(_point(f"{name}[{i}][0]", arc[0])),
-                         tuple(_point(f"{name}[{i}][1]", arc[1]))))
+            arcs.append(
+                (tuple(_point(f"{name}[{i}][0]", arc[0])), tuple(_point(f"{name}[{i}][1]", arc[1])))
+            )
         else:
-            raise ConfigError(f"{name}[{i}] must be a side name or an arc "
-                              f"[[x0, y0], [x1, y1]], got {arc!r}")
+            raise ConfigError(
+                f"{name}[{i}] must be a side name or an arc " f"[[x0, y0], [x1, y1]], got {arc!r}"
+            )
     return arcs
 
 
@@ -127,13 +160,16 @@ def parse_config(raw: dict[str, Any]) -> dict[str, dict[str, Any]]:
         for key, value in table.items():
             if key not in DEFAULTS[section]:
                 known = ", ".join(DEFAULTS[section])
-                raise ConfigError(f"unknown key {section}.{key}; the keys of [{section}] "
-                                  f"are {known}")
+                raise ConfigError(
+                    f"unknown key {section}.{key}; the keys of [{section}] " f"are {known}"
+                )
             config[section][key] = _check_value(section, key, value)
     geometry = config["geometry"]
     if geometry["shape"] == "polygon" and len(geometry["vertices"]) < 3:
-        raise ConfigError("geometry.vertices must list at least 3 points [x, y] in "
-                          'counter-clockwise order when geometry.shape = "polygon"')
+        raise ConfigError(
+            "geometry.vertices must list at least 3 points [x, y] in "
+            'counter-clockwise order when geometry.shape = "polygon"'
+        )
     return config
 
 
@@ -152,8 +188,11 @@ def apply_override(raw: dict[str, Any], assignment: str) -> None:
         value = tomllib.loads(f"v = {rhs.strip()}")["v"]
     except tomllib.TOMLDecodeError:
         value = rhs.strip()
-    if isinstance(DEFAULTS.get(section, {}).get(key), str) and not isinstance(value, str) \
-            and (section, key) != ("solver", "step"):  # step: "auto" or a number
+    if (
+        isinstance(DEFAULTS.get(section, {}).get(key), str)
+        and not isinstance(value, str)
+        and (section, key) != ("solver", "step")
+    ):  # step: "auto" or a number
         value = rhs.strip()
     raw.setdefault(section, {})
     if not isinstance(raw[section], dict):
@@ -167,8 +206,10 @@ def load_config(path: str | Path | None, overrides: list[str] = ()) -> dict[str,
     if path is not None:
         path = Path(path)
         if not path.is_file():
-            raise ConfigError(f"configuration file {str(path)!r} not found; give the path "
-                              "of an existing TOML file")
+            raise ConfigError(
+                f"configuration file {str(path)!r} not found; give the path "
+                "of an existing TOML file"
+            )
         try:
             raw = tomllib.loads(path.read_text())
         except tomllib.TOMLDecodeError as err:
@@ -210,8 +251,10 @@ def check_data_and_material(config: dict[str, dict[str, Any]]) -> None:
         make_material(material["rho"], p=material["p"], eps=material["eps"])
     except ValueError as err:
         # the power law's own parameters are named in its messages ("needs p > 1")
-        key = next((k for k in ("p", "eps") if material["rho"] == "power"
-                    and f"needs {k} " in str(err)), "rho")
+        key = next(
+            (k for k in ("p", "eps") if material["rho"] == "power" and f"needs {k} " in str(err)),
+            "rho",
+        )
         raise ConfigError(f"material.{key}: {err}") from None
 
 

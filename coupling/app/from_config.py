@@ -18,10 +18,18 @@ def domain_from_config(comm: MPI.Comm, config: dict) -> Any:
     from fem_py.geometry import build_domain
 
     g = config["geometry"]
-    return build_domain(comm, g["shape"], h=g["h"], subdomain_size=g["subdomain_size"],
-                        center=tuple(g["center"]), width=g["width"],
-                        vertices=g["vertices"] or None, signorini=g["signorini"],
-                        structured=g["structured"], allow_large=g["allow_large"])
+    return build_domain(
+        comm,
+        g["shape"],
+        h=g["h"],
+        subdomain_size=g["subdomain_size"],
+        center=tuple(g["center"]),
+        width=g["width"],
+        vertices=g["vertices"] or None,
+        signorini=g["signorini"],
+        structured=g["structured"],
+        allow_large=g["allow_large"],
+    )
 
 
 def material_from_config(config: dict) -> Any:
@@ -32,8 +40,9 @@ def material_from_config(config: dict) -> Any:
     return make_material(m["rho"], p=m["p"], eps=m["eps"])
 
 
-def problem_from_config(comm: MPI.Comm, config: dict
-                        ) -> tuple[SignoriniProblem, SolverOptions, dict[str, float]]:
+def problem_from_config(
+    comm: MPI.Comm, config: dict
+) -> tuple[SignoriniProblem, SolverOptions, dict[str, float]]:
     """The assembled problem, the solver options and the set-up timings (``mesh`` and the
     problem's stages) of a validated configuration (collective)."""
     data = config["data"]
@@ -42,7 +51,14 @@ def problem_from_config(comm: MPI.Comm, config: dict
     tic = time.perf_counter()
     domain = domain_from_config(comm, config)
     mesh_time = time.perf_counter() - tic
-    problem = SignoriniProblem(domain, material, f=data["f"], u0=data["u0"], t0=data["t0"],
-                               a=data["a"], flux_space=options.flux_space,
-                               jacobian=options.jacobian)
+    problem = SignoriniProblem(
+        domain,
+        material,
+        f=data["f"],
+        u0=data["u0"],
+        t0=data["t0"],
+        a=data["a"],
+        flux_space=options.flux_space,
+        jacobian=options.jacobian,
+    )
     return problem, options, {"mesh": mesh_time, **problem.timings}

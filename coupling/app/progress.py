@@ -18,17 +18,26 @@ class ProgressMonitor:
         self.comm, self.every, self.stream = comm, every, stream
 
     def __call__(self, record: IterationRecord) -> None:
-        if self.comm.rank != 0 or not (record.iteration % self.every == 0
-                                       or record.iteration == 1):
+        if self.comm.rank != 0 or not (record.iteration % self.every == 0 or record.iteration == 1):
             return
-        inner = (f"cg = {record.cg_iterations}" if record.line_search is not None
-                 else f"projection = {record.projection_iterations}")
-        print(f"  it {record.iteration:5d}  J_h = {record.energy:.12e}  "
-              f"step = {record.step_norm:.3e}  contact = {record.contact}  {inner}",
-              file=self.stream, flush=True)
+        inner = (
+            f"cg = {record.cg_iterations}"
+            if record.line_search is not None
+            else f"projection = {record.projection_iterations}"
+        )
+        print(
+            f"  it {record.iteration:5d}  J_h = {record.energy:.12e}  "
+            f"step = {record.step_norm:.3e}  contact = {record.contact}  {inner}",
+            file=self.stream,
+            flush=True,
+        )
 
     def finished(self, solution) -> None:
         """A note when J_h increased during the solve (tau was halved)."""
         if solution.energy_increases and self.comm.rank == 0:
-            print(f"  note: J_h increased {solution.energy_increases} times; tau was halved "
-                  f"to {solution.tau:.3e}", file=self.stream, flush=True)
+            print(
+                f"  note: J_h increased {solution.energy_increases} times; tau was halved "
+                f"to {solution.tau:.3e}",
+                file=self.stream,
+                flush=True,
+            )

@@ -25,14 +25,18 @@ def prepare_output_dir(comm: MPI.Comm, out: Path, *, force: bool) -> None:
         if out.exists() and not out.is_dir():
             error = f"output path {str(out)!r} exists and is not a folder; choose another --out"
         elif out.is_dir() and any(out.iterdir()) and not force:
-            error = (f"output folder {str(out)!r} is not empty; pass --force to overwrite "
-                     "it or choose another --out")
+            error = (
+                f"output folder {str(out)!r} is not empty; pass --force to overwrite "
+                "it or choose another --out"
+            )
         else:
             try:
                 out.mkdir(parents=True, exist_ok=True)
             except OSError as err:  # reported on every rank, not raised on rank 0 alone
-                error = (f"cannot create output folder {str(out)!r} ({err.strerror}); "
-                         "choose another --out")
+                error = (
+                    f"cannot create output folder {str(out)!r} ({err.strerror}); "
+                    "choose another --out"
+                )
     error = comm.bcast(error, root=0)
     if error:
         raise FileExistsError(error)

@@ -27,8 +27,7 @@ from mpi4py import MPI
 from coupling.io.atomic import atomic_write
 from coupling.io.plots import PLOT_FILES, write_plots
 
-__all__ = ["DATA_FILES", "write_outputs", "boundary_fields", "gather_p1", "load_fields",
-           "summary"]
+__all__ = ["DATA_FILES", "write_outputs", "boundary_fields", "gather_p1", "load_fields", "summary"]
 
 #: The files of a run besides the plots (coupling.plots.PLOT_FILES).
 DATA_FILES = ("summary.json", "fields.npz", "solution.xdmf", "solution.h5")
@@ -55,7 +54,7 @@ def gather_p1(u) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     N = index_map.size_global
     X, U = np.empty((N, 2)), np.empty(N)
     for s, xi, ui, _ in parts:
-        X[s:s + len(ui)], U[s:s + len(ui)] = xi, ui
+        X[s : s + len(ui)], U[s : s + len(ui)] = xi, ui
     return X, U, np.concatenate([c for *_, c in parts])
 
 
@@ -92,13 +91,29 @@ def boundary_fields(problem, result) -> dict[str, np.ndarray]:
     phi[boundary.signorini] = result.phi
     active[boundary.signorini] = result.contact
     signorini[boundary.signorini] = True
-    return dict(boundary_x=boundary.nodes, boundary_u=result.boundary_u, phi=phi,
-                ue=result.ue, dn_ue=result.flux, active=active, signorini=signorini)
+    return dict(
+        boundary_x=boundary.nodes,
+        boundary_u=result.boundary_u,
+        phi=phi,
+        ue=result.ue,
+        dn_ue=result.flux,
+        active=active,
+        signorini=signorini,
+    )
 
 
-def write_outputs(comm: MPI.Comm, out: Path, problem, result, *, tol: float,
-                  timings: Mapping[str, float], xdmf: bool, plots: bool,
-                  config: dict | None = None) -> list[str]:
+def write_outputs(
+    comm: MPI.Comm,
+    out: Path,
+    problem,
+    result,
+    *,
+    tol: float,
+    timings: Mapping[str, float],
+    xdmf: bool,
+    plots: bool,
+    config: dict | None = None,
+) -> list[str]:
     """Write summary.json, fields.npz and, on request, solution.xdmf/.h5 and the plots.
 
     Collective. Files of an earlier run in ``out`` that this run does not write (plots
@@ -120,8 +135,14 @@ def write_outputs(comm: MPI.Comm, out: Path, problem, result, *, tol: float,
         written += ["solution.xdmf", "solution.h5"]
     if comm.rank == 0:
         x, u, triangles = gathered
-        fields = dict(x=x, u=u, triangles=triangles, **boundary_fields(problem, result),
-                      a=np.array(problem.a), flux_space=np.array(problem.flux_space))
+        fields = dict(
+            x=x,
+            u=u,
+            triangles=triangles,
+            **boundary_fields(problem, result),
+            a=np.array(problem.a),
+            flux_space=np.array(problem.flux_space),
+        )
         atomic_write(out / "fields.npz", lambda p: np.savez(p, **fields))  # p ends in .npz
         written.append("fields.npz")
         if plots:
@@ -131,8 +152,9 @@ def write_outputs(comm: MPI.Comm, out: Path, problem, result, *, tol: float,
             record["config"] = config
         record["files"] = sorted(written + ["summary.json"])
         # last, so that a summary.json names a complete set of files
-        atomic_write(out / "summary.json",
-                     lambda p: p.write_text(json.dumps(record, indent=2, default=str)))
+        atomic_write(
+            out / "summary.json", lambda p: p.write_text(json.dumps(record, indent=2, default=str))
+        )
         written.append("summary.json")
         for name in set(DATA_FILES + PLOT_FILES) - set(written):
             (out / name).unlink(missing_ok=True)
@@ -165,7 +187,8 @@ def load_fields(result_dir: Path) -> dict:
     """Read fields.npz of a finished run (rank-independent)."""
     path = Path(result_dir) / "fields.npz"
     if not path.is_file():
-        raise FileNotFoundError(f"{str(path)!r} not found; give the output folder of a "
-                                "finished `fembem solve` run")
+        raise FileNotFoundError(
+            f"{str(path)!r} not found; give the output folder of a " "finished `fembem solve` run"
+        )
     with np.load(path) as data:
         return {k: data[k] for k in data.files}

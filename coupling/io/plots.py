@@ -90,16 +90,20 @@ def _draw_boundary(ax, fields: dict) -> None:
     shut = fields["phi"] == 0.0
     contact = panels & shut & np.roll(shut, -1)
     segments = np.stack([nodes, np.roll(nodes, -1, axis=0)], axis=1)
-    for mask, color, label in ((contact, "tab:red", r"$\Gamma_s$ in contact ($\phi_h = 0$)"),
-                               (panels & ~contact, "tab:blue", r"$\Gamma_s$ open ($\phi_h > 0$)")):
-        ax.add_collection(LineCollection(segments[mask], colors=color, linewidths=3.0,
-                                         capstyle="butt", label=label, zorder=5))
+    for mask, color, label in (
+        (contact, "tab:red", r"$\Gamma_s$ in contact ($\phi_h = 0$)"),
+        (panels & ~contact, "tab:blue", r"$\Gamma_s$ open ($\phi_h > 0$)"),
+    ):
+        ax.add_collection(
+            LineCollection(
+                segments[mask], colors=color, linewidths=3.0, capstyle="butt", label=label, zorder=5
+            )
+        )
     sig, active = fields["signorini"], fields["active"]
     if sig.sum() <= 64:
         ax.plot(*nodes[sig & active].T, zorder=6, **_CONTACT)
         ax.plot(*nodes[sig & ~active].T, zorder=6, **_OPEN)
-    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2, fontsize=8,
-              frameon=False)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2, fontsize=8, frameon=False)
 
 
 def _figure_u(fields: dict, tri: Triangulation):
@@ -115,15 +119,21 @@ def _figure_boundary(fields: dict):
     nodes = fields["boundary_x"]
     n = len(nodes)
     s = arc_length(_closed(nodes))
-    fig, axes = plt.subplots(3, 1, figsize=(7.5, 6.5), sharex=True,
-                             gridspec_kw=dict(height_ratios=[3, 3, 1.3]))
+    fig, axes = plt.subplots(
+        3, 1, figsize=(7.5, 6.5), sharex=True, gridspec_kw=dict(height_ratios=[3, 3, 1.3])
+    )
     # a run of Signorini panels may wrap past node 0: shade its pieces on either side
-    spans = [(s[a], s[b]) for i, j in _runs(_signorini_panels(fields))
-             for a, b in ((i, min(j, n)), (max(i, n) - n, j - n)) if b > a]
+    spans = [
+        (s[a], s[b])
+        for i, j in _runs(_signorini_panels(fields))
+        for a, b in ((i, min(j, n)), (max(i, n) - n, j - n))
+        if b > a
+    ]
     for ax in axes:
         for k, span in enumerate(spans):
-            ax.axvspan(*span, color="tab:orange", alpha=0.15, lw=0,
-                       label=r"$\Gamma_s$" if k == 0 else None)
+            ax.axvspan(
+                *span, color="tab:orange", alpha=0.15, lw=0, label=r"$\Gamma_s$" if k == 0 else None
+            )
         for c in _corners(nodes):
             ax.axvline(s[c], color="0.6", lw=0.6, ls=":")
         ax.grid(alpha=0.3, lw=0.5)
@@ -140,8 +150,10 @@ def _figure_boundary(fields: dict):
     axes[2].plot(s[:-1][sig & ~active], np.zeros(np.count_nonzero(sig & ~active)), **_OPEN)
     axes[2].set(yticks=[0, 1], yticklabels=["open", "contact"], ylim=(-0.5, 1.5))
     x0, y0 = nodes[0]
-    axes[2].set_xlabel(f"arc length $s$ along $\\Gamma$, counter-clockwise from "
-                       f"$({x0:.3g}, {y0:.3g})$ (dotted: corners)")
+    axes[2].set_xlabel(
+        f"arc length $s$ along $\\Gamma$, counter-clockwise from "
+        f"$({x0:.3g}, {y0:.3g})$ (dotted: corners)"
+    )
     axes[2].set_xlim(0, s[-1])
     if sig.any():
         axes[0].legend(loc="upper right", fontsize=8)
@@ -174,8 +186,14 @@ def _figure_whole_plane(fields: dict, tri: Triangulation, resolution: int = 121)
     outside = ~PolygonPath(nodes).contains_points(grid)
     outside[outside] = _distance_to_polygon(grid[outside], nodes[_corners(nodes)]) > h / 20
     grid = grid[outside]
-    ue_grid = bem_cpp.exterior_potential(nodes, fields["ue"], fields["dn_ue"], grid,
-                                         a=float(fields["a"]), flux=str(fields["flux_space"]))
+    ue_grid = bem_cpp.exterior_potential(
+        nodes,
+        fields["ue"],
+        fields["dn_ue"],
+        grid,
+        a=float(fields["a"]),
+        flux=str(fields["flux_space"]),
+    )
     points = np.vstack([grid, nodes])
     ue = np.concatenate([ue_grid, fields["ue"]])
     ext = Triangulation(points[:, 0], points[:, 1])
@@ -191,16 +209,30 @@ def _figure_whole_plane(fields: dict, tri: Triangulation, resolution: int = 121)
     levels = np.linspace(vmin, vmax, 17)[1:-1]
     fig, ax = plt.subplots(figsize=(6.2, 5.6))
     for z, (t, v) in enumerate(((ext, ue), (tri, u))):  # Omega's layers over the exterior's
-        im = ax.tripcolor(t, v, shading="gouraud", cmap="viridis", vmin=vmin, vmax=vmax,
-                          zorder=2 * z)
-        ax.tricontour(t, v, levels=levels, colors="white", linewidths=0.5, alpha=0.6,
-                      linestyles="solid", zorder=2 * z + 1)
+        im = ax.tripcolor(
+            t, v, shading="gouraud", cmap="viridis", vmin=vmin, vmax=vmax, zorder=2 * z
+        )
+        ax.tricontour(
+            t,
+            v,
+            levels=levels,
+            colors="white",
+            linewidths=0.5,
+            alpha=0.6,
+            linestyles="solid",
+            zorder=2 * z + 1,
+        )
     fig.colorbar(im, ax=ax, shrink=0.85, label=r"$u_h$ in $\Omega$, $u_e$ outside")
     _draw_boundary(ax, fields)
-    ax.set(aspect="equal", xlabel="$x$", ylabel="$y$", xlim=(X.min(), X.max()),
-           ylim=(Y.min(), Y.max()))
-    ax.set_title(r"Whole plane: $u_h$ in $\Omega$, $u_e$ (representation formula) outside;"
-                 "\n" r"across $\Gamma$ they differ by $u_0 - \phi_h$", fontsize=10)
+    ax.set(
+        aspect="equal", xlabel="$x$", ylabel="$y$", xlim=(X.min(), X.max()), ylim=(Y.min(), Y.max())
+    )
+    ax.set_title(
+        r"Whole plane: $u_h$ in $\Omega$, $u_e$ (representation formula) outside;"
+        "\n"
+        r"across $\Gamma$ they differ by $u_0 - \phi_h$",
+        fontsize=10,
+    )
     return fig
 
 
@@ -209,14 +241,18 @@ def _figure_history(history: Sequence, tol: float):
     energy = np.array([r.energy for r in history])
     step = np.array([r.step_norm for r in history])
     contact = np.array([r.contact for r in history])
-    fig, axes = plt.subplots(2, 1, figsize=(6.5, 5.5), sharex=True,
-                             gridspec_kw=dict(height_ratios=[3, 1.3]))
+    fig, axes = plt.subplots(
+        2, 1, figsize=(6.5, 5.5), sharex=True, gridspec_kw=dict(height_ratios=[3, 1.3])
+    )
     ax = axes[0]
     ax.semilogy(it, step, label=r"$\Vert\xi_{k+1} - \xi_k\Vert_B \,/\, \Vert\xi_{k+1}\Vert_B$")
     best = energy.min()  # J* below: the lowest energy reached
     keep = energy > best
-    ax.semilogy(it[keep], (energy[keep] - best) / max(abs(best), 1e-300),
-                label=r"$(J_h(\xi_k) - J^*) \,/\, |J^*|$,  $J^*$: lowest $J_h$ reached")
+    ax.semilogy(
+        it[keep],
+        (energy[keep] - best) / max(abs(best), 1e-300),
+        label=r"$(J_h(\xi_k) - J^*) \,/\, |J^*|$,  $J^*$: lowest $J_h$ reached",
+    )
     ax.axhline(tol, color="0.4", ls="--", lw=0.8, label=f"tol = {tol:g}")
     ax.set_ylabel("relative size")
     ax.grid(alpha=0.3, lw=0.5, which="both")
@@ -243,17 +279,20 @@ def write_plots(out: Path, fields: dict, history: Sequence, *, tol: float) -> li
         The PGPM tolerance, drawn in history.png.
     """
     tri = Triangulation(fields["x"][:, 0], fields["x"][:, 1], fields["triangles"])
-    figures = {"u.png": lambda: _figure_u(fields, tri),
-               "boundary.png": lambda: _figure_boundary(fields),
-               "whole_plane.png": lambda: _figure_whole_plane(fields, tri),
-               "history.png": lambda: _figure_history(history, tol) if len(history) else None}
+    figures = {
+        "u.png": lambda: _figure_u(fields, tri),
+        "boundary.png": lambda: _figure_boundary(fields),
+        "whole_plane.png": lambda: _figure_whole_plane(fields, tri),
+        "history.png": lambda: _figure_history(history, tol) if len(history) else None,
+    }
     written = []
     for name in PLOT_FILES:
         fig = figures[name]()
         if fig is None:
             continue
-        atomic_write(Path(out) / name, lambda p: fig.savefig(p, dpi=110, bbox_inches="tight",
-                                                       format="png"))
+        atomic_write(
+            Path(out) / name, lambda p: fig.savefig(p, dpi=110, bbox_inches="tight", format="png")
+        )
         plt.close(fig)
         written.append(name)
     return written

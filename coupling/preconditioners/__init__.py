@@ -18,17 +18,27 @@ from typing import Any
 from coupling.distributed import gather_matrix, gather_rows
 from coupling.options import SolverOptions
 from coupling.preconditioners.base import IdentityPreconditioner, Preconditioner
-from coupling.preconditioners.distributed import (DistributedSubstructuringPreconditioner,
-                                                  subdomain_ranks)
+from coupling.preconditioners.distributed import (
+    DistributedSubstructuringPreconditioner,
+    subdomain_ranks,
+)
 from coupling.preconditioners.exact import ExactPreconditioner
 from coupling.preconditioners.root import RootPreconditioner
 from coupling.preconditioners.signorini import SignoriniArc, signorini_arcs
 from coupling.preconditioners.substructuring import SubstructuringPreconditioner
 from fem_py.geometry import GAMMA_T_TAG
 
-__all__ = ["Preconditioner", "IdentityPreconditioner", "SubstructuringPreconditioner",
-           "DistributedSubstructuringPreconditioner", "RootPreconditioner",
-           "ExactPreconditioner", "SignoriniArc", "build_preconditioner", "problem_arcs"]
+__all__ = [
+    "Preconditioner",
+    "IdentityPreconditioner",
+    "SubstructuringPreconditioner",
+    "DistributedSubstructuringPreconditioner",
+    "RootPreconditioner",
+    "ExactPreconditioner",
+    "SignoriniArc",
+    "build_preconditioner",
+    "problem_arcs",
+]
 
 
 def problem_arcs(problem: Any) -> list[SignoriniArc]:
@@ -54,15 +64,25 @@ def build_preconditioner(problem: Any, options: SolverOptions) -> Preconditioner
     stiffness = problem.forms.assemble_stiffness()
     arcs = problem_arcs(problem)
     if kind == "substructuring" and comm.size > 1:
-        ranks = subdomain_ranks(comm, domain.cell_tags,
-                                domain.mesh.topology.index_map(2).size_local,
-                                domain.coarse.n_subdomains)
+        ranks = subdomain_ranks(
+            comm,
+            domain.cell_tags,
+            domain.mesh.topology.index_map(2).size_local,
+            domain.coarse.n_subdomains,
+        )
         if ranks is not None:  # whole subdomains per rank: no gathering
             try:
                 return DistributedSubstructuringPreconditioner(
-                    comm, stiffness, V.dofmap.index_map, domain.coarse, ranks,
-                    domain.subdomain_size, arcs, edge_form=options.edge_form,
-                    signorini_weight=options.signorini_weight)
+                    comm,
+                    stiffness,
+                    V.dofmap.index_map,
+                    domain.coarse,
+                    ranks,
+                    domain.subdomain_size,
+                    arcs,
+                    edge_form=options.edge_form,
+                    signorini_weight=options.signorini_weight,
+                )
             finally:
                 stiffness.destroy()
     csr = gather_matrix(stiffness)
@@ -74,7 +94,13 @@ def build_preconditioner(problem: Any, options: SolverOptions) -> Preconditioner
         if kind == "exact":
             return ExactPreconditioner(csr, problem.boundary.dofs, problem.boundary.signorini, S)
         return SubstructuringPreconditioner(
-            csr, domain.coarse, x, domain.subdomain_size, arcs, edge_form=options.edge_form,
-            signorini_weight=options.signorini_weight)
+            csr,
+            domain.coarse,
+            x,
+            domain.subdomain_size,
+            arcs,
+            edge_form=options.edge_form,
+            signorini_weight=options.signorini_weight,
+        )
 
     return build() if comm.size == 1 else RootPreconditioner(comm, n_owned, build)

@@ -11,23 +11,31 @@ __all__ = ["Preconditioner", "IdentityPreconditioner", "check_length"]
 
 
 class Preconditioner(Protocol):
-    """Interface of the block-diagonal preconditioner B = B_Omega + B_s used by the PGPM (3.21)-(3.22)."""
+    """Interface of the block-diagonal preconditioner B = B_Omega + B_s used by the PGPM "
+    "(3.21)-(3.22)."""
 
-    def apply_omega(self, g: np.ndarray) -> np.ndarray: ...  # B_Omega^{-1} g
+    def apply_omega(self, g: np.ndarray) -> np.ndarray:
+        ...  # B_Omega^{-1} g
 
-    def matvec_omega(self, u: np.ndarray) -> np.ndarray: ...  # B_Omega u
+    def matvec_omega(self, u: np.ndarray) -> np.ndarray:
+        ...  # B_Omega u
 
-    def apply_signorini(self, g: np.ndarray) -> np.ndarray: ...  # M_s^{-1} g
+    def apply_signorini(self, g: np.ndarray) -> np.ndarray:
+        ...  # M_s^{-1} g
 
-    def matvec_signorini(self, phi: np.ndarray) -> np.ndarray: ...  # M_s phi
+    def matvec_signorini(self, phi: np.ndarray) -> np.ndarray:
+        ...  # M_s phi
 
     @property
-    def lambda_max_signorini(self) -> float: ...  # largest eigenvalue of M_s, for theta in (3.20)
+    def lambda_max_signorini(self) -> float:
+        ...  # largest eigenvalue of M_s, for theta in (3.20)
 
     @property
-    def signorini_metric(self) -> np.ndarray: ...  # M_s, dense (the metric of the projection (3.19))
+    def signorini_metric(self) -> np.ndarray:
+        ...  # M_s, dense (the metric of the projection (3.19))
 
-    def destroy(self) -> None: ...  # free solver objects (PETSc) on every rank
+    def destroy(self) -> None:
+        ...  # free solver objects (PETSc) on every rank
 
 
 class IdentityPreconditioner:
@@ -41,7 +49,9 @@ class IdentityPreconditioner:
 
     def __init__(self, n_omega: int, n_signorini: int) -> None:
         if n_omega < 1 or n_signorini < 0:
-            raise ValueError(f"need n_omega >= 1 and n_signorini >= 0, got {n_omega}, {n_signorini}")
+            raise ValueError(
+                f"need n_omega >= 1 and n_signorini >= 0, got {n_omega}, {n_signorini}"
+            )
         self.n_omega = int(n_omega)
         self.n_signorini = int(n_signorini)
 
@@ -74,5 +84,3 @@ def check_length(v: np.ndarray, n: int, name: str) -> np.ndarray:
     if v.ndim not in (1, 2) or v.shape[0] != n:
         raise ValueError(f"{name} must have shape ({n},) or ({n}, k), got {v.shape}")
     return v
-
-

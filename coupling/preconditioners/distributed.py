@@ -20,9 +20,10 @@ one forward scatter, one local A_II solve, one reverse scatter, two Allreduces. 
 Signorini block (a few hundred to a few thousand unknowns) is replicated on every
 rank (:class:`coupling.preconditioners.signorini.SignoriniBlock`).
 
-The result equals the serial :class:`coupling.preconditioners.substructuring.SubstructuringPreconditioner`
-up to round-off (sums in another order), so the PGPM iterates do not depend on the
-number of ranks.
+The result equals the serial
+:class:`coupling.preconditioners.substructuring.SubstructuringPreconditioner` up to
+round-off (sums in another order), so the PGPM iterates do not depend on the number of
+ranks.
 """
 from __future__ import annotations
 
@@ -33,16 +34,21 @@ import scipy.sparse as sp
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from coupling.preconditioners.kernels import (SparseFactor, block_diagonal_edge_forms,
-                                              coarse_matrix, edge_weights)
+from coupling.preconditioners.kernels import (
+    SparseFactor,
+    block_diagonal_edge_forms,
+    coarse_matrix,
+    edge_weights,
+)
 from coupling.preconditioners.signorini import SignoriniArc, SignoriniBlock
 from fem_py.coarse import as_ragged
 
 __all__ = ["DistributedSubstructuringPreconditioner", "subdomain_ranks"]
 
 
-def subdomain_ranks(comm: MPI.Comm, cell_tags: Any, n_owned_cells: int,
-                    n_subdomains: int) -> np.ndarray | None:
+def subdomain_ranks(
+    comm: MPI.Comm, cell_tags: Any, n_owned_cells: int, n_subdomains: int
+) -> np.ndarray | None:
     """The rank owning each subdomain, or None if some subdomain is split between ranks.
 
     Collective. ``cell_tags`` are the subdomain ids of the cells (dolfinx MeshTags);
@@ -63,8 +69,9 @@ class _GhostExchange:
     """Owned <-> owned + ghost arrays of the P1 dof layout, through one ghosted PETSc Vec."""
 
     def __init__(self, comm: MPI.Comm, n_owned: int, n_global: int, ghosts: np.ndarray):
-        self._vec = PETSc.Vec().createGhost(np.asarray(ghosts, dtype=PETSc.IntType),
-                                            (n_owned, n_global), comm=comm)
+        self._vec = PETSc.Vec().createGhost(
+            np.asarray(ghosts, dtype=PETSc.IntType), (n_owned, n_global), comm=comm
+        )
         self.n_owned, self.n_local = n_owned, n_owned + len(ghosts)
 
     def forward(self, owned: np.ndarray) -> np.ndarray:
@@ -106,10 +113,19 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
     ``apply_omega`` and ``matvec_omega`` act on the owned entries of u.
     """
 
-    def __init__(self, comm: MPI.Comm, stiffness: PETSc.Mat, index_map: Any, coarse: Any,
-                 subdomain_rank: np.ndarray, subdomain_size: float,
-                 signorini_arcs: Sequence[SignoriniArc], *, edge_form: str,
-                 signorini_weight: float) -> None:
+    def __init__(
+        self,
+        comm: MPI.Comm,
+        stiffness: PETSc.Mat,
+        index_map: Any,
+        coarse: Any,
+        subdomain_rank: np.ndarray,
+        subdomain_size: float,
+        signorini_arcs: Sequence[SignoriniArc],
+        *,
+        edge_form: str,
+        signorini_weight: float,
+    ) -> None:
         self._init_signorini(signorini_arcs, subdomain_size, edge_form, signorini_weight)
         self.comm = comm
         r0, r1 = index_map.local_range
@@ -137,13 +153,21 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
         cols = to_local(indices.astype(np.int64))
         keep = int_pos[rows] >= 0
         rows, cols, data = int_pos[rows[keep]], cols[keep], data[keep]
-        if np.any(cols < 0) or np.any((sk_pos[np.maximum(cols, 0)] < 0) & (int_pos[np.maximum(cols, 0)] < 0)):
-            raise ValueError("a subdomain interior dof couples to a dof owned by another rank: "
-                             "the mesh is not partitioned by subdomains (use fem_py.geometry.build_domain)")
+        if np.any(cols < 0) or np.any(
+            (sk_pos[np.maximum(cols, 0)] < 0) & (int_pos[np.maximum(cols, 0)] < 0)
+        ):
+            raise ValueError(
+                "a subdomain interior dof couples to a dof owned by another rank: "
+                "the mesh is not partitioned by subdomains (use fem_py.geometry.build_domain)"
+            )
         is_int = int_pos[cols] >= 0
         n_i, n_sk = self._int.size, self._sk.size
-        self._a_ii = sp.csr_matrix((data[is_int], (rows[is_int], int_pos[cols[is_int]])), shape=(n_i, n_i))
-        self._a_is = sp.csr_matrix((data[~is_int], (rows[~is_int], sk_pos[cols[~is_int]])), shape=(n_i, n_sk))
+        self._a_ii = sp.csr_matrix(
+            (data[is_int], (rows[is_int], int_pos[cols[is_int]])), shape=(n_i, n_i)
+        )
+        self._a_is = sp.csr_matrix(
+            (data[~is_int], (rows[~is_int], sk_pos[cols[~is_int]])), shape=(n_i, n_sk)
+        )
         self._a_si = self._a_is.T.tocsr()
         self._interior_factor = SparseFactor(self._a_ii)
 
@@ -173,17 +197,23 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
                 p_vals.append(weight[present])
             own = mine[group]
             if np.any(inner[own] < 0):
-                raise ValueError("a coarse edge is not local to the rank owning its subdomain; "
-                                 "the mesh is not partitioned by subdomains")
+                raise ValueError(
+                    "a coarse edge is not local to the rank owning its subdomain; "
+                    "the mesh is not partitioned by subdomains"
+                )
             groups.append((inner[own], pts[own]))
-        self._interp = sp.csr_matrix((np.concatenate(p_vals), (np.concatenate(p_rows), np.concatenate(p_cols))),
-                                     shape=(n_sk, n_v))
+        self._interp = sp.csr_matrix(
+            (np.concatenate(p_vals), (np.concatenate(p_rows), np.concatenate(p_cols))),
+            shape=(n_sk, n_v),
+        )
         self._owned_sk = self._sk[self._sk_owned]  # local numbers of the owned skeleton dofs
         self._interp_owned = self._interp[self._sk_owned].tocsr()
         self._interp_owned_t = self._interp_owned.T.tocsr()
         self._interp_t = self._interp.T.tocsr()
         self._a0, self._a0_inv = block_diagonal_edge_forms(groups, n_sk, edge_form)
-        self._vertex_owned = np.flatnonzero(has & (vertex_local < n_owned))  # coarse vertices owned here
+        self._vertex_owned = np.flatnonzero(
+            has & (vertex_local < n_owned)
+        )  # coarse vertices owned here
         self._vertex_owned_dof = vertex_local[self._vertex_owned]
         self._coarse_matrix = coarse_matrix(coarse, self.subdomain_size)
         self._coarse = SparseFactor(self._coarse_matrix)
@@ -202,7 +232,9 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
         """u = B_Omega^{-1} g on the owned entries: the four steps of the module docstring."""
         g = np.asarray(g, dtype=float)
         if g.shape != (self.n_omega,):
-            raise ValueError(f"g must have shape ({self.n_omega},), the owned entries, got {g.shape}")
+            raise ValueError(
+                f"g must have shape ({self.n_omega},), the owned entries, got {g.shape}"
+            )
         x_i = self._interior_factor.solve(g[self._int])
         r = g - self._exchange.reverse_add(self._on_skeleton(self._a_si @ x_i))
         r_sk = self._exchange.forward(r)[self._sk]
@@ -219,7 +251,9 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
         """B_Omega u on the owned entries (METHOD.md section 6, B_Sk = Q^T A^0 Q + R^T C R)."""
         u = np.asarray(u, dtype=float)
         if u.shape != (self.n_omega,):
-            raise ValueError(f"u must have shape ({self.n_omega},), the owned entries, got {u.shape}")
+            raise ValueError(
+                f"u must have shape ({self.n_omega},), the owned entries, got {u.shape}"
+            )
         u_sk = self._exchange.forward(u)[self._sk]
         u_i = u[self._int]
         y = self._a_is @ u_sk
@@ -227,9 +261,12 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
         coarse_u[self._vertex_owned] = u[self._vertex_owned_dof]
         coarse_u = self._sum(coarse_u)  # R u
         a_sk = self._a0 @ (u_sk - self._interp @ coarse_u)  # A^0 Q u on the edges of this rank
-        coarse_term = self._coarse_matrix @ coarse_u - self._sum(self._interp_t @ a_sk)  # C R u - Pi^T A^0 Q u
+        coarse_term = self._coarse_matrix @ coarse_u - self._sum(
+            self._interp_t @ a_sk
+        )  # C R u - Pi^T A^0 Q u
         out = self._exchange.reverse_add(
-            self._on_skeleton(self._a_si @ (u_i + self._interior_factor.solve(y)) + a_sk))
+            self._on_skeleton(self._a_si @ (u_i + self._interior_factor.solve(y)) + a_sk)
+        )
         out[self._int] = self._a_ii @ u_i + y
         out[self._vertex_owned_dof] += coarse_term[self._vertex_owned]
         return out

@@ -40,7 +40,8 @@ def _as_batch(points: np.ndarray) -> tuple[np.ndarray, bool]:
         p = p[None]
     if p.ndim != 3 or p.shape[1] < 2:
         raise ValueError(
-            f"edge points must have shape (n+1, dim) or (batch, n+1, dim) with n >= 1, got {np.shape(points)}"
+            "edge points must have shape (n+1, dim) or (batch, n+1, dim) with n >= 1, got "
+            f"{np.shape(points)}"
         )
     return p, single
 
@@ -48,7 +49,10 @@ def _as_batch(points: np.ndarray) -> tuple[np.ndarray, bool]:
 def _segment_lengths(p: np.ndarray) -> np.ndarray:
     seg = np.linalg.norm(np.diff(p, axis=1), axis=2)  # (B, n)
     if np.any(seg <= 0.0):
-        raise ValueError("edge points must be distinct and consecutive nodes of the edge; found a zero-length segment")
+        raise ValueError(
+            "edge points must be distinct and consecutive nodes of the edge; found a zero-length "
+            "segment"
+        )
     return seg
 
 
@@ -58,7 +62,8 @@ def _symmetric(a: np.ndarray) -> np.ndarray:
 
 
 def _pairwise_form(weights: np.ndarray, diagonal: np.ndarray) -> np.ndarray:
-    """Matrix of sum_{i<j} w_ij (phi_i - phi_j)^2 + sum_i D_i phi_i^2 (w symmetric, zero diagonal)."""
+    """Matrix of sum_{i<j} w_ij (phi_i - phi_j)^2 + sum_i D_i phi_i^2 (w symmetric, zero "
+    "diagonal)."""
     a = -weights
     idx = np.arange(weights.shape[-1])
     a[..., idx, idx] = weights.sum(axis=-1) + diagonal

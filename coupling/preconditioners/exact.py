@@ -35,22 +35,30 @@ class ExactPreconditioner:
         Dense S_h (n_gamma x n_gamma).
     """
 
-    def __init__(self, stiffness: sp.spmatrix, boundary_dofs: np.ndarray,
-                 signorini: np.ndarray, steklov_poincare: np.ndarray):
+    def __init__(
+        self,
+        stiffness: sp.spmatrix,
+        boundary_dofs: np.ndarray,
+        signorini: np.ndarray,
+        steklov_poincare: np.ndarray,
+    ):
         n = stiffness.shape[0]
         dofs = np.asarray(boundary_dofs)
         rows, cols = np.meshgrid(dofs, dofs, indexing="ij")
-        boundary_block = sp.csr_matrix((steklov_poincare.ravel(), (rows.ravel(), cols.ravel())),
-                                       shape=(n, n))
+        boundary_block = sp.csr_matrix(
+            (steklov_poincare.ravel(), (rows.ravel(), cols.ravel())), shape=(n, n)
+        )
         self._omega = (sp.csr_matrix(stiffness) + boundary_block).tocsc()
         self._omega_factor = scipy.sparse.linalg.splu(self._omega)
-        self.signorini_metric = np.ascontiguousarray(
-            steklov_poincare[np.ix_(signorini, signorini)])
+        self.signorini_metric = np.ascontiguousarray(steklov_poincare[np.ix_(signorini, signorini)])
         self.n_omega, self.n_signorini = n, len(signorini)
         if self.n_signorini:
             self._signorini_factor = scipy.linalg.cho_factor(self.signorini_metric)
-            self.lambda_max_signorini = float(scipy.linalg.eigvalsh(
-                self.signorini_metric, subset_by_index=[self.n_signorini - 1] * 2)[0])
+            self.lambda_max_signorini = float(
+                scipy.linalg.eigvalsh(
+                    self.signorini_metric, subset_by_index=[self.n_signorini - 1] * 2
+                )[0]
+            )
         else:
             self.lambda_max_signorini = 1.0
 

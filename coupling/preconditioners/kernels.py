@@ -16,8 +16,14 @@ from threadpoolctl import threadpool_limits
 from coupling.preconditioners.edge_forms import edge_form
 from fem_py.polyline import arc_length
 
-__all__ = ["SparseFactor", "DenseFactor", "block_diagonal_edge_forms", "TwoLevelForm",
-           "coarse_matrix", "edge_weights"]
+__all__ = [
+    "SparseFactor",
+    "DenseFactor",
+    "block_diagonal_edge_forms",
+    "TwoLevelForm",
+    "coarse_matrix",
+    "edge_weights",
+]
 
 
 class SparseFactor:
@@ -34,8 +40,10 @@ class SparseFactor:
         if self.n == 0:
             return
         self._mat = PETSc.Mat().createAIJ(
-            size=m.shape, csr=(m.indptr.astype(PETSc.IntType), m.indices.astype(PETSc.IntType), m.data),
-            comm=PETSc.COMM_SELF)
+            size=m.shape,
+            csr=(m.indptr.astype(PETSc.IntType), m.indices.astype(PETSc.IntType), m.data),
+            comm=PETSc.COMM_SELF,
+        )
         self._mat.setOption(PETSc.Mat.Option.SPD, True)
         self._ksp = PETSc.KSP().create(PETSc.COMM_SELF)
         self._ksp.setOperators(self._mat)
@@ -59,7 +67,9 @@ class SparseFactor:
             self._factor.solve(self._rhs, self._sol)
             return self._sol.array.copy()
         out = np.zeros(b.shape, order="F")
-        rhs = PETSc.Mat().createDense(b.shape, array=np.asfortranarray(b, dtype=float), comm=PETSc.COMM_SELF)
+        rhs = PETSc.Mat().createDense(
+            b.shape, array=np.asfortranarray(b, dtype=float), comm=PETSc.COMM_SELF
+        )
         sol = PETSc.Mat().createDense(b.shape, array=out, comm=PETSc.COMM_SELF)
         self._factor.matSolve(rhs, sol)
         rhs.destroy()
@@ -82,14 +92,19 @@ class DenseFactor:
         self._factor = sla.cho_factor(matrix, lower=True) if matrix.size else None
 
     def solve(self, b: np.ndarray) -> np.ndarray:
-        return sla.cho_solve(self._factor, b) if self._factor is not None else np.zeros_like(b, dtype=float)
+        return (
+            sla.cho_solve(self._factor, b)
+            if self._factor is not None
+            else np.zeros_like(b, dtype=float)
+        )
 
     def destroy(self) -> None:
         pass
 
 
-def block_diagonal_edge_forms(groups: Sequence[tuple[np.ndarray, np.ndarray]], n: int,
-                    kind: str) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+def block_diagonal_edge_forms(
+    groups: Sequence[tuple[np.ndarray, np.ndarray]], n: int, kind: str
+) -> tuple[sp.csr_matrix, sp.csr_matrix]:
     """All edge forms A^0_gamma and their inverses as two block-diagonal n x n sparse matrices.
 
     Each group is ``(ix, pts)`` for a batch of edges with equal node counts: ``ix (B, m)``
@@ -118,7 +133,8 @@ def block_diagonal_edge_forms(groups: Sequence[tuple[np.ndarray, np.ndarray]], n
 
 
 class TwoLevelForm:
-    """The SPD form B = (I - P R)^T A0 (I - P R) + R^T C R on n nodes, with B^{-1} = A0^{-1} + P C^{-1} P^T.
+    """The SPD form B = (I - P R)^T A0 (I - P R) + R^T C R on n nodes, with
+    B^{-1} = A0^{-1} + P C^{-1} P^T.
 
     This is the skeleton part B_Sk of B_Omega and the Signorini matrix M_s alike
     (METHOD.md section 6): in the basis {edge-interior hats} U {P e_c} the form is
@@ -134,8 +150,14 @@ class TwoLevelForm:
         matrix a sparse one.
     """
 
-    def __init__(self, a0: sp.spmatrix, a0_inv: sp.spmatrix, interp: sp.spmatrix,
-                 coarse_nodes: np.ndarray, coarse: np.ndarray | sp.spmatrix) -> None:
+    def __init__(
+        self,
+        a0: sp.spmatrix,
+        a0_inv: sp.spmatrix,
+        interp: sp.spmatrix,
+        coarse_nodes: np.ndarray,
+        coarse: np.ndarray | sp.spmatrix,
+    ) -> None:
         n, n_c = interp.shape
         restrict = sp.csr_matrix((np.ones(n_c), (np.arange(n_c), coarse_nodes)), shape=(n_c, n))
         q = (sp.identity(n, format="csr") - interp @ restrict).tocsr()
@@ -144,7 +166,9 @@ class TwoLevelForm:
         self.interp = sp.csr_matrix(interp)
         self.interp_t = self.interp.T.tocsr()
         self.n = n
-        self._coarse = SparseFactor(coarse) if sp.issparse(coarse) else DenseFactor(np.asarray(coarse))
+        self._coarse = (
+            SparseFactor(coarse) if sp.issparse(coarse) else DenseFactor(np.asarray(coarse))
+        )
 
     def matvec(self, v: np.ndarray) -> np.ndarray:
         return self.matrix @ v
@@ -173,5 +197,3 @@ def edge_weights(points: np.ndarray) -> np.ndarray:
     t in (0, 1) of every interior node; its value is (1 - t) u(end 0) + t u(end 1)."""
     s = arc_length(points)
     return s[:, 1:-1] / s[:, -1:]
-
-

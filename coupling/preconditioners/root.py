@@ -42,16 +42,22 @@ class RootPreconditioner:
         self._counts = np.array(comm.allgather(n_owned))
         self._offsets = np.concatenate([[0], np.cumsum(self._counts)[:-1]])
         self._inner = run_on_root(comm, build)  # an error is raised on every rank
-        metric, lam = (self._inner.signorini_metric, self._inner.lambda_max_signorini) \
-            if comm.rank == 0 else (None, None)
+        metric, lam = (
+            (self._inner.signorini_metric, self._inner.lambda_max_signorini)
+            if comm.rank == 0
+            else (None, None)
+        )
         self.signorini_metric = comm.bcast(metric, root=0)
         self.lambda_max_signorini = comm.bcast(lam, root=0)
         self.n_signorini = self.signorini_metric.shape[0]
 
     def _root_apply(self, method: str, owned: np.ndarray) -> np.ndarray:
         full = np.empty(int(self._counts.sum())) if self.comm.rank == 0 else None
-        self.comm.Gatherv(np.ascontiguousarray(owned, dtype=float),
-                          [full, self._counts, self._offsets, MPI.DOUBLE], root=0)
+        self.comm.Gatherv(
+            np.ascontiguousarray(owned, dtype=float),
+            [full, self._counts, self._offsets, MPI.DOUBLE],
+            root=0,
+        )
         result = getattr(self._inner, method)(full) if self.comm.rank == 0 else None
         out = np.empty(self._counts[self.comm.rank])
         self.comm.Scatterv([result, self._counts, self._offsets, MPI.DOUBLE], out, root=0)

@@ -58,17 +58,27 @@ class SignoriniArc:
             raise ValueError(f"SignoriniArc.coords must have shape (k, 2), got {coords.shape}")
         k = coords.shape[0]
         if mask.shape != (k,):
-            raise ValueError(f"SignoriniArc.coarse_vertex_mask must have shape ({k},), one flag per node, got {mask.shape}")
+            raise ValueError(
+                f"SignoriniArc.coarse_vertex_mask must have shape ({k},), one flag per node, got "
+                f"{mask.shape}"
+            )
         expected = k if self.closed else k - 2
         if unknowns.shape != (expected,):
             raise ValueError(
-                f"SignoriniArc.unknowns must have {expected} entries ({'all nodes of a closed arc' if self.closed else 'the interior nodes'}), got {unknowns.shape}"
+                f"SignoriniArc.unknowns must have {expected} entries "
+                f"({'all nodes of a closed arc' if self.closed else 'the interior nodes'}), got "
+                f"{unknowns.shape}"
             )
         if self.closed:
             if not mask.any():
-                raise ValueError("a closed SignoriniArc needs at least one coarse vertex in coarse_vertex_mask")
+                raise ValueError(
+                    "a closed SignoriniArc needs at least one coarse vertex in coarse_vertex_mask"
+                )
         elif k < 2 or not (mask[0] and mask[-1]):
-            raise ValueError("the two end points of an open SignoriniArc must be coarse vertices (mask[0] and mask[-1] True)")
+            raise ValueError(
+                "the two end points of an open SignoriniArc must be coarse vertices (mask[0] and "
+                "mask[-1] True)"
+            )
         object.__setattr__(self, "coords", coords)
         object.__setattr__(self, "coarse_vertex_mask", mask)
         object.__setattr__(self, "unknowns", unknowns)
@@ -85,7 +95,9 @@ def signorini_form(arcs: Sequence[SignoriniArc], subdomain_size: float, kind: st
     n_s = sum(len(arc.unknowns) for arc in arcs)
     every = np.concatenate([arc.unknowns for arc in arcs]) if arcs else np.zeros(0, np.int64)
     if not np.array_equal(np.sort(every), np.arange(n_s)):
-        raise ValueError(f"the unknowns of the Signorini arcs must number the phi vector 0..{n_s - 1}, each once")
+        raise ValueError(
+            f"the unknowns of the Signorini arcs must number the phi vector 0..{n_s - 1}, each once"
+        )
     groups = []
     rows, cols, vals = [], [], []
     coarse_nodes, coarse_blocks = [], []
@@ -118,14 +130,16 @@ def signorini_form(arcs: Sequence[SignoriniArc], subdomain_size: float, kind: st
         n_c += len(c_pos)
         for a, b in zip(corners[:-1], corners[1:]):
             inner = np.arange(a + 1, b)
-            groups.append((phi_index[inner][None, :], pts[a:b + 1][None]))
+            groups.append((phi_index[inner][None, :], pts[a : b + 1][None]))
             t = (s[inner] - s[a]) / (s[b] - s[a])
             for end, weight in ((a, 1.0 - t), (b, t)):
                 if c_index[end] >= 0:
                     rows.append(phi_index[inner])
                     cols.append(np.full(len(inner), c_index[end]))
                     vals.append(weight)
-    interp = sp.csr_matrix((_concat(vals, float), (_concat(rows, np.int64), _concat(cols, np.int64))), shape=(n_s, n_c))
+    interp = sp.csr_matrix(
+        (_concat(vals, float), (_concat(rows, np.int64), _concat(cols, np.int64))), shape=(n_s, n_c)
+    )
     a0, a0_inv = block_diagonal_edge_forms(groups, n_s, kind)
     coarse = sla.block_diag(*coarse_blocks) if coarse_blocks else np.zeros((0, 0))
     return TwoLevelForm(a0, a0_inv, interp, _concat(coarse_nodes, np.int64), coarse)
@@ -142,8 +156,9 @@ class SignoriniBlock:
     serial and the distributed substructuring preconditioners.
     """
 
-    def _init_signorini(self, arcs: Sequence[SignoriniArc], subdomain_size: float, kind: str,
-                        weight: float) -> None:
+    def _init_signorini(
+        self, arcs: Sequence[SignoriniArc], subdomain_size: float, kind: str, weight: float
+    ) -> None:
         """Check the options shared by B_Omega and B_s, and build omega M_s."""
         if kind not in EDGE_FORMS:
             raise ValueError(f"edge_form must be one of {EDGE_FORMS}, got {kind!r}")
@@ -163,7 +178,9 @@ class SignoriniBlock:
 
     def matvec_signorini(self, phi: np.ndarray) -> np.ndarray:
         """omega M_s phi, the matrix of omega B_s (METHOD.md section 6)."""
-        return self.signorini_weight * self._signorini.matvec(check_length(phi, self.n_signorini, "phi"))
+        return self.signorini_weight * self._signorini.matvec(
+            check_length(phi, self.n_signorini, "phi")
+        )
 
     @property
     def signorini_metric(self) -> np.ndarray:
@@ -172,22 +189,26 @@ class SignoriniBlock:
 
     @property
     def lambda_max_signorini(self) -> float:
-        """Largest eigenvalue of omega M_s (0 without Signorini unknowns); bounds theta in (3.20)."""
+        """Largest eigenvalue of omega M_s (0 without Signorini unknowns); bounds theta in "
+        "(3.20)."""
         if self._lambda_max is None:  # of M_s, computed on first use
             m = self._signorini.matrix
             if m.shape[0] == 0:
                 self._lambda_max = 0.0
             elif m.shape[0] <= 400:
-                self._lambda_max = float(sla.eigvalsh(m.toarray(), subset_by_index=[m.shape[0] - 1] * 2)[0])
+                self._lambda_max = float(
+                    sla.eigvalsh(m.toarray(), subset_by_index=[m.shape[0] - 1] * 2)[0]
+                )
             else:
-                self._lambda_max = float(spla.eigsh(m, k=1, which="LA", return_eigenvectors=False, tol=1e-10)[0])
+                self._lambda_max = float(
+                    spla.eigsh(m, k=1, which="LA", return_eigenvectors=False, tol=1e-10)[0]
+                )
         return self.signorini_weight * self._lambda_max
 
 
-
-
-def signorini_arcs(boundary: Any, coarse_vertex_dofs: np.ndarray,
-                   transmission_tag: int) -> list[SignoriniArc]:
+def signorini_arcs(
+    boundary: Any, coarse_vertex_dofs: np.ndarray, transmission_tag: int
+) -> list[SignoriniArc]:
     """The Signorini arcs of a problem in the form of the preconditioner.
 
     Parameters
@@ -220,8 +241,10 @@ def signorini_arcs(boundary: Any, coarse_vertex_dofs: np.ndarray,
         # the arc starts at the panel whose predecessor is not on it
         first = np.flatnonzero(panels & ~np.roll(panels, 1))
         if first.size != 1:
-            raise ValueError(f"Signorini arc with facet tag {tag} is not one connected "
-                             "arc of the boundary; give each arc separately")
+            raise ValueError(
+                f"Signorini arc with facet tag {tag} is not one connected "
+                "arc of the boundary; give each arc separately"
+            )
         length = int(panels.sum())
         nodes = (first[0] + np.arange(length + 1)) % n
         arcs.append(SignoriniArc(b.nodes[nodes], is_vertex[nodes], phi_index[nodes[1:-1]]))

@@ -47,16 +47,22 @@ import numpy as np
 import scipy.sparse as sp
 
 from coupling.preconditioners.base import check_length
-from coupling.preconditioners.kernels import (SparseFactor, TwoLevelForm, block_diagonal_edge_forms,
-                                              coarse_matrix, edge_weights)
+from coupling.preconditioners.kernels import (
+    SparseFactor,
+    TwoLevelForm,
+    block_diagonal_edge_forms,
+    coarse_matrix,
+    edge_weights,
+)
 from coupling.preconditioners.signorini import SignoriniArc, SignoriniBlock
 from fem_py.coarse import as_ragged
 
 __all__ = ["SubstructuringPreconditioner", "skeleton_form"]
 
 
-def skeleton_form(coarse: Any, x: np.ndarray, subdomain_size: float, n_nodes: int,
-                   kind: str) -> TwoLevelForm:
+def skeleton_form(
+    coarse: Any, x: np.ndarray, subdomain_size: float, n_nodes: int, kind: str
+) -> TwoLevelForm:
     """B_Sk of METHOD.md section 6 in the numbering of ``coarse.skeleton_dofs``.
 
     Edge forms A^0_gamma on the interior nodes of every coarse edge; Pi = linear
@@ -70,24 +76,42 @@ def skeleton_form(coarse: Any, x: np.ndarray, subdomain_size: float, n_nodes: in
     edge_dofs = as_ragged(coarse.edge_dofs, dtype=np.int64)
     n_v, n_e = len(vertex_dofs), len(edge_dofs)
     if ends.shape != (n_e, 2) or on_boundary.shape != (n_v,):
-        raise ValueError(f"coarse.edge_vertices must be ({n_e}, 2) and coarse.vertex_on_boundary ({n_v},); check the coarse partition")
+        raise ValueError(
+            f"coarse.edge_vertices must be ({n_e}, 2) and coarse.vertex_on_boundary ({n_v},); "
+            "check the coarse partition"
+        )
     if not on_boundary.any():
-        raise ValueError("no coarse vertex lies on Gamma: the coarse matrix C would be singular; mark the boundary vertices")
+        raise ValueError(
+            "no coarse vertex lies on Gamma: the coarse matrix C would be singular; mark the "
+            "boundary vertices"
+        )
     pos = np.full(n_nodes, -1, dtype=np.int64)
     pos[skeleton] = np.arange(len(skeleton))
     n_sk = len(skeleton)
     if np.any(pos[vertex_dofs] < 0):
-        raise ValueError("every coarse vertex dof must be a skeleton dof; check coarse.vertex_dofs and coarse.skeleton_dofs")
+        raise ValueError(
+            "every coarse vertex dof must be a skeleton dof; check coarse.vertex_dofs and "
+            "coarse.skeleton_dofs"
+        )
     count = np.bincount(pos[vertex_dofs], minlength=n_sk)
     rows, cols, vals = [pos[vertex_dofs]], [np.arange(n_v)], [np.ones(n_v)]
     groups = []
     for length, group in edge_dofs.length_groups():
         dofs = edge_dofs.rows(group)  # (B, n+1)
-        if length < 2 or np.any(dofs[:, 0] != vertex_dofs[ends[group, 0]]) or np.any(dofs[:, -1] != vertex_dofs[ends[group, 1]]):
-            raise ValueError("coarse.edge_dofs must run from the dof of edge_vertices[:, 0] to that of edge_vertices[:, 1]")
+        if (
+            length < 2
+            or np.any(dofs[:, 0] != vertex_dofs[ends[group, 0]])
+            or np.any(dofs[:, -1] != vertex_dofs[ends[group, 1]])
+        ):
+            raise ValueError(
+                "coarse.edge_dofs must run from the dof of edge_vertices[:, 0] to that of "
+                "edge_vertices[:, 1]"
+            )
         inner = pos[dofs[:, 1:-1]]
         if np.any(inner < 0):
-            raise ValueError("every dof along a coarse edge must be a skeleton dof; check coarse.edge_dofs")
+            raise ValueError(
+                "every dof along a coarse edge must be a skeleton dof; check coarse.edge_dofs"
+            )
         count += np.bincount(inner.ravel(), minlength=n_sk)
         pts = x[dofs]
         t = edge_weights(pts)
@@ -97,10 +121,14 @@ def skeleton_form(coarse: Any, x: np.ndarray, subdomain_size: float, n_nodes: in
         groups.append((inner, pts))
     if np.any(count != 1):
         raise ValueError(
-            "each skeleton dof must be exactly one coarse vertex or one interior node of one coarse edge; "
-            f"{np.count_nonzero(count == 0)} are on none and {np.count_nonzero(count > 1)} on several"
+            "each skeleton dof must be exactly one coarse vertex or one interior node of one "
+            "coarse edge; "
+            f"{np.count_nonzero(count == 0)} are on none and {np.count_nonzero(count > 1)} on "
+            "several"
         )
-    interp = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n_sk, n_v))
+    interp = sp.csr_matrix(
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n_sk, n_v)
+    )
     a0, a0_inv = block_diagonal_edge_forms(groups, n_sk, kind)
     return TwoLevelForm(a0, a0_inv, interp, pos[vertex_dofs], coarse_matrix(coarse, subdomain_size))
 
@@ -142,24 +170,42 @@ class SubstructuringPreconditioner(SignoriniBlock):
     The PETSc objects live on ``PETSc.COMM_SELF``; call :meth:`destroy` when done.
     """
 
-    def __init__(self, stiffness: sp.spmatrix, coarse: Any, x: np.ndarray, subdomain_size: float,
-                 signorini_arcs: Sequence[SignoriniArc], *, edge_form: str,
-                 signorini_weight: float) -> None:
+    def __init__(
+        self,
+        stiffness: sp.spmatrix,
+        coarse: Any,
+        x: np.ndarray,
+        subdomain_size: float,
+        signorini_arcs: Sequence[SignoriniArc],
+        *,
+        edge_form: str,
+        signorini_weight: float,
+    ) -> None:
         self._init_signorini(signorini_arcs, subdomain_size, edge_form, signorini_weight)
         a = sp.csr_matrix(stiffness, dtype=float)
         n = a.shape[0]
         x = np.asarray(x, dtype=float)
         if a.shape != (n, n) or x.ndim != 2 or x.shape[0] != n:
-            raise ValueError(f"stiffness must be square and x must have one row per node; got {a.shape} and {x.shape}")
+            raise ValueError(
+                f"stiffness must be square and x must have one row per node; got {a.shape} and "
+                f"{x.shape}"
+            )
         interior = np.asarray(coarse.interior_dofs, dtype=np.int64)
         skeleton = np.asarray(coarse.skeleton_dofs, dtype=np.int64)
         if len(interior) + len(skeleton) != n or not np.array_equal(
-                np.bincount(np.concatenate([interior, skeleton]), minlength=n), np.ones(n, dtype=np.int64)):
-            raise ValueError("coarse.interior_dofs and coarse.skeleton_dofs must split the nodes 0..N-1 into two disjoint sets")
+            np.bincount(np.concatenate([interior, skeleton]), minlength=n),
+            np.ones(n, dtype=np.int64),
+        ):
+            raise ValueError(
+                "coarse.interior_dofs and coarse.skeleton_dofs must split the nodes 0..N-1 into "
+                "two disjoint sets"
+            )
         if np.any(np.diff(skeleton) <= 0):
             raise ValueError("coarse.skeleton_dofs must be sorted and unique")
         if n and abs(a - a.T).max() > 1e-12 * abs(a).max():
-            raise ValueError("stiffness must be symmetric (the P1 Laplace matrix A); got a nonsymmetric matrix")
+            raise ValueError(
+                "stiffness must be symmetric (the P1 Laplace matrix A); got a nonsymmetric matrix"
+            )
         self.n_omega = n
         self._interior = interior
         self._skeleton = skeleton
@@ -192,13 +238,16 @@ class SubstructuringPreconditioner(SignoriniBlock):
         return u
 
     def matvec_omega(self, u: np.ndarray) -> np.ndarray:
-        """B_Omega u = [A_II u_I + A_ISk u_Sk; A_SkI u_I + A_SkI A_II^{-1} A_ISk u_Sk + B_Sk u_Sk] (one A_II solve)."""
+        """B_Omega u = [A_II u_I + A_ISk u_Sk; A_SkI u_I + A_SkI A_II^{-1} A_ISk u_Sk + B_Sk "
+        "u_Sk] (one A_II solve)."""
         u = check_length(u, self.n_omega, "u")
         u_i, u_s = u[self._interior], u[self._skeleton]
         y = self._a_is @ u_s
         out = np.empty_like(u)
         out[self._interior] = self._a_ii @ u_i + y
-        out[self._skeleton] = self._a_si @ (u_i + self.solve_interior(y)) + self._skeleton_form.matvec(u_s)
+        out[self._skeleton] = self._a_si @ (
+            u_i + self.solve_interior(y)
+        ) + self._skeleton_form.matvec(u_s)
         return out
 
     def omega_matrix(self) -> np.ndarray:

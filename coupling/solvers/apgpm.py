@@ -27,8 +27,16 @@ import numpy as np
 
 from coupling.solvers.pgpm import energy_increased
 from coupling.solvers.projection import SignoriniProjection
-from coupling.solvers.records import (History, IterationRecord, Monitor, RunResult, b_norm2,
-                                      global_dot, relative_step, set_owned)
+from coupling.solvers.records import (
+    History,
+    IterationRecord,
+    Monitor,
+    RunResult,
+    b_norm2,
+    global_dot,
+    relative_step,
+    set_owned,
+)
 
 __all__ = ["apgpm", "MU_SAFETY", "momentum"]
 
@@ -46,15 +54,27 @@ def momentum(tau: float, mu: float) -> float:
     return float((1.0 - root) / (1.0 + root))
 
 
-def apgpm(functional, preconditioner, projection: SignoriniProjection, u_function,
-          phi0: np.ndarray, *, tau: float, tol: float, max_iterations: int,
-          strong_convexity: float, backtrack: bool = True,
-          monitor: Monitor | None = None) -> RunResult:
+def apgpm(
+    functional,
+    preconditioner,
+    projection: SignoriniProjection,
+    u_function,
+    phi0: np.ndarray,
+    *,
+    tau: float,
+    tol: float,
+    max_iterations: int,
+    strong_convexity: float,
+    backtrack: bool = True,
+    monitor: Monitor | None = None,
+) -> RunResult:
     """Run APGPM (module docstring) from (u_function, phi0).
 
     Parameters
     ----------
-    functional, preconditioner, projection, u_function, phi0, tau, max_iterations, backtrack, monitor
+    functional, preconditioner, projection, u_function, phi0, tau, max_iterations
+        As for :func:`coupling.solvers.pgpm.pgpm`.
+    backtrack, monitor
         As for :func:`coupling.solvers.pgpm.pgpm`.
     tol
         Stop when ||xi_{k+1} - y_k||_B <= tol ||xi_{k+1}||_B.
@@ -63,8 +83,9 @@ def apgpm(functional, preconditioner, projection: SignoriniProjection, u_functio
         :func:`coupling.solvers.lanczos.estimate_extremes`, computed with C0.
     """
     if not strong_convexity > 0.0:
-        raise ValueError(f"strong_convexity must be > 0 (lambda_min of B^-1 D^2 J_h), "
-                         f"got {strong_convexity}")
+        raise ValueError(
+            f"strong_convexity must be > 0 (lambda_min of B^-1 D^2 J_h), " f"got {strong_convexity}"
+        )
     comm = functional.comm
     mu = strong_convexity
     grad = u_function.vector.duplicate()
@@ -83,8 +104,11 @@ def apgpm(functional, preconditioner, projection: SignoriniProjection, u_functio
         beta = momentum(tau, mu) if with_momentum else 0.0
         restarted = False
         while True:
-            y_u, y_phi, b_y = (u_k + beta * (u_k - u_prev), phi_k + beta * (phi_k - phi_prev),
-                               b_u + beta * (b_u - b_prev))
+            y_u, y_phi, b_y = (
+                u_k + beta * (u_k - u_prev),
+                phi_k + beta * (phi_k - phi_prev),
+                b_u + beta * (b_u - b_prev),
+            )
             if beta > 0.0 or not gradient_at_xi_k:
                 set_owned(u_function, y_u)
                 g_phi = functional.gradient(u_function, y_phi, grad)
@@ -108,12 +132,14 @@ def apgpm(functional, preconditioner, projection: SignoriniProjection, u_functio
         b_new = b_y - tau * g_u
         d_phi = projected.phi - phi_k
         m_d_phi = preconditioner.matvec_signorini(d_phi)
-        norm2 = b_norm2(comm, u_new, b_new, projected.phi,
-                        preconditioner.matvec_signorini(projected.phi))
+        norm2 = b_norm2(
+            comm, u_new, b_new, projected.phi, preconditioner.matvec_signorini(projected.phi)
+        )
         # gradient mapping xi_{k+1} - y_k; B (u_{k+1} - y_u) = -tau grad_u J(y_k)
         m_phi = projected.phi - y_phi
-        step2 = b_norm2(comm, u_new - y_u, b_new - b_y, m_phi,
-                        preconditioner.matvec_signorini(m_phi))
+        step2 = b_norm2(
+            comm, u_new - y_u, b_new - b_y, m_phi, preconditioner.matvec_signorini(m_phi)
+        )
         # gradient restart: momentum that points uphill in the B metric is dropped
         uphill = (global_dot(comm, y_u - u_new, b_new - b_u) - m_phi @ m_d_phi) > 0.0
         with_momentum = not (uphill or restarted)
@@ -121,11 +147,27 @@ def apgpm(functional, preconditioner, projection: SignoriniProjection, u_functio
         u_prev, phi_prev, b_prev = u_k, phi_k, b_u
         u_k, phi_k, b_u, energy = u_new, projected.phi, b_new, new_energy
         relative = relative_step(step2, norm2)
-        history.add(IterationRecord(k, energy, relative, int(np.count_nonzero(phi_k <= 0.0)),
-                                    tau, projection_iterations=projected.iterations))
+        history.add(
+            IterationRecord(
+                k,
+                energy,
+                relative,
+                int(np.count_nonzero(phi_k <= 0.0)),
+                tau,
+                projection_iterations=projected.iterations,
+            )
+        )
         if relative <= tol:
             converged, reason = True, f"||xi_k+1 - y_k||_B <= {tol:g} ||xi_k+1||_B"
             break
     grad.destroy()
-    return RunResult(phi=phi_k, converged=converged, reason=reason, iterations=k,
-                     energy=energy, tau=tau, history=list(history), energy_increases=increases)
+    return RunResult(
+        phi=phi_k,
+        converged=converged,
+        reason=reason,
+        iterations=k,
+        energy=energy,
+        tau=tau,
+        history=list(history),
+        energy_increases=increases,
+    )

@@ -12,8 +12,9 @@ from coupling.solvers.records import global_dot
 __all__ = ["estimate_extremes", "extremes_at"]
 
 
-def estimate_extremes(functional, preconditioner, jacobian: PETSc.Mat, n_phi: int, *,
-                      steps: int, seed: int = 0) -> tuple[float, float]:
+def estimate_extremes(
+    functional, preconditioner, jacobian: PETSc.Mat, n_phi: int, *, steps: int, seed: int = 0
+) -> tuple[float, float]:
     """The smallest and the largest Ritz value of a ``steps``-step Lanczos recurrence for
     the pencil (D^2 J_h(xi), B) (METHOD.md (3.5); D^2 G(xi) given as ``jacobian``).
 
@@ -55,13 +56,14 @@ def estimate_extremes(functional, preconditioner, jacobian: PETSc.Mat, n_phi: in
         betas.append(beta)
         p_prev_u, p_prev_phi = p_u, p_phi
         q_u, q_phi, p_u, p_phi = r_u / beta, r_phi / beta, bu / beta, bphi / beta
-    ritz = scipy.linalg.eigvalsh_tridiagonal(np.array(alphas), np.array(betas[:len(alphas) - 1]))
+    ritz = scipy.linalg.eigvalsh_tridiagonal(np.array(alphas), np.array(betas[: len(alphas) - 1]))
     e_u.destroy(), work.destroy()
     return float(ritz[0]), float(ritz[-1])
 
 
-def extremes_at(functional, preconditioner, u_function, n_phi: int, *,
-                steps: int) -> tuple[float, float]:
+def extremes_at(
+    functional, preconditioner, u_function, n_phi: int, *, steps: int
+) -> tuple[float, float]:
     """:func:`estimate_extremes` with D^2 G assembled at the current u."""
     jacobian = functional.forms.create_matrix()
     functional.forms.assemble_jacobian(u_function, jacobian)

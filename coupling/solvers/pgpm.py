@@ -14,8 +14,15 @@ from __future__ import annotations
 import numpy as np
 
 from coupling.solvers.projection import SignoriniProjection
-from coupling.solvers.records import (History, IterationRecord, Monitor, RunResult, b_norm2,
-                                      relative_step, set_owned)
+from coupling.solvers.records import (
+    History,
+    IterationRecord,
+    Monitor,
+    RunResult,
+    b_norm2,
+    relative_step,
+    set_owned,
+)
 
 __all__ = ["pgpm", "energy_increased"]
 
@@ -25,9 +32,19 @@ def energy_increased(old: float, new: float) -> bool:
     return new - old > 1e-13 * (abs(old) + abs(new))
 
 
-def pgpm(functional, preconditioner, projection: SignoriniProjection, u_function,
-         phi0: np.ndarray, *, tau: float, tol: float, max_iterations: int,
-         backtrack: bool = True, monitor: Monitor | None = None) -> RunResult:
+def pgpm(
+    functional,
+    preconditioner,
+    projection: SignoriniProjection,
+    u_function,
+    phi0: np.ndarray,
+    *,
+    tau: float,
+    tol: float,
+    max_iterations: int,
+    backtrack: bool = True,
+    monitor: Monitor | None = None,
+) -> RunResult:
     """Run Algorithm 3.1 ((3.3)-(3.4), in the block form (3.21)-(3.22)).
 
     xi_{k+1} = P(xi_k - tau B^{-1} DJ_h(xi_k)), stopped when
@@ -82,8 +99,7 @@ def pgpm(functional, preconditioner, projection: SignoriniProjection, u_function
             projected = projection(phi_k - tau * r_phi, phi_k)
             if comm.size > 1:  # one copy of phi: rank 0's (round-off may differ by rank)
                 projected = comm.bcast(projected, root=0)
-            new_energy, new_g_phi = functional.value_and_gradient(u_function, projected.phi,
-                                                                  grad)
+            new_energy, new_g_phi = functional.value_and_gradient(u_function, projected.phi, grad)
             increased = energy_increased(energy, new_energy)
             increases += int(increased)
             if not (increased and backtrack and tau > 1e-12):
@@ -93,17 +109,34 @@ def pgpm(functional, preconditioner, projection: SignoriniProjection, u_function
         b_new = b_u - tau * g_u
         d_u, d_phi = u_new - u_k, projected.phi - phi_k
         m_d_phi = preconditioner.matvec_signorini(d_phi)
-        norm2 = b_norm2(comm, u_new, b_new, projected.phi,
-                        preconditioner.matvec_signorini(projected.phi))
+        norm2 = b_norm2(
+            comm, u_new, b_new, projected.phi, preconditioner.matvec_signorini(projected.phi)
+        )
         step2 = b_norm2(comm, d_u, b_new - b_u, d_phi, m_d_phi)
         g_u, g_phi = grad.array_r.copy(), new_g_phi
         u_k, phi_k, b_u, energy = u_new, projected.phi, b_new, new_energy
         relative = relative_step(step2, norm2)
-        history.add(IterationRecord(k, energy, relative, int(np.count_nonzero(phi_k <= 0.0)),
-                                    tau, projection_iterations=projected.iterations))
+        history.add(
+            IterationRecord(
+                k,
+                energy,
+                relative,
+                int(np.count_nonzero(phi_k <= 0.0)),
+                tau,
+                projection_iterations=projected.iterations,
+            )
+        )
         if relative <= tol:
             converged, reason = True, f"||xi_k+1 - xi_k||_B <= {tol:g} ||xi_k+1||_B"
             break
     grad.destroy()
-    return RunResult(phi=phi_k, converged=converged, reason=reason, iterations=k,
-                     energy=energy, tau=tau, history=list(history), energy_increases=increases)
+    return RunResult(
+        phi=phi_k,
+        converged=converged,
+        reason=reason,
+        iterations=k,
+        energy=energy,
+        tau=tau,
+        history=list(history),
+        energy_increases=increases,
+    )

@@ -54,8 +54,15 @@ class SignoriniProjection:
         M_s when not given, on first use by ``inexact``).
     """
 
-    def __init__(self, metric: np.ndarray, method: str, *, rho_in: float, max_iterations: int,
-                 lambda_max: float | Callable[[], float] | None = None):
+    def __init__(
+        self,
+        metric: np.ndarray,
+        method: str,
+        *,
+        rho_in: float,
+        max_iterations: int,
+        lambda_max: float | Callable[[], float] | None = None,
+    ):
         if method not in ("inexact", "exact"):
             raise ValueError(f'projection must be "inexact" or "exact", got {method!r}')
         self.M = np.asarray(metric, dtype=float)
@@ -109,8 +116,9 @@ class SignoriniProjection:
             residual = self.M @ phi - M_target
             lam = np.maximum(0.0, 2.0 * residual)
             q_lower = -lam @ target - 0.25 * lam @ scipy.linalg.cho_solve(self._factor, lam)
-            if (phi - target) @ residual <= (self.rho_in * q_start
-                                             + (1.0 - self.rho_in) * max(q_lower, 0.0)):
+            if (phi - target) @ residual <= (
+                self.rho_in * q_start + (1.0 - self.rho_in) * max(q_lower, 0.0)
+            ):
                 return ProjectionResult(phi, i)
         return ProjectionResult(phi, self.max_iterations)
 

@@ -14,8 +14,16 @@ import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
-__all__ = ["IterationRecord", "RunResult", "Monitor", "global_dot", "b_norm2", "relative_step",
-           "set_owned", "History"]
+__all__ = [
+    "IterationRecord",
+    "RunResult",
+    "Monitor",
+    "global_dot",
+    "b_norm2",
+    "relative_step",
+    "set_owned",
+    "History",
+]
 
 
 @dataclass(frozen=True)
@@ -90,8 +98,9 @@ def global_dot(comm: MPI.Comm, a: np.ndarray, b: np.ndarray) -> float:
     return comm.allreduce(float(a @ b), op=MPI.SUM)
 
 
-def b_norm2(comm: MPI.Comm, u: np.ndarray, b_u: np.ndarray, phi: np.ndarray,
-            m_phi: np.ndarray) -> float:
+def b_norm2(
+    comm: MPI.Comm, u: np.ndarray, b_u: np.ndarray, phi: np.ndarray, m_phi: np.ndarray
+) -> float:
     """u^T (B_Omega u) + phi^T (M_s phi), given the products B_Omega u and M_s phi."""
     return global_dot(comm, u, b_u) + phi @ m_phi
 

@@ -67,29 +67,56 @@ class Solution:
     timings: dict[str, float]
 
 
-def _run(problem: Any, options: SolverOptions, preconditioner: Preconditioner,
-         projection: SignoriniProjection, u: Any, phi0: np.ndarray, tau: float,
-         lambda_min: float | None, monitor: Monitor | None) -> RunResult:
+def _run(
+    problem: Any,
+    options: SolverOptions,
+    preconditioner: Preconditioner,
+    projection: SignoriniProjection,
+    u: Any,
+    phi0: np.ndarray,
+    tau: float,
+    lambda_min: float | None,
+    monitor: Monitor | None,
+) -> RunResult:
     """The iteration of ``options.method`` from (u, phi0)."""
-    common = dict(tau=tau, tol=options.tol, max_iterations=options.max_iterations,
-                  monitor=monitor)
+    common = dict(tau=tau, tol=options.tol, max_iterations=options.max_iterations, monitor=monitor)
     if options.method == "ssn":
-        return semismooth_newton(problem.functional, preconditioner, projection, problem.forms,
-                                 u, phi0, start_steps=SSN_START_STEPS,
-                                 cg_max_iterations=SSN_CG_MAX_ITERATIONS, **common)
+        return semismooth_newton(
+            problem.functional,
+            preconditioner,
+            projection,
+            problem.forms,
+            u,
+            phi0,
+            start_steps=SSN_START_STEPS,
+            cg_max_iterations=SSN_CG_MAX_ITERATIONS,
+            **common,
+        )
     if options.method == "apgpm":
         if lambda_min is None:  # a given step: lambda_min at the start, as C0 would be
-            lambda_min = extremes_at(problem.functional, preconditioner, u, phi0.size,
-                                     steps=LANCZOS_STEPS)[0]
-        return apgpm(problem.functional, preconditioner, projection, u, phi0,
-                     strong_convexity=lambda_min, **common)
+            lambda_min = extremes_at(
+                problem.functional, preconditioner, u, phi0.size, steps=LANCZOS_STEPS
+            )[0]
+        return apgpm(
+            problem.functional,
+            preconditioner,
+            projection,
+            u,
+            phi0,
+            strong_convexity=lambda_min,
+            **common,
+        )
     return pgpm(problem.functional, preconditioner, projection, u, phi0, **common)
 
 
-def solve(problem: Any, options: SolverOptions, *,
-          initial: tuple[np.ndarray, np.ndarray] | None = None,
-          preconditioner: Preconditioner | None = None,
-          monitor: Monitor | None = None) -> Solution:
+def solve(
+    problem: Any,
+    options: SolverOptions,
+    *,
+    initial: tuple[np.ndarray, np.ndarray] | None = None,
+    preconditioner: Preconditioner | None = None,
+    monitor: Monitor | None = None,
+) -> Solution:
     """Solve the discrete problem (2.3) with ``options.method`` (collective).
 
     ``ssn`` (default): semismooth Newton (:mod:`coupling.solvers.ssn`); ``pgpm``: the
@@ -126,27 +153,34 @@ def solve(problem: Any, options: SolverOptions, *,
     try:
         pc = preconditioner
         projection = SignoriniProjection(
-            pc.signorini_metric, options.projection, rho_in=options.projection_tol,
+            pc.signorini_metric,
+            options.projection,
+            rho_in=options.projection_tol,
             max_iterations=options.projection_max_iterations,
-            lambda_max=lambda: pc.lambda_max_signorini)
+            lambda_max=lambda: pc.lambda_max_signorini,
+        )
         u = fem.Function(problem.V, name="u")
         phi0 = np.zeros(problem.n_signorini)
         if initial is not None:
             u_start, phi_start = initial
             n_owned = problem.V.dofmap.index_map.size_local
-            u_values = (u_start.x.array[:n_owned] if hasattr(u_start, "x")
-                        else np.asarray(u_start, dtype=float))
+            u_values = (
+                u_start.x.array[:n_owned]
+                if hasattr(u_start, "x")
+                else np.asarray(u_start, dtype=float)
+            )
             phi0 = np.asarray(phi_start, dtype=float).copy()
             if u_values.shape != (n_owned,) or phi0.shape != (problem.n_signorini,):
-                raise ValueError(f"initial (u, phi) must have shapes ({n_owned},) (the owned "
-                                 f"entries) and ({problem.n_signorini},), got "
-                                 f"{u_values.shape} and {phi0.shape}")
+                raise ValueError(
+                    f"initial (u, phi) must have shapes ({n_owned},) (the owned "
+                    f"entries) and ({problem.n_signorini},), got "
+                    f"{u_values.shape} and {phi0.shape}"
+                )
             set_owned(u, u_values)
         tic = time.perf_counter()
         lambda_min = None  # the momentum of apgpm, from the same Lanczos run as C0
         if options.step == "auto":
-            lambda_min, C0 = extremes_at(problem.functional, pc, u, phi0.size,
-                                         steps=LANCZOS_STEPS)
+            lambda_min, C0 = extremes_at(problem.functional, pc, u, phi0.size, steps=LANCZOS_STEPS)
             tau = 1.0 / C0
         else:
             tau = float(options.step)
@@ -165,11 +199,26 @@ def solve(problem: Any, options: SolverOptions, *,
     gap[boundary.signorini] = run.phi
     ue = boundary_u + gap - problem.u0
     tic = time.perf_counter()
-    flux = array_from_root(comm, lambda: bem_cpp.exterior_flux(
-        boundary.nodes, ue, a=problem.a, flux=problem.flux_space), all_cores=True)
+    flux = array_from_root(
+        comm,
+        lambda: bem_cpp.exterior_flux(boundary.nodes, ue, a=problem.a, flux=problem.flux_space),
+        all_cores=True,
+    )
     timings["exterior_flux"] = time.perf_counter() - tic
-    return Solution(u=u, phi=run.phi, contact=run.phi <= 0.0, boundary_u=boundary_u, ue=ue,
-                    flux=flux, converged=run.converged, reason=run.reason,
-                    iterations=run.iterations, energy=run.energy, tau=run.tau, C0=C0,
-                    history=run.history, energy_increases=run.energy_increases,
-                    timings=timings)
+    return Solution(
+        u=u,
+        phi=run.phi,
+        contact=run.phi <= 0.0,
+        boundary_u=boundary_u,
+        ue=ue,
+        flux=flux,
+        converged=run.converged,
+        reason=run.reason,
+        iterations=run.iterations,
+        energy=run.energy,
+        tau=run.tau,
+        C0=C0,
+        history=run.history,
+        energy_increases=run.energy_increases,
+        timings=timings,
+    )

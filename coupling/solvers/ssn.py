@@ -37,16 +37,32 @@ import numpy as np
 import scipy.linalg
 from mpi4py import MPI
 
+from coupling.functional import CoupledFunctional
 from coupling.solvers.pgpm import energy_increased, pgpm
 from coupling.solvers.projection import SignoriniProjection
-from coupling.solvers.records import (History, IterationRecord, Monitor, RunResult, b_norm2,
-                                      global_dot, relative_step, set_owned)
+from coupling.solvers.records import (
+    History,
+    IterationRecord,
+    Monitor,
+    RunResult,
+    b_norm2,
+    global_dot,
+    relative_step,
+    set_owned,
+)
 
 __all__ = ["semismooth_newton"]
 
 
-def _pcg(apply_h: Callable, apply_b_inv: Callable, rhs: tuple[np.ndarray, np.ndarray],
-         comm: MPI.Comm, *, rtol: float, max_iterations: int):
+def _pcg(
+    apply_h: Callable,
+    apply_b_inv: Callable,
+    rhs: tuple[np.ndarray, np.ndarray],
+    comm: MPI.Comm,
+    *,
+    rtol: float,
+    max_iterations: int,
+):
     """Preconditioned CG on the pair (u owned entries, phi_I replicated)."""
     dot = lambda a, b: global_dot(comm, a[0], b[0]) + a[1] @ b[1]  # noqa: E731
     x = (np.zeros_like(rhs[0]), np.zeros_like(rhs[1]))
@@ -69,10 +85,21 @@ def _pcg(apply_h: Callable, apply_b_inv: Callable, rhs: tuple[np.ndarray, np.nda
     return x, max_iterations
 
 
-def semismooth_newton(functional: CoupledFunctional, preconditioner,
-                      projection: SignoriniProjection, forms, u_function, phi0: np.ndarray, *,
-                      tau: float, tol: float, max_iterations: int, start_steps: int,
-                      cg_max_iterations: int, monitor: Monitor | None = None) -> RunResult:
+def semismooth_newton(
+    functional: CoupledFunctional,
+    preconditioner,
+    projection: SignoriniProjection,
+    forms,
+    u_function,
+    phi0: np.ndarray,
+    *,
+    tau: float,
+    tol: float,
+    max_iterations: int,
+    start_steps: int,
+    cg_max_iterations: int,
+    monitor: Monitor | None = None,
+) -> RunResult:
     """Semismooth Newton on the optimality system, started by ``start_steps`` PGPM steps.
 
     The active set is predicted by a PGPM step in the M_s metric with the exact
@@ -83,8 +110,17 @@ def semismooth_newton(functional: CoupledFunctional, preconditioner,
     """
     comm = functional.comm
     history = History(monitor)
-    warm = pgpm(functional, preconditioner, projection, u_function, phi0, tau=tau, tol=tol,
-                max_iterations=min(start_steps, max_iterations), monitor=monitor)
+    warm = pgpm(
+        functional,
+        preconditioner,
+        projection,
+        u_function,
+        phi0,
+        tau=tau,
+        tol=tol,
+        max_iterations=min(start_steps, max_iterations),
+        monitor=monitor,
+    )
     history.extend(warm.history)
     if warm.converged or warm.iterations >= max_iterations:
         return warm
@@ -95,8 +131,11 @@ def semismooth_newton(functional: CoupledFunctional, preconditioner,
     energy, g_phi = functional.value_and_gradient(u_function, phi, grad)
     # the exact M_s-projection predicts the active set (an inexact one would blur it); the
     # solver's own projection serves when it is exact (one factor of M_s and of its inverse)
-    predictor = (projection if projection.method == "exact"
-                 else SignoriniProjection.exact(preconditioner.signorini_metric))
+    predictor = (
+        projection
+        if projection.method == "exact"
+        else SignoriniProjection.exact(preconditioner.signorini_metric)
+    )
     residual0 = None
     increases = warm.energy_increases
     active = np.zeros(phi.size, dtype=bool)
@@ -110,8 +149,10 @@ def semismooth_newton(functional: CoupledFunctional, preconditioner,
         active_changed = not np.array_equal(new_active, active)
         active, free = new_active, ~new_active
         natural = phi - predicted  # tau times the projected B_s-gradient
-        residual = np.sqrt(global_dot(comm, g_u, preconditioner.apply_omega(g_u))
-                           + natural @ preconditioner.matvec_signorini(natural) / tau ** 2)
+        residual = np.sqrt(
+            global_dot(comm, g_u, preconditioner.apply_omega(g_u))
+            + natural @ preconditioner.matvec_signorini(natural) / tau**2
+        )
         residual0 = residual if residual0 is None else residual0
         forms.assemble_jacobian(u_function, jacobian)
         metric_free = preconditioner.signorini_metric[np.ix_(free, free)]
@@ -129,16 +170,19 @@ def semismooth_newton(functional: CoupledFunctional, preconditioner,
             return h_u_owned, h_phi[free]
 
         def apply_b_inv(r):
-            return (preconditioner.apply_omega(r[0]),
-                    scipy.linalg.cho_solve(factor, r[1]) if factor is not None else r[1])
+            return (
+                preconditioner.apply_omega(r[0]),
+                scipy.linalg.cho_solve(factor, r[1]) if factor is not None else r[1],
+            )
 
         d_phi = np.zeros(phi.size)
         d_phi[active] = -phi[active]
         h_a_u, h_a_phi = hessian(np.zeros_like(g_u), d_phi)
         rhs = (-g_u - h_a_u, -g_phi[free] - h_a_phi[free])
         forcing = min(0.1, np.sqrt(residual / residual0))
-        (d_u, d_phi_free), cg_its = _pcg(apply_h, apply_b_inv, rhs, comm, rtol=forcing,
-                                         max_iterations=cg_max_iterations)
+        (d_u, d_phi_free), cg_its = _pcg(
+            apply_h, apply_b_inv, rhs, comm, rtol=forcing, max_iterations=cg_max_iterations
+        )
         d_phi[free] = d_phi_free
         if comm.size > 1:  # one copy of the replicated unknowns
             d_phi = comm.bcast(d_phi, root=0)
@@ -155,27 +199,62 @@ def semismooth_newton(functional: CoupledFunctional, preconditioner,
             step *= 0.5
         else:  # no decrease along the Newton path: fall back to one PGPM step
             set_owned(u_function, u_old)
-            run = pgpm(functional, preconditioner, projection, u_function, phi, tau=tau,
-                       tol=0.0, max_iterations=1)
+            run = pgpm(
+                functional,
+                preconditioner,
+                projection,
+                u_function,
+                phi,
+                tau=tau,
+                tol=0.0,
+                max_iterations=1,
+            )
             trial_phi, trial_energy = run.phi, run.energy
             trial_g_phi = functional.gradient(u_function, trial_phi, grad)
             step = 0.0
         d_u_taken = u_function.vector.array_r - u_old
         d_phi_taken = trial_phi - phi
-        step2 = b_norm2(comm, d_u_taken, preconditioner.matvec_omega(d_u_taken), d_phi_taken,
-                        preconditioner.matvec_signorini(d_phi_taken))
+        step2 = b_norm2(
+            comm,
+            d_u_taken,
+            preconditioner.matvec_omega(d_u_taken),
+            d_phi_taken,
+            preconditioner.matvec_signorini(d_phi_taken),
+        )
         u_now = u_function.vector.array_r
-        norm2 = b_norm2(comm, u_now, preconditioner.matvec_omega(u_now), trial_phi,
-                        preconditioner.matvec_signorini(trial_phi))
+        norm2 = b_norm2(
+            comm,
+            u_now,
+            preconditioner.matvec_omega(u_now),
+            trial_phi,
+            preconditioner.matvec_signorini(trial_phi),
+        )
         phi, energy, g_phi = trial_phi, trial_energy, trial_g_phi
         relative = relative_step(step2, norm2)
-        history.add(IterationRecord(k, energy, relative, int(np.count_nonzero(phi <= 0.0)), tau,
-                                    cg_iterations=cg_its, line_search=step))
+        history.add(
+            IterationRecord(
+                k,
+                energy,
+                relative,
+                int(np.count_nonzero(phi <= 0.0)),
+                tau,
+                cg_iterations=cg_its,
+                line_search=step,
+            )
+        )
         if relative <= tol and not active_changed:
             converged = True
             reason = f"||xi_k+1 - xi_k||_B <= {tol:g} ||xi_k+1||_B, active set settled"
             break
     for obj in (grad, jacobian, e_u, h_u):
         obj.destroy()
-    return RunResult(phi=phi, converged=converged, reason=reason, iterations=k, energy=energy,
-                     tau=tau, history=list(history), energy_increases=increases)
+    return RunResult(
+        phi=phi,
+        converged=converged,
+        reason=reason,
+        iterations=k,
+        energy=energy,
+        tau=tau,
+        history=list(history),
+        energy_increases=increases,
+    )
