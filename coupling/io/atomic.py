@@ -10,6 +10,8 @@ from typing import Callable
 
 from mpi4py import MPI
 
+from fem_py.parallel import run_on_root
+
 __all__ = ["atomic_write", "prepare_output_dir"]
 
 
@@ -20,26 +22,26 @@ def prepare_output_dir(comm: MPI.Comm, out: Path, *, force: bool) -> None:
     replaces or removes them, so a run that fails on bad input destroys nothing.
     """
     out = Path(out)
-    error = None
-    if comm.rank == 0:
+
+    def create() -> None:
         if out.exists() and not out.is_dir():
-            error = f"output path {str(out)!r} exists and is not a folder; choose another --out"
-        elif out.is_dir() and any(out.iterdir()) and not force:
-            error = (
+            raise FileExistsError(
+                f"output path {str(out)!r} exists and is not a folder; choose another --out"
+            )
+        if out.is_dir() and any(out.iterdir()) and not force:
+            raise FileExistsError(
                 f"output folder {str(out)!r} is not empty; pass --force to overwrite "
                 "it or choose another --out"
             )
-        else:
-            try:
-                out.mkdir(parents=True, exist_ok=True)
-            except OSError as err:  # reported on every rank, not raised on rank 0 alone
-                error = (
-                    f"cannot create output folder {str(out)!r} ({err.strerror}); "
-                    "choose another --out"
-                )
-    error = comm.bcast(error, root=0)
-    if error:
-        raise FileExistsError(error)
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+        except OSError as err:
+            raise FileExistsError(
+                f"cannot create output folder {str(out)!r} ({err.strerror}); "
+                "choose another --out"
+            ) from None
+
+    run_on_root(comm, create)  # the error, if any, is raised on every rank
 
 
 def atomic_write(path: Path, write: Callable[[Path], object]) -> None:

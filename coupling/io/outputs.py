@@ -26,6 +26,7 @@ from mpi4py import MPI
 
 from coupling.io.atomic import atomic_write
 from coupling.io.plots import PLOT_FILES, write_plots
+from fem_py.parallel import broadcast_from_root
 
 __all__ = ["DATA_FILES", "write_outputs", "boundary_fields", "gather_p1", "load_fields", "summary"]
 
@@ -133,7 +134,9 @@ def write_outputs(
     if xdmf:
         _write_xdmf(comm, out, problem, result)
         written += ["solution.xdmf", "solution.h5"]
-    if comm.rank == 0:
+
+    def write_gathered() -> list[str]:  # rank 0
+        names = list(written)
         x, u, triangles = gathered
         fields = dict(
             x=x,
@@ -144,21 +147,23 @@ def write_outputs(
             flux_space=np.array(problem.flux_space),
         )
         atomic_write(out / "fields.npz", lambda p: np.savez(p, **fields))  # p ends in .npz
-        written.append("fields.npz")
+        names.append("fields.npz")
         if plots:
-            written += write_plots(out, fields, result.history, tol=tol)
+            names += write_plots(out, fields, result.history, tol=tol)
         record = summary(problem, result, timings)
         if config is not None:
             record["config"] = config
-        record["files"] = sorted(written + ["summary.json"])
+        record["files"] = sorted(names + ["summary.json"])
         # last, so that a summary.json names a complete set of files
         atomic_write(
             out / "summary.json", lambda p: p.write_text(json.dumps(record, indent=2, default=str))
         )
-        written.append("summary.json")
-        for name in set(DATA_FILES + PLOT_FILES) - set(written):
+        names.append("summary.json")
+        for name in set(DATA_FILES + PLOT_FILES) - set(names):
             (out / name).unlink(missing_ok=True)
-    return comm.bcast(written, root=0)
+        return names
+
+    return broadcast_from_root(comm, write_gathered)  # a write error ends every rank
 
 
 def _write_xdmf(comm: MPI.Comm, out: Path, problem, result) -> None:

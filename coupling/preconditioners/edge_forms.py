@@ -27,6 +27,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from fem_py.polyline import segment_lengths
+
 EDGE_FORMS = ("paper", "sqrt-laplacian")
 
 
@@ -46,8 +48,8 @@ def _as_batch(points: np.ndarray) -> tuple[np.ndarray, bool]:
     return p, single
 
 
-def _segment_lengths(p: np.ndarray) -> np.ndarray:
-    seg = np.linalg.norm(np.diff(p, axis=1), axis=2)  # (B, n)
+def _positive_segment_lengths(p: np.ndarray) -> np.ndarray:
+    seg = segment_lengths(p)  # (B, n)
     if np.any(seg <= 0.0):
         raise ValueError(
             "edge points must be distinct and consecutive nodes of the edge; found a zero-length "
@@ -86,7 +88,7 @@ def paper_edge_form(points: np.ndarray) -> np.ndarray:
     + sum_i h_i phi_i^2 (1/|x_i - a| + 1/|x_i - b|) over the interior nodes.
     """
     p, single = _as_batch(points)
-    seg = _segment_lengths(p)
+    seg = _positive_segment_lengths(p)
     h = 0.5 * (seg[:, :-1] + seg[:, 1:])  # (B, m)
     xi = p[:, 1:-1]  # interior nodes (B, m, dim)
     dist = np.linalg.norm(xi[:, :, None, :] - xi[:, None, :, :], axis=3)
@@ -144,7 +146,7 @@ def sqrt_laplacian_edge_form(points: np.ndarray) -> tuple[np.ndarray, np.ndarray
         and mass matrices in arc length with homogeneous Dirichlet ends.
     """
     p, single = _as_batch(points)
-    seg = _segment_lengths(p)
+    seg = _positive_segment_lengths(p)
     m = seg.shape[1] - 1
     idx = np.arange(m)
     lap = np.zeros((p.shape[0], m, m))
