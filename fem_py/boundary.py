@@ -35,9 +35,12 @@ from dolfinx import fem
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from fem_py.coarse import SIGNORINI_TAG0
 from fem_py.expressions import Expression
-from fem_py.geometry import GAMMA_T_TAG, SIGNORINI_TAG0
 from fem_py.meshdata import exterior_facets, facet_data, gather_facet_data, p1_topology, tag_array
+from fem_py.parallel import broadcast_from_root
+from fem_py.polyline import arc_length, segment_lengths
+from fem_py.shapes import GAMMA_T_TAG
 
 __all__ = ["BoundaryMap"]
 
@@ -98,16 +101,9 @@ class BoundaryMap:
         fd = gather_facet_data(comm, [facet_data(topo, exterior_facets(msh), ftag,
                                                  np.zeros(n_cells, np.int32), True)])
         n_dofs = V.dofmap.index_map.size_global
-        result, error = None, None
-        if comm.rank == 0:
-            try:
-                result = _walk(fd, n_dofs, start)
-            except Exception as err:  # report on every rank instead of deadlocking
-                error = f"{type(err).__name__}: {err}"
-        error = comm.bcast(error, root=0)
-        if error is not None:
-            raise RuntimeError(f"boundary map: {error}")
-        for key, value in comm.bcast(result, root=0).items():
+        arrays = broadcast_from_root(comm, lambda: _walk(fd, n_dofs, start),
+                                     error_prefix="boundary map")
+        for key, value in arrays.items():
             setattr(self, key, value)
 
     @classmethod
@@ -128,7 +124,7 @@ class BoundaryMap:
 
     @property
     def panel_lengths(self) -> np.ndarray:
-        return np.linalg.norm(np.roll(self.nodes, -1, axis=0) - self.nodes, axis=1)
+        return segment_lengths(_closed(self.nodes))
 
     def on_gamma_t(self) -> np.ndarray:
         """Panel mask of Gamma_t (tag 1)."""
@@ -241,13 +237,20 @@ def _walk(fd: Any, n_dofs: int, start: Any) -> dict:
     if area <= 0:
         raise RuntimeError(f"boundary walk has shoelace area {area:g} <= 0 (expected counter-clockwise)")
     tags = fd.tag[facets].astype(np.int64)
-    seg = np.roll(nodes, -1, axis=0) - nodes
-    plen = np.linalg.norm(seg, axis=1)
+    polygon = _closed(nodes)
+    seg = np.diff(polygon, axis=0)
+    plen = segment_lengths(polygon)
     pn = np.stack([seg[:, 1], -seg[:, 0]], axis=1) / plen[:, None]
     nn = pn + np.roll(pn, 1, axis=0)
     nn /= np.linalg.norm(nn, axis=1)[:, None]
     sig = np.flatnonzero((tags >= SIGNORINI_TAG0) & (tags == np.roll(tags, 1)))
-    return dict(nodes=nodes, dofs=a[facets].astype(np.int64), s=np.concatenate([[0.0], np.cumsum(plen)[:-1]]),
+    return dict(nodes=nodes, dofs=a[facets].astype(np.int64), s=arc_length(polygon)[:-1],
                 length=float(plen.sum()), panel_tags=tags, panel_normals=pn, node_normals=nn,
-                signorini=sig.astype(np.int64), arc_of_signorini=(tags[sig] - SIGNORINI_TAG0).astype(np.int64),
+                signorini=sig.astype(np.int64),
+                arc_of_signorini=(tags[sig] - SIGNORINI_TAG0).astype(np.int64),
                 n_dofs=int(n_dofs))
+
+
+def _closed(nodes: np.ndarray) -> np.ndarray:
+    """The closed polygon of the boundary nodes: (n, 2) -> (n + 1, 2), first node last."""
+    return np.concatenate([nodes, nodes[:1]])

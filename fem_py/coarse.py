@@ -7,10 +7,10 @@ preconditioner needs. It is computed from the mesh itself, so it is right whatev
 mesh generator made the mesh.
 
 The chains are stored as :class:`Ragged` arrays (one flat array and offsets), not as
-one small array per coarse edge: a mesh of 10^6 dofs has ~10^5 coarse edges, and
-building, broadcasting and re-stacking that many small arrays dominated the cost.
-This module imports DOLFINx lazily (in :func:`compute_coarse_structure`), so the
-preconditioners can use :class:`Ragged` without loading it.
+one small array per coarse edge (measurements: docs/design/fem_py.md). The result is
+computed on rank 0 and broadcast (``fem_py.parallel``). This module imports DOLFINx
+lazily (in :func:`compute_coarse_structure`), so the preconditioners can use
+:class:`Ragged` without loading it.
 """
 from __future__ import annotations
 
@@ -23,6 +23,8 @@ import numpy as np
 import scipy.sparse as sp
 from mpi4py import MPI
 from scipy.sparse.csgraph import connected_components
+
+from fem_py.parallel import broadcast_from_root, run_on_root
 
 if TYPE_CHECKING:
     from fem_py.meshdata import FacetData
@@ -302,22 +304,17 @@ def compute_coarse_structure(msh: Any, cell_tags: Any, facet_tags: Any) -> Coars
     gathered = comm.gather((topo.local_to_global(owned), dof_tag[owned]), root=0)
     n_dofs = V.dofmap.index_map.size_global
     n_sub = comm.allreduce(int(ctag.max(initial=-1)) + 1, op=MPI.MAX)
-    result = None
-    error = None
-    if comm.rank == 0:
-        try:
-            tag_global = np.full(n_dofs, -1, dtype=np.int32)
-            for g, t in gathered:
-                tag_global[g] = t
-            result = _coarse_from_skeleton(fd, tag_global, n_dofs, n_sub)
-        except Exception as err:  # report on every rank instead of deadlocking
-            error = f"{type(err).__name__}: {err}"
-    error = comm.bcast(error, root=0)
-    if error is not None:
-        raise RuntimeError(f"coarse structure: {error}")
+
+    def on_root() -> CoarseStructure:
+        tag_global = np.full(n_dofs, -1, dtype=np.int32)
+        for g, t in gathered:
+            tag_global[g] = t
+        return _coarse_from_skeleton(fd, tag_global, n_dofs, n_sub)
+
     if comm.size == 1:
-        return result
-    return _unpack(comm.bcast(_pack(result) if comm.rank == 0 else None, root=0))
+        return run_on_root(comm, on_root, error_prefix="coarse structure")
+    return _unpack(broadcast_from_root(comm, lambda: _pack(on_root()),
+                                       error_prefix="coarse structure"))
 
 
 def _pack(coarse: CoarseStructure) -> dict:
@@ -362,7 +359,7 @@ def _coarse_from_skeleton(fd: FacetData, tag_global: np.ndarray, n_dofs: int, n_
     if len(i2):
         a = np.where(inv[f, 1] == i2, inv[f, 0], inv[f, 1])
         b = np.where(inv[g, 1] == i2, inv[g, 0], inv[g, 1])
-        Xi = X.take(i2, axis=0)  # take: much faster than X[i2] for (n, 2) rows
+        Xi = X.take(i2, axis=0)  # take: faster than X[i2] for (n, 2) rows (docs/design/fem_py.md)
         u, w = Xi - X.take(a, axis=0), X.take(b, axis=0) - Xi
         cross = np.abs(u[:, 0] * w[:, 1] - u[:, 1] * w[:, 0])
         bent = (cross > _COLLINEAR_TOL * np.linalg.norm(u, axis=1) * np.linalg.norm(w, axis=1)) \

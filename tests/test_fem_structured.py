@@ -4,7 +4,7 @@ boundary segments it reports agree with a brute-force facet search."""
 import numpy as np
 import pytest
 
-from fem_py.geometry import _grid_partition
+from fem_py.shapes import grid_partition as _grid_partition
 from fem_py.structured import lattice, refine
 
 

@@ -1,0 +1,286 @@
+"""Distribute a triangle mesh over the ranks by whole subdomains (METHOD.md section 6).
+
+Every rank gets whole subdomains (:func:`subdomain_owners`, passed to
+``dolfinx.mesh.create_mesh`` as its partitioner), so the local Dirichlet problems of
+the substructuring preconditioner are rank-local; cells are ghosted in DOLFINx's
+shared-facet mode. Two inputs:
+
+- :func:`distribute_mesh`: a mesh held whole on rank 0 (the gmsh arrays of
+  ``fem_py.gmsh_mesh``), distributed the way ``gmshio.model_to_mesh`` does it
+  (``create_mesh`` + ``distribute_entity_data`` + ``meshtags_from_entities``);
+- :func:`distribute_structured`: a structured refinement (``fem_py.structured``),
+  written down in parallel: each rank makes the triangles of its own coarse cells and a
+  block of the node coordinates, and the tags follow from the closed-form numbering.
+
+With fewer subdomains than ranks, DOLFINx's graph partitioner is used instead (the
+preconditioner then runs on rank 0, ``coupling.distributed``).
+"""
+from __future__ import annotations
+
+from typing import Any, Callable
+
+import numpy as np
+from dolfinx import mesh as dmesh
+
+from fem_py.parallel import broadcast_from_root
+from fem_py.structured import StructuredRefinement
+
+__all__ = ["distribute_mesh", "distribute_structured", "subdomain_owners"]
+
+#: (mesh, cell tags "subdomains" (dim 2), facet tags "boundary" (dim 1)).
+TaggedMesh = tuple[Any, Any, Any]
+
+
+def subdomain_owners(
+    x: np.ndarray, cells: np.ndarray, subdomain: np.ndarray, nparts: int
+) -> np.ndarray:
+    """The rank of every cell such that each subdomain lies whole on one rank.
+
+    Recursive coordinate bisection of the subdomain centroids, weighted by the cell
+    count: a group of subdomains for ``k`` ranks is cut across its longer extent at
+    the weighted position k//2 : k - k//2. The partition is deterministic (the same
+    for every run), and the local Dirichlet problems of METHOD.md section 6 become
+    rank-local.
+
+    Parameters
+    ----------
+    x : (n_nodes, 2) node coordinates; cells : (n_cells, 3) node numbers;
+    subdomain : (n_cells,) subdomain id of each cell (0 .. L-1); nparts : number of ranks.
+    """
+    subdomain = np.asarray(subdomain, dtype=np.int64)
+    n_sub = int(subdomain.max(initial=-1)) + 1
+    weight = np.bincount(subdomain, minlength=n_sub).astype(float)
+    centre = x[cells].mean(axis=1)
+    centroid = np.stack(
+        [np.bincount(subdomain, centre[:, i], minlength=n_sub) for i in range(2)], 1
+    )
+    centroid /= np.maximum(weight, 1.0)[:, None]
+    part = np.zeros(n_sub, dtype=np.int32)
+
+    def bisect(ids: np.ndarray, first: int, count: int) -> None:
+        if count == 1 or ids.size < 2:
+            part[ids] = first
+            return
+        c = centroid[ids]
+        axis = int(np.argmax(np.ptp(c, axis=0)))
+        order = ids[np.lexsort((c[:, 1 - axis], c[:, axis]))]
+        left = count // 2
+        cum = np.cumsum(weight[order])  # cum[k]: weight of order[:k + 1]
+        cut = 1 + int(np.argmin(np.abs(cum[:-1] - cum[-1] * left / count)))
+        bisect(order[:cut], first, left)
+        bisect(order[cut:], first + left, count - left)
+
+    bisect(np.arange(n_sub), 0, nparts)
+    return part[subdomain]
+
+
+def _destinations(owner: np.ndarray, links: np.ndarray) -> Any:
+    """DOLFINx partitioner output: per local cell its owner, then the ranks ghosting it
+    (``links``: unique (cell, rank) rows)."""
+    from dolfinx import cpp
+
+    n = len(owner)
+    cell = np.concatenate([np.arange(n), links[:, 0]])
+    rank = np.concatenate([owner, links[:, 1]])
+    order = np.lexsort((np.arange(cell.size) >= n, cell))  # per cell: the owner first
+    offsets = np.concatenate([[0], np.cumsum(np.bincount(cell, minlength=n))])
+    return cpp.graph.AdjacencyList_int32(rank[order].astype(np.int32), offsets.astype(np.int32))
+
+
+def _owner_and_ghosts(cells: np.ndarray, owner: np.ndarray) -> Any:
+    """Rows of (owner, ranks ghosting the cell) for DOLFINx's shared-facet ghost mode:
+    a cell is ghosted on the owners of its facet neighbours. Only cells with two nodes
+    touched by several ranks can have a neighbour elsewhere, so only their facets are
+    matched."""
+    nparts = int(owner.max(initial=0)) + 1
+    n_nodes = int(cells.max(initial=0)) + 1
+    ranks_at = sum(
+        (np.bincount(cells[owner == r].ravel(), minlength=n_nodes) > 0).astype(np.int8)
+        for r in range(nparts)
+    )
+    near = np.flatnonzero((ranks_at[cells] > 1).sum(1) >= 2)
+    facets = np.sort(cells[near][:, [[1, 2], [2, 0], [0, 1]]].reshape(-1, 2), axis=1)
+    code = facets[:, 0] * n_nodes + facets[:, 1]
+    order = np.argsort(code)
+    same = np.flatnonzero(code[order][1:] == code[order][:-1])  # a facet seen from both cells
+    a, b = near[order[same] // 3], near[order[same + 1] // 3]
+    cut = owner[a] != owner[b]
+    a, b = a[cut], b[cut]
+    links = np.unique(np.stack([np.concatenate([a, b]), owner[np.concatenate([b, a])]], 1), axis=0)
+    return _destinations(owner, links.reshape(-1, 2))
+
+
+def _tagged_mesh(
+    msh: Any, cell_values: np.ndarray, facets: np.ndarray, facet_values: np.ndarray
+) -> TaggedMesh:
+    """(mesh, cell tags, facet tags): ``cell_values`` for the local cells (owned, then
+    ghosts), ``facets`` (input node numbers) and their values on any rank."""
+    from dolfinx import cpp
+
+    ct = dmesh.meshtags(
+        msh,
+        2,
+        np.arange(_n_local_cells(msh), dtype=np.int32),
+        np.asarray(cell_values, dtype=np.int32),
+    )
+    ents, vals = cpp.io.distribute_entity_data(
+        msh._mesh,
+        1,
+        np.asarray(facets, dtype=np.int64).reshape(-1, 2),
+        np.asarray(facet_values, dtype=np.int32),
+    )
+    msh.topology.create_connectivity(1, 2)
+    ft = dmesh.meshtags_from_entities(
+        msh, 1, cpp.graph.AdjacencyList_int32(ents), vals.astype(np.int32)
+    )
+    ct.name, ft.name = "subdomains", "boundary"
+    return msh, ct, ft
+
+
+def _ufl_triangle_mesh() -> Any:
+    """The UFL domain of a P1 triangle mesh in 2D (``gmshio.ufl_mesh(2, 2)`` without
+    importing gmsh where no gmsh is needed; measurements: docs/design/fem_py.md)."""
+    import ufl
+
+    cell = ufl.Cell("triangle", geometric_dimension=2)
+    return ufl.Mesh(ufl.VectorElement(ufl.FiniteElement("Lagrange", cell, 1, variant="equispaced")))
+
+
+def _n_local_cells(msh: Any) -> int:
+    """Number of local cells, owned and ghosts."""
+    cells = msh.topology.index_map(2)
+    return cells.size_local + cells.num_ghosts
+
+
+def _local_cells(msh: Any) -> np.ndarray:
+    """Input (global) index of every local cell, owned then ghosts."""
+    return np.asarray(msh.topology.original_cell_index[: _n_local_cells(msh)], dtype=np.int64)
+
+
+def distribute_mesh(comm: Any, arrays: tuple | None) -> TaggedMesh:
+    """Distribute a triangle mesh held on rank 0, whole subdomains per rank (collective).
+
+    Parameters
+    ----------
+    comm
+        The communicator of the mesh.
+    arrays
+        On rank 0, (x (n, 2), cells (n_c, 3), subdomain id of every cell 0 .. L-1,
+        boundary facets (n_f, 2) as node numbers, facet tags) (``fem_py.gmsh_mesh``);
+        ignored on the other ranks.
+
+    Returns
+    -------
+    (mesh, cell tags, facet tags)
+    """
+    from dolfinx import cpp
+
+    if comm.rank == 0:
+        x, cells, cell_values, facets, facet_values = arrays
+    else:
+        x, cells = np.zeros((0, 2)), np.zeros((0, 3), dtype=np.int64)
+        cell_values = np.zeros(0, dtype=np.int32)
+        facets, facet_values = np.zeros((0, 2), dtype=np.int64), np.zeros(0, dtype=np.int32)
+    cells = np.asarray(cells, dtype=np.int64)
+    x = np.ascontiguousarray(x, dtype=np.float64)
+
+    def partitioner(comm_, nparts, tdim, local_cells, ghost_mode):
+        if len(cells) == 0:
+            return cpp.graph.AdjacencyList_int32(np.zeros(0, np.int32), np.zeros(1, np.int32))
+        return _owner_and_ghosts(cells, subdomain_owners(x, cells, cell_values, nparts))
+
+    # whole subdomains per rank when there are enough subdomains, else DOLFINx's graph
+    # partitioner (the preconditioner then runs on rank 0, coupling.distributed)
+    n_sub = broadcast_from_root(comm, lambda: int(np.max(cell_values, initial=-1)) + 1)
+    by_subdomain = n_sub >= comm.size  # also in serial: no graph partitioner for one part
+    msh = dmesh.create_mesh(
+        comm,
+        cells,
+        x,
+        _ufl_triangle_mesh(),
+        **({"partitioner": partitioner} if by_subdomain else {}),
+    )
+    # cell tags by the input index of every local cell (all cells were input on rank 0)
+    wanted = comm.gather(_local_cells(msh), root=0)
+    values = comm.scatter(
+        [np.asarray(cell_values, dtype=np.int32)[w] for w in wanted] if comm.rank == 0 else None,
+        root=0,
+    )
+    return _tagged_mesh(msh, values, facets, facet_values)
+
+
+def distribute_structured(
+    comm: Any, ref: StructuredRefinement, boundary_tag: Callable[[int, int], int]
+) -> TaggedMesh:
+    """Create the structured mesh in parallel (collective).
+
+    Every rank writes down the triangles of its own coarse cells (:func:`subdomain_owners`
+    of the coarse cells) and an even block of the node coordinates, so no rank holds the
+    whole mesh.
+
+    Parameters
+    ----------
+    comm
+        The communicator of the mesh.
+    ref
+        The refinement of the coarse cells (the same on every rank).
+    boundary_tag
+        ``boundary_tag(a, b)``: the facet tag of the coarse boundary edge a-b.
+
+    Returns
+    -------
+    (mesh, cell tags, facet tags)
+    """
+    nc, T = len(ref.cells), ref.triangles_per_cell
+    rank_of_cell = (
+        subdomain_owners(ref.V, ref.cells, np.arange(nc), comm.size)
+        if comm.size > 1
+        else np.zeros(nc, dtype=np.int32)
+    )
+    mine = np.flatnonzero(rank_of_cell == comm.rank)
+    cells = ref.triangles(mine)
+    N = ref.n_nodes
+    x = ref.coordinates(comm.rank * N // comm.size, (comm.rank + 1) * N // comm.size)
+
+    def partitioner(comm_, nparts, tdim, local_cells, ghost_mode):
+        return _destinations(
+            np.full(len(cells), comm.rank, dtype=np.int64),
+            ref.ghost_ranks(mine, rank_of_cell, comm.rank),
+        )
+
+    # whole subdomains per rank when there are enough subdomains, else DOLFINx's graph
+    # partitioner (the preconditioner then runs on rank 0, coupling.distributed)
+    by_subdomain = nc >= comm.size  # also in serial: no graph partitioner for one part
+    msh = dmesh.create_mesh(
+        comm,
+        cells,
+        x,
+        _ufl_triangle_mesh(),
+        **({"partitioner": partitioner} if by_subdomain else {}),
+    )
+    # input cells are numbered rank after rank, each rank's coarse cells in increasing order
+    by_rank = np.argsort(rank_of_cell, kind="stable")
+    ct = dmesh.meshtags(
+        msh,
+        2,
+        np.arange(_n_local_cells(msh), dtype=np.int32),
+        by_rank[_local_cells(msh) // T].astype(np.int32),
+    )
+    # facet tags from the input numbers of the facet nodes: the coarse edge under each facet
+    tag_of_edge = np.full(len(ref.edges), -1, dtype=np.int32)
+    for e in np.flatnonzero(ref.edge_cells[:, 1] < 0):
+        tag_of_edge[e] = boundary_tag(int(ref.edges[e, 0]), int(ref.edges[e, 1]))
+    topology = msh.topology
+    topology.create_connectivity(1, 0)
+    topology.create_connectivity(1, 2)
+    vertices = topology.index_map(0)
+    node_of_vertex = np.empty(vertices.size_local + vertices.num_ghosts, dtype=np.int64)
+    node_of_vertex[topology.connectivity(2, 0).array] = msh.geometry.dofmap.array
+    input_node = np.asarray(msh.geometry.input_global_indices, dtype=np.int64)
+    ends = input_node[node_of_vertex[topology.connectivity(1, 0).array]].reshape(-1, 2)
+    edge = ref.edge_of_segments(ends[:, 0], ends[:, 1])
+    tags = np.where(edge >= 0, tag_of_edge[np.maximum(edge, 0)], -1)
+    facets = np.flatnonzero(tags >= 0).astype(np.int32)
+    ft = dmesh.meshtags(msh, 1, facets, tags[facets])
+    ct.name, ft.name = "subdomains", "boundary"
+    return msh, ct, ft
