@@ -2,7 +2,9 @@
 
 Exit codes: 0 success, 1 a check failed (check-jacobian), 2 bad input (one line on
 stderr naming the configuration key or file and the fix; a traceback only with
---debug), 3 the solver did not converge (outputs are still written).
+--debug), 3 the solver did not converge (outputs are still written), 130 and 143
+interrupted by SIGINT (Ctrl-C) and SIGTERM (one line on stderr; the output folder is
+left as it was).
 
 Under mpirun every rank runs the same command on MPI.COMM_WORLD. The inputs are
 validated identically on every rank before the first collective call, errors raised
@@ -13,12 +15,44 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
+import signal
 import sys
 from pathlib import Path
 
 import numpy as np
 
 EXIT_OK, EXIT_CHECK_FAILED, EXIT_BAD_INPUT, EXIT_NOT_CONVERGED = 0, 1, 2, 3
+#: 128 + the signal number, as a shell reports a process ended by that signal
+EXIT_INTERRUPTED = {signal.SIGINT: 130, signal.SIGTERM: 143}
+
+
+class Interrupted(BaseException):
+    """SIGINT or SIGTERM arrived (a BaseException, like KeyboardInterrupt, so that no
+    ``except Exception`` swallows it; the output folder is cleaned up on the way out)."""
+
+    def __init__(self, signum: int):
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+
+def _interrupt(signum: int, frame: object) -> None:
+    for s in EXIT_INTERRUPTED:  # a second signal must not interrupt the clean-up
+        signal.signal(s, signal.SIG_IGN)
+    raise Interrupted(signum)
+
+
+def _rank() -> int:
+    """This process's MPI rank, without starting MPI if it is not started yet."""
+    if "mpi4py.MPI" in sys.modules:
+        return sys.modules["mpi4py.MPI"].COMM_WORLD.rank
+    return int(os.environ.get("OMPI_COMM_WORLD_RANK", os.environ.get("PMI_RANK", "0")))
+
+
+def _say(message: str) -> None:
+    """One line on stderr, from rank 0 only."""
+    if _rank() == 0:
+        print(f"fembem: {message}", file=sys.stderr, flush=True)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -142,28 +176,37 @@ def _solve(args: argparse.Namespace) -> int:
     config = _problem_inputs(args)
     from coupling.app.from_config import problem_from_config
     from coupling.app.progress import ProgressMonitor
-    from coupling.io.atomic import prepare_output_dir
+    from coupling.io.atomic import staged_output_dir
     from coupling.io.outputs import write_outputs
     from coupling.solvers import solve
+    from coupling.timing import process_seconds
 
     out = Path(args.out if args.out is not None else config["output"]["dir"])
-    prepare_output_dir(comm, out, force=args.force)
-    problem, options, timings = _with_geometry_key(problem_from_config, comm, config)
+    # the run is written beside ``out`` and moved into place once complete
     monitor = None if args.quiet else ProgressMonitor(comm)
-    result = solve(problem, options, monitor=monitor)
-    if monitor is not None:
-        monitor.finished(result)
-    write_outputs(
-        comm,
-        out,
-        problem,
-        result,
-        tol=options.tol,
-        timings={**timings, **result.timings},
-        xdmf=config["output"]["xdmf"],
-        plots=config["output"]["plots"],
-        config=config,
-    )
+    with staged_output_dir(comm, out, force=args.force) as staging:
+        startup = process_seconds()
+        if monitor is not None:
+            monitor.stage("building the mesh and assembling the problem")
+        problem, options, timings = _with_geometry_key(problem_from_config, comm, config)
+        if monitor is not None:
+            monitor.problem(problem, options)
+        result = solve(problem, options, monitor=monitor)
+        if monitor is not None:
+            monitor.finished(result)
+            monitor.stage(f"writing outputs to {out}")
+        write_outputs(
+            comm,
+            staging,
+            problem,
+            result,
+            tol=options.tol,
+            timings={"startup": startup, **timings, **result.timings},
+            total=process_seconds,
+            xdmf=config["output"]["xdmf"],
+            plots=config["output"]["plots"],
+            config=config,
+        )
     if comm.rank == 0 and not args.quiet:
         state = "converged" if result.converged else "did NOT converge"
         print(
@@ -240,7 +283,24 @@ def _check_jacobian(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    argv = sys.argv[1:] if argv is None else list(argv)
+    """Run the command line; returns the exit code. SIGINT and SIGTERM end it with one
+    line and exit code 130 or 143 wherever they arrive."""
+    previous = {s: signal.signal(s, _interrupt) for s in EXIT_INTERRUPTED}
+    import petsc4py
+
+    # signals stay Python's (PETSc's handlers would print a crash report instead)
+    petsc4py.init([sys.argv[0], "-no_signal_handler"])
+    try:
+        return _main(sys.argv[1:] if argv is None else list(argv))
+    except Interrupted as err:
+        _say(f"interrupted by {signal.Signals(err.signum).name}; no output of this run was kept")
+        return EXIT_INTERRUPTED[err.signum]
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+
+
+def _main(argv: list[str]) -> int:
     if argv[:1] == ["study"]:
         from coupling.study import main as study  # loaded only when asked for
 
@@ -266,9 +326,17 @@ def main(argv: list[str] | None = None) -> int:
     except (ValueError, OSError) as err:  # bad input: configuration, files, folders
         if args.debug:
             raise
-        if MPI.COMM_WORLD.rank == 0:
-            message = str(err).splitlines()[0] if str(err) else type(err).__name__
-            print(f"fembem: error: {message}", file=sys.stderr)
+        message = str(err).splitlines()[0] if str(err) else type(err).__name__
+        _say(f"error: {message}")
+        return EXIT_BAD_INPUT
+    except MemoryError as err:
+        if args.debug:
+            raise
+        detail = f" ({str(err).splitlines()[0]})" if str(err) else ""
+        _say(
+            f"error: out of memory{detail}; use a coarser mesh (geometry.h, "
+            "geometry.subdomain_size) or a machine with more memory"
+        )
         return EXIT_BAD_INPUT
 
 

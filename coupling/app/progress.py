@@ -32,6 +32,20 @@ class ProgressMonitor:
             flush=True,
         )
 
+    def stage(self, what: str) -> None:
+        """One line naming the stage that starts."""
+        if self.comm.rank == 0:
+            print(f"fembem: {what}", file=self.stream, flush=True)
+
+    def problem(self, problem, options) -> None:
+        """The size of the assembled problem and the method about to run."""
+        d = problem.domain
+        self.stage(
+            f"{problem.V.dofmap.index_map.size_global} dofs, {problem.boundary.n_gamma} on "
+            f"Gamma, {problem.n_signorini} Signorini unknowns, {d.coarse.n_subdomains} "
+            f"subdomains; solving with {options.method}"
+        )
+
     def finished(self, solution) -> None:
         """A note when J_h increased during the solve (tau was halved)."""
         if solution.energy_increases and self.comm.rank == 0:

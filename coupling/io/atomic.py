@@ -1,47 +1,124 @@
 """Files and folders that are never half-written: the output folder of a run, and
 files renamed into place once complete.
+
+A run writes into a hidden sibling of its output folder (:func:`staged_output_dir`)
+and swaps it into place when every file is written, so the folder holds either a
+complete run or what it held before; an interrupted or failed run leaves nothing.
 """
 from __future__ import annotations
 
+import contextlib
+import ctypes
 import os
+import shutil
 import tempfile
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Iterator
 
 from mpi4py import MPI
 
-from fem_py.parallel import run_on_root
+from fem_py.parallel import broadcast_from_root, run_on_root
 
-__all__ = ["atomic_write", "prepare_output_dir"]
+__all__ = ["atomic_write", "prepare_output_dir", "staged_output_dir"]
+
+
+def _check_output_dir(out: Path, force: bool) -> None:
+    """Refuse a path that is not a folder, or a non-empty folder unless ``force``."""
+    if out.exists() and not out.is_dir():
+        raise FileExistsError(
+            f"output path {str(out)!r} exists and is not a folder; choose another --out"
+        )
+    if out.is_dir() and any(out.iterdir()) and not force:
+        raise FileExistsError(
+            f"output folder {str(out)!r} is not empty; pass --force to overwrite "
+            "it or choose another --out"
+        )
+
+
+def _mkdir(path: Path, out: Path) -> None:
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise FileExistsError(
+            f"cannot create output folder {str(out)!r} ({err.strerror}); choose another --out"
+        ) from None
 
 
 def prepare_output_dir(comm: MPI.Comm, out: Path, *, force: bool) -> None:
     """Create ``out``; refuse an existing non-empty folder unless ``force`` (collective).
 
-    With ``force`` the files of the earlier run stay until :func:`write_outputs`
-    replaces or removes them, so a run that fails on bad input destroys nothing.
+    With ``force`` the files of the earlier run stay until
+    :func:`coupling.io.outputs.write_outputs` replaces or removes them, so a run that
+    fails on bad input destroys nothing.
     """
     out = Path(out)
 
     def create() -> None:
-        if out.exists() and not out.is_dir():
-            raise FileExistsError(
-                f"output path {str(out)!r} exists and is not a folder; choose another --out"
-            )
-        if out.is_dir() and any(out.iterdir()) and not force:
-            raise FileExistsError(
-                f"output folder {str(out)!r} is not empty; pass --force to overwrite "
-                "it or choose another --out"
-            )
-        try:
-            out.mkdir(parents=True, exist_ok=True)
-        except OSError as err:
-            raise FileExistsError(
-                f"cannot create output folder {str(out)!r} ({err.strerror}); "
-                "choose another --out"
-            ) from None
+        _check_output_dir(out, force)
+        _mkdir(out, out)
 
     run_on_root(comm, create)  # the error, if any, is raised on every rank
+
+
+def _exchange(a: Path, b: Path) -> bool:
+    """Swap two paths atomically (Linux renameat2 RENAME_EXCHANGE); False if unsupported."""
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        renameat2 = libc.renameat2
+    except (OSError, AttributeError):
+        return False
+    at_fdcwd, rename_exchange = -100, 2
+    done = renameat2(at_fdcwd, os.fsencode(a), at_fdcwd, os.fsencode(b), rename_exchange)
+    return done == 0
+
+
+def _move_into_place(staging: Path, out: Path) -> None:
+    """Put the complete folder ``staging`` at ``out``; the earlier ``out`` is removed after."""
+    if not out.exists() or (out.is_dir() and not any(out.iterdir())):
+        os.replace(staging, out)  # rename onto an empty folder replaces it
+        return
+    if _exchange(staging, out):
+        shutil.rmtree(staging)  # now the earlier run
+        return
+    old = Path(tempfile.mkdtemp(dir=out.parent, prefix=f".{out.name}.old-"))
+    os.replace(out, old / out.name)
+    os.replace(staging, out)
+    shutil.rmtree(old)
+
+
+@contextlib.contextmanager
+def staged_output_dir(comm: MPI.Comm, out: Path, *, force: bool) -> Iterator[Path]:
+    """A hidden sibling folder of ``out`` to write a run into (collective).
+
+    ``out`` is checked as by :func:`prepare_output_dir` first. When the block ends
+    normally the staging folder replaces ``out`` (collective); when it ends by an
+    exception (an interrupt included) rank 0 removes it and ``out`` is untouched, which
+    needs no collective call. Yields the staging folder on every rank.
+    """
+    out = Path(out)
+
+    def create() -> str:
+        _check_output_dir(out, force)
+        _mkdir(out.parent, out)
+        path = tempfile.mkdtemp(dir=out.parent, prefix=f".{out.name}.partial-")
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(path, 0o777 & ~umask)  # mkdtemp makes it private; a folder of results is not
+        return path
+
+    staging = Path(broadcast_from_root(comm, create))
+    try:
+        yield staging
+    except BaseException:
+        if comm.rank == 0:
+            shutil.rmtree(staging, ignore_errors=True)
+        raise
+    try:
+        run_on_root(comm, lambda: _move_into_place(staging, out))
+    except BaseException:
+        if comm.rank == 0:
+            shutil.rmtree(staging, ignore_errors=True)
+        raise
 
 
 def atomic_write(path: Path, write: Callable[[Path], object]) -> None:

@@ -18,8 +18,9 @@ import dataclasses
 import json
 import os
 import shutil
+import time
 from pathlib import Path
-from typing import Mapping
+from typing import Callable, Mapping
 
 import numpy as np
 from mpi4py import MPI
@@ -28,7 +29,15 @@ from coupling.io.atomic import atomic_write
 from coupling.io.plots import PLOT_FILES, write_plots
 from fem_py.parallel import broadcast_from_root
 
-__all__ = ["DATA_FILES", "write_outputs", "boundary_fields", "gather_p1", "load_fields", "summary"]
+__all__ = [
+    "DATA_FILES",
+    "write_outputs",
+    "boundary_fields",
+    "gather_p1",
+    "load_fields",
+    "load_summary",
+    "summary",
+]
 
 #: The files of a run besides the plots (coupling.plots.PLOT_FILES).
 DATA_FILES = ("summary.json", "fields.npz", "solution.xdmf", "solution.h5")
@@ -114,20 +123,24 @@ def write_outputs(
     xdmf: bool,
     plots: bool,
     config: dict | None = None,
+    total: Callable[[], float] | None = None,
 ) -> list[str]:
     """Write summary.json, fields.npz and, on request, solution.xdmf/.h5 and the plots.
 
     Collective. Files of an earlier run in ``out`` that this run does not write (plots
     when ``plots`` is false now, ...) are removed, so the folder never mixes two runs.
     ``tol`` is the solver tolerance (drawn in history.png), ``timings`` the seconds per
-    stage of the whole run, ``config`` (the validated configuration) is stored in
-    summary.json.
+    stage of the run so far, to which summary.json adds ``outputs`` (this call) and, when
+    ``total`` (a clock of the whole process) is given, ``total`` read just before
+    summary.json, the last file, is written. ``config`` (the validated configuration)
+    is stored in summary.json.
 
     Returns
     -------
     list of str
         The names of the files written (the same on every rank).
     """
+    tic = time.perf_counter()
     out = Path(out)
     gathered = gather_p1(result.u)
     written = []
@@ -150,7 +163,10 @@ def write_outputs(
         names.append("fields.npz")
         if plots:
             names += write_plots(out, fields, result.history, tol=tol)
-        record = summary(problem, result, timings)
+        stages = {**timings, "outputs": time.perf_counter() - tic}
+        if total is not None:
+            stages["total"] = total()
+        record = summary(problem, result, stages)
         if config is not None:
             record["config"] = config
         record["files"] = sorted(names + ["summary.json"])
@@ -188,12 +204,39 @@ def _write_xdmf(comm: MPI.Comm, out: Path, problem, result) -> None:
     comm.barrier()
 
 
-def load_fields(result_dir: Path) -> dict:
-    """Read fields.npz of a finished run (rank-independent)."""
-    path = Path(result_dir) / "fields.npz"
-    if not path.is_file():
+def load_summary(result_dir: Path) -> dict:
+    """summary.json of a complete run: every file it lists is present (rank-independent).
+
+    Raises
+    ------
+    FileNotFoundError
+        The folder holds no complete run (no or unreadable summary.json, or a file that
+        summary.json lists is missing), with a message that says so.
+    """
+    result_dir = Path(result_dir)
+    path = result_dir / "summary.json"
+    hint = "give the output folder of a finished `fembem solve` run"
+    try:
+        record = json.loads(path.read_text())
+        files = list(record["files"])
+    except FileNotFoundError:
         raise FileNotFoundError(
-            f"{str(path)!r} not found; give the output folder of a " "finished `fembem solve` run"
+            f"{str(result_dir)!r} holds no complete run (summary.json not found, so fields.npz "
+            f"is not read); {hint}"
+        ) from None
+    except (OSError, ValueError, KeyError, TypeError):
+        raise FileNotFoundError(f"{str(path)!r} is not a complete summary; {hint}") from None
+    missing = [name for name in files if not (result_dir / name).is_file()]
+    if missing:
+        raise FileNotFoundError(
+            f"{str(result_dir)!r} is not a complete run ({missing[0]} listed in summary.json "
+            f"is missing); {hint}"
         )
-    with np.load(path) as data:
+    return record
+
+
+def load_fields(result_dir: Path) -> dict:
+    """Read fields.npz of a complete run (:func:`load_summary`; rank-independent)."""
+    load_summary(result_dir)
+    with np.load(Path(result_dir) / "fields.npz") as data:
         return {k: data[k] for k in data.files}
