@@ -86,7 +86,9 @@ class BoundaryMap:
     n_dofs: int
 
     def __init__(self, V: fem.FunctionSpace, domain_or_facet_tags: Any, *, start: Any = None):
-        if hasattr(domain_or_facet_tags, "facet_tags") and hasattr(domain_or_facet_tags, "vertices"):
+        if hasattr(domain_or_facet_tags, "facet_tags") and hasattr(
+            domain_or_facet_tags, "vertices"
+        ):
             facet_tags = domain_or_facet_tags.facet_tags
             if start is None:
                 start = domain_or_facet_tags.vertices[0]
@@ -98,11 +100,13 @@ class BoundaryMap:
         n_facets = msh.topology.index_map(1).size_local + msh.topology.index_map(1).num_ghosts
         n_cells = msh.topology.index_map(2).size_local + msh.topology.index_map(2).num_ghosts
         ftag = tag_array(facet_tags, n_facets, default=0)
-        fd = gather_facet_data(comm, [facet_data(topo, exterior_facets(msh), ftag,
-                                                 np.zeros(n_cells, np.int32), True)])
+        fd = gather_facet_data(
+            comm, [facet_data(topo, exterior_facets(msh), ftag, np.zeros(n_cells, np.int32), True)]
+        )
         n_dofs = V.dofmap.index_map.size_global
-        arrays = broadcast_from_root(comm, lambda: _walk(fd, n_dofs, start),
-                                     error_prefix="boundary map")
+        arrays = broadcast_from_root(
+            comm, lambda: _walk(fd, n_dofs, start), error_prefix="boundary map"
+        )
         for key, value in arrays.items():
             setattr(self, key, value)
 
@@ -162,7 +166,9 @@ class BoundaryMap:
             comm.Allreduce(MPI.IN_PLACE, out, op=MPI.SUM)
         return out
 
-    def scatter_add(self, values: np.ndarray, vec: PETSc.Vec, *, refresh_ghosts: bool = True) -> PETSc.Vec:
+    def scatter_add(
+        self, values: np.ndarray, vec: PETSc.Vec, *, refresh_ghosts: bool = True
+    ) -> PETSc.Vec:
         """vec += T^T values (each rank adds to the entries it owns; ``values`` must be
         the same on every rank). With ``refresh_ghosts`` the ghost entries of a ghosted
         ``vec`` are refreshed (collective); without, only owned entries are valid."""
@@ -190,7 +196,9 @@ class BoundaryMap:
         x, y = self.nodes[:, 0], self.nodes[:, 1]
         nx, ny = self.node_normals[:, 0], self.node_normals[:, 1]
         if isinstance(expr, str):
-            out = Expression(expr, ("x", "y", "nx", "ny")).evaluate({"x": x, "y": y, "nx": nx, "ny": ny}, "numpy")
+            out = Expression(expr, ("x", "y", "nx", "ny")).evaluate(
+                {"x": x, "y": y, "nx": nx, "ny": ny}, "numpy"
+            )
         elif callable(expr):
             try:
                 nargs = len(inspect.signature(expr).parameters)
@@ -200,10 +208,14 @@ class BoundaryMap:
         elif isinstance(expr, (int, float, np.floating, np.integer)) and not isinstance(expr, bool):
             out = float(expr)
         else:
-            raise ValueError(f"boundary data must be text, a number or a callable, got {type(expr).__name__}")
+            raise ValueError(
+                f"boundary data must be text, a number or a callable, got {type(expr).__name__}"
+            )
         out = np.broadcast_to(np.asarray(out, dtype=float), (self.n_gamma,)).copy()
         if not np.all(np.isfinite(out)):
-            raise ValueError("boundary data is not finite at some boundary node; check the expression")
+            raise ValueError(
+                "boundary data is not finite at some boundary node; check the expression"
+            )
         return out
 
 
@@ -222,20 +234,26 @@ def _walk(fd: Any, n_dofs: int, start: Any) -> dict:
         xy = fd.coords[:, 0]
         f0 = int(np.lexsort((xy[:, 0], xy[:, 1]))[0])
     else:
-        f0 = int(np.argmin(np.linalg.norm(fd.coords[:, 0] - np.asarray(start, float)[None, :2], axis=1)))
+        f0 = int(
+            np.argmin(np.linalg.norm(fd.coords[:, 0] - np.asarray(start, float)[None, :2], axis=1))
+        )
     facets = np.empty(nf, dtype=np.int64)
     f = f0
     for i in range(nf):
         facets[i] = f
         f = int(order[np.searchsorted(a_sorted, b[f])])  # the facet leaving the end node
         if f == f0 and i != nf - 1:
-            raise RuntimeError(f"the boundary has several components ({i + 1} of {nf} facets in the first); "
-                               "Omega must be simply connected")
+            raise RuntimeError(
+                f"the boundary has several components ({i + 1} of {nf} facets in the first); "
+                "Omega must be simply connected"
+            )
     nodes = fd.coords[facets, 0].astype(float)
     x, y = nodes[:, 0], nodes[:, 1]
     area = 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
     if area <= 0:
-        raise RuntimeError(f"boundary walk has shoelace area {area:g} <= 0 (expected counter-clockwise)")
+        raise RuntimeError(
+            f"boundary walk has shoelace area {area:g} <= 0 (expected counter-clockwise)"
+        )
     tags = fd.tag[facets].astype(np.int64)
     polygon = _closed(nodes)
     seg = np.diff(polygon, axis=0)
@@ -244,11 +262,18 @@ def _walk(fd: Any, n_dofs: int, start: Any) -> dict:
     nn = pn + np.roll(pn, 1, axis=0)
     nn /= np.linalg.norm(nn, axis=1)[:, None]
     sig = np.flatnonzero((tags >= SIGNORINI_TAG0) & (tags == np.roll(tags, 1)))
-    return dict(nodes=nodes, dofs=a[facets].astype(np.int64), s=arc_length(polygon)[:-1],
-                length=float(plen.sum()), panel_tags=tags, panel_normals=pn, node_normals=nn,
-                signorini=sig.astype(np.int64),
-                arc_of_signorini=(tags[sig] - SIGNORINI_TAG0).astype(np.int64),
-                n_dofs=int(n_dofs))
+    return dict(
+        nodes=nodes,
+        dofs=a[facets].astype(np.int64),
+        s=arc_length(polygon)[:-1],
+        length=float(plen.sum()),
+        panel_tags=tags,
+        panel_normals=pn,
+        node_normals=nn,
+        signorini=sig.astype(np.int64),
+        arc_of_signorini=(tags[sig] - SIGNORINI_TAG0).astype(np.int64),
+        n_dofs=int(n_dofs),
+    )
 
 
 def _closed(nodes: np.ndarray) -> np.ndarray:

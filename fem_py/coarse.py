@@ -67,12 +67,16 @@ class Ragged(Sequence):
         flat = np.asarray(flat).view()
         offsets = np.array(offsets, dtype=np.int64)  # own copy: the caller's array stays writable
         if flat.ndim < 1 or offsets.ndim != 1 or offsets.size < 1:
-            raise ValueError("Ragged needs a flat array with ndim >= 1 and 1-D offsets of length n + 1; "
-                             "build it with as_ragged from a sequence of arrays")
+            raise ValueError(
+                "Ragged needs a flat array with ndim >= 1 and 1-D offsets of length n + 1; "
+                "build it with as_ragged from a sequence of arrays"
+            )
         lengths = np.diff(offsets)
         if offsets[0] != 0 or offsets[-1] != len(flat) or np.any(lengths < 0):
-            raise ValueError(f"Ragged offsets must rise from 0 to len(flat) = {len(flat)}; "
-                             f"got {offsets[0]} .. {offsets[-1]}, decreasing: {bool(np.any(lengths < 0))}")
+            raise ValueError(
+                f"Ragged offsets must rise from 0 to len(flat) = {len(flat)}; "
+                f"got {offsets[0]} .. {offsets[-1]}, decreasing: {bool(np.any(lengths < 0))}"
+            )
         for a in (flat, offsets, lengths):
             a.flags.writeable = False
         object.__setattr__(self, "flat", flat)
@@ -95,14 +99,14 @@ class Ragged(Sequence):
                 return self.take(np.arange(start, stop, step))
             stop = max(start, stop)
             a, b = self.offsets[start], self.offsets[stop]
-            return Ragged(self.flat[a:b], self.offsets[start:stop + 1] - a)
+            return Ragged(self.flat[a:b], self.offsets[start : stop + 1] - a)
         k = operator.index(key)
         n = len(self)
         if k < 0:
             k += n
         if not 0 <= k < n:
             raise IndexError(f"Ragged index {key} out of range for {n} rows")
-        return self.flat[self.offsets[k]:self.offsets[k + 1]]
+        return self.flat[self.offsets[k] : self.offsets[k + 1]]
 
     def __iter__(self) -> Iterator[np.ndarray]:
         bounds = self.offsets.tolist()
@@ -113,22 +117,32 @@ class Ragged(Sequence):
     def __add__(self, other: Any) -> Ragged:
         if not isinstance(other, (Ragged, tuple, list)):
             return NotImplemented
-        return _concat(self, as_ragged(other, dtype=self.flat.dtype, item_shape=self.flat.shape[1:]))
+        return _concat(
+            self, as_ragged(other, dtype=self.flat.dtype, item_shape=self.flat.shape[1:])
+        )
 
     def __radd__(self, other: Any) -> Ragged:
         if not isinstance(other, (Ragged, tuple, list)):
             return NotImplemented
-        return _concat(as_ragged(other, dtype=self.flat.dtype, item_shape=self.flat.shape[1:]), self)
+        return _concat(
+            as_ragged(other, dtype=self.flat.dtype, item_shape=self.flat.shape[1:]), self
+        )
 
     def __repr__(self) -> str:
-        return f"Ragged({len(self)} rows, {len(self.flat)} entries of shape {self.flat.shape[1:]} {self.flat.dtype})"
+        return (
+            f"Ragged({len(self)} rows, {len(self.flat)} entries of shape "
+            f"{self.flat.shape[1:]} {self.flat.dtype})"
+        )
 
     def take(self, indices: Any) -> Ragged:
         """The rows ``indices`` (any int array, repeats allowed) as a new ``Ragged``."""
         indices = np.asarray(indices, dtype=np.int64).ravel()
         n = len(self)
         if indices.size and (indices.min() < -n or indices.max() >= n):
-            raise IndexError(f"Ragged.take: indices must lie in [-{n}, {n}); got {indices.min()} .. {indices.max()}")
+            raise IndexError(
+                f"Ragged.take: indices must lie in [-{n}, {n}); "
+                f"got {indices.min()} .. {indices.max()}"
+            )
         indices = np.where(indices < 0, indices + n, indices)
         lengths = self.lengths[indices]
         offsets = np.zeros(len(indices) + 1, dtype=np.int64)
@@ -146,8 +160,9 @@ class Ragged(Sequence):
         sorted_lengths = self.lengths[order]
         cut = np.flatnonzero(sorted_lengths[1:] != sorted_lengths[:-1]) + 1
         starts = np.concatenate([[0], cut]).tolist() if len(order) else []
-        return [(int(sorted_lengths[a]), order[a:b])
-                for a, b in zip(starts, starts[1:] + [len(order)])]
+        return [
+            (int(sorted_lengths[a]), order[a:b]) for a, b in zip(starts, starts[1:] + [len(order)])
+        ]
 
     def rows(self, group: Any) -> np.ndarray:
         """Rows ``group`` of equal length L stacked into a (B, L, ...) array (a copy).
@@ -160,13 +175,17 @@ class Ragged(Sequence):
             return np.zeros((0, 0) + self.flat.shape[1:], dtype=self.flat.dtype)
         lengths = self.lengths[group]
         if np.any(lengths != lengths[0]):
-            raise ValueError(f"Ragged.rows needs rows of equal length; got lengths {lengths.min()} .. {lengths.max()} "
-                             "(group them with length_groups)")
+            raise ValueError(
+                "Ragged.rows needs rows of equal length; "
+                f"got lengths {lengths.min()} .. {lengths.max()} (group them with length_groups)"
+            )
         return self.flat.take(self.offsets[group][:, None] + np.arange(lengths[0]), axis=0)
 
 
 def _concat(a: Ragged, b: Ragged) -> Ragged:
-    return Ragged(np.concatenate([a.flat, b.flat]), np.concatenate([a.offsets, b.offsets[1:] + a.offsets[-1]]))
+    return Ragged(
+        np.concatenate([a.flat, b.flat]), np.concatenate([a.offsets, b.offsets[1:] + a.offsets[-1]])
+    )
 
 
 def as_ragged(seq: Any, dtype: Any = None, item_shape: tuple = ()) -> Ragged:
@@ -189,10 +208,15 @@ def as_ragged(seq: Any, dtype: Any = None, item_shape: tuple = ()) -> Ragged:
         return Ragged(seq.flat.astype(dtype), seq.offsets)
     arrays = [np.asarray(a, dtype=dtype) for a in seq]
     if not arrays:
-        return Ragged(np.zeros((0,) + tuple(item_shape), dtype=dtype or np.float64), np.zeros(1, dtype=np.int64))
+        return Ragged(
+            np.zeros((0,) + tuple(item_shape), dtype=dtype or np.float64),
+            np.zeros(1, dtype=np.int64),
+        )
     if any(a.ndim < 1 or a.shape[1:] != arrays[0].shape[1:] for a in arrays):
-        raise ValueError("as_ragged needs arrays with ndim >= 1 and equal trailing shapes; "
-                         f"got shapes {sorted({a.shape[1:] for a in arrays})} (ndim 0 items are not rows)")
+        raise ValueError(
+            "as_ragged needs arrays with ndim >= 1 and equal trailing shapes; "
+            f"got shapes {sorted({a.shape[1:] for a in arrays})} (ndim 0 items are not rows)"
+        )
     offsets = np.zeros(len(arrays) + 1, dtype=np.int64)
     np.cumsum([len(a) for a in arrays], out=offsets[1:])
     return Ragged(np.concatenate(arrays), offsets)
@@ -254,7 +278,9 @@ class CoarseStructure:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "edge_dofs", as_ragged(self.edge_dofs, dtype=np.int64))
-        object.__setattr__(self, "edge_coords", as_ragged(self.edge_coords, dtype=np.float64, item_shape=(2,)))
+        object.__setattr__(
+            self, "edge_coords", as_ragged(self.edge_coords, dtype=np.float64, item_shape=(2,))
+        )
 
     @property
     def n_vertices(self) -> int:
@@ -279,14 +305,22 @@ def compute_coarse_structure(msh: Any, cell_tags: Any, facet_tags: Any) -> Coars
     ends). Chains between coarse vertices are the coarse edges. The result is broadcast.
     """
     from fem_py.forms import p1_space
-    from fem_py.meshdata import exterior_facets, facet_data, gather_facet_data, p1_topology, tag_array
+    from fem_py.meshdata import (
+        exterior_facets,
+        facet_data,
+        gather_facet_data,
+        p1_topology,
+        tag_array,
+    )
 
     comm = msh.comm
     V = p1_space(msh)
     topo = p1_topology(V)
     tdim = msh.topology.dim
     n_cells = msh.topology.index_map(tdim).size_local + msh.topology.index_map(tdim).num_ghosts
-    n_facets = msh.topology.index_map(tdim - 1).size_local + msh.topology.index_map(tdim - 1).num_ghosts
+    n_facets = (
+        msh.topology.index_map(tdim - 1).size_local + msh.topology.index_map(tdim - 1).num_ghosts
+    )
     ctag = tag_array(cell_tags, n_cells)
     ftag = tag_array(facet_tags, n_facets, default=0)
     ext = exterior_facets(msh)
@@ -313,8 +347,9 @@ def compute_coarse_structure(msh: Any, cell_tags: Any, facet_tags: Any) -> Coars
 
     if comm.size == 1:
         return run_on_root(comm, on_root, error_prefix="coarse structure")
-    return _unpack(broadcast_from_root(comm, lambda: _pack(on_root()),
-                                       error_prefix="coarse structure"))
+    return _unpack(
+        broadcast_from_root(comm, lambda: _pack(on_root()), error_prefix="coarse structure")
+    )
 
 
 def _pack(coarse: CoarseStructure) -> dict:
@@ -334,7 +369,9 @@ def _unpack(fields: dict) -> CoarseStructure:
     return CoarseStructure(**fields)
 
 
-def _coarse_from_skeleton(fd: FacetData, tag_global: np.ndarray, n_dofs: int, n_sub: int) -> CoarseStructure:
+def _coarse_from_skeleton(
+    fd: FacetData, tag_global: np.ndarray, n_dofs: int, n_sub: int
+) -> CoarseStructure:
     # skeleton nodes = the dofs on skeleton facets, sorted (a mark array of n_dofs
     # instead of np.unique: no sort)
     on_skeleton = np.zeros(n_dofs, dtype=bool)
@@ -362,9 +399,12 @@ def _coarse_from_skeleton(fd: FacetData, tag_global: np.ndarray, n_dofs: int, n_
         Xi = X.take(i2, axis=0)  # take: faster than X[i2] for (n, 2) rows (docs/design/fem_py.md)
         u, w = Xi - X.take(a, axis=0), X.take(b, axis=0) - Xi
         cross = np.abs(u[:, 0] * w[:, 1] - u[:, 1] * w[:, 0])
-        bent = (cross > _COLLINEAR_TOL * np.linalg.norm(u, axis=1) * np.linalg.norm(w, axis=1)) \
-            | ((u * w).sum(1) <= 0)
-        tag_change = (fd.exterior[f] != fd.exterior[g]) | (fd.exterior[f] & (fd.tag[f] != fd.tag[g]))
+        bent = (cross > _COLLINEAR_TOL * np.linalg.norm(u, axis=1) * np.linalg.norm(w, axis=1)) | (
+            (u * w).sum(1) <= 0
+        )
+        tag_change = (fd.exterior[f] != fd.exterior[g]) | (
+            fd.exterior[f] & (fd.tag[f] != fd.tag[g])
+        )
         is_vertex[i2[bent | tag_change]] = True
     vidx = np.flatnonzero(is_vertex)
     # sort keys rounded far above round-off, so that coordinate noise (gmsh leaves ~1e-18
@@ -384,8 +424,10 @@ def _coarse_from_skeleton(fd: FacetData, tag_global: np.ndarray, n_dofs: int, n_
     end_comp, end_nodes = comp2[vertex_end], end_node[vertex_end]
     ends_per_edge = np.bincount(end_comp, minlength=n_edges)
     if np.any(ends_per_edge != 2):
-        raise RuntimeError(f"{int(np.count_nonzero(ends_per_edge != 2))} chains of skeleton facets do "
-                           "not run between two coarse vertices (closed loops without coarse vertices)")
+        raise RuntimeError(
+            f"{int(np.count_nonzero(ends_per_edge != 2))} chains of skeleton facets do "
+            "not run between two coarse vertices (closed loops without coarse vertices)"
+        )
     pair = np.argsort(end_comp, kind="stable").reshape(-1, 2)
     e0, e1 = end_nodes[pair[:, 0]], end_nodes[pair[:, 1]]
     # a coarse edge is straight (a bend makes a coarse vertex): order its nodes by position
@@ -398,8 +440,14 @@ def _coarse_from_skeleton(fd: FacetData, tag_global: np.ndarray, n_dofs: int, n_
     # the (edge, node) pairs sorted by edge then node, as one int64 key (nn * n_edges < 2^63):
     # a non-vertex node lies on one edge only (that of its two facets), plus the edge ends
     inner = i2[join]
-    key = np.unique(np.concatenate([comp[f[join]].astype(np.int64) * nn + inner,
-                                    end_comp.astype(np.int64) * nn + end_nodes]))
+    key = np.unique(
+        np.concatenate(
+            [
+                comp[f[join]].astype(np.int64) * nn + inner,
+                end_comp.astype(np.int64) * nn + end_nodes,
+            ]
+        )
+    )
     c, nd = np.divmod(key, nn)
     chord = (X[stop] - X[start]).take(c, axis=0)
     offset = X.take(nd, axis=0) - X[start].take(c, axis=0)
@@ -412,7 +460,9 @@ def _coarse_from_skeleton(fd: FacetData, tag_global: np.ndarray, n_dofs: int, n_
     ftag = fd.tag[first_facet]
     arc = np.where(ext & (ftag >= SIGNORINI_TAG0), ftag - SIGNORINI_TAG0, -1)
     cells = fd.cells[first_facet]
-    sub = np.where(ext[:, None], np.stack([cells[:, 0], np.full(n_edges, -1)], 1), np.sort(cells, axis=1))
+    sub = np.where(
+        ext[:, None], np.stack([cells[:, 0], np.full(n_edges, -1)], 1), np.sort(cells, axis=1)
+    )
     ev = np.stack([vnum[start], vnum[stop]], 1)
     mid = K[chain_nodes.flat[offsets[:-1] + length // 2]]
     eorder = np.lexsort((mid[:, 0], mid[:, 1], ev.max(1), ev.min(1)))

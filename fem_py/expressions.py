@@ -48,8 +48,19 @@ BACKENDS = ("ufl", "numpy", "sympy")
 
 #: Allowed function names and their number of arguments.
 FUNCTIONS: dict[str, int] = {
-    "sin": 1, "cos": 1, "tan": 1, "exp": 1, "log": 1, "sqrt": 1, "abs": 1,
-    "sinh": 1, "cosh": 1, "tanh": 1, "atan2": 2, "max": 2, "min": 2,
+    "sin": 1,
+    "cos": 1,
+    "tan": 1,
+    "exp": 1,
+    "log": 1,
+    "sqrt": 1,
+    "abs": 1,
+    "sinh": 1,
+    "cosh": 1,
+    "tanh": 1,
+    "atan2": 2,
+    "max": 2,
+    "min": 2,
 }
 #: Named constants.
 CONSTANTS: dict[str, float] = {"pi": math.pi, "e": math.e}
@@ -63,17 +74,37 @@ def _ufl_functions() -> dict[str, Callable]:
     import ufl
 
     return {
-        "sin": ufl.sin, "cos": ufl.cos, "tan": ufl.tan, "exp": ufl.exp, "log": ufl.ln,
-        "sqrt": ufl.sqrt, "abs": abs, "sinh": ufl.sinh, "cosh": ufl.cosh, "tanh": ufl.tanh,
-        "atan2": ufl.atan_2, "max": ufl.max_value, "min": ufl.min_value,
+        "sin": ufl.sin,
+        "cos": ufl.cos,
+        "tan": ufl.tan,
+        "exp": ufl.exp,
+        "log": ufl.ln,
+        "sqrt": ufl.sqrt,
+        "abs": abs,
+        "sinh": ufl.sinh,
+        "cosh": ufl.cosh,
+        "tanh": ufl.tanh,
+        "atan2": ufl.atan_2,
+        "max": ufl.max_value,
+        "min": ufl.min_value,
     }
 
 
 def _numpy_functions() -> dict[str, Callable]:
     return {
-        "sin": np.sin, "cos": np.cos, "tan": np.tan, "exp": np.exp, "log": np.log,
-        "sqrt": np.sqrt, "abs": np.abs, "sinh": np.sinh, "cosh": np.cosh, "tanh": np.tanh,
-        "atan2": np.arctan2, "max": np.maximum, "min": np.minimum,
+        "sin": np.sin,
+        "cos": np.cos,
+        "tan": np.tan,
+        "exp": np.exp,
+        "log": np.log,
+        "sqrt": np.sqrt,
+        "abs": np.abs,
+        "sinh": np.sinh,
+        "cosh": np.cosh,
+        "tanh": np.tanh,
+        "atan2": np.arctan2,
+        "max": np.maximum,
+        "min": np.minimum,
     }
 
 
@@ -81,18 +112,38 @@ def _sympy_functions() -> dict[str, Callable]:
     import sympy
 
     return {
-        "sin": sympy.sin, "cos": sympy.cos, "tan": sympy.tan, "exp": sympy.exp, "log": sympy.log,
-        "sqrt": sympy.sqrt, "abs": sympy.Abs, "sinh": sympy.sinh, "cosh": sympy.cosh,
-        "tanh": sympy.tanh, "atan2": sympy.atan2, "max": sympy.Max, "min": sympy.Min,
+        "sin": sympy.sin,
+        "cos": sympy.cos,
+        "tan": sympy.tan,
+        "exp": sympy.exp,
+        "log": sympy.log,
+        "sqrt": sympy.sqrt,
+        "abs": sympy.Abs,
+        "sinh": sympy.sinh,
+        "cosh": sympy.cosh,
+        "tanh": sympy.tanh,
+        "atan2": sympy.atan2,
+        "max": sympy.Max,
+        "min": sympy.Min,
     }
 
 
 def _math_functions() -> dict[str, Callable]:
     """Constant folding (all arguments are plain numbers) for the ufl backend."""
     return {
-        "sin": math.sin, "cos": math.cos, "tan": math.tan, "exp": math.exp, "log": math.log,
-        "sqrt": math.sqrt, "abs": abs, "sinh": math.sinh, "cosh": math.cosh, "tanh": math.tanh,
-        "atan2": math.atan2, "max": max, "min": min,
+        "sin": math.sin,
+        "cos": math.cos,
+        "tan": math.tan,
+        "exp": math.exp,
+        "log": math.log,
+        "sqrt": math.sqrt,
+        "abs": abs,
+        "sinh": math.sinh,
+        "cosh": math.cosh,
+        "tanh": math.tanh,
+        "atan2": math.atan2,
+        "max": max,
+        "min": min,
     }
 
 
@@ -117,14 +168,21 @@ class Expression:
 
     def __init__(self, text: str, names: tuple[str, ...] | list[str] | Mapping[str, Any]):
         if not isinstance(text, str):
-            raise ValueError(f"expression must be a string, got {type(text).__name__}; quote it in the configuration")
+            raise ValueError(
+                f"expression must be a string, got {type(text).__name__}; "
+                "quote it in the configuration"
+            )
         if len(text) > _MAX_LENGTH:
-            raise ValueError(f"expression is {len(text)} characters long; the limit is {_MAX_LENGTH}")
+            raise ValueError(
+                f"expression is {len(text)} characters long; the limit is {_MAX_LENGTH}"
+            )
         self.text = text
         self.names = tuple(names)
         for n in self.names:
             if n in FUNCTIONS or n in CONSTANTS:
-                raise ValueError(f"variable name '{n}' clashes with a built-in function or constant; rename it")
+                raise ValueError(
+                    f"variable name '{n}' clashes with a built-in function or constant; rename it"
+                )
         source = text.replace("^", "**").strip()
         if not source:
             raise ValueError("expression is empty; give a formula such as '1' or 'sin(pi*x)'")
@@ -133,10 +191,12 @@ class Expression:
             tree = ast.parse(source, mode="eval")
         except SyntaxError as err:
             col = (err.offset or 1) - 1
-            token = source[col:col + 10] or "<end of text>"
+            token = source[col : col + 10] or "<end of text>"
             raise ValueError(
-                f"cannot parse expression {text!r}: invalid syntax at '{token}' (column {col + 1}); "
-                "use + - * / ** ^, parentheses, numbers and the allowed names and functions") from None
+                f"cannot parse expression {text!r}: invalid syntax at '{token}' "
+                f"(column {col + 1}); use + - * / ** ^, parentheses, numbers and the allowed "
+                "names and functions"
+            ) from None
         self._tree = tree.body
         self.used_names: set[str] = set()
         self._check(self._tree)
@@ -149,48 +209,74 @@ class Expression:
     def _check(self, node: ast.AST) -> None:
         if isinstance(node, ast.BinOp):
             if type(node.op) not in _BINOPS:
-                raise ValueError(f"operator in '{self._segment(node)}' is not allowed in expression "
-                                 f"{self.text!r}; use + - * / ** only")
+                raise ValueError(
+                    f"operator in '{self._segment(node)}' is not allowed in expression "
+                    f"{self.text!r}; use + - * / ** only"
+                )
             self._check(node.left)
             self._check(node.right)
         elif isinstance(node, ast.UnaryOp):
             if type(node.op) not in _UNARY:
-                raise ValueError(f"operator in '{self._segment(node)}' is not allowed in expression "
-                                 f"{self.text!r}; use unary + or - only")
+                raise ValueError(
+                    f"operator in '{self._segment(node)}' is not allowed in expression "
+                    f"{self.text!r}; use unary + or - only"
+                )
             self._check(node.operand)
         elif isinstance(node, ast.Constant):
             if isinstance(node.value, bool) or not isinstance(node.value, (int, float)):
-                raise ValueError(f"literal '{self._segment(node)}' is not allowed in expression "
-                                 f"{self.text!r}; only real numbers are")
+                raise ValueError(
+                    f"literal '{self._segment(node)}' is not allowed in expression "
+                    f"{self.text!r}; only real numbers are"
+                )
         elif isinstance(node, ast.Name):
             if node.id not in self.names and node.id not in CONSTANTS:
                 if node.id in FUNCTIONS:
-                    raise ValueError(f"function '{node.id}' used without arguments in expression {self.text!r}; "
-                                     f"write {node.id}(...)")
+                    raise ValueError(
+                        f"function '{node.id}' used without arguments in expression {self.text!r}; "
+                        f"write {node.id}(...)"
+                    )
                 allowed = ", ".join(sorted(self.names) + sorted(CONSTANTS))
-                raise ValueError(f"unknown name '{node.id}' in expression {self.text!r}; allowed names: {allowed}")
+                raise ValueError(
+                    f"unknown name '{node.id}' in expression {self.text!r}; "
+                    f"allowed names: {allowed}"
+                )
             self.used_names.add(node.id)
         elif isinstance(node, ast.Call):
             if not isinstance(node.func, ast.Name):
-                raise ValueError(f"call '{self._segment(node)}' is not allowed in expression {self.text!r}; "
-                                 f"allowed functions: {', '.join(FUNCTIONS)}")
+                raise ValueError(
+                    f"call '{self._segment(node)}' is not allowed in expression {self.text!r}; "
+                    f"allowed functions: {', '.join(FUNCTIONS)}"
+                )
             name = node.func.id
             if name not in FUNCTIONS:
-                raise ValueError(f"unknown function '{name}' in expression {self.text!r}; "
-                                 f"allowed functions: {', '.join(FUNCTIONS)}")
+                raise ValueError(
+                    f"unknown function '{name}' in expression {self.text!r}; "
+                    f"allowed functions: {', '.join(FUNCTIONS)}"
+                )
             if node.keywords:
-                raise ValueError(f"keyword arguments in '{self._segment(node)}' are not allowed in expression "
-                                 f"{self.text!r}; pass arguments by position")
-            if len(node.args) != FUNCTIONS[name] or any(isinstance(a, ast.Starred) for a in node.args):
-                raise ValueError(f"function '{name}' takes {FUNCTIONS[name]} argument(s), got "
-                                 f"'{self._segment(node)}' in expression {self.text!r}")
+                raise ValueError(
+                    f"keyword arguments in '{self._segment(node)}' are not allowed in expression "
+                    f"{self.text!r}; pass arguments by position"
+                )
+            if len(node.args) != FUNCTIONS[name] or any(
+                isinstance(a, ast.Starred) for a in node.args
+            ):
+                raise ValueError(
+                    f"function '{name}' takes {FUNCTIONS[name]} argument(s), got "
+                    f"'{self._segment(node)}' in expression {self.text!r}"
+                )
             for a in node.args:
                 self._check(a)
         elif isinstance(node, ast.Attribute):
-            raise ValueError(f"attribute access '{self._segment(node)}' is not allowed in expression {self.text!r}")
+            raise ValueError(
+                f"attribute access '{self._segment(node)}' is not allowed in expression "
+                f"{self.text!r}"
+            )
         else:
-            raise ValueError(f"'{self._segment(node)}' ({type(node).__name__}) is not allowed in expression "
-                             f"{self.text!r}; use numbers, names, + - * / ** and the allowed functions")
+            raise ValueError(
+                f"'{self._segment(node)}' ({type(node).__name__}) is not allowed in expression "
+                f"{self.text!r}; use numbers, names, + - * / ** and the allowed functions"
+            )
 
     # ------------------------------------------------------------- evaluation
     def evaluate(self, variables: Mapping[str, Any], backend: str = "ufl") -> Any:
@@ -214,12 +300,17 @@ class Expression:
         if missing:
             raise ValueError(f"expression {self.text!r} needs values for {sorted(missing)}")
         if backend == "numpy":
-            arrays = {k: np.asarray(v, dtype=float) for k, v in variables.items() if k in self.used_names}
+            arrays = {
+                k: np.asarray(v, dtype=float) for k, v in variables.items() if k in self.used_names
+            }
             with np.errstate(all="ignore"):
                 value = self._eval(self._tree, arrays, _numpy_functions(), "numpy")
                 shape = np.broadcast_shapes(*(a.shape for a in arrays.values())) if arrays else ()
-                return np.array(np.broadcast_to(np.asarray(value, dtype=float), shape), dtype=float) \
-                    if shape else float(value)
+                return (
+                    np.array(np.broadcast_to(np.asarray(value, dtype=float), shape), dtype=float)
+                    if shape
+                    else float(value)
+                )
         if backend == "ufl":
             import ufl
 
@@ -258,10 +349,12 @@ class Expression:
                     return a * b
                 if op == "/":
                     return a / b
-                return a ** b
+                return a**b
             except (ZeroDivisionError, OverflowError) as err:
-                raise ValueError(f"'{self._segment(node)}' in expression {self.text!r} cannot be evaluated "
-                                 f"({err}); fix the constant") from None
+                raise ValueError(
+                    f"'{self._segment(node)}' in expression {self.text!r} cannot be evaluated "
+                    f"({err}); fix the constant"
+                ) from None
         # ast.Call (validated in _check)
         name = node.func.id
         args = [self._eval(a, env, funcs, backend) for a in node.args]
@@ -270,8 +363,10 @@ class Expression:
         try:
             return funcs[name](*args)
         except (ValueError, ZeroDivisionError, OverflowError) as err:
-            raise ValueError(f"'{self._segment(node)}' in expression {self.text!r} cannot be evaluated "
-                             f"({err}); fix its argument") from None
+            raise ValueError(
+                f"'{self._segment(node)}' in expression {self.text!r} cannot be evaluated "
+                f"({err}); fix its argument"
+            ) from None
 
     def __repr__(self) -> str:
         return f"Expression({self.text!r}, names={self.names})"
@@ -297,8 +392,10 @@ def numpy_function(text: str, names: tuple[str, ...]) -> Callable[..., np.ndarra
 
     def f(*arrays: Any) -> np.ndarray:
         if len(arrays) != len(names):
-            raise ValueError(f"expression {text!r} expects {len(names)} arrays ({', '.join(names)}), "
-                             f"got {len(arrays)}")
+            raise ValueError(
+                f"expression {text!r} expects {len(names)} arrays ({', '.join(names)}), "
+                f"got {len(arrays)}"
+            )
         return expr.evaluate(dict(zip(names, arrays)), "numpy")
 
     return f
@@ -321,20 +418,48 @@ def _sympy_table(backend: str) -> dict:
             return 0.5 * ufl.ln((1.0 + a) / (1.0 - a))
 
         return {
-            sympy.exp: ufl.exp, sympy.log: ufl.ln, sympy.sin: ufl.sin, sympy.cos: ufl.cos,
-            sympy.tan: ufl.tan, sympy.sinh: ufl.sinh, sympy.cosh: ufl.cosh, sympy.tanh: ufl.tanh,
-            sympy.asin: ufl.asin, sympy.acos: ufl.acos, sympy.atan: ufl.atan, sympy.asinh: asinh,
-            sympy.acosh: acosh, sympy.atanh: atanh, sympy.erf: ufl.erf, sympy.Abs: abs,
-            sympy.atan2: ufl.atan_2, sympy.Max: ufl.max_value, sympy.Min: ufl.min_value,
+            sympy.exp: ufl.exp,
+            sympy.log: ufl.ln,
+            sympy.sin: ufl.sin,
+            sympy.cos: ufl.cos,
+            sympy.tan: ufl.tan,
+            sympy.sinh: ufl.sinh,
+            sympy.cosh: ufl.cosh,
+            sympy.tanh: ufl.tanh,
+            sympy.asin: ufl.asin,
+            sympy.acos: ufl.acos,
+            sympy.atan: ufl.atan,
+            sympy.asinh: asinh,
+            sympy.acosh: acosh,
+            sympy.atanh: atanh,
+            sympy.erf: ufl.erf,
+            sympy.Abs: abs,
+            sympy.atan2: ufl.atan_2,
+            sympy.Max: ufl.max_value,
+            sympy.Min: ufl.min_value,
         }
     from scipy import special
 
     return {
-        sympy.exp: np.exp, sympy.log: np.log, sympy.sin: np.sin, sympy.cos: np.cos,
-        sympy.tan: np.tan, sympy.sinh: np.sinh, sympy.cosh: np.cosh, sympy.tanh: np.tanh,
-        sympy.asin: np.arcsin, sympy.acos: np.arccos, sympy.atan: np.arctan, sympy.asinh: np.arcsinh,
-        sympy.acosh: np.arccosh, sympy.atanh: np.arctanh, sympy.erf: special.erf, sympy.Abs: np.abs,
-        sympy.atan2: np.arctan2, sympy.Max: np.maximum, sympy.Min: np.minimum,
+        sympy.exp: np.exp,
+        sympy.log: np.log,
+        sympy.sin: np.sin,
+        sympy.cos: np.cos,
+        sympy.tan: np.tan,
+        sympy.sinh: np.sinh,
+        sympy.cosh: np.cosh,
+        sympy.tanh: np.tanh,
+        sympy.asin: np.arcsin,
+        sympy.acos: np.arccos,
+        sympy.atan: np.arctan,
+        sympy.asinh: np.arcsinh,
+        sympy.acosh: np.arccosh,
+        sympy.atanh: np.arctanh,
+        sympy.erf: special.erf,
+        sympy.Abs: np.abs,
+        sympy.atan2: np.arctan2,
+        sympy.Max: np.maximum,
+        sympy.Min: np.minimum,
     }
 
 
@@ -409,8 +534,10 @@ def from_sympy(expr: Any, variables: Mapping[str, Any], backend: str = "ufl") ->
                     out = f(out, a)
                 return out
             return f(*args)
-        raise ValueError(f"'{func.__name__}' in {e} has no {backend} translation; "
-                         "choose an expression with an elementary closed form")
+        raise ValueError(
+            f"'{func.__name__}' in {e} has no {backend} translation; "
+            "choose an expression with an elementary closed form"
+        )
 
     return walk(sympy.sympify(expr))
 

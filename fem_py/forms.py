@@ -85,8 +85,10 @@ def as_ufl_data(value: Any, mesh: Any, *, boundary: bool = False, what: str = "d
         return ufl.as_ufl(float(value))
     if isinstance(value, ufl.core.expr.Expr):
         return value
-    raise ValueError(f"{what} must be a string expression, a number or a UFL expression, "
-                     f"got {type(value).__name__}")
+    raise ValueError(
+        f"{what} must be a string expression, a number or a UFL expression, "
+        f"got {type(value).__name__}"
+    )
 
 
 @contextlib.contextmanager
@@ -137,13 +139,22 @@ class InteriorForms:
     updated), so the caller's object is never modified.
     """
 
-    def __init__(self, V: fem.FunctionSpace, material: Material, f: Any = None, *,
-                 jacobian: str = "ufl", jit_params: dict | None = None):
+    def __init__(
+        self,
+        V: fem.FunctionSpace,
+        material: Material,
+        f: Any = None,
+        *,
+        jacobian: str = "ufl",
+        jit_params: dict | None = None,
+    ):
         if jacobian not in JACOBIANS:
             raise ValueError(f"jacobian must be one of {JACOBIANS}, got {jacobian!r}")
         if not isinstance(material, Material):
-            raise ValueError(f"material must be a fem_py.materials.Material, got {type(material).__name__}; "
-                             "use make_material")
+            raise ValueError(
+                f"material must be a fem_py.materials.Material, got {type(material).__name__}; "
+                "use make_material"
+            )
         self.V = V
         self.mesh = V.mesh
         self.comm = V.mesh.comm
@@ -160,12 +171,14 @@ class InteriorForms:
             "energy": energy,
             "residual": residual,
             "ufl": ufl.derivative(residual, u, w),
-            "handwritten": ufl.inner(ufl.dot(material.tangent(grad_u), ufl.grad(w)), ufl.grad(v)) * dx,
+            "handwritten": ufl.inner(ufl.dot(material.tangent(grad_u), ufl.grad(w)), ufl.grad(v))
+            * dx,
             "stiffness": ufl.inner(ufl.grad(w), ufl.grad(v)) * dx,
         }
         if f is not None:
-            self._ufl["load"] = (ufl.inner(as_ufl_data(f, self.mesh, what="f"), v)
-                                 * ufl.dx(domain=self.mesh, metadata=DATA_QUADRATURE))
+            self._ufl["load"] = ufl.inner(as_ufl_data(f, self.mesh, what="f"), v) * ufl.dx(
+                domain=self.mesh, metadata=DATA_QUADRATURE
+            )
         self._compiled: dict[str, Any] = {}
         for key in ("energy", "residual", jacobian):
             self._form(key)
@@ -245,7 +258,9 @@ class InteriorForms:
         return A
 
 
-def assemble_linear_form(V: fem.FunctionSpace, form: Any, jit_params: dict | None = None) -> PETSc.Vec:
+def assemble_linear_form(
+    V: fem.FunctionSpace, form: Any, jit_params: dict | None = None
+) -> PETSc.Vec:
     """A new ghosted Vec on V holding the assembled linear ``form`` (ghosts summed and
     refreshed). ``None``, or a form whose integrands UFL simplified to zero (zero data,
     e.g. f = "0"), gives zeros."""
@@ -253,15 +268,18 @@ def assemble_linear_form(V: fem.FunctionSpace, form: Any, jit_params: dict | Non
     b = la.create_petsc_vector(index_map, V.dofmap.index_map_bs)
     with b.localForm() as bl:
         bl.set(0.0)
-    if form is not None and not all(isinstance(i.integrand(), ufl.constantvalue.Zero)
-                                    for i in form.integrals()):
+    if form is not None and not all(
+        isinstance(i.integrand(), ufl.constantvalue.Zero) for i in form.integrals()
+    ):
         fem.petsc.assemble_vector(b, compile_form(form, jit_params))
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         b.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
     return b
 
 
-def assemble_boundary_load(V: fem.FunctionSpace, t0: Any, *, jit_params: dict | None = None) -> PETSc.Vec:
+def assemble_boundary_load(
+    V: fem.FunctionSpace, t0: Any, *, jit_params: dict | None = None
+) -> PETSc.Vec:
     """m_t,j = int_Gamma t0 v_j ds over the whole boundary (METHOD.md section 4).
 
     ``t0`` is text in x, y, nx, ny (outward unit normal, ``ufl.FacetNormal``), a number
@@ -269,6 +287,7 @@ def assemble_boundary_load(V: fem.FunctionSpace, t0: Any, *, jit_params: dict | 
     boundary-order values are ``BoundaryMap.gather(m_t)``.
     """
     mesh = V.mesh
-    form = (ufl.inner(as_ufl_data(t0, mesh, boundary=True, what="t0"), ufl.TestFunction(V))
-            * ufl.ds(domain=mesh, metadata=DATA_QUADRATURE))
+    form = ufl.inner(as_ufl_data(t0, mesh, boundary=True, what="t0"), ufl.TestFunction(V)) * ufl.ds(
+        domain=mesh, metadata=DATA_QUADRATURE
+    )
     return assemble_linear_form(V, form, jit_params)

@@ -43,7 +43,9 @@ def _random_mode_function(V: Any, rng: np.random.Generator, n_modes: int = 4) ->
     w = rng.normal(scale=4.0, size=(n_modes, 2))
     c = rng.uniform(0.0, 2 * np.pi, size=n_modes)
     f = fem.Function(V)
-    f.interpolate(lambda x: sum(a[k] * np.sin(w[k, 0] * x[0] + w[k, 1] * x[1] + c[k]) for k in range(n_modes)))
+    f.interpolate(
+        lambda x: sum(a[k] * np.sin(w[k, 0] * x[0] + w[k, 1] * x[1] + c[k]) for k in range(n_modes))
+    )
     return f
 
 

@@ -166,17 +166,23 @@ def _check_structure(name: str, rho_np: Callable[[np.ndarray], np.ndarray]) -> t
         r = np.asarray(rho_np(t), dtype=float) * np.ones_like(t)
     bad = ~np.isfinite(r)
     if bad.any():
-        raise ValueError(f"material {name!r}: rho is not finite at t = {t[bad][0]:.6g}; "
-                         "rho must be finite on [0, inf)")
+        raise ValueError(
+            f"material {name!r}: rho is not finite at t = {t[bad][0]:.6g}; "
+            "rho must be finite on [0, inf)"
+        )
     if (r <= 0).any():
         i = int(np.argmax(r <= 0))
-        raise ValueError(f"material {name!r}: rho({t[i]:.6g}) = {r[i]:.6g} <= 0; METHOD.md section 1 implies "
-                         "rho(t) >= alpha > 0, make rho positive")
+        raise ValueError(
+            f"material {name!r}: rho({t[i]:.6g}) = {r[i]:.6g} <= 0; METHOD.md section 1 implies "
+            "rho(t) >= alpha > 0, make rho positive"
+        )
     q = np.diff(t * r) / np.diff(t)
     if not (q > 0).all():
         i = int(np.argmax(q <= 0))
-        raise ValueError(f"material {name!r}: t*rho(t) is not strictly increasing near t = {t[i]:.6g}; "
-                         "METHOD.md section 1 needs alpha (t-s) <= t rho(t) - s rho(s)")
+        raise ValueError(
+            f"material {name!r}: t*rho(t) is not strictly increasing near t = {t[i]:.6g}; "
+            "METHOD.md section 1 needs alpha (t-s) <= t rho(t) - s rho(s)"
+        )
     return float(q.min()), float(q.max())
 
 
@@ -192,13 +198,17 @@ def _build(name: str, rho: Any, g: Any | None) -> Material:
     if g is None:
         anti = sympy.integrate(_T * rho, _T)
         if anti.has(sympy.Integral) or anti.has(sympy.Piecewise):
-            raise ValueError(f"material {name!r}: sympy cannot integrate t*rho(t) in closed form; "
-                             "give a rho with an elementary antiderivative")
+            raise ValueError(
+                f"material {name!r}: sympy cannot integrate t*rho(t) in closed form; "
+                "give a rho with an elementary antiderivative"
+            )
         at0 = anti.subs(_T, 0)
         if not at0.is_finite:
             at0 = sympy.limit(anti, _T, 0, "+")
         if not at0.is_finite:
-            raise ValueError(f"material {name!r}: int_0^t s rho(s) ds diverges at 0; rho must be finite at 0")
+            raise ValueError(
+                f"material {name!r}: int_0^t s rho(s) ds diverges at 0; rho must be finite at 0"
+            )
         g = anti - at0
     drho = sympy.diff(rho, _T)
     g2 = g.subs(_T, sympy.sqrt(_S))
@@ -207,12 +217,24 @@ def _build(name: str, rho: Any, g: Any | None) -> Material:
         try:
             from_sympy(e, {"t": np.ones(1), "s": np.ones(1)}, "numpy")
         except ValueError as err:
-            raise ValueError(f"material {name!r}: {what} = {e} cannot be evaluated ({err})") from None
-    return Material(name=name, rho_sym=rho, g_sym=g, drho_sym=drho, rho0=rho0, alpha=alpha, beta=beta,
-                    _g2_sym=g2)
+            raise ValueError(
+                f"material {name!r}: {what} = {e} cannot be evaluated ({err})"
+            ) from None
+    return Material(
+        name=name,
+        rho_sym=rho,
+        g_sym=g,
+        drho_sym=drho,
+        rho0=rho0,
+        alpha=alpha,
+        beta=beta,
+        _g2_sym=g2,
+    )
 
 
-def make_material(name_or_expression: str, *, p: float | None = None, eps: float | None = None) -> Material:
+def make_material(
+    name_or_expression: str, *, p: float | None = None, eps: float | None = None
+) -> Material:
     """Build a material by name (``linear``, ``carstensen``, ``power``) or from rho(t) as text.
 
     Parameters
@@ -233,7 +255,9 @@ def make_material(name_or_expression: str, *, p: float | None = None, eps: float
         has no closed form.
     """
     if not isinstance(name_or_expression, str) or not name_or_expression.strip():
-        raise ValueError("material must be a non-empty string: linear, carstensen, power or an expression in t")
+        raise ValueError(
+            "material must be a non-empty string: linear, carstensen, power or an expression in t"
+        )
     key = name_or_expression.strip()
     t = _T
     if key == "linear":
@@ -246,7 +270,9 @@ def make_material(name_or_expression: str, *, p: float | None = None, eps: float
         try:
             p, eps = float(p), float(eps)
         except (TypeError, ValueError):
-            raise ValueError(f"material 'power' needs numbers p and eps, got p={p!r}, eps={eps!r}") from None
+            raise ValueError(
+                f"material 'power' needs numbers p and eps, got p={p!r}, eps={eps!r}"
+            ) from None
         if not (np.isfinite(p) and p > 1):
             raise ValueError(f"material 'power' needs p > 1, got p={p}")
         if not (np.isfinite(eps) and eps > 0):

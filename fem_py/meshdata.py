@@ -21,16 +21,16 @@ __all__ = ["P1Topology", "p1_topology", "FacetData", "facet_data", "gather_facet
 class P1Topology:
     """Rank-local P1 topology: vertex -> dof maps, facet/cell connectivity, coordinates."""
 
-    v2dof: np.ndarray          # (n_vertices_local,) local dof of each local vertex
-    f2v: np.ndarray            # (n_facets_local, 2) local vertices of each facet
-    c2v: np.ndarray            # (n_cells_local, 3) local vertices of each cell
-    f2c_offsets: np.ndarray    # offsets of facet -> cell adjacency
-    f2c_array: np.ndarray      # data of facet -> cell adjacency
-    dof_coords: np.ndarray     # (n_dofs_local, 2) coordinates of local dofs (owned then ghost)
-    dofmap: np.ndarray         # (n_cells_local, 3) local dofs of each cell
+    v2dof: np.ndarray  # (n_vertices_local,) local dof of each local vertex
+    f2v: np.ndarray  # (n_facets_local, 2) local vertices of each facet
+    c2v: np.ndarray  # (n_cells_local, 3) local vertices of each cell
+    f2c_offsets: np.ndarray  # offsets of facet -> cell adjacency
+    f2c_array: np.ndarray  # data of facet -> cell adjacency
+    dof_coords: np.ndarray  # (n_dofs_local, 2) coordinates of local dofs (owned then ghost)
+    dofmap: np.ndarray  # (n_cells_local, 3) local dofs of each cell
     n_owned_dofs: int
     n_owned_facets: int
-    local_to_global: Any       # callable: local dof indices -> global (int64)
+    local_to_global: Any  # callable: local dof indices -> global (int64)
 
 
 def p1_topology(V: fem.FunctionSpace) -> P1Topology:
@@ -54,9 +54,15 @@ def p1_topology(V: fem.FunctionSpace) -> P1Topology:
         return np.asarray(im.local_to_global(local), dtype=np.int64)
 
     return P1Topology(
-        v2dof=v2dof, f2v=f2v, c2v=c2v, f2c_offsets=f2c.offsets, f2c_array=f2c.array,
-        dof_coords=V.tabulate_dof_coordinates()[:, :2].copy(), dofmap=dofmap,
-        n_owned_dofs=im.size_local, n_owned_facets=top.index_map(tdim - 1).size_local,
+        v2dof=v2dof,
+        f2v=f2v,
+        c2v=c2v,
+        f2c_offsets=f2c.offsets,
+        f2c_array=f2c.array,
+        dof_coords=V.tabulate_dof_coordinates()[:, :2].copy(),
+        dofmap=dofmap,
+        n_owned_dofs=im.size_local,
+        n_owned_facets=top.index_map(tdim - 1).size_local,
         local_to_global=l2g,
     )
 
@@ -74,15 +80,20 @@ class FacetData:
     """Facets as global P1 dof pairs. Exterior facets are oriented with Omega on the left
     (counter-clockwise along Gamma); interior facets have sorted dofs."""
 
-    dofs: np.ndarray           # (n, 2) int64 global dofs
-    coords: np.ndarray         # (n, 2, 2) coordinates of the two end points
-    tag: np.ndarray            # (n,) facet tag (0 where untagged)
-    cells: np.ndarray          # (n, 2) cell tags on both sides (-1 for the exterior side)
-    exterior: np.ndarray       # (n,) bool
+    dofs: np.ndarray  # (n, 2) int64 global dofs
+    coords: np.ndarray  # (n, 2, 2) coordinates of the two end points
+    tag: np.ndarray  # (n,) facet tag (0 where untagged)
+    cells: np.ndarray  # (n, 2) cell tags on both sides (-1 for the exterior side)
+    exterior: np.ndarray  # (n,) bool
 
 
-def facet_data(topo: P1Topology, facets: np.ndarray, facet_tag: np.ndarray, cell_tag: np.ndarray,
-               exterior: bool) -> FacetData:
+def facet_data(
+    topo: P1Topology,
+    facets: np.ndarray,
+    facet_tag: np.ndarray,
+    cell_tag: np.ndarray,
+    exterior: bool,
+) -> FacetData:
     """Data of the given local ``facets`` (all exterior, or all interior with two local cells)."""
     facets = np.asarray(facets, dtype=np.int64)
     v = topo.f2v[facets]
@@ -106,8 +117,13 @@ def facet_data(topo: P1Topology, facets: np.ndarray, facet_tag: np.ndarray, cell
         order = np.argsort(dofs, axis=1)
         dofs = np.take_along_axis(dofs, order, axis=1)
         coords = np.take_along_axis(coords, order[:, :, None], axis=1)
-    return FacetData(dofs=dofs, coords=coords, tag=facet_tag[facets].astype(np.int32), cells=cells,
-                     exterior=np.full(len(facets), exterior))
+    return FacetData(
+        dofs=dofs,
+        coords=coords,
+        tag=facet_tag[facets].astype(np.int32),
+        cells=cells,
+        exterior=np.full(len(facets), exterior),
+    )
 
 
 def gather_facet_data(comm: Any, parts: list[FacetData]) -> FacetData | None:

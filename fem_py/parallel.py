@@ -33,8 +33,13 @@ def threads_per_rank(comm: MPI.Comm) -> int:
     return max(1, len(os.sched_getaffinity(0)) // ranks_here)
 
 
-def run_on_root(comm: MPI.Comm, compute: Callable[[], T], *, error_prefix: str | None = None,
-                all_cores: bool = False) -> T | None:
+def run_on_root(
+    comm: MPI.Comm,
+    compute: Callable[[], T],
+    *,
+    error_prefix: str | None = None,
+    all_cores: bool = False,
+) -> T | None:
     """``compute()`` on rank 0; its result there, None on the other ranks (collective).
 
     Parameters
@@ -62,8 +67,11 @@ def run_on_root(comm: MPI.Comm, compute: Callable[[], T], *, error_prefix: str |
             else:
                 result = compute()
         except Exception as err:  # noqa: BLE001 - raised on every rank below
-            error = (RuntimeError(f"{error_prefix}: {type(err).__name__}: {err}")
-                     if error_prefix is not None else err)
+            error = (
+                RuntimeError(f"{error_prefix}: {type(err).__name__}: {err}")
+                if error_prefix is not None
+                else err
+            )
     if comm.size > 1:
         barrier = comm.Ibarrier()
         while not barrier.Test():
@@ -74,22 +82,25 @@ def run_on_root(comm: MPI.Comm, compute: Callable[[], T], *, error_prefix: str |
     return result
 
 
-def broadcast_from_root(comm: MPI.Comm, compute: Callable[[], T], *,
-                        error_prefix: str | None = None) -> T:
+def broadcast_from_root(
+    comm: MPI.Comm, compute: Callable[[], T], *, error_prefix: str | None = None
+) -> T:
     """``compute()`` evaluated on rank 0 (:func:`run_on_root`) and sent to every rank
     (pickled: for small results and structures of arrays)."""
     result = run_on_root(comm, compute, error_prefix=error_prefix)
     return comm.bcast(result, root=0) if comm.size > 1 else result
 
 
-def array_from_root(comm: MPI.Comm, compute: Callable[[], np.ndarray], *,
-                    all_cores: bool = False) -> np.ndarray:
+def array_from_root(
+    comm: MPI.Comm, compute: Callable[[], np.ndarray], *, all_cores: bool = False
+) -> np.ndarray:
     """A dense float array computed once on rank 0 (:func:`run_on_root`) and broadcast
     to every rank as a buffer (no pickling: for large arrays)."""
     if comm.size == 1:
         return np.asarray(compute(), dtype=float)
-    result = run_on_root(comm, lambda: np.ascontiguousarray(compute(), dtype=float),
-                         all_cores=all_cores)
+    result = run_on_root(
+        comm, lambda: np.ascontiguousarray(compute(), dtype=float), all_cores=all_cores
+    )
     shape = comm.bcast(result.shape if comm.rank == 0 else None, root=0)
     if comm.rank != 0:
         result = np.empty(shape)

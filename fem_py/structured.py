@@ -69,7 +69,9 @@ def lattice(corners: int, n: int) -> Lattice:
     else:  # point (i, j), i + j <= n -> i (n+1) + j, corners (0,0), (n,0), (0,n)
         p = lambda i, j: np.asarray(i) * (n + 1) + np.asarray(j)  # noqa: E731
         sides = np.stack([p(k, 0), p(n - k, k), p(0, n - k)])
-        ij = np.array([(i, j) for i in range(1, n) for j in range(1, n - i)], dtype=np.int64).reshape(-1, 2)
+        ij = np.array(
+            [(i, j) for i in range(1, n) for j in range(1, n - i)], dtype=np.int64
+        ).reshape(-1, 2)
         interior = p(ij[:, 0], ij[:, 1])
         s, r = ij[:, 0] / n, ij[:, 1] / n
         weights = np.stack([1 - s - r, s, r], 1)
@@ -81,9 +83,15 @@ def lattice(corners: int, n: int) -> Lattice:
                     tl.append((p(i + 1, j), p(i + 1, j + 1), p(i, j + 1)))
         triangles = np.array(tl, dtype=np.int64)
     on_side = [np.isin(triangles, side).sum(1) == 2 for side in sides]
-    return Lattice(n=n, n_points=(n + 1) ** 2, sides=sides.astype(np.int64), interior=interior.astype(np.int64),
-                   weights=weights, triangles=triangles.astype(np.int64),
-                   side_triangles=tuple(np.flatnonzero(m) for m in on_side))
+    return Lattice(
+        n=n,
+        n_points=(n + 1) ** 2,
+        sides=sides.astype(np.int64),
+        interior=interior.astype(np.int64),
+        weights=weights,
+        triangles=triangles.astype(np.int64),
+        side_triangles=tuple(np.flatnonzero(m) for m in on_side),
+    )
 
 
 @dataclass(frozen=True, eq=False)
@@ -122,7 +130,9 @@ class StructuredRefinement:
 
     def edge_nodes(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """(len(a), n+1) node numbers at k/n along the coarse edges a -> b, k = 0..n."""
-        a, b = np.atleast_1d(np.asarray(a, dtype=np.int64)), np.atleast_1d(np.asarray(b, dtype=np.int64))
+        a, b = np.atleast_1d(np.asarray(a, dtype=np.int64)), np.atleast_1d(
+            np.asarray(b, dtype=np.int64)
+        )
         nv, n = len(self.V), self.n
         codes = self.edges[:, 0] * nv + self.edges[:, 1]
         e = np.searchsorted(codes, np.minimum(a, b) * nv + np.maximum(a, b))
@@ -156,12 +166,16 @@ class StructuredRefinement:
         a, b = V[self.edges[e, 0]], V[self.edges[e, 1]]
         X[on_edge] = a + ((k + 1) / n)[:, None] * (b - a)
         inside = g >= offset
-        c, l = np.divmod(g[inside] - offset, max(m, 1))
+        c, node = np.divmod(g[inside] - offset, max(m, 1))
         corners = V[self.cells[c]]  # (len, k, 2)
-        w = lat.weights[l]
+        w = lat.weights[node]
         if self.cells.shape[1] == 4:
-            X[inside] = (w[:, 0:1] * corners[:, 0] + w[:, 1:2] * corners[:, 1]
-                         + w[:, 2:3] * corners[:, 2] + w[:, 3:4] * corners[:, 3])
+            X[inside] = (
+                w[:, 0:1] * corners[:, 0]
+                + w[:, 1:2] * corners[:, 1]
+                + w[:, 2:3] * corners[:, 2]
+                + w[:, 3:4] * corners[:, 3]
+            )
         else:
             c0 = corners[:, 0]
             X[inside] = c0 + w[:, 1:2] * (corners[:, 1] - c0) + w[:, 2:3] * (corners[:, 2] - c0)
@@ -221,5 +235,12 @@ def refine(V: np.ndarray, cells: np.ndarray, n: int) -> StructuredRefinement:
         raise ValueError("a coarse edge is shared by more than two coarse cells")
     edge_cells[e[first], 0] = cell[first]
     edge_cells[e[~first], 1] = cell[~first]
-    return StructuredRefinement(V=np.asarray(V, dtype=float), cells=cells, n=int(n), lattice=lattice(k, int(n)),
-                                edges=edges, cell_edges=cell_edges, edge_cells=edge_cells)
+    return StructuredRefinement(
+        V=np.asarray(V, dtype=float),
+        cells=cells,
+        n=int(n),
+        lattice=lattice(k, int(n)),
+        edges=edges,
+        cell_edges=cell_edges,
+        edge_cells=edge_cells,
+    )
