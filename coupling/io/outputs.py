@@ -1,12 +1,13 @@
 """Outputs of a run: summary.json, fields.npz, solution.xdmf and PNG plots.
 
-fields.npz holds, in global dof order, ``x`` (N, 2), ``u`` (N,) and ``triangles``
-(n_cells, 3); along Gamma, counter-clockwise from the first polygon vertex,
-``boundary_x`` (n, 2), ``boundary_u``, the gap ``phi`` (0 on Gamma_t), ``ue`` = u + phi - u0,
-``active`` (bool: Signorini node in contact), ``signorini`` (bool: node carrying a phi
-unknown), all (n,); ``dn_ue``, the coefficients of du_e/dn in the flux space (n nodal
-values for "p1", n panel values for "p0", panel i = [node i, node i+1]); and the
-scalars ``a`` and ``flux_space`` that ``fembem exterior`` needs.
+fields.npz holds, in the input numbering of the mesh nodes (the same for any number of
+ranks, :mod:`fem_py.numbering`), ``x`` (N, 2), ``u`` (N,) and ``triangles`` (n_cells,
+3); along Gamma, counter-clockwise from the first polygon vertex, ``boundary_x`` (n, 2),
+``boundary_u``, the gap ``phi`` (0 on Gamma_t), ``ue`` = u + phi - u0, ``active`` (bool:
+Signorini node in contact), ``signorini`` (bool: node carrying a phi unknown), all (n,);
+``dn_ue``, the coefficients of du_e/dn in the flux space (n nodal values for "p1", n
+panel values for "p0", panel i = [node i, node i+1]); and the scalars ``a`` and
+``flux_space`` that ``fembem exterior`` needs.
 
 Every file is written atomically (:mod:`coupling.io.atomic`), so an interrupted run
 never leaves a half-written file under its final name. Rank 0 writes the gathered
@@ -27,6 +28,7 @@ from mpi4py import MPI
 
 from coupling.io.atomic import atomic_write
 from coupling.io.plots import PLOT_FILES, write_plots
+from fem_py.numbering import gather_by_input, input_indices
 from fem_py.parallel import broadcast_from_root
 
 __all__ = [
@@ -44,28 +46,29 @@ DATA_FILES = ("summary.json", "fields.npz", "solution.xdmf", "solution.h5")
 
 
 def gather_p1(u) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-    """Gather a P1 Function to rank 0 in global dof order.
+    """Gather a P1 Function to rank 0 in the input numbering of the mesh nodes
+    (:mod:`fem_py.numbering`), the same for any number of ranks.
 
-    Returns (x (N, 2), values (N,), triangles (n_cells, 3)) on rank 0, None elsewhere.
+    Returns (x (N, 2), values (N,), triangles (n_cells, 3)) on rank 0, None elsewhere;
+    the triangles (counter-clockwise as in the mesh) are sorted by their node numbers.
     """
     V = u.function_space
     comm = V.mesh.comm
     index_map = V.dofmap.index_map
-    n_owned = index_map.size_local
-    start = index_map.local_range[0]
-    x = V.tabulate_dof_coordinates()[:n_owned, :2]
-    values = u.x.array[:n_owned].real
+    n_owned, n_global = index_map.size_local, index_map.size_global
+    numbers = input_indices(V)
+    x = gather_by_input(
+        comm, numbers[:n_owned], V.tabulate_dof_coordinates()[:n_owned, :2], n_global
+    )
+    values = gather_by_input(comm, numbers[:n_owned], u.x.array[:n_owned].real, n_global)
     n_cells = V.mesh.topology.index_map(V.mesh.topology.dim).size_local
-    cells = V.dofmap.list.array.reshape(-1, 3)[:n_cells]
-    cells = index_map.local_to_global(cells.ravel().astype(np.int32)).reshape(-1, 3)
-    parts = comm.gather((start, x, values, cells), root=0)
+    cells = numbers[V.dofmap.list.array.reshape(-1, 3)[:n_cells]]
+    parts = comm.gather(cells, root=0)
     if comm.rank != 0:
         return None
-    N = index_map.size_global
-    X, U = np.empty((N, 2)), np.empty(N)
-    for s, xi, ui, _ in parts:
-        X[s : s + len(ui)], U[s : s + len(ui)] = xi, ui
-    return X, U, np.concatenate([c for *_, c in parts])
+    triangles = np.concatenate(parts)
+    key = np.sort(triangles, axis=1)
+    return x, values, triangles[np.lexsort(key.T[::-1])]
 
 
 def summary(problem, result, timings: Mapping[str, float]) -> dict:

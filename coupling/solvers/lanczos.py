@@ -8,6 +8,7 @@ import scipy.linalg
 from petsc4py import PETSc
 
 from coupling.solvers.records import global_dot
+from fem_py.numbering import input_indices
 
 __all__ = ["estimate_extremes", "extremes_at"]
 
@@ -29,10 +30,10 @@ def estimate_extremes(
     """
     comm = functional.comm
     work = jacobian.createVecRight()
-    r0, r1 = work.getOwnershipRange()
-    # the same start vector for any number of ranks (iterates independent of P)
+    # the same start vector for any number of ranks: drawn in the input numbering
+    V = functional.forms.V
     rng = np.random.default_rng(seed)
-    p_u = rng.standard_normal(work.getSize())[r0:r1]
+    p_u = rng.standard_normal(work.getSize())[input_indices(V)[: V.dofmap.index_map.size_local]]
     p_phi = rng.standard_normal(n_phi)
     q_u, q_phi = preconditioner.apply_omega(p_u), preconditioner.apply_signorini(p_phi)
     norm = np.sqrt(global_dot(comm, q_u, p_u) + q_phi @ p_phi)
