@@ -5,7 +5,8 @@ ranks, :mod:`fem_py.numbering`), ``x`` (N, 2), ``u`` (N,) and ``triangles`` (n_c
 3); along Gamma, counter-clockwise from the first polygon vertex, ``boundary_x`` (n, 2),
 ``boundary_u``, the gap ``phi`` (0 on Gamma_t), ``ue`` = u + phi - u0, ``active`` (bool:
 Signorini node in contact), ``signorini`` (bool: node carrying a phi unknown), all (n,);
-``dn_ue``, the coefficients of du_e/dn in the flux space (n nodal values for "p1", n
+``pressure``, rho du_h/dn at the nodes (the contact pressure on Gamma_s); ``dn_ue``, the
+coefficients of du_e/dn in the flux space (n nodal values for "p1", n
 panel values for "p0", panel i = [node i, node i+1]); and the scalars ``a`` and
 ``flux_space`` that ``fembem exterior`` needs.
 
@@ -28,6 +29,7 @@ from mpi4py import MPI
 
 from coupling.io.atomic import atomic_write
 from coupling.io.plots import PLOT_FILES, write_plots
+from coupling.io.quantities import boundary_flux, complementarity, log_coefficient
 from fem_py.numbering import gather_by_input, input_indices
 from fem_py.parallel import broadcast_from_root
 
@@ -71,8 +73,9 @@ def gather_p1(u) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     return x, values, triangles[np.lexsort(key.T[::-1])]
 
 
-def summary(problem, result, timings: Mapping[str, float]) -> dict:
-    """The contents of summary.json (without ``config`` and ``files``)."""
+def summary(problem, result, timings: Mapping[str, float], pressure: np.ndarray) -> dict:
+    """The contents of summary.json (without ``config`` and ``files``); ``pressure`` is
+    :func:`coupling.io.quantities.boundary_flux` (boundary order)."""
     return {
         "converged": bool(result.converged),
         "reason": result.reason,
@@ -85,18 +88,22 @@ def summary(problem, result, timings: Mapping[str, float]) -> dict:
         "tau": float(result.tau),
         "C0_estimate": float(result.C0),
         "energy_increases": int(result.energy_increases),
+        "complementarity": complementarity(result.phi, pressure[problem.boundary.signorini]),
+        "b": log_coefficient(problem, result),
         "mpi_ranks": int(problem.comm.size),
         "timings": {k: float(v) for k, v in timings.items()},
         "history": [dataclasses.asdict(r) for r in result.history],
     }
 
 
-def boundary_fields(problem, result) -> dict[str, np.ndarray]:
+def boundary_fields(problem, result, pressure: np.ndarray) -> dict[str, np.ndarray]:
     """The boundary arrays of fields.npz, all in the counter-clockwise boundary order.
 
     ``phi`` is the gap on every node (0 on Gamma_t and at arc end points), ``active``
     marks the Signorini nodes in contact (phi_h = 0), ``signorini`` the nodes that carry
-    a phi unknown (interior nodes of the Signorini arcs).
+    a phi unknown (interior nodes of the Signorini arcs), ``pressure`` the flux
+    rho du_h/dn (:func:`coupling.io.quantities.boundary_flux`; the contact pressure on
+    Gamma_s).
     """
     boundary = problem.boundary
     n = boundary.n_gamma
@@ -110,6 +117,7 @@ def boundary_fields(problem, result) -> dict[str, np.ndarray]:
         phi=phi,
         ue=result.ue,
         dn_ue=result.flux,
+        pressure=pressure,
         active=active,
         signorini=signorini,
     )
@@ -146,6 +154,7 @@ def write_outputs(
     tic = time.perf_counter()
     out = Path(out)
     gathered = gather_p1(result.u)
+    pressure = boundary_flux(problem, result)
     written = []
     if xdmf:
         _write_xdmf(comm, out, problem, result)
@@ -158,7 +167,7 @@ def write_outputs(
             x=x,
             u=u,
             triangles=triangles,
-            **boundary_fields(problem, result),
+            **boundary_fields(problem, result, pressure),
             a=np.array(problem.a),
             flux_space=np.array(problem.flux_space),
         )
@@ -169,7 +178,7 @@ def write_outputs(
         stages = {**timings, "outputs": time.perf_counter() - tic}
         if total is not None:
             stages["total"] = total()
-        record = summary(problem, result, stages)
+        record = summary(problem, result, stages, pressure)
         if config is not None:
             record["config"] = config
         record["files"] = sorted(names + ["summary.json"])

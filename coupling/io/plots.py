@@ -4,7 +4,8 @@ Every figure is drawn from the arrays of fields.npz (:mod:`coupling.io.outputs`)
 iteration history alone, so it can be redrawn from the outputs of a finished run:
 
 - ``u.png``: u_h over Omega; Gamma_s drawn thick, red where in contact, blue where open.
-- ``boundary.png``: the gap phi_h, the exterior flux du_e/dn and the contact set
+- ``boundary.png``: the gap phi_h, the flux rho du_h/dn (the contact pressure on
+  Gamma_s), the exterior flux du_e/dn and the contact set
   against the arc length s along Gamma (counter-clockwise from ``boundary_x[0]``),
   with Gamma_s shaded and the corners of Omega marked.
 - ``whole_plane.png``: u_h in Omega and u_e outside (representation formula,
@@ -120,7 +121,7 @@ def _figure_boundary(fields: dict):
     n = len(nodes)
     s = arc_length(_closed(nodes))
     fig, axes = plt.subplots(
-        3, 1, figsize=(7.5, 6.5), sharex=True, gridspec_kw=dict(height_ratios=[3, 3, 1.3])
+        4, 1, figsize=(7.5, 8.5), sharex=True, gridspec_kw=dict(height_ratios=[3, 3, 3, 1.3])
     )
     # a run of Signorini panels may wrap past node 0: shade its pieces on either side
     spans = [
@@ -139,25 +140,28 @@ def _figure_boundary(fields: dict):
         ax.grid(alpha=0.3, lw=0.5)
     axes[0].plot(s, _closed(fields["phi"]), ".-", ms=3, lw=1)
     axes[0].set_ylabel(r"gap $\phi_h$")
+    axes[1].plot(s, _closed(fields["pressure"]), ".-", ms=3, lw=1, color="tab:purple")
+    axes[1].axhline(0.0, color="0.3", lw=0.6)
+    axes[1].set_ylabel(r"$\rho\, \partial u_h / \partial n$" "\n(pressure on $\\Gamma_s$)")
     flux = fields["dn_ue"]
     if str(fields["flux_space"]) == "p0":
-        axes[1].stairs(flux, s, color="tab:green", lw=1)
+        axes[2].stairs(flux, s, color="tab:green", lw=1)
     else:
-        axes[1].plot(s, _closed(flux), ".-", ms=3, lw=1, color="tab:green")
-    axes[1].set_ylabel(r"$\partial u_e / \partial n$")
+        axes[2].plot(s, _closed(flux), ".-", ms=3, lw=1, color="tab:green")
+    axes[2].set_ylabel(r"$\partial u_e / \partial n$")
     sig, active = fields["signorini"], fields["active"]
-    axes[2].plot(s[:-1][sig & active], np.ones(np.count_nonzero(sig & active)), **_CONTACT)
-    axes[2].plot(s[:-1][sig & ~active], np.zeros(np.count_nonzero(sig & ~active)), **_OPEN)
-    axes[2].set(yticks=[0, 1], yticklabels=["open", "contact"], ylim=(-0.5, 1.5))
+    axes[3].plot(s[:-1][sig & active], np.ones(np.count_nonzero(sig & active)), **_CONTACT)
+    axes[3].plot(s[:-1][sig & ~active], np.zeros(np.count_nonzero(sig & ~active)), **_OPEN)
+    axes[3].set(yticks=[0, 1], yticklabels=["open", "contact"], ylim=(-0.5, 1.5))
     x0, y0 = nodes[0]
-    axes[2].set_xlabel(
+    axes[3].set_xlabel(
         f"arc length $s$ along $\\Gamma$, counter-clockwise from "
         f"$({x0:.3g}, {y0:.3g})$ (dotted: corners)"
     )
-    axes[2].set_xlim(0, s[-1])
+    axes[3].set_xlim(0, s[-1])
     if sig.any():
         axes[0].legend(loc="upper right", fontsize=8)
-    fig.suptitle(r"Along $\Gamma$: gap, exterior flux and contact set")
+    fig.suptitle(r"Along $\Gamma$: gap, pressure, exterior flux and contact set")
     fig.tight_layout()
     return fig
 

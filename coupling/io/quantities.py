@@ -1,0 +1,66 @@
+"""Quantities derived from a solution for the user: the flux rho du_h/dn on Gamma (the
+contact pressure on Gamma_s), the complementarity of the contact conditions (1.5), and
+the coefficient b of log|x| in u_e (1.3).
+"""
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+__all__ = ["boundary_flux", "complementarity", "log_coefficient"]
+
+
+def boundary_flux(problem: Any, solution: Any) -> np.ndarray:
+    """sigma_h = rho(|grad u_h|) du_h/dn at the boundary nodes (boundary order; collective).
+
+    The discrete Neumann trace of the interior equation (1.1): tested with the hat
+    function v_i of a boundary node i, (rho grad u_h, grad v_i) - (f, v_i) =
+    <sigma, v_i>_Gamma, with the boundary mass lumped, so
+
+        sigma_i = (A(u_h) - b_f)_i / m_i,   m_i = (|x_i - x_{i-1}| + |x_{i+1} - x_i|) / 2.
+
+    At the discrete solution grad_u J_h = 0 makes A(u_h) - b_f = -T^T (S_h z - m_t - s_0),
+    so on Gamma_s sigma_i = -lambda_i / m_i with lambda = grad_phi J_h >= 0 the discrete
+    multiplier of phi >= 0 ((2.5)): sigma <= 0 and phi sigma = 0 hold node by node, to
+    the solver's tolerance. At a corner of Gamma (no normal) the value is that of the
+    lumped form, not a point value.
+    """
+    residual = problem.functional.load.duplicate()
+    problem.forms.assemble_residual(solution.u, residual)
+    residual.axpy(-1.0, problem.functional.load)
+    r = problem.boundary.gather(residual)
+    residual.destroy()
+    lengths = problem.boundary.panel_lengths  # panel i = [node i, node i + 1]
+    mass = 0.5 * (lengths + np.roll(lengths, 1))
+    return r / mass
+
+
+def complementarity(phi: np.ndarray, sigma_s: np.ndarray) -> float:
+    """The largest violation of phi >= 0, sigma <= 0 and phi sigma = 0 on Gamma_s (1.5),
+    scale-free: max(-phi) / |phi|_inf, max(sigma) / |sigma|_inf and
+    max |phi sigma| / (|phi|_inf |sigma|_inf) (a zero scale counts as 1); 0 without
+    Signorini nodes."""
+    if phi.size == 0:
+        return 0.0
+    p_scale = float(np.abs(phi).max()) or 1.0
+    s_scale = float(np.abs(sigma_s).max()) or 1.0
+    return float(
+        max(
+            np.max(-phi, initial=0.0) / p_scale,
+            np.max(sigma_s, initial=0.0) / s_scale,
+            np.max(np.abs(phi * sigma_s)) / (p_scale * s_scale),
+        )
+    )
+
+
+def log_coefficient(problem: Any, solution: Any) -> float:
+    """b of u_e = a + b log|x| + O(1/|x|) (1.3): b = (1/(2 pi)) int_Gamma du_e/dn ds, the
+    flux coefficients integrated exactly in their space (P1: trapezoidal, P0: midpoint)."""
+    lengths = problem.boundary.panel_lengths
+    flux = np.asarray(solution.flux, dtype=float)
+    if problem.flux_space == "p0":
+        total = flux @ lengths
+    else:
+        total = 0.5 * (flux + np.roll(flux, -1)) @ lengths
+    return float(total / (2.0 * np.pi))
