@@ -1,4 +1,5 @@
-"""Command line ``fembem``: ``solve``, ``exterior`` and ``check-jacobian`` (README.md).
+"""Command line ``fembem``: ``solve``, ``evaluate``, ``exterior`` and ``check-jacobian``
+(README.md).
 
 Exit codes: 0 success, 1 a check failed (check-jacobian), 2 bad input (one line on
 stderr naming the configuration key or file and the fix; a traceback only with
@@ -102,6 +103,20 @@ def build_parser() -> argparse.ArgumentParser:
     ext.add_argument("--points", required=True, metavar="FILE.csv")
     ext.add_argument("--out", metavar="FILE.csv", help="write x,y,ue here (default: stdout)")
     ext.add_argument("--debug", action="store_true", help="show tracebacks on errors")
+
+    ev = sub.add_parser(
+        "evaluate",
+        help="u_h and u_e at any points from a finished run",
+        description="Evaluate the solution at the points of a CSV file (two columns x, y; "
+        "an optional header line) from the fields.npz of RESULT_DIR: each row "
+        "x,y,where,u,ue with where = inside (u = u_h), boundary (u_h and the trace u_e) "
+        "or outside (u_e by the representation formula); a value that does not apply "
+        "is empty.",
+    )
+    ev.add_argument("result_dir", metavar="RESULT_DIR")
+    ev.add_argument("--points", required=True, metavar="FILE.csv")
+    ev.add_argument("--out", metavar="FILE.csv", help="write the table here (default: stdout)")
+    ev.add_argument("--debug", action="store_true", help="show tracebacks on errors")
 
     check = sub.add_parser(
         "check-jacobian",
@@ -236,9 +251,7 @@ def _read_points(path: Path) -> np.ndarray:
 
 def _exterior(args: argparse.Namespace) -> int:
     import bem_cpp
-    from mpi4py import MPI
 
-    from coupling.io.atomic import atomic_write
     from coupling.io.outputs import load_fields
 
     fields = load_fields(Path(args.result_dir))
@@ -255,11 +268,37 @@ def _exterior(args: argparse.Namespace) -> int:
     except ValueError as err:  # a point inside Omega or on Gamma
         raise ValueError(f"--points {args.points}: {err}") from None
     table = "x,y,ue\n" + "".join(f"{x:.17g},{y:.17g},{v:.17g}\n" for (x, y), v in zip(points, ue))
-    if MPI.COMM_WORLD.rank == 0:  # every rank computed the same table
-        if args.out:
-            atomic_write(Path(args.out), lambda p: p.write_text(table))
+    _write_table(table, args.out)
+    return EXIT_OK
+
+
+def _write_table(table: str, out: str | None) -> None:
+    """A CSV table to ``out`` (atomically) or stdout, from rank 0 (every rank computed it)."""
+    from coupling.io.atomic import atomic_write
+
+    if _rank() == 0:
+        if out:
+            atomic_write(Path(out), lambda p: p.write_text(table))
         else:
             sys.stdout.write(table)
+
+
+def _evaluate(args: argparse.Namespace) -> int:
+    from coupling.io.evaluation import evaluate
+    from coupling.io.outputs import load_fields
+
+    fields = load_fields(Path(args.result_dir))
+    points = _read_points(Path(args.points))
+    values = evaluate(fields, points)
+
+    def number(v: float) -> str:
+        return "" if np.isnan(v) else f"{v:.17g}"
+
+    rows = zip(points, values["where"], values["u"], values["ue"])
+    table = "x,y,where,u,ue\n" + "".join(
+        f"{x:.17g},{y:.17g},{w},{number(u)},{number(ue)}\n" for (x, y), w, u, ue in rows
+    )
+    _write_table(table, args.out)
     return EXIT_OK
 
 
@@ -312,9 +351,12 @@ def _main(argv: list[str]) -> int:
     if args.command is None:
         parser.print_help()
         return EXIT_OK
-    handler = {"solve": _solve, "exterior": _exterior, "check-jacobian": _check_jacobian}[
-        args.command
-    ]
+    handler = {
+        "solve": _solve,
+        "exterior": _exterior,
+        "evaluate": _evaluate,
+        "check-jacobian": _check_jacobian,
+    }[args.command]
     from mpi4py import MPI
     from threadpoolctl import threadpool_limits
 

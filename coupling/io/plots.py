@@ -31,7 +31,7 @@ from matplotlib.tri import Triangulation  # noqa: E402
 
 import bem_cpp  # noqa: E402
 from coupling.io.atomic import atomic_write  # noqa: E402
-from fem_py.polyline import arc_length  # noqa: E402
+from fem_py.polyline import arc_length, closest_on_polygon  # noqa: E402
 
 __all__ = ["PLOT_FILES", "write_plots"]
 
@@ -166,14 +166,6 @@ def _figure_boundary(fields: dict):
     return fig
 
 
-def _distance_to_polygon(points: np.ndarray, vertices: np.ndarray) -> np.ndarray:
-    """Distance of each point (m, 2) to the closed polygon through ``vertices`` (k, 2)."""
-    a, ab = vertices, np.roll(vertices, -1, axis=0) - vertices
-    rel = points[:, None, :] - a  # (m, k, 2)
-    t = np.clip(np.einsum("mkj,kj->mk", rel, ab) / np.einsum("kj,kj->k", ab, ab), 0.0, 1.0)
-    return np.linalg.norm(rel - t[..., None] * ab, axis=2).min(axis=1)
-
-
 def _figure_whole_plane(fields: dict, tri: Triangulation, resolution: int = 121):
     """u_h inside and u_e outside. Outside, u_e is evaluated on a grid and at the boundary
     nodes (its discrete trace ``ue``) and drawn on their Delaunay triangulation, so the
@@ -188,7 +180,7 @@ def _figure_whole_plane(fields: dict, tri: Triangulation, resolution: int = 121)
     grid = np.column_stack([X.ravel(), Y.ravel()])
     h = np.linalg.norm(np.diff(_closed(nodes), axis=0), axis=1).max()
     outside = ~PolygonPath(nodes).contains_points(grid)
-    outside[outside] = _distance_to_polygon(grid[outside], nodes[_corners(nodes)]) > h / 20
+    outside[outside] = closest_on_polygon(grid[outside], nodes[_corners(nodes)])[0] > h / 20
     grid = grid[outside]
     ue_grid = bem_cpp.exterior_potential(
         nodes,

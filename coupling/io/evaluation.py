@@ -1,0 +1,58 @@
+"""u_h and u_e at any points, from the fields of a finished run (``fembem evaluate``).
+
+Each point is located against the mesh of fields.npz (P1 triangles, matplotlib's
+trapezoid-map point location) and against Gamma:
+
+- ``inside`` Omega: u = u_h (linear interpolation in its triangle); u_e does not apply;
+- on Gamma (closer than 1e-11 times the diameter of Gamma's bounding box): u = u_h and
+  u_e = the trace u + phi - u0, both linear along the panel;
+- ``outside``: u_e by the representation formula (METHOD.md section 2); u does not
+  apply.
+
+Values that do not apply are NaN (empty in the CSV).
+"""
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.tri import LinearTriInterpolator, Triangulation
+
+import bem_cpp
+from fem_py.polyline import closest_on_polygon
+
+__all__ = ["evaluate", "ON_GAMMA"]
+
+#: points closer to Gamma than this times its bounding-box diameter count as on Gamma
+#: (10 times the distance below which the representation formula refuses a point)
+ON_GAMMA = 1e-11
+
+
+def evaluate(fields: dict, points: np.ndarray) -> dict[str, np.ndarray]:
+    """``where`` ("inside", "boundary" or "outside"), ``u`` and ``ue`` at ``points`` (m, 2).
+
+    ``fields`` is the content of fields.npz (:func:`coupling.io.outputs.load_fields`).
+    """
+    points = np.asarray(points, dtype=float).reshape(-1, 2)
+    nodes = fields["boundary_x"]
+    diameter = float(np.linalg.norm(nodes.max(axis=0) - nodes.min(axis=0)))
+    dist, seg, t = closest_on_polygon(points, nodes)
+    on = dist <= ON_GAMMA * diameter
+    x = fields["x"]
+    tri = Triangulation(x[:, 0], x[:, 1], fields["triangles"])
+    inside = (tri.get_trifinder()(points[:, 0], points[:, 1]) >= 0) & ~on
+    outside = ~inside & ~on
+    u, ue = np.full(len(points), np.nan), np.full(len(points), np.nan)
+    u[inside] = LinearTriInterpolator(tri, fields["u"])(*points[inside].T).filled(np.nan)
+    nxt = (seg[on] + 1) % len(nodes)
+    for out, key in ((u, "boundary_u"), (ue, "ue")):
+        out[on] = (1.0 - t[on]) * fields[key][seg[on]] + t[on] * fields[key][nxt]
+    if outside.any():
+        ue[outside] = bem_cpp.exterior_potential(
+            nodes,
+            fields["ue"],
+            fields["dn_ue"],
+            points[outside],
+            a=float(fields["a"]),
+            flux=str(fields["flux_space"]),
+        )
+    where = np.where(inside, "inside", np.where(on, "boundary", "outside"))
+    return {"where": where, "u": u, "ue": ue}
