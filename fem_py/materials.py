@@ -44,6 +44,8 @@ gradients).
 """
 from __future__ import annotations
 
+import re
+
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
@@ -281,5 +283,10 @@ def make_material(
         rho = (es**2 + t**2) ** ((ps - 2) / 2)
         g = ((es**2 + t**2) ** (ps / 2) - es**ps) / ps
         return _build(f"power(p={float(p):g},eps={float(eps):g})", rho, g)
+    if re.fullmatch(r"[A-Za-z_]\w*", key) and key != "t":
+        raise ValueError(
+            f"unknown material {key!r}; the named materials are {', '.join(BUILTIN_MATERIALS)} "
+            '(lower case), or give rho(t) as an expression in t, e.g. "2 + 1/(1+t)"'
+        )
     rho = Expression(key, ("t",)).evaluate({"t": t}, "sympy")
     return _build(key, rho, None)

@@ -189,8 +189,11 @@ def _solve(args: argparse.Namespace) -> int:
 
     comm = MPI.COMM_WORLD
     config = _problem_inputs(args)
+    from coupling.app.advice import arc_warnings, material_warnings
     from coupling.app.from_config import problem_from_config
     from coupling.app.progress import ProgressMonitor
+    from coupling.preconditioners import problem_arcs
+    from fem_py.polyline import arc_length
     from coupling.io.atomic import staged_output_dir
     from coupling.io.outputs import write_outputs
     from coupling.solvers import solve
@@ -204,8 +207,15 @@ def _solve(args: argparse.Namespace) -> int:
         if monitor is not None:
             monitor.stage("building the mesh and assembling the problem")
         problem, options, timings = _with_geometry_key(problem_from_config, comm, config)
+        arcs = problem_arcs(problem)
+        arc_lengths = [float(arc_length(arc.coords)[-1]) for arc in arcs]
+        gamma = float(problem.boundary.panel_lengths.sum())
+        for line in material_warnings(problem.material) + arc_warnings(
+            arc_lengths, [arc.closed for arc in arcs], gamma
+        ):
+            _say(f"warning: {line}")
         if monitor is not None:
-            monitor.problem(problem, options)
+            monitor.problem(problem, options, arc_lengths)
         result = solve(problem, options, monitor=monitor)
         if monitor is not None:
             monitor.finished(result)

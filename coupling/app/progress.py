@@ -37,14 +37,20 @@ class ProgressMonitor:
         if self.comm.rank == 0:
             print(f"fembem: {what}", file=self.stream, flush=True)
 
-    def problem(self, problem, options) -> None:
-        """The size of the assembled problem and the method about to run."""
-        d = problem.domain
+    def problem(self, problem, options, arc_lengths) -> None:
+        """The size of the assembled problem, the material, the Signorini arcs and the
+        method about to run."""
+        d, m = problem.domain, problem.material
         self.stage(
             f"{problem.V.dofmap.index_map.size_global} dofs, {problem.boundary.n_gamma} on "
             f"Gamma, {problem.n_signorini} Signorini unknowns, {d.coarse.n_subdomains} "
-            f"subdomains; solving with {options.method}"
+            f"subdomains"
         )
+        self.stage(f"material {m.name}: alpha = {m.alpha:.4g}, beta = {m.beta:.4g}")
+        if len(arc_lengths):
+            lengths = ", ".join(f"{s:.4g}" for s in arc_lengths)
+            self.stage(f"Signorini arcs of length {lengths}")
+        self.stage(f"solving with {options.method}")
 
     def finished(self, solution) -> None:
         """A note when J_h increased during the solve (tau was halved)."""
