@@ -1,4 +1,4 @@
-"""The peer benchmark (bench/peers.py) and the PETSc peers (coupling/peers.py).
+"""The peer benchmark (bench/peers.py) and the PETSc baselines (coupling/baselines/).
 
 The quick benchmark checks that every solver reaches the PGPM solution, not the
 timings. Tolerances: PGPM stops at its default tol = 1e-8 on the B-norm step, which
@@ -45,7 +45,7 @@ def test_hessian_matrix_equals_the_hessian_action(small_problem):
     (D^2G matrix + dense S_h product) at a nonlinear state: equal to round-off."""
     from dolfinx import fem
 
-    from coupling.peers import CoupledHessian
+    from coupling.baselines import CoupledHessian
 
     p = small_problem
     u = fem.Function(p.V)
@@ -78,13 +78,15 @@ def test_hessian_matrix_equals_the_hessian_action(small_problem):
 def test_peers_reach_the_pgpm_minimiser(small_problem):
     """SNES VI (direct and CG + substructuring) and TAO BNLS reach the minimiser of J_h
     that PGPM reaches; the Newton solvers converge in a handful of steps."""
-    from coupling import peers
+    from coupling import baselines
 
-    ref = peers.solve_project(small_problem, "pgpm", tol=1e-12, max_iterations=5000)
+    ref = baselines.solve_project(small_problem, "pgpm", tol=1e-12, max_iterations=5000)
     assert ref.converged
-    runs = [peers.solve_snes_vi(small_problem, linear_solver="mumps-cholesky"),
-            peers.solve_snes_vi(small_problem, linear_solver="substructuring"),
-            peers.solve_tao(small_problem, "bnls", linear_solver="mumps-cholesky")]
+    runs = [
+        baselines.solve_snes_vi(small_problem, linear_solver="mumps-cholesky"),
+        baselines.solve_snes_vi(small_problem, linear_solver="substructuring"),
+        baselines.solve_tao(small_problem, "bnls", linear_solver="mumps-cholesky"),
+    ]
     for run in runs:
         assert run.converged, run.reason
         assert run.iterations <= 10
@@ -97,9 +99,9 @@ def test_peers_reach_the_pgpm_minimiser(small_problem):
 
 
 def test_budget_stops_a_solver(small_problem):
-    from coupling import peers
+    from coupling import baselines
 
-    run = peers.solve_tao(small_problem, "blmvm", gttol=1e-30, budget=0.2)
+    run = baselines.solve_tao(small_problem, "blmvm", gttol=1e-30, budget=0.2)
     assert not run.converged and "budget" in run.reason
 
 
@@ -110,8 +112,15 @@ def test_quick_benchmark_solvers_agree(tmp_path, capsys):
     solves = [r for r in result["records"] if r["type"] == "solve"]
     assert not [r for r in result["records"] if r["type"] == "crash"]
     names = {r["solver"] for r in solves}
-    assert {"pgpm", "apgpm", "ssn", "snes-substructuring", "snes-mumps-cholesky",
-            "tao-bnls", "poisson"} <= names
+    assert {
+        "pgpm",
+        "apgpm",
+        "ssn",
+        "snes-substructuring",
+        "snes-mumps-cholesky",
+        "tao-bnls",
+        "poisson",
+    } <= names
     sizes = sorted({r["dofs"] for r in solves})
     assert sizes[0] >= 1e4 and sizes[-1] >= 4e4
     for r in solves:

@@ -1,4 +1,4 @@
-"""``fembem study --quick``: the files are produced, linked and sane (coupling/study.py).
+"""``fembem study --quick``: the files are produced, linked and sane (coupling/study/).
 
 The quick study runs once for the module (about a minute on 2 cores). The checks are
 on the figures' meaning, not on fixed numbers: iteration counts positive and below
@@ -44,8 +44,15 @@ def test_every_part_writes_linked_tables_and_plots(out):
         for file in linked:
             assert (out / file).stat().st_size > 0, file
         # provenance: machine, versions, commit and command on every page
-        for needle in ("| Machine |", "dolfinx", "petsc4py", "numpy", "scipy", "git commit",
-                       "fembem study --quick"):
+        for needle in (
+            "| Machine |",
+            "dolfinx",
+            "petsc4py",
+            "numpy",
+            "scipy",
+            "git commit",
+            "fembem study --quick",
+        ):
             assert needle in text, (part, needle)
     assert "## Discussion" in readme and (out / "study.json").exists()
 
@@ -57,8 +64,13 @@ def test_iteration_counts_positive_below_cap_and_bounded(out):
     methods = {r["method"] for r in rows}
     assert {"pgpm"} <= methods
     for method in methods:
-        sub = [r for r in rows if r["preconditioner"] == "substructuring"
-               and r["varies"] == "h" and r["method"] == method]
+        sub = [
+            r
+            for r in rows
+            if r["preconditioner"] == "substructuring"
+            and r["varies"] == "h"
+            and r["method"] == method
+        ]
         counts = [r["iterations"] for r in sub]
         # Theorem 4.1 (bounded at fixed d/h); 1.5 leaves room for the pre-asymptotic
         # coarsest mesh (the full study measures 1.13 for PGPM over cells 32..512)
@@ -128,4 +140,4 @@ def test_bad_arguments_exit_with_usage_error():
         study.main(["--only", "nonsense"])
     assert err.value.code == 2
     with pytest.raises(ValueError, match="unknown solver option"):
-        study._solver_options({"no_such_option": 1})
+        study.check_solver_fields({"no_such_option": 1})

@@ -1,0 +1,73 @@
+"""Reproducibility study of the claims of METHOD.md section 7 (``fembem study``).
+
+Five parts, each a module with the same interface (:class:`coupling.study.base.Part`:
+``run`` returns tables, lists of dicts, one dict a row; ``summarize``, ``plot`` and
+``summary_markdown`` derive the page from the tables), written by
+:class:`~coupling.study.writer.ResultWriter` as CSV files, markdown tables and PNG plots:
+
+``iterations``  PGPM iterations to tol = 1e-8 against h at fixed d/h and against d/h
+                at fixed d (claims 7.1 and 7.4; Theorems 3.1 and 4.1), for the
+                ``substructuring``, ``identity`` and ``exact`` preconditioners, and
+                the other solver methods (``apgpm``, ``ssn``).
+``spectrum``    extreme eigenvalues of B^{-1} A (A of (4.2)) and of B^{-1} D^2 J_h(xi_h)
+                by Lanczos in the B inner product (claim 7.2, Theorem 4.1); the rate
+                of Theorem 3.1 predicted from them; cond(M_s) (claim 7.3, (4.6)); the
+                reference values of METHOD.md section 6 recomputed.
+``projection``  the inexact projection (3.20) with its certified stopping rule (3.6):
+                inner iterations per step and outer counts for several rho_in and caps,
+                against the exact projection and against (3.20) stopped by (3.6) with
+                the true optimum (what (3.6) itself demands).
+``errors``      discretisation errors on the manufactured solutions of METHOD.md
+                section 8 and their observed orders (claim 7.5), linear and carstensen
+                material, square and L-shape, P1 flux (and P0 flux for comparison).
+``variants``    the edge forms ``paper`` and ``sqrt-laplacian`` (iterations and kappa);
+                the ``ufl`` and ``handwritten`` Jacobians (assembly time, iterates).
+
+The other modules: :mod:`~coupling.study.sizes` (the sizes of the full and the quick
+study), :mod:`~coupling.study.common` (the study's problems and small fits),
+:mod:`~coupling.study.pencil` (the pencil (H, B) and its eigenvalues),
+:mod:`~coupling.study.provenance`, :mod:`~coupling.study.writer` (the files),
+:mod:`~coupling.study.discussion` (the README's prose) and
+:mod:`~coupling.study.driver` (the command line and the README).
+
+Every page states the machine, the versions, the git commit and the command. The
+README of the output folder is generated last from the CSV files found there, so
+parts run separately (``--only``) still give one consistent README.
+
+The test problem is the manufactured contact problem on the square of width 0.5
+(:func:`coupling.manufactured.square_contact`, Signorini arc = bottom side) with
+the nonlinear material ``carstensen`` (rho(t) = 2 + 1/(1 + t)), unless a part says
+otherwise; xi_0 = (0, 0); the solver options are the defaults of
+:data:`coupling.options.DEFAULTS` (B = B_Omega + omega B_s with omega = 1/4, P1 flux,
+exact projection) with method ``pgpm``, except where a table says otherwise. The
+study reads the library and never changes it: each variant is its own
+:class:`coupling.options.SolverOptions` or its own problem.
+
+Usage::
+
+    fembem study [--quick] [--out DIR] [--only PART ...] [--readme]
+    python -m coupling.study [--quick] ...
+
+Run times of the full and the quick study: docs/design/study.md.
+"""
+from coupling.study.common import check_solver_fields
+from coupling.study.driver import PARTS, REGISTRY, build_parser, main
+from coupling.study.errors import ERROR_KEYS
+from coupling.study.iterations import summarize as summarize_iterations
+from coupling.study.sizes import FULL, QUICK, Sizes
+from coupling.study.writer import ResultWriter, read_csv
+
+__all__ = [
+    "main",
+    "build_parser",
+    "PARTS",
+    "REGISTRY",
+    "Sizes",
+    "FULL",
+    "QUICK",
+    "ResultWriter",
+    "read_csv",
+    "check_solver_fields",
+    "summarize_iterations",
+    "ERROR_KEYS",
+]
