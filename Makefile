@@ -67,7 +67,7 @@ bench: setup
 	$(PY) bench/strong_scaling.py --output bench/scaling.md
 
 study: setup
-	$(PY) -m coupling.cli study
+	$(PY) -m coupling.study
 
 clean:
 	rm -rf build $(VENV) *.egg-info bem_cpp/*.so

@@ -271,9 +271,9 @@ def _profile_pgpm(problem, u: np.ndarray, phi: np.ndarray, repeat: int = 5) -> d
     projection of PGPM's solve (default options, built here)."""
     from dolfinx import fem
 
-    from coupling.baselines.project import solver_projection
     from coupling.options import SolverOptions
     from coupling.preconditioners import build_preconditioner
+    from coupling.solvers.solution import build_projection
     from coupling.timing import best_of
 
     def best(fn) -> float:
@@ -281,7 +281,7 @@ def _profile_pgpm(problem, u: np.ndarray, phi: np.ndarray, repeat: int = 5) -> d
 
     options = SolverOptions(flux_space=problem.flux_space, jacobian=problem.jacobian)
     f, pre = problem.functional, build_preconditioner(problem, options)
-    projection = solver_projection(pre, options)
+    projection = build_projection(pre, options)
     u_fun = fem.Function(problem.V)
     u_fun.x.array[:] = u
     grad = problem.forms.create_vector()

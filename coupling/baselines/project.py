@@ -15,31 +15,13 @@ from coupling.baselines.budget import (
     PeerResult,
     require_serial,
 )
-from coupling.options import LANCZOS_STEPS, SSN_CG_MAX_ITERATIONS, SSN_START_STEPS, SolverOptions
+from coupling.options import SolverOptions
 from coupling.preconditioners import Preconditioner, build_preconditioner
 from coupling.problem import SignoriniProblem
 from coupling.solvers import RunResult
-from coupling.solvers.apgpm import apgpm
-from coupling.solvers.lanczos import extremes_at
-from coupling.solvers.pgpm import pgpm
-from coupling.solvers.projection import SignoriniProjection
-from coupling.solvers.ssn import semismooth_newton
+from coupling.solvers.solution import build_projection, iterate, step_length
 
-__all__ = ["solve_project", "run_method", "solver_projection"]
-
-
-def solver_projection(
-    preconditioner: Preconditioner, options: SolverOptions
-) -> SignoriniProjection:
-    """P_s of ``options`` in the metric of ``preconditioner``, as
-    :func:`coupling.solvers.solve` builds it (lambda_max(M_s) only when first needed)."""
-    return SignoriniProjection(
-        preconditioner.signorini_metric,
-        options.projection,
-        rho_in=options.projection_tol,
-        max_iterations=options.projection_max_iterations,
-        lambda_max=lambda: preconditioner.lambda_max_signorini,
-    )
+__all__ = ["solve_project", "run_method"]
 
 
 def run_method(
@@ -50,46 +32,29 @@ def run_method(
     u_function: Any,
 ) -> tuple[RunResult, float, float, float]:
     """``options.method`` from xi_0 = (0, 0) on ``functional`` (J_h, or J_h wrapped),
-    with the projection, the step estimate and the method calls of
+    with the projection, the step estimate and the iteration of
     :func:`coupling.solvers.solve` (so the iterates are the same).
 
     Returns the run (u_h is left in ``u_function``), C0, and the wall times of the step
     estimate and of the iteration in seconds.
     """
-    pc = preconditioner
     phi0 = np.zeros(problem.n_signorini)
-    projection = solver_projection(pc, options)
+    projection = build_projection(preconditioner, options)
     tic = time.perf_counter()
-    lambda_min = None
-    if options.step == "auto":
-        lambda_min, C0 = extremes_at(functional, pc, u_function, phi0.size, steps=LANCZOS_STEPS)
-        tau = 1.0 / C0
-    else:
-        tau = float(options.step)
-        C0 = 1.0 / tau
+    tau, C0, lambda_min = step_length(functional, preconditioner, u_function, phi0.size, options)
     step_estimate = time.perf_counter() - tic
     tic = time.perf_counter()
-    common = dict(tau=tau, tol=options.tol, max_iterations=options.max_iterations)
-    if options.method == "ssn":
-        run = semismooth_newton(
-            functional,
-            pc,
-            projection,
-            problem.forms,
-            u_function,
-            phi0,
-            start_steps=SSN_START_STEPS,
-            cg_max_iterations=SSN_CG_MAX_ITERATIONS,
-            **common,
-        )
-    elif options.method == "apgpm":
-        if lambda_min is None:
-            lambda_min = extremes_at(functional, pc, u_function, phi0.size, steps=LANCZOS_STEPS)[0]
-        run = apgpm(
-            functional, pc, projection, u_function, phi0, strong_convexity=lambda_min, **common
-        )
-    else:
-        run = pgpm(functional, pc, projection, u_function, phi0, **common)
+    run = iterate(
+        functional,
+        problem.forms,
+        options,
+        preconditioner,
+        projection,
+        u_function,
+        phi0,
+        tau=tau,
+        lambda_min=lambda_min,
+    )
     return run, C0, step_estimate, time.perf_counter() - tic
 
 

@@ -23,7 +23,7 @@ from coupling.solvers.records import IterationRecord, Monitor, RunResult, set_ow
 from coupling.solvers.ssn import semismooth_newton
 from fem_py.parallel import array_from_root
 
-__all__ = ["Solution", "solve"]
+__all__ = ["Solution", "solve", "build_projection", "step_length", "iterate"]
 
 
 @dataclass
@@ -67,25 +67,53 @@ class Solution:
     timings: dict[str, float]
 
 
-def _run(
-    problem: Any,
+def build_projection(preconditioner: Preconditioner, options: SolverOptions) -> SignoriniProjection:
+    """P_s of ``options`` in the metric M_s of ``preconditioner`` (3.19)-(3.20);
+    lambda_max(M_s) is computed only when the inexact projection first needs it."""
+    return SignoriniProjection(
+        preconditioner.signorini_metric,
+        options.projection,
+        rho_in=options.projection_tol,
+        max_iterations=options.projection_max_iterations,
+        lambda_max=lambda: preconditioner.lambda_max_signorini,
+    )
+
+
+def step_length(
+    functional: Any, preconditioner: Preconditioner, u: Any, n_phi: int, options: SolverOptions
+) -> tuple[float, float, float | None]:
+    """(tau, C0, lambda_min): tau = 1/C0 with C0 from Lanczos at the iterate u
+    (``options.step = "auto"``; lambda_min, the momentum of apgpm, from the same run),
+    or the given step (lambda_min None)."""
+    if options.step == "auto":
+        lambda_min, C0 = extremes_at(functional, preconditioner, u, n_phi, steps=LANCZOS_STEPS)
+        return 1.0 / C0, C0, lambda_min
+    tau = float(options.step)
+    return tau, 1.0 / tau, None
+
+
+def iterate(
+    functional: Any,
+    forms: Any,
     options: SolverOptions,
     preconditioner: Preconditioner,
     projection: SignoriniProjection,
     u: Any,
     phi0: np.ndarray,
+    *,
     tau: float,
     lambda_min: float | None,
-    monitor: Monitor | None,
+    monitor: Monitor | None = None,
 ) -> RunResult:
-    """The iteration of ``options.method`` from (u, phi0)."""
+    """The iteration of ``options.method`` on J_h = ``functional`` from (u, phi0); u_h is
+    left in ``u``. (``functional`` may wrap the problem's, as the baselines' budget does.)"""
     common = dict(tau=tau, tol=options.tol, max_iterations=options.max_iterations, monitor=monitor)
     if options.method == "ssn":
         return semismooth_newton(
-            problem.functional,
+            functional,
             preconditioner,
             projection,
-            problem.forms,
+            forms,
             u,
             phi0,
             start_steps=SSN_START_STEPS,
@@ -94,19 +122,13 @@ def _run(
         )
     if options.method == "apgpm":
         if lambda_min is None:  # a given step: lambda_min at the start, as C0 would be
-            lambda_min = extremes_at(
-                problem.functional, preconditioner, u, phi0.size, steps=LANCZOS_STEPS
-            )[0]
+            lambda_min = extremes_at(functional, preconditioner, u, phi0.size, steps=LANCZOS_STEPS)[
+                0
+            ]
         return apgpm(
-            problem.functional,
-            preconditioner,
-            projection,
-            u,
-            phi0,
-            strong_convexity=lambda_min,
-            **common,
+            functional, preconditioner, projection, u, phi0, strong_convexity=lambda_min, **common
         )
-    return pgpm(problem.functional, preconditioner, projection, u, phi0, **common)
+    return pgpm(functional, preconditioner, projection, u, phi0, **common)
 
 
 def solve(
@@ -152,13 +174,7 @@ def solve(
         timings["preconditioner"] = time.perf_counter() - tic
     try:
         pc = preconditioner
-        projection = SignoriniProjection(
-            pc.signorini_metric,
-            options.projection,
-            rho_in=options.projection_tol,
-            max_iterations=options.projection_max_iterations,
-            lambda_max=lambda: pc.lambda_max_signorini,
-        )
+        projection = build_projection(pc, options)
         u = fem.Function(problem.V, name="u")
         phi0 = np.zeros(problem.n_signorini)
         if initial is not None:
@@ -178,16 +194,21 @@ def solve(
                 )
             set_owned(u, u_values)
         tic = time.perf_counter()
-        lambda_min = None  # the momentum of apgpm, from the same Lanczos run as C0
-        if options.step == "auto":
-            lambda_min, C0 = extremes_at(problem.functional, pc, u, phi0.size, steps=LANCZOS_STEPS)
-            tau = 1.0 / C0
-        else:
-            tau = float(options.step)
-            C0 = 1.0 / tau
+        tau, C0, lambda_min = step_length(problem.functional, pc, u, phi0.size, options)
         timings["step_estimate"] = time.perf_counter() - tic
         tic = time.perf_counter()
-        run = _run(problem, options, pc, projection, u, phi0, tau, lambda_min, monitor)
+        run = iterate(
+            problem.functional,
+            problem.forms,
+            options,
+            pc,
+            projection,
+            u,
+            phi0,
+            tau=tau,
+            lambda_min=lambda_min,
+            monitor=monitor,
+        )
         timings["solve"] = time.perf_counter() - tic
     finally:
         if owned:

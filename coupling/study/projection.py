@@ -5,8 +5,8 @@ against the exact projection and against (3.20) stopped by (3.6) with the true o
 
 The projection is instrumented (counted, timed, or replaced by the oracle), so these
 runs call :func:`coupling.solvers.pgpm.pgpm` with it directly, exactly as
-:func:`coupling.solvers.solve` runs PGPM: the projection :func:`solver_projection`
-builds, tau = 1/C0 from Lanczos at xi_0 = 0.
+:func:`coupling.solvers.solve` runs PGPM: the projection of
+:func:`coupling.solvers.solution.build_projection`, tau = 1/C0 from Lanczos at xi_0 = 0.
 """
 from __future__ import annotations
 
@@ -15,12 +15,12 @@ from typing import Any, Callable
 
 import numpy as np
 
-from coupling.options import LANCZOS_STEPS, SolverOptions
-from coupling.preconditioners import Preconditioner
+from coupling.options import LANCZOS_STEPS
 from coupling.solvers import RunResult
 from coupling.solvers.lanczos import extremes_at
 from coupling.solvers.pgpm import pgpm
 from coupling.solvers.projection import ProjectionResult, SignoriniProjection
+from coupling.solvers.solution import build_projection
 from coupling.study.base import Figures, Part, Table, Tables
 from coupling.study.common import (
     Case,
@@ -38,7 +38,6 @@ __all__ = [
     "PART",
     "TimedProjection",
     "OracleProjection",
-    "solver_projection",
     "run_pgpm",
     "run",
     "summarize",
@@ -89,20 +88,6 @@ class OracleProjection:
         return ProjectionResult(phi, self.cap)
 
 
-def solver_projection(
-    preconditioner: Preconditioner, options: SolverOptions
-) -> SignoriniProjection:
-    """P_s of ``options`` in the metric of ``preconditioner``, as
-    :func:`coupling.solvers.solve` builds it (lambda_max(M_s) only when first needed)."""
-    return SignoriniProjection(
-        preconditioner.signorini_metric,
-        options.projection,
-        rho_in=options.projection_tol,
-        max_iterations=options.projection_max_iterations,
-        lambda_max=lambda: preconditioner.lambda_max_signorini,
-    )
-
-
 def run_pgpm(case: Case, projection: Projection) -> tuple[RunResult, np.ndarray, float]:
     """PGPM (Algorithm 3.1) on ``case`` from xi_0 = 0 with ``projection``; returns the
     run, u_h (the Function's array) and the wall time (step estimate and iteration)."""
@@ -150,7 +135,7 @@ def run(comm: Any, sizes: Sizes) -> list[Table]:
             if projection == "inexact":
                 options.update(projection_tol=rho, projection_max_iterations=cap)
             case = setup_case(comm, cells, 4, **options)
-            p_s = solver_projection(case.preconditioner, case.options)
+            p_s = build_projection(case.preconditioner, case.options)
             timed = TimedProjection(
                 OracleProjection(p_s, rho, cap) if projection == "oracle" else p_s
             )
