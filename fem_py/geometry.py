@@ -88,7 +88,9 @@ __all__ = [
     "Arc",
     "CoarseStructure",
     "Domain",
+    "DomainSize",
     "build_domain",
+    "domain_size",
     "compute_coarse_structure",
     "GAMMA_T_TAG",
     "SIGNORINI_TAG0",
@@ -199,6 +201,137 @@ def _validate(shape, h, subdomain_size, center, width, vertices):
     return h, d, P, (cx, cy)
 
 
+@dataclass(frozen=True, eq=False)
+class _Plan:
+    """What ``build_domain`` knows before any mesh exists: the validated sizes, Omega's
+    polygon and boundary curve, the arcs, and (square, L-shape) the coarse grid."""
+
+    h: float
+    d: float
+    P: np.ndarray
+    B: BoundaryCurve
+    arcs: tuple
+    whole: bool
+    ends: list
+    cV: Any = None
+    ccells: Any = None
+    csize: float | None = None
+
+
+def _plan(
+    shape, h, subdomain_size, center, width, vertices, signorini, structured, allow_large
+) -> _Plan:
+    """Validate the arguments of :func:`build_domain` and lay out its coarse grid
+    (identically on every rank, before any collective call)."""
+    h, d, P, (cx, cy) = _validate(shape, h, subdomain_size, center, width, vertices)
+    cV = ccells = csize = None
+    if shape != "polygon":
+        P, cV, ccells, csize = grid_partition(shape, (cx, cy), float(width), d)
+    diam = diameter(P)
+    if diam >= 1.0 and not allow_large:
+        raise ValueError(
+            f"diam(Omega) = {diam:.4g} >= 1: the single-layer operator may not be "
+            "elliptic (METHOD.md section 2); shrink the domain, or opt out with "
+            "allow_large (geometry.allow_large = true) at your own risk"
+        )
+    B = BoundaryCurve(P)
+    arcs, whole = parse_arcs(signorini, shape, B)
+    ends = [] if whole else [np.asarray(p) for a in arcs for p in (a.start, a.end)]
+    if shape != "polygon":
+        if structured:
+            for q in ends:
+                if np.linalg.norm(cV - q, axis=1).min() > B.tol:
+                    raise ValueError(
+                        f"signorini: arc end ({q[0]:g}, {q[1]:g}) is not a coarse "
+                        "grid vertex, which structured=True requires; move it to a "
+                        f"multiple of the coarse size {csize:g} or use "
+                        "structured=False"
+                    )
+        else:
+            cV, ccells = insert_boundary_points(cV, ccells, ends, B.tol)
+    return _Plan(h, d, P, B, arcs, whole, ends, cV, ccells, csize)
+
+
+@dataclass(frozen=True)
+class DomainSize:
+    """The sizes of a domain (and of its P1 problem) as ``build_domain`` will make it.
+
+    Attributes
+    ----------
+    dofs, boundary_dofs, signorini_dofs
+        P1 nodes in Omega, on Gamma, and carrying a phi unknown.
+    subdomains
+        Coarse cells L.
+    h_min, h_max
+        The shortest and the longest fine facet.
+    """
+
+    dofs: int
+    boundary_dofs: int
+    signorini_dofs: int
+    subdomains: int
+    h_min: float
+    h_max: float
+
+
+def domain_size(
+    shape: str,
+    *,
+    h: float,
+    subdomain_size: float,
+    center: Sequence[float] = (0.0, 0.0),
+    width: float = 0.5,
+    vertices: Sequence[Sequence[float]] | None = None,
+    signorini: Any = (),
+    structured: bool = False,
+    allow_large: bool = False,
+) -> DomainSize | None:
+    """The sizes of ``build_domain(comm, shape, ...)`` (same arguments) in closed form,
+    without a mesh: for the structured square and L-shape; None where only meshing
+    tells (gmsh meshes). Raises the errors ``build_domain`` raises for the arguments.
+
+    A coarse square refined n = max(2, round(d/h)) times per side has (n+1)^2 nodes, and
+    the fine nodes number ``fem_py.structured.refine(...).n_nodes``; every coarse boundary
+    edge carries n fine facets; an open arc over k coarse edges has n k - 1 interior
+    nodes, a closed one (``"all"``) every boundary node. The facets of the right
+    triangles are c/n (legs) and sqrt(2) c/n (diagonals), c the coarse size.
+    """
+    plan = _plan(
+        shape, h, subdomain_size, center, width, vertices, signorini, structured, allow_large
+    )
+    if shape == "polygon" or not structured:
+        return None
+    n = max(2, int(round(plan.csize / plan.h)))
+    cV, cells = plan.cV, [list(c) for c in plan.ccells]
+    edges: dict[tuple[int, int], int] = {}
+    for c in cells:
+        for a, b in zip(c, c[1:] + c[:1]):
+            key = (min(a, b), max(a, b))
+            edges[key] = edges.get(key, 0) + 1
+    boundary = [
+        (a, b)
+        for c in cells
+        for a, b in zip(c, c[1:] + c[:1])
+        if edges[(min(a, b), max(a, b))] == 1
+    ]
+    tags = [edge_tag(cV, a, b, plan.B, plan.arcs) for a, b in boundary]
+    n_gamma = n * len(boundary)
+    if plan.whole:
+        n_s = n_gamma
+    else:
+        per_arc = [tags.count(SIGNORINI_TAG0 + k) for k in range(len(plan.arcs))]
+        n_s = sum(n * k - 1 for k in per_arc if k)
+    leg = plan.csize / n
+    return DomainSize(
+        dofs=refine(cV, np.asarray(plan.ccells), n).n_nodes,
+        boundary_dofs=n_gamma,
+        signorini_dofs=n_s,
+        subdomains=len(cells),
+        h_min=leg,
+        h_max=math.sqrt(2.0) * leg,
+    )
+
+
 def build_domain(
     comm: Any,
     shape: str,
@@ -244,31 +377,19 @@ def build_domain(
         gmsh failed on rank 0 (``"meshing the domain failed: <type>: <message>"``, on
         every rank).
     """
-    h, d, P, (cx, cy) = _validate(shape, h, subdomain_size, center, width, vertices)
-    if shape != "polygon":
-        P, cV, ccells, csize = grid_partition(shape, (cx, cy), float(width), d)
-    diam = diameter(P)
-    if diam >= 1.0 and not allow_large:
-        raise ValueError(
-            f"diam(Omega) = {diam:.4g} >= 1: the single-layer operator may not be "
-            "elliptic (METHOD.md section 2); shrink the domain, or opt out with "
-            "allow_large (geometry.allow_large = true) at your own risk"
-        )
-    B = BoundaryCurve(P)
-    arcs, whole = parse_arcs(signorini, shape, B)
-    ends = [] if whole else [np.asarray(p) for a in arcs for p in (a.start, a.end)]
-    if shape != "polygon":
-        if structured:
-            for q in ends:
-                if np.linalg.norm(cV - q, axis=1).min() > B.tol:
-                    raise ValueError(
-                        f"signorini: arc end ({q[0]:g}, {q[1]:g}) is not a coarse "
-                        "grid vertex, which structured=True requires; move it to a "
-                        f"multiple of the coarse size {csize:g} or use "
-                        "structured=False"
-                    )
-        else:
-            cV, ccells = insert_boundary_points(cV, ccells, ends, B.tol)
+    plan = _plan(
+        shape, h, subdomain_size, center, width, vertices, signorini, structured, allow_large
+    )
+    h, d, P, B, arcs, whole, ends = (
+        plan.h,
+        plan.d,
+        plan.P,
+        plan.B,
+        plan.arcs,
+        plan.whole,
+        plan.ends,
+    )
+    cV, ccells, csize = plan.cV, plan.ccells, plan.csize
 
     # gmsh runs on rank 0 (the polygon's coarse mesh, the unstructured fine mesh)
     arrays = None
