@@ -43,7 +43,8 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=2)
     args = parser.parse_args()
 
-    print(f"bem_cpp {bem_cpp.version()}, {os.cpu_count()} cores, load average {os.getloadavg()[0]:.2f}")
+    load = os.getloadavg()[0]
+    print(f"bem_cpp {bem_cpp.version()}, {os.cpu_count()} cores, load average {load:.2f}")
     header = (
         f"{'n':>6} {'S_h [s]':>9} {'assembly':>9} {'cholesky':>9} {'trsm':>9} {'syrk':>9}"
         f" {'dpotrf [s]':>11} {'S/chol':>7}"
@@ -64,11 +65,13 @@ def main() -> None:
         best = min(stages, key=lambda t: sum(t.values()))
         V = bem_cpp.single_layer(X, "p1")
         t_chol, _ = best_of(
-            args.repeat, lambda: scipy.linalg.cholesky(V, lower=True, overwrite_a=False, check_finite=False)
+            args.repeat,
+            lambda: scipy.linalg.cholesky(V, lower=True, overwrite_a=False, check_finite=False),
         )
         print(
             f"{n:>6} {t_s:>9.3f} {best['assembly']:>9.3f} {best['cholesky']:>9.3f}"
-            f" {best['triangular_solve']:>9.3f} {best['rank_update']:>9.3f} {t_chol:>11.3f} {t_s / t_chol:>7.1f}"
+            f" {best['triangular_solve']:>9.3f} {best['rank_update']:>9.3f} {t_chol:>11.3f}"
+            f" {t_s / t_chol:>7.1f}"
         )
 
     # Where the assembly time goes: each operator alone (S_h assembles them in one pass).
@@ -79,7 +82,10 @@ def main() -> None:
         "K_h (p1)": lambda: bem_cpp.double_layer(X, "p1"),
         "W_h": lambda: bem_cpp.hypersingular(X),
     }
-    print(f"\noperators alone, n = {n}: " + ", ".join(f"{k} {best_of(args.repeat, f)[0]:.3f} s" for k, f in parts.items()))
+    print(
+        f"\noperators alone, n = {n}: "
+        + ", ".join(f"{k} {best_of(args.repeat, f)[0]:.3f} s" for k, f in parts.items())
+    )
 
 
 if __name__ == "__main__":

@@ -16,6 +16,10 @@ import numpy as np
 from mpi4py import MPI
 
 from coupling.manufactured import manufactured_problem, square_contact
+from coupling.options import SolverOptions
+from coupling.preconditioners import build_preconditioner
+from coupling.solvers import solve
+from coupling.solvers.projection import SignoriniProjection
 from coupling.timing import best_of as _best_of
 from fem_py.materials import make_material
 
@@ -32,14 +36,22 @@ def main() -> None:
     args = parser.parse_args()
     comm = MPI.COMM_WORLD
 
+    # tol = 0: exactly --iterations steps of the paper's method
+    options = SolverOptions(method="pgpm", max_iterations=args.iterations, tol=0.0)
     tic = time.perf_counter()
-    problem = manufactured_problem(comm, square_contact(), make_material("carstensen"),
-                                   cells=args.cells, max_iterations=args.iterations, tol=0.0)
+    problem = manufactured_problem(
+        comm, square_contact(), make_material("carstensen"), cells=args.cells
+    )
+    built = time.perf_counter()
+    pre = build_preconditioner(problem, options)  # kept for the parts timed below
+    timings = {**problem.timings, "preconditioner": time.perf_counter() - built}
     setup = time.perf_counter() - tic
-    result = problem.solve()
+    result = solve(problem, options, preconditioner=pre)
+    timings.update(result.timings)
     per_iteration = result.timings["solve"] / result.iterations
 
-    f, u, pre = problem.functional, result.u, problem.preconditioner
+    f, u = problem.functional, result.u
+    projection = SignoriniProjection.exact(pre.signorini_metric)
     grad = problem.forms.create_vector()
     g_u = grad.array_r.copy()
     g_phi = np.ones(problem.n_signorini)
@@ -47,28 +59,37 @@ def main() -> None:
         "residual assembly": best_of(lambda: problem.forms.assemble_residual(u, grad)),
         "energy assembly": best_of(lambda: problem.forms.energy(u)),
         "S_h product (+ trace)": best_of(lambda: f.S @ f.boundary_block(u.vector, result.phi)),
-        "B^-1 (B_Omega^-1, M_s^-1)": best_of(lambda: (pre.apply_omega(g_u),
-                                                     pre.apply_signorini(g_phi))),
-        "projection (exact)": best_of(lambda: problem.projection(result.phi - 1e-3 * g_phi,
-                                                                 result.phi)),
+        "B^-1 (B_Omega^-1, M_s^-1)": best_of(
+            lambda: (pre.apply_omega(g_u), pre.apply_signorini(g_phi))
+        ),
+        "projection (exact)": best_of(lambda: projection(result.phi - 1e-3 * g_phi, result.phi)),
         "J_h and gradient": best_of(lambda: f.value_and_gradient(u, result.phi, grad)),
     }
     assembly = parts["residual assembly"]
     if comm.rank == 0:
         dofs = problem.V.dofmap.index_map.size_global
-        print(f"# PGPM iteration profile: {dofs} dofs, {problem.boundary.n_gamma} boundary "
-              f"dofs, {problem.n_signorini} Signorini dofs, {comm.size} rank(s)")
-        print(f"# machine: {platform.machine()} {platform.processor() or ''}, "
-              f"python {platform.python_version()}; setup {setup:.2f} s "
-              f"({', '.join(f'{k} {v:.2f} s' for k, v in result.timings.items())})")
+        print(
+            f"# PGPM iteration profile: {dofs} dofs, {problem.boundary.n_gamma} boundary "
+            f"dofs, {problem.n_signorini} Signorini dofs, {comm.size} rank(s)"
+        )
+        print(
+            f"# machine: {platform.machine()} {platform.processor() or ''}, "
+            f"python {platform.python_version()}; setup {setup:.2f} s "
+            f"({', '.join(f'{k} {v:.2f} s' for k, v in timings.items())})"
+        )
         print(f"{'part':32s} {'time [ms]':>10s} {'/ residual':>11s}")
         for name, t in parts.items():
             print(f"{name:32s} {1e3 * t:10.2f} {t / assembly:11.2f}")
-        print(f"{'one PGPM iteration (measured)':32s} {1e3 * per_iteration:10.2f} "
-              f"{per_iteration / assembly:11.2f}")
-        print(f"target: one iteration <= 3 residual assemblies -> "
-              f"{'met' if per_iteration <= 3 * assembly else 'MISSED'}")
+        print(
+            f"{'one PGPM iteration (measured)':32s} {1e3 * per_iteration:10.2f} "
+            f"{per_iteration / assembly:11.2f}"
+        )
+        print(
+            f"target: one iteration <= 3 residual assemblies -> "
+            f"{'met' if per_iteration <= 3 * assembly else 'MISSED'}"
+        )
     grad.destroy()
+    pre.destroy()
 
 
 if __name__ == "__main__":

@@ -26,7 +26,8 @@ only ever adds time). Prints a table of times and speed-ups (target: total speed
 >= 1.6 from P = 1 to 2 on this 2-core machine), the totals of every run, and writes
 them to ``--output`` (markdown) if given.
 
-    .venv/bin/python bench/strong_scaling.py [--cells 1000] [--ranks 1 2] [--method ssn pgpm] [--repeat 3]
+    .venv/bin/python bench/strong_scaling.py [--cells 1000] [--ranks 1 2]
+                                             [--method ssn pgpm] [--repeat 3]
 """
 from __future__ import annotations
 
@@ -48,42 +49,61 @@ def worker(cells: int, method: str) -> None:
     from mpi4py import MPI
     from threadpoolctl import threadpool_limits
 
-    from coupling.distributed import threads_per_rank
     from coupling.manufactured import manufactured_problem, square_contact
+    from coupling.options import SolverOptions
+    from coupling.preconditioners import build_preconditioner
+    from coupling.solvers import solve
     from fem_py.materials import make_material
+    from fem_py.parallel import threads_per_rank
 
     comm = MPI.COMM_WORLD
+    options = SolverOptions(method=method)
     comm.Barrier()
     with threadpool_limits(threads_per_rank(comm)):  # as the fembem command does
         tic = time.perf_counter()
-        problem = manufactured_problem(comm, square_contact(), make_material("carstensen"),
-                                       cells=cells, method=method)
+        problem = manufactured_problem(
+            comm, square_contact(), make_material("carstensen"), cells=cells
+        )
+        assembled = time.perf_counter()
+        B = build_preconditioner(problem, options)  # built here to report its class
+        factorisations = time.perf_counter() - assembled
         comm.Barrier()  # the slowest rank's set-up
         built = time.perf_counter() - tic
-        result = problem.solve()
+        result = solve(problem, options, preconditioner=B)
         total = time.perf_counter() - tic
-    t = result.timings
+        B.destroy()
+    t = {**problem.timings, **result.timings}
     phases = {
         "S_h": t["steklov_poincare"],
-        "factorisations": t["preconditioner"],
+        "factorisations": factorisations,
         "iterations": t["step_estimate"] + t["solve"],
     }
     phases["setup"] = built - phases["S_h"] - phases["factorisations"]
     phases["outputs"] = total - built - phases["iterations"]  # u_e and its flux on Gamma
     phases["total"] = total
     if comm.rank == 0:
-        print(json.dumps({
-            "ranks": comm.size, "dofs": problem.V.dofmap.index_map.size_global,
-            "boundary_dofs": problem.boundary.n_gamma, "method": method,
-            "subdomains": problem.domain.coarse.n_subdomains,
-            "preconditioner": type(problem.preconditioner).__name__,
-            "iterations_count": result.iterations, "converged": bool(result.converged),
-            "energy": result.energy, **phases}), flush=True)
+        print(
+            json.dumps(
+                {
+                    "ranks": comm.size,
+                    "dofs": problem.V.dofmap.index_map.size_global,
+                    "boundary_dofs": problem.boundary.n_gamma,
+                    "method": method,
+                    "subdomains": problem.domain.coarse.n_subdomains,
+                    "preconditioner": type(B).__name__,
+                    "iterations_count": result.iterations,
+                    "converged": bool(result.converged),
+                    "energy": result.energy,
+                    **phases,
+                }
+            ),
+            flush=True,
+        )
 
 
 #: The ceiling kernels' fixed work: triad arrays of 2^25 doubles (3 x 256 MiB in all, far
 #: beyond the 32 MiB L3), and 2^26 transcendental evaluations on an array of 2^15 doubles.
-TRIAD_ENTRIES, COMPUTE_ENTRIES, COMPUTE_SWEEPS = 2 ** 25, 2 ** 15, 2 ** 11
+TRIAD_ENTRIES, COMPUTE_ENTRIES, COMPUTE_SWEEPS = 2**25, 2**15, 2**11
 
 
 def ceiling_worker() -> None:
@@ -100,7 +120,9 @@ def ceiling_worker() -> None:
     small = np.linspace(0.0, 1.0, COMPUTE_ENTRIES)
     sweeps = COMPUTE_SWEEPS // comm.size
 
-    def triad() -> None:  # a = b + 3 c: 5 x 8 bytes an entry (multiply: c in, a out; add: a, b in, a out)
+    def triad() -> (
+        None
+    ):  # a = b + 3 c: 5 x 8 bytes an entry (multiply: c in, a out; add: a, b in, a out)
         np.multiply(c, 3.0, out=a)
         np.add(a, b, out=a)
 
@@ -125,15 +147,27 @@ def ceiling_worker() -> None:
 
 def _mpirun(ranks: int, args: list[str]) -> dict:
     """The last JSON line printed by ``mpirun -n ranks`` of this script with ``args``."""
-    cmd = ["mpirun", "--allow-run-as-root", "--oversubscribe", "--bind-to", "none", "-n", str(ranks),
-           sys.executable, __file__, *args]
+    cmd = [
+        "mpirun",
+        "--allow-run-as-root",
+        "--oversubscribe",
+        "--bind-to",
+        "none",
+        "-n",
+        str(ranks),
+        sys.executable,
+        __file__,
+        *args,
+    ]
     if ranks == 1:
-        cmd = cmd[cmd.index(sys.executable):]
+        cmd = cmd[cmd.index(sys.executable) :]
     # os.environ, not the C environment: an MPI-initialised parent (a test process) has
     # Open MPI singleton variables there that make mpirun fail
     out = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, env=dict(os.environ))
     if out.returncode != 0:
-        sys.exit(f"error: the run with {ranks} rank(s) failed:\n{(out.stdout + out.stderr)[-2000:]}")
+        sys.exit(
+            f"error: the run with {ranks} rank(s) failed:\n{(out.stdout + out.stderr)[-2000:]}"
+        )
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
@@ -146,17 +180,28 @@ def ceilings(ranks: list[int], repeat: int) -> str:
     rank counts (the bandwidth a VM gets varies with its neighbours' load): the best
     times as a markdown table, and the triad speed-up of every round."""
     rounds = [[_mpirun(p, ["--ceiling"]) for p in ranks] for _ in range(repeat)]
-    best = [{k: min(rnd[i][k] for rnd in rounds) for k in ("triad", "compute")} for i in range(len(ranks))]
+    best = [
+        {k: min(rnd[i][k] for rnd in rounds) for k in ("triad", "compute")}
+        for i in range(len(ranks))
+    ]
     base = best[0]
-    lines = [f"# Machine ceilings: fixed work split over P ranks (one thread per rank; best of "
-             f"10 times in each of {repeat} round(s), the best over all rounds shown)\n",
-             "| P | memory-bound triad | triad bandwidth | compute-bound kernel |", "|---|---|---|---|"]
+    lines = [
+        f"# Machine ceilings: fixed work split over P ranks (one thread per rank; best of "
+        f"10 times in each of {repeat} round(s), the best over all rounds shown)\n",
+        "| P | memory-bound triad | triad bandwidth | compute-bound kernel |",
+        "|---|---|---|---|",
+    ]
     for p, r in zip(ranks, best):
-        lines.append(f"| {p} | {r['triad']:.3f} s ({base['triad'] / r['triad']:.2f}x) | "
-                     f"{5 * 8 * TRIAD_ENTRIES / r['triad'] / 1e9:.1f} GB/s | "
-                     f"{r['compute']:.3f} s ({base['compute'] / r['compute']:.2f}x) |")
-    every = "; ".join(f"P = {p}: " + ", ".join(f"{rnd[0]['triad'] / rnd[i]['triad']:.2f}x" for rnd in rounds)
-                      for i, p in enumerate(ranks) if i > 0)
+        lines.append(
+            f"| {p} | {r['triad']:.3f} s ({base['triad'] / r['triad']:.2f}x) | "
+            f"{5 * 8 * TRIAD_ENTRIES / r['triad'] / 1e9:.1f} GB/s | "
+            f"{r['compute']:.3f} s ({base['compute'] / r['compute']:.2f}x) |"
+        )
+    every = "; ".join(
+        f"P = {p}: " + ", ".join(f"{rnd[0]['triad'] / rnd[i]['triad']:.2f}x" for rnd in rounds)
+        for i, p in enumerate(ranks)
+        if i > 0
+    )
     return "\n".join(lines) + f"\n\ntriad speed-up of every round: {every}\n"
 
 
@@ -176,30 +221,48 @@ def best_runs(ranks: list[int], cells: int, method: str, repeat: int) -> tuple[l
 
 def table(runs: list[dict], totals: dict[int, list[float]]) -> str:
     base = runs[0]
-    head = (f"# Strong scaling: {base['dofs']} dofs, {base['boundary_dofs']} boundary dofs, "
-            f"{base['subdomains']} subdomains, method {base['method']}\n\n"
-            f"machine: {platform.node()}, {os.cpu_count()} cores, load average "
-            f"{os.getloadavg()[0]:.2f} at the end; times in s (slowest rank), speed-up "
-            f"relative to P = {base['ranks']}; the fastest of "
-            f"{len(totals[base['ranks']])} run(s) per P\n\n")
-    lines = ["| P | B | iterations | " + " | ".join(PHASES) + " |",
-             "|---|---|---|" + "---|" * len(PHASES)]
+    head = (
+        f"# Strong scaling: {base['dofs']} dofs, {base['boundary_dofs']} boundary dofs, "
+        f"{base['subdomains']} subdomains, method {base['method']}\n\n"
+        f"machine: {platform.node()}, {os.cpu_count()} cores, load average "
+        f"{os.getloadavg()[0]:.2f} at the end; times in s (slowest rank), speed-up "
+        f"relative to P = {base['ranks']}; the fastest of "
+        f"{len(totals[base['ranks']])} run(s) per P\n\n"
+    )
+    lines = [
+        "| P | B | iterations | " + " | ".join(PHASES) + " |",
+        "|---|---|---|" + "---|" * len(PHASES),
+    ]
     for r in runs:
         cells = [f"{r[p]:.2f} ({base[p] / r[p]:.2f}x)" for p in PHASES]
-        lines.append(f"| {r['ranks']} | {r['preconditioner']} | {r['iterations_count']} | "
-                     + " | ".join(cells) + " |")
+        lines.append(
+            f"| {r['ranks']} | {r['preconditioner']} | {r['iterations_count']} | "
+            + " | ".join(cells)
+            + " |"
+        )
     every = "; ".join(f"P = {p}: " + ", ".join(f"{t:.2f}" for t in ts) for p, ts in totals.items())
     return head + "\n".join(lines) + f"\n\ntotals of every run (s): {every}\n"
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--cells", type=int, default=1000, help="cells per side (default 1000: 1.0e6 dofs)")
+    parser.add_argument(
+        "--cells", type=int, default=1000, help="cells per side (default 1000: 1.0e6 dofs)"
+    )
     parser.add_argument("--ranks", type=int, nargs="+", default=[1, 2])
-    parser.add_argument("--method", nargs="+", default=["ssn", "pgpm"],
-                        choices=["pgpm", "apgpm", "ssn"],
-                        help="solver methods, one table each (default: ssn pgpm)")
-    parser.add_argument("--repeat", type=int, default=3, help="runs per rank count, the fastest reported (default 3)")
+    parser.add_argument(
+        "--method",
+        nargs="+",
+        default=["ssn", "pgpm"],
+        choices=["pgpm", "apgpm", "ssn"],
+        help="solver methods, one table each (default: ssn pgpm)",
+    )
+    parser.add_argument(
+        "--repeat",
+        type=int,
+        default=3,
+        help="runs per rank count, the fastest reported (default 3)",
+    )
     parser.add_argument("--output", type=Path, help="also write the table (markdown) here")
     parser.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     parser.add_argument("--ceiling", action="store_true", help=argparse.SUPPRESS)
@@ -214,7 +277,9 @@ def main(argv: list[str] | None = None) -> int:
         ceiling_worker()
         return 0
     tables = [ceilings(args.ranks, args.repeat)]
-    tables += [table(*best_runs(args.ranks, args.cells, method, args.repeat)) for method in args.method]
+    tables += [
+        table(*best_runs(args.ranks, args.cells, method, args.repeat)) for method in args.method
+    ]
     text = "\n".join(tables)
     print(text)
     if args.output:

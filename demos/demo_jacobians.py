@@ -20,48 +20,49 @@
 #    C0 = lambda_max(B^-1 D^2 J_h(xi_0)) (METHOD.md section 5), so equal matrices
 #    must give the same iterates up to round-off.
 #
-# Run: `python demos/demo_jacobians.py [--cells N] [--repeat R]`.
+# Run: `python demos/demo_jacobians.py [--cells N] [--repeat R] [--out DIR]` (results.json
+# goes to DIR, default out/demo_jacobians).
 
 # %%
-import argparse
-import json
 import time
-from pathlib import Path
 
 import numpy as np
 from dolfinx import fem
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from common import demo_parser, rank0_print, write_results
 from coupling.manufactured import manufactured_problem, square_contact
+from coupling.options import SolverOptions
+from coupling.solvers import solve
 from fem_py.expressions import numpy_function
 from fem_py.jacobian_check import check_jacobian
 from fem_py.materials import make_material
 
-parser = argparse.ArgumentParser(description="UFL-derived against handwritten Jacobians.")
-parser.add_argument("--cells", type=int, default=256,
-                    help="cells per side of the square (h = 0.5/cells; default 256)")
+parser = demo_parser(
+    "demo_jacobians",
+    "UFL-derived against handwritten Jacobians.",
+    cells=256,
+    cells_help="cells per side of the square (h = 0.5/cells; default 256)",
+)
 parser.add_argument("--repeat", type=int, default=10, help="timed assemblies of each matrix")
-parser.add_argument("--out", type=Path, default=Path("out") / "demo_jacobians",
-                    help="folder for results.json")
 args = parser.parse_args()
 comm = MPI.COMM_WORLD
-
-
-def say(*items) -> None:
-    if comm.rank == 0:
-        print(*items, flush=True)
-
+say = rank0_print(comm)
 
 # %% [markdown]
 # ## Assembly at a nonlinear state
+#
+# The Jacobian is part of the discretisation: each problem is assembled with its own
+# (`jacobian=` of `manufactured_problem`, as of `coupling.problem.SignoriniProblem`).
 
 # %%
 solution = square_contact()
 material = make_material("carstensen")
-problems = {kind: manufactured_problem(comm, solution, material, cells=args.cells,
-                                       jacobian=kind)
-            for kind in ("ufl", "handwritten")}
+problems = {
+    kind: manufactured_problem(comm, solution, material, cells=args.cells, jacobian=kind)
+    for kind in ("ufl", "handwritten")
+}
 forms = problems["ufl"].forms
 V = problems["ufl"].V
 state = fem.Function(V)
@@ -97,35 +98,53 @@ say(f"||A_ufl - A_handwritten||_F / ||A_ufl||_F = {difference:.2e}")
 
 # %%
 report = check_jacobian(problems["ufl"].domain, material)
-say(f"Taylor slopes of r1: {np.round(report['slope1'], 3).tolist()}, of r2: "
-    f"{np.round(report['slope2'], 3).tolist()}; passed: {report['passed']}")
+say(
+    f"Taylor slopes of r1: {np.round(report['slope1'], 3).tolist()}, of r2: "
+    f"{np.round(report['slope2'], 3).tolist()}; passed: {report['passed']}"
+)
 
 # %% [markdown]
 # ## The same iterates with either Jacobian
+#
+# Both problems are solved with the same (default) solver options.
 
 # %%
-results = {kind: problem.solve() for kind, problem in problems.items()}
+results = {kind: solve(problem, SolverOptions()) for kind, problem in problems.items()}
 a, b = results["ufl"], results["handwritten"]
 energies = [np.array([r.energy for r in res.history]) for res in (a, b)]
 same_length = len(energies[0]) == len(energies[1])
-energy_gap = float(np.max(np.abs(energies[0] - energies[1]) / np.abs(energies[0]))) \
-    if same_length else float("inf")
+energy_gap = (
+    float(np.max(np.abs(energies[0] - energies[1]) / np.abs(energies[0])))
+    if same_length
+    else float("inf")
+)
 u_gap = comm.allreduce(float(np.abs(a.u.x.array - b.u.x.array).max()), op=MPI.MAX)
 u_max = comm.allreduce(float(np.abs(a.u.x.array).max()), op=MPI.MAX)
-say(f"iterations: ufl {a.iterations}, handwritten {b.iterations}; C0: {a.C0:.15g} vs "
-    f"{b.C0:.15g}")
+say(
+    f"iterations: ufl {a.iterations}, handwritten {b.iterations}; C0: {a.C0:.15g} vs "
+    f"{b.C0:.15g}"
+)
 say(f"largest relative difference of J_h over the iterations: {energy_gap:.2e}")
-say(f"max |u_ufl - u_handwritten| / max |u| = {u_gap / u_max:.2e}; "
-    f"contact sets equal: {bool(np.array_equal(a.contact, b.contact))}")
+say(
+    f"max |u_ufl - u_handwritten| / max |u| = {u_gap / u_max:.2e}; "
+    f"contact sets equal: {bool(np.array_equal(a.contact, b.contact))}"
+)
 
 # %%
-if comm.rank == 0:
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "results.json").write_text(json.dumps(dict(
-        cells=args.cells, seconds=seconds, matrix_rel_diff=difference,
-        taylor_passed=report["passed"], slope2=report["slope2"],
+path = write_results(
+    comm,
+    args.out,
+    dict(
+        cells=args.cells,
+        seconds=seconds,
+        matrix_rel_diff=difference,
+        taylor_passed=report["passed"],
+        slope2=report["slope2"],
         iterations={"ufl": a.iterations, "handwritten": b.iterations},
-        C0={"ufl": a.C0, "handwritten": b.C0}, energy_rel_diff=energy_gap,
-        u_rel_diff=u_gap / u_max, same_contact=bool(np.array_equal(a.contact, b.contact))),
-        indent=2))
-say(f"numbers in {args.out / 'results.json'}")
+        C0={"ufl": a.C0, "handwritten": b.C0},
+        energy_rel_diff=energy_gap,
+        u_rel_diff=u_gap / u_max,
+        same_contact=bool(np.array_equal(a.contact, b.contact)),
+    ),
+)
+say(f"numbers in {path}")

@@ -18,33 +18,32 @@
 # solver (`ssn`) solves that system by CG preconditioned with the substructuring B
 # after its 5 PGPM start steps.
 #
-# Run: `python demos/demo_linear_transmission.py [--cells N]` (N: finest mesh).
+# Run: `python demos/demo_linear_transmission.py [--cells N] [--out DIR]` (N: finest mesh;
+# results.json goes to DIR, default out/demo_linear_transmission).
 
 # %%
-import argparse
-import json
-from pathlib import Path
-
 import numpy as np
 from mpi4py import MPI
 
-from coupling.manufactured import (ManufacturedSolution, exterior_field, manufactured_problem,
-                                   solution_errors)
+from common import demo_parser, rank0_print, write_results
+from coupling.manufactured import (
+    ManufacturedSolution,
+    exterior_field,
+    manufactured_problem,
+    solution_errors,
+)
+from coupling.options import SolverOptions
+from coupling.solvers import solve
 from fem_py.materials import make_material
 
-parser = argparse.ArgumentParser(description="Linear transmission problem, known solution.")
-parser.add_argument("--cells", type=int, default=128,
-                    help="cells per side of the finest mesh; the others have N/2, N/4")
-parser.add_argument("--out", type=Path, default=Path("out") / "demo_linear_transmission",
-                    help="folder for results.json")
-args = parser.parse_args()
+args = demo_parser(
+    "demo_linear_transmission",
+    "Linear transmission problem, known solution.",
+    cells=128,
+    cells_help="cells per side of the finest mesh; the others have N/2, N/4",
+).parse_args()
 comm = MPI.COMM_WORLD
-
-
-def say(*items) -> None:
-    if comm.rank == 0:
-        print(*items, flush=True)
-
+say = rank0_print(comm)
 
 # %% [markdown]
 # ## The exact solution
@@ -56,26 +55,42 @@ def say(*items) -> None:
 
 # %%
 solution = ManufacturedSolution(
-    shape="square", width=0.5, center=(0.0, 0.0), arcs=(),
+    shape="square",
+    width=0.5,
+    center=(0.0, 0.0),
+    arcs=(),
     u="0.5 + x + 2*y + sin(pi*x)*cos(pi*y) + x*y^2",
-    ue=exterior_field((0.03, -0.02)))
+    ue=exterior_field((0.03, -0.02)),
+)
 material = make_material("linear")
 say(f"u   = {solution.u}\nu_e = {solution.ue}")
 
 # %% [markdown]
 # ## Three meshes at fixed d/h = 4
+#
+# Each mesh is a new problem; the solver options (here the defaults) are the same.
 
 # %%
+options = SolverOptions()
 rows = []
 for cells in (args.cells // 4, args.cells // 2, args.cells):
     problem = manufactured_problem(comm, solution, material, cells=cells)
-    result = problem.solve()
+    result = solve(problem, options)
     errors = solution_errors(problem, solution, result)
-    rows.append(dict(cells=cells, h=0.5 / cells, converged=bool(result.converged),
-                     iterations=int(result.iterations), **errors))
+    rows.append(
+        dict(
+            cells=cells,
+            h=0.5 / cells,
+            converged=bool(result.converged),
+            iterations=int(result.iterations),
+            **errors,
+        )
+    )
 
-say(f"\n{'h':>9} {'its':>5} {'|u-u_h|_1':>10} {'rate':>5} {'max|u-u_h|':>10} {'rate':>5} "
-    f"{'max|ue err|':>11} {'rate':>5}")
+say(
+    f"\n{'h':>9} {'its':>5} {'|u-u_h|_1':>10} {'rate':>5} {'max|u-u_h|':>10} {'rate':>5} "
+    f"{'max|ue err|':>11} {'rate':>5}"
+)
 rates = {"energy": [], "nodal_u": [], "ue_exterior": []}
 for i, r in enumerate(rows):
     line = f"{r['h']:9.3e} {r['iterations']:5d}"
@@ -88,7 +103,5 @@ for i, r in enumerate(rows):
 say("expected rates: 1 (energy norm), 2 (nodal values), 2 (u_e at exterior points)")
 
 # %%
-if comm.rank == 0:
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "results.json").write_text(json.dumps(dict(rows=rows, rates=rates), indent=2))
-say(f"numbers in {args.out / 'results.json'}")
+path = write_results(comm, args.out, dict(rows=rows, rates=rates))
+say(f"numbers in {path}")

@@ -14,32 +14,29 @@
 # the errors and the computed contact set of each arc next to the exact one, and
 # writes the figures.
 #
-# Run: `python demos/demo_lshape.py [--cells N]` (N cells per side of the square).
+# Run: `python demos/demo_lshape.py [--cells N] [--out DIR]` (N cells per side of the
+# square; the figures, fields and results.json go to DIR, default out/demo_lshape).
 
 # %%
-import argparse
-import json
-from pathlib import Path
-
 from mpi4py import MPI
 
+from common import demo_parser, rank0_print, write_results
+from coupling.io.atomic import prepare_output_dir
+from coupling.io.outputs import write_outputs
 from coupling.manufactured import lshape_contact, manufactured_problem, solution_errors
-from coupling.outputs import prepare_output_dir, write_outputs
+from coupling.options import SolverOptions
+from coupling.solvers import solve
 from fem_py.materials import make_material
 
-parser = argparse.ArgumentParser(description="L-shaped domain with two Signorini arcs.")
-parser.add_argument("--cells", type=int, default=128,
-                    help="cells per side of the bounding square (h = 0.5/cells; default 128)")
-parser.add_argument("--out", type=Path, default=Path("out") / "demo_lshape",
-                    help="folder for the plots, fields and results.json")
-args = parser.parse_args()
+args = demo_parser(
+    "demo_lshape",
+    "L-shaped domain with two Signorini arcs.",
+    cells=128,
+    cells_help="cells per side of the bounding square (h = 0.5/cells; default 128)",
+    out_help="folder for the plots, fields and results.json",
+).parse_args()
 comm = MPI.COMM_WORLD
-
-
-def say(*items) -> None:
-    if comm.rank == 0:
-        print(*items, flush=True)
-
+say = rank0_print(comm)
 
 # %% [markdown]
 # ## Solve
@@ -54,15 +51,20 @@ material = make_material("carstensen")
 for k, arc in enumerate(solution.arcs):
     say(f"Signorini arc {k}: {arc.start} -> {arc.end}, exact gap {arc.gap}")
 problem = manufactured_problem(comm, solution, material, cells=args.cells)
-result = problem.solve()
+options = SolverOptions()  # the defaults: ssn with the substructuring B
+result = solve(problem, options)
 errors = solution_errors(problem, solution, result)
-say(f"\nh = {0.5 / args.cells:.4g}, {problem.V.dofmap.index_map.size_global} dofs, "
+say(
+    f"\nh = {0.5 / args.cells:.4g}, {problem.V.dofmap.index_map.size_global} dofs, "
     f"{problem.n_signorini} Signorini nodes: "
     f"{'converged' if result.converged else 'NOT converged'} after {result.iterations} "
-    f"iterations of {problem.options.method}")
-say(f"|u - u_h|_1 = {errors['energy']:.3e}   max |u - u_h| = {errors['nodal_u']:.3e}   "
+    f"iterations of {options.method}"
+)
+say(
+    f"|u - u_h|_1 = {errors['energy']:.3e}   max |u - u_h| = {errors['nodal_u']:.3e}   "
     f"max |gap error| = {errors['gap']:.3e}   max |u_e error| outside = "
-    f"{errors['ue_exterior']:.3e}")
+    f"{errors['ue_exterior']:.3e}"
+)
 
 # %% [markdown]
 # ## The contact set of each arc
@@ -80,21 +82,45 @@ arcs = []
 for k in range(len(solution.arcs)):
     on = boundary.arc_of_signorini == k
     x_c, x_e = nodes[on & result.contact, 0], nodes[on & exact_contact, 0]
-    arcs.append(dict(arc=k, nodes=int(on.sum()), contact=int((on & result.contact).sum()),
-                     computed=[float(x_c.min()), float(x_c.max())],
-                     exact=[float(x_e.min()), float(x_e.max())]))
-    say(f"arc {k}: {arcs[-1]['contact']:3d} of {arcs[-1]['nodes']:3d} nodes in contact, "
+    arcs.append(
+        dict(
+            arc=k,
+            nodes=int(on.sum()),
+            contact=int((on & result.contact).sum()),
+            computed=[float(x_c.min()), float(x_c.max())],
+            exact=[float(x_e.min()), float(x_e.max())],
+        )
+    )
+    say(
+        f"arc {k}: {arcs[-1]['contact']:3d} of {arcs[-1]['nodes']:3d} nodes in contact, "
         f"x in [{x_c.min():+.4f}, {x_c.max():+.4f}]  (exact nodes: "
-        f"[{x_e.min():+.4f}, {x_e.max():+.4f}])")
+        f"[{x_e.min():+.4f}, {x_e.max():+.4f}])"
+    )
 say(f"nodes in the wrong state away from the switch points: {errors['contact_mismatch']}")
 
 # %%
 out = args.out
 prepare_output_dir(comm, out, force=True)
-files = write_outputs(comm, out, problem, result)
-if comm.rank == 0:
-    (out / "results.json").write_text(json.dumps(dict(
-        cells=args.cells, converged=bool(result.converged), iterations=int(result.iterations),
-        errors=errors, arcs=arcs), indent=2))
+files = write_outputs(
+    comm,
+    out,
+    problem,
+    result,
+    tol=options.tol,
+    timings={**problem.timings, **result.timings},
+    xdmf=True,
+    plots=True,
+)
+results = write_results(
+    comm,
+    out,
+    dict(
+        cells=args.cells,
+        converged=bool(result.converged),
+        iterations=int(result.iterations),
+        errors=errors,
+        arcs=arcs,
+    ),
+)
 say(f"\nplots:  {', '.join(str(out / f) for f in files if f.endswith('.png'))}")
-say(f"fields: {out / 'fields.npz'}, numbers: {out / 'results.json'}")
+say(f"fields: {out / 'fields.npz'}, numbers: {results}")

@@ -1,7 +1,8 @@
 # %% [markdown]
 # # An MPI run
 #
-# Run with `mpirun -n 2 python demos/demo_mpi.py [--cells N]`.
+# Run with `mpirun -n 2 python demos/demo_mpi.py [--cells N] [--out DIR]` (results.json
+# goes to DIR, default out/demo_mpi).
 #
 # Everything in the Python API takes its communicator from the mesh: here the mesh is
 # built on MPI.COMM_WORLD, so DOLFINx distributes the cells and the P1 dofs over the
@@ -17,38 +18,35 @@
 # compares the two solutions.
 
 # %%
-import argparse
-import json
 import time
-from pathlib import Path
 
 import numpy as np
 from mpi4py import MPI
 
+from common import demo_parser, rank0_print, write_results
+from coupling.io.outputs import gather_p1
 from coupling.manufactured import manufactured_problem, solution_errors, square_contact
-from coupling.outputs import gather_p1
+from coupling.options import SolverOptions
+from coupling.solvers import solve
 from fem_py.materials import make_material
 
-parser = argparse.ArgumentParser(description="The contact problem on several MPI ranks.")
-parser.add_argument("--cells", type=int, default=128,
-                    help="cells per side of the square (h = 0.5/cells; default 128)")
-parser.add_argument("--out", type=Path, default=Path("out") / "demo_mpi",
-                    help="folder for results.json")
-args = parser.parse_args()
+args = demo_parser(
+    "demo_mpi",
+    "The contact problem on several MPI ranks.",
+    cells=128,
+    cells_help="cells per side of the square (h = 0.5/cells; default 128)",
+).parse_args()
 world = MPI.COMM_WORLD
+say = rank0_print(world)
 
 
-def say(*items) -> None:
-    if world.rank == 0:
-        print(*items, flush=True)
-
-
-def solve(comm: MPI.Comm):
-    """Solve on ``comm``; return (problem, result, seconds)."""
+def solve_on(comm: MPI.Comm):
+    """Assemble and solve on ``comm``; return (problem, result, seconds)."""
     tic = time.perf_counter()
-    problem = manufactured_problem(comm, square_contact(), make_material("carstensen"),
-                                   cells=args.cells)
-    result = problem.solve()
+    problem = manufactured_problem(
+        comm, square_contact(), make_material("carstensen"), cells=args.cells
+    )
+    result = solve(problem, SolverOptions())
     return problem, result, comm.allreduce(time.perf_counter() - tic, op=MPI.MAX)
 
 
@@ -62,13 +60,15 @@ def sorted_by_coordinates(x: np.ndarray, u: np.ndarray) -> np.ndarray:
 # ## The distributed solve
 
 # %%
-problem, result, seconds = solve(world)
+problem, result, seconds = solve_on(world)
 owned = world.gather(problem.V.dofmap.index_map.size_local, root=0)
 errors = solution_errors(problem, square_contact(), result)
 say(f"{world.size} ranks own {owned} of {problem.V.dofmap.index_map.size_global} dofs")
-say(f"{'converged' if result.converged else 'NOT converged'} after {result.iterations} "
+say(
+    f"{'converged' if result.converged else 'NOT converged'} after {result.iterations} "
     f"iterations in {seconds:.1f} s; |u - u_h|_1 = {errors['energy']:.3e}, "
-    f"contact nodes {np.count_nonzero(result.contact)} of {problem.n_signorini}")
+    f"contact nodes {np.count_nonzero(result.contact)} of {problem.n_signorini}"
+)
 gathered = gather_p1(result.u)  # collective: every rank sends its owned dofs to rank 0
 
 # %% [markdown]
@@ -78,20 +78,34 @@ gathered = gather_p1(result.u)  # collective: every rank sends its owned dofs to
 
 # %%
 if world.rank == 0:
-    serial, serial_result, serial_seconds = solve(MPI.COMM_SELF)
+    serial, serial_result, serial_seconds = solve_on(MPI.COMM_SELF)
     x_par, u_par, _ = gathered
     x_ser, u_ser, _ = gather_p1(serial_result.u)
-    u_diff = float(np.abs(sorted_by_coordinates(x_par, u_par)
-                          - sorted_by_coordinates(x_ser, u_ser)).max() / np.abs(u_ser).max())
-    phi_diff = float(np.abs(result.phi - serial_result.phi).max()
-                     / max(np.abs(serial_result.phi).max(), 1e-300))
+    u_diff = float(
+        np.abs(sorted_by_coordinates(x_par, u_par) - sorted_by_coordinates(x_ser, u_ser)).max()
+        / np.abs(u_ser).max()
+    )
+    phi_diff = float(
+        np.abs(result.phi - serial_result.phi).max() / max(np.abs(serial_result.phi).max(), 1e-300)
+    )
     say(f"serial: {serial_result.iterations} iterations in {serial_seconds:.1f} s")
     say(f"max |u_parallel - u_serial| / max |u| = {u_diff:.1e}, same for phi: {phi_diff:.1e}")
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "results.json").write_text(json.dumps(dict(
-        ranks=world.size, owned=owned, cells=args.cells, converged=bool(result.converged),
-        iterations=int(result.iterations), serial_iterations=int(serial_result.iterations),
-        u_rel_diff=u_diff, phi_rel_diff=phi_diff, errors=errors,
-        seconds=seconds, serial_seconds=serial_seconds), indent=2))
-    say(f"numbers in {args.out / 'results.json'}")
+    path = write_results(
+        world,
+        args.out,
+        dict(
+            ranks=world.size,
+            owned=owned,
+            cells=args.cells,
+            converged=bool(result.converged),
+            iterations=int(result.iterations),
+            serial_iterations=int(serial_result.iterations),
+            u_rel_diff=u_diff,
+            phi_rel_diff=phi_diff,
+            errors=errors,
+            seconds=seconds,
+            serial_seconds=serial_seconds,
+        ),
+    )
+    say(f"numbers in {path}")
 world.barrier()

@@ -22,38 +22,37 @@
 # default solver is our semismooth Newton method (`method = "ssn"`): 5 steps of the
 # paper's preconditioned projection-gradient method (Algorithm 3.1), then Newton steps
 # whose linear systems are solved by CG preconditioned with the substructuring
-# preconditioner of section 4 (subdomains of size d = 4h here). Pass `method="pgpm"`
-# to `manufactured_problem` for the paper's method alone (about 190 iterations here).
+# preconditioner of section 4 (subdomains of size d = 4h here). Set
+# `options = SolverOptions(method="pgpm")` below for the paper's method alone (about 190
+# iterations here). The problem is assembled once (`manufactured_problem` returns a
+# `coupling.problem.SignoriniProblem`); `coupling.solvers.solve(problem, options)` solves it.
 #
-# Run it with `make demo` or `python demos/demo_signorini_square.py [--cells N]`.
+# Run it with `make demo` or `python demos/demo_signorini_square.py [--cells N] [--out DIR]`
+# (the figures, fields and results.json go to DIR, default out/demo_signorini_square).
 
 # %%
-import argparse
-import json
 import time
-from pathlib import Path
 
 import numpy as np
 from mpi4py import MPI
 
+from common import demo_parser, rank0_print, write_results
+from coupling.io.atomic import prepare_output_dir
+from coupling.io.outputs import write_outputs
 from coupling.manufactured import manufactured_problem, solution_errors, square_contact
-from coupling.outputs import prepare_output_dir, write_outputs
+from coupling.options import SolverOptions
+from coupling.solvers import solve
 from fem_py.materials import make_material
 
-parser = argparse.ArgumentParser(description="Nonlinear Signorini contact on a square "
-                                 "(manufactured solution with a known contact set).")
-parser.add_argument("--cells", type=int, default=128,
-                    help="cells per side of the finest mesh (h = 0.5/cells; default 128)")
-parser.add_argument("--out", type=Path, default=Path("out") / "demo_signorini_square",
-                    help="folder for the plots, fields and results.json")
-args = parser.parse_args()
+args = demo_parser(
+    "demo_signorini_square",
+    "Nonlinear Signorini contact on a square (manufactured solution with a known contact set).",
+    cells=128,
+    cells_help="cells per side of the finest mesh (h = 0.5/cells; default 128)",
+    out_help="folder for the plots, fields and results.json",
+).parse_args()
 comm = MPI.COMM_WORLD
-
-
-def say(*items) -> None:
-    if comm.rank == 0:
-        print(*items, flush=True)
-
+say = rank0_print(comm)
 
 # %% [markdown]
 # ## The material and the exact solution
@@ -65,12 +64,16 @@ def say(*items) -> None:
 # %%
 material = make_material("carstensen")
 solution = square_contact()
-say(f"material rho(t) = {material.rho_sym}: alpha = {material.alpha:.3f}, "
-    f"beta = {material.beta:.3f}")
+say(
+    f"material rho(t) = {material.rho_sym}: alpha = {material.alpha:.3f}, "
+    f"beta = {material.beta:.3f}"
+)
 say(f"exact u   = {solution.u}")
 say(f"exact u_e = {solution.ue}")
-say(f"Signorini arc {solution.arcs[0].start} -> {solution.arcs[0].end}: "
-    f"exact gap {solution.arcs[0].gap}, contact exactly where x < 0")
+say(
+    f"Signorini arc {solution.arcs[0].start} -> {solution.arcs[0].end}: "
+    f"exact gap {solution.arcs[0].gap}, contact exactly where x < 0"
+)
 
 # %% [markdown]
 # ## Two mesh sizes at fixed d/h = 4
@@ -81,41 +84,63 @@ say(f"Signorini arc {solution.arcs[0].start} -> {solution.arcs[0].end}: "
 # points where the exact contact set switches.
 
 # %%
+options = SolverOptions()  # the defaults: ssn, substructuring B, tol = 1e-8
 rows = []
 for cells in (args.cells // 2, args.cells):
     tic = time.perf_counter()
     problem = manufactured_problem(comm, solution, material, cells=cells)
-    result = problem.solve()
+    result = solve(problem, options)
     errors = solution_errors(problem, solution, result)
-    rows.append(dict(cells=cells, h=0.5 / cells, dofs=problem.V.dofmap.index_map.size_global,
-                     converged=bool(result.converged), iterations=int(result.iterations),
-                     contact_nodes=int(np.count_nonzero(result.contact)),
-                     signorini_nodes=problem.n_signorini, seconds=time.perf_counter() - tic,
-                     **errors))
+    rows.append(
+        dict(
+            cells=cells,
+            h=0.5 / cells,
+            dofs=problem.V.dofmap.index_map.size_global,
+            converged=bool(result.converged),
+            iterations=int(result.iterations),
+            contact_nodes=int(np.count_nonzero(result.contact)),
+            signorini_nodes=problem.n_signorini,
+            seconds=time.perf_counter() - tic,
+            **errors,
+        )
+    )
 
-say(f"\n{'h':>9} {'dofs':>7} {'its':>5} {'|u-u_h|_1':>10} {'max|u-u_h|':>10} "
-    f"{'max|gap err|':>12} {'max|ue err|':>11} {'contact':>9} {'wrong':>5} {'time':>6}")
+say(
+    f"\n{'h':>9} {'dofs':>7} {'its':>5} {'|u-u_h|_1':>10} {'max|u-u_h|':>10} "
+    f"{'max|gap err|':>12} {'max|ue err|':>11} {'contact':>9} {'wrong':>5} {'time':>6}"
+)
 for r in rows:
-    say(f"{r['h']:9.3e} {r['dofs']:7d} {r['iterations']:5d} {r['energy']:10.3e} "
+    say(
+        f"{r['h']:9.3e} {r['dofs']:7d} {r['iterations']:5d} {r['energy']:10.3e} "
         f"{r['nodal_u']:10.3e} {r['gap']:12.3e} {r['ue_exterior']:11.3e} "
         f"{r['contact_nodes']:4d}/{r['signorini_nodes']:<4d} {r['contact_mismatch']:5d} "
-        f"{r['seconds']:5.1f}s")
+        f"{r['seconds']:5.1f}s"
+    )
 rate = np.log2(rows[0]["energy"] / rows[1]["energy"])
 say(f"energy-norm convergence rate: {rate:.2f} (theory: 1)")
 
 # %% [markdown]
 # ## Outputs of the finer run
 #
-# `write_outputs` writes what `fembem solve` writes: summary.json, fields.npz,
-# solution.xdmf (open it in ParaView) and the PNG figures.
+# `write_outputs` writes what `fembem solve` writes: summary.json (with the seconds of
+# every stage of the assembly and of the solve), fields.npz, solution.xdmf (open it in
+# ParaView) and the PNG figures.
 
 # %%
 out = args.out
 prepare_output_dir(comm, out, force=True)
-files = write_outputs(comm, out, problem, result)
-if comm.rank == 0:
-    (out / "results.json").write_text(json.dumps(dict(rows=rows, energy_rate=rate), indent=2))
+files = write_outputs(
+    comm,
+    out,
+    problem,
+    result,
+    tol=options.tol,
+    timings={**problem.timings, **result.timings},
+    xdmf=True,
+    plots=True,
+)
+results = write_results(comm, out, dict(rows=rows, energy_rate=rate))
 say(f"\nplots:  {', '.join(str(out / f) for f in files if f.endswith('.png'))}")
 say(f"fields: {out / 'fields.npz'} (u on the mesh; gap, u_e, du_e/dn, contact set on Gamma)")
 say(f"        {out / 'solution.xdmf'} (u_h and the subdomains, for ParaView)")
-say(f"errors: {out / 'results.json'}")
+say(f"errors: {results}")

@@ -12,26 +12,40 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def run_mpi(nprocs: int, *args: str, timeout: float = 300, cwd: Path | None = None,
-            check: bool = True) -> subprocess.CompletedProcess:
+def run_mpi(
+    nprocs: int, *args: str, timeout: float = 300, cwd: Path | None = None, check: bool = True
+) -> subprocess.CompletedProcess:
     """Run ``python args...`` under ``mpirun -n nprocs`` with this interpreter."""
     mpirun = shutil.which("mpirun")
     if mpirun is None:
         pytest.fail("mpirun not found: `make setup` installs openmpi-bin")
-    cmd = [mpirun, "--allow-run-as-root", "--oversubscribe", "-n", str(nprocs),
-           sys.executable, *args]
+    cmd = [
+        mpirun,
+        "--allow-run-as-root",
+        "--oversubscribe",
+        "-n",
+        str(nprocs),
+        sys.executable,
+        *args,
+    ]
     env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
-    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout,
-                          cwd=cwd or ROOT, env=env)
+    proc = subprocess.run(
+        cmd, capture_output=True, text=True, timeout=timeout, cwd=cwd or ROOT, env=env
+    )
     if check and proc.returncode != 0:
-        pytest.fail(f"{' '.join(cmd)} exited {proc.returncode}\nstdout:\n{proc.stdout}\n"
-                    f"stderr:\n{proc.stderr[-4000:]}")
+        pytest.fail(
+            f"{' '.join(cmd)} exited {proc.returncode}\nstdout:\n{proc.stdout}\n"
+            f"stderr:\n{proc.stderr[-4000:]}"
+        )
     return proc
 
 
-def run_cli(*args: str, timeout: float = 300, cwd: Path | None = None) -> subprocess.CompletedProcess:
+def run_cli(
+    *args: str, timeout: float = 300, cwd: Path | None = None
+) -> subprocess.CompletedProcess:
     """Run ``fembem args...`` (the installed console script) and capture its output."""
     exe = Path(sys.executable).parent / "fembem"
-    cmd = [str(exe)] if exe.exists() else [sys.executable, "-m", "coupling.cli"]
-    return subprocess.run([*cmd, *args], capture_output=True, text=True, timeout=timeout,
-                          cwd=cwd or ROOT)
+    cmd = [str(exe)] if exe.exists() else [sys.executable, "-m", "coupling.app.cli"]
+    return subprocess.run(
+        [*cmd, *args], capture_output=True, text=True, timeout=timeout, cwd=cwd or ROOT
+    )

@@ -112,8 +112,12 @@ def test_potential_near_gamma(flux):
         normal = np.array([t[1], -t[0]])
         bisector = a / np.linalg.norm(a)
         for d in (1e-1, 1e-3, 1e-6, 1e-9):
-            Z = np.array([(a + b) / 2 + d * normal, a + d * bisector, a + 0.1 * (b - a) + d * normal])
-            errors[n, d] = np.abs(bem_cpp.exterior_potential(X, v, psi, Z, a=A, flux=flux) - u_exact(Z)).max()
+            Z = np.array(
+                [(a + b) / 2 + d * normal, a + d * bisector, a + 0.1 * (b - a) + d * normal]
+            )
+            errors[n, d] = np.abs(
+                bem_cpp.exterior_potential(X, v, psi, Z, a=A, flux=flux) - u_exact(Z)
+            ).max()
     for n in (64, 256):
         assert max(errors[n, d] for d in (1e-3, 1e-6, 1e-9)) <= 2 * errors[n, 1e-1]
     h = [mesh_size(circle(n)) for n in (64, 256)]

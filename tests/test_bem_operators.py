@@ -69,7 +69,8 @@ def test_hypersingular_circle_values_converge():
         theta = 2 * np.pi * np.arange(n) / n
         W, M = bem_cpp.hypersingular(X), bem_cpp.mass(X, "p1")
         err = max(
-            abs(f(m * theta) @ W @ f(m * theta) / (f(m * theta) @ M @ f(m * theta)) - m / R) / max(m / R, 1)
+            abs(f(m * theta) @ W @ f(m * theta) / (f(m * theta) @ M @ f(m * theta)) - m / R)
+            / max(m / R, 1)
             for m, f in MODES
         )
         errors.append(err)
@@ -149,4 +150,6 @@ def test_hypersingular_is_maue():
     D[np.arange(n), np.arange(n)] = -1 / h
     D[np.arange(n), (np.arange(n) + 1) % n] = 1 / h
     W_ref = D.T @ bem_cpp.single_layer(X, "p0") @ D
-    np.testing.assert_allclose(bem_cpp.hypersingular(X), W_ref, rtol=0, atol=1e-13 * np.abs(W_ref).max())
+    np.testing.assert_allclose(
+        bem_cpp.hypersingular(X), W_ref, rtol=0, atol=1e-13 * np.abs(W_ref).max()
+    )

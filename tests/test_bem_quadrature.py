@@ -165,7 +165,16 @@ def pair_kind(i, j, n):
 # Interior angles 71.6, 180 (exactly collinear), 178.65, 21.3 (sharp), 310.7 (reflex),
 # 34.9, 99.1, 183.8 degrees; panel lengths 0.13 ... 0.52.
 OCTAGON = np.array(
-    [[0, 0], [0.25, 0], [0.5, 0], [0.62, 0.004], [0.3, 0.12], [0.62, 0.3], [0.1, 0.35], [0.04, 0.12]]
+    [
+        [0, 0],
+        [0.25, 0],
+        [0.5, 0],
+        [0.62, 0.004],
+        [0.3, 0.12],
+        [0.62, 0.3],
+        [0.1, 0.35],
+        [0.04, 0.12],
+    ]
 )
 # Thin quadrilateral: two panels of length 1e-4 far apart (tensor Gauss with 2 points),
 # adjacent panels with length ratio 5800, long sides 1.7e-4 apart (subdivided near field).

@@ -28,7 +28,8 @@ def test_circle_values_converge(flux):
         theta = 2 * np.pi * np.arange(n) / n
         S, M = bem_cpp.steklov_poincare(X, flux), bem_cpp.mass(X, "p1")
         err = max(
-            abs(f(m * theta) @ S @ f(m * theta) / (f(m * theta) @ M @ f(m * theta)) - s_exact(m)) / s_exact(m)
+            abs(f(m * theta) @ S @ f(m * theta) / (f(m * theta) @ M @ f(m * theta)) - s_exact(m))
+            / s_exact(m)
             for m, f in MODES
         )
         errors.append(err)
@@ -58,7 +59,9 @@ def test_constant_is_not_in_the_kernel():
     X = circle(256)
     one = np.ones(len(X))
     S, M = bem_cpp.steklov_poincare(X), bem_cpp.mass(X)
-    assert one @ S @ one / (one @ M @ one) == pytest.approx(s_exact(0), rel=interpolation_bound(mesh_size(X)))
+    assert one @ S @ one / (one @ M @ one) == pytest.approx(
+        s_exact(0), rel=interpolation_bound(mesh_size(X))
+    )
 
 
 def test_timings_are_reported():

@@ -16,12 +16,35 @@ SCRIPT = str(ROOT / "bench" / "strong_scaling.py")
 @pytest.mark.mpi
 def test_strong_scaling_small_run(tmp_path):
     out = tmp_path / "scaling.md"
-    proc = subprocess.run([sys.executable, SCRIPT, "--cells", "32", "--ranks", "1", "2", "--method", "pgpm",
-                           "--repeat", "2", "--output", str(out)], capture_output=True, text=True, timeout=300,
-                          cwd=ROOT, env=dict(os.environ))  # not MPI singleton variables
+    proc = subprocess.run(
+        [
+            sys.executable,
+            SCRIPT,
+            "--cells",
+            "32",
+            "--ranks",
+            "1",
+            "2",
+            "--method",
+            "pgpm",
+            "--repeat",
+            "2",
+            "--output",
+            str(out),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=ROOT,
+        env=dict(os.environ),
+    )  # not MPI singleton variables
     assert proc.returncode == 0, proc.stderr
     ceilings, scaling = out.read_text().split("# Strong scaling")
-    rows = [line for line in scaling.splitlines() if line.startswith("| 1 |") or line.startswith("| 2 |")]
+    rows = [
+        line
+        for line in scaling.splitlines()
+        if line.startswith("| 1 |") or line.startswith("| 2 |")
+    ]
     assert len(rows) == 2
     serial, parallel = (row.split("|") for row in rows)
     assert serial[2].strip() == "SubstructuringPreconditioner"
@@ -33,7 +56,11 @@ def test_strong_scaling_small_run(tmp_path):
     every = out.read_text().split("totals of every run (s): ")[1]
     assert every.count(",") == 2 and "P = 1:" in every and "P = 2:" in every  # two totals each
     # the machine's ceilings, measured in the same run: a row per rank count, P = 1 the reference
-    ceiling = [line.split("|") for line in ceilings.splitlines() if line.startswith("| 1 |") or line.startswith("| 2 |")]
+    ceiling = [
+        line.split("|")
+        for line in ceilings.splitlines()
+        if line.startswith("| 1 |") or line.startswith("| 2 |")
+    ]
     assert len(ceiling) == 2 and "(1.00x)" in ceiling[0][2] and "GB/s" in ceiling[1][3]
 
 

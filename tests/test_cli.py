@@ -28,7 +28,7 @@ import numpy as np
 import pytest
 
 from conftest import ROOT, run_cli, run_mpi
-from coupling.config import DEFAULTS
+from coupling.options import DEFAULTS
 
 H = 1 / 32
 FEMBEM = str(Path(sys.executable).parent / "fembem")
@@ -99,16 +99,35 @@ def run(config, tmp_path_factory):
 def test_solve_writes_the_documented_outputs(run):
     out, proc = run
     summary = json.loads((out / "summary.json").read_text())
-    for key in ("converged", "reason", "iterations", "energy", "dofs", "boundary_dofs",
-                "signorini_dofs", "contact_nodes", "tau", "C0_estimate", "timings", "history"):
+    for key in (
+        "converged",
+        "reason",
+        "iterations",
+        "energy",
+        "dofs",
+        "boundary_dofs",
+        "signorini_dofs",
+        "contact_nodes",
+        "tau",
+        "C0_estimate",
+        "timings",
+        "history",
+    ):
         assert key in summary, key
     n = round(0.5 / H)
     assert summary["converged"] and summary["dofs"] == (n + 1) ** 2
     assert summary["boundary_dofs"] == 4 * n and summary["signorini_dofs"] == n - 1
     assert len(summary["history"]) == summary["iterations"]
     assert summary["config"]["material"]["rho"] == "carstensen"
-    for name in ("fields.npz", "solution.xdmf", "solution.h5", "u.png", "boundary.png",
-                 "whole_plane.png", "history.png"):
+    for name in (
+        "fields.npz",
+        "solution.xdmf",
+        "solution.h5",
+        "u.png",
+        "boundary.png",
+        "whole_plane.png",
+        "history.png",
+    ):
         assert (out / name).is_file(), name
         assert name in summary["files"]
     for name in ("u.png", "boundary.png", "whole_plane.png", "history.png"):
@@ -135,8 +154,9 @@ def test_solve_writes_the_documented_outputs(run):
     assert np.all(f["phi"] >= 0) and np.all(f["phi"][~f["signorini"]] == 0)
     np.testing.assert_array_equal(f["active"], f["signorini"] & (f["phi"] == 0))
     # u_e = u + phi - u0 on Gamma, and boundary_u is u at the boundary nodes
-    np.testing.assert_allclose(f["ue"], f["boundary_u"] + f["phi"] - exact(f"{U} - ({UE})", nodes),
-                               atol=1e-13)
+    np.testing.assert_allclose(
+        f["ue"], f["boundary_u"] + f["phi"] - exact(f"{U} - ({UE})", nodes), atol=1e-13
+    )
     index = {tuple(p): i for i, p in enumerate(np.round(f["x"], 12))}
     at_nodes = [index[tuple(p)] for p in np.round(nodes, 12)]
     np.testing.assert_array_equal(f["u"][at_nodes], f["boundary_u"])
@@ -167,22 +187,35 @@ def test_exterior_rejects_bad_points_and_missing_runs(run, tmp_path):
     inside = tmp_path / "inside.csv"
     inside.write_text("0.6,0.0\n0.1,0.1\n")
     assert_bad_input(run_cli("exterior", str(out), "--points", str(inside)), "--points")
-    assert_bad_input(run_cli("exterior", str(out), "--points", str(tmp_path / "no.csv")),
-                     "--points", "not found")
+    assert_bad_input(
+        run_cli("exterior", str(out), "--points", str(tmp_path / "no.csv")), "--points", "not found"
+    )
     bad = tmp_path / "bad.csv"
     bad.write_text("0.6;0.0\n")
     assert_bad_input(run_cli("exterior", str(out), "--points", str(bad)), "two numbers x,y")
-    assert_bad_input(run_cli("exterior", str(tmp_path), "--points", str(inside)),
-                     "fields.npz", "not found")
+    assert_bad_input(
+        run_cli("exterior", str(tmp_path), "--points", str(inside)), "fields.npz", "not found"
+    )
 
 
 def test_existing_folder_refused_and_force_leaves_no_stale_files(run, config, tmp_path):
     out = tmp_path / "out"
     shutil.copytree(run[0], out)
     assert_bad_input(run_cli("solve", str(config), "--out", str(out)), "not empty", "--force")
-    proc = run_cli("solve", str(config), "--out", str(out), "--force", "--quiet",
-                   "--set", "output.plots=false", "--set", "output.xdmf=false",
-                   "--set", "geometry.h=0.0625")
+    proc = run_cli(
+        "solve",
+        str(config),
+        "--out",
+        str(out),
+        "--force",
+        "--quiet",
+        "--set",
+        "output.plots=false",
+        "--set",
+        "output.xdmf=false",
+        "--set",
+        "geometry.h=0.0625",
+    )
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout == ""  # --quiet
     assert sorted(p.name for p in out.iterdir()) == ["fields.npz", "summary.json"]
@@ -194,8 +227,19 @@ def test_empty_configuration_solves_to_zero(tmp_path):
     path = tmp_path / "empty.toml"
     path.write_text("")
     out = tmp_path / "out"
-    proc = run_cli("solve", str(path), "--out", str(out), "--quiet", "--set", "geometry.h=0.0625",
-                   "--set", "output.plots=false", "--set", "output.xdmf=false")
+    proc = run_cli(
+        "solve",
+        str(path),
+        "--out",
+        str(out),
+        "--quiet",
+        "--set",
+        "geometry.h=0.0625",
+        "--set",
+        "output.plots=false",
+        "--set",
+        "output.xdmf=false",
+    )
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert json.loads((out / "summary.json").read_text())["converged"]
     assert not np.load(out / "fields.npz")["u"].any()
@@ -203,9 +247,19 @@ def test_empty_configuration_solves_to_zero(tmp_path):
 
 def test_no_convergence_writes_outputs_and_exits_3(config, tmp_path):
     out = tmp_path / "out"
-    proc = run_cli("solve", str(config), "--out", str(out), "--quiet",
-                   "--set", "solver.max_iterations=3", "--set", "output.plots=false",
-                   "--set", "output.xdmf=false")
+    proc = run_cli(
+        "solve",
+        str(config),
+        "--out",
+        str(out),
+        "--quiet",
+        "--set",
+        "solver.max_iterations=3",
+        "--set",
+        "output.plots=false",
+        "--set",
+        "output.xdmf=false",
+    )
     assert proc.returncode == 3, proc.stderr
     summary = json.loads((out / "summary.json").read_text())
     assert summary["converged"] is False and summary["iterations"] == 3
@@ -218,13 +272,19 @@ BAD_INPUTS = [
     # (TOML text, --set overrides, what the one-line message must name)
     ("[mesh]\nh = 0.1\n", [], ["unknown section [mesh]"]),
     ("", ["geometry.hh=0.1"], ["unknown key geometry.hh"]),
-    ("[geometry]\nh = \"small\"\n", [], ["geometry.h must be a finite number"]),
+    ('[geometry]\nh = "small"\n', [], ["geometry.h must be a finite number"]),
     ("", ["geometry.h=0"], ["geometry.h must be positive"]),
     ("", ["geometry.h=0.05", "geometry.subdomain_size=0.06"], ["geometry.subdomain_size"]),
-    ("", ["geometry.signorini=[[[0.0, 0.0], [0.25, -0.25]]]"],
-     ["geometry.signorini", "not on the boundary"]),
-    ('[geometry]\nshape = "polygon"\nvertices = [[0, 0], [0, 0.5], [0.5, 0]]\n', [],
-     ["geometry.vertices", "clockwise"]),
+    (
+        "",
+        ["geometry.signorini=[[[0.0, 0.0], [0.25, -0.25]]]"],
+        ["geometry.signorini", "not on the boundary"],
+    ),
+    (
+        '[geometry]\nshape = "polygon"\nvertices = [[0, 0], [0, 0.5], [0.5, 0]]\n',
+        [],
+        ["geometry.vertices", "clockwise"],
+    ),
     ("", ["geometry.width=0.8"], ["geometry.allow_large", "diam(Omega)"]),
     ("", ["data.f=sinn(x)"], ["data.f", "unknown function 'sinn'"]),
     ("", ["data.t0=nz*x"], ["data.t0", "unknown name 'nz'"]),
@@ -234,8 +294,11 @@ BAD_INPUTS = [
 ]
 
 
-@pytest.mark.parametrize("toml, overrides, fragments", BAD_INPUTS,
-                         ids=[b[2][0].split()[0] + f"-{i}" for i, b in enumerate(BAD_INPUTS)])
+@pytest.mark.parametrize(
+    "toml, overrides, fragments",
+    BAD_INPUTS,
+    ids=[b[2][0].split()[0] + f"-{i}" for i, b in enumerate(BAD_INPUTS)],
+)
 def test_bad_input_exits_2_with_one_line_naming_the_key(tmp_path, toml, overrides, fragments):
     path = tmp_path / "c.toml"
     path.write_text(toml)
@@ -273,8 +336,9 @@ def test_check_jacobian_passes_for_carstensen_with_json_report(tmp_path):
 def test_mpirun_solve_matches_the_serial_run(run, config, tmp_path):
     serial_out, _ = run
     out = tmp_path / "out"
-    run_mpi(2, FEMBEM, "solve", str(config), "--out", str(out), "--quiet",
-            "--set", "output.plots=false")
+    run_mpi(
+        2, FEMBEM, "solve", str(config), "--out", str(out), "--quiet", "--set", "output.plots=false"
+    )
     serial = json.loads((serial_out / "summary.json").read_text())
     par = json.loads((out / "summary.json").read_text())
     assert par["mpi_ranks"] == 2 and par["converged"]
@@ -298,8 +362,9 @@ def test_mpirun_solve_matches_the_serial_run(run, config, tmp_path):
 def test_mpirun_errors_print_once_and_do_not_hang(tmp_path):
     path = tmp_path / "c.toml"
     path.write_text("[geometry]\nsignorini = [[[0.0, 0.0], [0.25, -0.25]]]\n")
-    proc = run_mpi(2, FEMBEM, "solve", str(path), "--out", str(tmp_path / "out"),
-                   timeout=120, check=False)
+    proc = run_mpi(
+        2, FEMBEM, "solve", str(path), "--out", str(tmp_path / "out"), timeout=120, check=False
+    )
     assert proc.returncode == 2, proc.stderr
     errors = [ln for ln in proc.stderr.splitlines() if ln.startswith("fembem: error")]
     assert len(errors) == 1 and "geometry.signorini" in errors[0], proc.stderr
@@ -308,12 +373,17 @@ def test_mpirun_errors_print_once_and_do_not_hang(tmp_path):
 # ------------------------------------------------------------------------ README
 def test_readme_documents_every_configuration_key_with_its_default():
     """Each key has a row | `section.key` | `default` | ... whose default, read as TOML,
-    equals the value in coupling.config.DEFAULTS (the single source of the defaults)."""
+    equals the value in coupling.options.DEFAULTS (the single source of the defaults)."""
     readme = (ROOT / "README.md").read_text()
-    rows = {m.group(1): tomllib.loads(f"v = {m.group(2)}")["v"] for m in
-            re.finditer(r"^\| `([a-z_0-9]+\.[a-z_0-9]+)` \| `([^`]*)` \|", readme, re.M)}
-    expected = {f"{section}.{key}": value
-                for section, table in DEFAULTS.items() for key, value in table.items()}
+    rows = {
+        m.group(1): tomllib.loads(f"v = {m.group(2)}")["v"]
+        for m in re.finditer(r"^\| `([a-z_0-9]+\.[a-z_0-9]+)` \| `([^`]*)` \|", readme, re.M)
+    }
+    expected = {
+        f"{section}.{key}": value
+        for section, table in DEFAULTS.items()
+        for key, value in table.items()
+    }
     assert rows.keys() == expected.keys()
     for key, value in expected.items():
         assert rows[key] == value and type(rows[key]) is type(value), key

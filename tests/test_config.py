@@ -1,7 +1,8 @@
 """The TOML configuration: defaults, overrides and one-line errors naming the key."""
 import pytest
 
-from coupling.config import DEFAULTS, ConfigError, load_config, parse_config
+from coupling.app.config import ConfigError, load_config, parse_config
+from coupling.options import DEFAULTS
 
 
 def test_empty_configuration_is_all_defaults():
@@ -10,10 +11,13 @@ def test_empty_configuration_is_all_defaults():
 
 def test_values_are_converted_and_overrides_applied(tmp_path):
     path = tmp_path / "c.toml"
-    path.write_text('[geometry]\nh = 0.05\nsignorini = ["bottom", [[0, 0], [0.25, 0.0]]]\n'
-                    '[solver]\nstep = 0.5\nmax_iterations = 10\n')
-    config = load_config(path, ["material.rho=carstensen", "solver.tol=1e-6",
-                                "geometry.structured=false"])
+    path.write_text(
+        '[geometry]\nh = 0.05\nsignorini = ["bottom", [[0, 0], [0.25, 0.0]]]\n'
+        "[solver]\nstep = 0.5\nmax_iterations = 10\n"
+    )
+    config = load_config(
+        path, ["material.rho=carstensen", "solver.tol=1e-6", "geometry.structured=false"]
+    )
     assert config["geometry"]["h"] == 0.05
     assert config["geometry"]["signorini"] == ["bottom", ((0.0, 0.0), (0.25, 0.0))]
     assert config["material"]["rho"] == "carstensen"
@@ -21,22 +25,25 @@ def test_values_are_converted_and_overrides_applied(tmp_path):
     assert config["geometry"]["structured"] is False
 
 
-@pytest.mark.parametrize("raw, message", [
-    ({"mesh": {}}, r"unknown section \[mesh\]"),
-    ({"geometry": {"hh": 1}}, "unknown key geometry.hh"),
-    ({"geometry": {"h": "small"}}, "geometry.h must be a finite number"),
-    ({"geometry": {"h": -0.1}}, "geometry.h must be positive"),
-    ({"geometry": {"shape": "circle"}}, "geometry.shape must be one of"),
-    ({"geometry": {"shape": "polygon"}}, "geometry.vertices must list at least 3"),
-    ({"geometry": {"center": [0, "a"]}}, r"geometry.center must be a point"),
-    ({"geometry": {"signorini": [[1, 2, 3]]}}, r"geometry.signorini\[0\] must be"),
-    ({"geometry": {"signorini": 3}}, "geometry.signorini must be"),
-    ({"solver": {"step": "big"}}, "solver.step must be \"auto\" or a positive number"),
-    ({"solver": {"max_iterations": 1.5}}, "solver.max_iterations must be an integer"),
-    ({"solver": {"projection_tol": 1.0}}, r"solver.projection_tol .* must lie in \[0, 1\)"),
-    ({"output": {"plots": "yes"}}, "output.plots must be true or false"),
-    ({"data": {"f": 1}}, "data.f must be a string"),
-])
+@pytest.mark.parametrize(
+    "raw, message",
+    [
+        ({"mesh": {}}, r"unknown section \[mesh\]"),
+        ({"geometry": {"hh": 1}}, "unknown key geometry.hh"),
+        ({"geometry": {"h": "small"}}, "geometry.h must be a finite number"),
+        ({"geometry": {"h": -0.1}}, "geometry.h must be positive"),
+        ({"geometry": {"shape": "circle"}}, "geometry.shape must be one of"),
+        ({"geometry": {"shape": "polygon"}}, "geometry.vertices must list at least 3"),
+        ({"geometry": {"center": [0, "a"]}}, r"geometry.center must be a point"),
+        ({"geometry": {"signorini": [[1, 2, 3]]}}, r"geometry.signorini\[0\] must be"),
+        ({"geometry": {"signorini": 3}}, "geometry.signorini must be"),
+        ({"solver": {"step": "big"}}, 'solver.step must be "auto" or a positive number'),
+        ({"solver": {"max_iterations": 1.5}}, "solver.max_iterations must be an integer"),
+        ({"solver": {"projection_tol": 1.0}}, r"solver.projection_tol .* must lie in \[0, 1\)"),
+        ({"output": {"plots": "yes"}}, "output.plots must be true or false"),
+        ({"data": {"f": 1}}, "data.f must be a string"),
+    ],
+)
 def test_errors_name_the_key(raw, message):
     with pytest.raises(ConfigError, match=message):
         parse_config(raw)

@@ -31,23 +31,32 @@ def run_demo(name: str, out: Path, *args: str, nprocs: int | None = None) -> tup
     if nprocs:
         proc = run_mpi(nprocs, *argv)
     else:
-        proc = subprocess.run([sys.executable, *argv], capture_output=True, text=True,
-                              timeout=300, cwd=ROOT)
+        proc = subprocess.run(
+            [sys.executable, *argv], capture_output=True, text=True, timeout=300, cwd=ROOT
+        )
         assert proc.returncode == 0, proc.stderr[-4000:]
     return json.loads((out / "results.json").read_text()), proc.stdout
 
 
 def test_every_demo_is_a_percent_script_with_a_size_argument():
     demos = sorted(DEMOS.glob("demo_*.py"))
-    assert {p.stem for p in demos} >= {"demo_linear_transmission", "demo_signorini_square",
-                                       "demo_lshape", "demo_jacobians", "demo_mpi"}
+    assert {p.stem for p in demos} >= {
+        "demo_linear_transmission",
+        "demo_signorini_square",
+        "demo_lshape",
+        "demo_jacobians",
+        "demo_mpi",
+    }
     for path in demos:
         text = path.read_text()
         assert text.startswith("# %% [markdown]\n# # "), path.name
         assert "--cells" in text and "--out" in text, path.name
         # library code takes the communicator as an argument: COMM_WORLD only at top level
-        assert all(not line.startswith((" ", "\t")) for line in text.splitlines()
-                   if "COMM_WORLD" in line and not line.lstrip().startswith("#")), path.name
+        assert all(
+            not line.startswith((" ", "\t"))
+            for line in text.splitlines()
+            if "COMM_WORLD" in line and not line.lstrip().startswith("#")
+        ), path.name
 
 
 def test_linear_transmission_converges_at_the_expected_rates(tmp_path):
@@ -71,8 +80,15 @@ def test_signorini_square_demo_finds_the_contact_set(tmp_path):
     its = [r["iterations"] for r in rows]
     assert max(its) <= 1.5 * min(its)
     # it tells where its outputs are, and they are there
-    for name in ("u.png", "boundary.png", "whole_plane.png", "history.png", "fields.npz",
-                 "solution.xdmf", "summary.json"):
+    for name in (
+        "u.png",
+        "boundary.png",
+        "whole_plane.png",
+        "history.png",
+        "fields.npz",
+        "solution.xdmf",
+        "summary.json",
+    ):
         assert (tmp_path / name).is_file(), name
     assert f"plots:  {tmp_path / 'u.png'}" in stdout
     assert f"fields: {tmp_path / 'fields.npz'}" in stdout
@@ -115,8 +131,9 @@ def test_readme_python_example_runs(tmp_path):
     readme = (ROOT / "README.md").read_text()
     blocks = re.findall(r"```python\n(.*?)```", readme, re.S)
     assert blocks, "the README has no python example"
-    proc = subprocess.run([sys.executable, "-c", blocks[0]], capture_output=True, text=True,
-                          timeout=300, cwd=tmp_path)
+    proc = subprocess.run(
+        [sys.executable, "-c", blocks[0]], capture_output=True, text=True, timeout=300, cwd=tmp_path
+    )
     assert proc.returncode == 0, proc.stderr[-4000:]
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert summary["converged"] and 0 < summary["contact_nodes"] <= summary["signorini_dofs"]

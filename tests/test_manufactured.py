@@ -19,6 +19,8 @@ import pytest
 from mpi4py import MPI
 
 from coupling.manufactured import MANUFACTURED, manufactured_problem, solution_errors
+from coupling.options import SolverOptions
+from coupling.solvers import solve
 from fem_py.materials import make_material
 
 MIN_ORDER = {
@@ -34,7 +36,7 @@ def test_errors_fall_at_the_expected_orders(shape):
     errors = []
     for cells in (8, 16, 32):
         problem = manufactured_problem(MPI.COMM_WORLD, solution, material, cells=cells)
-        result = problem.solve()
+        result = solve(problem, SolverOptions())
         assert result.converged
         e = solution_errors(problem, solution, result)
         # the computed contact set is the exact one away from the switch points
@@ -53,9 +55,8 @@ def test_methods_agree_on_the_lshape_with_two_arcs(method):
     material = make_material("carstensen")
     results = {}
     for m in ("pgpm", method):
-        problem = manufactured_problem(MPI.COMM_WORLD, solution, material, cells=16,
-                                       method=m, tol=1e-11, max_iterations=5000)
-        results[m] = problem.solve()
+        problem = manufactured_problem(MPI.COMM_WORLD, solution, material, cells=16)
+        results[m] = solve(problem, SolverOptions(method=m, tol=1e-11, max_iterations=5000))
         assert results[m].converged
     a, b = results["pgpm"], results[method]
     assert np.linalg.norm(a.u.x.array - b.u.x.array) <= 1e-8 * np.linalg.norm(a.u.x.array)

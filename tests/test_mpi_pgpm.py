@@ -22,8 +22,10 @@ def test_iterates_independent_of_ranks(tmp_path, preconditioner):
     for nprocs in (2, 3):
         par = runs[nprocs]
         # whole subdomains per rank: the substructuring B is distributed, not gathered
-        expected = {"substructuring": "DistributedSubstructuringPreconditioner",
-                    "exact": "RootPreconditioner"}[preconditioner]
+        expected = {
+            "substructuring": "DistributedSubstructuringPreconditioner",
+            "exact": "RootPreconditioner",
+        }[preconditioner]
         assert str(par["preconditioner_class"]) == expected
         assert par["iterations"] == serial["iterations"]
         np.testing.assert_allclose(par["x"], serial["x"], atol=1e-15)

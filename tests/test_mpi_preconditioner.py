@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from conftest import ROOT, run_mpi
-from fem_py.geometry import _grid_partition, subdomain_owners
+from fem_py.distribute import subdomain_owners
+from fem_py.shapes import grid_partition
 
 SCRIPT = str(ROOT / "tests" / "mpi" / "distributed_preconditioner_check.py")
 
@@ -32,7 +33,7 @@ def test_distributed_equals_serial(tmp_path, nprocs):
 
 @pytest.mark.parametrize("nparts", [2, 3, 4, 7])
 def test_subdomain_owners_balances_whole_subdomains(nparts):
-    _, V, cells, _ = _grid_partition("lshape", (0.5, 0.5), 1.0, 1 / 12)
+    _, V, cells, _ = grid_partition("lshape", (0.5, 0.5), 1.0, 1 / 12)
     quads = np.array(cells)
     tris = np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
     subdomain = np.tile(np.arange(len(quads)), 2)

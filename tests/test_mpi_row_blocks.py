@@ -20,4 +20,7 @@ def test_row_blocks_equal_the_whole_matrix(tmp_path, nprocs, counts):
     assert report["row_counts"] == counts  # rows [r n / P, (r + 1) n / P)
     assert report["rows_equal"] and report["product_within_roundoff"] and report["full_equal"]
     # a block of the wrong shape is refused on every rank with a line naming its rows
-    assert all(e is not None and e.startswith(f"rank {r} must hold rows") for r, e in enumerate(report["errors"]))
+    assert all(
+        e is not None and e.startswith(f"rank {r} must hold rows")
+        for r, e in enumerate(report["errors"])
+    )

@@ -13,8 +13,9 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from coupling.outputs import atomic_write, prepare_output_dir
-from coupling.plots import PLOT_FILES, _runs, arc_length, write_plots
+from coupling.io.atomic import atomic_write, prepare_output_dir
+from coupling.io.plots import PLOT_FILES, _runs, write_plots
+from fem_py.polyline import arc_length
 
 PNG = b"\x89PNG\r\n\x1a\n"
 
@@ -48,13 +49,16 @@ def test_prepare_output_dir(tmp_path):
         prepare_output_dir(comm, out / "x", force=True)
 
 
-@pytest.mark.parametrize("mask, runs", [
-    ([0, 1, 1, 0, 0], [(1, 3)]),
-    ([1, 1, 0, 0, 1], [(4, 7)]),           # wraps past panel 0: panels 4, 0, 1
-    ([1, 0, 1, 0, 1], [(2, 3), (4, 6)]),   # panels 4 and 0 form one run
-    ([0, 0, 0], []),
-    ([1, 1, 1], [(0, 3)]),
-])
+@pytest.mark.parametrize(
+    "mask, runs",
+    [
+        ([0, 1, 1, 0, 0], [(1, 3)]),
+        ([1, 1, 0, 0, 1], [(4, 7)]),  # wraps past panel 0: panels 4, 0, 1
+        ([1, 0, 1, 0, 1], [(2, 3), (4, 6)]),  # panels 4 and 0 form one run
+        ([0, 0, 0], []),
+        ([1, 1, 1], [(0, 3)]),
+    ],
+)
 def test_runs_of_a_cyclic_mask(mask, runs):
     assert _runs(np.array(mask, dtype=bool)) == runs
 
@@ -65,21 +69,37 @@ def square_fields(n: int, signorini: np.ndarray, flux_space: str) -> dict:
     X, Y = np.meshgrid(g, g)
     x = np.column_stack([X.ravel(), Y.ravel()])
     k = np.arange(n * (n + 1)).reshape(n, n + 1)[:, :n].ravel()  # lower-left corners
-    triangles = np.concatenate([np.column_stack([k, k + 1, k + n + 2]),
-                                np.column_stack([k, k + n + 2, k + n + 1])])
+    triangles = np.concatenate(
+        [np.column_stack([k, k + 1, k + n + 2]), np.column_stack([k, k + n + 2, k + n + 1])]
+    )
     side = g[:-1]
-    nodes = np.concatenate([np.column_stack([side, np.full(n, -0.25)]),
-                            np.column_stack([np.full(n, 0.25), side]),
-                            np.column_stack([-side, np.full(n, 0.25)]),
-                            np.column_stack([np.full(n, -0.25), -side])])
-    r2 = (nodes ** 2).sum(axis=1)
+    nodes = np.concatenate(
+        [
+            np.column_stack([side, np.full(n, -0.25)]),
+            np.column_stack([np.full(n, 0.25), side]),
+            np.column_stack([-side, np.full(n, 0.25)]),
+            np.column_stack([np.full(n, -0.25), -side]),
+        ]
+    )
+    r2 = (nodes**2).sum(axis=1)
     phi = np.where(signorini, 0.01 * np.sin(np.arange(len(nodes))) ** 2, 0.0)
     active = signorini & (phi == 0)
-    return dict(x=x, u=x.sum(axis=1), triangles=triangles, boundary_x=nodes,
-                boundary_u=nodes.sum(axis=1), phi=phi, ue=0.5 + 0.1 * np.log(r2),
-                dn_ue=0.2 / np.sqrt(r2) if flux_space == "p1" else np.full(len(nodes), 0.8),
-                active=active, signorini=signorini, a=np.array(0.5),
-                flux_space=np.array(flux_space))
+    return dict(
+        x=x,
+        u=x.sum(axis=1),
+        triangles=triangles,
+        boundary_x=nodes,
+        boundary_u=nodes.sum(axis=1),
+        phi=phi,
+        # du/dn of u = x + y on the bottom, right, top and left sides (n nodes each)
+        pressure=np.repeat([-1.0, 1.0, 1.0, -1.0], n),
+        ue=0.5 + 0.1 * np.log(r2),
+        dn_ue=0.2 / np.sqrt(r2) if flux_space == "p1" else np.full(len(nodes), 0.8),
+        active=active,
+        signorini=signorini,
+        a=np.array(0.5),
+        flux_space=np.array(flux_space),
+    )
 
 
 @pytest.mark.parametrize("case", ["none", "wrapping arc, p0 flux", "all"])
@@ -88,12 +108,14 @@ def test_every_figure_is_written(tmp_path, case):
     signorini = np.zeros(4 * n, dtype=bool)
     if case == "wrapping arc, p0 flux":
         # an arc from node 4n - 4 on the left side round the corner node 0 to node 3
-        signorini[np.r_[4 * n - 3:4 * n, 0:3]] = True
+        signorini[np.r_[4 * n - 3 : 4 * n, 0:3]] = True
     elif case == "all":
         signorini[:] = True
     fields = square_fields(n, signorini, "p0" if "p0" in case else "p1")
-    history = [SimpleNamespace(iteration=k, energy=-1 + 2.0 ** -k, step_norm=2.0 ** -k,
-                               contact=3) for k in range(1, 30)]
+    history = [
+        SimpleNamespace(iteration=k, energy=-1 + 2.0**-k, step_norm=2.0**-k, contact=3)
+        for k in range(1, 30)
+    ]
     if case == "none":  # no history (no iteration): no history.png
         history = []
     written = write_plots(tmp_path, fields, history, tol=1e-8)

@@ -13,22 +13,53 @@ import numpy as np
 import pytest
 import scipy.linalg as sla
 
-from coupling.edge_forms import closed_paper_form, edge_form, paper_edge_form, sqrt_laplacian_edge_form
-from coupling.preconditioner import IdentityPreconditioner, SignoriniArc, SubstructuringPreconditioner
-from test_preconditioner_meshes import structured_square
+from coupling.preconditioners import (
+    IdentityPreconditioner,
+    SignoriniArc,
+    SubstructuringPreconditioner,
+)
+from coupling.preconditioners.edge_forms import (
+    closed_paper_form,
+    edge_form,
+    paper_edge_form,
+    sqrt_laplacian_edge_form,
+)
+from test_preconditioner_meshes import StructuredSquare, structured_square
 
 RTOL = 1e-12
 
 
+def substructuring(
+    prob: StructuredSquare, *, edge_form: str = "paper", signorini_weight: float = 1.0
+) -> SubstructuringPreconditioner:
+    """B of METHOD.md section 6 for ``prob``: the paper's edge form (5.1) and B_s
+    unweighted (omega = 1), the definitions the references below read, unless told."""
+    return SubstructuringPreconditioner(
+        prob.stiffness,
+        prob.coarse,
+        prob.x,
+        prob.d,
+        prob.arcs,
+        edge_form=edge_form,
+        signorini_weight=signorini_weight,
+    )
+
+
 # ---------------------------------------------------------------- references
 def paper_form_loops(points: np.ndarray) -> np.ndarray:
-    """(5.1) read literally: sum_{i<j} h_i h_j (phi_i-phi_j)^2/|x_i-x_j|^2 + sum_i h_i phi_i^2 (1/|x_i-a| + 1/|x_i-b|)."""
+    """(5.1) read literally: sum_{i<j} h_i h_j (phi_i-phi_j)^2/|x_i-x_j|^2
+    + sum_i h_i phi_i^2 (1/|x_i-a| + 1/|x_i-b|)."""
     n = len(points) - 1
     dist = lambda p, q: float(np.linalg.norm(np.asarray(p) - np.asarray(q)))  # noqa: E731
-    h = {i: 0.5 * (dist(points[i], points[i - 1]) + dist(points[i + 1], points[i])) for i in range(1, n)}
+    h = {
+        i: 0.5 * (dist(points[i], points[i - 1]) + dist(points[i + 1], points[i]))
+        for i in range(1, n)
+    }
     a = np.zeros((n - 1, n - 1))
     for i in range(1, n):
-        a[i - 1, i - 1] += h[i] * (1.0 / dist(points[i], points[0]) + 1.0 / dist(points[i], points[n]))
+        a[i - 1, i - 1] += h[i] * (
+            1.0 / dist(points[i], points[0]) + 1.0 / dist(points[i], points[n])
+        )
         for j in range(i + 1, n):
             w = h[i] * h[j] / dist(points[i], points[j]) ** 2
             a[i - 1, i - 1] += w
@@ -44,8 +75,8 @@ def sqrt_laplacian_reference(points: np.ndarray) -> np.ndarray:
     n = len(seg)
     lap, mass = np.zeros((n + 1, n + 1)), np.zeros((n + 1, n + 1))
     for k, length in enumerate(seg):  # element matrices of the P1 segments
-        lap[k:k + 2, k:k + 2] += np.array([[1.0, -1.0], [-1.0, 1.0]]) / length
-        mass[k:k + 2, k:k + 2] += np.array([[2.0, 1.0], [1.0, 2.0]]) * length / 6.0
+        lap[k : k + 2, k : k + 2] += np.array([[1.0, -1.0], [-1.0, 1.0]]) / length
+        mass[k : k + 2, k : k + 2] += np.array([[2.0, 1.0], [1.0, 2.0]]) * length / 6.0
     lap, mass = lap[1:-1, 1:-1], mass[1:-1, 1:-1]
     mh = np.real(sla.sqrtm(mass))
     mh_inv = np.linalg.inv(mh)
@@ -64,7 +95,9 @@ def reference_omega(prob, kind: str) -> np.ndarray:
     pos = {int(g): k for k, g in enumerate(skeleton)}
     harmonic = np.zeros((n, len(skeleton)))  # discrete harmonic extension of skeleton values
     harmonic[skeleton, np.arange(len(skeleton))] = 1.0
-    harmonic[interior] = -np.linalg.solve(a[np.ix_(interior, interior)], a[np.ix_(interior, skeleton)])
+    harmonic[interior] = -np.linalg.solve(
+        a[np.ix_(interior, interior)], a[np.ix_(interior, skeleton)]
+    )
     n_v = len(c.vertex_dofs)
     pi = np.zeros((len(skeleton), n_v))
     for v, dof in enumerate(c.vertex_dofs):
@@ -105,14 +138,16 @@ def reference_signorini(arcs, d: float, kind: str, uniform_formula: bool = False
         if arc.closed:
             pts, mask = np.vstack([pts, pts[:1]]), np.append(mask, True)
             phi = np.append(arc.unknowns, arc.unknowns[0])
-            assert arc.coarse_vertex_mask[0], "reference expects node 0 of a closed arc to be a coarse vertex"
+            assert arc.coarse_vertex_mask[
+                0
+            ], "reference expects node 0 of a closed arc to be a coarse vertex"
         else:
             phi[1:-1] = arc.unknowns
         s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
         corners = np.flatnonzero(mask)
         free = corners[:-1] if arc.closed else corners[1:-1]
         for a, b in zip(corners[:-1], corners[1:]):
-            blocks.append(REFERENCE_FORMS[kind](pts[a:b + 1]))
+            blocks.append(REFERENCE_FORMS[kind](pts[a : b + 1]))
             for k in range(a + 1, b):
                 col = np.zeros(n_s)
                 col[phi[k]] = 1.0
@@ -120,8 +155,10 @@ def reference_signorini(arcs, d: float, kind: str, uniform_formula: bool = False
         m = len(free)
         coarse = np.zeros((m, m))
         # H at a coarse vertex: mean length of its two coarse edges
-        big_h = [0.5 * (s[corners[min(q + 1, len(corners) - 1)]] - s[corners[max(q - 1, 0)]])
-                 for q in range(len(corners))]
+        big_h = [
+            0.5 * (s[corners[min(q + 1, len(corners) - 1)]] - s[corners[max(q - 1, 0)]])
+            for q in range(len(corners))
+        ]
         if arc.closed:  # wrap the neighbours of the first coarse vertex
             big_h[0] = 0.5 * (s[corners[1]] - s[corners[0]] + s[-1] - s[corners[-2]])
         off = 0 if arc.closed else 1
@@ -132,7 +169,9 @@ def reference_signorini(arcs, d: float, kind: str, uniform_formula: bool = False
             elif uniform_formula:
                 coarse[i, i] += 1.0 / qi + 1.0 / (len(corners) - 1 - qi)
             else:
-                coarse[i, i] += big_h[qi] * (1.0 / (s[corners[qi]] - s[0]) + 1.0 / (s[-1] - s[corners[qi]]))
+                coarse[i, i] += big_h[qi] * (
+                    1.0 / (s[corners[qi]] - s[0]) + 1.0 / (s[-1] - s[corners[qi]])
+                )
             for j in range(i + 1, m):
                 qj = j + off
                 if uniform_formula:
@@ -141,7 +180,7 @@ def reference_signorini(arcs, d: float, kind: str, uniform_formula: bool = False
                     dist = s[corners[qj]] - s[corners[qi]]
                     if arc.closed:
                         dist = min(dist, s[-1] - dist)
-                    w = big_h[qi] * big_h[qj] / dist ** 2
+                    w = big_h[qi] * big_h[qj] / dist**2
                 coarse[[i, j], [i, j]] += w
                 coarse[i, j] -= w
                 coarse[j, i] -= w
@@ -172,7 +211,8 @@ def graded_lines(n: int, width: float = 0.5) -> np.ndarray:
 # ---------------------------------------------------------------- edge forms
 @pytest.mark.parametrize("n", [2, 3, 7, 16])
 def test_paper_form_uniform_identity(n):
-    """On a uniform edge with n segments, (5.1) is sum_{i<j} (.)^2/(j-i)^2 + sum_i (1/i + 1/(n-i)) phi_i^2."""
+    """On a uniform edge with n segments, (5.1) is
+    sum_{i<j} (.)^2/(j-i)^2 + sum_i (1/i + 1/(n-i)) phi_i^2."""
     direction = np.array([0.6, 0.8])
     pts = np.array([0.1, -0.2]) + np.outer(np.linspace(0.0, 0.37, n + 1), direction)
     expected = np.zeros((n - 1, n - 1))
@@ -255,7 +295,7 @@ CASES = [
 @pytest.mark.parametrize("n, ratio, lines, kind", CASES)
 def test_apply_omega_is_inverse_of_definition(n, ratio, lines, kind):
     prob = structured_square(n, ratio, lines=lines)
-    pc = SubstructuringPreconditioner(prob.stiffness, prob.coarse, prob.x, prob.d, prob.arcs, edge_form=kind)
+    pc = substructuring(prob, edge_form=kind)
     b_ref = reference_omega(prob, kind)
     b = pc.omega_matrix()
     assert relerr(b, b_ref) < RTOL
@@ -268,14 +308,19 @@ def test_apply_omega_is_inverse_of_definition(n, ratio, lines, kind):
     assert relerr(pc.matvec_omega(pc.apply_omega(g)), g) < RTOL
     # several right-hand sides at once
     g2 = rng.standard_normal((prob.x.shape[0], 3))
-    np.testing.assert_allclose(pc.apply_omega(g2), np.column_stack([pc.apply_omega(c) for c in g2.T]), rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(
+        pc.apply_omega(g2),
+        np.column_stack([pc.apply_omega(c) for c in g2.T]),
+        rtol=1e-12,
+        atol=1e-12,
+    )
     pc.destroy()
 
 
 def test_apply_omega_without_interior_nodes():
     """d = h: every node lies on the skeleton, A_II is empty and B_Omega = B_Sk."""
     prob = structured_square(4, 1)
-    pc = SubstructuringPreconditioner(prob.stiffness, prob.coarse, prob.x, prob.d, prob.arcs)
+    pc = substructuring(prob)
     b = reference_omega(prob, "paper")
     g = np.linspace(-1.0, 1.0, prob.x.shape[0])
     assert relerr(pc.apply_omega(g), np.linalg.solve(b, g)) < RTOL
@@ -296,7 +341,7 @@ SIGNORINI_CASES = [
 @pytest.mark.parametrize("kind", ["paper", "sqrt-laplacian"])
 def test_signorini_block_matches_definition(n, ratio, layout, lines, kind):
     prob = structured_square(n, ratio, signorini=layout, lines=lines)
-    pc = SubstructuringPreconditioner(prob.stiffness, prob.coarse, prob.x, prob.d, prob.arcs, edge_form=kind)
+    pc = substructuring(prob, edge_form=kind)
     m_ref = reference_signorini(prob.arcs, prob.d, kind)
     m = pc.signorini_metric
     assert relerr(m, m_ref) < RTOL
@@ -309,20 +354,23 @@ def test_signorini_block_matches_definition(n, ratio, layout, lines, kind):
 
 
 def test_signorini_coarse_form_is_methods_formula_on_equal_edges():
-    """Arc-length weights reduce to METHOD.md's 1/(j-i)^2 and 1/i + 1/(n_s-i) for equal coarse edges."""
+    """Arc-length weights reduce to METHOD.md's 1/(j-i)^2 and 1/i + 1/(n_s-i) for equal
+    coarse edges."""
     prob = structured_square(24, 4, signorini="bottom-right")
-    pc = SubstructuringPreconditioner(prob.stiffness, prob.coarse, prob.x, prob.d, prob.arcs)
+    pc = substructuring(prob)
     m_ref = reference_signorini(prob.arcs, prob.d, "paper", uniform_formula=True)
     assert relerr(pc.signorini_metric, m_ref) < RTOL
 
 
 def test_signorini_weight_scales_the_block_only():
     prob = structured_square(16, 4)
-    pc1 = SubstructuringPreconditioner(prob.stiffness, prob.coarse, prob.x, prob.d, prob.arcs)
-    pc4 = SubstructuringPreconditioner(prob.stiffness, prob.coarse, prob.x, prob.d, prob.arcs, signorini_weight=0.25)
+    pc1 = substructuring(prob)
+    pc4 = substructuring(prob, signorini_weight=0.25)
     phi = np.linspace(0.0, 1.0, pc1.n_signorini)
     g = np.sin(np.arange(prob.x.shape[0]))
-    np.testing.assert_allclose(pc4.matvec_signorini(phi), 0.25 * pc1.matvec_signorini(phi), rtol=1e-15)
+    np.testing.assert_allclose(
+        pc4.matvec_signorini(phi), 0.25 * pc1.matvec_signorini(phi), rtol=1e-15
+    )
     np.testing.assert_allclose(pc4.apply_signorini(phi), 4.0 * pc1.apply_signorini(phi), rtol=1e-15)
     assert pc4.lambda_max_signorini == pytest.approx(0.25 * pc1.lambda_max_signorini, rel=1e-14)
     np.testing.assert_allclose(pc4.signorini_metric, 0.25 * pc1.signorini_metric, rtol=1e-15)
@@ -331,7 +379,7 @@ def test_signorini_weight_scales_the_block_only():
 
 def test_no_signorini_arcs():
     prob = structured_square(8, 4, signorini="none")
-    pc = SubstructuringPreconditioner(prob.stiffness, prob.coarse, prob.x, prob.d, prob.arcs)
+    pc = substructuring(prob)
     assert pc.n_signorini == 0
     assert pc.apply_signorini(np.zeros(0)).shape == (0,)
     assert pc.lambda_max_signorini == 0.0
@@ -340,9 +388,11 @@ def test_no_signorini_arcs():
 def test_lambda_max_by_lanczos_on_large_arcs():
     """Above 400 unknowns lambda_max comes from ARPACK; compare with the dense value."""
     prob = structured_square(128, 8, signorini="closed")
-    pc = SubstructuringPreconditioner(prob.stiffness, prob.coarse, prob.x, prob.d, prob.arcs)
+    pc = substructuring(prob)
     assert pc.n_signorini == 512
-    assert pc.lambda_max_signorini == pytest.approx(np.linalg.eigvalsh(pc.signorini_metric)[-1], rel=1e-9)
+    assert pc.lambda_max_signorini == pytest.approx(
+        np.linalg.eigvalsh(pc.signorini_metric)[-1], rel=1e-9
+    )
 
 
 # ---------------------------------------------------------------- identity and input checks
@@ -361,24 +411,33 @@ def test_identity_preconditioner():
 def test_bad_input_is_rejected():
     prob = structured_square(8, 4)
     args = (prob.stiffness, prob.coarse, prob.x, prob.d, prob.arcs)
+    unweighted = dict(edge_form="paper", signorini_weight=1.0)
     with pytest.raises(ValueError, match="edge_form"):
-        SubstructuringPreconditioner(*args, edge_form="exact")
+        SubstructuringPreconditioner(*args, edge_form="exact", signorini_weight=1.0)
     with pytest.raises(ValueError, match="signorini_weight"):
-        SubstructuringPreconditioner(*args, signorini_weight=0.0)
+        SubstructuringPreconditioner(*args, edge_form="paper", signorini_weight=0.0)
     reversed_edge = dict(vars(prob.coarse))
     reversed_edge["edge_dofs"] = (prob.coarse.edge_dofs[0][::-1],) + prob.coarse.edge_dofs[1:]
     with pytest.raises(ValueError, match="edge_dofs"):
-        SubstructuringPreconditioner(prob.stiffness, type(prob.coarse)(**reversed_edge), *args[2:])
+        SubstructuringPreconditioner(
+            prob.stiffness, type(prob.coarse)(**reversed_edge), *args[2:], **unweighted
+        )
     missing_edge = dict(vars(prob.coarse))
     missing_edge["edge_dofs"] = prob.coarse.edge_dofs[1:]
     missing_edge["edge_vertices"] = prob.coarse.edge_vertices[1:]
     with pytest.raises(ValueError, match="exactly one coarse vertex or one interior node"):
-        SubstructuringPreconditioner(prob.stiffness, type(prob.coarse)(**missing_edge), *args[2:])
+        SubstructuringPreconditioner(
+            prob.stiffness, type(prob.coarse)(**missing_edge), *args[2:], **unweighted
+        )
     with pytest.raises(ValueError, match="unknowns"):
         arc = prob.arcs[0]
-        SubstructuringPreconditioner(*args[:4], [SignoriniArc(arc.coords, arc.coarse_vertex_mask, arc.unknowns + 1)])
+        SubstructuringPreconditioner(
+            *args[:4],
+            [SignoriniArc(arc.coords, arc.coarse_vertex_mask, arc.unknowns + 1)],
+            **unweighted,
+        )
     with pytest.raises(ValueError, match="end points"):
         SignoriniArc(arc.coords, np.zeros(len(arc.coords), bool), arc.unknowns)
-    pc = SubstructuringPreconditioner(*args)
+    pc = SubstructuringPreconditioner(*args, **unweighted)
     with pytest.raises(ValueError, match="shape"):
         pc.apply_omega(np.zeros(3))

@@ -3,7 +3,7 @@
 The square [0, width]^2 with n cells per side, each cell cut into two triangles by
 its (0,0)-(1,1) diagonal; continuous P1 stiffness matrix; coarse squares of
 ``ratio`` cells per side (d = ratio * h). The data mirror the contract of
-``fem_py`` described in ``coupling/preconditioner.py``. This module holds no tests;
+``fem_py`` described in ``coupling/preconditioners/substructuring.py``. This module holds no tests;
 it is shared by ``test_preconditioner.py`` and ``test_preconditioner_spectral.py``.
 """
 from __future__ import annotations
@@ -14,7 +14,7 @@ from types import SimpleNamespace
 import numpy as np
 import scipy.sparse as sp
 
-from coupling.preconditioner import SignoriniArc
+from coupling.preconditioners import SignoriniArc
 
 
 @dataclass
@@ -57,8 +57,13 @@ def p1_stiffness(x: np.ndarray, triangles: np.ndarray) -> sp.csr_matrix:
     return sp.csr_matrix((local.ravel(), (rows, cols)), shape=(n, n))
 
 
-def structured_square(n: int, ratio: int, width: float = 0.5, signorini: str = "bottom",
-                      lines: np.ndarray | None = None) -> StructuredSquare:
+def structured_square(
+    n: int,
+    ratio: int,
+    width: float = 0.5,
+    signorini: str = "bottom",
+    lines: np.ndarray | None = None,
+) -> StructuredSquare:
     """Build the structured square problem.
 
     Parameters
@@ -86,7 +91,7 @@ def structured_square(n: int, ratio: int, width: float = 0.5, signorini: str = "
     triangles = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, dd], 1)])
     stiffness = p1_stiffness(x, triangles)
 
-    # coarse vertices (I, J), I, J = 0..nc
+    # coarse vertices (p, q), p, q = 0..nc
     vi, vj = np.meshgrid(np.arange(nc + 1), np.arange(nc + 1), indexing="xy")
     vi, vj = vi.ravel(), vj.ravel()
     vid = lambda i, j: np.asarray(i) + np.asarray(j) * (nc + 1)  # noqa: E731
@@ -94,18 +99,18 @@ def structured_square(n: int, ratio: int, width: float = 0.5, signorini: str = "
     vertex_on_boundary = (vi == 0) | (vi == nc) | (vj == 0) | (vj == nc)
     edges, edge_dofs, edge_on_boundary, edge_side = [], [], [], []
     steps = np.arange(ratio + 1)
-    for J in range(nc + 1):
-        for I in range(nc):  # horizontal edges, left to right
-            edges.append((vid(I, J), vid(I + 1, J)))
-            edge_dofs.append(node(I * ratio + steps, J * ratio).astype(np.int64))
-            edge_on_boundary.append(J in (0, nc))
-            edge_side.append("bottom" if J == 0 else "top" if J == nc else "")
-    for I in range(nc + 1):
-        for J in range(nc):  # vertical edges, bottom to top
-            edges.append((vid(I, J), vid(I, J + 1)))
-            edge_dofs.append(node(I * ratio, J * ratio + steps).astype(np.int64))
-            edge_on_boundary.append(I in (0, nc))
-            edge_side.append("left" if I == 0 else "right" if I == nc else "")
+    for q in range(nc + 1):
+        for p in range(nc):  # horizontal edges, left to right
+            edges.append((vid(p, q), vid(p + 1, q)))
+            edge_dofs.append(node(p * ratio + steps, q * ratio).astype(np.int64))
+            edge_on_boundary.append(q in (0, nc))
+            edge_side.append("bottom" if q == 0 else "top" if q == nc else "")
+    for p in range(nc + 1):
+        for q in range(nc):  # vertical edges, bottom to top
+            edges.append((vid(p, q), vid(p, q + 1)))
+            edge_dofs.append(node(p * ratio, q * ratio + steps).astype(np.int64))
+            edge_on_boundary.append(p in (0, nc))
+            edge_side.append("left" if p == 0 else "right" if p == nc else "")
     on_skeleton = (ii % ratio == 0) | (jj % ratio == 0)
     skeleton_dofs = np.flatnonzero(on_skeleton).astype(np.int64)
     interior_dofs = np.flatnonzero(~on_skeleton).astype(np.int64)
@@ -120,10 +125,18 @@ def structured_square(n: int, ratio: int, width: float = 0.5, signorini: str = "
         # path: global nodes along the arc, both ends included, counter-clockwise
         xi, yj = path % (n + 1), path // (n + 1)
         mask = (xi % ratio == 0) & (yj % ratio == 0)
-        return SignoriniArc(coords=x[path], coarse_vertex_mask=mask,
-                            unknowns=first_unknown + np.arange(len(path) - 2))
+        return SignoriniArc(
+            coords=x[path],
+            coarse_vertex_mask=mask,
+            unknowns=first_unknown + np.arange(len(path) - 2),
+        )
 
-    sides = {"bottom": (bottom, right), "right": (right, top), "top": (top, left), "left": (left, bottom)}
+    sides = {
+        "bottom": (bottom, right),
+        "right": (right, top),
+        "top": (top, left),
+        "left": (left, bottom),
+    }
 
     def full(side: str) -> np.ndarray:  # the side with both corners, counter-clockwise
         nodes, following = sides[side]
@@ -146,8 +159,14 @@ def structured_square(n: int, ratio: int, width: float = 0.5, signorini: str = "
     if signorini == "closed":
         xi, yj = boundary_nodes % (n + 1), boundary_nodes // (n + 1)
         mask = (xi % ratio == 0) & (yj % ratio == 0)
-        arcs.append(SignoriniArc(coords=x[boundary_nodes], coarse_vertex_mask=mask,
-                                 unknowns=np.arange(len(boundary_nodes)), closed=True))
+        arcs.append(
+            SignoriniArc(
+                coords=x[boundary_nodes],
+                coarse_vertex_mask=mask,
+                unknowns=np.arange(len(boundary_nodes)),
+                closed=True,
+            )
+        )
         sig_nodes.append(boundary_nodes)
     signorini_nodes = np.concatenate(sig_nodes) if sig_nodes else np.zeros(0, np.int64)
 
@@ -171,8 +190,19 @@ def structured_square(n: int, ratio: int, width: float = 0.5, signorini: str = "
         skeleton_dofs=skeleton_dofs,
         interior_dofs=interior_dofs,
         n_subdomains=nc * nc,
-        subdomain_of_interior_dof=(ii[interior_dofs] // ratio + (jj[interior_dofs] // ratio) * nc).astype(np.int64),
+        subdomain_of_interior_dof=(
+            ii[interior_dofs] // ratio + (jj[interior_dofs] // ratio) * nc
+        ).astype(np.int64),
     )
-    return StructuredSquare(n=n, ratio=ratio, width=width, x=x, triangles=triangles,
-                            stiffness=stiffness, coarse=coarse, boundary_nodes=boundary_nodes,
-                            arcs=tuple(arcs), signorini_nodes=signorini_nodes)
+    return StructuredSquare(
+        n=n,
+        ratio=ratio,
+        width=width,
+        x=x,
+        triangles=triangles,
+        stiffness=stiffness,
+        coarse=coarse,
+        boundary_nodes=boundary_nodes,
+        arcs=tuple(arcs),
+        signorini_nodes=signorini_nodes,
+    )

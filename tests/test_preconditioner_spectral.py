@@ -14,7 +14,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from coupling.preconditioner import SubstructuringPreconditioner
+from coupling.preconditioners import SubstructuringPreconditioner
 from test_preconditioner_meshes import structured_square
 
 try:
@@ -22,7 +22,9 @@ try:
 except ImportError:  # the BEM module is built separately (make build)
     steklov_poincare = None
 
-needs_bem = pytest.mark.skipif(steklov_poincare is None, reason="bem_cpp.steklov_poincare is not built")
+needs_bem = pytest.mark.skipif(
+    steklov_poincare is None, reason="bem_cpp.steklov_poincare is not built"
+)
 
 
 def coupled_problem(n: int, ratio: int, signorini_weight: float = 1.0):
@@ -33,28 +35,49 @@ def coupled_problem(n: int, ratio: int, signorini_weight: float = 1.0):
     where = np.full(n_nodes, -1)
     where[prob.boundary_nodes] = np.arange(n_b)
     # z = T u + E phi: the trace of u plus phi injected at its boundary positions
-    trace = sp.hstack([
-        sp.csr_matrix((np.ones(n_b), (np.arange(n_b), prob.boundary_nodes)), shape=(n_b, n_nodes)),
-        sp.csr_matrix((np.ones(n_s), (where[prob.signorini_nodes], np.arange(n_s))), shape=(n_b, n_s)),
-    ]).tocsr()
+    trace = sp.hstack(
+        [
+            sp.csr_matrix(
+                (np.ones(n_b), (np.arange(n_b), prob.boundary_nodes)), shape=(n_b, n_nodes)
+            ),
+            sp.csr_matrix(
+                (np.ones(n_s), (where[prob.signorini_nodes], np.arange(n_s))), shape=(n_b, n_s)
+            ),
+        ]
+    ).tocsr()
     stiff = sp.block_diag([prob.stiffness, sp.csr_matrix((n_s, n_s))]).tocsr()
-    pc = SubstructuringPreconditioner(prob.stiffness, prob.coarse, prob.x, prob.d, prob.arcs,
-                                      signorini_weight=signorini_weight)
+    pc = SubstructuringPreconditioner(
+        prob.stiffness,
+        prob.coarse,
+        prob.x,
+        prob.d,
+        prob.arcs,
+        edge_form="paper",
+        signorini_weight=signorini_weight,
+    )
     return stiff, trace, s_h, pc, n_nodes
 
 
 def extreme_eigenvalues(n: int, ratio: int, signorini_weight: float = 1.0) -> tuple[float, float]:
-    """lambda_min, lambda_max of A x = lambda B x by Lanczos (ARPACK) with B^{-1} and A^{-1} applied exactly."""
+    """lambda_min, lambda_max of A x = lambda B x by Lanczos (ARPACK) with B^{-1} and A^{-1}
+    applied exactly."""
     stiff, trace, s_h, pc, n_nodes = coupled_problem(n, ratio, signorini_weight)
     size = stiff.shape[0]
     op = lambda f: spla.LinearOperator((size, size), matvec=f, dtype=float)  # noqa: E731
     a_op = op(lambda z: stiff @ z + trace.T @ (s_h @ (trace @ z)))
-    b_op = op(lambda z: np.concatenate([pc.matvec_omega(z[:n_nodes]), pc.matvec_signorini(z[n_nodes:])]))
-    b_inv = op(lambda z: np.concatenate([pc.apply_omega(z[:n_nodes]), pc.apply_signorini(z[n_nodes:])]))
+    b_op = op(
+        lambda z: np.concatenate([pc.matvec_omega(z[:n_nodes]), pc.matvec_signorini(z[n_nodes:])])
+    )
+    b_inv = op(
+        lambda z: np.concatenate([pc.apply_omega(z[:n_nodes]), pc.apply_signorini(z[n_nodes:])])
+    )
     a_lu = spla.splu((stiff + trace.T @ sp.csr_matrix(s_h) @ trace).tocsc())
-    lam_max = spla.eigsh(a_op, k=1, M=b_op, Minv=b_inv, which="LA", tol=1e-10, return_eigenvectors=False)[0]
-    inv_min = spla.eigsh(b_op, k=1, M=a_op, Minv=op(a_lu.solve), which="LA", tol=1e-10,
-                         return_eigenvectors=False)[0]
+    lam_max = spla.eigsh(
+        a_op, k=1, M=b_op, Minv=b_inv, which="LA", tol=1e-10, return_eigenvectors=False
+    )[0]
+    inv_min = spla.eigsh(
+        b_op, k=1, M=a_op, Minv=op(a_lu.solve), which="LA", tol=1e-10, return_eigenvectors=False
+    )[0]
     pc.destroy()
     return 1.0 / inv_min, lam_max
 
@@ -83,7 +106,8 @@ def test_kappa_levels_off_at_fixed_ratio():
 
 @needs_bem
 def test_kappa_grows_at_most_like_log_squared_at_fixed_d():
-    """Theorem 4.1 at fixed d = 1/8: kappa grows with d/h = 4, 8, 16, at most like (1 + ln(d/h))^2."""
+    """Theorem 4.1 at fixed d = 1/8: kappa grows with d/h = 4, 8, 16, at most like
+    (1 + ln(d/h))^2."""
     ratios = np.array([4, 8, 16])
     kappa = np.array([hi / lo for lo, hi in (extreme_eigenvalues(4 * r, r) for r in ratios)])
     assert np.all(np.diff(kappa) > 0.0)
@@ -102,7 +126,15 @@ def signorini_conditions(ns: list[int], ratio_of_n, edge_form: str = "paper") ->
     conds = []
     for n in ns:
         prob = structured_square(n, ratio_of_n(n))
-        pc = SubstructuringPreconditioner(prob.stiffness, prob.coarse, prob.x, prob.d, prob.arcs, edge_form=edge_form)
+        pc = SubstructuringPreconditioner(
+            prob.stiffness,
+            prob.coarse,
+            prob.x,
+            prob.d,
+            prob.arcs,
+            edge_form=edge_form,
+            signorini_weight=1.0,
+        )
         lam = np.linalg.eigvalsh(pc.signorini_metric)
         conds.append(lam[-1] / lam[0])
         pc.destroy()

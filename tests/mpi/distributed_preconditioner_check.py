@@ -9,17 +9,24 @@ import numpy as np
 from mpi4py import MPI
 
 from coupling.distributed import gather_matrix, gather_rows
-from coupling.distributed_substructuring import (DistributedSubstructuringPreconditioner,
-                                                 subdomain_ranks)
-from coupling.preconditioner import SubstructuringPreconditioner
+from coupling.preconditioners import SubstructuringPreconditioner, problem_arcs
+from coupling.preconditioners.distributed import (
+    DistributedSubstructuringPreconditioner,
+    subdomain_ranks,
+)
 from coupling.problem import SignoriniProblem
 from fem_py.geometry import build_domain
 from fem_py.materials import make_material
 
 MESHES = {
     "square": dict(shape="square", h=1 / 32, subdomain_size=1 / 8, signorini=["bottom"]),
-    "lshape-unstructured": dict(shape="lshape", h=1 / 24, subdomain_size=1 / 6,
-                                signorini=["bottom", "notch_left"], structured=False),
+    "lshape-unstructured": dict(
+        shape="lshape",
+        h=1 / 24,
+        subdomain_size=1 / 6,
+        signorini=["bottom", "notch_left"],
+        structured=False,
+    ),
     "square-all": dict(shape="square", h=1 / 16, subdomain_size=1 / 4, signorini="all"),
 }
 
@@ -32,21 +39,35 @@ for name, kwargs in MESHES.items():
     n_cells = domain.mesh.topology.index_map(2).size_local
     ranks = subdomain_ranks(comm, domain.cell_tags, n_cells, domain.coarse.n_subdomains)
     stiffness = problem.forms.assemble_stiffness()
-    arcs = problem._signorini_arcs()
+    arcs = problem_arcs(problem)
     dist = DistributedSubstructuringPreconditioner(
-        comm, stiffness, index_map, domain.coarse, ranks, domain.subdomain_size, arcs,
-        edge_form="sqrt-laplacian" if "unstructured" in name else "paper", signorini_weight=0.25)
+        comm,
+        stiffness,
+        index_map,
+        domain.coarse,
+        ranks,
+        domain.subdomain_size,
+        arcs,
+        edge_form="sqrt-laplacian" if "unstructured" in name else "paper",
+        signorini_weight=0.25,
+    )
     r0, r1 = index_map.local_range
     g = np.random.default_rng(7).standard_normal(index_map.size_global)
     phi = np.random.default_rng(8).standard_normal(dist.n_signorini)
     applied = gather_rows(comm, dist.apply_omega(g[r0:r1]))
     product = gather_rows(comm, dist.matvec_omega(g[r0:r1]))
     csr = gather_matrix(stiffness)
-    x = gather_rows(comm, problem.V.tabulate_dof_coordinates()[:r1 - r0, :2])
+    x = gather_rows(comm, problem.V.tabulate_dof_coordinates()[: r1 - r0, :2])
     if comm.rank == 0:
         serial = SubstructuringPreconditioner(
-            csr, domain.coarse, x, domain.subdomain_size, arcs,
-            edge_form=dist.edge_form, signorini_weight=0.25)
+            csr,
+            domain.coarse,
+            x,
+            domain.subdomain_size,
+            arcs,
+            edge_form=dist.edge_form,
+            signorini_weight=0.25,
+        )
         rel = lambda a, b: float(np.abs(a - b).max() / np.abs(b).max())  # noqa: E731
         report[name] = {
             "apply": rel(applied, serial.apply_omega(g)),

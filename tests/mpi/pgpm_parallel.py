@@ -6,20 +6,32 @@ import sys
 import numpy as np
 from mpi4py import MPI
 
+from coupling.io.outputs import gather_p1
 from coupling.manufactured import manufactured_problem, square_contact
-from coupling.outputs import gather_p1
+from coupling.options import SolverOptions
+from coupling.preconditioners import build_preconditioner
+from coupling.solvers import solve
 from fem_py.materials import make_material
 
 comm = MPI.COMM_WORLD
 cells, preconditioner = int(sys.argv[2]), sys.argv[3]
-problem = manufactured_problem(comm, square_contact(), make_material("carstensen"),
-                               cells=cells, preconditioner=preconditioner, tol=1e-10)
-result = problem.solve()
+problem = manufactured_problem(comm, square_contact(), make_material("carstensen"), cells=cells)
+options = SolverOptions(preconditioner=preconditioner, tol=1e-10)
+B = build_preconditioner(problem, options)  # built here to report its class
+result = solve(problem, options, preconditioner=B)
+B.destroy()
 gathered = gather_p1(result.u)
 if comm.rank == 0:
     x, u, _ = gathered
     key = np.round(x, 12)  # exact ties despite 1e-18 noise in mesh coordinates
     order = np.lexsort((key[:, 1], key[:, 0]))
-    np.savez(sys.argv[1], iterations=result.iterations, energy=result.energy,
-             x=x[order], u=u[order], phi=result.phi, converged=result.converged,
-             preconditioner_class=type(problem.preconditioner).__name__)
+    np.savez(
+        sys.argv[1],
+        iterations=result.iterations,
+        energy=result.energy,
+        x=x[order],
+        u=u[order],
+        phi=result.phi,
+        converged=result.converged,
+        preconditioner_class=type(B).__name__,
+    )

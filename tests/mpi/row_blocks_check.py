@@ -25,13 +25,17 @@ except ValueError as err:
     error = str(err)
 errors = comm.gather(error, root=0)
 if comm.rank == 0:
-    json.dump({
-        "row_counts": [len(r) for r in rows],
-        "rows_equal": bool(np.array_equal(np.concatenate(rows), A)),
-        # the same dot products, each computed by one rank: within the round-off bound of
-        # a length-n dot product, n eps |A| |z|, of the serial product
-        "product_within_roundoff": bool(np.all(np.abs(product - A @ z)
-                                               <= n * np.finfo(float).eps * (np.abs(A) @ np.abs(z)))),
-        "full_equal": bool(np.array_equal(full, A)),
-        "errors": errors,
-    }, open(sys.argv[1], "w"))
+    json.dump(
+        {
+            "row_counts": [len(r) for r in rows],
+            "rows_equal": bool(np.array_equal(np.concatenate(rows), A)),
+            # the same dot products, each computed by one rank: within the round-off bound of
+            # a length-n dot product, n eps |A| |z|, of the serial product
+            "product_within_roundoff": bool(
+                np.all(np.abs(product - A @ z) <= n * np.finfo(float).eps * (np.abs(A) @ np.abs(z)))
+            ),
+            "full_equal": bool(np.array_equal(full, A)),
+            "errors": errors,
+        },
+        open(sys.argv[1], "w"),
+    )

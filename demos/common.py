@@ -1,0 +1,53 @@
+"""The preamble the demos share: their command line, printing on rank 0, results.json.
+
+Every demo takes ``--cells N`` (its mesh size) and ``--out DIR`` (default
+``out/<demo name>``) and writes the numbers it prints to DIR/results.json, which the
+tests read (tests/test_demos.py). The communicator is an argument, as in the library:
+each demo takes MPI.COMM_WORLD at its top level and passes it here.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+from typing import Any, Callable
+
+from mpi4py import MPI
+
+__all__ = ["demo_parser", "rank0_print", "write_results"]
+
+
+def demo_parser(
+    name: str,
+    description: str,
+    *,
+    cells: int,
+    cells_help: str,
+    out_help: str = "folder for results.json",
+) -> argparse.ArgumentParser:
+    """The parser of ``--cells`` (default ``cells``) and ``--out`` (default out/``name``);
+    a demo adds its own arguments before calling ``parse_args()``."""
+    parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("--cells", type=int, default=cells, help=cells_help)
+    parser.add_argument("--out", type=Path, default=Path("out") / name, help=out_help)
+    return parser
+
+
+def rank0_print(comm: MPI.Comm) -> Callable[..., None]:
+    """``print`` (flushed) on rank 0 of ``comm``; nothing on the other ranks."""
+
+    def say(*items: Any) -> None:
+        if comm.rank == 0:
+            print(*items, flush=True)
+
+    return say
+
+
+def write_results(comm: MPI.Comm, out: Path, results: dict[str, Any]) -> Path:
+    """Write ``results`` as JSON to out/results.json on rank 0 of ``comm``, creating the
+    folder; return the path (on every rank). Not collective."""
+    path = Path(out) / "results.json"
+    if comm.rank == 0:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps(results, indent=2))
+    return path
