@@ -82,7 +82,7 @@ from fem_py.shapes import (
     insert_boundary_points,
     parse_arcs,
 )
-from fem_py.structured import refine
+from fem_py.structured import node_count, refine
 
 __all__ = [
     "Arc",
@@ -290,8 +290,8 @@ def domain_size(
     without a mesh: for the structured square and L-shape; None where only meshing
     tells (gmsh meshes). Raises the errors ``build_domain`` raises for the arguments.
 
-    A coarse square refined n = max(2, round(d/h)) times per side has (n+1)^2 nodes, and
-    the fine nodes number ``fem_py.structured.refine(...).n_nodes``; every coarse boundary
+    The fine nodes number ``fem_py.structured.node_count`` for n = max(2, round(c/h))
+    segments per coarse edge (c the coarse size); every coarse boundary
     edge carries n fine facets; an open arc over k coarse edges has n k - 1 interior
     nodes, a closed one (``"all"``) every boundary node. The facets of the right
     triangles are c/n (legs) and sqrt(2) c/n (diagonals), c the coarse size.
@@ -323,7 +323,7 @@ def domain_size(
         n_s = sum(n * k - 1 for k in per_arc if k)
     leg = plan.csize / n
     return DomainSize(
-        dofs=refine(cV, np.asarray(plan.ccells), n).n_nodes,
+        dofs=node_count(len(cV), len(edges), len(cells), len(cells[0]), n),
         boundary_dofs=n_gamma,
         signorini_dofs=n_s,
         subdomains=len(cells),

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Lattice", "StructuredRefinement", "lattice", "refine"]
+__all__ = ["Lattice", "StructuredRefinement", "lattice", "refine", "node_count"]
 
 
 @dataclass(frozen=True)
@@ -118,7 +118,9 @@ class StructuredRefinement:
 
     @property
     def n_nodes(self) -> int:
-        return self._offset + len(self.cells) * len(self.lattice.interior)
+        return node_count(
+            len(self.V), len(self.edges), len(self.cells), self.cells.shape[1], self.n
+        )
 
     @property
     def triangles_per_cell(self) -> int:
@@ -210,6 +212,14 @@ class StructuredRefinement:
             tri = (far[:, None] * T + tris[None, :]).ravel()
             rows.append(np.stack([tri, np.repeat(rank_of_cell[other[far]], len(tris))], 1))
         return np.unique(np.concatenate(rows), axis=0)  # one (possibly empty) block per side
+
+
+def node_count(n_vertices: int, n_edges: int, n_cells: int, corners: int, n: int) -> int:
+    """The fine nodes of the refinement (the numbering of the module docstring) without
+    building it: nv + ne (n - 1) + nc m, m = (n - 1)^2 interior nodes per square,
+    (n - 1)(n - 2)/2 per triangle."""
+    interior = (n - 1) ** 2 if corners == 4 else (n - 1) * (n - 2) // 2
+    return n_vertices + n_edges * (n - 1) + n_cells * interior
 
 
 def refine(V: np.ndarray, cells: np.ndarray, n: int) -> StructuredRefinement:

@@ -15,10 +15,12 @@ only rank 0 prints, so a bad input ends every rank with exit code 2 and one mess
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import os
 import signal
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -91,6 +93,18 @@ def build_parser() -> argparse.ArgumentParser:
     )
     solve.add_argument("--quiet", action="store_true", help="no progress lines")
     common(solve)
+
+    info = sub.add_parser(
+        "info",
+        help="the size of a run without running it",
+        description="Validate CONFIG and print, without solving, the sizes of its problem: "
+        "dofs, boundary_dofs, signorini_dofs, subdomains, h_min, h_max (in closed form for "
+        "the structured square and L-shape; otherwise the mesh is built) and "
+        "memory_estimate_bytes, the estimated peak memory of `fembem solve`.",
+    )
+    info.add_argument("config", metavar="CONFIG.toml")
+    info.add_argument("--json", action="store_true", help="print the report as JSON")
+    common(info)
 
     ext = sub.add_parser(
         "exterior",
@@ -190,8 +204,9 @@ def _solve(args: argparse.Namespace) -> int:
     comm = MPI.COMM_WORLD
     config = _problem_inputs(args)
     from coupling.app.advice import arc_warnings, material_warnings
-    from coupling.app.from_config import problem_from_config
+    from coupling.app.from_config import domain_from_config, planned_size, problem_on_domain
     from coupling.app.progress import ProgressMonitor
+    from coupling.app.sizing import check_memory, size_of_domain
     from coupling.preconditioners import problem_arcs
     from fem_py.polyline import arc_length
     from coupling.io.atomic import staged_output_dir
@@ -202,11 +217,20 @@ def _solve(args: argparse.Namespace) -> int:
     out = Path(args.out if args.out is not None else config["output"]["dir"])
     # the run is written beside ``out`` and moved into place once complete
     monitor = None if args.quiet else ProgressMonitor(comm)
+    size = _with_geometry_key(planned_size, config)
+    if size is not None:  # closed form: refuse before anything is built
+        check_memory(size, comm.size, plots=config["output"]["plots"])
     with staged_output_dir(comm, out, force=args.force) as staging:
         startup = process_seconds()
         if monitor is not None:
             monitor.stage("building the mesh and assembling the problem")
-        problem, options, timings = _with_geometry_key(problem_from_config, comm, config)
+        tic = time.perf_counter()
+        domain = _with_geometry_key(domain_from_config, comm, config)
+        mesh_time = time.perf_counter() - tic
+        if size is None:  # a gmsh mesh: refuse before the boundary matrices are formed
+            check_memory(size_of_domain(domain), comm.size, plots=config["output"]["plots"])
+        problem, options, timings = problem_on_domain(domain, config)
+        timings = {"mesh": mesh_time, **timings}
         arcs = problem_arcs(problem)
         arc_lengths = [float(arc_length(arc.coords)[-1]) for arc in arcs]
         gamma = float(problem.boundary.panel_lengths.sum())
@@ -239,6 +263,35 @@ def _solve(args: argparse.Namespace) -> int:
             f"outputs in {out}"
         )
     return EXIT_OK if result.converged else EXIT_NOT_CONVERGED
+
+
+def _info(args: argparse.Namespace) -> int:
+    from mpi4py import MPI
+
+    from coupling.app.from_config import domain_from_config, planned_size
+    from coupling.app.sizing import memory_available, memory_estimate, size_of_domain
+
+    comm = MPI.COMM_WORLD
+    config = _problem_inputs(args)
+    size = _with_geometry_key(planned_size, config)
+    how = "closed form"
+    if size is None:
+        size = size_of_domain(_with_geometry_key(domain_from_config, comm, config))
+        how = "from the mesh"
+    report = {
+        **dataclasses.asdict(size),
+        "memory_estimate_bytes": memory_estimate(size, comm.size, plots=config["output"]["plots"]),
+        "memory_available_bytes": memory_available(),
+        "mpi_ranks": comm.size,
+        "sizes": how,
+    }
+    if comm.rank == 0:
+        if args.json:
+            print(json.dumps(report, indent=2))
+        else:
+            for key, value in report.items():
+                print(f"{key}: {value:.6g}" if isinstance(value, float) else f"{key}: {value}")
+    return EXIT_OK
 
 
 def _read_points(path: Path) -> np.ndarray:
@@ -363,6 +416,7 @@ def _main(argv: list[str]) -> int:
         return EXIT_OK
     handler = {
         "solve": _solve,
+        "info": _info,
         "exterior": _exterior,
         "evaluate": _evaluate,
         "check-jacobian": _check_jacobian,

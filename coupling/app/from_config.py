@@ -10,17 +10,21 @@ from mpi4py import MPI
 from coupling.options import SolverOptions, solver_options
 from coupling.problem import SignoriniProblem
 
-__all__ = ["domain_from_config", "material_from_config", "problem_from_config"]
+__all__ = [
+    "geometry_arguments",
+    "domain_from_config",
+    "planned_size",
+    "material_from_config",
+    "problem_on_domain",
+    "problem_from_config",
+]
 
 
-def domain_from_config(comm: MPI.Comm, config: dict) -> Any:
-    """The ``fem_py.geometry.Domain`` of a validated configuration (collective)."""
-    from fem_py.geometry import build_domain
-
+def geometry_arguments(config: dict) -> tuple[str, dict[str, Any]]:
+    """(shape, keyword arguments) of ``fem_py.geometry.build_domain`` and ``domain_size``
+    for the [geometry] section of a validated configuration."""
     g = config["geometry"]
-    return build_domain(
-        comm,
-        g["shape"],
+    return g["shape"], dict(
         h=g["h"],
         subdomain_size=g["subdomain_size"],
         center=tuple(g["center"]),
@@ -32,6 +36,23 @@ def domain_from_config(comm: MPI.Comm, config: dict) -> Any:
     )
 
 
+def domain_from_config(comm: MPI.Comm, config: dict) -> Any:
+    """The ``fem_py.geometry.Domain`` of a validated configuration (collective)."""
+    from fem_py.geometry import build_domain
+
+    shape, kwargs = geometry_arguments(config)
+    return build_domain(comm, shape, **kwargs)
+
+
+def planned_size(config: dict) -> Any:
+    """The ``fem_py.geometry.DomainSize`` of the configuration's domain in closed form (no
+    mesh), or None when only meshing tells."""
+    from fem_py.geometry import domain_size
+
+    shape, kwargs = geometry_arguments(config)
+    return domain_size(shape, **kwargs)
+
+
 def material_from_config(config: dict) -> Any:
     """The ``fem_py.materials.Material`` of a validated configuration."""
     from fem_py.materials import make_material
@@ -40,20 +61,16 @@ def material_from_config(config: dict) -> Any:
     return make_material(m["rho"], p=m["p"], eps=m["eps"])
 
 
-def problem_from_config(
-    comm: MPI.Comm, config: dict
+def problem_on_domain(
+    domain: Any, config: dict
 ) -> tuple[SignoriniProblem, SolverOptions, dict[str, float]]:
-    """The assembled problem, the solver options and the set-up timings (``mesh`` and the
-    problem's stages) of a validated configuration (collective)."""
+    """The assembled problem on ``domain``, the solver options and the problem's stage
+    timings, for a validated configuration (collective)."""
     data = config["data"]
     options = solver_options(config["solver"])
-    material = material_from_config(config)
-    tic = time.perf_counter()
-    domain = domain_from_config(comm, config)
-    mesh_time = time.perf_counter() - tic
     problem = SignoriniProblem(
         domain,
-        material,
+        material_from_config(config),
         f=data["f"],
         u0=data["u0"],
         t0=data["t0"],
@@ -61,4 +78,16 @@ def problem_from_config(
         flux_space=options.flux_space,
         jacobian=options.jacobian,
     )
-    return problem, options, {"mesh": mesh_time, **problem.timings}
+    return problem, options, dict(problem.timings)
+
+
+def problem_from_config(
+    comm: MPI.Comm, config: dict
+) -> tuple[SignoriniProblem, SolverOptions, dict[str, float]]:
+    """The assembled problem, the solver options and the set-up timings (``mesh`` and the
+    problem's stages) of a validated configuration (collective)."""
+    tic = time.perf_counter()
+    domain = domain_from_config(comm, config)
+    mesh_time = time.perf_counter() - tic
+    problem, options, timings = problem_on_domain(domain, config)
+    return problem, options, {"mesh": mesh_time, **timings}

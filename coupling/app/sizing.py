@@ -1,0 +1,94 @@
+"""The size of a run before it runs: the counts of the domain and a memory estimate.
+
+Peak resident memory of ``fembem solve`` (whole process, outputs included), fitted to
+runs on the square at N = 1.6e4 .. 1e6 dofs (docs/design/memory.md):
+
+    memory ~ ranks * PROCESS_BYTES + DOF_BYTES * N + BOUNDARY_BYTES * n^2
+             (+ ranks * PLOT_PROCESS_BYTES + PLOT_DOF_BYTES * N with the plots)
+
+(the interpreter and its libraries per rank; meshes, forms, factors and vectors per
+dof; the dense boundary matrices (V, K, W, S_h: five n x n arrays) while S_h is formed,
+n the boundary dofs; matplotlib and the triangulations of the plots).
+"""
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from mpi4py import MPI
+
+from fem_py.geometry import DomainSize
+
+__all__ = [
+    "PLOT_PROCESS_BYTES",
+    "PLOT_DOF_BYTES",
+    "PROCESS_BYTES",
+    "DOF_BYTES",
+    "BOUNDARY_BYTES",
+    "memory_estimate",
+    "memory_available",
+    "check_memory",
+    "size_of_domain",
+]
+
+PROCESS_BYTES = 200e6
+DOF_BYTES = 0.65e3
+BOUNDARY_BYTES = 5 * 8.0
+PLOT_PROCESS_BYTES = 40e6
+PLOT_DOF_BYTES = 0.8e3
+
+
+def memory_estimate(size: DomainSize, ranks: int = 1, *, plots: bool = True) -> int:
+    """Bytes of peak resident memory of a solve of ``size`` on ``ranks`` ranks (all ranks
+    together), with or without the plots."""
+    per_rank = PROCESS_BYTES + (PLOT_PROCESS_BYTES if plots else 0.0)
+    per_dof = DOF_BYTES + (PLOT_DOF_BYTES if plots else 0.0)
+    return int(
+        ranks * per_rank + per_dof * size.dofs + BOUNDARY_BYTES * float(size.boundary_dofs) ** 2
+    )
+
+
+def memory_available() -> int:
+    """Bytes the kernel says new processes can use without swapping (MemAvailable)."""
+    with open("/proc/meminfo") as meminfo:
+        for line in meminfo:
+            if line.startswith("MemAvailable:"):
+                return int(line.split()[1]) * 1024
+    raise OSError("MemAvailable not found in /proc/meminfo")
+
+
+def _gb(n: float) -> str:
+    return f"{n / 1e9:.3g} GB"
+
+
+def check_memory(size: DomainSize, ranks: int, *, plots: bool) -> None:
+    """Refuse a run whose estimate exceeds the memory available (one-line ValueError)."""
+    need, have = memory_estimate(size, ranks, plots=plots), memory_available()
+    if need > have:
+        raise ValueError(
+            f"the run needs about {_gb(need)} of memory ({size.dofs:.3g} dofs, "
+            f"{size.boundary_dofs:.3g} on Gamma) but {_gb(have)} are available; increase "
+            "geometry.h (fewer dofs) or run on a machine with more memory"
+        )
+
+
+def size_of_domain(domain: Any) -> DomainSize:
+    """The sizes of a built domain (collective): the P1 counts, L, and the shortest and
+    longest fine facet."""
+    from fem_py.boundary import BoundaryMap
+    from fem_py.forms import p1_space
+
+    V = p1_space(domain.mesh)
+    boundary = BoundaryMap(V, domain)
+    x = domain.mesh.geometry.x[:, :2]
+    cells = domain.mesh.geometry.dofmap.array.reshape(-1, 3)
+    lengths = [np.linalg.norm(x[cells[:, i]] - x[cells[:, (i + 1) % 3]], axis=1) for i in range(3)]
+    local = float(min(length.min(initial=np.inf) for length in lengths))
+    return DomainSize(
+        dofs=V.dofmap.index_map.size_global,
+        boundary_dofs=boundary.n_gamma,
+        signorini_dofs=boundary.n_signorini,
+        subdomains=domain.coarse.n_subdomains,
+        h_min=domain.mesh.comm.allreduce(local, op=MPI.MIN),
+        h_max=domain.h_max,
+    )

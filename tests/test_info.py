@@ -1,0 +1,118 @@
+"""`fembem info`: the sizes of a run without running it. The counts equal those of the
+solve exactly (closed form for the structured square and L-shape, the built mesh
+otherwise), the memory estimate is within a factor 2 of the measured peak, and a run that
+cannot fit is refused with one line before anything is built."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from conftest import ROOT, run_cli
+
+FEMBEM = str(Path(sys.executable).parent / "fembem")
+BASE = """
+[geometry]
+shape = "{shape}"
+h = {h}
+subdomain_size = {d}
+structured = {structured}
+signorini = {signorini}
+[material]
+rho = "carstensen"
+[data]
+f = "1 + x"
+t0 = "-1"
+u0 = "0.1"
+[solver]
+method = "ssn"
+"""
+CASES = [
+    dict(shape="square", h=1 / 32, d=1 / 8, structured="true", signorini='["bottom"]'),
+    dict(shape="square", h=1 / 40, d=1 / 10, structured="true", signorini='"all"'),
+    dict(
+        shape="lshape", h=1 / 32, d=1 / 8, structured="true", signorini='["bottom", "notch_bottom"]'
+    ),
+    dict(shape="lshape", h=1 / 32, d=1 / 8, structured="false", signorini='["bottom"]'),
+    dict(
+        shape="square",
+        h=1 / 24,
+        d=1 / 6,
+        structured="false",
+        signorini="[[[-0.25, -0.25], [0.1, -0.25]]]",
+    ),
+]
+COUNTS = ("dofs", "boundary_dofs", "signorini_dofs")
+
+
+@pytest.mark.parametrize("case", CASES, ids=[f"{c['shape']}-{c['structured']}" for c in CASES])
+def test_counts_equal_those_of_the_solve(tmp_path, case):
+    config = tmp_path / "c.toml"
+    config.write_text(BASE.format(**case))
+    info = run_cli("info", str(config), "--json")
+    assert info.returncode == 0, info.stderr
+    report = json.loads(info.stdout)
+    assert report["sizes"] == ("closed form" if case["structured"] == "true" else "from the mesh")
+    solve = run_cli("solve", str(config), "--out", str(tmp_path / "out"), "--quiet")
+    assert solve.returncode == 0, solve.stderr
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert {k: report[k] for k in COUNTS} == {k: summary[k] for k in COUNTS}
+    assert 0 < report["h_min"] <= report["h_max"]
+    if case["structured"] == "true":  # right triangles of legs h
+        assert report["h_min"] == pytest.approx(case["h"], rel=1e-12)
+        assert report["h_max"] == pytest.approx(2**0.5 * case["h"], rel=1e-12)
+
+
+@pytest.mark.parametrize("h,plots", [(1 / 256, "true"), (1 / 512, "false")])
+def test_memory_estimate_within_2x_of_the_peak(tmp_path, h, plots):
+    config = tmp_path / "c.toml"
+    config.write_text(
+        BASE.format(shape="square", h=h, d=4 * h, structured="true", signorini='["bottom"]')
+        + f"[output]\nplots = {plots}\n"
+    )
+    report = json.loads(run_cli("info", str(config), "--json").stdout)
+    # the peak resident memory of one child process, measured by a fresh parent
+    probe = (
+        "import resource, subprocess, sys; subprocess.run(sys.argv[1:], check=True, "
+        "capture_output=True); print(resource.getrusage(resource.RUSAGE_CHILDREN)"
+        ".ru_maxrss * 1024)"
+    )
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            probe,
+            FEMBEM,
+            "solve",
+            str(config),
+            "--out",
+            str(tmp_path / "out"),
+            "--quiet",
+        ],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=600,
+    )
+    assert proc.returncode == 0, proc.stderr
+    peak = int(proc.stdout)
+    assert 0.5 <= report["memory_estimate_bytes"] / peak <= 2.0, (report, peak)
+
+
+def test_a_run_that_cannot_fit_is_refused(tmp_path):
+    config = tmp_path / "c.toml"
+    config.write_text(
+        BASE.format(shape="square", h=1e-5, d=1 / 16, structured="true", signorini='["bottom"]')
+    )
+    out = tmp_path / "out"
+    proc = run_cli("solve", str(config), "--out", str(out), timeout=60)
+    assert proc.returncode == 2
+    (line,) = proc.stderr.strip().splitlines()
+    assert line.startswith("fembem: error: the run needs about ") and "geometry.h" in line
+    assert "GB are available" in line
+    assert not out.exists() and sorted(p.name for p in tmp_path.iterdir()) == ["c.toml"]
+    report = json.loads(run_cli("info", str(config), "--json").stdout)
+    assert report["dofs"] == 50001**2 and report["memory_estimate_bytes"] > 1e11
