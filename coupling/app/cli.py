@@ -395,7 +395,14 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return _main(sys.argv[1:] if argv is None else list(argv))
     except Interrupted as err:
-        _say(f"interrupted by {signal.Signals(err.signum).name}; no output of this run was kept")
+        # after the output folder was staged, the first rank to clean up reports
+        if getattr(err, "first_to_clean_up", _rank() == 0):
+            name = signal.Signals(err.signum).name
+            print(
+                f"fembem: interrupted by {name}; no output of this run was kept",
+                file=sys.stderr,
+                flush=True,
+            )
         return EXIT_INTERRUPTED[err.signum]
     finally:
         for s, handler in previous.items():

@@ -86,6 +86,16 @@ def _move_into_place(staging: Path, out: Path) -> None:
     shutil.rmtree(old)
 
 
+def _claim(staging: Path) -> bool:
+    """True for exactly one of the ranks that call this while ``staging`` exists (an
+    exclusive create of a marker file inside it)."""
+    try:
+        os.close(os.open(staging / ".claimed", os.O_CREAT | os.O_EXCL | os.O_WRONLY))
+        return True
+    except OSError:
+        return False
+
+
 @contextlib.contextmanager
 def staged_output_dir(comm: MPI.Comm, out: Path, *, force: bool) -> Iterator[Path]:
     """A hidden sibling folder of ``out`` to write a run into (collective).
@@ -109,9 +119,12 @@ def staged_output_dir(comm: MPI.Comm, out: Path, *, force: bool) -> Iterator[Pat
     staging = Path(broadcast_from_root(comm, create))
     try:
         yield staging
-    except BaseException:
-        if comm.rank == 0:
-            shutil.rmtree(staging, ignore_errors=True)
+    except BaseException as err:
+        # every rank removes it: after an interrupt a rank may be stuck in a collective
+        # call with a peer that has gone, and mpirun then kills it; the first rank to
+        # arrive (and only it) is marked to report the interrupt
+        err.first_to_clean_up = _claim(staging)
+        shutil.rmtree(staging, ignore_errors=True)
         raise
     try:
         run_on_root(comm, lambda: _move_into_place(staging, out))
