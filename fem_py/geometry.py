@@ -98,10 +98,6 @@ __all__ = [
     "subdomain_owners",
 ]
 
-# Still importable from here under its old name for tests/test_mpi_preconditioner.py; its
-# home is fem_py.shapes.grid_partition (subdomain_owners: fem_py.distribute).
-_grid_partition = grid_partition
-
 
 @dataclass(frozen=True, eq=False)
 class Domain:

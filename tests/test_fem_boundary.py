@@ -17,7 +17,9 @@ COMM = MPI.COMM_WORLD
 POLY = [(0.0, 0.0), (0.5, 0.0), (0.6, 0.35), (0.3, 0.55), (-0.05, 0.4)]
 CASES = {
     "square": dict(shape="square", signorini=["bottom", ((0.25, 0.1), (0.0, 0.25))]),
-    "lshape": dict(shape="lshape", structured=True, signorini=["notch_bottom", "notch_left", "left"]),
+    "lshape": dict(
+        shape="lshape", structured=True, signorini=["notch_bottom", "notch_left", "left"]
+    ),
     "polygon": dict(shape="polygon", vertices=POLY, signorini=[((0.2, 0.0), (0.55, 0.175))]),
     "all": dict(shape="square", structured=True, signorini="all"),
 }
@@ -41,8 +43,9 @@ def test_closed_ccw_and_mesh_nodes(case):
     assert bm.nodes.shape == (bm.n_gamma, 2) and len(np.unique(bm.dofs)) == bm.n_gamma
     # Gamma_h is the polygon itself: its shoelace area is |Omega| (positive: CCW)
     assert _area(bm.nodes) == pytest.approx(_area(dom.vertices), rel=1e-13)
-    assert bm.length == pytest.approx(np.sum(np.linalg.norm(np.roll(dom.vertices, -1, 0) - dom.vertices, axis=1)),
-                                      rel=1e-13)
+    assert bm.length == pytest.approx(
+        np.sum(np.linalg.norm(np.roll(dom.vertices, -1, 0) - dom.vertices, axis=1)), rel=1e-13
+    )
     assert np.allclose(bm.nodes[0], dom.vertices[0], atol=1e-15)
     # consecutive nodes (and last -> first) are joined by a boundary facet
     fdim = 1
@@ -66,7 +69,8 @@ def test_closed_ccw_and_mesh_nodes(case):
 
 
 def test_signorini_nodes(case):
-    """phi unknowns: exactly the nodes strictly inside an arc (ends excluded unless Gamma_s = Gamma)."""
+    """phi unknowns: exactly the nodes strictly inside an arc (ends excluded unless
+    Gamma_s = Gamma)."""
     dom, V, bm = case
     if dom.signorini_is_whole_boundary:
         assert np.array_equal(bm.signorini, np.arange(bm.n_gamma))
@@ -99,7 +103,9 @@ def test_trace_and_extension(case):
     N = V.dofmap.index_map.size_global
     assert T.shape == (bm.n_gamma, N) and E.shape == (bm.n_gamma, bm.n_signorini)
     X = V.tabulate_dof_coordinates()[:, :2]
-    assert np.allclose(T @ X[:, 0], bm.nodes[:, 0], atol=0) and np.allclose(T @ X[:, 1], bm.nodes[:, 1], atol=0)
+    assert np.allclose(T @ X[:, 0], bm.nodes[:, 0], atol=0) and np.allclose(
+        T @ X[:, 1], bm.nodes[:, 1], atol=0
+    )
     assert abs(T @ T.T - np.eye(bm.n_gamma)).max() == 0
     assert abs(E.T @ E - np.eye(bm.n_signorini)).max() == 0
     phi = np.arange(1.0, bm.n_signorini + 1)
@@ -127,14 +133,21 @@ def test_boundary_data(case):
     x, y = bm.nodes[:, 0], bm.nodes[:, 1]
     assert np.allclose(bm.interpolate_boundary("x^2 + y"), x**2 + y, atol=1e-15)
     assert np.allclose(bm.interpolate_boundary(lambda x, y: x * y), x * y, atol=0)
-    assert np.allclose(bm.interpolate_boundary(lambda x, y, nx, ny: nx), bm.node_normals[:, 0], atol=0)
+    assert np.allclose(
+        bm.interpolate_boundary(lambda x, y, nx, ny: nx), bm.node_normals[:, 0], atol=0
+    )
     assert np.allclose(bm.interpolate_boundary(1.5), 1.5)
     assert np.allclose(np.linalg.norm(bm.node_normals, axis=1), 1.0, atol=1e-15)
     # panel normals point out of Omega: (dy, -dx)/h for CCW panels, outward by the shoelace sign
     seg = np.roll(bm.nodes, -1, 0) - bm.nodes
-    assert np.allclose(bm.panel_normals[:, 0] * seg[:, 0] + bm.panel_normals[:, 1] * seg[:, 1], 0, atol=1e-15)
-    assert np.sum(np.sum(bm.panel_normals * (bm.nodes + 0.5 * seg), axis=1) * bm.panel_lengths) \
-        == pytest.approx(2 * _area(bm.nodes), rel=1e-12)  # int x.n ds = 2|Omega|
+    assert np.allclose(
+        bm.panel_normals[:, 0] * seg[:, 0] + bm.panel_normals[:, 1] * seg[:, 1], 0, atol=1e-15
+    )
+    assert np.sum(
+        np.sum(bm.panel_normals * (bm.nodes + 0.5 * seg), axis=1) * bm.panel_lengths
+    ) == pytest.approx(
+        2 * _area(bm.nodes), rel=1e-12
+    )  # int x.n ds = 2|Omega|
     with pytest.raises(ValueError, match="unknown name 'z'"):
         bm.interpolate_boundary("z")
 
@@ -142,8 +155,10 @@ def test_boundary_data(case):
 def test_square_node_normals():
     dom = build_domain(COMM, "square", h=1 / 8, subdomain_size=1 / 4, structured=True)
     bm = BoundaryMap(p1_space(dom.mesh), dom)
-    assert np.allclose(bm.node_normals[0], [-np.sqrt(0.5), -np.sqrt(0.5)], atol=1e-15)  # corner (-1/4, -1/4)
-    assert np.allclose(bm.node_normals[1], [0.0, -1.0], atol=1e-15)                       # bottom side
+    assert np.allclose(
+        bm.node_normals[0], [-np.sqrt(0.5), -np.sqrt(0.5)], atol=1e-15
+    )  # corner (-1/4, -1/4)
+    assert np.allclose(bm.node_normals[1], [0.0, -1.0], atol=1e-15)  # bottom side
     forms = InteriorForms(p1_space(dom.mesh), make_material("linear"), None)
     m = forms.boundary_load("nx*x", bm)
     # int_Gamma nx x v_j ds: on the right side (x = 1/4) the hats sum to the side length

@@ -9,7 +9,15 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from fem_py.coarse import CoarseStructure, Ragged, _first_index, _pack, _sort_rows, _unpack, as_ragged
+from fem_py.coarse import (
+    CoarseStructure,
+    Ragged,
+    _first_index,
+    _pack,
+    _sort_rows,
+    _unpack,
+    as_ragged,
+)
 
 LENGTHS = [3, 0, 5, 3, 1, 5, 2, 3]
 
@@ -42,8 +50,16 @@ def test_sequence_behaviour_matches_tuple(trailing):
     assert all(_same(a, b) for a, b in zip(r, ref))
     assert len(list(r)) == len(ref)
     assert _same(np.concatenate(r), np.concatenate(ref))
-    for sl in (slice(1, None), slice(None, -2), slice(2, 6), slice(None, None, 2), slice(None, None, -1),
-               slice(5, 2), slice(-3, None, -2), slice(0, 0)):
+    for sl in (
+        slice(1, None),
+        slice(None, -2),
+        slice(2, 6),
+        slice(None, None, 2),
+        slice(None, None, -1),
+        slice(5, 2),
+        slice(-3, None, -2),
+        slice(0, 0),
+    ):
         sub = r[sl]
         assert isinstance(sub, Ragged)
         assert len(sub) == len(ref[sl])
@@ -145,8 +161,14 @@ def test_first_index_equals_minimum_at(shuffle):
 def test_pack_unpack_round_trip():
     from fem_py.geometry import build_domain
 
-    c = build_domain(MPI.COMM_SELF, "square", h=1 / 16, subdomain_size=1 / 4, structured=True,
-                     signorini=["bottom"]).coarse
+    c = build_domain(
+        MPI.COMM_SELF,
+        "square",
+        h=1 / 16,
+        subdomain_size=1 / 4,
+        structured=True,
+        signorini=["bottom"],
+    ).coarse
     assert isinstance(c.edge_dofs, Ragged) and isinstance(c.edge_coords, Ragged)
     fields = _pack(c)
     assert all(isinstance(v, (np.ndarray, int)) for v in fields.values())  # no per-edge objects
@@ -164,4 +186,6 @@ def test_pack_unpack_round_trip():
     plain = dict(vars(c), edge_dofs=tuple(c.edge_dofs), edge_coords=tuple(c.edge_coords))
     rebuilt = CoarseStructure(**plain)
     assert isinstance(rebuilt.edge_dofs, Ragged)
-    assert _same(rebuilt.edge_dofs.flat, c.edge_dofs.flat) and _same(rebuilt.edge_coords.flat, c.edge_coords.flat)
+    assert _same(rebuilt.edge_dofs.flat, c.edge_dofs.flat) and _same(
+        rebuilt.edge_coords.flat, c.edge_coords.flat
+    )

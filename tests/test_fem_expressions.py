@@ -22,7 +22,10 @@ TABLE = [
     ("2**-1*x", lambda x, y: 0.5 * x),
     ("1e-3*x + 2.5E2*y", lambda x, y: 1e-3 * x + 250.0 * y),
     ("sin(pi*x)*cos(y)", lambda x, y: np.sin(np.pi * x) * np.cos(y)),
-    ("tan(x) + sinh(y) + cosh(x) + tanh(y)", lambda x, y: np.tan(x) + np.sinh(y) + np.cosh(x) + np.tanh(y)),
+    (
+        "tan(x) + sinh(y) + cosh(x) + tanh(y)",
+        lambda x, y: np.tan(x) + np.sinh(y) + np.cosh(x) + np.tanh(y),
+    ),
     ("exp(x) - log(y + 2)", lambda x, y: np.exp(x) - np.log(y + 2)),
     ("sqrt(abs(x)) + abs(y)", lambda x, y: np.sqrt(np.abs(x)) + np.abs(y)),
     ("atan2(y, x)", lambda x, y: np.arctan2(y, x)),
@@ -49,15 +52,24 @@ def test_sympy_backend(text, ref):
     xs, ys = sympy.symbols("x y", real=True)
     e = parse_expression(text, {"x": xs, "y": ys}, backend="sympy")
     for px, py in POINTS:
-        assert float(e.subs({xs: px, ys: py}).evalf(30)) == pytest.approx(ref(px, py), rel=1e-13, abs=1e-13)
+        assert float(e.subs({xs: px, ys: py}).evalf(30)) == pytest.approx(
+            ref(px, py), rel=1e-13, abs=1e-13
+        )
     # back to numpy through from_sympy
     got = from_sympy(e, {"x": POINTS[:, 0], "y": POINTS[:, 1]}, "numpy")
-    assert np.allclose(np.broadcast_to(got, (len(POINTS),)), ref(POINTS[:, 0], POINTS[:, 1]), rtol=1e-13, atol=1e-13)
+    assert np.allclose(
+        np.broadcast_to(got, (len(POINTS),)),
+        ref(POINTS[:, 0], POINTS[:, 1]),
+        rtol=1e-13,
+        atol=1e-13,
+    )
 
 
 def test_ufl_backend_matches_numpy():
     """Evaluate every table entry as a UFL expression at cell midpoints (fem.Expression)."""
-    msh = mesh.create_rectangle(MPI.COMM_SELF, [np.array([-0.9, -0.9]), np.array([0.9, 0.9])], [3, 3])
+    msh = mesh.create_rectangle(
+        MPI.COMM_SELF, [np.array([-0.9, -0.9]), np.array([0.9, 0.9])], [3, 3]
+    )
     X = ufl.SpatialCoordinate(msh)
     ref_point = np.array([[1.0 / 3.0, 1.0 / 3.0]])
     cells = np.arange(msh.topology.index_map(2).size_local, dtype=np.int32)
@@ -65,7 +77,9 @@ def test_ufl_backend_matches_numpy():
     mid = msh.geometry.x[gdofs][:, :, :2].mean(axis=1)
     for text, ref in TABLE:
         # + Constant(0): a constant entry (2^3^2 + 0*x) still needs a domain for fem.Expression
-        expr = parse_expression(text, {"x": X[0], "y": X[1]}, backend="ufl") + fem.Constant(msh, 0.0)
+        expr = parse_expression(text, {"x": X[0], "y": X[1]}, backend="ufl") + fem.Constant(
+            msh, 0.0
+        )
         vals = fem.Expression(expr, ref_point).eval(cells).ravel()
         assert np.allclose(vals, ref(mid[:, 0], mid[:, 1]), rtol=1e-12, atol=1e-12), text
 

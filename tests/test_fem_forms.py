@@ -15,8 +15,13 @@ from fem_py.jacobian_check import check_jacobian
 from fem_py.materials import make_material
 
 COMM = MPI.COMM_WORLD
-MATERIALS = [("linear", {}), ("carstensen", {}), ("power", {"p": 1.5, "eps": 0.1}),
-             ("power", {"p": 3.0, "eps": 0.5}), ("1 + t^2/(1 + t^2)", {})]
+MATERIALS = [
+    ("linear", {}),
+    ("carstensen", {}),
+    ("power", {"p": 1.5, "eps": 0.1}),
+    ("power", {"p": 3.0, "eps": 0.5}),
+    ("1 + t^2/(1 + t^2)", {}),
+]
 AREA = 0.25  # square of width 0.5
 
 
@@ -84,7 +89,9 @@ def test_residual_equals_rho_form(forms, V):
     u = smooth(V)
     v = ufl.TestFunction(V)
     gu = ufl.grad(u)
-    ref_form = compile_form(ufl.inner(forms.material.rho(ufl.sqrt(ufl.inner(gu, gu))) * gu, ufl.grad(v)) * ufl.dx)
+    ref_form = compile_form(
+        ufl.inner(forms.material.rho(ufl.sqrt(ufl.inner(gu, gu))) * gu, ufl.grad(v)) * ufl.dx
+    )
     ref = fem.petsc.assemble_vector(ref_form)
     ref.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
     b = forms.create_vector()
@@ -144,7 +151,7 @@ def test_load_and_stiffness(V):
     one.set(1.0)
     Kx = x.duplicate()
     K.mult(one, Kx)
-    assert Kx.norm() <= 1e-13 * K.norm()           # constants are in the kernel
+    assert Kx.norm() <= 1e-13 * K.norm()  # constants are in the kernel
     K.mult(x, Kx)
     assert Kx.dot(x) == pytest.approx(AREA, rel=1e-13)  # int |grad x|^2 = |Omega|
     zero = InteriorForms(V, make_material("linear"), None).assemble_load()

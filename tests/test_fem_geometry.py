@@ -15,12 +15,16 @@ POLY = [(0.0, 0.0), (0.5, 0.0), (0.6, 0.35), (0.3, 0.55), (-0.05, 0.4)]
 
 CASES = {
     "square": dict(shape="square", signorini=["bottom"]),
-    "square-structured": dict(shape="square", structured=True, signorini=["left", ((0.125, -0.25), (0.25, 0.0))]),
+    "square-structured": dict(
+        shape="square", structured=True, signorini=["left", ((0.125, -0.25), (0.25, 0.0))]
+    ),
     "square-inserted": dict(shape="square", signorini=[((-0.2, -0.25), (0.25, 0.1))]),
     "lshape": dict(shape="lshape", signorini=["notch_bottom", "notch_left"]),
     "lshape-structured": dict(shape="lshape", structured=True, signorini="all"),
     "polygon": dict(shape="polygon", vertices=POLY, signorini=[((0.2, 0.0), (0.55, 0.175))]),
-    "polygon-structured": dict(shape="polygon", vertices=POLY, structured=True, signorini=["side3"]),
+    "polygon-structured": dict(
+        shape="polygon", vertices=POLY, structured=True, signorini=["side3"]
+    ),
 }
 
 
@@ -145,34 +149,43 @@ def test_arcs_and_boundary_edges(domain):
             # counter-clockwise along Gamma: same direction as the side of the CCW polygon
             assert np.dot(q - p, P[(side + 1) % len(P)] - P[side]) > 0
             # every segment midpoint lies in the arc the edge is tagged with (and no other)
-            inside = [j for j, a in enumerate(domain.arcs) if a.whole or 0 < (s - a.s0) % L < a.length]
+            inside = [
+                j for j, a in enumerate(domain.arcs) if a.whole or 0 < (s - a.s0) % L < a.length
+            ]
             assert inside == ([] if c.edge_arc[k] < 0 else [c.edge_arc[k]])
     assert np.all(c.edge_arc[~c.edge_on_boundary] == -1)
-    expected_tags = {GAMMA_T_TAG if a < 0 else SIGNORINI_TAG0 + a for a in c.edge_arc[c.edge_on_boundary]}
+    expected_tags = {
+        GAMMA_T_TAG if a < 0 else SIGNORINI_TAG0 + a for a in c.edge_arc[c.edge_on_boundary]
+    }
     assert set(np.unique(domain.facet_tags.values)) == expected_tags
 
 
 def test_structured_is_uniform():
     dom = build_domain(COMM, "square", h=1 / 16, subdomain_size=1 / 4, structured=True)
     seg = dom.coarse.edge_segments()
-    assert np.all(seg == 4)                                       # n = d/h per coarse edge
+    assert np.all(seg == 4)  # n = d/h per coarse edge
     assert dom.coarse.n_dofs == 9 * 9 and dom.coarse.n_subdomains == 4
     assert dom.h_max == pytest.approx(np.sqrt(2) * 0.5 / 8, rel=1e-14)  # diagonal of the h-square
     X = p1_space(dom.mesh).tabulate_dof_coordinates()[:, :2]
     grid = np.round((X + 0.25) * 16, 9)
-    assert np.allclose(grid, np.round(grid))                      # all nodes on the h-grid
+    assert np.allclose(grid, np.round(grid))  # all nodes on the h-grid
 
 
 def test_whole_boundary_flag():
-    dom = build_domain(COMM, "square", h=1 / 16, subdomain_size=1 / 4, structured=True, signorini="all")
+    dom = build_domain(
+        COMM, "square", h=1 / 16, subdomain_size=1 / 4, structured=True, signorini="all"
+    )
     assert dom.signorini_is_whole_boundary and dom.arcs[0].whole
     assert np.all(dom.coarse.edge_arc[dom.coarse.edge_on_boundary] == 0)
-    assert not build_domain(COMM, "square", h=1 / 16, subdomain_size=1 / 4,
-                            signorini=["bottom"]).signorini_is_whole_boundary
+    assert not build_domain(
+        COMM, "square", h=1 / 16, subdomain_size=1 / 4, signorini=["bottom"]
+    ).signorini_is_whole_boundary
 
 
 def test_allow_large():
-    dom = build_domain(COMM, "square", h=1 / 4, subdomain_size=1 / 2, width=1.0, structured=True, allow_large=True)
+    dom = build_domain(
+        COMM, "square", h=1 / 4, subdomain_size=1 / 2, width=1.0, structured=True, allow_large=True
+    )
     assert dom.diameter == pytest.approx(np.sqrt(2), rel=1e-15)
 
 
@@ -182,17 +195,50 @@ ERRORS = [
     (("square",), dict(h=0.1, subdomain_size=0.15), "smaller than 2h"),
     (("disc",), dict(h=0.1, subdomain_size=0.2), "shape must be one of"),
     (("square",), dict(h=0.05, subdomain_size=0.1, width=1.0), "diam(Omega)"),
-    (("square",), dict(h=0.05, subdomain_size=0.1, signorini=[((0.0, 0.0), (0.25, 0.0))]), "not on the boundary"),
-    (("square",), dict(h=0.05, subdomain_size=0.1, signorini=[((0.0, -0.25), (0.0, -0.25))]), "end equals its start"),
+    (
+        ("square",),
+        dict(h=0.05, subdomain_size=0.1, signorini=[((0.0, 0.0), (0.25, 0.0))]),
+        "not on the boundary",
+    ),
+    (
+        ("square",),
+        dict(h=0.05, subdomain_size=0.1, signorini=[((0.0, -0.25), (0.0, -0.25))]),
+        "end equals its start",
+    ),
     (("square",), dict(h=0.05, subdomain_size=0.1, signorini=["north"]), "unknown side 'north'"),
-    (("square",), dict(h=0.05, subdomain_size=0.1, signorini=["bottom", ((0.0, -0.25), (0.25, 0.0))]), "overlap"),
+    (
+        ("square",),
+        dict(h=0.05, subdomain_size=0.1, signorini=["bottom", ((0.0, -0.25), (0.25, 0.0))]),
+        "overlap",
+    ),
     (("square",), dict(h=0.05, subdomain_size=0.1, signorini=["all", "top"]), "cannot be combined"),
-    (("square",), dict(h=1 / 32, subdomain_size=1 / 8, structured=True, signorini=[((0.1, -0.25), (0.25, 0.0))]),
-     "not a coarse grid vertex"),
-    (("polygon",), dict(h=0.05, subdomain_size=0.1, vertices=[(0, 0), (0.4, 0)]), "at least 3 vertices"),
-    (("polygon",), dict(h=0.05, subdomain_size=0.1, vertices=[(0, 0), (0, 0.4), (0.4, 0)]), "clockwise"),
-    (("polygon",), dict(h=0.05, subdomain_size=0.1, vertices=[(0, 0), (0.4, 0.4), (0.4, 0), (0, 0.4)]), "intersect"),
-    (("polygon",), dict(h=0.05, subdomain_size=0.1, vertices=[(0, 0), (0.4, 0), (0.2, 0)]), "fold back"),
+    (
+        ("square",),
+        dict(
+            h=1 / 32, subdomain_size=1 / 8, structured=True, signorini=[((0.1, -0.25), (0.25, 0.0))]
+        ),
+        "not a coarse grid vertex",
+    ),
+    (
+        ("polygon",),
+        dict(h=0.05, subdomain_size=0.1, vertices=[(0, 0), (0.4, 0)]),
+        "at least 3 vertices",
+    ),
+    (
+        ("polygon",),
+        dict(h=0.05, subdomain_size=0.1, vertices=[(0, 0), (0, 0.4), (0.4, 0)]),
+        "clockwise",
+    ),
+    (
+        ("polygon",),
+        dict(h=0.05, subdomain_size=0.1, vertices=[(0, 0), (0.4, 0.4), (0.4, 0), (0, 0.4)]),
+        "intersect",
+    ),
+    (
+        ("polygon",),
+        dict(h=0.05, subdomain_size=0.1, vertices=[(0, 0), (0.4, 0), (0.2, 0)]),
+        "fold back",
+    ),
     (("polygon",), dict(h=0.05, subdomain_size=0.1), "needs vertices"),
     (("square",), dict(h=0.05, subdomain_size=0.1, vertices=POLY), "only used by shape 'polygon'"),
 ]

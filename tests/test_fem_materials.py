@@ -7,8 +7,14 @@ import pytest
 
 from fem_py.materials import make_material
 
-MATERIALS = [("linear", {}), ("carstensen", {}), ("power", {"p": 1.5, "eps": 0.1}),
-             ("power", {"p": 3.0, "eps": 0.5}), ("2 + 1/(1+t)", {}), ("1 + t^2/(1 + t^2)", {})]
+MATERIALS = [
+    ("linear", {}),
+    ("carstensen", {}),
+    ("power", {"p": 1.5, "eps": 0.1}),
+    ("power", {"p": 3.0, "eps": 0.5}),
+    ("2 + 1/(1+t)", {}),
+    ("1 + t^2/(1 + t^2)", {}),
+]
 T = np.linspace(0.05, 5.0, 60)
 
 
@@ -48,7 +54,9 @@ def test_closed_forms():
     p, eps = 1.5, 0.1
     m = make_material("power", p=p, eps=eps)
     assert np.allclose(m.rho_np(t), (eps**2 + t**2) ** ((p - 2) / 2), rtol=1e-14)
-    assert np.allclose(m.g_np(t), ((eps**2 + t**2) ** (p / 2) - eps**p) / p, rtol=1e-13, atol=1e-15)
+    assert np.allclose(
+        m.g_np(t), ((eps**2 + t**2) ** (p / 2) - eps**p) / p, rtol=1e-13, atol=1e-15
+    )
     m = make_material("linear")
     assert np.allclose(m.g_np(t), t**2 / 2, rtol=1e-15) and m.alpha == m.beta == 1.0
 
@@ -65,19 +73,22 @@ def test_p_eps_ignored_for_other_materials():
     assert make_material("linear", p=2.0, eps=1.0).g_np(2.0) == pytest.approx(2.0, rel=1e-15)
 
 
-@pytest.mark.parametrize("args, kw, match", [
-    (("power",), {}, "needs both p > 1 and eps > 0"),
-    (("power",), {"p": 1.0, "eps": 0.1}, "p > 1"),
-    (("power",), {"p": 1.5, "eps": 0.0}, "eps > 0"),
-    (("1 - t",), {}, "<= 0"),
-    (("1/(1 + t)^2",), {}, "not strictly increasing"),
-    (("1/t",), {}, "not finite"),
-    (("sqrt(t)",), {}, "<= 0"),
-    (("2 + 1/(1 + exp(t))",), {}, "closed form"),
-    (("2 + q",), {}, "unknown name 'q'"),
-    (("2 +",), {}, "invalid syntax"),
-    (("",), {}, "non-empty"),
-])
+@pytest.mark.parametrize(
+    "args, kw, match",
+    [
+        (("power",), {}, "needs both p > 1 and eps > 0"),
+        (("power",), {"p": 1.0, "eps": 0.1}, "p > 1"),
+        (("power",), {"p": 1.5, "eps": 0.0}, "eps > 0"),
+        (("1 - t",), {}, "<= 0"),
+        (("1/(1 + t)^2",), {}, "not strictly increasing"),
+        (("1/t",), {}, "not finite"),
+        (("sqrt(t)",), {}, "<= 0"),
+        (("2 + 1/(1 + exp(t))",), {}, "closed form"),
+        (("2 + q",), {}, "unknown name 'q'"),
+        (("2 +",), {}, "invalid syntax"),
+        (("",), {}, "non-empty"),
+    ],
+)
 def test_errors(args, kw, match):
     with pytest.raises(ValueError, match=match) as err:
         make_material(*args, **kw)

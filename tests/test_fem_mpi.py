@@ -35,13 +35,31 @@ def test_serial_equals_two_ranks(tmp_path):
         assert all(s["numbering_ok"].values()), (name, s["numbering_ok"])
         assert p["jacobian_check_passed"] and s["jacobian_check_passed"]
         # sums in a different order: agreement to round-off
-        for key in ("energy", "residual_norm", "jacobian_norm_ufl", "jacobian_norm_handwritten",
-                    "load_norm", "stiffness_norm"):
+        for key in (
+            "energy",
+            "residual_norm",
+            "jacobian_norm_ufl",
+            "jacobian_norm_handwritten",
+            "load_norm",
+            "stiffness_norm",
+        ):
             assert p[key] == pytest.approx(s[key], rel=1e-12), (name, key)
-        for key in ("n_dofs", "n_subdomains", "n_skeleton_facets", "vertex_on_boundary", "edge_vertices",
-                    "edge_arc", "edge_subdomains", "interior_per_subdomain", "signorini", "arc_of_signorini"):
+        for key in (
+            "n_dofs",
+            "n_subdomains",
+            "n_skeleton_facets",
+            "vertex_on_boundary",
+            "edge_vertices",
+            "edge_arc",
+            "edge_subdomains",
+            "interior_per_subdomain",
+            "signorini",
+            "arc_of_signorini",
+        ):
             assert p[key] == s[key], (name, key)
         # coordinates are recomputed from the distributed geometry: equal to round-off
         for key in ("vertex_coords", "boundary_nodes", "trace_u", "boundary_load"):
             assert np.allclose(p[key], s[key], rtol=1e-13, atol=1e-14), (name, key)
-        assert all(np.allclose(a, b, atol=1e-14) for a, b in zip(p["edge_coords"], s["edge_coords"]))
+        assert all(
+            np.allclose(a, b, atol=1e-14) for a, b in zip(p["edge_coords"], s["edge_coords"])
+        )

@@ -47,18 +47,24 @@ def test_pieces_agree_with_the_whole(coarse):
     x = ref.coordinates(0, N)
     for P in (2, 3, 7):  # node blocks and coarse-cell subsets as P ranks make them
         cuts = [r * N // P for r in range(P + 1)]
-        np.testing.assert_array_equal(np.concatenate([ref.coordinates(a, b) for a, b in zip(cuts, cuts[1:])]), x)
+        np.testing.assert_array_equal(
+            np.concatenate([ref.coordinates(a, b) for a, b in zip(cuts, cuts[1:])]), x
+        )
     whole = ref.triangles(np.arange(len(cells)))
     T = ref.triangles_per_cell
     for ids in (np.array([1]), np.arange(0, len(cells), 2)):
-        np.testing.assert_array_equal(ref.triangles(ids), whole.reshape(len(cells), T, 3)[ids].reshape(-1, 3))
+        np.testing.assert_array_equal(
+            ref.triangles(ids), whole.reshape(len(cells), T, 3)[ids].reshape(-1, 3)
+        )
     # the triangles tile the coarse cells: all nodes used once at least, positive areas
     # summing to each coarse cell's area (round-off)
     assert np.array_equal(np.unique(whole), np.arange(N))
     area = _areas(x, whole).reshape(len(cells), T)
     assert area.min() > 0
     q = V[cells]
-    coarse_area = 0.5 * np.sum(q[:, :, 0] * np.roll(q[:, :, 1], -1, 1) - np.roll(q[:, :, 0], -1, 1) * q[:, :, 1], 1)
+    coarse_area = 0.5 * np.sum(
+        q[:, :, 0] * np.roll(q[:, :, 1], -1, 1) - np.roll(q[:, :, 0], -1, 1) * q[:, :, 1], 1
+    )
     np.testing.assert_allclose(area.sum(1), coarse_area, rtol=1e-13)
     # conformity: every facet lies in one or two triangles
     f, _ = _facets(whole)

@@ -14,7 +14,7 @@ import pytest
 from mpi4py import MPI
 
 from coupling.io.atomic import atomic_write, prepare_output_dir
-from coupling.io.plots import PLOT_FILES, _runs, write_plots
+from coupling.io.plots import PLOT_FILES, true_runs, write_plots
 from fem_py.polyline import arc_length
 
 PNG = b"\x89PNG\r\n\x1a\n"
@@ -60,7 +60,7 @@ def test_prepare_output_dir(tmp_path):
     ],
 )
 def test_runs_of_a_cyclic_mask(mask, runs):
-    assert _runs(np.array(mask, dtype=bool)) == runs
+    assert true_runs(np.array(mask, dtype=bool)) == runs
 
 
 def square_fields(n: int, signorini: np.ndarray, flux_space: str) -> dict:

@@ -33,7 +33,7 @@ import bem_cpp  # noqa: E402
 from coupling.io.atomic import atomic_write  # noqa: E402
 from fem_py.polyline import arc_length, closest_on_polygon  # noqa: E402
 
-__all__ = ["PLOT_FILES", "write_plots"]
+__all__ = ["PLOT_FILES", "write_plots", "true_runs"]
 
 #: The figures, in the order they are written.
 PLOT_FILES = ("u.png", "boundary.png", "whole_plane.png", "history.png")
@@ -53,7 +53,7 @@ def _signorini_panels(fields: dict) -> np.ndarray:
     return s | np.roll(s, -1)
 
 
-def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+def true_runs(mask: np.ndarray) -> list[tuple[int, int]]:
     """Maximal runs [i, j) of True in a cyclic boolean array (panels along Gamma)."""
     n = len(mask)
     if mask.all():
@@ -126,7 +126,7 @@ def _figure_boundary(fields: dict):
     # a run of Signorini panels may wrap past node 0: shade its pieces on either side
     spans = [
         (s[a], s[b])
-        for i, j in _runs(_signorini_panels(fields))
+        for i, j in true_runs(_signorini_panels(fields))
         for a, b in ((i, min(j, n)), (max(i, n) - n, j - n))
         if b > a
     ]

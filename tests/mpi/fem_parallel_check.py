@@ -22,9 +22,16 @@ from fem_py.jacobian_check import check_jacobian
 from fem_py.materials import make_material
 
 DOMAINS = {
-    "square": dict(shape="square", h=1 / 16, subdomain_size=1 / 8, signorini=[((-0.2, -0.25), (0.25, 0.1))]),
-    "lshape": dict(shape="lshape", h=1 / 16, subdomain_size=1 / 8, structured=True,
-                   signorini=["notch_bottom", "notch_left"]),
+    "square": dict(
+        shape="square", h=1 / 16, subdomain_size=1 / 8, signorini=[((-0.2, -0.25), (0.25, 0.1))]
+    ),
+    "lshape": dict(
+        shape="lshape",
+        h=1 / 16,
+        subdomain_size=1 / 8,
+        structured=True,
+        signorini=["notch_bottom", "notch_left"],
+    ),
 }
 
 
@@ -44,7 +51,9 @@ def _numbering_ok(dom, V, bm) -> dict:
     c = dom.coarse
     ok = {
         "vertex_dofs": bool(np.allclose(X[c.vertex_dofs], c.vertex_coords, atol=1e-14)),
-        "edge_dofs": all(np.allclose(X[d], x, atol=1e-14) for d, x in zip(c.edge_dofs, c.edge_coords)),
+        "edge_dofs": all(
+            np.allclose(X[d], x, atol=1e-14) for d, x in zip(c.edge_dofs, c.edge_coords)
+        ),
         "boundary_dofs": bool(np.allclose(X[bm.dofs], bm.nodes, atol=1e-14)),
     }
     # interior dofs of every local cell carry that cell's subdomain id
@@ -97,7 +106,9 @@ def compute(comm) -> dict:
             "edge_arc": c.edge_arc.tolist(),
             "edge_subdomains": c.edge_subdomains.tolist(),
             "edge_coords": [x.tolist() for x in c.edge_coords],
-            "interior_per_subdomain": np.bincount(c.subdomain_of_interior_dof, minlength=c.n_subdomains).tolist(),
+            "interior_per_subdomain": np.bincount(
+                c.subdomain_of_interior_dof, minlength=c.n_subdomains
+            ).tolist(),
             "boundary_nodes": bm.nodes.tolist(),
             "signorini": bm.signorini.tolist(),
             "arc_of_signorini": bm.arc_of_signorini.tolist(),

@@ -12,7 +12,9 @@ from fem_py.geometry import GAMMA_T_TAG, build_domain
 
 CASES = {
     "square": dict(shape="square", h=1 / 40, subdomain_size=1 / 10, signorini=["bottom"]),
-    "lshape": dict(shape="lshape", h=1 / 48, subdomain_size=1 / 12, signorini=["notch_bottom", "left"]),
+    "lshape": dict(
+        shape="lshape", h=1 / 48, subdomain_size=1 / 12, signorini=["notch_bottom", "left"]
+    ),
 }
 
 
@@ -29,8 +31,11 @@ def check(comm, case):
     square = np.floor((mid - d.vertices.min(0)) / d.coarse_size).astype(int)
     for c, t in zip(square.tolist(), tag.tolist()):
         first.setdefault(tuple(c), set()).add(t)
-    cells_ok = bool(tag.min() >= 0 and all(len(t) == 1 for t in first.values())
-                    and len(set().union(*first.values())) == len(first))  # one square per tag
+    cells_ok = bool(
+        tag.min() >= 0
+        and all(len(t) == 1 for t in first.values())
+        and len(set().union(*first.values())) == len(first)
+    )  # one square per tag
     # facets: exactly those on the polygon boundary are tagged, with the arc they lie in
     fmid = compute_midpoints(m, 1, np.arange(n_facets, dtype=np.int32))[:, :2]
     P = d.vertices
@@ -41,13 +46,27 @@ def check(comm, case):
         side[on] = i
     ftag = np.full(n_facets, -1)
     ftag[d.facet_tags.indices] = d.facet_tags.values
-    names = {"square": ["bottom", "right", "top", "left"],
-             "lshape": ["bottom", "right", "notch_bottom", "notch_left", "top", "left"]}[case["shape"]]
-    want = np.array([SIGNORINI_TAG0 + case["signorini"].index(names[s]) if names[s] in case["signorini"]
-                     else GAMMA_T_TAG for s in side[side >= 0]])
-    facets_ok = bool(np.array_equal(np.flatnonzero(ftag >= 0), np.flatnonzero(side >= 0))
-                     and np.array_equal(ftag[side >= 0], want))
-    return {"cells_ok": cells_ok, "facets_ok": facets_ok, "ghost_cells": m.topology.index_map(2).num_ghosts}
+    names = {
+        "square": ["bottom", "right", "top", "left"],
+        "lshape": ["bottom", "right", "notch_bottom", "notch_left", "top", "left"],
+    }[case["shape"]]
+    want = np.array(
+        [
+            SIGNORINI_TAG0 + case["signorini"].index(names[s])
+            if names[s] in case["signorini"]
+            else GAMMA_T_TAG
+            for s in side[side >= 0]
+        ]
+    )
+    facets_ok = bool(
+        np.array_equal(np.flatnonzero(ftag >= 0), np.flatnonzero(side >= 0))
+        and np.array_equal(ftag[side >= 0], want)
+    )
+    return {
+        "cells_ok": cells_ok,
+        "facets_ok": facets_ok,
+        "ghost_cells": m.topology.index_map(2).num_ghosts,
+    }
 
 
 if __name__ == "__main__":
