@@ -45,6 +45,7 @@ DEFAULTS: dict[str, dict[str, Any]] = {
         "signorini_weight": 0.25,
     },
     "output": {"dir": "fembem-out", "xdmf": True, "plots": True},
+    "adapt": {"steps": 0, "theta": 0.5, "max_dofs": 200000},
 }
 
 #: Keys whose value must be one of a fixed set of strings.

@@ -26,6 +26,7 @@ LAYERS = [
     ("coupling.problem", "coupling.manufactured"),
     ("coupling.preconditioners",),
     ("coupling.solvers",),
+    ("coupling.adapt",),
     ("coupling.io",),
     ("coupling.app",),
     ("coupling.study", "coupling.baselines"),

@@ -39,6 +39,7 @@ _POSITIVE = {
     ("solver", "projection_max_iterations"),
     ("solver", "signorini_weight"),
     ("material", "eps"),
+    ("adapt", "max_dofs"),
 }
 
 
@@ -96,6 +97,10 @@ def _check_value(section: str, key: str, value: Any) -> Any:
         value = [_point(f"{name}[{i}]", v) for i, v in enumerate(value)]
     if (section, key) == ("solver", "projection_tol") and not 0 <= value < 1:
         raise ConfigError(f"{name} (rho_in of (3.6)) must lie in [0, 1), got {value!r}")
+    if (section, key) == ("adapt", "theta") and not 0 < value <= 1:
+        raise ConfigError(f"{name} (Doerfler's parameter) must lie in (0, 1], got {value!r}")
+    if (section, key) == ("adapt", "steps") and value < 0:
+        raise ConfigError(f"{name} must be >= 0 (0: no adaptive refinement), got {value!r}")
     return value
 
 

@@ -1,0 +1,207 @@
+"""Residual a posteriori estimator of the discrete problem (2.3), per cell.
+
+The formula, its terms and references (Carstensen-Stephan M2AN 1995; Aurada et al.
+Comput Mech 2013; Veeser SINUM 2001; Braess Numer Math 2005): docs/design/estimator.md.
+With sigma_h = rho(|grad u_h|) grad u_h the discrete interior flux, psi_h the exterior
+flux (``solution.flux``), v_h = u_h + phi_h - u0 the trace of u_e and lambda_h the
+discrete contact pressure on Gamma_s,
+
+    eta_T^2 = h_T^2 ||f + div sigma_h||_T^2                                 volume
+            + 1/2 sum_{E in T, interior} h_E ||[sigma_h . n]||_E^2           jumps
+            + sum_{E in T, on Gamma} h_E ||sigma_h . n - psi_h - t0||_E^2    flux mismatch
+            + sum_{E in T, on Gamma} h_E ||d/ds R_h||_E^2                    BIE residual
+            + sum_{E in T, on Gamma_s} h_E ||(lambda_h)_+||_E^2
+                                     + |(phi_h, lambda_h)_E|                 contact
+
+R_h = (K - I)(v_h - a) - V psi_h is the residual of the first-kind (second) boundary
+integral equation of METHOD.md section 2, evaluated by Galerkin matrices of bem_cpp on
+the boundary with every panel bisected (on the coarse boundary it is zero by
+construction of psi_h) and L2-projected there. Per cell, per term:
+:class:`Estimate`. Interior terms by UFL with a DG0 test function (any material of
+fem_py.materials); note that for P1, sigma_h is constant on each cell, so the volume
+term reduces to h_T^2 ||f||^2 for every material.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import ufl
+from dolfinx import fem
+from dolfinx import mesh as dmesh
+from mpi4py import MPI
+from petsc4py import PETSc
+from scipy.spatial import cKDTree
+
+import bem_cpp
+from fem_py.coarse import SIGNORINI_TAG0
+from fem_py.forms import as_ufl_data, compile_form
+from fem_py.parallel import array_from_root
+
+__all__ = ["Estimate", "estimate", "contact_pressure", "bie_residual", "TERMS"]
+
+#: The terms of eta^2, in the order of the module docstring.
+TERMS = ("volume", "jump", "flux", "bie", "contact_positive", "complementarity")
+_QUADRATURE = {"quadrature_degree": 4}
+
+
+@dataclass
+class Estimate:
+    """eta_T^2 of the owned cells and the global sums of the terms.
+
+    Attributes
+    ----------
+    cells : (n_owned_cells,) float
+        eta_T^2 (all terms).
+    terms : dict
+        Global sum of each term of :data:`TERMS` (squares; ``complementarity`` enters
+        eta^2 unsquared, Braess 2005).
+    total : float
+        eta = sqrt(sum_T eta_T^2).
+    """
+
+    cells: np.ndarray
+    terms: dict[str, float]
+    total: float
+
+
+def contact_pressure(problem: Any, u: Any) -> np.ndarray:
+    """lambda_h at the boundary nodes: (A(u_h) - b_f)_i / m_i with the lumped boundary mass
+    m_i (as coupling.io.quantities.boundary_flux; collective)."""
+    residual = problem.functional.load.duplicate()
+    problem.forms.assemble_residual(u, residual)
+    residual.axpy(-1.0, problem.functional.load)
+    r = problem.boundary.gather(residual)
+    residual.destroy()
+    lengths = problem.boundary.panel_lengths
+    return r / (0.5 * (lengths + np.roll(lengths, 1)))
+
+
+def _bisected(nodes: np.ndarray) -> np.ndarray:
+    mid = 0.5 * (nodes + np.roll(nodes, -1, axis=0))
+    return np.stack([nodes, mid], axis=1).reshape(-1, 2)
+
+
+def bie_residual(nodes: np.ndarray, ue: np.ndarray, flux: np.ndarray, a: float, space: str):
+    """h_E ||d/ds R_h||^2_E per panel (n,) of the residual R_h = (K - I)(v_h - a) - V psi_h.
+
+    R_h is tested with the hats (``"p1"``) or indicators (``"p0"``) of the boundary with
+    every panel bisected, and L2-projected onto that space; ``"p1"``: h_E ||d/ds R_h||^2
+    of the projection; ``"p0"`` (no derivative): the inverse-estimate equivalent
+    h_E^-1 ||R_h||^2 (the projection is piecewise constant).
+    """
+    fine = _bisected(nodes)
+    v = _bisected(np.column_stack([ue, ue]))[:, 0]
+    v[1::2] = 0.5 * (ue + np.roll(ue, -1))
+    if space == "p1":
+        psi = np.empty(2 * len(ue))
+        psi[0::2], psi[1::2] = flux, 0.5 * (flux + np.roll(flux, -1))
+    else:
+        psi = np.repeat(flux, 2)
+    K, M = bem_cpp.double_layer(fine, space), bem_cpp.mass(fine, space)
+    r = (K - M) @ (v - a) - bem_cpp.single_layer(fine, space) @ psi
+    lengths = np.linalg.norm(np.roll(fine, -1, axis=0) - fine, axis=1)
+    h = lengths[0::2] + lengths[1::2]
+    if space == "p1":
+        R = np.linalg.solve(bem_cpp.mass(fine, "p1"), r)
+        per_fine = (np.roll(R, -1) - R) ** 2 / lengths  # int |R'|^2 on each half panel
+        return h * (per_fine[0::2] + per_fine[1::2])
+    per_fine = r**2 / lengths  # int R^2 of the P0 projection r / l
+    return (per_fine[0::2] + per_fine[1::2]) / h
+
+
+def _boundary_function(problem: Any, values: np.ndarray, name: str) -> fem.Function:
+    """The P1 function on problem.V with ``values`` (boundary order) at the boundary dofs."""
+    fn = fem.Function(problem.V, name=name)
+    problem.boundary.scatter_add(values, fn.vector)
+    fn.x.scatter_forward()
+    return fn
+
+
+def _assemble_cellwise(W: Any, form: Any) -> np.ndarray:
+    vec = fem.petsc.assemble_vector(compile_form(form))
+    vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    out = vec.array_r.copy()
+    vec.destroy()
+    return out
+
+
+def _panel_cells(problem: Any, W: Any, per_panel: np.ndarray) -> np.ndarray:
+    """Owned-cell sums of a per-panel quantity (boundary order), each panel to its cell."""
+    msh = problem.V.mesh
+    tdim = msh.topology.dim
+    msh.topology.create_connectivity(tdim - 1, tdim)
+    facets = dmesh.exterior_facet_indices(msh.topology)
+    mids = dmesh.compute_midpoints(msh, tdim - 1, facets)[:, :2]
+    nodes = problem.boundary.nodes
+    panel_mids = 0.5 * (nodes + np.roll(nodes, -1, axis=0))
+    dist, panel = cKDTree(panel_mids).query(mids)
+    f2c = msh.topology.connectivity(tdim - 1, tdim)
+    cells = np.array([f2c.links(f)[0] for f in facets], dtype=np.int32)
+    vec = fem.Function(W)
+    np.add.at(vec.x.array, cells, per_panel[panel])
+    vec.vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    return vec.vector.array_r.copy()
+
+
+def estimate(problem: Any, solution: Any, *, f: Any = "0", t0: Any = "0") -> Estimate:
+    """eta_T^2 per owned cell of ``solution`` of ``problem`` (collective).
+
+    Parameters
+    ----------
+    problem, solution
+        :class:`coupling.problem.SignoriniProblem` and the
+        :class:`coupling.solvers.Solution` of it.
+    f, t0
+        The data the problem was built with (text, numbers or UFL on problem's mesh).
+    """
+    msh = problem.V.mesh
+    comm = msh.comm
+    W = fem.FunctionSpace(msh, ("DG", 0))
+    w = ufl.TestFunction(W)
+    u = solution.u
+    sigma = problem.material.flux(ufl.grad(u))
+    n = ufl.FacetNormal(msh)
+    h_T, h_E = ufl.CellDiameter(msh), ufl.FacetArea(msh)
+    f_ufl = as_ufl_data(f, msh, what="f")
+    t0_ufl = as_ufl_data(t0, msh, boundary=True, what="t0")
+    b = problem.boundary
+
+    psi_nodes = np.asarray(solution.flux, dtype=float)
+    if problem.flux_space == "p0":  # the P1 function of the nodal averages
+        psi_nodes = 0.5 * (psi_nodes + np.roll(psi_nodes, 1))
+    psi = _boundary_function(problem, psi_nodes, "psi")
+    pressure = np.zeros(b.n_gamma)
+    pressure[b.signorini] = contact_pressure(problem, u)[b.signorini]
+    lam = _boundary_function(problem, pressure, "lambda")
+    gap = np.zeros(b.n_gamma)
+    gap[b.signorini] = solution.phi
+    phi = _boundary_function(problem, gap, "phi")
+
+    dx = ufl.dx(metadata=_QUADRATURE)
+    dS = ufl.dS(metadata=_QUADRATURE)
+    ds = ufl.Measure("ds", domain=msh, subdomain_data=problem.domain.facet_tags,
+                     metadata=_QUADRATURE)  # fmt: skip
+    arcs = tuple(SIGNORINI_TAG0 + k for k in range(len(problem.domain.arcs)))
+    jump = ufl.jump(sigma, n)
+    cell = {
+        "volume": _assemble_cellwise(W, h_T**2 * (f_ufl + ufl.div(sigma)) ** 2 * w * dx),
+        "jump": _assemble_cellwise(W, h_E("+") * jump**2 * ufl.avg(w) * dS),
+        "flux": _assemble_cellwise(W, h_E * (ufl.dot(sigma, n) - psi - t0_ufl) ** 2 * w * ds),
+    }
+    per_panel = array_from_root(
+        comm,
+        lambda: bie_residual(b.nodes, solution.ue, solution.flux, problem.a, problem.flux_space),
+    )
+    cell["bie"] = _panel_cells(problem, W, per_panel)
+    if arcs:
+        positive = h_E * ufl.max_value(lam, 0.0) ** 2 * w * ds(arcs)
+        cell["contact_positive"] = _assemble_cellwise(W, positive)
+        cell["complementarity"] = np.abs(_assemble_cellwise(W, phi * lam * w * ds(arcs)))
+    else:
+        zeros = np.zeros_like(cell["volume"])
+        cell["contact_positive"] = cell["complementarity"] = zeros
+    total = sum(cell[t] for t in TERMS)
+    terms = {t: comm.allreduce(float(cell[t].sum()), op=MPI.SUM) for t in TERMS}
+    return Estimate(cells=total, terms=terms, total=float(np.sqrt(sum(terms.values()))))

@@ -1,0 +1,141 @@
+"""The adaptive loop solve -> estimate -> mark -> refine (METHOD.md section 10).
+
+Each level is a new :class:`coupling.problem.SignoriniProblem` on the refined
+:class:`fem_py.geometry.Domain` (built by the caller's ``problem_builder``), solved by
+:func:`coupling.solvers.solve` from the previous solution transferred to it
+(:mod:`coupling.adapt.transfer`), estimated (:mod:`coupling.adapt.estimator`) and
+marked by Doerfler's rule (:mod:`coupling.adapt.marking`); the marked cells are
+refined (:func:`fem_py.refinement.refine_domain`).
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+from coupling.adapt.estimator import Estimate, estimate
+from coupling.adapt.marking import doerfler_marking
+from coupling.adapt.transfer import transfer_iterate
+from coupling.options import DEFAULTS, SolverOptions
+from coupling.solvers import solve
+from fem_py.refinement import refine_domain
+
+__all__ = ["AdaptOptions", "adapt_options", "Level", "adapt"]
+
+
+def _default(key: str) -> Any:
+    return field(default=DEFAULTS["adapt"][key])
+
+
+@dataclass(frozen=True)
+class AdaptOptions:
+    """The ``[adapt]`` section (defaults in coupling.options.DEFAULTS): ``steps``
+    refinements (0: no adaptivity), Doerfler's ``theta`` in (0, 1], and ``max_dofs``: no
+    level beyond this many dofs is solved."""
+
+    steps: int = _default("steps")
+    theta: float = _default("theta")
+    max_dofs: int = _default("max_dofs")
+
+    def __post_init__(self) -> None:
+        if not 0.0 < self.theta <= 1.0:
+            raise ValueError(f"AdaptOptions.theta must lie in (0, 1], got {self.theta!r}")
+        if self.steps < 0 or self.max_dofs <= 0:
+            raise ValueError(
+                f"AdaptOptions: steps >= 0 and max_dofs > 0, got {self.steps}, {self.max_dofs}"
+            )
+
+
+def adapt_options(section: dict[str, Any]) -> AdaptOptions:
+    """:class:`AdaptOptions` from a validated ``[adapt]`` section."""
+    return AdaptOptions(**section)
+
+
+@dataclass
+class Level:
+    """One level of the loop. :meth:`record` gives the JSON fields (dofs, boundary_dofs,
+    signorini_dofs, cells, estimator, terms, iterations, gradient_steps, newton_steps,
+    cg_iterations, converged, time); ``problem``, ``solution``, ``estimate`` and
+    ``domain`` are the objects themselves."""
+
+    level: int
+    domain: Any
+    problem: Any
+    solution: Any
+    estimate: Estimate
+    time: float
+    marked: int = 0
+
+    def record(self) -> dict[str, Any]:
+        sol, p = self.solution, self.problem
+        history = sol.history
+        newton = [r for r in history if r.line_search is not None]
+        cells = p.V.mesh.topology.index_map(2).size_global
+        return {
+            "level": self.level,
+            "dofs": int(p.V.dofmap.index_map.size_global),
+            "boundary_dofs": int(p.boundary.n_gamma),
+            "signorini_dofs": int(p.n_signorini),
+            "cells": int(cells),
+            "estimator": self.estimate.total,
+            "terms": dict(self.estimate.terms),
+            "iterations": int(sol.iterations),
+            "gradient_steps": len(history) - len(newton),
+            "newton_steps": len(newton),
+            "cg_iterations": int(sum(r.cg_iterations for r in history)),
+            "converged": bool(sol.converged),
+            "contact_nodes": int(sol.contact.sum()),
+            "marked": self.marked,
+            "time": self.time,
+        }
+
+
+def adapt(
+    problem_builder: Callable[[Any], tuple[Any, dict[str, Any]]],
+    domain: Any,
+    options: SolverOptions,
+    adapt_options: AdaptOptions,
+    *,
+    monitor: Any = None,
+    on_level: Callable[[Level], None] | None = None,
+) -> list[Level]:
+    """Run the adaptive loop from ``domain`` (collective); return the levels.
+
+    Parameters
+    ----------
+    problem_builder
+        ``problem_builder(domain) -> (problem, data)``: the SignoriniProblem on a domain
+        and the data it was built with, ``{"f": ..., "t0": ...}`` (text, numbers or UFL
+        on domain.mesh) for the estimator.
+    domain
+        The first (coarsest) :class:`fem_py.geometry.Domain`.
+    options, adapt_options
+        The ``[solver]`` and ``[adapt]`` sections. ``steps`` refinements give up to
+        steps + 1 levels; the loop stops before a level of more than ``max_dofs`` dofs.
+    monitor
+        Passed to every solve.
+    on_level
+        Called with each finished :class:`Level` (e.g. to print or measure it).
+    """
+    levels: list[Level] = []
+    start = None
+    previous = None
+    for k in range(adapt_options.steps + 1):
+        tic = time.perf_counter()
+        problem, data = problem_builder(domain)
+        if k > 0 and problem.V.dofmap.index_map.size_global > adapt_options.max_dofs:
+            break
+        if previous is not None:
+            start = transfer_iterate(previous.problem, previous.solution, problem)
+        solution = solve(problem, options, initial=start, monitor=monitor)
+        est = estimate(problem, solution, f=data.get("f", "0"), t0=data.get("t0", "0"))
+        level = Level(k, domain, problem, solution, est, time.perf_counter() - tic)
+        levels.append(level)
+        if k < adapt_options.steps:
+            marked = doerfler_marking(domain.comm, est.cells, adapt_options.theta)
+            level.marked = int(domain.comm.allreduce(int(marked.sum())))
+            domain = refine_domain(domain, marked.nonzero()[0])
+        if on_level is not None:
+            on_level(level)
+        previous = level
+    return levels

@@ -1,0 +1,33 @@
+"""Doerfler marking (METHOD.md section 10): the smallest set M of cells with
+sum_M eta_T^2 >= theta sum_T eta_T^2, 0 < theta <= 1 (Doerfler, SINUM 33, 1996)."""
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+__all__ = ["doerfler_marking"]
+
+
+def doerfler_marking(comm: Any, indicators: np.ndarray, theta: float) -> np.ndarray:
+    """Mask of the owned cells in M for the owned eta_T^2 ``indicators`` (collective).
+
+    The indicators of all ranks are sorted on rank 0; the threshold is the k-th largest
+    value, k the smallest count whose sum reaches theta times the total, and every cell
+    at or above it is marked (cells tied with the threshold are all marked).
+    """
+    if not 0.0 < theta <= 1.0:
+        raise ValueError(f"theta must lie in (0, 1], got {theta!r}")
+    indicators = np.asarray(indicators, dtype=float)
+    gathered = comm.gather(indicators, root=0)
+    threshold = None
+    if comm.rank == 0:
+        values = np.sort(np.concatenate(gathered))[::-1]
+        cumulative = np.cumsum(values)
+        if cumulative.size == 0 or cumulative[-1] <= 0.0:
+            threshold = np.inf  # nothing to refine
+        else:
+            k = int(np.searchsorted(cumulative, theta * cumulative[-1] * (1 - 1e-14)))
+            threshold = float(values[min(k, values.size - 1)])
+    threshold = comm.bcast(threshold, root=0)
+    return indicators >= threshold

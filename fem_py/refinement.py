@@ -1,0 +1,165 @@
+"""Local refinement of a :class:`fem_py.geometry.Domain` and P1 transfer to the refined mesh.
+
+``dolfinx.mesh.refine(mesh, edges)`` (DOLFINx 0.5.2, Plaza) bisects the marked edges and
+whatever edges keep the mesh conforming, but transfers no tags after a local refinement
+(its parent maps exist for uniform refinement only). They are rebuilt here from the
+geometry, which refinement does not change:
+
+- cell tags: a child lies inside its parent, so the subdomain of a new cell is the tag of
+  the old cell containing its midpoint. Subdomains stay unions of cells and the coarse
+  partition is kept; the coarse structure is recomputed from the new tags
+  (:func:`fem_py.coarse.compute_coarse_structure`), so the substructuring
+  preconditioner applies on every level (coarse vertices and edges do not change,
+  only the fine chains along them);
+- facet tags: the midpoint of a new boundary facet lies on exactly one old boundary
+  facet (its parent), whose tag (Gamma_t or Signorini arc k) it takes.
+
+New nodes are edge midpoints and old nodes stay, so a P1 function is transferred
+exactly by evaluating it at the new nodes (:func:`transfer_p1`): old values at old
+nodes, the average of the two end values at a midpoint.
+
+Serial meshes; under MPI ``redistribute=False`` keeps each child on the rank of its
+parent, which the local point location below needs.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from dolfinx import cpp, fem, geometry
+from dolfinx import mesh as dmesh
+from mpi4py import MPI
+
+from fem_py.coarse import compute_coarse_structure
+from fem_py.meshdata import tag_array
+
+__all__ = [
+    "refine_domain",
+    "transfer_p1",
+    "boundary_transfer",
+    "locate_cells",
+    "max_facet_length",
+]
+
+
+def locate_cells(msh: Any, points: np.ndarray) -> np.ndarray:
+    """For each point (m, 2 or 3) the first local cell of ``msh`` containing it (-1: none)."""
+    pts = np.zeros((len(points), 3))
+    pts[:, : points.shape[1]] = points[:, :3]
+    tree = geometry.BoundingBoxTree(msh, msh.topology.dim)
+    candidates = geometry.compute_collisions(tree, pts)
+    colliding = geometry.compute_colliding_cells(msh, candidates, pts)
+    offsets = colliding.offsets
+    found = np.diff(offsets) > 0
+    out = np.full(len(pts), -1, dtype=np.int32)
+    out[found] = colliding.array[offsets[:-1][found]]
+    return out
+
+
+def transfer_p1(u_old: fem.Function, V_new: fem.FunctionSpace) -> np.ndarray:
+    """Values of the P1 function ``u_old`` at the local dofs (owned then ghost) of the P1
+    space ``V_new`` on a refinement of its mesh: exact nested interpolation."""
+    x = V_new.tabulate_dof_coordinates()
+    cells = locate_cells(u_old.function_space.mesh, x)
+    if np.any(cells < 0):
+        raise RuntimeError("transfer_p1: a node of the refined mesh lies outside the old mesh")
+    return u_old.eval(x, cells).ravel().astype(float)
+
+
+def _segment_distance(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(m, k) distances of m points to k segments [a_j, b_j]."""
+    t = b - a
+    rel = points[:, None, :] - a[None, :, :]
+    s = np.clip(np.einsum("mkd,kd->mk", rel, t) / np.einsum("kd,kd->k", t, t), 0.0, 1.0)
+    closest = a[None, :, :] + s[..., None] * t[None, :, :]
+    return np.linalg.norm(points[:, None, :] - closest, axis=2)
+
+
+def _facet_segments(msh: Any, facets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """End points (k, 2), (k, 2) of the local facets ``facets``."""
+    geo = cpp.mesh.entities_to_geometry(msh._mesh, 1, np.asarray(facets, np.int32), False)
+    x = msh.geometry.x[:, :2]
+    return x[geo[:, 0]], x[geo[:, 1]]
+
+
+def max_facet_length(msh: Any) -> float:
+    """The longest facet of ``msh`` (all ranks)."""
+    msh.topology.create_entities(1)
+    n = msh.topology.index_map(1).size_local
+    a, b = _facet_segments(msh, np.arange(n, dtype=np.int32))
+    loc = float(np.linalg.norm(b - a, axis=1).max(initial=0.0))
+    return msh.comm.allreduce(loc, op=MPI.MAX)
+
+
+def refine_domain(domain: Any, cells: np.ndarray) -> Any:
+    """Refine ``domain`` (a :class:`fem_py.geometry.Domain`) at the local cells ``cells``
+    (every edge of a marked cell is bisected, plus the closure of Plaza's refinement) and
+    return the refined Domain with re-built tags and coarse structure (collective).
+    """
+    from fem_py.geometry import Domain  # geometry imports this module's siblings only
+
+    old = domain.mesh
+    tdim = old.topology.dim
+    old.topology.create_connectivity(tdim, 1)
+    c2e = old.topology.connectivity(tdim, 1).array.reshape(-1, 3)
+    edges = np.unique(c2e[np.asarray(cells, dtype=np.int64)].ravel()).astype(np.int32)
+    new = dmesh.refine(old, edges, redistribute=False)
+    new.topology.create_connectivity(tdim - 1, tdim)
+    new.topology.create_connectivity(tdim, 0)
+
+    # cell tags: the parent (old cell containing the midpoint)
+    n_old = old.topology.index_map(tdim).size_local + old.topology.index_map(tdim).num_ghosts
+    old_tags = tag_array(domain.cell_tags, n_old)
+    n_new = new.topology.index_map(tdim).size_local + new.topology.index_map(tdim).num_ghosts
+    mids = dmesh.compute_midpoints(new, tdim, np.arange(n_new, dtype=np.int32))
+    parents = locate_cells(old, mids)
+    if np.any(parents < 0):
+        raise RuntimeError("refine_domain: a refined cell has no parent on this rank")
+    ct = dmesh.meshtags(
+        new, tdim, np.arange(n_new, dtype=np.int32), old_tags[parents].astype(np.int32)
+    )
+
+    # facet tags: the old boundary facet on which the new facet's midpoint lies
+    ft_old = domain.facet_tags
+    a, b = _facet_segments(old, ft_old.indices)
+    facets = np.sort(dmesh.exterior_facet_indices(new.topology)).astype(np.int32)
+    fmid = dmesh.compute_midpoints(new, tdim - 1, facets)[:, :2]
+    values = np.empty(len(facets), dtype=np.int32)
+    for start in range(0, len(facets), 512):
+        block = slice(start, start + 512)
+        values[block] = ft_old.values[np.argmin(_segment_distance(fmid[block], a, b), axis=1)]
+    ft = dmesh.meshtags(new, tdim - 1, facets, values)
+
+    return Domain(
+        mesh=new,
+        cell_tags=ct,
+        facet_tags=ft,
+        coarse=compute_coarse_structure(new, ct, ft),
+        arcs=domain.arcs,
+        h=domain.h,
+        subdomain_size=domain.subdomain_size,
+        shape=domain.shape,
+        vertices=domain.vertices.copy(),
+        signorini_is_whole_boundary=domain.signorini_is_whole_boundary,
+        structured=False,
+        coarse_size=domain.coarse_size,
+        h_max=max_facet_length(new),
+    )
+
+
+def boundary_transfer(
+    old_nodes: np.ndarray, old_values: np.ndarray, new_nodes: np.ndarray
+) -> np.ndarray:
+    """A continuous piecewise linear function on the closed polygon ``old_nodes`` (n, 2)
+    with nodal ``old_values`` evaluated at the points ``new_nodes`` (m, 2) on it."""
+    a = old_nodes
+    b = np.roll(old_nodes, -1, axis=0)
+    out = np.empty(len(new_nodes))
+    for start in range(0, len(new_nodes), 512):
+        block = slice(start, start + 512)
+        p = new_nodes[block]
+        panel = np.argmin(_segment_distance(p, a, b), axis=1)
+        t = b[panel] - a[panel]
+        s = np.clip(np.einsum("md,md->m", p - a[panel], t) / np.einsum("md,md->m", t, t), 0, 1)
+        out[block] = (1 - s) * old_values[panel] + s * np.roll(old_values, -1)[panel]
+    return out
