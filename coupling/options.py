@@ -43,6 +43,7 @@ DEFAULTS: dict[str, dict[str, Any]] = {
         "flux_space": "p1",
         "jacobian": "ufl",
         "signorini_weight": 0.25,
+        "nested": False,
     },
     "output": {"dir": "fembem-out", "xdmf": True, "plots": True},
     "adapt": {"steps": 0, "theta": 0.5, "max_dofs": 200000},
@@ -69,6 +70,7 @@ DATA_VARIABLES: dict[str, tuple[str, ...]] = {
 
 #: Steps of the semismooth Newton method that are not part of the schema.
 SSN_START_STEPS = 5  # PGPM steps before the first Newton step
+SSN_WARM_START_STEPS = 0  # the same from a given iterate (nested iteration, adaptivity)
 SSN_CG_MAX_ITERATIONS = 500  # cap on the CG iterations of one Newton step
 LANCZOS_STEPS = 20  # Lanczos steps of the step estimate C0 (and of lambda_min for apgpm)
 
@@ -82,7 +84,9 @@ class SolverOptions:
     """The ``[solver]`` section (defaults in :data:`DEFAULTS`; README, configuration).
 
     ``flux_space`` and ``jacobian`` choose how the problem is discretised
-    (:class:`coupling.problem.SignoriniProblem` takes them); the rest choose how it is
+    (:class:`coupling.problem.SignoriniProblem` takes them), ``nested`` whether the
+    application solves by nested iteration over coarser meshes
+    (:func:`coupling.solvers.nested.solve_nested`); the rest choose how one problem is
     solved (:func:`coupling.solvers.solve`).
     """
 
@@ -98,6 +102,7 @@ class SolverOptions:
     flux_space: str = _solver_default("flux_space")
     jacobian: str = _solver_default("jacobian")
     signorini_weight: float = _solver_default("signorini_weight")
+    nested: bool = _solver_default("nested")
 
     def __post_init__(self) -> None:
         for name in (

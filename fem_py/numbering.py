@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["input_indices", "gather_by_input"]
+__all__ = ["input_indices", "gather_by_input", "gather_p1"]
 
 
 def input_indices(V: Any) -> np.ndarray:
@@ -42,3 +42,29 @@ def gather_by_input(
     for index, part in parts:
         out[index] = part
     return out
+
+
+def gather_p1(u) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """Gather a P1 Function to rank 0 in the input numbering of the mesh nodes
+    (:mod:`fem_py.numbering`), the same for any number of ranks.
+
+    Returns (x (N, 2), values (N,), triangles (n_cells, 3)) on rank 0, None elsewhere;
+    the triangles (counter-clockwise as in the mesh) are sorted by their node numbers.
+    """
+    V = u.function_space
+    comm = V.mesh.comm
+    index_map = V.dofmap.index_map
+    n_owned, n_global = index_map.size_local, index_map.size_global
+    numbers = input_indices(V)
+    x = gather_by_input(
+        comm, numbers[:n_owned], V.tabulate_dof_coordinates()[:n_owned, :2], n_global
+    )
+    values = gather_by_input(comm, numbers[:n_owned], u.x.array[:n_owned].real, n_global)
+    n_cells = V.mesh.topology.index_map(V.mesh.topology.dim).size_local
+    cells = numbers[V.dofmap.list.array.reshape(-1, 3)[:n_cells]]
+    parts = comm.gather(cells, root=0)
+    if comm.rank != 0:
+        return None
+    triangles = np.concatenate(parts)
+    key = np.sort(triangles, axis=1)
+    return x, values, triangles[np.lexsort(key.T[::-1])]

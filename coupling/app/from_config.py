@@ -14,6 +14,7 @@ __all__ = [
     "geometry_arguments",
     "domain_from_config",
     "planned_size",
+    "coarser_configs",
     "material_from_config",
     "problem_on_domain",
     "problem_from_config",
@@ -51,6 +52,24 @@ def planned_size(config: dict) -> Any:
 
     shape, kwargs = geometry_arguments(config)
     return domain_size(shape, **kwargs)
+
+
+def coarser_configs(config: dict, *, min_dofs: int = 1000) -> list[dict]:
+    """The configurations of the coarser levels of a nested solve, coarsest first: h
+    doubled per level with the subdomains kept, while a coarse edge keeps at least two
+    segments (2^k h <= d / 2) and the level at least ``min_dofs`` dofs (estimated as N /
+    4^k from the closed-form sizes; not limited by size for gmsh meshes)."""
+    g = config["geometry"]
+    size = planned_size(config)
+    dofs = size.dofs if size is not None else None
+    levels, k = [], 1
+    while 2**k * g["h"] <= g["subdomain_size"] / 2 and (
+        dofs is None or dofs / 4**k >= min_dofs
+    ):
+        level = {**config, "geometry": {**g, "h": g["h"] * 2**k}}
+        levels.append(level)
+        k += 1
+    return levels[::-1]
 
 
 def material_from_config(config: dict) -> Any:

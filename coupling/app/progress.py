@@ -52,6 +52,13 @@ class ProgressMonitor:
             self.stage(f"Signorini arcs of length {lengths}")
         self.stage(f"solving with {options.method}")
 
+    def level(self, record) -> None:
+        """One line per level of a nested solve."""
+        self.stage(
+            f"level of {record.dofs} dofs: {record.iterations} iterations, "
+            f"{record.cg_iterations} CG, {record.time:.2f} s"
+        )
+
     def finished(self, solution) -> None:
         """A note when J_h increased during the solve (tau was halved)."""
         if solution.energy_increases and self.comm.rank == 0:

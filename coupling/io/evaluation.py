@@ -1,7 +1,7 @@
 """u_h and u_e at any points, from the fields of a finished run (``fembem evaluate``).
 
-Each point is located against the mesh of fields.npz (P1 triangles, matplotlib's
-trapezoid-map point location) and against Gamma:
+Each point is located against the mesh of fields.npz (P1 triangles,
+:func:`fem_py.locate.locate`) and against Gamma:
 
 - ``inside`` Omega: u = u_h (linear interpolation in its triangle); u_e does not apply;
 - on Gamma (closer than 1e-11 times the diameter of Gamma's bounding box): u = u_h and
@@ -14,9 +14,9 @@ Values that do not apply are NaN (empty in the CSV).
 from __future__ import annotations
 
 import numpy as np
-from matplotlib.tri import LinearTriInterpolator, Triangulation
 
 import bem_cpp
+from fem_py.locate import interpolate_p1
 from fem_py.polyline import closest_on_polygon
 
 __all__ = ["evaluate", "ON_GAMMA"]
@@ -36,12 +36,11 @@ def evaluate(fields: dict, points: np.ndarray) -> dict[str, np.ndarray]:
     diameter = float(np.linalg.norm(nodes.max(axis=0) - nodes.min(axis=0)))
     dist, seg, t = closest_on_polygon(points, nodes)
     on = dist <= ON_GAMMA * diameter
-    x = fields["x"]
-    tri = Triangulation(x[:, 0], x[:, 1], fields["triangles"])
-    inside = (tri.get_trifinder()(points[:, 0], points[:, 1]) >= 0) & ~on
+    u_h = interpolate_p1(fields["x"], fields["triangles"], fields["u"], points)
+    inside = ~np.isnan(u_h) & ~on
     outside = ~inside & ~on
     u, ue = np.full(len(points), np.nan), np.full(len(points), np.nan)
-    u[inside] = LinearTriInterpolator(tri, fields["u"])(*points[inside].T).filled(np.nan)
+    u[inside] = u_h[inside]
     nxt = (seg[on] + 1) % len(nodes)
     for out, key in ((u, "boundary_u"), (ue, "ue")):
         out[on] = (1.0 - t[on]) * fields[key][seg[on]] + t[on] * fields[key][nxt]

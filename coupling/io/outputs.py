@@ -30,7 +30,7 @@ from mpi4py import MPI
 from coupling.io.atomic import atomic_write
 from coupling.io.plots import PLOT_FILES, write_plots
 from coupling.io.quantities import boundary_flux, complementarity, log_coefficient
-from fem_py.numbering import gather_by_input, input_indices
+from fem_py.numbering import gather_p1
 from fem_py.parallel import broadcast_from_root
 
 __all__ = [
@@ -45,32 +45,6 @@ __all__ = [
 
 #: The files of a run besides the plots (coupling.plots.PLOT_FILES).
 DATA_FILES = ("summary.json", "fields.npz", "solution.xdmf", "solution.h5")
-
-
-def gather_p1(u) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-    """Gather a P1 Function to rank 0 in the input numbering of the mesh nodes
-    (:mod:`fem_py.numbering`), the same for any number of ranks.
-
-    Returns (x (N, 2), values (N,), triangles (n_cells, 3)) on rank 0, None elsewhere;
-    the triangles (counter-clockwise as in the mesh) are sorted by their node numbers.
-    """
-    V = u.function_space
-    comm = V.mesh.comm
-    index_map = V.dofmap.index_map
-    n_owned, n_global = index_map.size_local, index_map.size_global
-    numbers = input_indices(V)
-    x = gather_by_input(
-        comm, numbers[:n_owned], V.tabulate_dof_coordinates()[:n_owned, :2], n_global
-    )
-    values = gather_by_input(comm, numbers[:n_owned], u.x.array[:n_owned].real, n_global)
-    n_cells = V.mesh.topology.index_map(V.mesh.topology.dim).size_local
-    cells = numbers[V.dofmap.list.array.reshape(-1, 3)[:n_cells]]
-    parts = comm.gather(cells, root=0)
-    if comm.rank != 0:
-        return None
-    triangles = np.concatenate(parts)
-    key = np.sort(triangles, axis=1)
-    return x, values, triangles[np.lexsort(key.T[::-1])]
 
 
 def summary(problem, result, timings: Mapping[str, float], pressure: np.ndarray) -> dict:
@@ -135,6 +109,7 @@ def write_outputs(
     plots: bool,
     config: dict | None = None,
     total: Callable[[], float] | None = None,
+    levels: list[dict] | None = None,
 ) -> list[str]:
     """Write summary.json, fields.npz and, on request, solution.xdmf/.h5 and the plots.
 
@@ -179,6 +154,8 @@ def write_outputs(
         if total is not None:
             stages["total"] = total()
         record = summary(problem, result, stages, pressure)
+        if levels is not None:  # a nested or adaptive solve: one record per level
+            record["levels"] = levels
         if config is not None:
             record["config"] = config
         record["files"] = sorted(names + ["summary.json"])

@@ -13,14 +13,20 @@ from typing import Any
 import numpy as np
 
 import bem_cpp
-from coupling.options import LANCZOS_STEPS, SSN_CG_MAX_ITERATIONS, SSN_START_STEPS, SolverOptions
+from coupling.options import (
+    LANCZOS_STEPS,
+    SSN_CG_MAX_ITERATIONS,
+    SSN_START_STEPS,
+    SSN_WARM_START_STEPS,
+    SolverOptions,
+)
 from coupling.preconditioners import Preconditioner, build_preconditioner
 from coupling.solvers.apgpm import apgpm
 from coupling.solvers.lanczos import extremes_at
 from coupling.solvers.pgpm import pgpm
 from coupling.solvers.projection import SignoriniProjection
 from coupling.solvers.records import IterationRecord, Monitor, RunResult, set_owned
-from coupling.solvers.ssn import semismooth_newton
+from coupling.solvers.ssn import semismooth_newton, zero_residual
 from fem_py.parallel import array_from_root
 
 __all__ = ["Solution", "solve", "build_projection", "step_length", "iterate"]
@@ -103,12 +109,16 @@ def iterate(
     *,
     tau: float,
     lambda_min: float | None,
+    warm_start: bool = False,
     monitor: Monitor | None = None,
 ) -> RunResult:
     """The iteration of ``options.method`` on J_h = ``functional`` from (u, phi0); u_h is
     left in ``u``. (``functional`` may wrap the problem's, as the baselines' budget does.)"""
     common = dict(tau=tau, tol=options.tol, max_iterations=options.max_iterations, monitor=monitor)
     if options.method == "ssn":
+        # from a given iterate (nested iteration, adaptivity) Newton steps start at once,
+        # with CG tolerances relative to the scale of the problem's residuals
+        scale = zero_residual(functional, preconditioner, u, phi0.size, tau) if warm_start else None
         return semismooth_newton(
             functional,
             preconditioner,
@@ -116,8 +126,9 @@ def iterate(
             forms,
             u,
             phi0,
-            start_steps=SSN_START_STEPS,
+            start_steps=SSN_WARM_START_STEPS if warm_start else SSN_START_STEPS,
             cg_max_iterations=SSN_CG_MAX_ITERATIONS,
+            residual_scale=scale,
             **common,
         )
     if options.method == "apgpm":
@@ -207,6 +218,7 @@ def solve(
             phi0,
             tau=tau,
             lambda_min=lambda_min,
+            warm_start=initial is not None,
             monitor=monitor,
         )
         timings["solve"] = time.perf_counter() - tic

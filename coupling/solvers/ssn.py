@@ -85,6 +85,36 @@ def _pcg(
     return x, max_iterations
 
 
+def _predict(preconditioner, predictor, comm, g_u, g_phi, phi, tau):
+    """The active-set prediction P_s(phi - tau M_s^{-1} grad_phi J) and the Newton residual
+    r = (||grad_u J||^2_{B_Omega^{-1}} + ||phi - prediction||^2_{M_s} / tau^2)^{1/2}."""
+    predicted = predictor(phi - tau * preconditioner.apply_signorini(g_phi), phi).phi
+    if comm.size > 1:  # one copy of the replicated unknowns
+        predicted = comm.bcast(predicted, root=0)
+    natural = phi - predicted  # tau times the projected B_s-gradient
+    residual = np.sqrt(
+        global_dot(comm, g_u, preconditioner.apply_omega(g_u))
+        + natural @ preconditioner.matvec_signorini(natural) / tau**2
+    )
+    return predicted, residual
+
+
+def zero_residual(functional, preconditioner, u_function, n_phi: int, tau: float) -> float:
+    """The Newton residual r at xi = (0, 0): the scale of the problem's residuals (for
+    ``residual_scale``; ``u_function`` is left as it was)."""
+    comm = functional.comm
+    saved = u_function.vector.array_r.copy()
+    set_owned(u_function, np.zeros_like(saved))
+    grad = u_function.vector.duplicate()
+    phi = np.zeros(n_phi)
+    g_phi = functional.gradient(u_function, phi, grad)
+    predictor = SignoriniProjection.exact(preconditioner.signorini_metric)
+    _, residual = _predict(preconditioner, predictor, comm, grad.array_r.copy(), g_phi, phi, tau)
+    grad.destroy()
+    set_owned(u_function, saved)
+    return float(residual)
+
+
 def semismooth_newton(
     functional: CoupledFunctional,
     preconditioner,
@@ -98,6 +128,7 @@ def semismooth_newton(
     max_iterations: int,
     start_steps: int,
     cg_max_iterations: int,
+    residual_scale: float | None = None,
     monitor: Monitor | None = None,
 ) -> RunResult:
     """Semismooth Newton on the optimality system, started by ``start_steps`` PGPM steps.
@@ -107,6 +138,12 @@ def semismooth_newton(
     (the rule of the PGPM) with an unchanged active set, or after ``max_iterations``
     outer steps in all (the PGPM steps included). The records of the Newton steps hold
     their CG iterations and the length taken along the Newton direction.
+
+    The CG tolerance of a step is min(0.1, sqrt(r / r_0)) times the residual r (module
+    docstring), r_0 the residual of the first Newton step, or ``residual_scale`` when
+    given: from a start already close to the solution (nested iteration) r_0 of the
+    problem's own scale (:func:`zero_residual`) keeps the steps from being limited to a
+    contraction of 0.1 each.
     """
     comm = functional.comm
     history = History(monitor)
@@ -136,23 +173,16 @@ def semismooth_newton(
         if projection.method == "exact"
         else SignoriniProjection.exact(preconditioner.signorini_metric)
     )
-    residual0 = None
+    residual0 = residual_scale
     increases = warm.energy_increases
     active = np.zeros(phi.size, dtype=bool)
     reason, converged, k = f"reached max_iterations = {max_iterations}", False, warm.iterations
     for k in range(warm.iterations + 1, max_iterations + 1):
         g_u = grad.array_r.copy()
-        predicted = predictor(phi - tau * preconditioner.apply_signorini(g_phi), phi).phi
-        if comm.size > 1:  # one copy of the replicated unknowns
-            predicted = comm.bcast(predicted, root=0)
+        predicted, residual = _predict(preconditioner, predictor, comm, g_u, g_phi, phi, tau)
         new_active = predicted <= 0.0
         active_changed = not np.array_equal(new_active, active)
         active, free = new_active, ~new_active
-        natural = phi - predicted  # tau times the projected B_s-gradient
-        residual = np.sqrt(
-            global_dot(comm, g_u, preconditioner.apply_omega(g_u))
-            + natural @ preconditioner.matvec_signorini(natural) / tau**2
-        )
         residual0 = residual if residual0 is None else residual0
         forms.assemble_jacobian(u_function, jacobian)
         metric_free = preconditioner.signorini_metric[np.ix_(free, free)]

@@ -1,0 +1,42 @@
+"""Point location in a triangle mesh (fem_py.locate) against exact answers: nodes and
+random points of a structured mesh of the unit square, P1 interpolation exact for
+linear functions, points outside found in no triangle."""
+from __future__ import annotations
+
+import numpy as np
+
+from fem_py.locate import interpolate_p1, locate
+
+
+def _mesh(n: int):
+    g = np.linspace(0.0, 1.0, n + 1)
+    X, Y = np.meshgrid(g, g, indexing="ij")
+    x = np.column_stack([X.ravel(), Y.ravel()])
+    i, j = (a.ravel() for a in np.meshgrid(np.arange(n), np.arange(n), indexing="ij"))
+    p = lambda a, b: a * (n + 1) + b  # noqa: E731
+    tris = np.concatenate(
+        [
+            np.stack([p(i, j), p(i + 1, j), p(i + 1, j + 1)], 1),
+            np.stack([p(i, j), p(i + 1, j + 1), p(i, j + 1)], 1),
+        ]
+    )
+    return x, tris
+
+
+def test_random_points_are_in_the_triangle_that_holds_them():
+    x, tris = _mesh(16)
+    pts = np.random.default_rng(0).uniform(0, 1, (500, 2))
+    cell, bary = locate(x, tris, pts)
+    assert (cell >= 0).all() and (bary >= -1e-12).all()
+    np.testing.assert_allclose(np.einsum("ij,ijk->ik", bary, x[tris[cell]]), pts, atol=1e-14)
+
+
+def test_linear_functions_interpolate_exactly_and_outside_is_nan():
+    x, tris = _mesh(8)
+    f = lambda p: 1.0 + 2.0 * p[:, 0] - 3.0 * p[:, 1]  # noqa: E731
+    pts = np.vstack(
+        [np.random.default_rng(1).uniform(0, 1, (200, 2)), x, [[1.5, 0.5], [-0.1, 0.2]]]
+    )
+    values = interpolate_p1(x, tris, f(x), pts)
+    np.testing.assert_allclose(values[:-2], f(pts[:-2]), atol=1e-13)
+    assert np.isnan(values[-2:]).all()
