@@ -1,0 +1,31 @@
+"""The adaptive loop under MPI: the same levels (dofs, marked cells, estimator, errors,
+contact sets) and the same refined mesh up to the ordering as in serial."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from conftest import ROOT, run_mpi
+
+SCRIPT = str(ROOT / "tests" / "mpi" / "adapt_parallel.py")
+
+
+@pytest.mark.mpi
+@pytest.mark.parametrize("case", ["corner", "contact"])
+def test_adaptive_levels_independent_of_ranks(tmp_path, case):
+    runs = {}
+    for nprocs in (1, 2):
+        out = tmp_path / f"p{nprocs}.json"
+        run_mpi(nprocs, SCRIPT, str(out), case)
+        runs[nprocs] = json.loads(out.read_text())
+    serial, par = runs[1], runs[2]
+    assert len(serial["rows"]) == len(par["rows"])
+    for s, p in zip(serial["rows"], par["rows"]):
+        for key in ("dofs", "boundary_dofs", "signorini_dofs", "cells", "marked", "contact_nodes"):
+            assert s[key] == p[key], key
+        assert s["converged"] and p["converged"] and p["mismatch"] == 0
+        assert p["estimator"] == pytest.approx(s["estimator"], rel=1e-8)
+        assert p["error"] == pytest.approx(s["error"], rel=1e-8)
+    np.testing.assert_allclose(np.array(par["cells"]), np.array(serial["cells"]), atol=1e-14)
