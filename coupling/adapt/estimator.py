@@ -119,16 +119,24 @@ def _boundary_function(problem: Any, values: np.ndarray, name: str) -> fem.Funct
     return fn
 
 
+def _owned_cell_values(W: Any, vec: PETSc.Vec) -> np.ndarray:
+    """The owned entries of a DG0 vector (ghosts summed), in the order of the owned cells
+    (the DG0 dof of cell c is dofmap[c], not necessarily c)."""
+    vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    n_cells = W.mesh.topology.index_map(W.mesh.topology.dim).size_local
+    return vec.array_r[W.dofmap.list.array[:n_cells]].copy()
+
+
 def _assemble_cellwise(W: Any, form: Any) -> np.ndarray:
     vec = fem.petsc.assemble_vector(compile_form(form))
-    vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-    out = vec.array_r.copy()
+    out = _owned_cell_values(W, vec)
     vec.destroy()
     return out
 
 
 def _panel_cells(problem: Any, W: Any, per_panel: np.ndarray) -> np.ndarray:
-    """Owned-cell sums of a per-panel quantity (boundary order), each panel to its cell."""
+    """Owned-cell sums of a per-panel quantity (boundary order), each panel to its cell
+    (its exterior facet's cell, found by the facet midpoint)."""
     msh = problem.V.mesh
     tdim = msh.topology.dim
     msh.topology.create_connectivity(tdim - 1, tdim)
@@ -136,13 +144,12 @@ def _panel_cells(problem: Any, W: Any, per_panel: np.ndarray) -> np.ndarray:
     mids = dmesh.compute_midpoints(msh, tdim - 1, facets)[:, :2]
     nodes = problem.boundary.nodes
     panel_mids = 0.5 * (nodes + np.roll(nodes, -1, axis=0))
-    dist, panel = cKDTree(panel_mids).query(mids)
+    _, panel = cKDTree(panel_mids).query(mids)
     f2c = msh.topology.connectivity(tdim - 1, tdim)
     cells = np.array([f2c.links(f)[0] for f in facets], dtype=np.int32)
     vec = fem.Function(W)
-    np.add.at(vec.x.array, cells, per_panel[panel])
-    vec.vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-    return vec.vector.array_r.copy()
+    np.add.at(vec.x.array, W.dofmap.list.array[cells], per_panel[panel])
+    return _owned_cell_values(W, vec.vector)
 
 
 def estimate(problem: Any, solution: Any, *, f: Any = "0", t0: Any = "0") -> Estimate:
