@@ -39,10 +39,33 @@ class Interrupted(BaseException):
         self.signum = signum
 
 
-def _interrupt(signum: int, frame: object) -> None:
-    for s in EXIT_INTERRUPTED:  # a second signal must not interrupt the clean-up
-        signal.signal(s, signal.SIG_IGN)
-    raise Interrupted(signum)
+class InterruptHandler:
+    """The SIGINT/SIGTERM handler of one command: it reports the interrupt at once (before
+    any clean-up: mpirun may stop forwarding output soon after it forwards a signal) and
+    raises :class:`Interrupted`. Once the output folder is staged (``staging``), the
+    first rank to claim it reports (another rank may be stuck in a collective call);
+    before, rank 0 does."""
+
+    def __init__(self) -> None:
+        self.staging: Path | None = None
+
+    def __call__(self, signum: int, frame: object) -> None:
+        for s in EXIT_INTERRUPTED:  # a second signal must not interrupt the clean-up
+            signal.signal(s, signal.SIG_IGN)
+        if self.staging is not None:
+            from coupling.io.atomic import claim
+
+            report = claim(self.staging)
+        else:
+            report = _rank() == 0
+        if report:
+            name = signal.Signals(signum).name
+            print(
+                f"fembem: interrupted by {name}; no output of this run was kept",
+                file=sys.stderr,
+                flush=True,
+            )
+        raise Interrupted(signum)
 
 
 def _rank() -> int:
@@ -198,7 +221,7 @@ def _with_geometry_key(build, *args):
         raise named from None
 
 
-def _solve(args: argparse.Namespace) -> int:
+def _solve(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
     from mpi4py import MPI
 
     comm = MPI.COMM_WORLD
@@ -227,6 +250,7 @@ def _solve(args: argparse.Namespace) -> int:
     if size is not None:  # closed form: refuse before anything is built
         check_memory(size, comm.size, plots=config["output"]["plots"])
     with staged_output_dir(comm, out, force=args.force) as staging:
+        interrupts.staging = staging  # from here the first rank to claim it reports
         startup = process_seconds()
         if monitor is not None:
             monitor.stage("building the mesh and assembling the problem")
@@ -280,7 +304,7 @@ def _solve(args: argparse.Namespace) -> int:
     return EXIT_OK if result.converged else EXIT_NOT_CONVERGED
 
 
-def _info(args: argparse.Namespace) -> int:
+def _info(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
     from mpi4py import MPI
 
     from coupling.app.from_config import domain_from_config, planned_size
@@ -334,7 +358,7 @@ def _read_points(path: Path) -> np.ndarray:
     return points
 
 
-def _exterior(args: argparse.Namespace) -> int:
+def _exterior(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
     import bem_cpp
 
     from coupling.io.outputs import load_fields
@@ -368,7 +392,7 @@ def _write_table(table: str, out: str | None) -> None:
             sys.stdout.write(table)
 
 
-def _evaluate(args: argparse.Namespace) -> int:
+def _evaluate(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
     from coupling.io.evaluation import evaluate
     from coupling.io.outputs import load_fields
 
@@ -387,7 +411,7 @@ def _evaluate(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _check_jacobian(args: argparse.Namespace) -> int:
+def _check_jacobian(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
     from mpi4py import MPI
 
     from coupling.app.from_config import domain_from_config, material_from_config
@@ -409,29 +433,22 @@ def _check_jacobian(args: argparse.Namespace) -> int:
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the exit code. SIGINT and SIGTERM end it with one
     line and exit code 130 or 143 wherever they arrive."""
-    previous = {s: signal.signal(s, _interrupt) for s in EXIT_INTERRUPTED}
+    interrupts = InterruptHandler()
+    previous = {s: signal.signal(s, interrupts) for s in EXIT_INTERRUPTED}
     import petsc4py
 
     # signals stay Python's (PETSc's handlers would print a crash report instead)
     petsc4py.init([sys.argv[0], "-no_signal_handler"])
     try:
-        return _main(sys.argv[1:] if argv is None else list(argv))
-    except Interrupted as err:
-        # after the output folder was staged, the first rank to clean up reports
-        if getattr(err, "first_to_clean_up", _rank() == 0):
-            name = signal.Signals(err.signum).name
-            print(
-                f"fembem: interrupted by {name}; no output of this run was kept",
-                file=sys.stderr,
-                flush=True,
-            )
+        return _main(sys.argv[1:] if argv is None else list(argv), interrupts)
+    except Interrupted as err:  # reported by the handler
         return EXIT_INTERRUPTED[err.signum]
     finally:
         for s, handler in previous.items():
             signal.signal(s, handler)
 
 
-def _main(argv: list[str]) -> int:
+def _main(argv: list[str], interrupts: InterruptHandler) -> int:
     if argv[:1] == ["study"]:
         from coupling.study import main as study  # loaded only when asked for
 
@@ -457,7 +474,7 @@ def _main(argv: list[str]) -> int:
 
     try:
         with threadpool_limits(threads_per_rank(MPI.COMM_WORLD)):  # no oversubscription
-            return handler(args)
+            return handler(args, interrupts)
     except (ValueError, OSError) as err:  # bad input: configuration, files, folders
         if args.debug:
             raise

@@ -19,7 +19,7 @@ from mpi4py import MPI
 
 from fem_py.parallel import broadcast_from_root, run_on_root
 
-__all__ = ["atomic_write", "prepare_output_dir", "staged_output_dir"]
+__all__ = ["atomic_write", "prepare_output_dir", "staged_output_dir", "claim"]
 
 
 def _check_output_dir(out: Path, force: bool) -> None:
@@ -86,9 +86,10 @@ def _move_into_place(staging: Path, out: Path) -> None:
     shutil.rmtree(old)
 
 
-def _claim(staging: Path) -> bool:
-    """True for exactly one of the ranks that call this while ``staging`` exists (an
-    exclusive create of a marker file inside it)."""
+def claim(staging: Path) -> bool:
+    """True for exactly one of the ranks (processes) that call this while ``staging``
+    exists: an exclusive create of a marker file inside it. Which rank reports an
+    interrupt, when any rank may be stuck in a collective call."""
     try:
         os.close(os.open(staging / ".claimed", os.O_CREAT | os.O_EXCL | os.O_WRONLY))
         return True
@@ -102,8 +103,8 @@ def staged_output_dir(comm: MPI.Comm, out: Path, *, force: bool) -> Iterator[Pat
 
     ``out`` is checked as by :func:`prepare_output_dir` first. When the block ends
     normally the staging folder replaces ``out`` (collective); when it ends by an
-    exception (an interrupt included) rank 0 removes it and ``out`` is untouched, which
-    needs no collective call. Yields the staging folder on every rank.
+    exception (an interrupt included) every rank removes it and ``out`` is untouched,
+    which needs no collective call. Yields the staging folder on every rank.
     """
     out = Path(out)
 
@@ -119,11 +120,9 @@ def staged_output_dir(comm: MPI.Comm, out: Path, *, force: bool) -> Iterator[Pat
     staging = Path(broadcast_from_root(comm, create))
     try:
         yield staging
-    except BaseException as err:
+    except BaseException:
         # every rank removes it: after an interrupt a rank may be stuck in a collective
-        # call with a peer that has gone, and mpirun then kills it; the first rank to
-        # arrive (and only it) is marked to report the interrupt
-        err.first_to_clean_up = _claim(staging)
+        # call with a peer that has gone, and mpirun then kills it
         shutil.rmtree(staging, ignore_errors=True)
         raise
     try:
