@@ -79,6 +79,17 @@ def test_volume_and_jump_terms_vanish_for_a_globally_linear_u(square, rho):
     assert terms["jump"] <= 1e-26
 
 
+def test_flux_mismatch_vanishes_when_interior_flux_equals_exterior_flux_plus_t0(square):
+    """u_h = 2x - 1.5y (rho = 1), psi_h = 0 and t0 = grad u . n: sigma_h . n - psi_h - t0 = 0
+    on every boundary facet."""
+    problem = SignoriniProblem(square, make_material("linear"), f="0")
+    solution = solve(problem, SolverOptions(max_iterations=1))
+    solution.u.interpolate(lambda x: 2.0 * x[0] - 1.5 * x[1])
+    solution = dataclasses.replace(solution, flux=np.zeros_like(solution.flux))
+    terms = estimate(problem, solution, f="0", t0="2*nx - 1.5*ny").terms
+    assert terms["flux"] <= 1e-26 and terms["jump"] <= 1e-26
+
+
 def test_volume_term_is_h2_f2_for_p1(square):
     problem = SignoriniProblem(square, make_material("carstensen"), f="2")
     solution = solve(problem, SolverOptions())
