@@ -18,11 +18,13 @@ New nodes are edge midpoints and old nodes stay, so a P1 function is transferred
 exactly by evaluating it at the new nodes (:func:`transfer_p1`): old values at old
 nodes, the average of the two end values at a midpoint.
 
-Serial meshes; under MPI ``redistribute=False`` keeps each child on the rank of its
-parent, which the local point location below needs.
+Under MPI, ``redistribute=False`` keeps each child on the rank of its parent, which the
+rank-local point location below needs, and keeps whole subdomains per rank; the refined
+mesh is the same as in serial up to the ordering (tests/test_mpi_adapt.py, 2 ranks).
 """
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 import numpy as np
@@ -96,8 +98,6 @@ def refine_domain(domain: Any, cells: np.ndarray) -> Any:
     (every edge of a marked cell is bisected, plus the closure of Plaza's refinement) and
     return the refined Domain with re-built tags and coarse structure (collective).
     """
-    from fem_py.geometry import Domain  # geometry imports this module's siblings only
-
     old = domain.mesh
     tdim = old.topology.dim
     old.topology.create_connectivity(tdim, 1)
@@ -130,19 +130,14 @@ def refine_domain(domain: Any, cells: np.ndarray) -> Any:
         values[block] = ft_old.values[np.argmin(_segment_distance(fmid[block], a, b), axis=1)]
     ft = dmesh.meshtags(new, tdim - 1, facets, values)
 
-    return Domain(
+    # the other fields (arcs, sizes, polygon, ...) are those of the refined domain
+    return dataclasses.replace(
+        domain,
         mesh=new,
         cell_tags=ct,
         facet_tags=ft,
         coarse=compute_coarse_structure(new, ct, ft),
-        arcs=domain.arcs,
-        h=domain.h,
-        subdomain_size=domain.subdomain_size,
-        shape=domain.shape,
-        vertices=domain.vertices.copy(),
-        signorini_is_whole_boundary=domain.signorini_is_whole_boundary,
         structured=False,
-        coarse_size=domain.coarse_size,
         h_max=max_facet_length(new),
     )
 
