@@ -116,3 +116,23 @@ def test_a_run_that_cannot_fit_is_refused(tmp_path):
     assert not out.exists() and sorted(p.name for p in tmp_path.iterdir()) == ["c.toml"]
     report = json.loads(run_cli("info", str(config), "--json").stdout)
     assert report["dofs"] == 50001**2 and report["memory_estimate_bytes"] > 1e11
+
+
+def test_memory_error_ends_as_one_line(monkeypatch, tmp_path, capsys):
+    """A MemoryError that the estimate did not foresee (here raised on purpose by the
+    command) ends as one line and exit code 2, not a traceback."""
+    import coupling.app.cli as cli
+
+    def out_of_memory(args, interrupts):
+        raise MemoryError("Unable to allocate 5.2 GiB for an array with shape (26000, 26000)")
+
+    monkeypatch.setattr(cli, "_info", out_of_memory)
+    config = tmp_path / "c.toml"
+    config.write_text("")
+    assert cli.main(["info", str(config)]) == 2
+    err = capsys.readouterr().err
+    assert err.strip().splitlines() == [
+        "fembem: error: out of memory (Unable to allocate 5.2 GiB for an array with shape "
+        "(26000, 26000)); use a coarser mesh (geometry.h, geometry.subdomain_size) or a "
+        "machine with more memory"
+    ]

@@ -49,12 +49,19 @@ def memory_estimate(size: DomainSize, ranks: int = 1, *, plots: bool = True) -> 
 
 
 def memory_available() -> int:
-    """Bytes the kernel says new processes can use without swapping (MemAvailable)."""
+    """Bytes the kernel says new processes can use without swapping (MemAvailable), or the
+    process's address-space limit (``ulimit -v``) if that is lower."""
+    import resource
+
     with open("/proc/meminfo") as meminfo:
         for line in meminfo:
             if line.startswith("MemAvailable:"):
-                return int(line.split()[1]) * 1024
-    raise OSError("MemAvailable not found in /proc/meminfo")
+                available = int(line.split()[1]) * 1024
+                break
+        else:
+            raise OSError("MemAvailable not found in /proc/meminfo")
+    limit = resource.getrlimit(resource.RLIMIT_AS)[0]
+    return available if limit == resource.RLIM_INFINITY else min(available, int(limit))
 
 
 def _gb(n: float) -> str:
