@@ -30,7 +30,13 @@ import ufl
 
 from fem_py.expressions import numpy_function, parse_expression
 
-__all__ = ["ManufacturedSolution", "square_contact", "lshape_contact", "MANUFACTURED"]
+__all__ = [
+    "ManufacturedSolution",
+    "square_contact",
+    "lshape_contact",
+    "disk_contact",
+    "MANUFACTURED",
+]
 
 _A, _B, _C = 0.5, 0.2, (0.05, -0.03)
 _K, _G = 20.0, 100.0
@@ -78,6 +84,7 @@ class ManufacturedSolution:
     u: str
     ue: str
     a: float = _A
+    radius: float = 0.0  # the disk's (its arcs run along the circle)
 
     @property
     def signorini(self) -> list[tuple[tuple[float, float], tuple[float, float]]]:
@@ -97,6 +104,8 @@ class ManufacturedSolution:
         return gap
 
     def _on_arcs(self, points: np.ndarray) -> list[np.ndarray]:
+        if self.shape == "disk":
+            return self._on_circle_arcs(points)
         masks = []
         for arc in self.arcs:
             p0, p1 = np.array(arc.start), np.array(arc.end)
@@ -105,6 +114,21 @@ class ManufacturedSolution:
             along = rel @ t / (t @ t)
             across = np.abs(rel[:, 0] * t[1] - rel[:, 1] * t[0]) / np.linalg.norm(t)
             masks.append((across < 1e-12) & (along >= -1e-12) & (along <= 1 + 1e-12))
+        return masks
+
+    def _on_circle_arcs(self, points: np.ndarray) -> list[np.ndarray]:
+        rel = points - np.asarray(self.center)
+        on_circle = np.abs(np.linalg.norm(rel, axis=1) - self.radius) < 1e-9 * self.radius
+        angle = np.arctan2(rel[:, 1], rel[:, 0])
+        masks = []
+        for arc in self.arcs:
+            t0, t1 = (
+                np.arctan2(p[1] - self.center[1], p[0] - self.center[0])
+                for p in (arc.start, arc.end)
+            )
+            span = (t1 - t0) % (2 * np.pi)
+            r = (angle - t0) % (2 * np.pi)
+            masks.append(on_circle & ((r <= span + 1e-12) | (r >= 2 * np.pi - 1e-12)))
         return masks
 
     def u0(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -159,7 +183,26 @@ def lshape_contact() -> ManufacturedSolution:
     return ManufacturedSolution("lshape", 0.5, (0.0, 0.0), arcs, u, exterior_field((-0.1, -0.1)))
 
 
-MANUFACTURED = {"square": square_contact, "lshape": lshape_contact}
+def disk_contact(radius: float = 0.25) -> ManufacturedSolution:
+    """Disk of radius R about 0, Signorini arc = the lower quarter of the circle, from angle
+    -3 pi/4 to -pi/4 (x from -R/sqrt 2 to R/sqrt 2; contact for x < 0).
+
+    The smooth part is P(m x, m y) with m = (3R^2 - r^2)/(2R^2), whose radial derivative
+    vanishes on the circle; the flux term is K (R^2 - r^2)/(2R) max(0, -x)^3 (du/dn = -K
+    max(0, -x)^3 on r = R), the gap G max(0, x)^3 (R/sqrt 2 - x)."""
+    R = float(radius)
+    m = f"((3*{R}**2 - (x**2 + y**2))/(2*{R}**2))"
+    X, Y = f"({m}*x)", f"({m}*y)"
+    smooth = f"0.2 + 3*{X} + 0.2*cos(pi*{Y})*sin(pi*{X}) + 0.3*({X} + 0.1)**2"
+    u = f"{smooth} + {_K}*(({R}**2 - (x**2 + y**2))/(2*{R}))*max(0, -x)**3"
+    c = R / np.sqrt(2.0)
+    arc = Arc((-c, -c), (c, -c), f"{_G}*max(0, x)**3*({c} - x)")
+    return ManufacturedSolution(
+        "disk", 2 * R, (0.0, 0.0), (arc,), u, exterior_field((0.03, -0.02)), radius=R
+    )
+
+
+MANUFACTURED = {"square": square_contact, "lshape": lshape_contact, "disk": disk_contact}
 
 
 def manufactured_problem(
@@ -185,9 +228,12 @@ def manufactured_problem(
         h=h,
         subdomain_size=d_over_h * h,
         center=solution.center,
-        width=solution.width,
+        **(
+            {"radius": solution.radius}
+            if solution.shape == "disk"
+            else {"width": solution.width, "structured": structured}
+        ),
         signorini=solution.signorini,
-        structured=structured,
     )
     data = solution.data(domain.mesh, material)
     return SignoriniProblem(

@@ -27,6 +27,9 @@ DEFAULTS: dict[str, dict[str, Any]] = {
         "structured": True,
         "signorini": [],
         "allow_large": False,
+        "mesh": "",
+        "subdomains": "auto",
+        "radius": 0.25,
     },
     "material": {"rho": "linear", "p": 2.0, "eps": 1.0},
     "data": {"f": "0", "u0": "0", "t0": "0", "a": 0.0},
@@ -51,7 +54,8 @@ DEFAULTS: dict[str, dict[str, Any]] = {
 
 #: Keys whose value must be one of a fixed set of strings.
 CHOICES: dict[tuple[str, str], tuple[str, ...]] = {
-    ("geometry", "shape"): ("square", "lshape", "polygon"),
+    ("geometry", "shape"): ("square", "lshape", "polygon", "disk"),
+    ("geometry", "subdomains"): ("auto", "physical"),
     ("solver", "method"): ("pgpm", "apgpm", "ssn"),
     ("solver", "preconditioner"): ("substructuring", "identity", "exact"),
     ("solver", "projection"): ("inexact", "exact"),

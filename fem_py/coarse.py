@@ -24,6 +24,7 @@ import scipy.sparse as sp
 from mpi4py import MPI
 from scipy.sparse.csgraph import connected_components
 
+from fem_py.chains import mark_closed_chains, walk_chains
 from fem_py.parallel import broadcast_from_root, run_on_root
 
 if TYPE_CHECKING:
@@ -295,7 +296,9 @@ class CoarseStructure:
         return self.edge_dofs.lengths - 1
 
 
-def compute_coarse_structure(msh: Any, cell_tags: Any, facet_tags: Any) -> CoarseStructure:
+def compute_coarse_structure(
+    msh: Any, cell_tags: Any, facet_tags: Any, corner_angle: float | None = None
+) -> CoarseStructure:
     """Recover the coarse partition from the distributed mesh (collective).
 
     Skeleton facets are the exterior facets and the facets whose two cells carry
@@ -303,6 +306,12 @@ def compute_coarse_structure(msh: Any, cell_tags: Any, facet_tags: Any) -> Coars
     pairs; coarse vertices are the skeleton nodes of degree != 2, or where the two
     skeleton facets are not collinear, or where the exterior facet tag changes (arc
     ends). Chains between coarse vertices are the coarse edges. The result is broadcast.
+
+    ``corner_angle`` (radians) is for curved coarse edges (subdomains of an automatic
+    partition, ``fem_py.partition``, curved boundaries): a bend makes a coarse vertex
+    only on Gamma and only where it turns by more than ``corner_angle``; interfaces
+    between subdomains may zigzag, their chains are ordered by walking them, and a
+    closed chain without a coarse vertex gets two. None: the straight edges above.
     """
     from fem_py.forms import p1_space
     from fem_py.meshdata import (
@@ -343,7 +352,7 @@ def compute_coarse_structure(msh: Any, cell_tags: Any, facet_tags: Any) -> Coars
         tag_global = np.full(n_dofs, -1, dtype=np.int32)
         for g, t in gathered:
             tag_global[g] = t
-        return _coarse_from_skeleton(fd, tag_global, n_dofs, n_sub)
+        return _coarse_from_skeleton(fd, tag_global, n_dofs, n_sub, corner_angle)
 
     if comm.size == 1:
         return run_on_root(comm, on_root, error_prefix="coarse structure")
@@ -370,7 +379,11 @@ def _unpack(fields: dict) -> CoarseStructure:
 
 
 def _coarse_from_skeleton(
-    fd: FacetData, tag_global: np.ndarray, n_dofs: int, n_sub: int
+    fd: FacetData,
+    tag_global: np.ndarray,
+    n_dofs: int,
+    n_sub: int,
+    corner_angle: float | None = None,
 ) -> CoarseStructure:
     # skeleton nodes = the dofs on skeleton facets, sorted (a mark array of n_dofs
     # instead of np.unique: no sort)
@@ -399,13 +412,19 @@ def _coarse_from_skeleton(
         Xi = X.take(i2, axis=0)  # take: faster than X[i2] for (n, 2) rows (docs/design/fem_py.md)
         u, w = Xi - X.take(a, axis=0), X.take(b, axis=0) - Xi
         cross = np.abs(u[:, 0] * w[:, 1] - u[:, 1] * w[:, 0])
-        bent = (cross > _COLLINEAR_TOL * np.linalg.norm(u, axis=1) * np.linalg.norm(w, axis=1)) | (
-            (u * w).sum(1) <= 0
-        )
+        if corner_angle is None:
+            bent = (
+                cross > _COLLINEAR_TOL * np.linalg.norm(u, axis=1) * np.linalg.norm(w, axis=1)
+            ) | ((u * w).sum(1) <= 0)
+        else:  # corners of Gamma only
+            turn = np.arctan2(cross, (u * w).sum(1))
+            bent = fd.exterior[f] & fd.exterior[g] & (turn > corner_angle)
         tag_change = (fd.exterior[f] != fd.exterior[g]) | (
             fd.exterior[f] & (fd.tag[f] != fd.tag[g])
         )
         is_vertex[i2[bent | tag_change]] = True
+    if corner_angle is not None:
+        mark_closed_chains(inv, incident, first, i2, f, g, is_vertex)
     vidx = np.flatnonzero(is_vertex)
     # sort keys rounded far above round-off, so that coordinate noise (gmsh leaves ~1e-18
     # instead of 0) cannot reorder vertices between runs
@@ -454,7 +473,14 @@ def _coarse_from_skeleton(
     position = offset[:, 0] * chord[:, 0] + offset[:, 1] * chord[:, 1]
     length = np.bincount(c, minlength=n_edges)
     offsets = np.concatenate([[0], np.cumsum(length)])
-    chain_nodes = _sort_rows(Ragged(nd, offsets), position)
+    if corner_angle is None:
+        chain_nodes = _sort_rows(Ragged(nd, offsets), position)
+    else:  # curved chains: walk them from their start
+        start, stop, rows = walk_chains(
+            inv, incident, first, is_vertex, comp, fd.exterior, start, stop, vnum
+        )
+        chain_nodes = as_ragged(rows, dtype=np.int64)
+        offsets, length = chain_nodes.offsets, chain_nodes.lengths
     if np.any(fd.exterior & (fd.tag != fd.tag[first_facet][comp])):
         raise RuntimeError("a coarse boundary edge carries two facet tags")
     ftag = fd.tag[first_facet]

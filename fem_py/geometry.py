@@ -91,6 +91,9 @@ __all__ = [
     "DomainSize",
     "build_domain",
     "domain_size",
+    "domain_from_file",
+    "domain_from_mesh",
+    "domain_from_prepared",
     "compute_coarse_structure",
     "GAMMA_T_TAG",
     "SIGNORINI_TAG0",
@@ -281,6 +284,7 @@ def domain_size(
     signorini: Any = (),
     structured: bool = False,
     allow_large: bool = False,
+    radius: float = 0.25,
 ) -> DomainSize | None:
     """The sizes of ``build_domain(comm, shape, ...)`` (same arguments) in closed form,
     without a mesh: for the structured square and L-shape; None where only meshing
@@ -292,6 +296,11 @@ def domain_size(
     nodes, a closed one (``"all"``) every boundary node. The facets of the right
     triangles are c/n (legs) and sqrt(2) c/n (diagonals), c the coarse size.
     """
+    if shape == "disk":
+        from fem_py.disk import disk_plan
+
+        disk_plan(h, subdomain_size, center, radius, signorini, allow_large)
+        return None
     plan = _plan(
         shape, h, subdomain_size, center, width, vertices, signorini, structured, allow_large
     )
@@ -340,6 +349,7 @@ def build_domain(
     signorini: Any = (),
     structured: bool = False,
     allow_large: bool = False,
+    radius: float = 0.25,
 ) -> Domain:
     """Mesh Omega with a coarse partition into subdomains of size about ``subdomain_size``.
 
@@ -349,7 +359,9 @@ def build_domain(
         MPI communicator (all its ranks call with the same arguments).
     shape
         ``"square"`` (``center``, ``width``), ``"lshape"`` (``center``, ``width``: the square
-        of that width minus its upper-right quarter) or ``"polygon"`` (``vertices``, CCW).
+        of that width minus its upper-right quarter), ``"polygon"`` (``vertices``, CCW) or
+        ``"disk"`` (``center``, ``radius``: a gmsh mesh of size h, subdomains of the
+        automatic partition ``fem_py.partition``, arcs as point pairs on the circle).
     h
         Fine mesh size (structured: h = coarse edge / round(d/h)).
     subdomain_size
@@ -373,6 +385,10 @@ def build_domain(
         gmsh failed on rank 0 (``"meshing the domain failed: <type>: <message>"``, on
         every rank).
     """
+    if shape == "disk":
+        from fem_py.disk import disk_domain
+
+        return disk_domain(comm, h, subdomain_size, center, radius, signorini, allow_large)
     plan = _plan(
         shape, h, subdomain_size, center, width, vertices, signorini, structured, allow_large
     )
@@ -424,6 +440,119 @@ def build_domain(
         signorini_is_whole_boundary=whole,
         structured=bool(structured),
         coarse_size=float(csize),
+        h_max=h_max,
+    )
+
+
+#: A bend of Gamma by more than this (radians) makes a coarse vertex of a mesh from a
+#: file or of a curved shape (``fem_py.coarse``: corners stay coarse vertices, a smooth
+#: curve does not fill with them).
+CORNER_ANGLE = math.pi / 6
+
+
+def domain_from_file(
+    comm: Any,
+    path: str,
+    *,
+    subdomain_size: float,
+    signorini: Any = (),
+    subdomains: str = "auto",
+    allow_large: bool = False,
+) -> Domain:
+    """The :class:`Domain` of a gmsh mesh file (MSH 2.2 or 4.1, 2D linear triangles).
+
+    Rank 0 reads and checks the file (``fem_py.own_mesh``) and partitions it (``subdomains
+    = "auto"``: subdomains of size about ``subdomain_size``; ``"physical"``: the
+    physical surface groups); the mesh is then distributed by whole subdomains.
+    ``signorini`` names physical curve groups (or ``"all"``). Collective; a bad file or
+    argument raises the same one-line ``ValueError`` on every rank before the mesh is
+    distributed.
+    """
+    from fem_py.own_mesh import prepare_mesh, read_msh
+
+    d = _check_size(subdomain_size)
+    return domain_from_prepared(
+        comm,
+        lambda: prepare_mesh(
+            read_msh(path),
+            signorini=signorini,
+            subdomain_size=d,
+            subdomains=subdomains,
+            allow_large=allow_large,
+        ),
+        d,
+        "mesh",
+    )
+
+
+def domain_from_mesh(
+    mesh: Any,
+    facet_tags: Any,
+    signorini: Any = (),
+    subdomain_size: float | None = None,
+    cell_tags: Any = None,
+    names: dict[str, int] | None = None,
+    allow_large: bool = False,
+) -> Domain:
+    """The :class:`Domain` of a DOLFINx triangle mesh (collective, on ``mesh.comm``).
+
+    ``facet_tags`` mark boundary parts; ``signorini`` lists the tags (or names, through
+    ``names``: name -> tag) of Gamma_s, or ``"all"``. Subdomains: ``cell_tags`` (one
+    subdomain per tag value) when given, else the automatic partition of size
+    ``subdomain_size``. The mesh is gathered on rank 0 and distributed anew by whole
+    subdomains, so the returned ``Domain.mesh`` is a new mesh.
+    """
+    from fem_py.own_mesh import gather_mesh, prepare_mesh
+
+    if subdomain_size is None and cell_tags is None:
+        raise ValueError("subdomain_size: give subdomain_size (or cell_tags as subdomains)")
+    d = _check_size(subdomain_size) if subdomain_size is not None else 1.0
+    gathered = gather_mesh(mesh, facet_tags, cell_tags, names)
+    comm = mesh.comm
+    return domain_from_prepared(
+        comm,
+        lambda: prepare_mesh(
+            gathered,
+            signorini=[str(s) for s in signorini] if not isinstance(signorini, str) else signorini,
+            subdomain_size=d,
+            subdomains="auto" if cell_tags is None else "physical",
+            allow_large=allow_large,
+        ),
+        d,
+        "mesh",
+    )
+
+
+def _check_size(d: Any) -> float:
+    if not _is_positive_number(d):
+        raise ValueError(f"subdomain_size must be a positive number, got {d!r}")
+    return float(d)
+
+
+def domain_from_prepared(comm: Any, prepare: Any, d: float, shape: str) -> Domain:
+    """``prepare()`` (a ``fem_py.own_mesh.PreparedMesh``) on rank 0, its errors raised on
+    every rank; the mesh distributed by whole subdomains, its coarse edges curved."""
+    prepared = run_on_root(comm, prepare)
+    meta = broadcast_from_root(
+        comm, lambda: (prepared.polygon, prepared.arcs, prepared.whole, prepared.subdomain_size)
+    )
+    polygon, arcs, whole, d = meta
+    msh, ct0, ft = distribute_mesh(comm, prepared.arrays if comm.rank == 0 else None)
+    coarse = compute_coarse_structure(msh, ct0, ft, corner_angle=CORNER_ANGLE)
+    h_max = _max_facet_length(msh)
+    return Domain(
+        mesh=msh,
+        cell_tags=ct0,
+        facet_tags=ft,
+        coarse=coarse,
+        arcs=arcs,
+        h=h_max,
+        subdomain_size=d,
+        shape=shape,
+        vertices=np.asarray(polygon, dtype=float),
+        signorini_is_whole_boundary=bool(whole),
+        structured=False,
+        coarse_size=d,
         h_max=h_max,
     )
 

@@ -65,7 +65,12 @@ class Arc:
 
 # ======================================================================= polygons
 def diameter(P: np.ndarray) -> float:
-    """diam of the point set ``P`` (m, 2): the largest distance between two points."""
+    """diam of the point set ``P`` (m, 2): the largest distance between two points (for
+    many points, between two vertices of their convex hull)."""
+    if len(P) > 64:
+        from scipy.spatial import ConvexHull
+
+        P = P[ConvexHull(P).vertices]
     d = P[:, None, :] - P[None, :, :]
     return float(np.sqrt((d**2).sum(-1)).max())
 

@@ -34,6 +34,7 @@ _POSITIVE = {
     ("geometry", "h"),
     ("geometry", "subdomain_size"),
     ("geometry", "width"),
+    ("geometry", "radius"),
     ("solver", "tol"),
     ("solver", "max_iterations"),
     ("solver", "projection_max_iterations"),
@@ -170,12 +171,41 @@ def parse_config(raw: dict[str, Any]) -> dict[str, dict[str, Any]]:
                 )
             config[section][key] = _check_value(section, key, value)
     geometry = config["geometry"]
+    _check_mesh_keys(geometry, raw.get("geometry", {}))
     if geometry["shape"] == "polygon" and len(geometry["vertices"]) < 3:
         raise ConfigError(
             "geometry.vertices must list at least 3 points [x, y] in "
             'counter-clockwise order when geometry.shape = "polygon"'
         )
     return config
+
+
+#: The [geometry] keys of a generated shape, which a mesh file sets itself.
+GENERATED_KEYS = ("shape", "center", "width", "radius", "vertices", "h", "structured")
+
+
+def _check_mesh_keys(geometry: dict[str, Any], given: dict[str, Any]) -> None:
+    """``mesh`` excludes the keys of a generated shape; ``subdomains = "physical"`` needs
+    ``mesh``; a mesh file takes names of physical curve groups as ``signorini``."""
+    if not geometry["mesh"]:
+        if geometry["subdomains"] != "auto":
+            raise ConfigError(
+                'geometry.subdomains = "physical" needs geometry.mesh (the physical surface '
+                "groups of a mesh file); drop it for a generated shape"
+            )
+        return
+    for key in GENERATED_KEYS:
+        if key in given:
+            raise ConfigError(
+                f"geometry.{key}: the mesh file geometry.mesh sets the geometry; drop "
+                f"geometry.{key} (or geometry.mesh)"
+            )
+    signorini = geometry["signorini"]
+    if signorini != "all" and any(not isinstance(s, str) for s in signorini):
+        raise ConfigError(
+            "geometry.signorini: with geometry.mesh give names of physical curve groups "
+            '(["contact", ...]) or "all", not coordinate arcs'
+        )
 
 
 def apply_override(raw: dict[str, Any], assignment: str) -> None:
@@ -221,7 +251,12 @@ def load_config(path: str | Path | None, overrides: list[str] = ()) -> dict[str,
             raise ConfigError(f"{path}: invalid TOML ({err}); fix the syntax") from None
     for assignment in overrides:
         apply_override(raw, assignment)
-    return parse_config(raw)
+    config = parse_config(raw)
+    mesh = config["geometry"]["mesh"]
+    if mesh and path is not None and not Path(mesh).is_absolute():
+        # a relative mesh path is relative to the configuration file's folder
+        config["geometry"]["mesh"] = str(Path(path).parent / mesh)
+    return config
 
 
 def check_data_and_material(config: dict[str, dict[str, Any]]) -> None:

@@ -3,6 +3,7 @@ library: the domain, the material, the assembled problem and the solver options.
 from __future__ import annotations
 
 import time
+from pathlib import Path
 from typing import Any
 
 from mpi4py import MPI
@@ -25,6 +26,14 @@ def geometry_arguments(config: dict) -> tuple[str, dict[str, Any]]:
     """(shape, keyword arguments) of ``fem_py.geometry.build_domain`` and ``domain_size``
     for the [geometry] section of a validated configuration."""
     g = config["geometry"]
+    if g["mesh"]:  # a mesh file: fem_py.geometry.domain_from_file
+        return "mesh", dict(
+            path=g["mesh"],
+            subdomain_size=g["subdomain_size"],
+            signorini=g["signorini"],
+            subdomains=g["subdomains"],
+            allow_large=g["allow_large"],
+        )
     return g["shape"], dict(
         h=g["h"],
         subdomain_size=g["subdomain_size"],
@@ -34,23 +43,33 @@ def geometry_arguments(config: dict) -> tuple[str, dict[str, Any]]:
         signorini=g["signorini"],
         structured=g["structured"],
         allow_large=g["allow_large"],
+        **({"radius": g["radius"]} if g["shape"] == "disk" else {}),
     )
 
 
 def domain_from_config(comm: MPI.Comm, config: dict) -> Any:
     """The ``fem_py.geometry.Domain`` of a validated configuration (collective)."""
-    from fem_py.geometry import build_domain
+    from fem_py.geometry import build_domain, domain_from_file
 
     shape, kwargs = geometry_arguments(config)
+    if shape == "mesh":
+        return domain_from_file(comm, **kwargs)
     return build_domain(comm, shape, **kwargs)
 
 
 def planned_size(config: dict) -> Any:
     """The ``fem_py.geometry.DomainSize`` of the configuration's domain in closed form (no
-    mesh), or None when only meshing tells."""
+    mesh), or None when only meshing tells (a mesh file: then its existence is checked)."""
     from fem_py.geometry import domain_size
 
     shape, kwargs = geometry_arguments(config)
+    if shape == "mesh":
+        if not Path(kwargs["path"]).is_file():  # before an output folder is made
+            raise ValueError(
+                f"mesh: file {kwargs['path']!r} not found; give the path of a gmsh .msh "
+                "file (relative to the configuration file's folder)"
+            )
+        return None
     return domain_size(shape, **kwargs)
 
 
