@@ -3,8 +3,9 @@
 
 :func:`partition_cells` seeds one subdomain per point of a hexagonal lattice (one point
 per area d^2) that lies in Omega (near a cell centroid), runs a few Lloyd (k-means)
-iterations on the area-weighted cell centroids, smooths the part boundaries and makes every part connected and free of enclosed islands by
-merging fragments into the neighbour they share most facets with. The result depends
+iterations on the area-weighted cell centroids, smooths the part boundaries, and makes
+every part connected and free of enclosed islands by merging fragments into the
+neighbour they share most facets with. The result depends
 on Omega and d only, not on how finely the boundary is drawn: a polygon of 480 vertices
 gets as many subdomains as the disk it approximates.
 
