@@ -129,31 +129,30 @@ def build_parser() -> argparse.ArgumentParser:
     info.add_argument("--json", action="store_true", help="print the report as JSON")
     common(info)
 
-    ext = sub.add_parser(
-        "exterior",
-        help="u_e at exterior points from a finished run",
-        description="Evaluate the exterior solution u_e at the points of "
-        "a CSV file (two columns x, y; an optional header line) by the "
-        "representation formula, from the fields.npz of RESULT_DIR.",
-    )
-    ext.add_argument("result_dir", metavar="RESULT_DIR")
-    ext.add_argument("--points", required=True, metavar="FILE.csv")
-    ext.add_argument("--out", metavar="FILE.csv", help="write x,y,ue here (default: stdout)")
-    ext.add_argument("--debug", action="store_true", help="show tracebacks on errors")
+    def result_reader(name: str, help: str, description: str, out: str) -> None:
+        reader = sub.add_parser(name, help=help, description=description)
+        reader.add_argument("result_dir", metavar="RESULT_DIR")
+        reader.add_argument("--points", required=True, metavar="FILE.csv")
+        reader.add_argument("--out", metavar="FILE.csv", help=f"{out} (default: stdout)")
+        reader.add_argument("--debug", action="store_true", help="show tracebacks on errors")
 
-    ev = sub.add_parser(
-        "evaluate",
-        help="u_h and u_e at any points from a finished run",
-        description="Evaluate the solution at the points of a CSV file (two columns x, y; "
-        "an optional header line) from the fields.npz of RESULT_DIR: each row "
-        "x,y,where,u,ue with where = inside (u = u_h), boundary (u_h and the trace u_e) "
-        "or outside (u_e by the representation formula); a value that does not apply "
-        "is empty.",
+    result_reader(
+        "exterior",
+        "u_e at exterior points from a finished run",
+        "Evaluate the exterior solution u_e at the points of a CSV file (two columns x, y; "
+        "an optional header line) by the representation formula, from the fields.npz of "
+        "RESULT_DIR.",
+        "write x,y,ue here",
     )
-    ev.add_argument("result_dir", metavar="RESULT_DIR")
-    ev.add_argument("--points", required=True, metavar="FILE.csv")
-    ev.add_argument("--out", metavar="FILE.csv", help="write the table here (default: stdout)")
-    ev.add_argument("--debug", action="store_true", help="show tracebacks on errors")
+    result_reader(
+        "evaluate",
+        "u_h and u_e at any points from a finished run",
+        "Evaluate the solution at the points of a CSV file (two columns x, y; an optional "
+        "header line) from the fields.npz of RESULT_DIR: each row x,y,where,u,ue with "
+        "where = inside (u = u_h), boundary (u_h and the trace u_e) or outside (u_e by the "
+        "representation formula); a value that does not apply is empty.",
+        "write the table here",
+    )
 
     check = sub.add_parser(
         "check-jacobian",

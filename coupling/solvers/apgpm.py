@@ -161,13 +161,12 @@ def apgpm(
             converged, reason = True, f"||xi_k+1 - y_k||_B <= {tol:g} ||xi_k+1||_B"
             break
     grad.destroy()
-    return RunResult(
-        phi=phi_k,
+    return history.result(
+        phi_k,
         converged=converged,
         reason=reason,
         iterations=k,
         energy=energy,
         tau=tau,
-        history=list(history),
         energy_increases=increases,
     )

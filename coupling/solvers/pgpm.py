@@ -130,13 +130,12 @@ def pgpm(
             converged, reason = True, f"||xi_k+1 - xi_k||_B <= {tol:g} ||xi_k+1||_B"
             break
     grad.destroy()
-    return RunResult(
-        phi=phi_k,
+    return history.result(
+        phi_k,
         converged=converged,
         reason=reason,
         iterations=k,
         energy=energy,
         tau=tau,
-        history=list(history),
         energy_increases=increases,
     )

@@ -92,6 +92,29 @@ class History(list):
         if self.monitor is not None:
             self.monitor(record)
 
+    def result(
+        self,
+        phi: np.ndarray,
+        *,
+        converged: bool,
+        reason: str,
+        iterations: int,
+        energy: float,
+        tau: float,
+        energy_increases: int,
+    ) -> "RunResult":
+        """The :class:`RunResult` of the run these records belong to."""
+        return RunResult(
+            phi=phi,
+            converged=converged,
+            reason=reason,
+            iterations=iterations,
+            energy=energy,
+            tau=tau,
+            history=list(self),
+            energy_increases=energy_increases,
+        )
+
 
 def global_dot(comm: MPI.Comm, a: np.ndarray, b: np.ndarray) -> float:
     """a^T b over the owned entries of every rank (one Allreduce)."""

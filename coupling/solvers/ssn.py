@@ -278,13 +278,12 @@ def semismooth_newton(
             break
     for obj in (grad, jacobian, e_u, h_u):
         obj.destroy()
-    return RunResult(
-        phi=phi,
+    return history.result(
+        phi,
         converged=converged,
         reason=reason,
         iterations=k,
         energy=energy,
         tau=tau,
-        history=list(history),
         energy_increases=increases,
     )
