@@ -43,6 +43,7 @@ __all__ = [
     "mass",
     "single_layer",
     "steklov_poincare",
+    "SteklovPoincareOperator",
     "version",
 ]
 
@@ -202,9 +203,97 @@ def mass(nodes: ArrayLike, space: str = "p1") -> NDArray[np.float64]:
     return _bem.mass(_nodes(nodes), _space(space, "space"))
 
 
+_COMPRESSIONS = ("none", "hmatrix")
+
+# H-matrix parameters (docs/design/hmatrix.md explains the choice).
+HMATRIX_LEAF_SIZE = 32
+HMATRIX_ETA = 1.0
+# V solves: relative residual solver_tol = HMATRIX_SOLVER_TOL_FACTOR * tol.
+HMATRIX_SOLVER_TOL_FACTOR = 1e-3
+HMATRIX_MAX_ITERATIONS = 1000
+# flux "p0": accuracy of the refined-mesh V0 inside the Calderon preconditioner.
+HMATRIX_PRECONDITIONER_TOL = 1e-4
+
+
+class SteklovPoincareOperator:
+    r"""S_h applied as an operator, never formed (docs/design/hmatrix.md).
+
+    .. math:: S x = \tfrac12\left(W x + (K - M)^T V^{-1} (K - M) x\right),
+              \qquad W x = D^T V^{(0)} D x,
+
+    with V (flux space), :math:`V^{(0)}` (P0, Maue's identity for W) and K held as
+    H-matrices (ACA blocks to the relative tolerance ``tol``, near field exact), M and D
+    sparse, and :math:`V^{-1}` by conjugate gradients with a Calderon preconditioner
+    (W on a trace space paired with the flux space; bounded iteration counts). Built by :func:`steklov_poincare` with ``compression="hmatrix"``.
+
+    Attributes
+    ----------
+    shape : (n, n)
+    nbytes : int
+        Bytes held (H-matrix blocks, permutations, preconditioner factors).
+    last_iterations : int
+        CG iterations of the V solve in the last product.
+    info : object
+        ``setup_seconds``, ``max_rank`` and the bytes per part
+        (``nbytes_v``, ``nbytes_v0``, ``nbytes_k``, ``nbytes_preconditioner``).
+    """
+
+    dtype = np.dtype(np.float64)
+
+    def __init__(self, compiled: _bem.SteklovPoincareOperator) -> None:
+        self._op = compiled
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return (self._op.size, self._op.size)
+
+    @property
+    def nbytes(self) -> int:
+        return int(self._op.nbytes)
+
+    @property
+    def last_iterations(self) -> int:
+        return int(self._op.last_iterations)
+
+    @property
+    def info(self) -> _bem.SteklovInfo:
+        return self._op.info
+
+    def _block(self, x: ArrayLike) -> tuple[NDArray[np.float64], bool]:
+        arr = np.asarray(x, dtype=np.float64)
+        n = self._op.size
+        if arr.ndim not in (1, 2) or arr.shape[0] != n:
+            raise ValueError(f"x must have shape ({n},) or ({n}, k), got {arr.shape}")
+        if not np.all(np.isfinite(arr)):
+            raise ValueError("x contains non-finite values")
+        vector = arr.ndim == 1
+        return (arr.reshape(n, 1) if vector else arr), vector
+
+    def __matmul__(self, x: ArrayLike) -> NDArray[np.float64]:
+        """S_h x for x of shape (n,) or (n, k) (nodal values of P1 traces)."""
+        arr, vector = self._block(x)
+        y = self._op.apply(np.asfortranarray(arr))
+        return y[:, 0] if vector else y
+
+    def flux(self, dirichlet: ArrayLike) -> NDArray[np.float64]:
+        """Coefficients of psi_h = V_h^{-1}(K_h - M_h) v (``exterior_flux`` with a = 0)."""
+        arr, vector = self._block(dirichlet)
+        y = self._op.flux(np.asfortranarray(arr))
+        return y[:, 0] if vector else y
+
+    def __repr__(self) -> str:
+        n = self._op.size
+        return f"SteklovPoincareOperator(n={n}, nbytes={self.nbytes})"
+
+
 def steklov_poincare(
-    nodes: ArrayLike, flux: str = "p1", *, timings: dict[str, float] | None = None
-) -> NDArray[np.float64]:
+    nodes: ArrayLike,
+    flux: str = "p1",
+    *,
+    compression: str = "none",
+    tol: float = 1e-10,
+    timings: dict[str, float] | None = None,
+) -> NDArray[np.float64] | SteklovPoincareOperator:
     r"""Discrete Steklov-Poincare operator S_h of the exterior (METHOD.md (2.x), section 4).
 
     .. math:: S_h = \tfrac12\left(W_h + (K_h - M_h)^T V_h^{-1}(K_h - M_h)\right),
@@ -220,23 +309,53 @@ def steklov_poincare(
         Boundary nodes, counter-clockwise, first node not repeated, diam < 1.
     flux : {"p1", "p0"}
         Flux space of V_h and of the rows of K_h, M_h.
+    compression : {"none", "hmatrix"}
+        ``"none"``: the dense matrix above. ``"hmatrix"``: a
+        :class:`SteklovPoincareOperator` that applies S_h with H-matrices of V_h, V0_h
+        (for W_h) and K_h and a preconditioned CG solve with V_h, in O(n log n) memory
+        and time per product (docs/design/hmatrix.md); products agree with the dense S_h
+        to about ``tol`` relative.
+    tol : float
+        Relative accuracy of the H-matrix blocks (``"hmatrix"`` only); the V solves run
+        to the relative residual 1e-3 tol.
     timings : dict, optional
         If given, filled with the wall-clock seconds of the stages ``assembly``
-        (V_h, K_h, W_h), ``cholesky``, ``triangular_solve`` and ``rank_update``.
+        (V_h, K_h, W_h), ``cholesky``, ``triangular_solve`` and ``rank_update``
+        (``"none"``), or ``setup`` (``"hmatrix"``).
 
     Returns
     -------
-    (n, n) ndarray
+    (n, n) ndarray or SteklovPoincareOperator
         Symmetric positive definite. On the circle of radius R < 1:
         S cos(m theta) = (m/R) cos(m theta), S 1 = -1/(R log R).
 
     Raises
     ------
     ValueError
-        Invalid polygon, or V_h not positive definite (logarithmic capacity of Gamma
-        >= 1; rescale the geometry to diameter < 1).
+        Invalid polygon, unknown compression, tol not in (0, 1), or V_h not positive
+        definite (logarithmic capacity of Gamma >= 1; rescale the geometry to diameter < 1).
     """
     args = (_nodes(nodes), _space(flux, "flux"))
+    if compression not in _COMPRESSIONS:
+        raise ValueError(f"compression must be one of {_COMPRESSIONS}, got {compression!r}")
+    if compression == "hmatrix":
+        tol = _scalar(tol, "tol")
+        if not 0 < tol < 1:
+            raise ValueError(f"tol must be in (0, 1), got {tol}")
+        op = SteklovPoincareOperator(
+            _bem.SteklovPoincareOperator(
+                *args,
+                leaf_size=HMATRIX_LEAF_SIZE,
+                eta=HMATRIX_ETA,
+                tol=tol,
+                preconditioner_tol=HMATRIX_PRECONDITIONER_TOL,
+                solver_tol=HMATRIX_SOLVER_TOL_FACTOR * tol,
+                max_iterations=HMATRIX_MAX_ITERATIONS,
+            )
+        )
+        if timings is not None:
+            timings.update(setup=op.info.setup_seconds)
+        return op
     if timings is None:
         return _bem.steklov_poincare(*args)
     S, t = _bem.steklov_poincare_timed(*args)

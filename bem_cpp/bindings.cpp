@@ -5,8 +5,11 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <memory>
+
 #include "bem/operators.hpp"
 #include "bem/potentials.hpp"
+#include "bem/steklov_operator.hpp"
 #include "bem/steklov_poincare.hpp"
 #include "bem/version.hpp"
 
@@ -26,6 +29,28 @@ PYBIND11_MODULE(_bem, m) {
       .def_readonly("cholesky", &bem::StageTimes::cholesky)
       .def_readonly("triangular_solve", &bem::StageTimes::triangular_solve)
       .def_readonly("rank_update", &bem::StageTimes::rank_update);
+
+  py::class_<bem::SteklovInfo>(m, "SteklovInfo")
+      .def_readonly("setup_seconds", &bem::SteklovInfo::setup_seconds)
+      .def_readonly("max_rank", &bem::SteklovInfo::max_rank)
+      .def_readonly("nbytes_v", &bem::SteklovInfo::nbytes_v)
+      .def_readonly("nbytes_v0", &bem::SteklovInfo::nbytes_v0)
+      .def_readonly("nbytes_k", &bem::SteklovInfo::nbytes_k)
+      .def_readonly("nbytes_preconditioner", &bem::SteklovInfo::nbytes_preconditioner);
+  py::class_<bem::SteklovPoincareOperator>(m, "SteklovPoincareOperator")
+      .def(py::init([](NodesRef nodes, Space flux, bem::Index leaf_size, double eta, double tol,
+                       double preconditioner_tol, double solver_tol, int max_iterations) {
+             return std::make_unique<bem::SteklovPoincareOperator>(
+                 nodes, flux, bem::SteklovOptions{{leaf_size, eta, tol}, preconditioner_tol, solver_tol, max_iterations});
+           }),
+           py::arg("nodes"), py::arg("flux"), py::arg("leaf_size"), py::arg("eta"), py::arg("tol"),
+           py::arg("preconditioner_tol"), py::arg("solver_tol"), py::arg("max_iterations"), Release())
+      .def("apply", &bem::SteklovPoincareOperator::apply, py::arg("x"), Release())
+      .def("flux", &bem::SteklovPoincareOperator::flux, py::arg("x"), Release())
+      .def_property_readonly("size", &bem::SteklovPoincareOperator::size)
+      .def_property_readonly("nbytes", &bem::SteklovPoincareOperator::nbytes)
+      .def_property_readonly("info", &bem::SteklovPoincareOperator::info)
+      .def_property_readonly("last_iterations", &bem::SteklovPoincareOperator::last_iterations);
 
   m.def("version", &bem::version);
   m.def("single_layer", py::overload_cast<NodesRef, Space>(&bem::single_layer), py::arg("nodes"),

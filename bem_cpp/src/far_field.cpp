@@ -21,10 +21,15 @@ double log(double x) noexcept;
 namespace bem {
 
 PanelArrays::PanelArrays(const Polygon& polygon) {
-  const std::size_t n = polygon.panels().size();
+  std::vector<Index> all(polygon.panels().size());
+  for (std::size_t j = 0; j < all.size(); ++j) all[j] = static_cast<Index>(j);
+  assign(polygon, all.data(), all.size());
+}
+
+void PanelArrays::assign(const Polygon& polygon, const Index* panels, std::size_t n) {
   for (auto* v : {&ax, &ay, &tx, &ty, &nx, &ny, &h, &mx, &my}) v->resize(n);
   for (std::size_t j = 0; j < n; ++j) {
-    const Panel& p = polygon.panels()[j];
+    const Panel& p = polygon.panel(panels[j]);
     ax[j] = p.a.x;
     ay[j] = p.a.y;
     tx[j] = p.t.x;

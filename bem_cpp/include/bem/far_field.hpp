@@ -11,7 +11,10 @@ namespace bem {
 
 /// Panel data as structure of arrays, for the vectorised far-field kernel.
 struct PanelArrays {
+  PanelArrays() = default;
   explicit PanelArrays(const Polygon& polygon);
+  /// The panels panels[k], k < m, of the polygon, as entries k (reuses the storage).
+  void assign(const Polygon& polygon, const Index* panels, std::size_t m);
   std::vector<double> ax, ay, tx, ty, nx, ny, h, mx, my;
 };
 

@@ -1,0 +1,58 @@
+#pragma once
+// Cluster tree on the degrees of freedom of a boundary element space (docs/design/hmatrix.md):
+// geometric bisection of the bounding box of the dof points (nodes for P1, panel
+// midpoints for P0) along its longer side, until a cluster holds at most `leaf_size`
+// dofs. Each cluster is a contiguous range of the permuted order and carries the
+// bounding box of the supports of its basis functions (the panels the dofs live on), so
+// that the admissibility condition below is a statement about the integration domains.
+#include <vector>
+
+#include "bem/geometry.hpp"
+#include "bem/operators.hpp"
+
+namespace bem {
+
+/// Axis-parallel box [x0, x1] x [y0, y1].
+struct Box {
+  double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
+  void add(Vec2 p);
+  void add(const Box& b);
+  double diameter() const;
+  /// Euclidean distance between the boxes (0 if they overlap or touch).
+  double distance(const Box& b) const;
+};
+
+/// Standard admissibility: min(diam t, diam s) <= eta dist(t, s), dist > 0.
+bool admissible(const Box& t, const Box& s, double eta);
+
+struct Cluster {
+  Index begin = 0, end = 0;  ///< range [begin, end) of the permuted order
+  Box box;                   ///< bounding box of the supports of the cluster's dofs
+  int children[2] = {-1, -1};
+  bool leaf() const { return children[0] < 0; }
+  Index size() const { return end - begin; }
+};
+
+class ClusterTree {
+ public:
+  /// points: (n, 2) representative point of each dof; supports[i]: box of its support.
+  ClusterTree(const Points& points, const std::vector<Box>& supports, Index leaf_size);
+  /// The tree of the P1 (nodes) or P0 (panels) space of a polygon.
+  static ClusterTree for_space(const Polygon& polygon, Space space, Index leaf_size);
+
+  Index size() const { return static_cast<Index>(permutation_.size()); }
+  const Cluster& cluster(int c) const { return clusters_[static_cast<std::size_t>(c)]; }
+  const std::vector<Cluster>& clusters() const { return clusters_; }
+  /// permutation()[k]: the dof at position k of the permuted order (root is cluster 0).
+  const std::vector<Index>& permutation() const { return permutation_; }
+  /// Indices of the leaf clusters, in permuted order (they partition [0, n)).
+  std::vector<int> leaves() const;
+
+ private:
+  int build(Index begin, Index end, const Points& points, const std::vector<Box>& supports,
+            Index leaf_size);
+  std::vector<Cluster> clusters_;
+  std::vector<Index> permutation_;
+};
+
+}  // namespace bem

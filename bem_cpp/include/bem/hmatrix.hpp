@@ -1,0 +1,60 @@
+#pragma once
+// Hierarchical matrix (docs/design/hmatrix.md): the block tree of a row and a column
+// cluster tree (cluster_tree.hpp) under the admissibility condition
+// min(diam t, diam s) <= eta dist(t, s); admissible leaves held as U V^T by ACA
+// (aca.hpp) recompressed to the relative tolerance tol, the other leaves (near field,
+// at least one cluster a leaf) dense and exact. Products with vectors and blocks of
+// vectors run over the blocks in parallel (OpenMP).
+#include <Eigen/Dense>
+#include <cstddef>
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include "bem/aca.hpp"
+#include "bem/cluster_tree.hpp"
+
+namespace bem {
+
+struct HMatrixOptions {
+  Index leaf_size;  ///< largest leaf cluster
+  double eta;       ///< admissibility parameter
+  double tol;       ///< relative accuracy of each low-rank block (ACA and recompression)
+};
+
+/// entries(I, m, J, k, out, ld): out[r + c ld] = A(I[r], J[c]) in the original dof order.
+using EntryFunction =
+    std::function<void(const Index* I, Index m, const Index* J, Index k, double* out, Index ld)>;
+
+class HMatrix {
+ public:
+  struct Block {
+    int row_cluster, col_cluster;
+    Index r0, m, c0, k;  ///< ranges in the permuted orders
+    bool low_rank;
+    Eigen::MatrixXd dense;  ///< m x k if !low_rank
+    LowRank factors;        ///< if low_rank
+  };
+
+  HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const ClusterTree> cols,
+          const EntryFunction& entries, const HMatrixOptions& options);
+
+  Index rows() const { return rows_->size(); }
+  Index cols() const { return cols_->size(); }
+  /// Y = A X (transpose: Y = A^T X), X and Y in the original dof order.
+  Eigen::MatrixXd apply(const Eigen::Ref<const Eigen::MatrixXd>& X, bool transpose = false) const;
+  /// The approximation as a dense matrix in the original order (for tests).
+  Eigen::MatrixXd to_dense() const;
+  /// Bytes of the blocks (dense entries and factors) and of the permutations.
+  std::size_t nbytes() const;
+  Index max_rank() const;
+  const std::vector<Block>& blocks() const { return blocks_; }
+  const ClusterTree& row_tree() const { return *rows_; }
+  const ClusterTree& col_tree() const { return *cols_; }
+
+ private:
+  std::shared_ptr<const ClusterTree> rows_, cols_;
+  std::vector<Block> blocks_;
+};
+
+}  // namespace bem

@@ -1,0 +1,38 @@
+#pragma once
+// Entries of the Galerkin matrices V_h and K_h (operators.hpp) on arbitrary index sets,
+// for the H-matrix assembly (hmatrix.hpp): a row, a column or a dense block at a time.
+// The panel-pair integrals are those of the dense assembly (log_integrals.hpp: closed
+// forms near, Gauss rules far, far pairs of one test panel in vector batches), so a
+// near-field block equals the dense one up to round-off.
+//
+// A dof is a sum of two panel shape functions: P1 hat of node i = phi_1 on panel i - 1 +
+// phi_0 on panel i; P0 indicator of panel i = phi_0 + phi_1 on panel i.
+#include "bem/geometry.hpp"
+#include "bem/operators.hpp"
+
+namespace bem {
+
+enum class Kernel {
+  SingleLayer,  ///< V_h, rows and columns in the same space
+  DoubleLayer,  ///< K_h, rows in the flux space, columns P1
+};
+
+class OperatorEntries {
+ public:
+  /// Throws std::invalid_argument for V with rows != cols or K with P0 columns. The
+  /// polygon must outlive the object.
+  OperatorEntries(const Polygon& polygon, Kernel kernel, Space rows, Space cols);
+
+  Index size() const { return polygon_.size(); }
+
+  /// out[r + c ld] = A(I[r], J[c]) for r < m, c < k (column-major, leading dimension ld).
+  /// Thread-safe.
+  void block(const Index* I, Index m, const Index* J, Index k, double* out, Index ld) const;
+
+ private:
+  const Polygon& polygon_;
+  Kernel kernel_;
+  Space rows_, cols_;
+};
+
+}  // namespace bem

@@ -1,0 +1,58 @@
+#pragma once
+// The discrete Steklov-Poincare operator as an operator that is applied, never formed
+// (METHOD.md section 4, docs/design/hmatrix.md):
+//   S x = 1/2 ( W x + (K - M)^T V^{-1} (K - M) x ),   W x = D^T V0 D x (Maue),
+// with V (flux space), V0 (P0, for W) and K (rows in the flux space, columns P1)
+// H-matrices, M and D sparse, and V^{-1} by SingleLayerSolver (PCG).
+#include <atomic>
+#include <memory>
+
+#include "bem/calderon_preconditioner.hpp"
+#include "bem/hmatrix.hpp"
+#include "bem/operators.hpp"
+#include "bem/single_layer_solver.hpp"
+
+namespace bem {
+
+struct SteklovOptions {
+  HMatrixOptions hmatrix;
+  double preconditioner_tol;  ///< flux P0: tolerance of the refined-mesh V0 of the preconditioner
+  double solver_tol;   ///< relative residual of the V solves
+  int max_iterations;  ///< of each V solve
+};
+
+/// What the set-up built.
+struct SteklovInfo {
+  double setup_seconds = 0;
+  Index max_rank = 0;          ///< largest rank of a low-rank block (V, V0, K)
+  std::size_t nbytes_v = 0, nbytes_v0 = 0, nbytes_k = 0, nbytes_preconditioner = 0;
+};
+
+class SteklovPoincareOperator {
+ public:
+  SteklovPoincareOperator(const Eigen::Ref<const Points>& nodes, Space flux, const SteklovOptions& options);
+
+  Index size() const { return polygon_.size(); }
+  /// Y = S_h X for X (n, k).
+  Eigen::MatrixXd apply(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
+  /// Psi = V_h^{-1} (K_h - M_h)(X): the exterior Neumann data of the Dirichlet traces X
+  /// (columns; cf. exterior_flux with a = 0).
+  Eigen::MatrixXd flux(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
+  std::size_t nbytes() const;
+  const SteklovInfo& info() const { return info_; }
+  /// CG iterations of the V solve of the last apply/flux call.
+  int last_iterations() const { return last_iterations_.load(); }
+
+ private:
+  Eigen::MatrixXd double_layer_minus_mass(const Eigen::Ref<const Eigen::MatrixXd>& X, bool transpose) const;
+  Polygon polygon_;
+  Space flux_;
+  SteklovOptions options_;
+  std::shared_ptr<const HMatrix> V_, V0_, K_;
+  std::unique_ptr<CalderonPreconditioner> preconditioner_;
+  std::unique_ptr<SingleLayerSolver> solver_;
+  SteklovInfo info_;
+  mutable std::atomic<int> last_iterations_{0};
+};
+
+}  // namespace bem

@@ -1,0 +1,183 @@
+#include "bem/aca.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+namespace bem {
+
+namespace {
+
+/// argmax |x[i]| over i with !used[i]; -1 if all are used.
+Index unused_argmax(const Eigen::VectorXd& x, const std::vector<char>& used) {
+  Index best = -1;
+  double value = -1.0;
+  for (Index i = 0; i < x.size(); ++i)
+    if (!used[static_cast<std::size_t>(i)] && std::abs(x(i)) > value) {
+      value = std::abs(x(i));
+      best = i;
+    }
+  return best;
+}
+
+class Cross {
+ public:
+  Cross(Index m, Index n, const Slice& row, const Slice& column)
+      : m_(m), n_(n), row_(row), column_(column), row_used_(m, 0), col_used_(n, 0) {}
+
+  Eigen::VectorXd residual_row(Index i) const {
+    Eigen::VectorXd r(n_);
+    row_(i, r.data());
+    for (std::size_t k = 0; k < us_.size(); ++k) r -= us_[k](i) * vs_[k];
+    return r;
+  }
+  Eigen::VectorXd residual_column(Index j) const {
+    Eigen::VectorXd c(m_);
+    column_(j, c.data());
+    for (std::size_t k = 0; k < us_.size(); ++k) c -= vs_[k](j) * us_[k];
+    return c;
+  }
+  /// Adds u v^T and updates |U V^T|_F^2.
+  void add(Eigen::VectorXd u, Eigen::VectorXd v) {
+    double cross = 0.0;
+    for (std::size_t k = 0; k < us_.size(); ++k) cross += us_[k].dot(u) * vs_[k].dot(v);
+    norm2_ += u.squaredNorm() * v.squaredNorm() + 2.0 * cross;
+    us_.push_back(std::move(u));
+    vs_.push_back(std::move(v));
+  }
+  double norm() const { return std::sqrt(std::max(norm2_, 0.0)); }
+  Index rank() const { return static_cast<Index>(us_.size()); }
+  const Eigen::VectorXd& last_u() const { return us_.back(); }
+  const Eigen::VectorXd& last_v() const { return vs_.back(); }
+  std::vector<char>& row_used() { return row_used_; }
+  std::vector<char>& col_used() { return col_used_; }
+
+  LowRank result() const {
+    LowRank a;
+    a.U.resize(m_, rank());
+    a.V.resize(n_, rank());
+    for (Index k = 0; k < rank(); ++k) {
+      a.U.col(k) = us_[static_cast<std::size_t>(k)];
+      a.V.col(k) = vs_[static_cast<std::size_t>(k)];
+    }
+    return a;
+  }
+
+ private:
+  Index m_, n_;
+  const Slice& row_;
+  const Slice& column_;
+  std::vector<char> row_used_, col_used_;
+  std::vector<Eigen::VectorXd> us_, vs_;
+  double norm2_ = 0.0;
+};
+
+Index next_unused(const std::vector<char>& used, Index from) {
+  const Index m = static_cast<Index>(used.size());
+  for (Index d = 0; d < m; ++d) {
+    const Index i = (from + d) % m;
+    if (!used[static_cast<std::size_t>(i)]) return i;
+  }
+  return -1;
+}
+
+constexpr int kSamples = 3;      // sampled rows and columns confirming the stop
+constexpr int kZeroRowTries = 3;  // consecutive zero rows before the samples decide
+
+}  // namespace
+
+LowRank aca(Index m, Index n, const Slice& row, const Slice& column, double tol, Index max_rank) {
+  max_rank = std::min({max_rank, m, n});
+  Cross x(m, n, row, column);
+  std::uint64_t seed = 0x9E3779B97F4A7C15ULL ^ (static_cast<std::uint64_t>(m) * 1315423911ULL +
+                                                 static_cast<std::uint64_t>(n));
+  auto random_index = [&seed](Index size) {
+    seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
+    return static_cast<Index>((seed >> 33) % static_cast<std::uint64_t>(size));
+  };
+  Index i = m / 2;
+  int zero_rows = 0;
+  while (x.rank() < max_rank) {
+    bool stop = false;
+    if (i >= 0) {
+      const Eigen::VectorXd r = x.residual_row(i);
+      x.row_used()[static_cast<std::size_t>(i)] = 1;
+      const Index j = unused_argmax(r, x.col_used());
+      if (j < 0 || r(j) == 0.0) {
+        i = ++zero_rows > kZeroRowTries ? -1 : next_unused(x.row_used(), i + m / 3 + 1);
+        stop = i < 0;
+      } else {
+        zero_rows = 0;
+        Eigen::VectorXd v = r / r(j);
+        Eigen::VectorXd u = x.residual_column(j);
+        x.col_used()[static_cast<std::size_t>(j)] = 1;
+        x.add(std::move(u), std::move(v));
+        stop = x.last_u().norm() * x.last_v().norm() <= tol * x.norm();
+        i = unused_argmax(x.last_u(), x.row_used());
+        if (i < 0) stop = true;
+      }
+    } else {
+      stop = true;
+    }
+    if (!stop) continue;
+    // Confirm on sampled columns and rows: a residual whose norm, scaled to the block,
+    // fails the test gives the next cross.
+    bool found = false;
+    for (int s = 0; s < kSamples && !found && x.rank() < max_rank; ++s) {
+      const Index j = random_index(n);
+      const Eigen::VectorXd c = x.residual_column(j);
+      if (c.norm() * std::sqrt(static_cast<double>(n)) > tol * x.norm() && c.cwiseAbs().maxCoeff() > 0) {
+        Index p;
+        c.cwiseAbs().maxCoeff(&p);
+        const Eigen::VectorXd r = x.residual_row(p);
+        if (r(j) == 0.0) continue;
+        x.row_used()[static_cast<std::size_t>(p)] = 1;
+        x.col_used()[static_cast<std::size_t>(j)] = 1;
+        x.add(c, r / r(j));
+        found = true;
+      }
+      const Index q = random_index(m);
+      if (found || x.rank() >= max_rank) break;
+      const Eigen::VectorXd r = x.residual_row(q);
+      if (r.norm() * std::sqrt(static_cast<double>(m)) > tol * x.norm() && r.cwiseAbs().maxCoeff() > 0) {
+        Index p;
+        r.cwiseAbs().maxCoeff(&p);
+        const Eigen::VectorXd cc = x.residual_column(p);
+        if (cc(q) == 0.0) continue;
+        x.row_used()[static_cast<std::size_t>(q)] = 1;
+        x.col_used()[static_cast<std::size_t>(p)] = 1;
+        x.add(cc, r / r(p));
+        found = true;
+      }
+    }
+    if (!found) break;
+    zero_rows = 0;
+    i = unused_argmax(x.last_u(), x.row_used());
+  }
+  return x.result();
+}
+
+void recompress(LowRank& a, double tol) {
+  const Index k = a.rank(), m = a.U.rows(), n = a.V.rows();
+  if (k == 0) return;
+  Eigen::HouseholderQR<Eigen::MatrixXd> qu(a.U), qv(a.V);
+  const Index ku = std::min(m, k), kv = std::min(n, k);
+  const Eigen::MatrixXd ru = qu.matrixQR().topRows(ku).triangularView<Eigen::Upper>();
+  const Eigen::MatrixXd rv = qv.matrixQR().topRows(kv).triangularView<Eigen::Upper>();
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(ru * rv.transpose(), Eigen::ComputeThinU | Eigen::ComputeThinV);
+  const Eigen::VectorXd& s = svd.singularValues();
+  const double total = s.squaredNorm();
+  Index r = s.size();
+  double tail = 0.0;
+  while (r > 0 && tail + s(r - 1) * s(r - 1) <= tol * tol * total) {
+    tail += s(r - 1) * s(r - 1);
+    --r;
+  }
+  const Eigen::MatrixXd Qu = qu.householderQ() * Eigen::MatrixXd::Identity(m, ku);
+  const Eigen::MatrixXd Qv = qv.householderQ() * Eigen::MatrixXd::Identity(n, kv);
+  a.U = Qu * (svd.matrixU().leftCols(r) * s.head(r).asDiagonal());
+  a.V = Qv * svd.matrixV().leftCols(r);
+}
+
+}  // namespace bem

@@ -1,0 +1,118 @@
+#include "bem/cluster_tree.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+
+namespace bem {
+
+void Box::add(Vec2 p) {
+  x0 = std::min(x0, p.x);
+  x1 = std::max(x1, p.x);
+  y0 = std::min(y0, p.y);
+  y1 = std::max(y1, p.y);
+}
+
+void Box::add(const Box& b) {
+  x0 = std::min(x0, b.x0);
+  x1 = std::max(x1, b.x1);
+  y0 = std::min(y0, b.y0);
+  y1 = std::max(y1, b.y1);
+}
+
+double Box::diameter() const { return std::hypot(x1 - x0, y1 - y0); }
+
+double Box::distance(const Box& b) const {
+  const double dx = std::max({0.0, b.x0 - x1, x0 - b.x1});
+  const double dy = std::max({0.0, b.y0 - y1, y0 - b.y1});
+  return std::hypot(dx, dy);
+}
+
+bool admissible(const Box& t, const Box& s, double eta) {
+  const double d = t.distance(s);
+  return d > 0.0 && std::min(t.diameter(), s.diameter()) <= eta * d;
+}
+
+ClusterTree::ClusterTree(const Points& points, const std::vector<Box>& supports, Index leaf_size) {
+  const Index n = points.rows();
+  if (n < 1 || static_cast<Index>(supports.size()) != n || leaf_size < 1)
+    throw std::invalid_argument("ClusterTree: need n >= 1 points, one support each, leaf_size >= 1");
+  permutation_.resize(static_cast<std::size_t>(n));
+  std::iota(permutation_.begin(), permutation_.end(), Index{0});
+  clusters_.reserve(static_cast<std::size_t>(4 * (n / leaf_size + 1)));
+  build(0, n, points, supports, leaf_size);
+}
+
+int ClusterTree::build(Index begin, Index end, const Points& points,
+                       const std::vector<Box>& supports, Index leaf_size) {
+  const int id = static_cast<int>(clusters_.size());
+  clusters_.emplace_back();
+  Cluster c;
+  c.begin = begin;
+  c.end = end;
+  Box point_box;
+  for (Index k = begin; k < end; ++k) {
+    const Index i = permutation_[static_cast<std::size_t>(k)];
+    c.box.add(supports[static_cast<std::size_t>(i)]);
+    point_box.add(Vec2{points(i, 0), points(i, 1)});
+  }
+  if (end - begin > leaf_size) {
+    // Bisect the box of the points along its longer side; fall back to the median if
+    // all points fall on one side (cannot happen for distinct points, kept for safety).
+    const bool split_x = point_box.x1 - point_box.x0 >= point_box.y1 - point_box.y0;
+    const int axis = split_x ? 0 : 1;
+    const double mid = split_x ? 0.5 * (point_box.x0 + point_box.x1) : 0.5 * (point_box.y0 + point_box.y1);
+    auto first = permutation_.begin() + begin, last = permutation_.begin() + end;
+    auto cut = std::stable_partition(first, last, [&](Index i) { return points(i, axis) < mid; });
+    if (cut == first || cut == last) {
+      cut = first + (end - begin) / 2;
+      std::nth_element(first, cut, last,
+                       [&](Index a, Index b) { return points(a, axis) < points(b, axis); });
+    }
+    const Index split = begin + (cut - first);
+    c.children[0] = build(begin, split, points, supports, leaf_size);
+    c.children[1] = build(split, end, points, supports, leaf_size);
+  }
+  clusters_[static_cast<std::size_t>(id)] = c;
+  return id;
+}
+
+ClusterTree ClusterTree::for_space(const Polygon& polygon, Space space, Index leaf_size) {
+  const Index n = polygon.size();
+  Points points(n, 2);
+  std::vector<Box> supports(static_cast<std::size_t>(n));
+  for (Index i = 0; i < n; ++i) {
+    const Panel& p = polygon.panel(i);
+    Box& b = supports[static_cast<std::size_t>(i)];
+    b.add(p.a);
+    b.add(p.b);
+    if (space == Space::P0) {  // indicator of panel i
+      points(i, 0) = p.m.x;
+      points(i, 1) = p.m.y;
+    } else {  // hat of node i = start of panel i: panels i - 1 and i
+      b.add(polygon.panel((i + n - 1) % n).a);
+      points(i, 0) = p.a.x;
+      points(i, 1) = p.a.y;
+    }
+  }
+  return ClusterTree(points, supports, leaf_size);
+}
+
+std::vector<int> ClusterTree::leaves() const {
+  std::vector<int> out, stack{0};
+  while (!stack.empty()) {
+    const int c = stack.back();
+    stack.pop_back();
+    const Cluster& cl = cluster(c);
+    if (cl.leaf()) {
+      out.push_back(c);
+    } else {
+      stack.push_back(cl.children[1]);
+      stack.push_back(cl.children[0]);
+    }
+  }
+  return out;
+}
+
+}  // namespace bem

@@ -1,0 +1,163 @@
+#include "bem/operator_entries.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+#include <vector>
+
+#include "bem/far_field.hpp"
+#include "bem/log_integrals.hpp"
+
+namespace bem {
+
+namespace {
+
+constexpr double kInvPi = 0.318309886183790671537767526745;
+
+/// Panel and local shape of the two terms of a dof.
+struct Terms {
+  Index panel[2];
+  int shape[2];
+};
+
+Terms terms(Space space, Index i, Index n) {
+  if (space == Space::P0) return {{i, i}, {0, 1}};
+  return {{(i + n - 1) % n, i}, {1, 0}};
+}
+
+PairRelation relation(Index p, Index q, Index n) {
+  if (p == q) return PairRelation::Coincident;
+  if (q == (p + 1) % n) return PairRelation::EndToStart;
+  if (q == (p + n - 1) % n) return PairRelation::StartToEnd;
+  return PairRelation::Separated;
+}
+
+std::vector<Index> sorted_panels(Space space, const Index* dofs, Index m, Index n) {
+  std::vector<Index> panels;
+  panels.reserve(static_cast<std::size_t>(2 * m));
+  for (Index r = 0; r < m; ++r) {
+    const Terms t = terms(space, dofs[r], n);
+    panels.push_back(t.panel[0]);
+    panels.push_back(t.panel[1]);
+  }
+  std::sort(panels.begin(), panels.end());
+  panels.erase(std::unique(panels.begin(), panels.end()), panels.end());
+  return panels;
+}
+
+Index position(const std::vector<Index>& sorted, Index panel) {
+  return static_cast<Index>(std::lower_bound(sorted.begin(), sorted.end(), panel) - sorted.begin());
+}
+
+}  // namespace
+
+OperatorEntries::OperatorEntries(const Polygon& polygon, Kernel kernel, Space rows, Space cols)
+    : polygon_(polygon), kernel_(kernel), rows_(rows), cols_(cols) {
+  if (kernel == Kernel::SingleLayer && rows != cols)
+    throw std::invalid_argument("OperatorEntries: V_h needs the same row and column space");
+  if (kernel == Kernel::DoubleLayer && cols != Space::P1)
+    throw std::invalid_argument("OperatorEntries: K_h has P1 columns");
+}
+
+void OperatorEntries::block(const Index* I, Index m, const Index* J, Index k, double* out,
+                            Index ld) const {
+  const Index n = polygon_.size();
+  const bool with_k = kernel_ == Kernel::DoubleLayer;
+  const std::vector<Index> P = sorted_panels(rows_, I, m, n);
+  const std::vector<Index> Q = sorted_panels(cols_, J, k, n);
+  const std::size_t np = P.size(), nq = Q.size();
+  // table[(a * 2 + b) * np * nq + ip * nq + iq]: block [a][b] of (test P[ip], trial Q[iq]),
+  // with the factor -1/pi (V) or 1/pi (K).
+  std::vector<double> table(4 * np * nq);
+  auto at = [&](int a, int b, std::size_t ip, std::size_t iq) -> double& {
+    return table[(static_cast<std::size_t>(2 * a + b) * np + ip) * nq + iq];
+  };
+  const double scale = with_k ? kInvPi : -kInvPi;
+  PairBlocks B;
+  if (np <= nq || !with_k) {
+    // Test panel by test panel against all trial panels, far pairs in vector batches.
+    // For V with few trial panels (a column) the roles swap: v is symmetric,
+    // v_pq[a][b] = v_qp[b][a].
+    const bool swap = np > nq;
+    const std::vector<Index>& outer = swap ? Q : P;
+    const std::vector<Index>& inner = swap ? P : Q;
+    const std::size_t ni = inner.size();
+    PanelArrays arrays;
+    arrays.assign(polygon_, inner.data(), ni);
+    std::vector<double> store(4 * ni);
+    std::vector<int> points(ni);
+    PairBlockColumns col;
+    for (int a = 0; a < 2; ++a)
+      for (int b = 0; b < 2; ++b) {
+        col.v[a][b] = store.data() + (2 * a + b) * ni;
+        col.kij[a][b] = col.v[a][b];
+      }
+    for (std::size_t io = 0; io < outer.size(); ++io) {
+      const Panel& po = polygon_.panel(outer[io]);
+      Index queue[kMaxFarPoints + 1][kFarBatch];
+      int queued[kMaxFarPoints + 1] = {};
+      auto flush = [&](int p) {
+        far_blocks_batch(po, arrays, queue[p], queued[p], p, !with_k, with_k, col, 1.0, 1.0);
+        queued[p] = 0;
+      };
+      for (std::size_t ii = 0; ii < ni; ++ii) {
+        const Index q = inner[ii];
+        const PairRelation rel = relation(outer[io], q, n);
+        const Panel& pq = polygon_.panel(q);
+        const int p = rel == PairRelation::Separated ? far_field_points(po, pq) : 0;
+        if (p > 0) {
+          queue[p][queued[p]++] = static_cast<Index>(ii);
+          if (queued[p] == kFarBatch) flush(p);
+          continue;
+        }
+        pair_blocks(po, pq, rel, with_k, B);
+        for (int a = 0; a < 2; ++a)
+          for (int b = 0; b < 2; ++b) col.v[a][b][ii] = with_k ? B.kij[a][b] : B.v[a][b];
+      }
+      for (int p = 1; p <= kMaxFarPoints; ++p)
+        if (queued[p] > 0) flush(p);
+      for (int a = 0; a < 2; ++a)
+        for (int b = 0; b < 2; ++b)
+          for (std::size_t ii = 0; ii < ni; ++ii) {
+            const double value = scale * col.v[a][b][ii];
+            if (swap)
+              at(b, a, ii, io) = value;
+            else
+              at(a, b, io, ii) = value;
+          }
+    }
+  } else {
+    // K with few trial panels (a column): the double-layer kernel carries the normal of
+    // the trial panel, so the batches (normal of the batch panel) do not apply.
+    for (std::size_t iq = 0; iq < nq; ++iq)
+      for (std::size_t ip = 0; ip < np; ++ip) {
+        pair_blocks(polygon_.panel(P[ip]), polygon_.panel(Q[iq]), relation(P[ip], Q[iq], n), true, B);
+        for (int a = 0; a < 2; ++a)
+          for (int b = 0; b < 2; ++b) at(a, b, ip, iq) = scale * B.kij[a][b];
+      }
+  }
+  // Entries: sums over the two terms of the row dof and of the column dof.
+  std::vector<Index> col_pos(static_cast<std::size_t>(2 * k));
+  std::vector<int> col_shape(static_cast<std::size_t>(2 * k));
+  for (Index c = 0; c < k; ++c) {
+    const Terms t = terms(cols_, J[c], n);
+    for (int e = 0; e < 2; ++e) {
+      col_pos[static_cast<std::size_t>(2 * c + e)] = position(Q, t.panel[e]);
+      col_shape[static_cast<std::size_t>(2 * c + e)] = t.shape[e];
+    }
+  }
+  for (Index r = 0; r < m; ++r) {
+    const Terms t = terms(rows_, I[r], n);
+    const std::size_t ip[2] = {static_cast<std::size_t>(position(P, t.panel[0])),
+                               static_cast<std::size_t>(position(P, t.panel[1]))};
+    for (Index c = 0; c < k; ++c) {
+      double sum = 0.0;
+      for (int e = 0; e < 2; ++e)
+        for (int f = 0; f < 2; ++f)
+          sum += at(t.shape[e], col_shape[static_cast<std::size_t>(2 * c + f)], ip[e],
+                    static_cast<std::size_t>(col_pos[static_cast<std::size_t>(2 * c + f)]));
+      out[r + c * ld] = sum;
+    }
+  }
+}
+
+}  // namespace bem

@@ -1,0 +1,42 @@
+#include <gtest/gtest.h>
+
+#include "bem/hmatrix.hpp"
+#include "bem/operator_entries.hpp"
+#include "test_helpers.hpp"
+
+using namespace bem;
+
+namespace {
+std::shared_ptr<const HMatrix> hmatrix(const Polygon& poly, Kernel kernel, Space rows, double tol) {
+  const Space cols = kernel == Kernel::SingleLayer ? rows : Space::P1;
+  auto tr = std::make_shared<const ClusterTree>(ClusterTree::for_space(poly, rows, 16));
+  auto tc = rows == cols ? tr : std::make_shared<const ClusterTree>(ClusterTree::for_space(poly, cols, 16));
+  const OperatorEntries e(poly, kernel, rows, cols);
+  const EntryFunction f = [&e](const Index* I, Index m, const Index* J, Index k, double* out, Index ld) {
+    e.block(I, m, J, k, out, ld);
+  };
+  return std::make_shared<const HMatrix>(tr, tc, f, HMatrixOptions{16, 1.0, tol});
+}
+}  // namespace
+
+TEST(HMatrix, ApproximatesVAndKToTheTolerance) {
+  for (const Points& X : {test::circle(600), test::square(150)}) {
+    const Polygon poly(X);
+    const Index n = poly.size();
+    for (Space s : {Space::P0, Space::P1}) {
+      for (Kernel kernel : {Kernel::SingleLayer, Kernel::DoubleLayer}) {
+        const Eigen::MatrixXd A = kernel == Kernel::SingleLayer ? single_layer(poly, s) : double_layer(poly, s);
+        const auto H = hmatrix(poly, kernel, s, 1e-8);
+        EXPECT_LT((H->to_dense() - A).norm(), 1e-8 * A.norm());
+        // Products agree with the dense approximation, for blocks of vectors and transposed.
+        const Eigen::MatrixXd Xr = Eigen::MatrixXd::Random(n, 3);
+        const Eigen::MatrixXd Hd = H->to_dense();
+        EXPECT_LT((H->apply(Xr) - Hd * Xr).norm(), 1e-13 * (Hd * Xr).norm());
+        EXPECT_LT((H->apply(Xr, true) - Hd.transpose() * Xr).norm(), 1e-13 * (Hd * Xr).norm());
+        // Compression: less than the dense n^2 doubles.
+        EXPECT_LT(H->nbytes(), static_cast<std::size_t>(n * n) * sizeof(double));
+        EXPECT_GT(H->max_rank(), 0);
+      }
+    }
+  }
+}

@@ -1,0 +1,23 @@
+#include <gtest/gtest.h>
+
+#include "bem/steklov_operator.hpp"
+#include "bem/steklov_poincare.hpp"
+#include "test_helpers.hpp"
+
+using namespace bem;
+
+TEST(SteklovPoincareOperator, MatchesTheDenseOperator) {
+  for (const Points& X : {test::circle(700), test::square(160)}) {
+    for (Space flux : {Space::P1, Space::P0}) {
+      const double tol = 1e-10;
+      const SteklovPoincareOperator S(X, flux, SteklovOptions{{32, 1.0, tol}, 1e-4, 1e-3 * tol, 1000});
+      const Matrix dense = steklov_poincare(Polygon(X), flux);
+      const Eigen::MatrixXd Y = Eigen::MatrixXd::Random(X.rows(), 4);
+      const Eigen::MatrixXd ref = dense * Y;
+      EXPECT_LT((S.apply(Y) - ref).norm(), 10 * tol * ref.norm());
+      EXPECT_GT(S.last_iterations(), 0);
+      const SteklovInfo& info = S.info();
+      EXPECT_EQ(S.nbytes(), info.nbytes_v + info.nbytes_v0 + info.nbytes_k + info.nbytes_preconditioner);
+    }
+  }
+}
