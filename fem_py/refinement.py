@@ -33,6 +33,7 @@ from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
 from fem_py.coarse import compute_coarse_structure
+from fem_py.geometry import CORNER_ANGLE
 from fem_py.meshdata import tag_array
 
 __all__ = [
@@ -93,6 +94,14 @@ def max_facet_length(msh: Any) -> float:
     return msh.comm.allreduce(loc, op=MPI.MAX)
 
 
+def _corner_angle(domain: Any) -> float | None:
+    """The ``corner_angle`` the coarse structure of ``domain`` was computed with: none for
+    the square and L-shape of build_domain, fem_py.geometry.CORNER_ANGLE for the other
+    shapes and meshes (curved coarse edges). The new nodes are midpoints of straight
+    facets, so they add no bend and the coarse vertices stay the same."""
+    return None if domain.shape in ("square", "lshape") else CORNER_ANGLE
+
+
 def refine_domain(domain: Any, cells: np.ndarray) -> Any:
     """Refine ``domain`` (a :class:`fem_py.geometry.Domain`) at the local cells ``cells``
     (every edge of a marked cell is bisected, plus the closure of Plaza's refinement) and
@@ -136,7 +145,7 @@ def refine_domain(domain: Any, cells: np.ndarray) -> Any:
         mesh=new,
         cell_tags=ct,
         facet_tags=ft,
-        coarse=compute_coarse_structure(new, ct, ft),
+        coarse=compute_coarse_structure(new, ct, ft, corner_angle=_corner_angle(domain)),
         structured=False,
         h_max=max_facet_length(new),
     )

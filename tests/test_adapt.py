@@ -274,3 +274,21 @@ def test_adapt_options_and_config():
     assert parse_config({"adapt": {"theta": 1, "steps": 3}})["adapt"]["theta"] == 1.0
     with pytest.raises(ValueError, match="theta"):
         AdaptOptions(theta=0.0)
+
+
+@pytest.mark.parametrize(
+    "shape,extra",
+    [
+        ("polygon", dict(vertices=[[0, 0], [0.5, 0], [0.5, 0.3], [0.2, 0.5]], signorini=["side0"])),
+        ("disk", dict(radius=0.25, signorini="all")),
+    ],
+)
+def test_refinement_keeps_curved_coarse_edges(shape, extra):
+    """Meshes whose coarse structure has curved edges (corner_angle): the new boundary
+    nodes are facet midpoints, no new bend, the same coarse vertices."""
+    domain = build_domain(COMM, shape, h=1 / 16, subdomain_size=1 / 8, **extra)
+    n = domain.mesh.topology.index_map(2).size_local
+    refined = refine_domain(domain, np.arange(0, n, 2))
+    old, new = domain.coarse, refined.coarse
+    assert new.n_subdomains == old.n_subdomains
+    assert np.allclose(np.sort(new.vertex_coords, axis=0), np.sort(old.vertex_coords, axis=0))
