@@ -226,20 +226,14 @@ def _solve(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
     comm = MPI.COMM_WORLD
     config = _problem_inputs(args)
     from coupling.app.advice import arc_warnings, material_warnings
-    from coupling.app.from_config import (
-        coarser_configs,
-        domain_from_config,
-        planned_size,
-        problem_on_domain,
-    )
-    from coupling.solvers.nested import solve_nested
+    from coupling.app.from_config import domain_from_config, planned_size, problem_on_domain
     from coupling.app.progress import ProgressMonitor
+    from coupling.app.run import run_solver
     from coupling.app.sizing import check_memory, size_of_domain
     from coupling.preconditioners import problem_arcs
     from fem_py.polyline import arc_length
     from coupling.io.atomic import staged_output_dir
     from coupling.io.outputs import write_outputs
-    from coupling.solvers import solve
     from coupling.timing import process_seconds
 
     out = Path(args.out if args.out is not None else config["output"]["dir"])
@@ -269,30 +263,24 @@ def _solve(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
             _say(f"warning: {line}")
         if monitor is not None:
             monitor.problem(problem, options, arc_lengths)
-        levels = None
-        if options.nested:
-            coarser = [_level_builder(comm, c) for c in coarser_configs(config)]
-            result, records = solve_nested(
-                problem, coarser, options, monitor=monitor, level_monitor=monitor and monitor.level
-            )
-            levels = [dataclasses.asdict(r) for r in records]
-        else:
-            result = solve(problem, options, monitor=monitor)
+        run = run_solver(comm, config, domain, problem, options, timings, monitor)
+        result = run.solution
         if monitor is not None:
             monitor.finished(result)
             monitor.stage(f"writing outputs to {out}")
         write_outputs(
             comm,
             staging,
-            problem,
+            run.problem,
             result,
             tol=options.tol,
-            timings={"startup": startup, **timings, **result.timings},
+            timings={"startup": startup, **run.timings},
             total=process_seconds,
             xdmf=config["output"]["xdmf"],
             plots=config["output"]["plots"],
             config=config,
-            levels=levels,
+            levels=run.levels,
+            estimator=run.estimator,
         )
     if comm.rank == 0 and not args.quiet:
         state = "converged" if result.converged else "did NOT converge"
@@ -330,13 +318,6 @@ def _info(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
             for key, value in report.items():
                 print(f"{key}: {value:.6g}" if isinstance(value, float) else f"{key}: {value}")
     return EXIT_OK
-
-
-def _level_builder(comm, config: dict):
-    """A builder of the problem of one coarser level (called when the level starts)."""
-    from coupling.app.from_config import domain_from_config, problem_on_domain
-
-    return lambda: problem_on_domain(domain_from_config(comm, config), config)[0]
 
 
 def _read_points(path: Path) -> np.ndarray:

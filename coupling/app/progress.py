@@ -59,6 +59,14 @@ class ProgressMonitor:
             f"{record.cg_iterations} CG, {record.time:.2f} s"
         )
 
+    def adapt_level(self, level) -> None:
+        """One line per level of the adaptive loop."""
+        r = level.record()
+        self.stage(
+            f"adaptive level {r['level']}: {r['dofs']} dofs, estimator {r['estimator']:.4g}, "
+            f"{r['iterations']} iterations, {r['marked']} cells marked, {r['time']:.2f} s"
+        )
+
     def finished(self, solution) -> None:
         """A note when J_h increased during the solve (tau was halved)."""
         if solution.energy_increases and self.comm.rank == 0:

@@ -28,6 +28,7 @@ import numpy as np
 from mpi4py import MPI
 
 from coupling.io.atomic import atomic_write
+from coupling.io.levels import LEVEL_FILES, write_levels
 from coupling.io.plots import PLOT_FILES, write_plots
 from coupling.io.quantities import boundary_flux, complementarity, log_coefficient
 from fem_py.numbering import gather_p1
@@ -110,6 +111,7 @@ def write_outputs(
     config: dict | None = None,
     total: Callable[[], float] | None = None,
     levels: list[dict] | None = None,
+    estimator: float | None = None,
 ) -> list[str]:
     """Write summary.json, fields.npz and, on request, solution.xdmf/.h5 and the plots.
 
@@ -150,10 +152,14 @@ def write_outputs(
         names.append("fields.npz")
         if plots:
             names += write_plots(out, fields, result.history, tol=tol)
+        if levels:
+            names += write_levels(out, levels, plot=plots)
         stages = {**timings, "outputs": time.perf_counter() - tic}
         if total is not None:
             stages["total"] = total()
         record = summary(problem, result, stages, pressure)
+        if estimator is not None:  # the global a posteriori estimator eta
+            record["estimator"] = estimator
         if levels is not None:  # a nested or adaptive solve: one record per level
             record["levels"] = levels
         if config is not None:
@@ -164,7 +170,7 @@ def write_outputs(
             out / "summary.json", lambda p: p.write_text(json.dumps(record, indent=2, default=str))
         )
         names.append("summary.json")
-        for name in set(DATA_FILES + PLOT_FILES) - set(names):
+        for name in set(DATA_FILES + PLOT_FILES + LEVEL_FILES) - set(names):
             (out / name).unlink(missing_ok=True)
         return names
 

@@ -1,0 +1,109 @@
+"""The solve of one configuration, plain, nested (``[solver] nested``) or adaptive
+(``[adapt] steps > 0``), and the a posteriori estimator of its result."""
+from __future__ import annotations
+
+import dataclasses
+import time
+from dataclasses import dataclass
+from typing import Any
+
+from coupling.app.config import ConfigError
+from coupling.app.from_config import coarser_configs, domain_from_config, problem_on_domain
+from coupling.options import SolverOptions
+
+__all__ = ["Run", "run_solver"]
+
+
+@dataclass
+class Run:
+    """What the outputs of a run need: the (finest) problem and its solution, the stage
+    timings, one record per level (nested or adaptive runs) and the global estimator."""
+
+    problem: Any
+    solution: Any
+    timings: dict[str, float]
+    levels: list[dict] | None
+    estimator: float
+
+
+def _level_builder(comm: Any, config: dict):
+    """A builder of the problem of one coarser level (called when the level starts)."""
+    return lambda: problem_on_domain(domain_from_config(comm, config), config)[0]
+
+
+def run_solver(
+    comm: Any,
+    config: dict,
+    domain: Any,
+    problem: Any,
+    options: SolverOptions,
+    timings: dict[str, float],
+    monitor: Any = None,
+) -> Run:
+    """Solve the assembled ``problem`` on ``domain`` as the configuration asks (collective).
+
+    ``timings`` are the set-up stages so far; the run adds ``solve`` (and the stages of
+    :func:`coupling.solvers.solve`), ``coarse_levels`` and ``prolongation`` for a nested
+    solve, ``adaptive_loop`` (every level: assembly, solves, estimates, refinement) for
+    an adaptive one, and ``estimator``.
+    """
+    from coupling.adapt import adapt, adapt_options, estimate
+    from coupling.solvers import solve
+    from coupling.solvers.nested import solve_nested
+
+    data, steps = config["data"], config["adapt"]["steps"]
+    if steps > 0:
+        if options.nested:
+            raise ConfigError(
+                "solver.nested = true and adapt.steps > 0 do not combine: the "
+                "adaptive loop already starts each level from the one before; "
+                "set solver.nested = false"
+            )
+        settings = adapt_options(config["adapt"])
+        dofs = problem.V.dofmap.index_map.size_global
+        if dofs > settings.max_dofs:
+            raise ConfigError(
+                f"adapt.max_dofs = {settings.max_dofs} is below the starting "
+                f"mesh's {dofs} dofs; raise it or coarsen the mesh (geometry.h)"
+            )
+        first = [problem]
+
+        def build(level_domain: Any) -> tuple[Any, dict]:
+            if first:  # the starting level is the problem assembled already
+                return first.pop(), data
+            return problem_on_domain(level_domain, config)[0], data
+
+        tic = time.perf_counter()
+        levels = adapt(
+            build,
+            domain,
+            options,
+            settings,
+            monitor=monitor,
+            on_level=monitor.adapt_level if monitor is not None else None,
+        )
+        last = levels[-1]
+        return Run(
+            last.problem,
+            last.solution,
+            {**timings, "adaptive_loop": time.perf_counter() - tic},
+            [level.record() for level in levels],
+            float(last.estimate.total),
+        )
+    records = None
+    if options.nested:
+        coarser = [_level_builder(comm, c) for c in coarser_configs(config)]
+        solution, nested = solve_nested(
+            problem,
+            coarser,
+            options,
+            monitor=monitor,
+            level_monitor=monitor.level if monitor is not None else None,
+        )
+        records = [dataclasses.asdict(r) for r in nested]
+    else:
+        solution = solve(problem, options, monitor=monitor)
+    tic = time.perf_counter()
+    eta = estimate(problem, solution, f=data["f"], t0=data["t0"]).total
+    stages = {**timings, **solution.timings, "estimator": time.perf_counter() - tic}
+    return Run(problem, solution, stages, records, float(eta))
