@@ -58,6 +58,7 @@ call it inside a gmsh session of your own).
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any, Sequence
@@ -402,6 +403,8 @@ def build_domain(
         plan.ends,
     )
     cV, ccells, csize = plan.cV, plan.ccells, plan.csize
+    if shape == "polygon" and float(B.len.min()) < 0.5 * d:
+        return _fine_polygon_domain(comm, plan)
 
     # gmsh runs on rank 0 (the polygon's coarse mesh, the unstructured fine mesh)
     arrays = None
@@ -521,6 +524,28 @@ def domain_from_mesh(
         d,
         "mesh",
     )
+
+
+def _fine_polygon_domain(comm: Any, plan: _Plan) -> Domain:
+    """A polygon with sides shorter than d/2 (a finely drawn curve): meshed at size h
+    and split by the automatic partition (``fem_py.partition``), so that its subdomains
+    have size d whatever the vertex spacing (coarse triangles of a gmsh mesh of size d
+    would follow the vertex spacing instead)."""
+    from fem_py.own_mesh import polygon_mesh, prepare_mesh
+
+    names = "all" if plan.whole else [f"arc{k}" for k in range(len(plan.arcs))]
+    domain = domain_from_prepared(
+        comm,
+        lambda: prepare_mesh(
+            polygon_mesh(plan.B, plan.ends, plan.h, plan.arcs),
+            signorini=names,
+            subdomain_size=plan.d,
+            allow_large=True,
+        ),
+        plan.d,
+        "polygon",
+    )
+    return dataclasses.replace(domain, h=plan.h)
 
 
 def _check_size(d: Any) -> float:

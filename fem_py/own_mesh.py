@@ -414,3 +414,21 @@ def gather_mesh(msh: Any, facet_tags: Any, cell_tags: Any = None, names: Any = N
         cv = np.concatenate([p[5] for p in parts])
         surfaces = {str(t): np.flatnonzero(cv == t) for t in np.unique(cv) if t >= 0}
     return MeshFile(X, C, curves, surfaces, "the mesh")
+
+
+def polygon_mesh(boundary: Any, ends: list, h: float, arcs: tuple) -> MeshFile:
+    """A gmsh mesh of size h of the polygon of ``boundary`` (a ``fem_py.shapes.
+    BoundaryCurve``) with the arc ends ``ends`` as nodes, as a :class:`MeshFile` whose
+    curve groups ``arc<k>`` hold the boundary facets inside arc k (call on one rank)."""
+    from fem_py.gmsh_mesh import mesh_with_gmsh
+
+    x, tri, _ = mesh_with_gmsh(boundary, None, ends, h, h, arcs, fine=False)
+    cells = np.asarray(tri, dtype=np.int64)
+    facets = np.sort(cells[:, [[0, 1], [1, 2], [2, 0]]].reshape(-1, 2), axis=1)
+    uniq, count = np.unique(facets, axis=0, return_counts=True)
+    bnd = uniq[count == 1]
+    position = np.array([boundary.locate(0.5 * (x[a] + x[b]))[1] for a, b in bnd])
+    curves = {}
+    for k, arc in enumerate(arcs):
+        curves["all" if arc.whole else f"arc{k}"] = bnd[boundary.inside(position, arc)]
+    return MeshFile(np.asarray(x, dtype=float), cells, curves, {}, "the polygon")

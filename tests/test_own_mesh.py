@@ -318,3 +318,25 @@ def test_own_mesh_demo(tmp_path, nprocs):
     assert results["errors"]["nodal_u"] < 3e-3 and results["errors"]["gap"] < 3e-3
     assert 0 < results["contact"] < results["signorini_nodes"]
     assert (tmp_path / "subdomains.png").is_file() and (tmp_path / "disk.msh").is_file()
+
+
+def test_finely_drawn_polygon_gets_subdomains_of_size_d():
+    """A 480-gon (sides 0.0033 < d/2) is meshed at size h and partitioned automatically:
+    about area/d^2 subdomains (42 measured; the coarse triangles of a gmsh mesh of size d
+    followed the vertex spacing: 42,530 for a 480-gon at d = 1/64); a 24-gon (sides
+    0.065 >= d/2) keeps its coarse triangles (122)."""
+    from fem_py.geometry import build_domain
+
+    counts = {}
+    for n in (24, 480):
+        t = 2 * np.pi * np.arange(n) / n
+        V = 0.25 * np.column_stack([np.cos(t), np.sin(t)])
+        arc = [V[n * 5 // 8].tolist(), V[n * 7 // 8].tolist()]
+        domain = build_domain(
+            COMM, "polygon", h=0.02, subdomain_size=0.08, vertices=V.tolist(), signorini=[arc]
+        )
+        counts[n] = domain.coarse.n_subdomains
+        ends = np.array([domain.arcs[0].start, domain.arcs[0].end])
+        dist = np.linalg.norm(domain.coarse.vertex_coords[:, None] - ends, axis=2).min(0)
+        assert dist.max() < 1e-12  # the arc ends are coarse vertices
+    assert counts[24] == 122 and 30 <= counts[480] <= 60, counts
