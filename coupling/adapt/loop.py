@@ -121,10 +121,11 @@ def adapt(
     start = None
     previous = None
     for k in range(adapt_options.steps + 1):
+        # P1 dofs = mesh vertices: checked before S_h of the level is assembled
+        if k > 0 and domain.mesh.topology.index_map(0).size_global > adapt_options.max_dofs:
+            break
         tic = time.perf_counter()
         problem, data = problem_builder(domain)
-        if k > 0 and problem.V.dofmap.index_map.size_global > adapt_options.max_dofs:
-            break
         if previous is not None:
             start = transfer_iterate(previous.problem, previous.solution, problem)
         solution = solve(problem, options, initial=start, monitor=monitor)
