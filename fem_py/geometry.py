@@ -42,7 +42,9 @@ Modules
 ``fem_py.shapes`` (Omega's polygon, Gamma by arc length, the arcs and tags),
 ``fem_py.gmsh_mesh`` (gmsh, on rank 0), ``fem_py.structured`` (the uniform refinement),
 ``fem_py.distribute`` (whole subdomains per rank), ``fem_py.coarse`` (the coarse
-structure recovered from the distributed mesh); this module joins them.
+structure recovered from the distributed mesh); this module joins them. Users' meshes
+(:func:`domain_from_file`, :func:`domain_from_mesh`), the disk and finely drawn polygons
+go through ``fem_py.own_mesh`` and the automatic partition ``fem_py.partition``.
 
 Parallel use: all ranks call ``build_domain`` with the same arguments. Arguments are
 validated identically on every rank before any collective call. Whole subdomains are
