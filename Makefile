@@ -65,6 +65,7 @@ bench: setup
 	$(PY) bench/pgpm_profile.py
 	$(PY) bench/peers.py
 	$(PY) bench/strong_scaling.py --output bench/scaling.md
+	$(PY) bench/outputs.py
 
 study: setup
 	$(PY) -m coupling.study

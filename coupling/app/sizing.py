@@ -35,7 +35,7 @@ PROCESS_BYTES = 200e6
 DOF_BYTES = 0.65e3
 BOUNDARY_BYTES = 5 * 8.0
 PLOT_PROCESS_BYTES = 40e6
-PLOT_DOF_BYTES = 0.8e3
+PLOT_DOF_BYTES = 0.02e3
 
 
 def memory_estimate(size: DomainSize, ranks: int = 1, *, plots: bool = True) -> int:

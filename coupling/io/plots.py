@@ -13,12 +13,17 @@ iteration history alone, so it can be redrawn from the outputs of a finished run
 - ``history.png``: the relative B-norm step and the relative energy excess of each
   iteration against the tolerance, and the size of the contact set.
 
+u_h is drawn as an image: :func:`rasterise` evaluates the P1 interpolant at the
+centres of a pixel grid of :data:`RASTER_PIXELS` pixels along its longer side (pixels
+outside Omega masked), so drawing costs the same at any mesh size; only the rasteriser's
+pass over the triangles grows with N (vectorised, docs/design/outputs.md).
+
 The problem is dimensionless, so the axes carry no units.
 """
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Sequence
+from typing import NamedTuple, Sequence
 
 import matplotlib
 
@@ -33,10 +38,160 @@ import bem_cpp  # noqa: E402
 from coupling.io.atomic import atomic_write  # noqa: E402
 from fem_py.polyline import arc_length, closest_on_polygon  # noqa: E402
 
-__all__ = ["PLOT_FILES", "write_plots", "true_runs"]
+__all__ = [
+    "PLOT_FILES",
+    "RASTER_PIXELS",
+    "PixelGrid",
+    "rasterise",
+    "coarsen",
+    "write_plots",
+    "true_runs",
+]
 
 #: The figures, in the order they are written.
 PLOT_FILES = ("u.png", "boundary.png", "whole_plane.png", "history.png")
+
+#: Pixels along the longer side of the images of u_h (about twice the drawn size at 110 dpi).
+RASTER_PIXELS = 600
+
+#: Triangle-pixel pairs tested at once by :func:`rasterise` (bounds its scratch memory).
+_BATCH = 1 << 16
+
+
+class PixelGrid(NamedTuple):
+    """Square pixels of side ``size``, ``nx`` by ``ny``, the first one's lower-left corner
+    at ``origin``; pixel (i, j) (row i, column j) has its centre at
+    origin + size * (j + 1/2, i + 1/2)."""
+
+    origin: tuple[float, float]
+    size: float
+    nx: int
+    ny: int
+
+    @classmethod
+    def covering(cls, lo: np.ndarray, hi: np.ndarray, pixels: int = RASTER_PIXELS) -> PixelGrid:
+        """The grid over the box [lo, hi] with ``pixels`` pixels along its longer side."""
+        lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+        size = float((hi - lo).max()) / pixels
+        nx, ny = (max(int(np.ceil(w / size - 1e-9)), 1) for w in hi - lo)
+        return cls((float(lo[0]), float(lo[1])), size, nx, ny)
+
+    def centres(self) -> tuple[np.ndarray, np.ndarray]:
+        """The x (nx,) and y (ny,) coordinates of the pixel centres."""
+        x0, y0 = self.origin
+        return (
+            x0 + (np.arange(self.nx) + 0.5) * self.size,
+            y0 + (np.arange(self.ny) + 0.5) * self.size,
+        )
+
+    @property
+    def extent(self) -> tuple[float, float, float, float]:
+        """(left, right, bottom, top), as ``imshow`` takes it."""
+        x0, y0 = self.origin
+        return (x0, x0 + self.nx * self.size, y0, y0 + self.ny * self.size)
+
+
+def rasterise(
+    x: np.ndarray, triangles: np.ndarray, values: np.ndarray, grid: PixelGrid
+) -> np.ma.MaskedArray:
+    """The P1 interpolant of ``values`` at the pixel centres of ``grid``.
+
+    Each triangle is tested against the pixel centres in its bounding box (barycentric
+    coordinates, all >= 0 up to round-off); a centre on an edge shared by two triangles
+    takes the value of either, equal up to round-off. Vectorised over batches of
+    triangle-pixel pairs: the time is linear in the triangles plus the pixels, and the
+    scratch memory is bounded by the batch size.
+
+    Parameters
+    ----------
+    x : (N, 2) array
+        Node coordinates.
+    triangles : (n_cells, 3) int array
+        Node indices of each triangle, either orientation.
+    values : (N,) array
+        Nodal values.
+
+    Returns
+    -------
+    (ny, nx) masked array
+        Row i holds the pixel centres at height y0 + size (i + 1/2); pixels whose centre
+        lies in no triangle (outside Omega) are masked.
+    """
+    image = np.full(grid.ny * grid.nx, np.nan)
+    # node coordinates in pixel-centre units: the centre of pixel (i, j) is the point (j, i)
+    q = (np.asarray(x, float)[:, :2] - np.asarray(grid.origin)) / grid.size - 0.5
+    last = np.array([grid.nx - 1, grid.ny - 1])
+    chunk = 1 << 16  # triangles per pass over their bounding boxes
+    for start in range(0, len(triangles), chunk):
+        t = triangles[start : start + chunk]
+        p0, p1, p2 = q[t[:, 0]], q[t[:, 1]], q[t[:, 2]]
+        first = np.maximum(np.ceil(np.minimum(np.minimum(p0, p1), p2)), 0).astype(np.int64)
+        width = np.minimum(np.floor(np.maximum(np.maximum(p0, p1), p2)), last).astype(np.int64)
+        width -= first - 1
+        counts = np.where((width > 0).all(axis=1), width[:, 0] * width[:, 1], 0)
+        hit = np.flatnonzero(counts)  # most triangles far below the pixel size hold no centre
+        t, first, width, counts = t[hit], first[hit], width[hit], counts[hit]
+        ends = np.cumsum(counts)
+        # batches of whole triangles with at most _BATCH pairs (or a single triangle)
+        cuts = [0]
+        while cuts[-1] < len(t):
+            begun = ends[cuts[-1] - 1] if cuts[-1] else 0
+            cuts.append(max(int(np.searchsorted(ends, begun + _BATCH, "right")), cuts[-1] + 1))
+        for a, b in zip(cuts[:-1], cuts[1:]):
+            _fill(image, grid.nx, q[t[a:b]], values[t[a:b]], first[a:b], width[a:b], counts[a:b])
+    return np.ma.masked_invalid(image.reshape(grid.ny, grid.nx))
+
+
+def coarsen(
+    image: np.ma.MaskedArray, grid: PixelGrid, lo: np.ndarray, hi: np.ndarray
+) -> tuple[PixelGrid, np.ma.MaskedArray]:
+    """``image`` on ``grid`` seen through pixels twice as large covering the box [lo, hi]
+    (which must contain ``grid``'s area), each centred on every other centre of ``grid``:
+    the same values, no second pass over the triangles. Pixels off ``grid`` are masked.
+
+    Returns the coarse grid and its (ny, nx) image.
+    """
+    o, s = np.asarray(grid.origin), grid.size
+    m = np.ceil((o - s / 2 - np.asarray(lo)) / (2 * s) - 1e-9).astype(int)
+    origin = o - s / 2 - 2 * s * m
+    n = np.maximum(np.ceil((np.asarray(hi) - origin) / (2 * s) - 1e-9).astype(int), 1)
+    coarse = PixelGrid((float(origin[0]), float(origin[1])), 2 * s, int(n[0]), int(n[1]))
+    out = np.ma.masked_all((coarse.ny, coarse.nx))
+    # coarse pixel (r, c) is centred on the centre of pixel (2 (r - m_y), 2 (c - m_x))
+    cols, rows = (mk + np.arange((nk + 1) // 2) for mk, nk in zip(m, (grid.nx, grid.ny)))
+    cols, rows = cols[(cols >= 0) & (cols < coarse.nx)], rows[(rows >= 0) & (rows < coarse.ny)]
+    out[np.ix_(rows, cols)] = image[np.ix_(2 * (rows - m[1]), 2 * (cols - m[0]))]
+    return coarse, out
+
+
+def _fill(image, nx, p, v, first, width, counts) -> None:
+    """Write the values at the pixel centres inside the triangles ``p`` (m, 3, 2) into
+    the flat ``image`` (a batch of :func:`rasterise`)."""
+    # per triangle, the barycentric coordinates l1, l2 and the value as affine functions
+    # of the pixel indices (j, i): c[:, 3 r : 3 r + 3] . (j, i, 1)
+    e1, e2 = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
+    with np.errstate(divide="ignore", invalid="ignore"):  # degenerate triangles: NaN, dropped
+        det = 1.0 / (e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+        g1 = np.column_stack([e2[:, 1], -e2[:, 0]]) * det[:, None]
+        g2 = np.column_stack([-e1[:, 1], e1[:, 0]]) * det[:, None]
+    gu = g1 * (v[:, 1] - v[:, 0])[:, None] + g2 * (v[:, 2] - v[:, 0])[:, None]
+    c = np.empty((len(p), 9))
+    for r, (g, base) in enumerate(((g1, 0.0), (g2, 0.0), (gu, v[:, 0]))):
+        c[:, 3 * r : 3 * r + 2] = g
+        c[:, 3 * r + 2] = base - (g * p[:, 0]).sum(axis=1)
+    k = np.repeat(np.arange(len(counts)), counts)
+    local = np.arange(len(k)) - np.repeat(np.cumsum(counts) - counts, counts)
+    w = width[k, 0]
+    j = first[k, 0] + local % w
+    i = first[k, 1] + local // w
+    ck = c[k]
+    l1 = ck[:, 0] * j + ck[:, 1] * i + ck[:, 2]
+    l2 = ck[:, 3] * j + ck[:, 4] * i + ck[:, 5]
+    tol = -1e-12
+    inside = (l1 >= tol) & (l2 >= tol) & (1.0 - l1 - l2 >= tol)
+    ck, j, i = ck[inside], j[inside], i[inside]
+    image[i * nx + j] = ck[:, 6] * j + ck[:, 7] * i + ck[:, 8]
+
 
 _CONTACT = dict(ls="none", marker="o", ms=3.5, color="tab:red")
 _OPEN = dict(ls="none", marker="o", ms=3.5, mfc="white", mec="tab:blue", mew=1.0)
@@ -107,9 +262,16 @@ def _draw_boundary(ax, fields: dict) -> None:
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2, fontsize=8, frameon=False)
 
 
-def _figure_u(fields: dict, tri: Triangulation):
+def _image(ax, image: np.ma.MaskedArray, grid: PixelGrid, **kwargs):
+    """``image`` drawn over the area of ``grid``; masked pixels are transparent."""
+    return ax.imshow(
+        image, origin="lower", extent=grid.extent, cmap="viridis", interpolation="nearest", **kwargs
+    )
+
+
+def _figure_u(fields: dict, image: np.ma.MaskedArray, grid: PixelGrid):
     fig, ax = plt.subplots(figsize=(5.6, 5.2))
-    im = ax.tripcolor(tri, fields["u"], shading="gouraud", cmap="viridis")
+    im = _image(ax, image, grid)
     fig.colorbar(im, ax=ax, shrink=0.85, label="$u_h$")
     _draw_boundary(ax, fields)
     ax.set(aspect="equal", xlabel="$x$", ylabel="$y$", title=r"$u_h$ in $\Omega$")
@@ -166,12 +328,16 @@ def _figure_boundary(fields: dict):
     return fig
 
 
-def _figure_whole_plane(fields: dict, tri: Triangulation, resolution: int = 121):
-    """u_h inside and u_e outside. Outside, u_e is evaluated on a grid and at the boundary
-    nodes (its discrete trace ``ue``) and drawn on their Delaunay triangulation, so the
-    colour reaches Gamma with no band: exterior_potential integrates the panels near a
-    point analytically and is accurate at any distance from Gamma (its docstring);
-    grid points closer than h/20 are left out only to avoid slivers."""
+def _figure_whole_plane(
+    fields: dict, image: np.ma.MaskedArray, u_grid: PixelGrid, resolution: int = 121
+):
+    """u_h inside and u_e outside, rasterised on one pixel grid. Outside, u_e is
+    evaluated on a coarse grid and at the boundary nodes (its discrete trace ``ue``) and
+    interpolated linearly on their Delaunay triangulation, so the colour reaches Gamma
+    with no band: exterior_potential integrates the panels near a point analytically and
+    is accurate at any distance from Gamma (its docstring); grid points closer than h/20
+    are left out only to avoid slivers. u_h (``image`` on ``u_grid``, coarsened to the
+    plane's pixels) covers every pixel whose centre is in Omega."""
     nodes = fields["boundary_x"]
     lo, hi = nodes.min(axis=0), nodes.max(axis=0)
     centre, half = 0.5 * (lo + hi), (hi - lo).max()
@@ -196,28 +362,32 @@ def _figure_whole_plane(fields: dict, tri: Triangulation, resolution: int = 121)
     # Omega is covered by the triangles of boundary nodes alone whose centroid is inside;
     # a triangle with a grid vertex is exterior even where it cuts a corner of Omega
     # (u_h is drawn over it)
-    on_gamma = np.all(ext.triangles >= len(grid), axis=1)
-    centroids = points[ext.triangles].mean(axis=1)
-    ext.set_mask(on_gamma & PolygonPath(nodes).contains_points(centroids))
+    interior = np.all(ext.triangles >= len(grid), axis=1)
+    centroids = points[ext.triangles[interior]].mean(axis=1)
+    interior[interior] = PolygonPath(nodes).contains_points(centroids)
+    exterior = ext.triangles[~interior]
 
+    pixels, inner = coarsen(image, u_grid, centre - half, centre + half)
+    outer = np.ma.masked_where(~inner.mask, rasterise(points, exterior, ue, pixels))
     u = fields["u"]
     vmin, vmax = min(ue.min(), u.min()), max(ue.max(), u.max())
     levels = np.linspace(vmin, vmax, 17)[1:-1]
     fig, ax = plt.subplots(figsize=(6.2, 5.6))
-    for z, (t, v) in enumerate(((ext, ue), (tri, u))):  # Omega's layers over the exterior's
-        im = ax.tripcolor(
-            t, v, shading="gouraud", cmap="viridis", vmin=vmin, vmax=vmax, zorder=2 * z
-        )
-        ax.tricontour(
-            t,
-            v,
-            levels=levels,
-            colors="white",
-            linewidths=0.5,
-            alpha=0.6,
-            linestyles="solid",
-            zorder=2 * z + 1,
-        )
+    im = _image(ax, np.ma.where(inner.mask, outer, inner), pixels, vmin=vmin, vmax=vmax)
+    xc, yc = pixels.centres()
+    for image in (outer, inner):  # each side's own contours: u_h and u_e jump across Gamma
+        if image.count() and np.ptp(image) > 0:
+            ax.contour(
+                xc,
+                yc,
+                image,
+                levels=levels,
+                colors="white",
+                linewidths=0.5,
+                alpha=0.6,
+                linestyles="solid",
+                zorder=1,
+            )
     fig.colorbar(im, ax=ax, shrink=0.85, label=r"$u_h$ in $\Omega$, $u_e$ outside")
     _draw_boundary(ax, fields)
     ax.set(
@@ -274,11 +444,13 @@ def write_plots(out: Path, fields: dict, history: Sequence, *, tol: float) -> li
     tol
         The PGPM tolerance, drawn in history.png.
     """
-    tri = Triangulation(fields["x"][:, 0], fields["x"][:, 1], fields["triangles"])
+    x = fields["x"]
+    grid = PixelGrid.covering(x.min(axis=0), x.max(axis=0))
+    image = rasterise(x, fields["triangles"], fields["u"], grid)  # for both figures of u_h
     figures = {
-        "u.png": lambda: _figure_u(fields, tri),
+        "u.png": lambda: _figure_u(fields, image, grid),
         "boundary.png": lambda: _figure_boundary(fields),
-        "whole_plane.png": lambda: _figure_whole_plane(fields, tri),
+        "whole_plane.png": lambda: _figure_whole_plane(fields, image, grid),
         "history.png": lambda: _figure_history(history, tol) if len(history) else None,
     }
     written = []

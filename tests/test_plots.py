@@ -1,0 +1,141 @@
+"""The images of u.png and whole_plane.png: the rasterised P1 field equals u_h at the
+pixel centres (against a closed form and against matplotlib's own point location and
+linear interpolation), pixels outside Omega are masked, and a run under mpirun -n 2
+writes the same figures as a serial one."""
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import matplotlib.tri as mtri
+import numpy as np
+import pytest
+
+from conftest import run_cli, run_mpi
+from coupling.io.plots import PLOT_FILES, RASTER_PIXELS, PixelGrid, coarsen, rasterise
+
+FEMBEM = str(Path(sys.executable).parent / "fembem")
+
+
+def grid_mesh(n: int, jitter: float = 0.0, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """The unit square cut into 2 n^2 triangles (diagonals alternating, so both
+    orientations of the node order occur), interior nodes moved by up to ``jitter`` h."""
+    g = np.linspace(0.0, 1.0, n + 1)
+    X, Y = np.meshgrid(g, g)
+    x = np.column_stack([X.ravel(), Y.ravel()])
+    inner = (x > 0).all(axis=1) & (x < 1).all(axis=1)
+    x[inner] += np.random.default_rng(seed).uniform(-jitter, jitter, (inner.sum(), 2)) / n
+    k = np.arange(n * (n + 1)).reshape(n, n + 1)[:, :n].ravel()
+    up = np.column_stack([k, k + 1, k + n + 2]), np.column_stack([k, k + n + 2, k + n + 1])
+    down = np.column_stack([k, k + 1, k + n + 1]), np.column_stack([k + 1, k + n + 1, k + n + 2])
+    odd = (k % (n + 1) + k // (n + 1)) % 2 == 1
+    triangles = np.concatenate(
+        [np.where(odd[:, None], d, u) for u, d in zip(up, down)]
+        + [np.where(odd[:, None], down[0], up[0])[::3, ::-1]]  # some clockwise duplicates
+    )
+    return x, triangles
+
+
+def test_pixel_grid():
+    grid = PixelGrid.covering(np.array([-1.0, 0.0]), np.array([2.0, 1.0]), pixels=300)
+    assert (grid.nx, grid.ny, grid.size) == (300, 100, 0.01)
+    assert grid.extent == pytest.approx((-1.0, 2.0, 0.0, 1.0), abs=1e-12)
+    xc, yc = grid.centres()
+    np.testing.assert_allclose(xc[[0, -1]], [-0.995, 1.995], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(yc[[0, -1]], [0.005, 0.995], rtol=0, atol=1e-12)
+    assert PixelGrid.covering(np.zeros(2), np.ones(2)).nx == RASTER_PIXELS
+
+
+@pytest.mark.parametrize("n, pixels", [(1, 1000), (7, 120), (60, 90)])
+def test_a_linear_field_is_reproduced_at_every_pixel_centre(n, pixels):
+    """P1 reproduces linear functions: the image is the function at the centres, to
+    round-off, whether triangles span many pixels (batches of one triangle) or few."""
+    x, triangles = grid_mesh(n, jitter=0.2)
+    grid = PixelGrid.covering(x.min(axis=0), x.max(axis=0), pixels=pixels)
+    image = rasterise(x, triangles, 1.0 + 2.0 * x[:, 0] - 3.0 * x[:, 1], grid)
+    xc, yc = grid.centres()
+    X, Y = np.meshgrid(xc, yc)
+    assert image.shape == (grid.ny, grid.nx) and not image.mask.any()  # Omega fills the box
+    np.testing.assert_allclose(image.data, 1.0 + 2.0 * X - 3.0 * Y, rtol=0, atol=1e-13)
+
+
+def test_the_image_equals_the_p1_interpolant_at_the_pixel_centres():
+    x, triangles = grid_mesh(12, jitter=0.2, seed=1)
+    u = np.sin(3 * x[:, 0]) * np.cos(2 * x[:, 1]) + np.random.default_rng(2).normal(0, 0.1, len(x))
+    grid = PixelGrid.covering(x.min(axis=0) - 0.05, x.max(axis=0) + 0.05, pixels=157)
+    image = rasterise(x, triangles, u, grid)
+    xc, yc = grid.centres()
+    X, Y = np.meshgrid(xc, yc)
+    tri = mtri.Triangulation(x[:, 0], x[:, 1], triangles[: 2 * 12**2])  # no duplicates
+    reference = mtri.LinearTriInterpolator(tri, u)(X, Y)
+    np.testing.assert_array_equal(image.mask, np.ma.getmaskarray(reference))
+    assert image.count() > 0.8 * image.size
+    np.testing.assert_allclose(image.compressed(), reference.compressed(), rtol=0, atol=1e-12)
+
+
+def test_pixels_outside_omega_are_masked():
+    """An L-shape (the unit square without its upper-right quarter) in a larger box."""
+    x, triangles = grid_mesh(8)
+    centroids = x[triangles].mean(axis=1)
+    triangles = triangles[~((centroids > 0.5).all(axis=1))]
+    grid = PixelGrid.covering(np.array([-0.25, -0.25]), np.array([1.25, 1.25]), pixels=150)
+    image = rasterise(x, triangles, np.ones(len(x)), grid)
+    xc, yc = grid.centres()
+    X, Y = np.meshgrid(xc, yc)
+    inside = (X > 0) & (X < 1) & (Y > 0) & (Y < 1) & ~((X > 0.5) & (Y > 0.5))
+    np.testing.assert_array_equal(~image.mask, inside)  # no centre lies on Gamma here
+    np.testing.assert_allclose(image.compressed(), 1.0, rtol=0, atol=1e-14)
+
+
+def _png_size(path: Path) -> tuple[int, int]:
+    data = path.read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    return int.from_bytes(data[16:20], "big"), int.from_bytes(data[20:24], "big")
+
+
+@pytest.mark.mpi
+def test_figures_under_mpirun_are_those_of_the_serial_run(tmp_path):
+    config = tmp_path / "c.toml"
+    config.write_text(
+        '[geometry]\nshape = "square"\nh = 0.03125\nsubdomain_size = 0.125\n'
+        'structured = true\nsignorini = ["bottom"]\n[material]\nrho = "carstensen"\n'
+        '[data]\nf = "1 + x"\nt0 = "-1"\nu0 = "0.1"\n[solver]\nmethod = "ssn"\n'
+        "[output]\nxdmf = false\n"
+    )
+    serial, parallel = tmp_path / "serial", tmp_path / "parallel"
+    proc = run_cli("solve", str(config), "--out", str(serial), "--quiet")
+    assert proc.returncode == 0, proc.stderr
+    run_mpi(2, FEMBEM, "solve", str(config), "--out", str(parallel), "--quiet")
+    files = [json.loads((out / "summary.json").read_text())["files"] for out in (serial, parallel)]
+    assert files[0] == files[1] and set(PLOT_FILES) <= set(files[0])
+    for name in PLOT_FILES:
+        assert _png_size(parallel / name) == _png_size(serial / name), name
+    # the images drawn from either run's fields agree to the solver tolerance
+    images = []
+    for out in (serial, parallel):
+        with np.load(out / "fields.npz") as f:
+            grid = PixelGrid.covering(f["x"].min(axis=0), f["x"].max(axis=0))
+            images.append(rasterise(f["x"], f["triangles"], f["u"], grid))
+    np.testing.assert_array_equal(images[0].mask, images[1].mask)
+    assert np.abs(images[0] - images[1]).max() <= 1e-6 * np.abs(images[0]).max()
+
+
+@pytest.mark.parametrize("pixels", [60, 61])
+def test_the_coarsened_image_is_the_image_on_the_coarse_grid(pixels):
+    """whole_plane.png reuses the image of u.png: every other pixel centre, seen through
+    pixels twice as large over a box twice as wide, equals a rasterisation on that grid."""
+    x, triangles = grid_mesh(9, jitter=0.2, seed=3)
+    x = x * [1.0, 0.6] + [0.3, -0.2]  # not a square, not at the origin
+    u = np.cos(4 * x[:, 0] + x[:, 1])
+    fine = PixelGrid.covering(x.min(axis=0), x.max(axis=0), pixels=pixels)
+    centre, half = 0.5 * (x.min(axis=0) + x.max(axis=0)), np.ptp(x, axis=0).max()
+    coarse, image = coarsen(rasterise(x, triangles, u, fine), fine, centre - half, centre + half)
+    assert coarse.size == 2 * fine.size
+    left, right, bottom, top = np.array(coarse.extent) + 1e-12 * np.array([-1, 1, -1, 1])
+    assert left <= centre[0] - half and right >= centre[0] + half  # up to round-off
+    assert bottom <= centre[1] - half and top >= centre[1] + half
+    direct = rasterise(x, triangles, u, coarse)
+    assert image.count() > 0
+    np.testing.assert_array_equal(image.mask, direct.mask)
+    np.testing.assert_allclose(image.compressed(), direct.compressed(), rtol=0, atol=1e-12)
