@@ -8,7 +8,7 @@ runs on the square at N = 1.6e4 .. 1e6 dofs (docs/design/memory.md):
 
 (the interpreter and its libraries per rank; meshes, forms, factors and vectors per
 dof; the dense boundary matrices (V, K, W, S_h: five n x n arrays) while S_h is formed,
-n the boundary dofs; matplotlib and the triangulations of the plots).
+n the boundary dofs; matplotlib and the rasterised images of the plots).
 """
 from __future__ import annotations
 
