@@ -103,8 +103,15 @@ def test_interrupt_without_earlier_run_leaves_nothing(tmp_path):
 
 @pytest.mark.mpi
 def test_interrupt_under_mpirun(tmp_path):
-    """mpirun forwards the signal to every rank as SIGTERM; each rank cleans up and rank 0
-    prints the one line. (mpirun's own exit code for a job it aborted is its own: 1.)"""
+    """mpirun forwards the signal to every rank as SIGTERM; each rank cleans up and the
+    first to claim the staging folder prints the one line. (mpirun's own exit code for a
+    job it aborted is its own: 1.)
+
+    The line reaches the terminal only while mpirun still forwards the ranks' output,
+    which it stops soon after it forwards the signal: measured, the line arrives on an
+    idle machine and may be lost at load 7 or more on 2 cores. So the test asks for at
+    most that one line; the clean-up (no traceback, the earlier run intact, no staging
+    folder) must hold whatever the load."""
     mpirun = shutil.which("mpirun")
     config = tmp_path / "c.toml"
     config.write_text(CONFIG.format(h=1 / 512, d=1 / 128))
@@ -125,9 +132,8 @@ def test_interrupt_under_mpirun(tmp_path):
     code, _, stderr = _interrupt(cmd, STAGES["solve"], signal.SIGINT)
     assert code != 0
     assert "Traceback" not in stderr
-    assert [ln for ln in stderr.splitlines() if ln.startswith("fembem:")] == [
-        "fembem: interrupted by SIGTERM; no output of this run was kept"
-    ], stderr
+    lines = [ln for ln in stderr.splitlines() if ln.startswith("fembem:")]
+    assert lines in ([], ["fembem: interrupted by SIGTERM; no output of this run was kept"]), stderr
     _assert_untouched(out)
 
 
