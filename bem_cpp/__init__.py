@@ -206,8 +206,8 @@ def mass(nodes: ArrayLike, space: str = "p1") -> NDArray[np.float64]:
 _COMPRESSIONS = ("none", "hmatrix")
 
 # H-matrix parameters (docs/design/hmatrix.md explains the choice).
-HMATRIX_LEAF_SIZE = 32
-HMATRIX_ETA = 1.0
+HMATRIX_LEAF_SIZE = 64
+HMATRIX_ETA = 2.0
 # V solves: relative residual solver_tol = HMATRIX_SOLVER_TOL_FACTOR * tol.
 HMATRIX_SOLVER_TOL_FACTOR = 1e-3
 HMATRIX_MAX_ITERATIONS = 1000
@@ -224,7 +224,8 @@ class SteklovPoincareOperator:
     with V (flux space), :math:`V^{(0)}` (P0, Maue's identity for W) and K held as
     H-matrices (ACA blocks to the relative tolerance ``tol``, near field exact), M and D
     sparse, and :math:`V^{-1}` by conjugate gradients with a Calderon preconditioner
-    (W on a trace space paired with the flux space; bounded iteration counts). Built by :func:`steklov_poincare` with ``compression="hmatrix"``.
+    (W on a trace space paired with the flux space; bounded iteration counts). Built by
+    :func:`steklov_poincare` with ``compression="hmatrix"``.
 
     Attributes
     ----------

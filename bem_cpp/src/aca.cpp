@@ -82,7 +82,7 @@ Index next_unused(const std::vector<char>& used, Index from) {
   return -1;
 }
 
-constexpr int kSamples = 3;      // sampled rows and columns confirming the stop
+constexpr int kSamples = 1;      // sampled rows and columns confirming the stop
 constexpr int kZeroRowTries = 3;  // consecutive zero rows before the samples decide
 
 }  // namespace

@@ -34,7 +34,7 @@ void collect(const ClusterTree& rows, const ClusterTree& cols, int t, int s, dou
 }  // namespace
 
 HMatrix::HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const ClusterTree> cols,
-                 const EntryFunction& entries, const HMatrixOptions& options)
+                 const EntrySource& entries, const HMatrixOptions& options)
     : rows_(std::move(rows)), cols_(std::move(cols)) {
   if (!(options.eta > 0) || !(options.tol > 0) || options.leaf_size < 1)
     throw std::invalid_argument("HMatrix: need eta > 0, tol > 0, leaf_size >= 1");
@@ -53,13 +53,14 @@ HMatrix::HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const 
     Block& b = blocks_[order[static_cast<std::size_t>(q)]];
     const Index* I = rp + b.r0;
     const Index* J = cp + b.c0;
+    const std::unique_ptr<EntryBlock> e = entries.block(I, b.m, J, b.k);
     if (!b.low_rank) {
       b.dense.resize(b.m, b.k);
-      entries(I, b.m, J, b.k, b.dense.data(), b.m);
+      e->all(b.dense.data());
       continue;
     }
-    const Slice row = [&](Index i, double* out) { entries(I + i, 1, J, b.k, out, 1); };
-    const Slice column = [&](Index j, double* out) { entries(I, b.m, J + j, 1, out, b.m); };
+    const Slice row = [&e](Index i, double* out) { e->row(i, out); };
+    const Slice column = [&e](Index j, double* out) { e->column(j, out); };
     b.factors = aca(b.m, b.k, row, column, options.tol, std::min(b.m, b.k));
     recompress(b.factors, options.tol);
     if (b.factors.rank() * (b.m + b.k) >= b.m * b.k) {  // dense is smaller

@@ -58,12 +58,33 @@ OperatorEntries::OperatorEntries(const Polygon& polygon, Kernel kernel, Space ro
     throw std::invalid_argument("OperatorEntries: K_h has P1 columns");
 }
 
+DofSet OperatorEntries::dofs(Space space, const Index* dofs, Index m) const {
+  const Index n = polygon_.size();
+  DofSet d;
+  d.panels = sorted_panels(space, dofs, m, n);
+  d.position.resize(static_cast<std::size_t>(2 * m));
+  d.shape.resize(static_cast<std::size_t>(2 * m));
+  for (Index r = 0; r < m; ++r) {
+    const Terms t = terms(space, dofs[r], n);
+    for (int e = 0; e < 2; ++e) {
+      d.position[static_cast<std::size_t>(2 * r + e)] = position(d.panels, t.panel[e]);
+      d.shape[static_cast<std::size_t>(2 * r + e)] = t.shape[e];
+    }
+  }
+  d.arrays.assign(polygon_, d.panels.data(), d.panels.size());
+  return d;
+}
+
 void OperatorEntries::block(const Index* I, Index m, const Index* J, Index k, double* out,
                             Index ld) const {
+  block(dofs(rows_, I, m), dofs(cols_, J, k), out, ld);
+}
+
+void OperatorEntries::block(const DofSet& R, const DofSet& C, double* out, Index ld) const {
   const Index n = polygon_.size();
   const bool with_k = kernel_ == Kernel::DoubleLayer;
-  const std::vector<Index> P = sorted_panels(rows_, I, m, n);
-  const std::vector<Index> Q = sorted_panels(cols_, J, k, n);
+  const std::vector<Index>& P = R.panels;
+  const std::vector<Index>& Q = C.panels;
   const std::size_t np = P.size(), nq = Q.size();
   // table[(a * 2 + b) * np * nq + ip * nq + iq]: block [a][b] of (test P[ip], trial Q[iq]),
   // with the factor -1/pi (V) or 1/pi (K).
@@ -81,8 +102,7 @@ void OperatorEntries::block(const Index* I, Index m, const Index* J, Index k, do
     const std::vector<Index>& outer = swap ? Q : P;
     const std::vector<Index>& inner = swap ? P : Q;
     const std::size_t ni = inner.size();
-    PanelArrays arrays;
-    arrays.assign(polygon_, inner.data(), ni);
+    const PanelArrays& arrays = swap ? R.arrays : C.arrays;
     std::vector<double> store(4 * ni);
     std::vector<int> points(ni);
     PairBlockColumns col;
@@ -135,29 +155,46 @@ void OperatorEntries::block(const Index* I, Index m, const Index* J, Index k, do
           for (int b = 0; b < 2; ++b) at(a, b, ip, iq) = scale * B.kij[a][b];
       }
   }
-  // Entries: sums over the two terms of the row dof and of the column dof.
-  std::vector<Index> col_pos(static_cast<std::size_t>(2 * k));
-  std::vector<int> col_shape(static_cast<std::size_t>(2 * k));
-  for (Index c = 0; c < k; ++c) {
-    const Terms t = terms(cols_, J[c], n);
-    for (int e = 0; e < 2; ++e) {
-      col_pos[static_cast<std::size_t>(2 * c + e)] = position(Q, t.panel[e]);
-      col_shape[static_cast<std::size_t>(2 * c + e)] = t.shape[e];
-    }
-  }
+  const Index m = R.size(), k = C.size();
   for (Index r = 0; r < m; ++r) {
-    const Terms t = terms(rows_, I[r], n);
-    const std::size_t ip[2] = {static_cast<std::size_t>(position(P, t.panel[0])),
-                               static_cast<std::size_t>(position(P, t.panel[1]))};
+    const std::size_t ip[2] = {static_cast<std::size_t>(R.position[static_cast<std::size_t>(2 * r)]),
+                               static_cast<std::size_t>(R.position[static_cast<std::size_t>(2 * r + 1)])};
+    const int sr[2] = {R.shape[static_cast<std::size_t>(2 * r)], R.shape[static_cast<std::size_t>(2 * r + 1)]};
     for (Index c = 0; c < k; ++c) {
       double sum = 0.0;
       for (int e = 0; e < 2; ++e)
         for (int f = 0; f < 2; ++f)
-          sum += at(t.shape[e], col_shape[static_cast<std::size_t>(2 * c + f)], ip[e],
-                    static_cast<std::size_t>(col_pos[static_cast<std::size_t>(2 * c + f)]));
+          sum += at(sr[e], C.shape[static_cast<std::size_t>(2 * c + f)], ip[e],
+                    static_cast<std::size_t>(C.position[static_cast<std::size_t>(2 * c + f)]));
       out[r + c * ld] = sum;
     }
   }
+}
+
+namespace {
+
+class PreparedBlock : public EntryBlock {
+ public:
+  PreparedBlock(const OperatorEntries& e, const Index* I, Index m, const Index* J, Index k)
+      : e_(e), I_(I), J_(J), rows_(e.dofs(e.row_space(), I, m)), cols_(e.dofs(e.col_space(), J, k)) {}
+  void row(Index i, double* out) const override {
+    e_.block(e_.dofs(e_.row_space(), I_ + i, 1), cols_, out, 1);
+  }
+  void column(Index j, double* out) const override {
+    e_.block(rows_, e_.dofs(e_.col_space(), J_ + j, 1), out, rows_.size());
+  }
+  void all(double* out) const override { e_.block(rows_, cols_, out, rows_.size()); }
+
+ private:
+  const OperatorEntries& e_;
+  const Index *I_, *J_;
+  DofSet rows_, cols_;
+};
+
+}  // namespace
+
+std::unique_ptr<EntryBlock> OperatorEntries::block(const Index* I, Index m, const Index* J, Index k) const {
+  return std::make_unique<PreparedBlock>(*this, I, m, J, k);
 }
 
 }  // namespace bem

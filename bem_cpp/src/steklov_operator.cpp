@@ -13,10 +13,7 @@ std::shared_ptr<const HMatrix> build(const Polygon& polygon, Kernel kernel, Spac
                                      std::shared_ptr<const ClusterTree> row_tree,
                                      std::shared_ptr<const ClusterTree> col_tree, const HMatrixOptions& o) {
   const OperatorEntries entries(polygon, kernel, rows, kernel == Kernel::SingleLayer ? rows : Space::P1);
-  const EntryFunction f = [&entries](const Index* I, Index m, const Index* J, Index k, double* out, Index ld) {
-    entries.block(I, m, J, k, out, ld);
-  };
-  return std::make_shared<const HMatrix>(std::move(row_tree), std::move(col_tree), f, o);
+  return std::make_shared<const HMatrix>(std::move(row_tree), std::move(col_tree), entries, o);
 }
 
 }  // namespace

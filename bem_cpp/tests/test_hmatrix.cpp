@@ -12,10 +12,7 @@ std::shared_ptr<const HMatrix> hmatrix(const Polygon& poly, Kernel kernel, Space
   auto tr = std::make_shared<const ClusterTree>(ClusterTree::for_space(poly, rows, 16));
   auto tc = rows == cols ? tr : std::make_shared<const ClusterTree>(ClusterTree::for_space(poly, cols, 16));
   const OperatorEntries e(poly, kernel, rows, cols);
-  const EntryFunction f = [&e](const Index* I, Index m, const Index* J, Index k, double* out, Index ld) {
-    e.block(I, m, J, k, out, ld);
-  };
-  return std::make_shared<const HMatrix>(tr, tc, f, HMatrixOptions{16, 1.0, tol});
+  return std::make_shared<const HMatrix>(tr, tc, e, HMatrixOptions{16, 1.0, tol});
 }
 }  // namespace
 

@@ -11,10 +11,7 @@ namespace {
 std::shared_ptr<const HMatrix> single_layer_h(const Polygon& poly, Space s) {
   auto tree = std::make_shared<const ClusterTree>(ClusterTree::for_space(poly, s, 32));
   const OperatorEntries e(poly, Kernel::SingleLayer, s, s);
-  const EntryFunction f = [&e](const Index* I, Index m, const Index* J, Index k, double* out, Index ld) {
-    e.block(I, m, J, k, out, ld);
-  };
-  return std::make_shared<const HMatrix>(tree, tree, f, HMatrixOptions{32, 1.0, 1e-10});
+  return std::make_shared<const HMatrix>(tree, tree, e, HMatrixOptions{32, 1.0, 1e-10});
 }
 }  // namespace
 

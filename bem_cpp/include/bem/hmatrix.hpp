@@ -22,9 +22,21 @@ struct HMatrixOptions {
   double tol;       ///< relative accuracy of each low-rank block (ACA and recompression)
 };
 
-/// entries(I, m, J, k, out, ld): out[r + c ld] = A(I[r], J[c]) in the original dof order.
-using EntryFunction =
-    std::function<void(const Index* I, Index m, const Index* J, Index k, double* out, Index ld)>;
+/// Entries of one block A(I, J) (original dof order), by rows, columns or all at once.
+class EntryBlock {
+ public:
+  virtual ~EntryBlock() = default;
+  virtual void row(Index i, double* out) const = 0;     ///< out[c] = A(I[i], J[c])
+  virtual void column(Index j, double* out) const = 0;  ///< out[r] = A(I[r], J[j])
+  virtual void all(double* out) const = 0;              ///< out[r + c m] = A(I[r], J[c])
+};
+
+/// Source of the entries of a matrix; block() may prepare per-block data. Thread-safe.
+class EntrySource {
+ public:
+  virtual ~EntrySource() = default;
+  virtual std::unique_ptr<EntryBlock> block(const Index* I, Index m, const Index* J, Index k) const = 0;
+};
 
 class HMatrix {
  public:
@@ -37,7 +49,7 @@ class HMatrix {
   };
 
   HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const ClusterTree> cols,
-          const EntryFunction& entries, const HMatrixOptions& options);
+          const EntrySource& entries, const HMatrixOptions& options);
 
   Index rows() const { return rows_->size(); }
   Index cols() const { return cols_->size(); }

@@ -7,7 +7,12 @@
 //
 // A dof is a sum of two panel shape functions: P1 hat of node i = phi_1 on panel i - 1 +
 // phi_0 on panel i; P0 indicator of panel i = phi_0 + phi_1 on panel i.
+#include <memory>
+#include <vector>
+
+#include "bem/far_field.hpp"
 #include "bem/geometry.hpp"
+#include "bem/hmatrix.hpp"
 #include "bem/operators.hpp"
 
 namespace bem {
@@ -17,7 +22,17 @@ enum class Kernel {
   DoubleLayer,  ///< K_h, rows in the flux space, columns P1
 };
 
-class OperatorEntries {
+/// The dofs of one side of a block, prepared once: their panels (sorted, unique, also as
+/// PanelArrays for the vector batches) and, per dof, the positions and shapes of its terms.
+struct DofSet {
+  std::vector<Index> panels;
+  std::vector<Index> position;  ///< 2 per dof: index into panels
+  std::vector<int> shape;       ///< 2 per dof
+  PanelArrays arrays;
+  Index size() const { return static_cast<Index>(position.size() / 2); }
+};
+
+class OperatorEntries : public EntrySource {
  public:
   /// Throws std::invalid_argument for V with rows != cols or K with P0 columns. The
   /// polygon must outlive the object.
@@ -28,6 +43,13 @@ class OperatorEntries {
   /// out[r + c ld] = A(I[r], J[c]) for r < m, c < k (column-major, leading dimension ld).
   /// Thread-safe.
   void block(const Index* I, Index m, const Index* J, Index k, double* out, Index ld) const;
+  /// The same on prepared dof sets.
+  void block(const DofSet& rows, const DofSet& cols, double* out, Index ld) const;
+  DofSet dofs(Space space, const Index* dofs, Index m) const;
+  /// EntrySource: rows and columns of I x J with both sides prepared once.
+  std::unique_ptr<EntryBlock> block(const Index* I, Index m, const Index* J, Index k) const override;
+  Space row_space() const { return rows_; }
+  Space col_space() const { return cols_; }
 
  private:
   const Polygon& polygon_;
