@@ -29,7 +29,6 @@ from coupling.solvers.pgpm import energy_increased
 from coupling.solvers.projection import SignoriniProjection
 from coupling.solvers.records import (
     History,
-    IterationRecord,
     Monitor,
     RunResult,
     b_norm2,
@@ -147,16 +146,7 @@ def apgpm(
         u_prev, phi_prev, b_prev = u_k, phi_k, b_u
         u_k, phi_k, b_u, energy = u_new, projected.phi, b_new, new_energy
         relative = relative_step(step2, norm2)
-        history.add(
-            IterationRecord(
-                k,
-                energy,
-                relative,
-                int(np.count_nonzero(phi_k <= 0.0)),
-                tau,
-                projection_iterations=projected.iterations,
-            )
-        )
+        history.step(k, energy, relative, phi_k, tau, projection_iterations=projected.iterations)
         if relative <= tol:
             converged, reason = True, f"||xi_k+1 - y_k||_B <= {tol:g} ||xi_k+1||_B"
             break

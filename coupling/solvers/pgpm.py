@@ -16,7 +16,6 @@ import numpy as np
 from coupling.solvers.projection import SignoriniProjection
 from coupling.solvers.records import (
     History,
-    IterationRecord,
     Monitor,
     RunResult,
     b_norm2,
@@ -116,16 +115,7 @@ def pgpm(
         g_u, g_phi = grad.array_r.copy(), new_g_phi
         u_k, phi_k, b_u, energy = u_new, projected.phi, b_new, new_energy
         relative = relative_step(step2, norm2)
-        history.add(
-            IterationRecord(
-                k,
-                energy,
-                relative,
-                int(np.count_nonzero(phi_k <= 0.0)),
-                tau,
-                projection_iterations=projected.iterations,
-            )
-        )
+        history.step(k, energy, relative, phi_k, tau, projection_iterations=projected.iterations)
         if relative <= tol:
             converged, reason = True, f"||xi_k+1 - xi_k||_B <= {tol:g} ||xi_k+1||_B"
             break

@@ -92,6 +92,14 @@ class History(list):
         if self.monitor is not None:
             self.monitor(record)
 
+    def step(
+        self, iteration: int, energy: float, step_norm: float, phi: np.ndarray, tau: float, **counts
+    ) -> None:
+        """Record one outer step (the contact count read off phi) and pass it to the
+        monitor; ``counts``: the inner iteration fields of :class:`IterationRecord`."""
+        contact = int(np.count_nonzero(phi <= 0.0))
+        self.add(IterationRecord(iteration, energy, step_norm, contact, tau, **counts))
+
     def result(
         self,
         phi: np.ndarray,

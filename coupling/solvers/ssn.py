@@ -42,7 +42,6 @@ from coupling.solvers.pgpm import energy_increased, pgpm
 from coupling.solvers.projection import SignoriniProjection
 from coupling.solvers.records import (
     History,
-    IterationRecord,
     Monitor,
     RunResult,
     b_norm2,
@@ -261,17 +260,7 @@ def semismooth_newton(
         )
         phi, energy, g_phi = trial_phi, trial_energy, trial_g_phi
         relative = relative_step(step2, norm2)
-        history.add(
-            IterationRecord(
-                k,
-                energy,
-                relative,
-                int(np.count_nonzero(phi <= 0.0)),
-                tau,
-                cg_iterations=cg_its,
-                line_search=step,
-            )
-        )
+        history.step(k, energy, relative, phi, tau, cg_iterations=cg_its, line_search=step)
         if relative <= tol and not active_changed:
             converged = True
             reason = f"||xi_k+1 - xi_k||_B <= {tol:g} ||xi_k+1||_B, active set settled"
