@@ -32,7 +32,7 @@ DEFAULTS: dict[str, dict[str, Any]] = {
         "radius": 0.25,
     },
     "material": {"rho": "linear", "p": 2.0, "eps": 1.0},
-    "data": {"f": "0", "u0": "0", "t0": "0", "a": 0.0},
+    "data": {"f": "0", "u0": "0", "t0": "0", "a": 0.0, "exact": ""},
     "solver": {
         "method": "ssn",
         "preconditioner": "substructuring",
@@ -48,7 +48,7 @@ DEFAULTS: dict[str, dict[str, Any]] = {
         "signorini_weight": 0.25,
         "nested": False,
     },
-    "output": {"dir": "fembem-out", "xdmf": True, "plots": True},
+    "output": {"dir": "fembem-out", "xdmf": True, "plots": True, "indicators": False},
     "adapt": {"steps": 0, "theta": 0.5, "max_dofs": 200000},
 }
 
@@ -65,11 +65,13 @@ CHOICES: dict[tuple[str, str], tuple[str, ...]] = {
 }
 
 #: The variables each expression of [data] may use: boundary data also see the outward
-#: unit normal (nx, ny). ``a`` is a number, not an expression.
+#: unit normal (nx, ny). ``a`` is a number, not an expression; ``exact`` (the exact
+#: interior solution u, "" when none is known) is checked only when given.
 DATA_VARIABLES: dict[str, tuple[str, ...]] = {
     "f": ("x", "y"),
     "u0": ("x", "y", "nx", "ny"),
     "t0": ("x", "y", "nx", "ny"),
+    "exact": ("x", "y"),
 }
 
 #: Steps of the semismooth Newton method that are not part of the schema.
@@ -77,6 +79,10 @@ SSN_START_STEPS = 5  # PGPM steps before the first Newton step
 SSN_WARM_START_STEPS = 0  # the same from a given iterate (nested iteration, adaptivity)
 SSN_CG_MAX_ITERATIONS = 500  # cap on the CG iterations of one Newton step
 LANCZOS_STEPS = 20  # Lanczos steps of the step estimate C0 (and of lambda_min for apgpm)
+#: Fitted convergence rates (adapt.png, the study's adaptivity part) use the levels with
+#: at least this many dofs (the pre-asymptotic coarse levels left out), or all levels
+#: when fewer than two are that large.
+SLOPE_MIN_DOFS = 1000
 
 
 def _solver_default(key: str) -> Any:

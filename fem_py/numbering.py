@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["input_indices", "gather_by_input", "gather_p1"]
+__all__ = ["input_indices", "gather_by_input", "gather_p1", "gather_cells"]
 
 
 def input_indices(V: Any) -> np.ndarray:
@@ -44,6 +44,19 @@ def gather_by_input(
     return out
 
 
+def _owned_triangles(V: Any) -> np.ndarray:
+    """The owned cells of the P1 space ``V`` as node triples in the input numbering."""
+    n_cells = V.mesh.topology.index_map(V.mesh.topology.dim).size_local
+    return input_indices(V)[V.dofmap.list.array.reshape(-1, 3)[:n_cells]]
+
+
+def _cell_order(triangles: np.ndarray) -> np.ndarray:
+    """The order of the gathered triangles: by their sorted node numbers (unique per
+    cell, so the order does not depend on the partition)."""
+    key = np.sort(triangles, axis=1)
+    return np.lexsort(key.T[::-1])
+
+
 def gather_p1(u) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     """Gather a P1 Function to rank 0 in the input numbering of the mesh nodes
     (:mod:`fem_py.numbering`), the same for any number of ranks.
@@ -60,11 +73,20 @@ def gather_p1(u) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         comm, numbers[:n_owned], V.tabulate_dof_coordinates()[:n_owned, :2], n_global
     )
     values = gather_by_input(comm, numbers[:n_owned], u.x.array[:n_owned].real, n_global)
-    n_cells = V.mesh.topology.index_map(V.mesh.topology.dim).size_local
-    cells = numbers[V.dofmap.list.array.reshape(-1, 3)[:n_cells]]
-    parts = comm.gather(cells, root=0)
+    parts = comm.gather(_owned_triangles(V), root=0)
     if comm.rank != 0:
         return None
     triangles = np.concatenate(parts)
-    key = np.sort(triangles, axis=1)
-    return x, values, triangles[np.lexsort(key.T[::-1])]
+    return x, values, triangles[_cell_order(triangles)]
+
+
+def gather_cells(V: Any, values: np.ndarray) -> np.ndarray | None:
+    """Per-cell ``values`` of the owned cells (local cell order, (n_owned_cells,)) of every
+    rank, gathered to rank 0 in the order of the triangles of :func:`gather_p1` (the same
+    for any number of ranks); None on the other ranks."""
+    comm = V.mesh.comm
+    parts = comm.gather((_owned_triangles(V), np.asarray(values)), root=0)
+    if comm.rank != 0:
+        return None
+    triangles = np.concatenate([t for t, _ in parts])
+    return np.concatenate([v for _, v in parts])[_cell_order(triangles)]

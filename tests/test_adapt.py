@@ -19,7 +19,9 @@ from coupling.adapt.transfer import transfer_iterate
 from coupling.app.config import ConfigError, parse_config
 from coupling.manufactured import (
     ManufacturedSolution,
+    energy_error,
     exterior_field,
+    manufactured_problem,
     solution_errors,
     square_contact,
 )
@@ -231,7 +233,27 @@ def test_adaptive_lshape_recovers_the_optimal_rate(corner_levels):
     assert 1.0 <= min(index)
 
 
-def test_adaptive_square_contact_keeps_the_exact_contact_set():
+@pytest.mark.parametrize("h", [1 / 128, 1 / 256])
+def test_adaptive_lshape_reaches_the_uniform_error_with_half_the_dofs(corner_levels, h):
+    """The uniform mesh of size h (3,201 and 12,545 dofs, the same subdomains) against
+    the adaptive levels: the first adaptive level at least as accurate has at most half
+    the dofs (measured: 537 and 1,643 dofs, 0.17 and 0.13 of the uniform dofs;
+    docs/design/adapt.md)."""
+    solution = corner_solution()
+    domain = build_domain(COMM, "lshape", h=h, subdomain_size=1 / 8, structured=True)
+    problem, _ = builder_of(solution, make_material("linear"), zero_f=True)(domain)
+    uniform = solve(problem, SolverOptions())
+    assert uniform.converged
+    error = solution_errors(problem, solution, uniform)["energy"]
+    dofs = problem.V.dofmap.index_map.size_global
+    better = [r["dofs"] for r in corner_levels if r["error"] <= error]
+    assert better and min(better) <= dofs / 2, (dofs, error, better[:1])
+
+
+@pytest.fixture(scope="module")
+def contact_levels():
+    """The square contact case (Carstensen material), adaptive (theta = 0.5) from h = 1/16:
+    the levels with their errors (solution_errors)."""
     solution = square_contact()
     material = make_material("carstensen")
     domain = build_domain(
@@ -248,9 +270,13 @@ def test_adaptive_square_contact_keeps_the_exact_contact_set():
         SolverOptions(),
         AdaptOptions(steps=5, theta=0.5),
     )
+    return [(level, solution_errors(level.problem, solution, level.solution)) for level in levels]
+
+
+def test_adaptive_square_contact_keeps_the_exact_contact_set(contact_levels):
+    solution = square_contact()
     index = []
-    for level in levels:
-        errors = solution_errors(level.problem, solution, level.solution)
+    for level, errors in contact_levels:
         assert level.solution.converged
         assert errors["contact_mismatch"] == 0
         # independently of domain.h (the first mesh's): a wrong state only within the
@@ -262,7 +288,33 @@ def test_adaptive_square_contact_keeps_the_exact_contact_set():
         assert np.all(np.abs(wrong) <= (errors["gap"] / 12.5) ** (1 / 3) + 1e-12)
         index.append(level.estimate.total / errors["energy"])
     assert max(index) / min(index) <= 3.0  # measured 10.2 .. 14.2
+    levels = [level for level, _ in contact_levels]
     assert levels[-1].record()["dofs"] > 5 * levels[0].record()["dofs"]
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="issue 19 target not met: on the smooth manufactured contact solution the "
+    "adaptive meshes carry 5-17 % more error than the uniform structured mesh of as "
+    "many dofs (0.01137 at 1,074 dofs against 0.00974 at 1,089; docs/design/adapt.md)",
+)
+def test_adaptive_square_contact_is_no_worse_than_a_uniform_mesh_of_as_many_dofs(
+    contact_levels,
+):
+    """The final adaptive level against the uniform structured mesh with at least as many
+    dofs (the same subdomains)."""
+    solution = square_contact()
+    level, errors = contact_levels[-1]
+    dofs = level.record()["dofs"]
+    cells = 8
+    while (cells + 1) ** 2 < dofs:  # (cells + 1)^2 nodes on the square
+        cells *= 2
+    problem = manufactured_problem(
+        COMM, solution, make_material("carstensen"), cells=cells, d_over_h=cells // 4
+    )
+    uniform = solve(problem, SolverOptions())
+    assert uniform.converged and problem.V.dofmap.index_map.size_global >= dofs
+    assert errors["energy"] <= solution_errors(problem, solution, uniform)["energy"]
 
 
 def test_adapt_options_and_config():
@@ -292,3 +344,14 @@ def test_refinement_keeps_curved_coarse_edges(shape, extra):
     old, new = domain.coarse, refined.coarse
     assert new.n_subdomains == old.n_subdomains
     assert np.allclose(np.sort(new.vertex_coords, axis=0), np.sort(old.vertex_coords, axis=0))
+
+
+def test_energy_error_of_closed_form_cases(square):
+    """|u_h - u|_1: zero for the interpolant of a linear u, sqrt(|Omega|) for u_h = 0
+    against u = x (the square has area 1/4)."""
+    problem = SignoriniProblem(square, make_material("linear"), f="0")
+    u_h = fem.Function(problem.V)
+    u_h.interpolate(lambda x: 1 + 2 * x[0] - 3 * x[1])
+    assert energy_error(problem, u_h, "1 + 2*x - 3*y") <= 1e-12
+    u_h.x.array[:] = 0.0
+    assert energy_error(problem, u_h, "x") == pytest.approx(0.5, rel=1e-12)

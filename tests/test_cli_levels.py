@@ -1,11 +1,14 @@
-"""`fembem solve` with levels: adaptive (`[adapt] steps`) and nested (`[solver] nested`)
-runs write one record per level into summary.json and levels.csv / levels.png; every
-run reports the a posteriori estimator; bad combinations are refused with one line."""
+"""`fembem solve` with levels: adaptive runs (`[adapt] steps`) write one record per level
+into summary.json and adapt.csv / adapt.png (nested runs write levels.csv:
+tests/test_nested.py); every run reports the a posteriori estimator, and with
+`[data] exact` the energy error; `[output] indicators` puts eta_T per cell into
+fields.npz; bad combinations are refused with one line."""
 from __future__ import annotations
 
 import csv
 import json
 
+import numpy as np
 import pytest
 
 from conftest import run_cli
@@ -22,6 +25,22 @@ rho = "carstensen"
 f = "1 + x"
 t0 = "-1"
 u0 = "0.1"
+"""
+
+#: u = r^(2/3) sin(2 theta/3) at the re-entrant corner (tests/test_adapt.py, CORNER) with
+#: u_e = 0: u0 = u, t0 = grad u . n = -(2/3) r^(-1/3) (cos(theta/3) nx + sin(theta/3) ny),
+#: theta = atan2(x - y, -(x + y)) + 3 pi/4; linear material, f = 0 (u is harmonic).
+U = "(x**2 + y**2)**(1/3)*cos(2/3*atan2(x - y, -(x + y)))"
+THETA = "(atan2(x - y, -(x + y)) + 3*pi/4)"
+CORNER_CONFIG = f"""
+[geometry]
+shape = "lshape"
+h = 0.0625
+subdomain_size = 0.125
+[data]
+u0 = "{U}"
+t0 = "-2/3*(x**2 + y**2)**(-1/6)*(cos({THETA}/3)*nx + sin({THETA}/3)*ny)"
+exact = "{U}"
 """
 
 
@@ -44,18 +63,57 @@ def test_adaptive_run_writes_its_levels(config, tmp_path):
     assert all(lv["converged"] for lv in levels)
     assert summary["dofs"] == dofs[-1] and summary["estimator"] == levels[-1]["estimator"]
     assert levels[-1]["estimator"] < levels[0]["estimator"]
-    with open(out / "levels.csv") as f:
+    with open(out / "adapt.csv") as f:
         rows = list(csv.DictReader(f))
     assert [int(r["dofs"]) for r in rows] == dofs
-    assert {"levels.csv", "levels.png"} <= set(summary["files"])
+    assert "error" not in rows[0] and "error" not in summary  # no exact solution given
+    files = set(summary["files"])
+    assert {"adapt.csv", "adapt.png"} <= files and "levels.csv" not in files
+    assert "indicators" not in np.load(out / "fields.npz").files  # off by default
+
+
+def test_adaptive_run_with_an_exact_solution_reports_errors_and_indicators(tmp_path):
+    """The corner singularity: error and efficiency per level in summary.json and
+    adapt.csv; the indicators of fields.npz follow its triangles (the largest at the
+    corner) and their squares sum to eta^2."""
+    config = tmp_path / "corner.toml"
+    config.write_text(CORNER_CONFIG)
+    out = tmp_path / "out"
+    sets = ["adapt.steps=5", "output.indicators=true", "output.xdmf=false"]
+    proc = run_cli("solve", str(config), "--out", str(out), "--quiet", *(
+        a for s in sets for a in ("--set", s)
+    ))  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    summary = json.loads((out / "summary.json").read_text())
+    levels = summary["levels"]
+    errors = [lv["error"] for lv in levels]
+    assert summary["error"] == errors[-1]
+    # measured 0.065 at 65 dofs .. 0.016 at 573 dofs, about N^(-0.58)
+    assert all(b < a for a, b in zip(errors, errors[1:])) and errors[-1] < errors[0] / 3
+    for lv in levels:
+        assert lv["efficiency"] == pytest.approx(lv["estimator"] / lv["error"], rel=1e-12)
+        assert 1.0 <= lv["efficiency"] <= 10.0  # measured 3.2 .. 3.5
+    with open(out / "adapt.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert [float(r["error"]) for r in rows] == errors
+    fields = np.load(out / "fields.npz")
+    eta = fields["indicators"]
+    assert eta.shape == (len(fields["triangles"]),) and eta.min() >= 0.0
+    assert np.sqrt(np.sum(eta**2)) == pytest.approx(summary["estimator"], rel=1e-12)
+    corner = np.flatnonzero(np.linalg.norm(fields["x"], axis=1) < 1e-12)
+    assert np.isin(corner, fields["triangles"][np.argmax(eta)]).all()
 
 
 def test_every_run_reports_the_estimator(config, tmp_path):
     out = tmp_path / "out"
-    assert run_cli("solve", str(config), "--out", str(out), "--quiet").returncode == 0
+    proc = run_cli("solve", str(config), "--out", str(out), "--quiet", "--set",
+                   "output.indicators=true")  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
     summary = json.loads((out / "summary.json").read_text())
     assert summary["estimator"] > 0 and "levels" not in summary
-    assert not (out / "levels.csv").exists()
+    assert not {"levels.csv", "adapt.csv", "adapt.png"} & set(summary["files"])
+    eta = np.load(out / "fields.npz")["indicators"]
+    assert np.sqrt(np.sum(eta**2)) == pytest.approx(summary["estimator"], rel=1e-12)
 
 
 @pytest.mark.parametrize(
@@ -63,6 +121,8 @@ def test_every_run_reports_the_estimator(config, tmp_path):
     [
         (["adapt.max_dofs=100"], "adapt.max_dofs = 100 is below the starting mesh's 833 dofs"),
         (["solver.nested=true"], "solver.nested = true and adapt.steps > 0 do not combine"),
+        (["data.exact=sin(x"], "data.exact:"),
+        (["output.indicators=1"], "output.indicators must be true or false"),
     ],
 )
 def test_bad_level_settings_are_refused(config, tmp_path, sets, fragment):

@@ -97,5 +97,7 @@ def test_cli_nested_option(tmp_path):
     (s_nested, f_nested), (s_cold, f_cold) = runs["true"], runs["false"]
     assert [lv["dofs"] for lv in s_nested["levels"]] == [1089, 4225]
     assert "levels" not in s_cold
+    assert s_nested["files"].count("levels.csv") == 1 and "levels.csv" not in s_cold["files"]
+    assert not {"adapt.csv", "adapt.png"} & set(s_nested["files"])  # adaptive runs only
     assert s_nested["iterations"] < s_cold["iterations"]
     np.testing.assert_allclose(f_nested["u"], f_cold["u"], atol=1e-12)

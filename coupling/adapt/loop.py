@@ -16,6 +16,7 @@ from typing import Any, Callable
 from coupling.adapt.estimator import Estimate, estimate
 from coupling.adapt.marking import doerfler_marking
 from coupling.adapt.transfer import transfer_iterate
+from coupling.manufactured import energy_error
 from coupling.options import DEFAULTS, SolverOptions
 from coupling.solvers import solve
 from fem_py.refinement import refine_domain
@@ -55,8 +56,8 @@ def adapt_options(section: dict[str, Any]) -> AdaptOptions:
 class Level:
     """One level of the loop. :meth:`record` gives the JSON fields (dofs, boundary_dofs,
     signorini_dofs, cells, estimator, terms, iterations, gradient_steps, newton_steps,
-    cg_iterations, converged, time); ``problem``, ``solution``, ``estimate`` and
-    ``domain`` are the objects themselves."""
+    cg_iterations, converged, time; with an exact solution also error and efficiency);
+    ``problem``, ``solution``, ``estimate`` and ``domain`` are the objects themselves."""
 
     level: int
     domain: Any
@@ -65,6 +66,7 @@ class Level:
     estimate: Estimate
     time: float
     marked: int = 0
+    error: float | None = None
 
     def record(self) -> dict[str, Any]:
         sol, p = self.solution, self.problem
@@ -87,6 +89,11 @@ class Level:
             "contact_nodes": int(sol.contact.sum()),
             "marked": self.marked,
             "time": self.time,
+            **(
+                {}
+                if self.error is None
+                else {"error": self.error, "efficiency": self.estimate.total / self.error}
+            ),
         }
 
 
@@ -98,6 +105,7 @@ def adapt(
     *,
     monitor: Any = None,
     on_level: Callable[[Level], None] | None = None,
+    exact: str = "",
 ) -> list[Level]:
     """Run the adaptive loop from ``domain`` (collective); return the levels.
 
@@ -116,6 +124,9 @@ def adapt(
         Passed to every solve.
     on_level
         Called with each finished :class:`Level` (e.g. to print or measure it).
+    exact
+        The exact interior solution u (an expression in x, y), when known: each level
+        then records the energy error |u_h - u|_1 and the efficiency index eta / error.
     """
     levels: list[Level] = []
     start = None
@@ -131,6 +142,8 @@ def adapt(
         solution = solve(problem, options, initial=start, monitor=monitor)
         est = estimate(problem, solution, f=data.get("f", "0"), t0=data.get("t0", "0"))
         level = Level(k, domain, problem, solution, est, time.perf_counter() - tic)
+        if exact:
+            level.error = energy_error(problem, solution.u, exact)
         levels.append(level)
         if k < adapt_options.steps:
             marked = doerfler_marking(domain.comm, est.cells, adapt_options.theta)

@@ -280,7 +280,10 @@ def _solve(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
             plots=config["output"]["plots"],
             config=config,
             levels=run.levels,
+            adaptive=config["adapt"]["steps"] > 0,
             estimator=run.estimator,
+            error=run.error,
+            indicators=run.indicators if config["output"]["indicators"] else None,
         )
     if comm.rank == 0 and not args.quiet:
         state = "converged" if result.converged else "did NOT converge"

@@ -282,6 +282,8 @@ def check_data_and_material(config: dict[str, dict[str, Any]]) -> None:
     x, n = ufl.SpatialCoordinate(domain), ufl.FacetNormal(domain)
     values = {"x": x[0], "y": x[1], "nx": n[0], "ny": n[1]}
     for key, names in DATA_VARIABLES.items():
+        if key == "exact" and not config["data"][key]:
+            continue  # no exact solution known
         try:
             parse_expression(config["data"][key], {name: values[name] for name in names})
         except ValueError as err:

@@ -65,6 +65,7 @@ class ProgressMonitor:
         self.stage(
             f"adaptive level {r['level']}: {r['dofs']} dofs, estimator {r['estimator']:.4g}, "
             f"{r['iterations']} iterations, {r['marked']} cells marked, {r['time']:.2f} s"
+            + (f", error {r['error']:.4g}" if "error" in r else "")
         )
 
     def finished(self, solution) -> None:

@@ -1,11 +1,14 @@
 """The solve of one configuration, plain, nested (``[solver] nested``) or adaptive
-(``[adapt] steps > 0``), and the a posteriori estimator of its result."""
+(``[adapt] steps > 0``), the a posteriori estimator of its result and, when the
+configuration gives the exact solution (``[data] exact``), its energy error."""
 from __future__ import annotations
 
 import dataclasses
 import time
 from dataclasses import dataclass
 from typing import Any
+
+import numpy as np
 
 from coupling.app.config import ConfigError
 from coupling.app.from_config import coarser_configs, domain_from_config, problem_on_domain
@@ -17,13 +20,17 @@ __all__ = ["Run", "run_solver"]
 @dataclass
 class Run:
     """What the outputs of a run need: the (finest) problem and its solution, the stage
-    timings, one record per level (nested or adaptive runs) and the global estimator."""
+    timings, one record per level (nested or adaptive runs), the global estimator, the
+    per-cell eta_T^2 of the owned cells of the final mesh (``indicators``, in the local
+    cell order) and the energy error |u_h - u|_1 (None without ``[data] exact``)."""
 
     problem: Any
     solution: Any
     timings: dict[str, float]
     levels: list[dict] | None
     estimator: float
+    indicators: np.ndarray
+    error: float | None = None
 
 
 def _level_builder(comm: Any, config: dict):
@@ -44,14 +51,16 @@ def run_solver(
 
     ``timings`` are the set-up stages so far; the run adds ``solve`` (and the stages of
     :func:`coupling.solvers.solve`), ``coarse_levels`` and ``prolongation`` for a nested
-    solve, ``adaptive_loop`` (every level: assembly, solves, estimates, refinement) for
-    an adaptive one, and ``estimator``.
+    solve, ``adaptive_loop`` (every level: assembly, solves, estimates, errors,
+    refinement) for an adaptive one, and ``estimator``.
     """
     from coupling.adapt import adapt, adapt_options, estimate
+    from coupling.manufactured import energy_error
     from coupling.solvers import solve
     from coupling.solvers.nested import solve_nested
 
     data, steps = config["data"], config["adapt"]["steps"]
+    exact = data["exact"]
     if steps > 0:
         if options.nested:
             raise ConfigError(
@@ -81,6 +90,7 @@ def run_solver(
             settings,
             monitor=monitor,
             on_level=monitor.adapt_level if monitor is not None else None,
+            exact=exact,
         )
         last = levels[-1]
         return Run(
@@ -89,6 +99,8 @@ def run_solver(
             {**timings, "adaptive_loop": time.perf_counter() - tic},
             [level.record() for level in levels],
             float(last.estimate.total),
+            last.estimate.cells,
+            last.error,
         )
     records = None
     if options.nested:
@@ -104,6 +116,7 @@ def run_solver(
     else:
         solution = solve(problem, options, monitor=monitor)
     tic = time.perf_counter()
-    eta = estimate(problem, solution, f=data["f"], t0=data["t0"]).total
+    est = estimate(problem, solution, f=data["f"], t0=data["t0"])
     stages = {**timings, **solution.timings, "estimator": time.perf_counter() - tic}
-    return Run(problem, solution, stages, records, float(eta))
+    error = energy_error(problem, solution.u, exact) if exact else None
+    return Run(problem, solution, stages, records, float(est.total), est.cells, error)

@@ -1,5 +1,12 @@
-"""The table and figure of the levels of a nested or adaptive run: ``levels.csv`` and
-``levels.png`` (the estimator against the dofs, log-log, with the fitted slope)."""
+"""The table and figure of the levels of a run with levels.
+
+An adaptive run (``[adapt] steps > 0``) writes ``adapt.csv`` (one row per level: dofs,
+the estimator eta and, when the exact solution is known (``[data] exact``), the energy
+error and the efficiency index eta / error, solver counts, time) and ``adapt.png`` (eta
+and the error against the dofs, log-log, with the fitted slopes in the legend). A nested
+solve (``[solver] nested``) writes ``levels.csv`` (its levels' dofs, iteration counts
+and times; its coarse levels are not estimated, so there is no figure).
+"""
 from __future__ import annotations
 
 import csv
@@ -13,54 +20,86 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from coupling.io.atomic import atomic_write  # noqa: E402
+from coupling.options import SLOPE_MIN_DOFS  # noqa: E402
 
-__all__ = ["LEVEL_FILES", "write_levels", "fitted_slope"]
+__all__ = ["LEVEL_FILES", "write_levels", "fitted_slope", "slope_levels"]
 
-#: The files this module writes.
-LEVEL_FILES = ("levels.csv", "levels.png")
+#: The files this module writes (nested: levels.csv; adaptive: adapt.csv, adapt.png).
+LEVEL_FILES = ("levels.csv", "adapt.csv", "adapt.png")
 
 _COLUMNS = (
+    "level",
     "dofs",
     "boundary_dofs",
+    "signorini_dofs",
+    "cells",
+    "marked",
     "estimator",
+    "error",
+    "efficiency",
     "iterations",
+    "gradient_steps",
+    "newton_steps",
     "cg_iterations",
+    "contact_nodes",
     "converged",
     "time",
 )
 
 
+def slope_levels(dofs) -> np.ndarray:
+    """The levels a fitted rate uses (bool mask): N >= coupling.options.SLOPE_MIN_DOFS,
+    or every level when fewer than two are that large."""
+    dofs = np.asarray(dofs, dtype=float)
+    large = dofs >= SLOPE_MIN_DOFS
+    return large if large.sum() >= 2 else np.ones(dofs.shape, bool)
+
+
 def fitted_slope(dofs, values) -> float:
-    """The least-squares slope of log(values) against log(dofs) (NaN with < 2 points)."""
+    """The least-squares slope of log(values) against log(dofs) over :func:`slope_levels`
+    (NaN with fewer than 2 positive points)."""
     dofs, values = np.asarray(dofs, dtype=float), np.asarray(values, dtype=float)
-    keep = (dofs > 0) & (values > 0)
+    keep = slope_levels(dofs) & (dofs > 0) & (values > 0)
     if keep.sum() < 2:
         return float("nan")
     return float(np.polyfit(np.log(dofs[keep]), np.log(values[keep]), 1)[0])
 
 
-def write_levels(out: Path, levels: list[dict], *, plot: bool) -> list[str]:
-    """Write levels.csv (one row per level; the columns each level has) and, with ``plot``
-    and an estimator per level, levels.png. Returns the names written (rank 0 only)."""
+def _plot(path: Path, levels: list[dict]) -> None:
+    """eta (and the error) against the dofs, log-log, slopes in the legend."""
+    dofs = [level["dofs"] for level in levels]
+    fit = slope_levels(dofs)
+    where = f"N >= {SLOPE_MIN_DOFS}" if not fit.all() else "all levels"
+    fig, ax = plt.subplots(figsize=(6, 4.5))
+    series = [("estimator", r"estimator $\eta$", "o-")]
+    if all("error" in level for level in levels):
+        series.append(("error", r"error $|u - u_h|_1$", "s-"))
+    for key, label, style in series:
+        values = [level[key] for level in levels]
+        ax.loglog(dofs, values, style, label=f"{label} (slope {fitted_slope(dofs, values):.2f})")
+    ax.set_xlabel("dofs N")
+    ax.set_ylabel("estimator, error")
+    ax.grid(alpha=0.3, which="both", lw=0.5)
+    ax.legend(title=f"slopes fitted over {where}", fontsize=9, title_fontsize=8)
+    ax.set_title(f"Adaptive refinement ({len(levels)} levels)")
+    fig.tight_layout()
+    atomic_write(path, lambda p: fig.savefig(p, dpi=120, format="png"))
+    plt.close(fig)
+
+
+def write_levels(out: Path, levels: list[dict], *, adaptive: bool, plot: bool) -> list[str]:
+    """Write the levels' table (one row per level; the columns every level has):
+    adapt.csv and, with ``plot``, adapt.png for an adaptive run, levels.csv for a nested
+    one. Returns the names written (rank 0 only)."""
     columns = [c for c in _COLUMNS if all(c in level for level in levels)]
     table = io.StringIO()
     writer = csv.writer(table, lineterminator="\n")
     writer.writerow(columns)
     writer.writerows([[level[c] for c in columns] for level in levels])
-    atomic_write(Path(out) / "levels.csv", lambda p: p.write_text(table.getvalue()))
-    written = ["levels.csv"]
-    if plot and "estimator" in columns:
-        dofs = [level["dofs"] for level in levels]
-        eta = [level["estimator"] for level in levels]
-        fig, ax = plt.subplots(figsize=(6, 4.5))
-        ax.loglog(dofs, eta, "o-", label=f"estimator (slope {fitted_slope(dofs, eta):.2f})")
-        ax.set_xlabel("dofs")
-        ax.set_ylabel(r"$\eta$")
-        ax.grid(alpha=0.3, which="both", lw=0.5)
-        ax.legend()
-        ax.set_title(f"Levels ({len(levels)})")
-        fig.tight_layout()
-        atomic_write(Path(out) / "levels.png", lambda p: fig.savefig(p, dpi=120, format="png"))
-        plt.close(fig)
-        written.append("levels.png")
+    name = "adapt.csv" if adaptive else "levels.csv"
+    atomic_write(Path(out) / name, lambda p: p.write_text(table.getvalue()))
+    written = [name]
+    if adaptive and plot:
+        _plot(Path(out) / "adapt.png", levels)
+        written.append("adapt.png")
     return written

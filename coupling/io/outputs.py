@@ -8,7 +8,9 @@ Signorini node in contact), ``signorini`` (bool: node carrying a phi unknown), a
 ``pressure``, rho du_h/dn at the nodes (the contact pressure on Gamma_s); ``dn_ue``, the
 coefficients of du_e/dn in the flux space (n nodal values for "p1", n
 panel values for "p0", panel i = [node i, node i+1]); and the scalars ``a`` and
-``flux_space`` that ``fembem exterior`` needs.
+``flux_space`` that ``fembem exterior`` needs; with ``[output] indicators``, ``indicators``
+(n_cells,), the estimator's eta_T per cell in the order of ``triangles`` (sum of squares
+eta^2, coupling.adapt.estimator).
 
 Every file is written atomically (:mod:`coupling.io.atomic`), so an interrupted run
 never leaves a half-written file under its final name. Rank 0 writes the gathered
@@ -31,7 +33,7 @@ from coupling.io.atomic import atomic_write
 from coupling.io.levels import LEVEL_FILES, write_levels
 from coupling.io.plots import PLOT_FILES, write_plots
 from coupling.io.quantities import boundary_flux, complementarity, log_coefficient
-from fem_py.numbering import gather_p1
+from fem_py.numbering import gather_cells, gather_p1
 from fem_py.parallel import broadcast_from_root
 
 __all__ = [
@@ -111,7 +113,10 @@ def write_outputs(
     config: dict | None = None,
     total: Callable[[], float] | None = None,
     levels: list[dict] | None = None,
+    adaptive: bool = False,
     estimator: float | None = None,
+    error: float | None = None,
+    indicators: np.ndarray | None = None,
 ) -> list[str]:
     """Write summary.json, fields.npz and, on request, solution.xdmf/.h5 and the plots.
 
@@ -121,7 +126,11 @@ def write_outputs(
     stage of the run so far, to which summary.json adds ``outputs`` (this call) and, when
     ``total`` (a clock of the whole process) is given, ``total`` read just before
     summary.json, the last file, is written. ``config`` (the validated configuration)
-    is stored in summary.json.
+    is stored in summary.json. ``levels`` (one record per level) go to summary.json and
+    to adapt.csv / adapt.png (``adaptive``) or levels.csv (a nested solve,
+    :mod:`coupling.io.levels`); ``estimator`` (eta) and ``error`` (|u_h - u|_1 against
+    ``[data] exact``) to summary.json; ``indicators``, eta_T^2 of the owned cells (local
+    cell order), as ``indicators`` = eta_T in fields.npz, in the order of ``triangles``.
 
     Returns
     -------
@@ -131,6 +140,7 @@ def write_outputs(
     tic = time.perf_counter()
     out = Path(out)
     gathered = gather_p1(result.u)
+    cells = None if indicators is None else gather_cells(problem.V, np.sqrt(indicators))
     pressure = boundary_flux(problem, result)
     written = []
     if xdmf:
@@ -147,19 +157,22 @@ def write_outputs(
             **boundary_fields(problem, result, pressure),
             a=np.array(problem.a),
             flux_space=np.array(problem.flux_space),
+            **({} if cells is None else {"indicators": cells}),
         )
         atomic_write(out / "fields.npz", lambda p: np.savez(p, **fields))  # p ends in .npz
         names.append("fields.npz")
         if plots:
             names += write_plots(out, fields, result.history, tol=tol)
         if levels:
-            names += write_levels(out, levels, plot=plots)
+            names += write_levels(out, levels, adaptive=adaptive, plot=plots)
         stages = {**timings, "outputs": time.perf_counter() - tic}
         if total is not None:
             stages["total"] = total()
         record = summary(problem, result, stages, pressure)
         if estimator is not None:  # the global a posteriori estimator eta
             record["estimator"] = estimator
+        if error is not None:  # the energy error against the exact solution
+            record["error"] = error
         if levels is not None:  # a nested or adaptive solve: one record per level
             record["levels"] = levels
         if config is not None:

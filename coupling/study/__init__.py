@@ -1,6 +1,6 @@
 """Reproducibility study of the claims of METHOD.md section 7 (``fembem study``).
 
-Five parts, each a module with the same interface (:class:`coupling.study.base.Part`:
+Six parts, each a module with the same interface (:class:`coupling.study.base.Part`:
 ``run`` returns tables, lists of dicts, one dict a row; ``summarize``, ``plot`` and
 ``summary_markdown`` derive the page from the tables), written by
 :class:`~coupling.study.writer.ResultWriter` as CSV files, markdown tables and PNG plots:
@@ -22,6 +22,9 @@ Five parts, each a module with the same interface (:class:`coupling.study.base.P
                 material, square and L-shape, P1 flux (and P0 flux for comparison).
 ``variants``    the edge forms ``paper`` and ``sqrt-laplacian`` (iterations and kappa);
                 the ``ufl`` and ``handwritten`` Jacobians (assembly time, iterates).
+``adaptivity``  uniform against adaptive refinement on the singular L-shape (issue 19):
+                dofs, error, estimator, efficiency index and rates per level, and the
+                PGPM and ssn counts per level as the mesh grades inside the subdomains.
 
 The other modules: :mod:`~coupling.study.sizes` (the sizes of the full and the quick
 study), :mod:`~coupling.study.common` (the study's problems and small fits),

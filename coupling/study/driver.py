@@ -11,7 +11,7 @@ import traceback
 from pathlib import Path
 from typing import Any, Sequence
 
-from coupling.study import errors, iterations, projection, spectrum, variants
+from coupling.study import adaptivity, errors, iterations, projection, spectrum, variants
 from coupling.study.base import Part
 from coupling.study.common import log
 from coupling.study.discussion import discussion
@@ -23,7 +23,8 @@ __all__ = ["PARTS", "REGISTRY", "build_parser", "main", "run_part", "write_readm
 
 #: The parts by name, in the order they run and appear.
 REGISTRY: dict[str, Part] = {
-    module.PART.name: module.PART for module in (iterations, spectrum, projection, errors, variants)
+    module.PART.name: module.PART
+    for module in (iterations, spectrum, projection, errors, variants, adaptivity)
 }
 PARTS = tuple(REGISTRY)
 

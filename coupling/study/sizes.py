@@ -46,6 +46,7 @@ class Sizes:
     edge_d_cells: tuple[int, ...]  # edge forms at fixed d
     edge_kappa_max_cells: int  # kappa of the edge-form runs up to this size
     jacobian_cells: tuple[int, ...]
+    adapt_max_dofs: int  # adaptivity: the largest level (first mesh h = 1/16, d = 1/8)
     d_subdomains: int = 4
     spectrum_ratio: int = 4
 
@@ -74,6 +75,7 @@ FULL = Sizes(
     edge_d_cells=(16, 32, 64, 128),
     edge_kappa_max_cells=128,
     jacobian_cells=(64, 256),
+    adapt_max_dofs=40000,
 )
 
 QUICK = Sizes(
@@ -93,4 +95,5 @@ QUICK = Sizes(
     edge_d_cells=(16, 32),
     edge_kappa_max_cells=32,
     jacobian_cells=(16,),
+    adapt_max_dofs=1500,
 )

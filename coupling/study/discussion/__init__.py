@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from coupling.study.discussion.adaptivity import discuss_adaptivity
 from coupling.study.discussion.claims import claims_table, departures
 from coupling.study.discussion.sections import (
     discuss_errors,
@@ -49,4 +50,6 @@ def discussion(summaries: Summaries) -> str:
         out += discuss_errors(summaries["errors"])
     if "variants" in summaries:
         out += discuss_variants(summaries["variants"])
+    if "adaptivity" in summaries:
+        out += discuss_adaptivity(summaries["adaptivity"])
     return "\n".join(out)
