@@ -1,22 +1,34 @@
-"""Dense and sparse matrices across ranks: S_h kept by rows, matrices and rows gathered.
+"""Dense and sparse matrices across ranks: S_h kept by rows or replicated, matrices and
+rows gathered.
 
 The u block of the iterations lives in a distributed PETSc vector whose owned entries
-are the contiguous global range [r0, r1) of each rank, in rank order; S_h and the
-Signorini unknowns are small enough to be computed once (on rank 0) and then held by
-rows (:class:`RowBlocks`) or replicated.
+are the contiguous global range [r0, r1) of each rank, in rank order. S_h
+(:func:`steklov_poincare`) is either dense, computed once on rank 0 and held by rows
+(:class:`RowBlocks`), or the H-matrix operator of bem_cpp, held whole by every rank
+(:class:`ReplicatedOperator`); the Signorini unknowns are replicated.
 """
 from __future__ import annotations
 
-from typing import Callable
+from typing import Any, Callable
 
 import numpy as np
 import scipy.sparse as sp
 from mpi4py import MPI
 from petsc4py import PETSc
 
+import bem_cpp
+from coupling.options import CHOICES, HMATRIX_CROSSOVER, HMATRIX_TOL
 from fem_py.parallel import run_on_root
 
-__all__ = ["RowBlocks", "gather_matrix", "gather_rows"]
+__all__ = [
+    "RowBlocks",
+    "ReplicatedOperator",
+    "boundary_operator_kind",
+    "steklov_poincare",
+    "dense_matrix",
+    "gather_matrix",
+    "gather_rows",
+]
 
 
 class RowBlocks:
@@ -72,6 +84,89 @@ class RowBlocks:
             np.ascontiguousarray(self.block), [out, self._counts * n, self._offsets * n, MPI.DOUBLE]
         )
         return out
+
+
+class ReplicatedOperator:
+    """A boundary operator held whole by every rank of ``comm`` (the H-matrix S_h of
+    bem_cpp under MPI, :func:`steklov_poincare`).
+
+    ``A @ z`` (and ``A.flux(v)``) for a replicated z: every rank applies its copy and
+    rank 0's result is broadcast, so that the replicated iterates stay bitwise equal on
+    all ranks whatever the round-off of the threaded products. The memory per rank is
+    that of the operator (O(n log n)); the products are not divided among the ranks
+    (bem_cpp applies S_h as a whole: V^{-1} by CG couples all rows).
+    """
+
+    def __init__(self, comm: MPI.Comm, operator: Any):
+        self.comm, self.operator, self.shape = comm, operator, tuple(operator.shape)
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes of the operator on one rank."""
+        return int(self.operator.nbytes)
+
+    def _replicated(self, y: np.ndarray) -> np.ndarray:
+        y = np.ascontiguousarray(y, dtype=float)
+        if self.comm.size > 1:
+            self.comm.Bcast(y, root=0)
+        return y
+
+    def __matmul__(self, z: np.ndarray) -> np.ndarray:
+        return self._replicated(self.operator @ z)
+
+    def flux(self, v: np.ndarray) -> np.ndarray:
+        """V_h^{-1} (K_h - M_h) v, replicated (``bem_cpp.SteklovPoincareOperator.flux``)."""
+        return self._replicated(self.operator.flux(v))
+
+
+def boundary_operator_kind(choice: str, n: int) -> str:
+    """``"dense"`` or ``"hmatrix"``: the S_h of ``[solver] boundary_operator = choice`` for
+    n boundary dofs (``"auto"``: the H-matrix from :data:`coupling.options.HMATRIX_CROSSOVER`
+    boundary dofs on)."""
+    allowed = CHOICES["solver", "boundary_operator"]
+    if choice not in allowed:
+        raise ValueError(f"boundary_operator must be one of {allowed}, got {choice!r}")
+    if choice == "auto":
+        return "hmatrix" if n >= HMATRIX_CROSSOVER else "dense"
+    return choice
+
+
+def steklov_poincare(comm: MPI.Comm, nodes: np.ndarray, flux: str, choice: str) -> Any:
+    """S_h of the boundary ``nodes`` (replicated, (n, 2)) for ``[solver] boundary_operator
+    = choice`` (collective).
+
+    Dense: the matrix (serial) or :class:`RowBlocks` (computed on rank 0 with every core,
+    held by rows). H-matrix: ``bem_cpp.SteklovPoincareOperator`` to the relative accuracy
+    :data:`coupling.options.HMATRIX_TOL` (serial), or built by every rank and wrapped in
+    :class:`ReplicatedOperator`. Each has ``S @ z`` for a replicated z and ``S.shape``.
+    """
+    nodes = np.asarray(nodes, dtype=float)
+    if boundary_operator_kind(choice, nodes.shape[0]) == "hmatrix":
+        op = bem_cpp.steklov_poincare(nodes, flux=flux, compression="hmatrix", tol=HMATRIX_TOL)
+        return op if comm.size == 1 else ReplicatedOperator(comm, op)
+
+    def dense() -> np.ndarray:
+        return bem_cpp.steklov_poincare(nodes, flux=flux)
+
+    return dense() if comm.size == 1 else RowBlocks.from_root(comm, dense)
+
+
+def dense_matrix(operator: Any, what: str) -> np.ndarray:
+    """The dense S_h on every rank for ``what`` (collective for :class:`RowBlocks`).
+
+    Raises
+    ------
+    ValueError
+        One line naming ``what`` if ``operator`` is the H-matrix operator (never formed).
+    """
+    if isinstance(operator, np.ndarray):
+        return operator
+    if isinstance(operator, RowBlocks):
+        return operator.full()
+    raise ValueError(
+        f"{what} needs the dense S_h, but S_h is the H-matrix operator (n = "
+        f'{operator.shape[0]} boundary dofs); set [solver] boundary_operator = "dense"'
+    )
 
 
 def _row_blocks(ranks: int, n: int) -> tuple[np.ndarray, np.ndarray]:

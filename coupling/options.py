@@ -47,6 +47,7 @@ DEFAULTS: dict[str, dict[str, Any]] = {
         "jacobian": "ufl",
         "signorini_weight": 0.25,
         "nested": False,
+        "boundary_operator": "auto",
     },
     "output": {"dir": "fembem-out", "xdmf": True, "plots": True, "indicators": False},
     "adapt": {"steps": 0, "theta": 0.5, "max_dofs": 200000},
@@ -62,6 +63,7 @@ CHOICES: dict[tuple[str, str], tuple[str, ...]] = {
     ("solver", "edge_form"): ("paper", "sqrt-laplacian"),
     ("solver", "flux_space"): ("p1", "p0"),
     ("solver", "jacobian"): ("ufl", "handwritten"),
+    ("solver", "boundary_operator"): ("auto", "dense", "hmatrix"),
 }
 
 #: The variables each expression of [data] may use: boundary data also see the outward
@@ -79,6 +81,16 @@ SSN_START_STEPS = 5  # PGPM steps before the first Newton step
 SSN_WARM_START_STEPS = 0  # the same from a given iterate (nested iteration, adaptivity)
 SSN_CG_MAX_ITERATIONS = 500  # cap on the CG iterations of one Newton step
 LANCZOS_STEPS = 20  # Lanczos steps of the step estimate C0 (and of lambda_min for apgpm)
+
+#: ``boundary_operator = "auto"``: the H-matrix S_h from this many boundary dofs on, the
+#: dense one below: where S_h costs less in an ssn solve (set-up + about 120 products) as
+#: an H-matrix, measured on this machine by bench/boundary_operator_crossover.py (the
+#: set-up alone is cheaper from about 1,000 on; docs/design/hmatrix.md, "The solver's S_h").
+HMATRIX_CROSSOVER = 4096
+#: Relative accuracy of the H-matrix blocks of S_h (``bem_cpp.steklov_poincare`` tol):
+#: products agree with the dense S_h to a few times this (docs/design/hmatrix.md), far
+#: below the solver tolerances (1e-8 by default).
+HMATRIX_TOL = 1e-10
 #: Fitted convergence rates (adapt.png, the study's adaptivity part) use the levels with
 #: at least this many dofs (the pre-asymptotic coarse levels left out), or all levels
 #: when fewer than two are that large.
@@ -93,7 +105,8 @@ def _solver_default(key: str) -> Any:
 class SolverOptions:
     """The ``[solver]`` section (defaults in :data:`DEFAULTS`; README, configuration).
 
-    ``flux_space`` and ``jacobian`` choose how the problem is discretised
+    ``flux_space``, ``jacobian`` and ``boundary_operator`` (S_h dense or as an H-matrix
+    operator) choose how the problem is discretised
     (:class:`coupling.problem.SignoriniProblem` takes them), ``nested`` whether the
     application solves by nested iteration over coarser meshes
     (:func:`coupling.solvers.nested.solve_nested`); the rest choose how one problem is
@@ -113,6 +126,7 @@ class SolverOptions:
     jacobian: str = _solver_default("jacobian")
     signorini_weight: float = _solver_default("signorini_weight")
     nested: bool = _solver_default("nested")
+    boundary_operator: str = _solver_default("boundary_operator")
 
     def __post_init__(self) -> None:
         for name in (
@@ -122,6 +136,7 @@ class SolverOptions:
             "edge_form",
             "flux_space",
             "jacobian",
+            "boundary_operator",
         ):
             allowed = CHOICES["solver", name]
             if getattr(self, name) not in allowed:

@@ -26,9 +26,10 @@ from typing import Any, Mapping
 import numpy as np
 
 import bem_cpp
-from coupling.distributed import RowBlocks
+from coupling.distributed import boundary_operator_kind, steklov_poincare
 from coupling.functional import CoupledFunctional
 from coupling.options import DEFAULTS
+from fem_py.parallel import array_from_root
 
 __all__ = ["SignoriniProblem"]
 
@@ -51,13 +52,23 @@ class SignoriniProblem:
         The space of the exterior normal derivative: ``"p1"`` or ``"p0"`` (bem_cpp).
     jacobian
         D^2 G from ``"ufl"`` (derived) or ``"handwritten"`` forms (fem_py.forms).
+    boundary_operator
+        S_h ``"dense"``, as the ``"hmatrix"`` operator of bem_cpp (applied, never
+        formed), or ``"auto"`` (by the boundary size,
+        :func:`coupling.distributed.boundary_operator_kind`).
 
     Attributes
     ----------
     V, forms, boundary
         The P1 space, the interior forms and the boundary map T, E.
     S
-        S_h, dense: an array in serial, :class:`coupling.distributed.RowBlocks` under MPI.
+        S_h (:func:`coupling.distributed.steklov_poincare`): dense, an array in serial and
+        :class:`coupling.distributed.RowBlocks` under MPI; or the H-matrix operator
+        (``bem_cpp.SteklovPoincareOperator``, under MPI in a
+        :class:`coupling.distributed.ReplicatedOperator`). Only ``S @ z`` and ``S.shape``
+        are common to all.
+    boundary_operator
+        The S_h chosen: ``"dense"`` or ``"hmatrix"``.
     u0
         u0 at the boundary nodes (boundary order).
     functional
@@ -77,6 +88,7 @@ class SignoriniProblem:
         a: float = 0.0,
         flux_space: str = DEFAULTS["solver"]["flux_space"],
         jacobian: str = DEFAULTS["solver"]["jacobian"],
+        boundary_operator: str = DEFAULTS["solver"]["boundary_operator"],
     ):
         from fem_py.boundary import BoundaryMap
         from fem_py.forms import InteriorForms, p1_space
@@ -92,13 +104,9 @@ class SignoriniProblem:
         timings["forms"] = time.perf_counter() - tic
 
         tic = time.perf_counter()
-        # S_h: dense, replicated in serial; under MPI computed on rank 0 and kept by rows
         nodes = self.boundary.nodes
-
-        def steklov() -> np.ndarray:
-            return bem_cpp.steklov_poincare(nodes, flux=flux_space)
-
-        self.S = steklov() if self.comm.size == 1 else RowBlocks.from_root(self.comm, steklov)
+        self.boundary_operator = boundary_operator_kind(boundary_operator, nodes.shape[0])
+        self.S = steklov_poincare(self.comm, nodes, flux_space, self.boundary_operator)
         timings["steklov_poincare"] = time.perf_counter() - tic
 
         tic = time.perf_counter()
@@ -126,8 +134,22 @@ class SignoriniProblem:
         """n_s, the number of phi unknowns."""
         return int(self.boundary.signorini.size)
 
+    def exterior_flux(self, ue: np.ndarray) -> np.ndarray:
+        """Coefficients of psi_h ~ du_e/dn from the trace ``ue`` (boundary order,
+        replicated): V_h psi_h = (K_h - M_h)(ue - a) (METHOD.md section 2), by the dense
+        Cholesky solve on rank 0 or by the H-matrix operator's CG solve (collective)."""
+        if self.boundary_operator == "hmatrix":
+            return self.S.flux(np.asarray(ue, dtype=float) - self.a)
+        nodes = self.boundary.nodes
+        return array_from_root(
+            self.comm,
+            lambda: bem_cpp.exterior_flux(nodes, ue, a=self.a, flux=self.flux_space),
+            all_cores=True,
+        )
+
     def exterior(self, solution: Any, points: np.ndarray) -> np.ndarray:
-        """u_e at exterior points (m, 2) by the representation formula (METHOD.md section 2)."""
+        """u_e at exterior points (m, 2) by the representation formula (METHOD.md section 2),
+        evaluated panel by panel for each point (bem_cpp has no compressed potential)."""
         return bem_cpp.exterior_potential(
             self.boundary.nodes,
             solution.ue,

@@ -170,6 +170,12 @@ def parse_config(raw: dict[str, Any]) -> dict[str, dict[str, Any]]:
                     f"unknown key {section}.{key}; the keys of [{section}] " f"are {known}"
                 )
             config[section][key] = _check_value(section, key, value)
+    solver = config["solver"]
+    if solver["preconditioner"] == "exact" and solver["boundary_operator"] == "hmatrix":
+        raise ConfigError(
+            'solver.preconditioner = "exact" factors the dense S_h; set solver.boundary_operator '
+            '= "dense" (or "auto" for small boundaries) or use another preconditioner'
+        )
     geometry = config["geometry"]
     _check_mesh_keys(geometry, raw.get("geometry", {}))
     if geometry["shape"] == "polygon" and len(geometry["vertices"]) < 3:

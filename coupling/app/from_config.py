@@ -115,6 +115,7 @@ def problem_on_domain(
         a=data["a"],
         flux_space=options.flux_space,
         jacobian=options.jacobian,
+        boundary_operator=options.boundary_operator,
     )
     return problem, options, dict(problem.timings)
 

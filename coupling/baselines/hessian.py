@@ -9,6 +9,7 @@ import numpy as np
 from petsc4py import PETSc
 
 from coupling.baselines.budget import Budget, require_serial
+from coupling.distributed import dense_matrix
 from coupling.problem import SignoriniProblem
 
 __all__ = ["Evaluator", "CoupledHessian"]
@@ -105,6 +106,7 @@ class CoupledHessian:
         from dolfinx import fem
 
         require_serial(problem.comm)
+        s_h = dense_matrix(problem.S, "the assembled Hessian of the SNES VI / TAO Newton peers")
         self.forms = problem.forms
         b = problem.boundary
         n_u = problem.V.dofmap.index_map.size_local
@@ -144,7 +146,7 @@ class CoupledHessian:
         indices = np.empty(nnz, dtype=PETSc.IntType)
         values = np.zeros(nnz)
         indices[k_pos] = k_indices
-        s_sym = 0.5 * (problem.S + problem.S.T)
+        s_sym = 0.5 * (s_h + s_h.T)
         extra_cols = k_indices[extra]
         extra_ptr = np.concatenate([[0], np.cumsum(np.bincount(k_rows[extra], minlength=n))])
         for p, row in enumerate(idx):

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from coupling.distributed import gather_matrix, gather_rows
+from coupling.distributed import dense_matrix, gather_matrix, gather_rows
 from coupling.options import SolverOptions
 from coupling.preconditioners.base import IdentityPreconditioner, Preconditioner
 from coupling.preconditioners.distributed import (
@@ -88,7 +88,7 @@ def build_preconditioner(problem: Any, options: SolverOptions) -> Preconditioner
     csr = gather_matrix(stiffness)
     stiffness.destroy()
     x = gather_rows(comm, V.tabulate_dof_coordinates()[:n_owned, :2])
-    S = problem.S if comm.size == 1 or kind != "exact" else problem.S.full()
+    S = dense_matrix(problem.S, "the exact preconditioner") if kind == "exact" else None
 
     def build() -> Preconditioner:
         if kind == "exact":

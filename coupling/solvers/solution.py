@@ -12,7 +12,6 @@ from typing import Any
 
 import numpy as np
 
-import bem_cpp
 from coupling.options import (
     LANCZOS_STEPS,
     SSN_CG_MAX_ITERATIONS,
@@ -27,7 +26,6 @@ from coupling.solvers.pgpm import pgpm
 from coupling.solvers.projection import SignoriniProjection
 from coupling.solvers.records import IterationRecord, Monitor, RunResult, set_owned
 from coupling.solvers.ssn import semismooth_newton, zero_residual
-from fem_py.parallel import array_from_root
 
 __all__ = ["Solution", "solve", "build_projection", "step_length", "iterate"]
 
@@ -176,7 +174,6 @@ def solve(
     """
     from dolfinx import fem
 
-    comm = problem.comm
     timings: dict[str, float] = {}
     owned = preconditioner is None
     if owned:
@@ -232,11 +229,7 @@ def solve(
     gap[boundary.signorini] = run.phi
     ue = boundary_u + gap - problem.u0
     tic = time.perf_counter()
-    flux = array_from_root(
-        comm,
-        lambda: bem_cpp.exterior_flux(boundary.nodes, ue, a=problem.a, flux=problem.flux_space),
-        all_cores=True,
-    )
+    flux = problem.exterior_flux(ue)
     timings["exterior_flux"] = time.perf_counter() - tic
     return Solution(
         u=u,

@@ -9,7 +9,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from coupling.distributed import gather_matrix
+from coupling.distributed import dense_matrix, gather_matrix
 from coupling.preconditioners import Preconditioner
 from coupling.problem import SignoriniProblem
 
@@ -83,7 +83,7 @@ class PencilOperators:
     def dense_extremes(self) -> tuple[float, float]:
         """The same by a dense generalized eigensolver (small problems: a check)."""
         W = self.W.toarray()
-        H = W.T @ self.S @ W
+        H = W.T @ dense_matrix(self.S, "the dense pencil check") @ W
         H[: self.N, : self.N] += self.K.toarray()
         B = sla.block_diag(self.pc.matvec_omega(np.eye(self.N)), self.M_s)
         lam = sla.eigh(0.5 * (H + H.T), 0.5 * (B + B.T), eigvals_only=True)
