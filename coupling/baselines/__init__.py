@@ -23,6 +23,9 @@ PETSc Vec with u first (the P1 dof order) and phi after it:
   on the reduced Newton system, among them CG preconditioned by the project's
   substructuring preconditioner B (METHOD.md section 6) restricted to the inactive set,
   through a PCSHELL;
+* :func:`~coupling.baselines.sequenced.solve_snes_vi_sequenced` - the same with grid
+  sequencing: solved on the coarser meshes of a hierarchy first, each solution
+  prolonged (:func:`coupling.solvers.nested.prolong`) to start the next finer level;
 * :func:`~coupling.baselines.tao.solve_tao` - TAO bound-constrained minimisation of J_h:
   ``blmvm``, ``bqnls`` (objective and gradient) and ``bnls``, ``bntr`` (with H);
 * :func:`~coupling.baselines.yardstick.poisson_yardstick` - one linear P1 Poisson solve
@@ -41,6 +44,7 @@ from coupling.baselines.budget import Budget, BudgetExceeded, PeerResult
 from coupling.baselines.hessian import CoupledHessian
 from coupling.baselines.linear import KRYLOV_RTOL, LINEAR_SOLVERS
 from coupling.baselines.project import solve_project
+from coupling.baselines.sequenced import solve_snes_vi_sequenced
 from coupling.baselines.snes import solve_snes_vi
 from coupling.baselines.tao import TAO_TYPES, solve_tao
 from coupling.baselines.yardstick import poisson_yardstick
@@ -55,6 +59,7 @@ __all__ = [
     "CoupledHessian",
     "solve_project",
     "solve_snes_vi",
+    "solve_snes_vi_sequenced",
     "solve_tao",
     "poisson_yardstick",
 ]
