@@ -12,7 +12,8 @@ Solvers (``coupling.baselines`` sets them all up):
 
     (a) PGPM + substructuring preconditioner (the paper's method)
     (b) PGPM + identity (small sizes only), APGPM and SSN (the default method) + substructuring
-    (c) PETSc SNES vinewtonrsls on the optimality system, with several linear solvers
+    (c) PETSc SNES vinewtonrsls on the optimality system, with several linear solvers,
+        from x = 0 and grid-sequenced (coarser levels first, each solution prolonged)
     (d) PETSc TAO BLMVM, BQNLS (J_h and gradient), BNLS and BNTR (with the Hessian)
     (e) yardstick: one P1 Poisson solve, CG + GAMG to rtol 1e-8
 
@@ -21,7 +22,8 @@ its own window for wall time and peak memory (the Linux high-water mark VmHWM is
 through /proc/self/clear_refs before each solver). Solutions are compared with PGPM's.
 
     .venv/bin/python bench/peers.py [--quick] [--json] [--sizes 100,250,500,1000]
-                                    [--out DIR] [--budget SECONDS] [--report-from FILE]
+                                    [--solvers pgpm,ssn,...] [--out DIR]
+                                    [--budget SECONDS] [--report-from FILE]
 
 ``--quick`` (sizes 100 and 200, a handful of solvers) prints the table and writes
 results only when ``--out`` is given; the full run writes ``bench/results.md``,
@@ -62,6 +64,7 @@ if str(HERE) not in sys.path:  # bench/ is not a package: its siblings by path
 from peers_report import plot, print_table, report  # noqa: E402
 from peers_solvers import (  # noqa: E402
     BY_NAME,
+    DEEP_MIN_DOFS,
     FULL_SIZES,
     NEWTON_TOL,
     PROBLEMS,
@@ -119,7 +122,56 @@ def _relative(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.linalg.norm(a - b) / scale) if scale > 0 else float(np.linalg.norm(a))
 
 
-def _run_one(solver: Solver, problem, budget: float, reference) -> Any:
+def _coarser_levels(
+    problem, cells: int, hierarchy: str, data: Callable[[Any], dict[str, Any]]
+) -> list[Callable[[], Any]]:
+    """Builders of the coarser levels of the benchmark's square for a grid-sequenced
+    peer, coarsest first, from :func:`coupling.app.from_config.coarser_configs`:
+    ``nested`` the hierarchy of ``[solver] nested = true`` (the subdomains d = 4h kept),
+    ``deep`` h doubled down to DEEP_MIN_DOFS dofs (on 2 x 2 subdomains, so that d does
+    not stop the coarsening); ``data(mesh)`` gives f, t0, u0, a on a level's mesh."""
+    from coupling.app.config import parse_config
+    from coupling.app.from_config import coarser_configs, domain_from_config
+    from coupling.manufactured import square_contact
+    from coupling.problem import SignoriniProblem
+
+    shape = square_contact()
+    h = shape.width / cells
+    d = 4 * h if hierarchy == "nested" else shape.width / 2
+    config = parse_config(
+        {
+            "geometry": {
+                "shape": shape.shape,
+                "h": h,
+                "subdomain_size": d,
+                "center": list(shape.center),
+                "width": shape.width,
+                "structured": True,
+                "signorini": [[list(a), list(b)] for a, b in shape.signorini],
+            }
+        }
+    )
+    levels = coarser_configs(config, min_dofs=1000 if hierarchy == "nested" else DEEP_MIN_DOFS)
+
+    def builder(level_config: dict) -> Callable[[], Any]:
+        def build():
+            domain = domain_from_config(problem.comm, level_config)
+            values = data(domain.mesh)
+            return SignoriniProblem(
+                domain,
+                problem.material,
+                f=values["f"],
+                u0=values["u0"],
+                t0=values["t0"],
+                a=values["a"],
+            )
+
+        return build
+
+    return [builder(c) for c in levels]
+
+
+def _run_one(solver: Solver, problem, budget: float, reference, coarser=None) -> Any:
     from coupling import baselines
 
     if solver.budget is not None:
@@ -129,6 +181,11 @@ def _run_one(solver: Solver, problem, budget: float, reference) -> Any:
         return baselines.solve_project(problem, opts.pop("method"), budget=budget, **opts)
     if solver.kind == "snes":
         return baselines.solve_snes_vi(problem, rtol=NEWTON_TOL, budget=budget, **opts)
+    if solver.kind == "snes-sequenced":
+        levels = coarser(opts.pop("hierarchy"))
+        return baselines.solve_snes_vi_sequenced(
+            problem, levels, rtol=NEWTON_TOL, budget=budget, **opts
+        )
     if solver.kind == "tao":
         stop = None
         if opts.pop("oracle", False) and reference is not None:
@@ -213,10 +270,13 @@ def worker(spec: dict[str, Any]) -> None:
     base = {"cells": cells}
     for name, solver_names in spec["jobs"].items():
         tic = time.perf_counter()
-        if name == "manufactured":
-            data = manufactured.data(domain.mesh, material)
-        else:
-            data = {k: PROBLEMS[name][k] for k in ("f", "t0", "u0", "a")}
+
+        def data_on(mesh, name=name):
+            if name == "manufactured":
+                return manufactured.data(mesh, material)
+            return {k: PROBLEMS[name][k] for k in ("f", "t0", "u0", "a")}
+
+        data = data_on(domain.mesh)
         # the shared set-up: forms, S_h, loads (every solver builds its own B)
         problem = SignoriniProblem(
             domain, material, f=data["f"], u0=data["u0"], t0=data["t0"], a=data["a"]
@@ -239,11 +299,15 @@ def worker(spec: dict[str, Any]) -> None:
             }
         )
         reference = None
+
+        def coarser(hierarchy: str, data_on=data_on) -> list[Callable[[], Any]]:
+            return _coarser_levels(problem, cells, hierarchy, data_on)
+
         for solver in (BY_NAME[n] for n in solver_names):
             record = {**info, "type": "solve", "solver": solver.name}
             try:
                 with MemoryWindow() as memory:
-                    result = _run_one(solver, problem, budget, reference)
+                    result = _run_one(solver, problem, budget, reference, coarser)
             except Exception as err:  # reported, never dropped
                 emit(
                     {
@@ -365,6 +429,9 @@ def _plan(args) -> tuple[tuple[int, ...], list[Solver]]:
         else (QUICK_SIZES if args.quick else FULL_SIZES)
     )
     solvers = [s for s in SOLVERS if s.quick] if args.quick else list(SOLVERS)
+    if args.solvers:  # PGPM always: the reference of the accuracy test
+        chosen = {"pgpm", *args.solvers.split(",")}
+        solvers = [s for s in SOLVERS if s.name in chosen]
     return tuple(sorted(set(sizes))), solvers
 
 
@@ -432,6 +499,7 @@ def run(args: argparse.Namespace, log: Callable[[str], None]) -> dict[str, Any]:
         "sizes": list(sizes),
         "budget": budget,
         "quick": bool(args.quick),
+        "solvers": args.solvers,
         "wall_time": time.perf_counter() - start,
         "tol_u": TOL_U,
         "tol_phi": TOL_PHI,
@@ -504,6 +572,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--json", action="store_true", help="print the results as JSON")
     parser.add_argument("--sizes", help="comma-separated cells per side, e.g. 100,250,500,1000")
     parser.add_argument(
+        "--solvers",
+        help="comma-separated solver names to run (PGPM always runs, as the reference); "
+        "default all (--quick: its handful)",
+    )
+    parser.add_argument(
         "--out",
         help="directory for results.md, peers.png and the raw "
         "results.json (default: bench/ for the full run, none "
@@ -544,6 +617,10 @@ def main(argv: list[str] | None = None) -> int:
             parser.error(f"--sizes must be comma-separated integers, got {args.sizes!r}")
         if any(s < 8 for s in sizes):
             parser.error("--sizes: at least 8 cells per side (subdomains of 4 cells)")
+    if args.solvers:
+        unknown = sorted(set(args.solvers.split(",")) - set(BY_NAME))
+        if unknown:
+            parser.error(f"--solvers: unknown {', '.join(unknown)}; known: {', '.join(BY_NAME)}")
     if args.budget is not None and not args.budget > 0:
         parser.error("--budget must be positive")
 
@@ -558,6 +635,7 @@ def main(argv: list[str] | None = None) -> int:
         args.sizes = (
             None if result["sizes"] == list(default) else ",".join(map(str, result["sizes"]))
         )
+        args.solvers = result.get("solvers")
         result["targets"] = targets(result["records"])
     else:
         result = run(args, log)
@@ -568,6 +646,7 @@ def main(argv: list[str] | None = None) -> int:
             "fembem bench"
             + (" --quick" if args.quick else "")
             + (f" --sizes {args.sizes}" if args.sizes else "")
+            + (f" --solvers {args.solvers}" if getattr(args, "solvers", None) else "")
         )
         (out / "results.md").write_text(report(result, command))
         if not args.report_from:  # the raw records, for --report-from

@@ -6,7 +6,15 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any, Sequence
 
-from peers_solvers import BY_NAME, NEWTON_TOL, PROBLEMS, SOLVERS, TOL_PHI, TOL_U
+from peers_solvers import (
+    BY_NAME,
+    NEWTON_TOL,
+    PROBLEMS,
+    SEQUENCED_KEPT,
+    SOLVERS,
+    TOL_PHI,
+    TOL_U,
+)
 from peers_targets import TIE, index_records
 
 
@@ -43,10 +51,16 @@ def markdown_table(
                 else (f"{r['status']}: {r.get('reason', '')}")
             )
             its = r.get("iterations")
+            its = _fmt(its if its is not None and its >= 0 else None, "d")
+            lin = _fmt(r.get("linear_iterations") or None, "d")
+            levels = (r.get("details") or {}).get("levels")
+            if levels:  # grid-sequenced: per level, coarsest first
+                its = " / ".join(str(lv["iterations"]) for lv in levels)
+                if any(lv["linear_iterations"] for lv in levels):
+                    lin = " / ".join(str(lv["linear_iterations"]) for lv in levels)
             lines.append(
                 f"| {_fmt(dofs, 'd')} | {solver.group}: {solver.label} | {status} "
-                f"| {_fmt(its if its is not None and its >= 0 else None, 'd')} "
-                f"| {_fmt(r.get('linear_iterations') or None, 'd')} "
+                f"| {its} | {lin} "
                 f"| {_fmt(r.get('setup'))} | {_fmt(r.get('solve'))} | {_fmt(total)} "
                 f"| {_fmt(ratio_a)} | {_fmt(ratio_e, '.1f')} | {_fmt(r.get('peak_mb'), '.0f')} "
                 f"| {_fmt(r.get('delta_mb'), '.0f')} | {_fmt(r.get('du'), '.1e')} "
@@ -56,11 +70,12 @@ def markdown_table(
 
 
 #: The solvers of the main tables and the plot: all but the SNES VI linear-solver
-#: candidates that were not kept.
+#: candidates (cold and grid-sequenced) that were not kept.
 MAIN = tuple(
     s.name
     for s in SOLVERS
-    if not s.selection or s.name in ("snes-substructuring", "snes-mumps-cholesky")
+    if (not s.selection or s.name in ("snes-substructuring", "snes-mumps-cholesky"))
+    and (not s.sequenced_selection or s.name in SEQUENCED_KEPT)
 )
 
 
@@ -170,7 +185,16 @@ def report(result: dict[str, Any], command: str) -> str:
         "(the P1 pattern plus the dense boundary/Signorini block, pattern built once, "
         f"values refreshed in place). snes_rtol = {NEWTON_TOL:g}. Linear solvers: see the "
         "selection below; the CG-based ones stop at rtol 1e-6 (fastest of 1e-8, 1e-6, 1e-4 "
-        "and Eisenstat-Walker, measured on SNES VI + CG/B at N = 6.2e4).",
+        "and Eisenstat-Walker, measured on SNES VI + CG/B at N = 6.2e4). Grid-sequenced "
+        "(issue 18; PETSc's `-snes_grid_sequence` done on the project's hierarchy): solved "
+        "on the coarsest level of a hierarchy of the same square (h doubled per level, "
+        "`coupling.app.from_config.coarser_configs`) from x = 0, the solution prolonged "
+        "to the next finer level (`coupling.solvers.nested.prolong`: P1 interpolation of "
+        "u, linear interpolation of the gap along Gamma) as its initial iterate, and so "
+        "on to the finest; every level stops at the cold test ||F|| <= snes_rtol "
+        "||F(0)|| (PETSc's VI norm), and its time counts the coarser levels' assembly "
+        "(mesh, forms, S_h, loads). `its` and `lin. its` of these rows are per level, "
+        "coarsest first.",
         "- (d) PETSc TAO: `blmvm` and `bqnls` (J_h and gradient only) and `bnls`, `bntr` "
         f"(Hessian as in (c), STCG with a MUMPS Cholesky factor). gttol = {NEWTON_TOL:g} "
         "for BNLS/BNTR.",
@@ -224,6 +248,7 @@ def report(result: dict[str, Any], command: str) -> str:
     ]
     out += markdown_table(result, "manufactured", names=selection)
     out += ["", *_selection_text(result), ""]
+    out += _sequenced_section(result)
     # main tables
     main = MAIN
     for problem in PROBLEMS:
@@ -309,6 +334,45 @@ def _selection_text(result) -> list[str]:
     return lines
 
 
+def _sequenced_section(result) -> list[str]:
+    """The grid-sequenced SNES VI candidates, next to the cold SNES VI with CG + B."""
+    table, _ = index_records(result["records"])
+    names = [s.name for s in SOLVERS if s.sequenced_selection]
+    if not any(k[2] in names for k in table):
+        return []
+    out = [
+        "## Linear solver and hierarchy for the grid-sequenced SNES VI",
+        "",
+        "The candidates on the manufactured problem up to N = 6.2e4, next to the cold SNES "
+        "VI with CG + substructuring; the finer meshes run the ones kept for the main "
+        "tables (" + ", ".join(BY_NAME[n].label for n in SEQUENCED_KEPT) + "). The "
+        "`nested` hierarchy is that of `[solver] nested = true` (h doubled with the "
+        "subdomains of d = 4h kept, so one coarser level with d = 2h; B needs d/h >= 2); "
+        "`to 1e3 dofs` doubles h down to about 10^3 dofs on 2 x 2 subdomains (for the "
+        "black-box linear solvers, which do not use them).",
+        "",
+    ]
+    out += markdown_table(result, "manufactured", names=["snes-substructuring", *names])
+    out.append("")
+    for cells in result["sizes"]:
+        rows = [
+            (table[k]["total"], n, table[k])
+            for n in names
+            if (k := ("manufactured", cells, n)) in table and table[k]["status"] == "ok"
+        ]
+        if len(rows) > 1:
+            rows.sort(key=lambda row: row[0])
+            levels = [lv["dofs"] for lv in rows[0][2]["details"]["levels"]]
+            lines = ", ".join(f"{BY_NAME[n].label.split(', ', 1)[1]} {t:.2f} s" for t, n, _ in rows)
+            out.append(
+                f"- N = {rows[0][2]['dofs']}: {lines} (fastest on levels of "
+                + ", ".join(map(str, levels))
+                + " dofs)."
+            )
+    out.append("")
+    return out
+
+
 def _targets_text(result) -> list[str]:
     t = result["targets"]
     lines = []
@@ -343,6 +407,30 @@ def _targets_text(result) -> list[str]:
             "(ratios "
             + ", ".join(f"{r['problem']} N={r['dofs']}: {r['ratio']:.1f}" for r in rows)
             + ")."
+        )
+    rows = t.get("ssn_vs_sequenced", [])
+    if rows:
+        met = all(r["met"] for r in rows)
+        lines.append(
+            "3. (b) SSN, the default method, faster than the grid-sequenced SNES VI peer at "
+            f"N >= 2.5e5 (issue 18): **{'met' if met else 'not met'}**."
+        )
+        for r in rows:
+            best = r["best_peer"]
+            peer = (
+                f"fastest grid-sequenced peer {best[0]} {best[1]:.1f} s ({best[1] / r['time']:.2f}x"
+                " SSN's time)"
+                if best
+                else "no grid-sequenced peer converged"
+            )
+            tie = " (within 10%: a tie on this shared machine)" if r["tie"] else ""
+            lines.append(
+                f"   - {r['problem']}, N = {r['dofs']}: SSN {r['time']:.1f} s, {peer}{tie}."
+            )
+    else:
+        lines.append(
+            "3. (b) SSN faster than the grid-sequenced SNES VI peer at N >= 2.5e5: not "
+            "measured (no size >= 2.5e5 in this run)."
         )
     for method, label in (("apgpm", "APGPM"), ("ssn", "SSN")):
         other = t.get(method)

@@ -30,11 +30,12 @@ class Solver:
     name: str
     label: str
     group: str
-    kind: str  # "project", "snes", "tao", "poisson"
+    kind: str  # "project", "snes", "snes-sequenced", "tao", "poisson"
     options: dict = field(default_factory=dict)
     max_cells: int | None = None  # not run on finer meshes
     budget: float | None = None  # cap on the per-solve budget
     selection: bool = False  # part of the SNES VI linear-solver selection
+    sequenced_selection: bool = False  # part of the grid-sequenced SNES VI selection
     quick: bool = False  # part of --quick
     problems: tuple[str, ...] = ("manufactured", "load")
 
@@ -122,6 +123,58 @@ SOLVERS: tuple[Solver, ...] = (
         selection=True,
         problems=_SELECTION,
     ),
+    # grid-sequenced SNES VI: "nested" is the hierarchy of the project's nested iteration
+    # (coupling.app.from_config.coarser_configs: h doubled with the subdomains kept, so
+    # one coarser level at d = 4h); "deep" doubles h down to about 1e3 dofs, on coarse
+    # partitions of 2 x 2 subdomains (which only B would need)
+    Solver(
+        "snes-seq-substructuring",
+        "SNES VI grid-sequenced, CG + substructuring",
+        "c",
+        "snes-sequenced",
+        {"linear_solver": "substructuring", "hierarchy": "nested"},
+        sequenced_selection=True,
+        quick=True,
+    ),
+    Solver(
+        "snes-seq-mumps-cholesky",
+        "SNES VI grid-sequenced, MUMPS Cholesky (AMD)",
+        "c",
+        "snes-sequenced",
+        {"linear_solver": "mumps-cholesky", "hierarchy": "nested"},
+        max_cells=250,
+        sequenced_selection=True,
+        problems=_SELECTION,
+    ),
+    Solver(
+        "snes-seq-mumps-cholesky-deep",
+        "SNES VI grid-sequenced to 1e3 dofs, MUMPS Cholesky (AMD)",
+        "c",
+        "snes-sequenced",
+        {"linear_solver": "mumps-cholesky", "hierarchy": "deep"},
+        sequenced_selection=True,
+        quick=True,
+    ),
+    Solver(
+        "snes-seq-hypre-deep",
+        "SNES VI grid-sequenced to 1e3 dofs, CG + BoomerAMG",
+        "c",
+        "snes-sequenced",
+        {"linear_solver": "hypre", "hierarchy": "deep"},
+        max_cells=250,
+        sequenced_selection=True,
+        problems=_SELECTION,
+    ),
+    Solver(
+        "snes-seq-gamg-deep",
+        "SNES VI grid-sequenced to 1e3 dofs, CG + GAMG",
+        "c",
+        "snes-sequenced",
+        {"linear_solver": "gamg", "hierarchy": "deep"},
+        max_cells=250,
+        sequenced_selection=True,
+        problems=_SELECTION,
+    ),
     Solver("tao-blmvm", "TAO BLMVM", "d", "tao", {"kind": "blmvm", "oracle": True}, budget=120.0),
     Solver("tao-bqnls", "TAO BQNLS", "d", "tao", {"kind": "bqnls", "oracle": True}, budget=120.0),
     Solver(
@@ -142,6 +195,11 @@ SOLVERS: tuple[Solver, ...] = (
     Solver("poisson", "Poisson, CG + GAMG (yardstick)", "e", "poisson", quick=True),
 )
 BY_NAME = {s.name: s for s in SOLVERS}
+#: The grid-sequenced SNES VI peers run on every mesh (the candidates' fastest,
+#: docs/design/baselines.md), against which target 3 is measured.
+SEQUENCED_KEPT = ("snes-seq-substructuring", "snes-seq-mumps-cholesky-deep")
+#: Coarsest level of the "deep" hierarchy [dofs] (coarser_configs' min_dofs).
+DEEP_MIN_DOFS = 1000
 FULL_SIZES = (100, 250, 500, 1000)
 QUICK_SIZES = (100, 200)
 #: SNES rtol and TAO gttol of the Newton-type peers: Newton converges quadratically,

@@ -98,6 +98,39 @@ def test_peers_reach_the_pgpm_minimiser(small_problem):
     assert runs[1].linear_iterations <= 60 * runs[1].iterations
 
 
+def test_grid_sequenced_snes_vi_reaches_the_ssn_solution(small_problem):
+    """SNES VI with grid sequencing (a coarse level of 8 cells, d = 2h, prolonged to the
+    16-cell problem) reaches the discrete solution of ssn: both converge quadratically
+    past their tolerances (ssn at tol 1e-12, SNES VI at rtol 1e-10 of ||F(0)||), so they
+    agree to round-off amplified by the conditioning, as the cold peers above; every
+    level converges, and the finest in no more Newton steps than the cold start."""
+    from coupling import baselines
+    from coupling.manufactured import manufactured_problem, square_contact
+    from fem_py.materials import make_material
+
+    def coarse():
+        return manufactured_problem(
+            COMM, square_contact(), make_material("carstensen"), cells=8, d_over_h=2
+        )
+
+    ref = baselines.solve_project(small_problem, "ssn", tol=1e-12)
+    cold = baselines.solve_snes_vi(small_problem, linear_solver="substructuring", rtol=1e-10)
+    assert ref.converged and cold.converged
+    for linear_solver in ("substructuring", "mumps-cholesky"):
+        run = baselines.solve_snes_vi_sequenced(
+            small_problem, [coarse], linear_solver=linear_solver, rtol=1e-10
+        )
+        assert run.converged, run.reason
+        levels = run.details["levels"]
+        assert [lv["dofs"] for lv in levels] == [81, 289]
+        assert all(lv["converged"] for lv in levels)
+        assert levels[-1]["iterations"] == run.iterations <= cold.iterations
+        assert np.linalg.norm(run.u - ref.u) <= 1e-9 * np.linalg.norm(ref.u)
+        assert np.linalg.norm(run.phi - ref.phi) <= 1e-8 * np.linalg.norm(ref.phi)
+        assert np.all(run.phi >= 0.0)
+        assert run.setup >= 0.0 and run.solve > sum(lv["time"] for lv in levels[:-1])
+
+
 def test_budget_stops_a_solver(small_problem):
     from coupling import baselines
 
@@ -118,6 +151,8 @@ def test_quick_benchmark_solvers_agree(tmp_path, capsys):
         "ssn",
         "snes-substructuring",
         "snes-mumps-cholesky",
+        "snes-seq-substructuring",
+        "snes-seq-mumps-cholesky-deep",
         "tao-bnls",
         "poisson",
     } <= names
