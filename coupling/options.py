@@ -46,6 +46,7 @@ DEFAULTS: dict[str, dict[str, Any]] = {
         "flux_space": "p1",
         "jacobian": "ufl",
         "signorini_weight": 0.25,
+        "coarse_space": "auto",
         "nested": False,
         "boundary_operator": "auto",
     },
@@ -61,6 +62,7 @@ CHOICES: dict[tuple[str, str], tuple[str, ...]] = {
     ("solver", "preconditioner"): ("substructuring", "identity", "exact"),
     ("solver", "projection"): ("inexact", "exact"),
     ("solver", "edge_form"): ("paper", "sqrt-laplacian"),
+    ("solver", "coarse_space"): ("auto", "graph", "galerkin"),
     ("solver", "flux_space"): ("p1", "p0"),
     ("solver", "jacobian"): ("ufl", "handwritten"),
     ("solver", "boundary_operator"): ("auto", "dense", "hmatrix"),
@@ -125,6 +127,7 @@ class SolverOptions:
     flux_space: str = _solver_default("flux_space")
     jacobian: str = _solver_default("jacobian")
     signorini_weight: float = _solver_default("signorini_weight")
+    coarse_space: str = _solver_default("coarse_space")
     nested: bool = _solver_default("nested")
     boundary_operator: str = _solver_default("boundary_operator")
 
@@ -134,6 +137,7 @@ class SolverOptions:
             "preconditioner",
             "projection",
             "edge_form",
+            "coarse_space",
             "flux_space",
             "jacobian",
             "boundary_operator",

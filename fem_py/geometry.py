@@ -126,6 +126,7 @@ class Domain:
         Actual coarse size (coarse square side, or mean coarse edge length for a polygon).
     h_max : float
         Longest fine facet.
+    partition : "grid" (a generated coarse grid) or "cells" (groups of a mesh's cells)
     """
 
     mesh: Any
@@ -141,6 +142,7 @@ class Domain:
     structured: bool
     coarse_size: float
     h_max: float
+    partition: str = "grid"
 
     @property
     def comm(self) -> Any:
@@ -581,6 +583,7 @@ def domain_from_prepared(comm: Any, prepare: Any, d: float, shape: str) -> Domai
         structured=False,
         coarse_size=d,
         h_max=h_max,
+        partition="cells",
     )
 
 

@@ -39,6 +39,7 @@ def test_values_are_converted_and_overrides_applied(tmp_path):
         ({"geometry": {"signorini": 3}}, "geometry.signorini must be"),
         ({"solver": {"step": "big"}}, 'solver.step must be "auto" or a positive number'),
         ({"solver": {"max_iterations": 1.5}}, "solver.max_iterations must be an integer"),
+        ({"solver": {"coarse_space": "exact"}}, "solver.coarse_space must be one of"),
         ({"solver": {"projection_tol": 1.0}}, r"solver.projection_tol .* must lie in \[0, 1\)"),
         ({"output": {"plots": "yes"}}, "output.plots must be true or false"),
         ({"data": {"f": 1}}, "data.f must be a string"),

@@ -42,6 +42,7 @@ def substructuring(
         prob.arcs,
         edge_form=edge_form,
         signorini_weight=signorini_weight,
+        coarse_space="graph",
     )
 
 
@@ -411,11 +412,15 @@ def test_identity_preconditioner():
 def test_bad_input_is_rejected():
     prob = structured_square(8, 4)
     args = (prob.stiffness, prob.coarse, prob.x, prob.d, prob.arcs)
-    unweighted = dict(edge_form="paper", signorini_weight=1.0)
+    unweighted = dict(edge_form="paper", signorini_weight=1.0, coarse_space="graph")
     with pytest.raises(ValueError, match="edge_form"):
-        SubstructuringPreconditioner(*args, edge_form="exact", signorini_weight=1.0)
+        SubstructuringPreconditioner(
+            *args, edge_form="exact", signorini_weight=1.0, coarse_space="graph"
+        )
     with pytest.raises(ValueError, match="signorini_weight"):
-        SubstructuringPreconditioner(*args, edge_form="paper", signorini_weight=0.0)
+        SubstructuringPreconditioner(
+            *args, edge_form="paper", signorini_weight=0.0, coarse_space="graph"
+        )
     reversed_edge = dict(vars(prob.coarse))
     reversed_edge["edge_dofs"] = (prob.coarse.edge_dofs[0][::-1],) + prob.coarse.edge_dofs[1:]
     with pytest.raises(ValueError, match="edge_dofs"):

@@ -54,6 +54,7 @@ def coupled_problem(n: int, ratio: int, signorini_weight: float = 1.0):
         prob.arcs,
         edge_form="paper",
         signorini_weight=signorini_weight,
+        coarse_space="graph",
     )
     return stiff, trace, s_h, pc, n_nodes
 
@@ -134,6 +135,7 @@ def signorini_conditions(ns: list[int], ratio_of_n, edge_form: str = "paper") ->
             prob.arcs,
             edge_form=edge_form,
             signorini_weight=1.0,
+            coarse_space="graph",
         )
         lam = np.linalg.eigvalsh(pc.signorini_metric)
         conds.append(lam[-1] / lam[0])

@@ -37,6 +37,7 @@ __all__ = [
     "ExactPreconditioner",
     "SignoriniArc",
     "build_preconditioner",
+    "coarse_space",
     "problem_arcs",
 ]
 
@@ -44,6 +45,17 @@ __all__ = [
 def problem_arcs(problem: Any) -> list[SignoriniArc]:
     """The Signorini arcs of an assembled :class:`coupling.problem.SignoriniProblem`."""
     return signorini_arcs(problem.boundary, problem.domain.coarse.vertex_dofs, GAMMA_T_TAG)
+
+
+def coarse_space(domain: Any, choice: str) -> str:
+    """The coarse matrix C of ``[solver] coarse_space`` for ``domain``: ``"auto"`` is the
+    paper's graph Laplacian on a generated coarse grid (shape-regular by construction)
+    and the Galerkin C on subdomains made of a mesh's cells (the automatic partition or
+    physical groups: ``domain.partition == "cells"``), whose jagged interfaces and short
+    coarse edges the graph Laplacian does not see (docs/design/coarse_space.md)."""
+    if choice != "auto":
+        return choice
+    return "galerkin" if domain.partition == "cells" else "graph"
 
 
 def build_preconditioner(problem: Any, options: SolverOptions) -> Preconditioner:
@@ -61,6 +73,7 @@ def build_preconditioner(problem: Any, options: SolverOptions) -> Preconditioner
     if kind == "identity":
         return IdentityPreconditioner(n_owned, problem.n_signorini)
     domain = problem.domain
+    coarse = coarse_space(domain, options.coarse_space)
     stiffness = problem.forms.assemble_stiffness()
     arcs = problem_arcs(problem)
     if kind == "substructuring" and comm.size > 1:
@@ -82,6 +95,7 @@ def build_preconditioner(problem: Any, options: SolverOptions) -> Preconditioner
                     arcs,
                     edge_form=options.edge_form,
                     signorini_weight=options.signorini_weight,
+                    coarse_space=coarse,
                 )
             finally:
                 stiffness.destroy()
@@ -101,6 +115,7 @@ def build_preconditioner(problem: Any, options: SolverOptions) -> Preconditioner
             arcs,
             edge_form=options.edge_form,
             signorini_weight=options.signorini_weight,
+            coarse_space=coarse,
         )
 
     return build() if comm.size == 1 else RootPreconditioner(comm, n_owned, build)

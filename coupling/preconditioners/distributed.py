@@ -39,6 +39,7 @@ from coupling.preconditioners.kernels import (
     block_diagonal_edge_forms,
     coarse_matrix,
     edge_weights,
+    galerkin_coarse_matrix,
 )
 from coupling.preconditioners.signorini import SignoriniArc, SignoriniBlock
 from fem_py.coarse import as_ragged
@@ -107,7 +108,7 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
         ``fem_py.coarse.CoarseStructure`` (replicated, global dof numbers).
     subdomain_rank
         (L,) owner rank of each subdomain (:func:`subdomain_ranks`).
-    subdomain_size, signorini_arcs, edge_form, signorini_weight
+    subdomain_size, signorini_arcs, edge_form, signorini_weight, coarse_space
         As for :class:`coupling.preconditioners.substructuring.SubstructuringPreconditioner`.
 
     ``apply_omega`` and ``matvec_omega`` act on the owned entries of u.
@@ -125,6 +126,7 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
         *,
         edge_form: str,
         signorini_weight: float,
+        coarse_space: str,
     ) -> None:
         self._init_signorini(signorini_arcs, subdomain_size, edge_form, signorini_weight)
         self.comm = comm
@@ -215,8 +217,31 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
             has & (vertex_local < n_owned)
         )  # coarse vertices owned here
         self._vertex_owned_dof = vertex_local[self._vertex_owned]
-        self._coarse_matrix = coarse_matrix(coarse, self.subdomain_size)
+        if coarse_space == "galerkin":
+            self._coarse_matrix = galerkin_coarse_matrix(
+                coarse, self.subdomain_size, lambda e: self._schur_of(stiffness, e)
+            )
+        elif coarse_space == "graph":
+            self._coarse_matrix = coarse_matrix(coarse, self.subdomain_size)
+        else:
+            raise ValueError(f"coarse_space must be 'graph' or 'galerkin', got {coarse_space!r}")
         self._coarse = SparseFactor(self._coarse_matrix)
+
+    def _schur_of(self, stiffness: PETSc.Mat, e: np.ndarray) -> np.ndarray:
+        """Pi^T S Pi e for coarse vertex values e (n_v, K), collective: the discrete
+        harmonic extension u of Pi e (local Dirichlet solves), then Pi^T (A u) on the
+        owned skeleton rows, summed over the ranks."""
+        out = np.zeros(e.shape)
+        u, au = stiffness.createVecs()
+        for k in range(e.shape[1]):
+            p = self._interp @ e[:, k]  # Pi e on the local skeleton (owned and ghost)
+            u.array[self._int] = -self._interior_factor.solve(self._a_is @ p)
+            u.array[self._owned_sk] = p[self._sk_owned]
+            stiffness.mult(u, au)
+            out[:, k] = self._interp_owned_t @ au.array[self._owned_sk]
+        u.destroy()
+        au.destroy()
+        return self._sum(out)
 
     def _sum(self, v: np.ndarray) -> np.ndarray:
         out = np.empty_like(v)

@@ -5,7 +5,7 @@ interpolation Pi along coarse edges.
 """
 from __future__ import annotations
 
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 import scipy.linalg as sla
@@ -22,6 +22,9 @@ __all__ = [
     "block_diagonal_edge_forms",
     "TwoLevelForm",
     "coarse_matrix",
+    "coarse_vertex_pattern",
+    "probing_colours",
+    "galerkin_coarse_matrix",
     "edge_weights",
 ]
 
@@ -197,3 +200,89 @@ def edge_weights(points: np.ndarray) -> np.ndarray:
     t in (0, 1) of every interior node; its value is (1 - t) u(end 0) + t u(end 1)."""
     s = arc_length(points)
     return s[:, 1:-1] / s[:, -1:]
+
+
+def coarse_vertex_pattern(coarse: Any) -> sp.csr_matrix:
+    """The pattern of the Galerkin coarse matrix: coarse vertices i, j couple when they
+    lie on the boundary of one subdomain (the subdomains of a vertex are those of its
+    coarse edges, ``coarse.edge_subdomains``, -1 for Gamma)."""
+    ends = np.asarray(coarse.edge_vertices, dtype=np.int64)
+    sides = np.asarray(coarse.edge_subdomains, dtype=np.int64)
+    n_v = len(np.asarray(coarse.vertex_dofs))
+    v = np.repeat(ends, 2, axis=1).ravel()  # each end with each side: a a b b
+    s = np.tile(sides, (1, 2)).ravel()  # s0 s1 s0 s1
+    keep = s >= 0
+    member = sp.csr_matrix(
+        (np.ones(int(keep.sum())), (v[keep], s[keep])), shape=(n_v, int(coarse.n_subdomains))
+    )
+    pattern = (member @ member.T).tocsr()
+    pattern.data[:] = 1.0
+    return pattern
+
+
+def probing_colours(pattern: sp.csr_matrix) -> np.ndarray:
+    """A colouring of the columns of a sparse symmetric ``pattern`` such that no row has
+    two nonzero columns of one colour (a distance-2 colouring of its graph), so that the
+    products of the matrix with the K colour indicator vectors determine every entry.
+
+    Jones-Plassmann: in every round the uncoloured vertices whose (fixed, distinct)
+    priority beats that of all their uncoloured conflicting vertices take the smallest
+    colour none of their coloured conflicting vertices has. The result is a function of
+    the pattern only, the same on every rank.
+    """
+    n = pattern.shape[0]
+    conflict = (pattern @ pattern).tocsr()  # columns sharing a row
+    conflict.setdiag(0)
+    conflict.eliminate_zeros()
+    conflict.sort_indices()
+    row = np.repeat(np.arange(n), np.diff(conflict.indptr))
+    col = conflict.indices.astype(np.int64)
+    priority = np.random.default_rng(seed=0).permutation(n)  # fixed, distinct
+    colour = np.full(n, -1, dtype=np.int64)
+    while np.any(colour < 0):
+        rival = (colour[col] < 0) & (priority[col] > priority[row])
+        chosen = (colour < 0) & (np.bincount(row[rival], minlength=n) == 0)
+        # the smallest colour missing among the coloured neighbours of each chosen vertex
+        taken = chosen[row] & (colour[col] >= 0)
+        width = int(colour.max()) + 2
+        key = np.unique(row[taken] * width + colour[col[taken]])
+        v, c = key // width, key % width
+        rank = np.arange(len(v)) - np.searchsorted(v, v)  # position among the vertex's colours
+        gap = np.bincount(v, minlength=n)  # no gap: the next colour after the taken ones
+        np.minimum.at(gap, v[c != rank], rank[c != rank])
+        colour[chosen] = gap[chosen]
+        keep = colour[row] < 0  # only the uncoloured vertices' rows are needed again
+        row, col = row[keep], col[keep]
+    return colour
+
+
+def galerkin_coarse_matrix(
+    coarse: Any, subdomain_size: float, schur_of: Callable[[np.ndarray], np.ndarray]
+) -> sp.csc_matrix:
+    """C = Pi^T S Pi + d sum_{v on Gamma} u(v)^2: the coarse term of METHOD.md section 6
+    with the coarse graph Laplacian replaced by the exact energy of the coarse functions.
+
+    S is the Schur complement of the P1 Laplace matrix on the skeleton, so that
+    (Pi e_i)^T S (Pi e_j) is the energy of the discrete harmonic extension of the
+    function linear along the coarse edges with the vertex values e_i, e_j. On a
+    shape-regular coarse grid this is spectrally equivalent to the graph Laplacian (the
+    paper's choice); on subdomains cut from a mesh's cells (jagged interfaces, short
+    coarse edges) it is not, and this one follows the partition.
+
+    ``schur_of(E)`` returns Pi^T S Pi E for an (n_v, K) block E of coarse vertex values
+    (collective under MPI). It is called once with the K colour indicators of
+    :func:`probing_colours` (K about 20-40 for a 2D partition), i.e. K local Dirichlet
+    solves on every subdomain.
+    """
+    pattern = coarse_vertex_pattern(coarse)
+    colour = probing_colours(pattern)
+    n_v = pattern.shape[0]
+    indicators = np.zeros((n_v, int(colour.max()) + 1))
+    indicators[np.arange(n_v), colour] = 1.0
+    product = schur_of(indicators)  # (n_v, K): column k = sum of the columns of colour k
+    coo = pattern.tocoo()
+    values = product[coo.row, colour[coo.col]]
+    galerkin = sp.csr_matrix((values, (coo.row, coo.col)), shape=(n_v, n_v))
+    galerkin = 0.5 * (galerkin + galerkin.T)  # symmetric up to the solver's round-off
+    on_boundary = np.asarray(coarse.vertex_on_boundary, dtype=float)
+    return (galerkin + sp.diags(subdomain_size * on_boundary)).tocsc()

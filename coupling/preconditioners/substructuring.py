@@ -41,7 +41,7 @@ subdomain size d; the Signorini arcs as :class:`SignoriniArc`.
 """
 from __future__ import annotations
 
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 import scipy.sparse as sp
@@ -53,6 +53,7 @@ from coupling.preconditioners.kernels import (
     block_diagonal_edge_forms,
     coarse_matrix,
     edge_weights,
+    galerkin_coarse_matrix,
 )
 from coupling.preconditioners.signorini import SignoriniArc, SignoriniBlock
 from fem_py.coarse import as_ragged
@@ -61,13 +62,19 @@ __all__ = ["SubstructuringPreconditioner", "skeleton_form"]
 
 
 def skeleton_form(
-    coarse: Any, x: np.ndarray, subdomain_size: float, n_nodes: int, kind: str
+    coarse: Any,
+    x: np.ndarray,
+    subdomain_size: float,
+    n_nodes: int,
+    kind: str,
+    coarse_of: Callable[[sp.csr_matrix], sp.spmatrix] | None = None,
 ) -> TwoLevelForm:
     """B_Sk of METHOD.md section 6 in the numbering of ``coarse.skeleton_dofs``.
 
     Edge forms A^0_gamma on the interior nodes of every coarse edge; Pi = linear
     interpolation in arc length between the two end vertices; C = coarse graph
-    Laplacian + d * sum over coarse vertices on Gamma.
+    Laplacian + d * sum over coarse vertices on Gamma, or ``coarse_of(Pi)`` (the
+    Galerkin C of :func:`coupling.preconditioners.kernels.galerkin_coarse_matrix`).
     """
     skeleton = np.asarray(coarse.skeleton_dofs, dtype=np.int64)
     vertex_dofs = np.asarray(coarse.vertex_dofs, dtype=np.int64)
@@ -130,7 +137,8 @@ def skeleton_form(
         (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n_sk, n_v)
     )
     a0, a0_inv = block_diagonal_edge_forms(groups, n_sk, kind)
-    return TwoLevelForm(a0, a0_inv, interp, pos[vertex_dofs], coarse_matrix(coarse, subdomain_size))
+    c = coarse_matrix(coarse, subdomain_size) if coarse_of is None else coarse_of(interp)
+    return TwoLevelForm(a0, a0_inv, interp, pos[vertex_dofs], c)
 
 
 class SubstructuringPreconditioner(SignoriniBlock):
@@ -156,6 +164,10 @@ class SubstructuringPreconditioner(SignoriniBlock):
     signorini_weight : float
         omega > 0 multiplying B_s (our extension; METHOD.md section 6 reports that
         omega = 1/4 halves kappa).
+    coarse_space : {"graph", "galerkin"}
+        C: the paper's coarse graph Laplacian, or the exact energy Pi^T S Pi of the coarse
+        functions (:func:`coupling.preconditioners.kernels.galerkin_coarse_matrix`; our
+        extension, for partitions cut from a mesh's cells).
 
     Notes
     -----
@@ -180,6 +192,7 @@ class SubstructuringPreconditioner(SignoriniBlock):
         *,
         edge_form: str,
         signorini_weight: float,
+        coarse_space: str,
     ) -> None:
         self._init_signorini(signorini_arcs, subdomain_size, edge_form, signorini_weight)
         a = sp.csr_matrix(stiffness, dtype=float)
@@ -214,7 +227,20 @@ class SubstructuringPreconditioner(SignoriniBlock):
         self._a_is = a_i[:, skeleton].tocsr()
         self._a_si = self._a_is.T.tocsr()  # A is symmetric
         self._interior_factor = SparseFactor(self._a_ii)
-        self._skeleton_form = skeleton_form(coarse, x, self.subdomain_size, n, edge_form)
+        coarse_of = None
+        if coarse_space == "galerkin":
+            a_ss = a[skeleton][:, skeleton].tocsr()
+
+            def coarse_of(interp: sp.csr_matrix) -> sp.spmatrix:
+                def schur_of(e: np.ndarray) -> np.ndarray:  # Pi^T S Pi e
+                    p = interp @ e
+                    return interp.T @ (a_ss @ p - self._a_si @ self.solve_interior(self._a_is @ p))
+
+                return galerkin_coarse_matrix(coarse, self.subdomain_size, schur_of)
+
+        elif coarse_space != "graph":
+            raise ValueError(f"coarse_space must be 'graph' or 'galerkin', got {coarse_space!r}")
+        self._skeleton_form = skeleton_form(coarse, x, self.subdomain_size, n, edge_form, coarse_of)
 
     # -- the local Dirichlet problems (rank-local in coupling.preconditioners.distributed) --
     def solve_interior(self, g_i: np.ndarray) -> np.ndarray:
