@@ -3,9 +3,7 @@
 ``build_domain`` makes a polygon Omega (square, L-shape or a given polygon), a coarse
 partition of Omega into L subdomains of size about d (coarse squares for the square and
 the L-shape, coarse triangles of a gmsh mesh of size d for a polygon), and a fine P1
-mesh of size h that resolves every coarse edge. Each coarse cell is its own gmsh plane
-surface, sharing the coarse edges with its neighbours, with its own physical group, so
-the fine mesh is conforming and every fine cell carries its subdomain id.
+mesh of size h that resolves every coarse edge (every fine cell carries its subdomain).
 
 ``structured=True`` refines every coarse cell uniformly instead: n = max(2, round(d/h))
 segments per coarse edge; a coarse square becomes an n x n grid of squares split into
@@ -42,9 +40,9 @@ Modules
 ``fem_py.shapes`` (Omega's polygon, Gamma by arc length, the arcs and tags),
 ``fem_py.gmsh_mesh`` (gmsh, on rank 0), ``fem_py.structured`` (the uniform refinement),
 ``fem_py.distribute`` (whole subdomains per rank), ``fem_py.coarse`` (the coarse
-structure recovered from the distributed mesh); this module joins them. Users' meshes
-(:func:`domain_from_file`, :func:`domain_from_mesh`), the disk and finely drawn polygons
-go through ``fem_py.own_mesh`` and the automatic partition ``fem_py.partition``.
+structure recovered from the distributed mesh); this module joins them. Users' meshes,
+the disk and polygons with sides < d (resampled at h, or at d when structured, corners and
+arc ends kept: ``fem_py.polyline.coarsened_polygon``) go through ``fem_py.own_mesh``.
 
 Parallel use: all ranks call ``build_domain`` with the same arguments. Arguments are
 validated identically on every rank before any collective call. Whole subdomains are
@@ -72,7 +70,7 @@ from fem_py.coarse import SIGNORINI_TAG0, CoarseStructure, compute_coarse_struct
 from fem_py.distribute import distribute_mesh, distribute_structured, subdomain_owners
 from fem_py.gmsh_mesh import mesh_with_gmsh
 from fem_py.parallel import broadcast_from_root, run_on_root
-from fem_py.polyline import segment_lengths
+from fem_py.polyline import coarsened_polygon, segment_lengths
 from fem_py.shapes import (
     GAMMA_T_TAG,
     SHAPES,
@@ -241,6 +239,10 @@ def _plan(
     B = BoundaryCurve(P)
     arcs, whole = parse_arcs(signorini, shape, B)
     ends = [] if whole else [np.asarray(p) for a in arcs for p in (a.start, a.end)]
+    if shape == "polygon" and float(B.len.min()) < d:  # finely drawn: resampled at d or h
+        P = coarsened_polygon(P, d if structured else h, ends, CORNER_ANGLE, B.tol)
+        B = BoundaryCurve(P)
+        arcs, whole = parse_arcs(signorini, shape, B)
     if shape != "polygon":
         if structured:
             for q in ends:
@@ -397,17 +399,10 @@ def build_domain(
     plan = _plan(
         shape, h, subdomain_size, center, width, vertices, signorini, structured, allow_large
     )
-    h, d, P, B, arcs, whole, ends = (
-        plan.h,
-        plan.d,
-        plan.P,
-        plan.B,
-        plan.arcs,
-        plan.whole,
-        plan.ends,
-    )
+    h, d, P, B = plan.h, plan.d, plan.P, plan.B
+    arcs, whole, ends = plan.arcs, plan.whole, plan.ends
     cV, ccells, csize = plan.cV, plan.ccells, plan.csize
-    if shape == "polygon" and float(B.len.min()) < 0.5 * d:
+    if shape == "polygon" and float(B.len.min()) < (0.5 if structured else 1.0) * d:
         return _fine_polygon_domain(comm, plan)
 
     # gmsh runs on rank 0 (the polygon's coarse mesh, the unstructured fine mesh)

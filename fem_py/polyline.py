@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["segment_lengths", "arc_length", "closest_on_polygon"]
+__all__ = ["segment_lengths", "arc_length", "closest_on_polygon", "coarsened_polygon"]
 
 
 def segment_lengths(points: np.ndarray) -> np.ndarray:
@@ -42,3 +42,51 @@ def closest_on_polygon(
         dist[lo : lo + step], seg[lo : lo + step] = d[rows, best], best
         par[lo : lo + step] = t[rows, best]
     return dist, seg, par
+
+
+def coarsened_polygon(
+    vertices: np.ndarray, spacing: float, keep: list, corner_angle: float, tol: float
+) -> np.ndarray:
+    """The polygon through a subset of ``vertices`` (k, 2, counter-clockwise) whose sides
+    are about ``spacing`` long where the given sides are shorter: a finely drawn curve
+    resampled for a mesh of that size.
+
+    Kept always: the corners (vertices where the boundary turns by at least
+    ``corner_angle``) and the points ``keep`` (inserted as vertices where they lie inside
+    a side, within ``tol``). Between two kept vertices, the stretch is cut into the
+    fewest pieces of arc length <= ``spacing``, each ending at the first given vertex at
+    or after its even share (so sides are at most ``spacing`` plus one given side). The result is inscribed in
+    the given polygon: it departs from it by the sagitta of its sides, about
+    spacing^2 / (8 R) on a curve of radius R.
+    """
+    p = np.asarray(vertices, dtype=float)
+    for q in keep:  # the points to keep become vertices
+        q = np.asarray(q, dtype=float)
+        dist, seg, t = closest_on_polygon(q[None, :], p)
+        if dist[0] <= tol and np.linalg.norm(p - q, axis=1).min() > tol:
+            p = np.insert(p, seg[0] + 1, q, axis=0)
+    before, after = p - np.roll(p, 1, axis=0), np.roll(p, -1, axis=0) - p
+    turn = np.abs(
+        np.arctan2(
+            before[:, 0] * after[:, 1] - before[:, 1] * after[:, 0],
+            np.einsum("ij,ij->i", before, after),
+        )
+    )
+    fixed = turn >= corner_angle
+    for q in keep:
+        fixed[np.linalg.norm(p - np.asarray(q, dtype=float), axis=1) <= tol] = True
+    if not fixed.any():
+        fixed[0] = True
+    start = int(np.flatnonzero(fixed)[0])
+    p, fixed = np.roll(p, -start, axis=0), np.roll(fixed, -start)
+    s = arc_length(np.vstack([p, p[:1]]))
+    chosen = [0]
+    for i in range(1, len(p) + 1):
+        if i == len(p) or fixed[i]:
+            # split the stretch from the last kept vertex to i evenly by arc length
+            a, b = chosen[-1], i
+            parts = max(1, int(np.ceil((s[b] - s[a]) / spacing - 1e-9)))
+            targets = s[a] + (s[b] - s[a]) * np.arange(1, parts) / parts
+            inner = np.searchsorted(s[a : b + 1], targets) + a
+            chosen += sorted(set(int(j) for j in inner if a < j < b)) + ([i] if i < len(p) else [])
+    return p[chosen]

@@ -320,23 +320,58 @@ def test_own_mesh_demo(tmp_path, nprocs):
     assert (tmp_path / "subdomains.png").is_file() and (tmp_path / "disk.msh").is_file()
 
 
-def test_finely_drawn_polygon_gets_subdomains_of_size_d():
-    """A 480-gon (sides 0.0033 < d/2) is meshed at size h and partitioned automatically:
-    about area/d^2 subdomains (42 measured; the coarse triangles of a gmsh mesh of size d
-    followed the vertex spacing: 42,530 for a 480-gon at d = 1/64); a 24-gon (sides
-    0.065 >= d/2) keeps its coarse triangles (122)."""
+@pytest.mark.parametrize("structured", [False, True])
+def test_finely_drawn_polygon_gets_subdomains_of_size_d(structured):
+    """A 480-gon and a 48-gon of one circle at h = 1/64, d = 1/16 (sides 0.0033 and 0.033,
+    both < d): the 48-gon gave 454 subdomains (coarse triangles following the vertex
+    spacing) and the 480-gon 21,515 dofs (boundary nodes at every vertex); now the
+    polygon is resampled at h (unstructured, automatic partition) or d (structured,
+    coarse triangles), keeping its corners and the arc ends (issue 17's targets)."""
     from fem_py.geometry import build_domain
 
-    counts = {}
-    for n in (24, 480):
+    h, d = 1 / 64, 1 / 16
+    sizes = {}
+    for n in (48, 480):
         t = 2 * np.pi * np.arange(n) / n
         V = 0.25 * np.column_stack([np.cos(t), np.sin(t)])
         arc = [V[n * 5 // 8].tolist(), V[n * 7 // 8].tolist()]
         domain = build_domain(
-            COMM, "polygon", h=0.02, subdomain_size=0.08, vertices=V.tolist(), signorini=[arc]
+            COMM,
+            "polygon",
+            h=h,
+            subdomain_size=d,
+            vertices=V.tolist(),
+            signorini=[arc],
+            structured=structured,
         )
-        counts[n] = domain.coarse.n_subdomains
+        area = 0.5 * n * 0.25**2 * np.sin(2 * np.pi / n)
+        dofs = domain.mesh.topology.index_map(0).size_global
+        sizes[n] = dofs
+        assert domain.coarse.n_subdomains <= 3 * area / d**2, (n, domain.coarse.n_subdomains)
+        assert domain.coarse.n_subdomains >= area / d**2 / 3, (n, domain.coarse.n_subdomains)
+        assert domain.h_max <= 2 * h, (n, domain.h_max / h)
         ends = np.array([domain.arcs[0].start, domain.arcs[0].end])
         dist = np.linalg.norm(domain.coarse.vertex_coords[:, None] - ends, axis=2).min(0)
         assert dist.max() < 1e-12  # the arc ends are coarse vertices
-    assert counts[24] == 122 and 30 <= counts[480] <= 60, counts
+    assert max(sizes.values()) <= 1.5 * min(sizes.values()), sizes
+
+
+def test_coarsened_polygon_keeps_corners_and_arc_ends():
+    from fem_py.polyline import coarsened_polygon
+
+    # a finely drawn square (sides of 0.5 cut into 200 pieces) and a point inside a piece
+    t = np.linspace(0, 1, 201)[:-1]
+    side = np.column_stack([t, np.zeros_like(t)]) * 0.5
+    square = np.concatenate(
+        [side, side[:, ::-1] * [-1, 1] + [0.5, 0], 0.5 - side, side[:, ::-1] * [1, -1] + [0, 0.5]]
+    )
+    keep = [np.array([0.1234, 0.0])]
+    p = coarsened_polygon(square, 0.1, keep, math.pi / 6, 1e-12)
+    corners = np.array([[0, 0], [0.5, 0], [0.5, 0.5], [0, 0.5]])
+    for q in list(corners) + keep:
+        assert np.linalg.norm(p - q, axis=1).min() < 1e-12, q
+    sides = np.linalg.norm(np.roll(p, -1, axis=0) - p, axis=1)
+    assert sides.max() <= 0.1 + 0.0025 + 1e-12 and sides.min() >= 0.04, sides
+    # counter-clockwise still, and every vertex one of the given ones (or a kept point)
+    area = 0.5 * np.sum(p[:, 0] * np.roll(p[:, 1], -1) - np.roll(p[:, 0], -1) * p[:, 1])
+    assert area == pytest.approx(0.25)
