@@ -56,7 +56,9 @@ CalderonPreconditioner::CalderonPreconditioner(const Polygon& polygon, Space flu
     h_ = refined_->lengths();
     auto tree = std::make_shared<const ClusterTree>(ClusterTree::for_space(*refined_, Space::P0, refined.leaf_size));
     const OperatorEntries e(*refined_, Kernel::SingleLayer, Space::P0, Space::P0);
-    V0_ = std::make_shared<const HMatrix>(tree, tree, e, refined);
+    HMatrixOptions symmetric = refined;
+    symmetric.symmetric = true;
+    V0_ = std::make_shared<const HMatrix>(tree, tree, e, symmetric);
     // G[j, i] = int_{panel j} dual_i: 3 h_i/4 (j = i), h_j/8 (j = i -+ 1).
     for (Index i = 0; i < n; ++i) {
       const double h = polygon.panel(i).h;

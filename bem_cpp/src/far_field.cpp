@@ -72,7 +72,7 @@ namespace {
 /// Accumulators start from their first term, not from zero, and the results are scaled
 /// on the way out: small zero-fill and copy loops would otherwise become rep stos/movs
 /// instructions, whose start-up cost exceeds the arithmetic here.
-template <bool WithV, bool WithK>
+template <bool WithV, bool WithK, bool WithKji = false>
 inline __attribute__((always_inline)) void far_batch(const Panel& pi, const PanelArrays& panels,
                                                      const Index* js, int m, int p, double v_scale,
                                                      double k_scale, const PairBlockColumns& out) {
@@ -81,6 +81,8 @@ inline __attribute__((always_inline)) void far_batch(const Panel& pi, const Pane
   // Panel j data, contiguous for the vector loops.
   double hj[B], dj0[B], dj1[B];
   double ox[kMaxFarPoints][B], oy[kMaxFarPoints][B], w0[kMaxFarPoints][B], w1[kMaxFarPoints][B];
+  // WithKji: (y_b - x).n_i = -(a_i - y_b).n_i (t_i.n_i = 0) times the weights of point b.
+  double e0[WithKji ? kMaxFarPoints : 1][B], e1[WithKji ? kMaxFarPoints : 1][B];
   for (int k = 0; k < m; ++k) {
     const std::size_t j = static_cast<std::size_t>(js[k]);
     hj[k] = panels.h[j];
@@ -95,6 +97,11 @@ inline __attribute__((always_inline)) void far_batch(const Panel& pi, const Pane
       oy[b][k] = dy0 - t * panels.ty[j];
       w0[b][k] = wb * (1.0 - xb) * hj[k];
       w1[b][k] = wb * xb * hj[k];
+      if constexpr (WithKji) {
+        const double di = -(ox[b][k] * pi.n.x + oy[b][k] * pi.n.y);
+        e0[b][k] = w0[b][k] * di;
+        e1[b][k] = w1[b][k] * di;
+      }
     }
   }
   double v00[B], v01[B], v10[B], v11[B], k00[B], k01[B], k10[B], k11[B];
@@ -111,6 +118,8 @@ inline __attribute__((always_inline)) void far_batch(const Panel& pi, const Pane
       const double* oyb = oy[b];
       const double* w0b = w0[b];
       const double* w1b = w1[b];
+      const double* e0b = e0[WithKji ? b : 0];
+      const double* e1b = e1[WithKji ? b : 0];
 #pragma omp simd
       for (int k = 0; k < m; ++k) {
         const double rx = oxb[k] + sx, ry = oyb[k] + sy;
@@ -133,6 +142,16 @@ inline __attribute__((always_inline)) void far_batch(const Panel& pi, const Pane
           } else {
             c0[k] += w0b[k] * inv;
             c1[k] += w1b[k] * inv;
+          }
+        }
+        if constexpr (WithKji) {
+          const double inv = 1.0 / r2;
+          if constexpr (decltype(first)::value) {
+            c0[k] = e0b[k] * inv;
+            c1[k] = e1b[k] * inv;
+          } else {
+            c0[k] += e0b[k] * inv;
+            c1[k] += e1b[k] * inv;
           }
         }
       }
@@ -162,6 +181,12 @@ inline __attribute__((always_inline)) void far_batch(const Panel& pi, const Pane
           acc(k10[k], wi1 * dj * c0[k]);
           acc(k11[k], wi1 * dj * c1[k]);
         }
+        if constexpr (WithKji) {  // k<shape on j><shape on i>
+          acc(k00[k], wi0 * c0[k]);
+          acc(k10[k], wi0 * c1[k]);
+          acc(k01[k], wi1 * c0[k]);
+          acc(k11[k], wi1 * c1[k]);
+        }
       }
     };
     if (a == 0)
@@ -187,7 +212,7 @@ inline __attribute__((always_inline)) void far_batch(const Panel& pi, const Pane
     put(out.v[1][0], v10, v_scale);
     put(out.v[1][1], v11, v_scale);
   }
-  if constexpr (WithK) {
+  if constexpr (WithK || WithKji) {
     put(out.kij[0][0], k00, k_scale);
     put(out.kij[0][1], k01, k_scale);
     put(out.kij[1][0], k10, k_scale);
@@ -206,6 +231,12 @@ BEM_FAR_BATCH_CLONE(far_batch_vk, true, true)
 BEM_FAR_BATCH_CLONE(far_batch_k, false, true)
 #undef BEM_FAR_BATCH_CLONE
 
+__attribute__((target_clones("avx2", "default"))) void far_batch_kji(
+    const Panel& pi, const PanelArrays& panels, const Index* js, int m, int p, double ks,
+    const PairBlockColumns& out) {
+  far_batch<false, false, true>(pi, panels, js, m, p, 1.0, ks, out);
+}
+
 }  // namespace
 
 void far_blocks_batch(const Panel& pi, const PanelArrays& panels, const Index* js, int m, int p,
@@ -219,6 +250,13 @@ void far_blocks_batch(const Panel& pi, const PanelArrays& panels, const Index* j
     far_batch_v(pi, panels, js, m, p, v_scale, k_scale, out);
   else
     far_batch_k(pi, panels, js, m, p, v_scale, k_scale, out);
+}
+
+void far_kji_batch(const Panel& pi, const PanelArrays& panels, const Index* js, int m, int p,
+                   const PairBlockColumns& out, double k_scale) {
+  if (m < 1 || m > kFarBatch || p < 1 || p > kMaxFarPoints)
+    throw std::invalid_argument("far_kji_batch: batch size or points out of range");
+  far_batch_kji(pi, panels, js, m, p, k_scale, out);
 }
 
 __attribute__((target_clones("avx2", "default"))) void point_far_field_points(

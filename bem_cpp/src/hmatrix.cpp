@@ -11,9 +11,12 @@ namespace bem {
 namespace {
 
 void collect(const ClusterTree& rows, const ClusterTree& cols, int t, int s, double eta,
-             std::vector<HMatrix::Block>& out) {
+             bool upper, std::vector<HMatrix::Block>& out) {
   const Cluster& ct = rows.cluster(t);
   const Cluster& cs = cols.cluster(s);
+  // Symmetric: cluster ranges are nested or disjoint, so t starting after s (disjoint)
+  // puts the whole subtree of (t, s) below the block diagonal.
+  if (upper && ct.begin > cs.begin && ct.begin >= cs.end) return;
   const bool adm = admissible(ct.box, cs.box, eta);
   if (adm || ct.leaf() || cs.leaf()) {
     HMatrix::Block b;
@@ -28,17 +31,19 @@ void collect(const ClusterTree& rows, const ClusterTree& cols, int t, int s, dou
     return;
   }
   for (int a : ct.children)
-    for (int c : cs.children) collect(rows, cols, a, c, eta, out);
+    for (int c : cs.children) collect(rows, cols, a, c, eta, upper, out);
 }
 
 }  // namespace
 
 HMatrix::HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const ClusterTree> cols,
                  const EntrySource& entries, const HMatrixOptions& options)
-    : rows_(std::move(rows)), cols_(std::move(cols)) {
+    : rows_(std::move(rows)), cols_(std::move(cols)), symmetric_(options.symmetric) {
   if (!(options.eta > 0) || !(options.tol > 0) || options.leaf_size < 1)
     throw std::invalid_argument("HMatrix: need eta > 0, tol > 0, leaf_size >= 1");
-  collect(*rows_, *cols_, 0, 0, options.eta, blocks_);
+  if (symmetric_ && rows_ != cols_)
+    throw std::invalid_argument("HMatrix: a symmetric matrix needs one cluster tree for rows and columns");
+  collect(*rows_, *cols_, 0, 0, options.eta, symmetric_, blocks_);
   const Index* rp = rows_->permutation().data();
   const Index* cp = cols_->permutation().data();
   // Largest blocks first, so that the dynamic schedule ends with small ones.
@@ -91,20 +96,25 @@ Eigen::MatrixXd HMatrix::apply(const Eigen::Ref<const Eigen::MatrixXd>& X, bool 
 #pragma omp for schedule(dynamic, 4)
     for (long q = 0; q < count; ++q) {
       const Block& b = blocks_[static_cast<std::size_t>(q)];
-      const Index in0 = transpose ? b.r0 : b.c0, n_in = transpose ? b.m : b.k;
-      const Index out0 = transpose ? b.c0 : b.r0, n_o = transpose ? b.k : b.m;
-      const auto x = Xp.middleRows(in0, n_in);
-      auto y = Y.middleRows(out0, n_o);
-      if (!b.low_rank) {
-        if (transpose)
-          y.noalias() += b.dense.transpose() * x;
-        else
-          y.noalias() += b.dense * x;
-      } else if (b.factors.rank() > 0) {
-        const Eigen::MatrixXd& in_f = transpose ? b.factors.U : b.factors.V;
-        const Eigen::MatrixXd& out_f = transpose ? b.factors.V : b.factors.U;
-        const Eigen::MatrixXd z = in_f.transpose() * x;
-        y.noalias() += out_f * z;
+      // symmetric: an off-diagonal block also stands for its transpose below the diagonal
+      const bool both = symmetric_ && b.r0 != b.c0;
+      for (int pass = 0; pass < (both ? 2 : 1); ++pass) {
+        const bool tr = pass == 1 ? !transpose : transpose;
+        const Index in0 = tr ? b.r0 : b.c0, n_in = tr ? b.m : b.k;
+        const Index out0 = tr ? b.c0 : b.r0, n_o = tr ? b.k : b.m;
+        const auto x = Xp.middleRows(in0, n_in);
+        auto y = Y.middleRows(out0, n_o);
+        if (!b.low_rank) {
+          if (tr)
+            y.noalias() += b.dense.transpose() * x;
+          else
+            y.noalias() += b.dense * x;
+        } else if (b.factors.rank() > 0) {
+          const Eigen::MatrixXd& in_f = tr ? b.factors.U : b.factors.V;
+          const Eigen::MatrixXd& out_f = tr ? b.factors.V : b.factors.U;
+          const Eigen::MatrixXd z = in_f.transpose() * x;
+          y.noalias() += out_f * z;
+        }
       }
     }
   }
@@ -124,6 +134,10 @@ Eigen::MatrixXd HMatrix::to_dense() const {
     for (Index c = 0; c < b.k; ++c)
       for (Index r = 0; r < b.m; ++r)
         A(rp[static_cast<std::size_t>(b.r0 + r)], cp[static_cast<std::size_t>(b.c0 + c)]) = D(r, c);
+    if (symmetric_ && b.r0 != b.c0)
+      for (Index c = 0; c < b.k; ++c)
+        for (Index r = 0; r < b.m; ++r)
+          A(cp[static_cast<std::size_t>(b.c0 + c)], rp[static_cast<std::size_t>(b.r0 + r)]) = D(r, c);
   }
   return A;
 }

@@ -31,8 +31,9 @@ PairRelation relation(Index p, Index q, Index n) {
   return PairRelation::Separated;
 }
 
-std::vector<Index> sorted_panels(Space space, const Index* dofs, Index m, Index n) {
-  std::vector<Index> panels;
+std::vector<Index> sorted_panels(Space space, const Index* dofs, Index m, Index n,
+                                 std::vector<Index> panels) {
+  panels.clear();
   panels.reserve(static_cast<std::size_t>(2 * m));
   for (Index r = 0; r < m; ++r) {
     const Terms t = terms(space, dofs[r], n);
@@ -59,9 +60,14 @@ OperatorEntries::OperatorEntries(const Polygon& polygon, Kernel kernel, Space ro
 }
 
 DofSet OperatorEntries::dofs(Space space, const Index* dofs, Index m) const {
-  const Index n = polygon_.size();
   DofSet d;
-  d.panels = sorted_panels(space, dofs, m, n);
+  dofs_into(space, dofs, m, d);
+  return d;
+}
+
+void OperatorEntries::dofs_into(Space space, const Index* dofs, Index m, DofSet& d) const {
+  const Index n = polygon_.size();
+  d.panels = sorted_panels(space, dofs, m, n, std::move(d.panels));
   d.position.resize(static_cast<std::size_t>(2 * m));
   d.shape.resize(static_cast<std::size_t>(2 * m));
   for (Index r = 0; r < m; ++r) {
@@ -72,7 +78,6 @@ DofSet OperatorEntries::dofs(Space space, const Index* dofs, Index m) const {
     }
   }
   d.arrays.assign(polygon_, d.panels.data(), d.panels.size());
-  return d;
 }
 
 void OperatorEntries::block(const Index* I, Index m, const Index* J, Index k, double* out,
@@ -88,7 +93,10 @@ void OperatorEntries::block(const DofSet& R, const DofSet& C, double* out, Index
   const std::size_t np = P.size(), nq = Q.size();
   // table[(a * 2 + b) * np * nq + ip * nq + iq]: block [a][b] of (test P[ip], trial Q[iq]),
   // with the factor -1/pi (V) or 1/pi (K).
-  std::vector<double> table(4 * np * nq);
+  // Per-thread scratch (rows and columns of ACA call this often with small sets; fresh
+  // zero-filled vectors cost more than the integrals). Every entry is written before use.
+  thread_local std::vector<double> table, store;
+  if (table.size() < 4 * np * nq) table.resize(4 * np * nq);
   auto at = [&](int a, int b, std::size_t ip, std::size_t iq) -> double& {
     return table[(static_cast<std::size_t>(2 * a + b) * np + ip) * nq + iq];
   };
@@ -103,8 +111,7 @@ void OperatorEntries::block(const DofSet& R, const DofSet& C, double* out, Index
     const std::vector<Index>& inner = swap ? P : Q;
     const std::size_t ni = inner.size();
     const PanelArrays& arrays = swap ? R.arrays : C.arrays;
-    std::vector<double> store(4 * ni);
-    std::vector<int> points(ni);
+    if (store.size() < 4 * ni) store.resize(4 * ni);
     PairBlockColumns col;
     for (int a = 0; a < 2; ++a)
       for (int b = 0; b < 2; ++b) {
@@ -147,13 +154,38 @@ void OperatorEntries::block(const DofSet& R, const DofSet& C, double* out, Index
     }
   } else {
     // K with few trial panels (a column): the double-layer kernel carries the normal of
-    // the trial panel, so the batches (normal of the batch panel) do not apply.
-    for (std::size_t iq = 0; iq < nq; ++iq)
+    // the trial panel, so the far pairs go in batches over the test panels with kji.
+    if (store.size() < 4 * np) store.resize(4 * np);
+    PairBlockColumns col;
+    for (int a = 0; a < 2; ++a)
+      for (int b = 0; b < 2; ++b) col.kij[a][b] = store.data() + (2 * a + b) * np;
+    for (std::size_t iq = 0; iq < nq; ++iq) {
+      const Panel& pq = polygon_.panel(Q[iq]);
+      Index queue[kMaxFarPoints + 1][kFarBatch];
+      int queued[kMaxFarPoints + 1] = {};
+      auto flush = [&](int p) {
+        far_kji_batch(pq, R.arrays, queue[p], queued[p], p, col, 1.0);
+        queued[p] = 0;
+      };
       for (std::size_t ip = 0; ip < np; ++ip) {
-        pair_blocks(polygon_.panel(P[ip]), polygon_.panel(Q[iq]), relation(P[ip], Q[iq], n), true, B);
+        const Panel& pp = polygon_.panel(P[ip]);
+        const PairRelation rel = relation(P[ip], Q[iq], n);
+        const int p = rel == PairRelation::Separated ? far_field_points(pp, pq) : 0;
+        if (p > 0) {
+          queue[p][queued[p]++] = static_cast<Index>(ip);
+          if (queued[p] == kFarBatch) flush(p);
+          continue;
+        }
+        pair_blocks(pp, pq, rel, true, B);
         for (int a = 0; a < 2; ++a)
-          for (int b = 0; b < 2; ++b) at(a, b, ip, iq) = scale * B.kij[a][b];
+          for (int b = 0; b < 2; ++b) col.kij[a][b][ip] = B.kij[a][b];
       }
+      for (int p = 1; p <= kMaxFarPoints; ++p)
+        if (queued[p] > 0) flush(p);
+      for (int a = 0; a < 2; ++a)
+        for (int b = 0; b < 2; ++b)
+          for (std::size_t ip = 0; ip < np; ++ip) at(a, b, ip, iq) = scale * col.kij[a][b][ip];
+    }
   }
   const Index m = R.size(), k = C.size();
   for (Index r = 0; r < m; ++r) {
@@ -178,10 +210,12 @@ class PreparedBlock : public EntryBlock {
   PreparedBlock(const OperatorEntries& e, const Index* I, Index m, const Index* J, Index k)
       : e_(e), I_(I), J_(J), rows_(e.dofs(e.row_space(), I, m)), cols_(e.dofs(e.col_space(), J, k)) {}
   void row(Index i, double* out) const override {
-    e_.block(e_.dofs(e_.row_space(), I_ + i, 1), cols_, out, 1);
+    e_.dofs_into(e_.row_space(), I_ + i, 1, one_);
+    e_.block(one_, cols_, out, 1);
   }
   void column(Index j, double* out) const override {
-    e_.block(rows_, e_.dofs(e_.col_space(), J_ + j, 1), out, rows_.size());
+    e_.dofs_into(e_.col_space(), J_ + j, 1, one_);
+    e_.block(rows_, one_, out, rows_.size());
   }
   void all(double* out) const override { e_.block(rows_, cols_, out, rows_.size()); }
 
@@ -189,6 +223,7 @@ class PreparedBlock : public EntryBlock {
   const OperatorEntries& e_;
   const Index *I_, *J_;
   DofSet rows_, cols_;
+  mutable DofSet one_;  ///< a single row or column, storage reused (one thread per block)
 };
 
 }  // namespace

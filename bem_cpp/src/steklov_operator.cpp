@@ -13,7 +13,9 @@ std::shared_ptr<const HMatrix> build(const Polygon& polygon, Kernel kernel, Spac
                                      std::shared_ptr<const ClusterTree> row_tree,
                                      std::shared_ptr<const ClusterTree> col_tree, const HMatrixOptions& o) {
   const OperatorEntries entries(polygon, kernel, rows, kernel == Kernel::SingleLayer ? rows : Space::P1);
-  return std::make_shared<const HMatrix>(std::move(row_tree), std::move(col_tree), entries, o);
+  HMatrixOptions options = o;
+  options.symmetric = kernel == Kernel::SingleLayer;  // V_h = V_h^T: half the blocks
+  return std::make_shared<const HMatrix>(std::move(row_tree), std::move(col_tree), entries, options);
 }
 
 }  // namespace

@@ -37,3 +37,29 @@ TEST(HMatrix, ApproximatesVAndKToTheTolerance) {
     }
   }
 }
+
+TEST(HMatrix, SymmetricStorageHoldsHalfTheOffDiagonalBlocks) {
+  const Polygon poly(test::square(150));
+  const Index n = poly.size();
+  for (Space s : {Space::P0, Space::P1}) {
+    const Eigen::MatrixXd A = single_layer(poly, s);
+    auto tree = std::make_shared<const ClusterTree>(ClusterTree::for_space(poly, s, 16));
+    const OperatorEntries e(poly, Kernel::SingleLayer, s, s);
+    const HMatrix full(tree, tree, e, HMatrixOptions{16, 1.0, 1e-8});
+    const HMatrix sym(tree, tree, e, HMatrixOptions{16, 1.0, 1e-8, true});
+    EXPECT_TRUE(sym.symmetric());
+    const Eigen::MatrixXd D = sym.to_dense();
+    EXPECT_LT((D - D.transpose()).norm(), 1e-14 * D.norm());  // diagonal blocks: round-off
+    EXPECT_LT((D - A).norm(), 1e-8 * A.norm());
+    const Eigen::MatrixXd X = Eigen::MatrixXd::Random(n, 2);
+    EXPECT_LT((sym.apply(X) - D * X).norm(), 1e-13 * (D * X).norm());
+    EXPECT_LT((sym.apply(X, true) - D * X).norm(), 1e-13 * (D * X).norm());
+    EXPECT_LT(sym.blocks().size(), full.blocks().size());
+    EXPECT_LT(sym.nbytes(), 0.75 * static_cast<double>(full.nbytes()));
+  }
+  // one tree for rows and columns is required
+  const auto t0 = std::make_shared<const ClusterTree>(ClusterTree::for_space(poly, Space::P0, 16));
+  const auto t1 = std::make_shared<const ClusterTree>(ClusterTree::for_space(poly, Space::P0, 16));
+  const OperatorEntries e(poly, Kernel::SingleLayer, Space::P0, Space::P0);
+  EXPECT_THROW(HMatrix(t0, t1, e, HMatrixOptions{16, 1.0, 1e-8, true}), std::invalid_argument);
+}

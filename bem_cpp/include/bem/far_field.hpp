@@ -39,6 +39,12 @@ void far_blocks_batch(const Panel& pi, const PanelArrays& panels, const Index* j
                       bool with_v, bool with_k, const PairBlockColumns& out, double v_scale = 1.0,
                       double k_scale = 1.0);
 
+/// kji of far_blocks for the pairs (pi, panel js[k]) (double-layer kernel with the normal
+/// of pi, test panel js[k], trial pi), stored times k_scale to out.kij[b][a][js[k]] with b
+/// the shape on panel js[k], a the shape on pi: the column of K_h for a trial panel pi.
+void far_kji_batch(const Panel& pi, const PanelArrays& panels, const Index* js, int m, int p,
+                   const PairBlockColumns& out, double k_scale = 1.0);
+
 /// Gauss points of point_panel_moments for the point z and every panel j (0: near,
 /// closed form), vectorised, into points[j].
 void point_far_field_points(Vec2 z, const PanelArrays& panels, int* points);

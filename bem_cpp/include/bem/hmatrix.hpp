@@ -4,7 +4,8 @@
 // min(diam t, diam s) <= eta dist(t, s); admissible leaves held as U V^T by ACA
 // (aca.hpp) recompressed to the relative tolerance tol, the other leaves (near field,
 // at least one cluster a leaf) dense and exact. Products with vectors and blocks of
-// vectors run over the blocks in parallel (OpenMP).
+// vectors run over the blocks in parallel (OpenMP). A symmetric matrix keeps the blocks
+// (t, s) with t's range starting at or before s's (half the set-up and memory).
 #include <Eigen/Dense>
 #include <cstddef>
 #include <functional>
@@ -20,6 +21,9 @@ struct HMatrixOptions {
   Index leaf_size;  ///< largest leaf cluster
   double eta;       ///< admissibility parameter
   double tol;       ///< relative accuracy of each low-rank block (ACA and recompression)
+  /// A symmetric matrix on one cluster tree (V_h): only the blocks on and above the block
+  /// diagonal are built and held; the products use each off-diagonal block twice.
+  bool symmetric = false;
 };
 
 /// Entries of one block A(I, J) (original dof order), by rows, columns or all at once.
@@ -60,6 +64,7 @@ class HMatrix {
   /// Bytes of the blocks (dense entries and factors) and of the permutations.
   std::size_t nbytes() const;
   Index max_rank() const;
+  bool symmetric() const { return symmetric_; }
   const std::vector<Block>& blocks() const { return blocks_; }
   const ClusterTree& row_tree() const { return *rows_; }
   const ClusterTree& col_tree() const { return *cols_; }
@@ -67,6 +72,7 @@ class HMatrix {
  private:
   std::shared_ptr<const ClusterTree> rows_, cols_;
   std::vector<Block> blocks_;
+  bool symmetric_ = false;
 };
 
 }  // namespace bem

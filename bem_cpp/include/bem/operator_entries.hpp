@@ -46,6 +46,8 @@ class OperatorEntries : public EntrySource {
   /// The same on prepared dof sets.
   void block(const DofSet& rows, const DofSet& cols, double* out, Index ld) const;
   DofSet dofs(Space space, const Index* dofs, Index m) const;
+  /// The same into d, reusing its storage.
+  void dofs_into(Space space, const Index* dofs, Index m, DofSet& d) const;
   /// EntrySource: rows and columns of I x J with both sides prepared once.
   std::unique_ptr<EntryBlock> block(const Index* I, Index m, const Index* J, Index k) const override;
   Space row_space() const { return rows_; }
