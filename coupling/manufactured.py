@@ -35,6 +35,7 @@ __all__ = [
     "square_contact",
     "lshape_contact",
     "disk_contact",
+    "ellipse_contact",
     "lshape_corner",
     "MANUFACTURED",
     "manufactured_problem",
@@ -89,6 +90,7 @@ class ManufacturedSolution:
     ue: str
     a: float = _A
     radius: float = 0.0  # the disk's (its arcs run along the circle)
+    semi_axes: tuple[float, float] = (0.0, 0.0)  # the ellipse's (its arcs run along it)
 
     @property
     def signorini(self) -> list[tuple[tuple[float, float], tuple[float, float]]]:
@@ -108,8 +110,8 @@ class ManufacturedSolution:
         return gap
 
     def _on_arcs(self, points: np.ndarray) -> list[np.ndarray]:
-        if self.shape == "disk":
-            return self._on_circle_arcs(points)
+        if self.shape in ("disk", "ellipse"):
+            return self._on_conic_arcs(points)
         masks = []
         for arc in self.arcs:
             p0, p1 = np.array(arc.start), np.array(arc.end)
@@ -120,14 +122,17 @@ class ManufacturedSolution:
             masks.append((across < 1e-12) & (along >= -1e-12) & (along <= 1 + 1e-12))
         return masks
 
-    def _on_circle_arcs(self, points: np.ndarray) -> list[np.ndarray]:
-        rel = points - np.asarray(self.center)
-        on_circle = np.abs(np.linalg.norm(rel, axis=1) - self.radius) < 1e-9 * self.radius
+    def _on_conic_arcs(self, points: np.ndarray) -> list[np.ndarray]:
+        """Points of the arcs along the circle or ellipse, by parameter angle (the points
+        mapped onto the unit circle)."""
+        axes = self.semi_axes if self.shape == "ellipse" else (self.radius, self.radius)
+        rel = (points - np.asarray(self.center)) / np.asarray(axes)
+        on_circle = np.abs(np.linalg.norm(rel, axis=1) - 1.0) < 1e-9
         angle = np.arctan2(rel[:, 1], rel[:, 0])
         masks = []
         for arc in self.arcs:
             t0, t1 = (
-                np.arctan2(p[1] - self.center[1], p[0] - self.center[0])
+                np.arctan2((p[1] - self.center[1]) / axes[1], (p[0] - self.center[0]) / axes[0])
                 for p in (arc.start, arc.end)
             )
             span = (t1 - t0) % (2 * np.pi)
@@ -206,6 +211,36 @@ def disk_contact(radius: float = 0.25) -> ManufacturedSolution:
     )
 
 
+def ellipse_contact(semi_axes: tuple[float, float] = (0.3, 0.2)) -> ManufacturedSolution:
+    """Ellipse x^2/a^2 + y^2/b^2 < 1, Signorini arc = its lower part from the parameter
+    angle -3 pi/4 to -pi/4 ((-a, -b)/sqrt 2 to (a, -b)/sqrt 2; contact for x < 0).
+
+    With psi = x^2/a^2 + y^2/b^2, A = diag(1/a^2, 1/b^2) (grad psi = 2 A p) and q = |A p|^2
+    + (1 - psi)/(a b) (> 0 in Omega, |grad psi|^2 / 4 on Gamma), the smooth part is
+    P(F(p)) with F(p) = p + (1 - psi) A p / (2 q): on Gamma DF n = n - A p (grad psi . n)
+    / (2 q) = 0, so its normal derivative vanishes. The flux term is K eta max(0, -x)^3
+    with eta = (1 - psi) / (2 sqrt q) (d eta/dn = -1 on Gamma), the gap G max(0, x)^3
+    (a/sqrt 2 - x). For a = b = R this is :func:`disk_contact`."""
+    a, b = (float(v) for v in semi_axes)
+    psi = f"(x**2/{a}**2 + y**2/{b}**2)"
+    q = f"(x**2/{a}**4 + y**2/{b}**4 + (1 - {psi})/({a}*{b}))"
+    X = f"(x*(1 + (1 - {psi})/(2*{a}**2*{q})))"
+    Y = f"(y*(1 + (1 - {psi})/(2*{b}**2*{q})))"
+    smooth = f"0.2 + 3*{X} + 0.2*cos(pi*{Y})*sin(pi*{X}) + 0.3*({X} + 0.1)**2"
+    u = f"{smooth} + {_K}*((1 - {psi})/(2*sqrt({q})))*max(0, -x)**3"
+    ca, cb = a / np.sqrt(2.0), b / np.sqrt(2.0)
+    arc = Arc((-ca, -cb), (ca, -cb), f"{_G}*max(0, x)**3*({ca} - x)")
+    return ManufacturedSolution(
+        "ellipse",
+        2 * max(a, b),
+        (0.0, 0.0),
+        (arc,),
+        u,
+        exterior_field((0.03, -0.02)),
+        semi_axes=(a, b),
+    )
+
+
 def lshape_corner() -> ManufacturedSolution:
     """The L-shape [-1/4, 1/4]^2 minus [0, 1/4]^2 without contact and u = r^(2/3)
     sin(2 theta/3) about the re-entrant corner (0, 0), theta from the side x = 0, y > 0:
@@ -217,7 +252,12 @@ def lshape_corner() -> ManufacturedSolution:
     return ManufacturedSolution("lshape", 0.5, (0.0, 0.0), (), u, exterior_field((-0.1, -0.1)))
 
 
-MANUFACTURED = {"square": square_contact, "lshape": lshape_contact, "disk": disk_contact}
+MANUFACTURED = {
+    "square": square_contact,
+    "lshape": lshape_contact,
+    "disk": disk_contact,
+    "ellipse": ellipse_contact,
+}
 
 
 def manufactured_problem(
@@ -237,17 +277,14 @@ def manufactured_problem(
     from fem_py.geometry import build_domain
 
     h = solution.width / cells
+    curved = {"disk": {"radius": solution.radius}, "ellipse": {"semi_axes": solution.semi_axes}}
     domain = build_domain(
         comm,
         solution.shape,
         h=h,
         subdomain_size=d_over_h * h,
         center=solution.center,
-        **(
-            {"radius": solution.radius}
-            if solution.shape == "disk"
-            else {"width": solution.width, "structured": structured}
-        ),
+        **curved.get(solution.shape, {"width": solution.width, "structured": structured}),
         signorini=solution.signorini,
     )
     data = solution.data(domain.mesh, material)

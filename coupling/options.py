@@ -30,6 +30,7 @@ DEFAULTS: dict[str, dict[str, Any]] = {
         "mesh": "",
         "subdomains": "auto",
         "radius": 0.25,
+        "semi_axes": [0.3, 0.2],
     },
     "material": {"rho": "linear", "p": 2.0, "eps": 1.0},
     "data": {"f": "0", "u0": "0", "t0": "0", "a": 0.0, "exact": ""},
@@ -56,7 +57,7 @@ DEFAULTS: dict[str, dict[str, Any]] = {
 
 #: Keys whose value must be one of a fixed set of strings.
 CHOICES: dict[tuple[str, str], tuple[str, ...]] = {
-    ("geometry", "shape"): ("square", "lshape", "polygon", "disk"),
+    ("geometry", "shape"): ("square", "lshape", "polygon", "disk", "ellipse"),
     ("geometry", "subdomains"): ("auto", "physical"),
     ("solver", "method"): ("pgpm", "apgpm", "ssn"),
     ("solver", "preconditioner"): ("substructuring", "identity", "exact"),

@@ -41,7 +41,7 @@ Modules
 ``fem_py.gmsh_mesh`` (gmsh, on rank 0), ``fem_py.structured`` (the uniform refinement),
 ``fem_py.distribute`` (whole subdomains per rank), ``fem_py.coarse`` (the coarse
 structure recovered from the distributed mesh); this module joins them. Users' meshes,
-the disk and polygons with sides < d (resampled at h, or at d when structured, corners and
+the disk, ellipse, polygons with sides < d (resampled at h, or at d when structured, corners and
 arc ends kept: ``fem_py.polyline.coarsened_polygon``) go through ``fem_py.own_mesh``.
 
 Parallel use: all ranks call ``build_domain`` with the same arguments. Arguments are
@@ -67,6 +67,7 @@ import numpy as np
 from mpi4py import MPI
 
 from fem_py.coarse import SIGNORINI_TAG0, CoarseStructure, compute_coarse_structure
+from fem_py.conic import CONICS, conic_domain, conic_plan
 from fem_py.distribute import distribute_mesh, distribute_structured, subdomain_owners
 from fem_py.gmsh_mesh import mesh_with_gmsh
 from fem_py.parallel import broadcast_from_root, run_on_root
@@ -77,6 +78,7 @@ from fem_py.shapes import (
     Arc,
     BoundaryCurve,
     check_polygon,
+    checked_center,
     diameter,
     edge_tag,
     grid_partition,
@@ -191,12 +193,7 @@ def _validate(shape, h, subdomain_size, center, width, vertices):
             raise ValueError(
                 f"vertices are only used by shape 'polygon'; drop them for shape {shape!r}"
             )
-        try:
-            cx, cy = (float(c) for c in center)
-        except (TypeError, ValueError):
-            raise ValueError(f"center must be a pair (x, y), got {center!r}") from None
-        if not (math.isfinite(cx) and math.isfinite(cy)):
-            raise ValueError(f"center must be finite, got {center!r}")
+        cx, cy = checked_center(center)
         if not _is_positive_number(width):
             raise ValueError(f"width must be a positive number, got {width!r}")
         P = None
@@ -292,6 +289,7 @@ def domain_size(
     structured: bool = False,
     allow_large: bool = False,
     radius: float = 0.25,
+    semi_axes: Sequence[float] | None = None,
 ) -> DomainSize | None:
     """The sizes of ``build_domain(comm, shape, ...)`` (same arguments) in closed form,
     without a mesh: for the structured square and L-shape; None where only meshing
@@ -303,10 +301,8 @@ def domain_size(
     nodes, a closed one (``"all"``) every boundary node. The facets of the right
     triangles are c/n (legs) and sqrt(2) c/n (diagonals), c the coarse size.
     """
-    if shape == "disk":
-        from fem_py.disk import disk_plan
-
-        disk_plan(h, subdomain_size, center, radius, signorini, allow_large)
+    if shape in CONICS:
+        conic_plan(shape, h, subdomain_size, center, radius, semi_axes, signorini, allow_large)
         return None
     plan = _plan(
         shape, h, subdomain_size, center, width, vertices, signorini, structured, allow_large
@@ -357,6 +353,7 @@ def build_domain(
     structured: bool = False,
     allow_large: bool = False,
     radius: float = 0.25,
+    semi_axes: Sequence[float] | None = None,
 ) -> Domain:
     """Mesh Omega with a coarse partition into subdomains of size about ``subdomain_size``.
 
@@ -367,8 +364,8 @@ def build_domain(
     shape
         ``"square"`` (``center``, ``width``), ``"lshape"`` (``center``, ``width``: the square
         of that width minus its upper-right quarter), ``"polygon"`` (``vertices``, CCW) or
-        ``"disk"`` (``center``, ``radius``: a gmsh mesh of size h, subdomains of the
-        automatic partition ``fem_py.partition``, arcs as point pairs on the circle).
+        ``"disk"`` / ``"ellipse"`` (``center``, ``radius`` / ``semi_axes`` (a, b): gmsh, size
+        h, automatic subdomains ``fem_py.partition``, arcs as point pairs on the curve).
     h
         Fine mesh size (structured: h = coarse edge / round(d/h)).
     subdomain_size
@@ -392,10 +389,9 @@ def build_domain(
         gmsh failed on rank 0 (``"meshing the domain failed: <type>: <message>"``, on
         every rank).
     """
-    if shape == "disk":
-        from fem_py.disk import disk_domain
-
-        return disk_domain(comm, h, subdomain_size, center, radius, signorini, allow_large)
+    if shape in CONICS:
+        args = (center, radius, semi_axes, signorini, allow_large)
+        return conic_domain(comm, shape, h, subdomain_size, *args)
     plan = _plan(
         shape, h, subdomain_size, center, width, vertices, signorini, structured, allow_large
     )

@@ -32,6 +32,7 @@ __all__ = [
     "SQUARE_SIDES",
     "LSHAPE_SIDES",
     "check_polygon",
+    "checked_center",
     "diameter",
     "edge_tag",
     "grid_partition",
@@ -73,6 +74,17 @@ def diameter(P: np.ndarray) -> float:
         P = P[ConvexHull(P).vertices]
     d = P[:, None, :] - P[None, :, :]
     return float(np.sqrt((d**2).sum(-1)).max())
+
+
+def checked_center(center: Any) -> tuple[float, float]:
+    """``center`` as a pair of finite numbers; else a one-line ``ValueError`` naming it."""
+    try:
+        cx, cy = (float(c) for c in center)
+    except (TypeError, ValueError):
+        raise ValueError(f"center must be a pair (x, y), got {center!r}") from None
+    if not (np.isfinite(cx) and np.isfinite(cy)):
+        raise ValueError(f"center must be finite, got {center!r}")
+    return cx, cy
 
 
 def _signed_area(P: np.ndarray) -> float:

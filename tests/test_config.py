@@ -37,6 +37,14 @@ def test_values_are_converted_and_overrides_applied(tmp_path):
         ({"geometry": {"center": [0, "a"]}}, r"geometry.center must be a point"),
         ({"geometry": {"signorini": [[1, 2, 3]]}}, r"geometry.signorini\[0\] must be"),
         ({"geometry": {"signorini": 3}}, "geometry.signorini must be"),
+        ({"geometry": {"semi_axes": 0.3}}, "geometry.semi_axes must be a list"),
+        ({"geometry": {"semi_axes": [0.3]}}, r"geometry.semi_axes must be \[a, b\], two positive"),
+        ({"geometry": {"semi_axes": [0.3, -0.2]}}, r"geometry.semi_axes must be \[a, b\]"),
+        ({"geometry": {"semi_axes": [0.3, True]}}, r"geometry.semi_axes must be \[a, b\]"),
+        (
+            {"geometry": {"mesh": "m.msh", "semi_axes": [0.3, 0.2]}},
+            "geometry.semi_axes: the mesh file geometry.mesh sets the geometry",
+        ),
         ({"solver": {"step": "big"}}, 'solver.step must be "auto" or a positive number'),
         ({"solver": {"max_iterations": 1.5}}, "solver.max_iterations must be an integer"),
         ({"solver": {"coarse_space": "exact"}}, "solver.coarse_space must be one of"),
@@ -48,6 +56,15 @@ def test_values_are_converted_and_overrides_applied(tmp_path):
 def test_errors_name_the_key(raw, message):
     with pytest.raises(ConfigError, match=message):
         parse_config(raw)
+
+
+def test_ellipse_keys():
+    from coupling.app.from_config import geometry_arguments
+
+    config = parse_config({"geometry": {"shape": "ellipse", "semi_axes": [1, 0.25]}})
+    assert config["geometry"]["semi_axes"] == [1.0, 0.25]
+    shape, kwargs = geometry_arguments(config)
+    assert shape == "ellipse" and kwargs["semi_axes"] == (1.0, 0.25) and "radius" not in kwargs
 
 
 def test_missing_file_and_bad_toml(tmp_path):

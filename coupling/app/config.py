@@ -94,6 +94,8 @@ def _check_value(section: str, key: str, value: Any) -> Any:
         raise ConfigError(f"{name} must be positive, got {value!r}")
     if (section, key) == ("geometry", "center"):
         value = _point(name, value)
+    if (section, key) == ("geometry", "semi_axes"):
+        value = _semi_axes(name, value)
     if (section, key) == ("geometry", "vertices"):
         value = [_point(f"{name}[{i}]", v) for i, v in enumerate(value)]
     if (section, key) == ("solver", "projection_tol") and not 0 <= value < 1:
@@ -115,6 +117,19 @@ def _point(name: str, value: Any) -> list[float]:
         )
     ):
         raise ConfigError(f"{name} must be a point [x, y] of two numbers, got {value!r}")
+    return [float(value[0]), float(value[1])]
+
+
+def _semi_axes(name: str, value: list) -> list[float]:
+    """The ellipse's semi-axes [a, b]: two positive finite numbers."""
+    if len(value) != 2 or not all(
+        isinstance(c, (int, float)) and not isinstance(c, bool) and math.isfinite(c) and c > 0
+        for c in value
+    ):
+        raise ConfigError(
+            f"{name} must be [a, b], two positive numbers (the semi-axes along x and y), "
+            f"got {value!r}"
+        )
     return [float(value[0]), float(value[1])]
 
 
@@ -187,7 +202,16 @@ def parse_config(raw: dict[str, Any]) -> dict[str, dict[str, Any]]:
 
 
 #: The [geometry] keys of a generated shape, which a mesh file sets itself.
-GENERATED_KEYS = ("shape", "center", "width", "radius", "vertices", "h", "structured")
+GENERATED_KEYS = (
+    "shape",
+    "center",
+    "width",
+    "radius",
+    "semi_axes",
+    "vertices",
+    "h",
+    "structured",
+)
 
 
 def _check_mesh_keys(geometry: dict[str, Any], given: dict[str, Any]) -> None:

@@ -44,6 +44,7 @@ def geometry_arguments(config: dict) -> tuple[str, dict[str, Any]]:
         structured=g["structured"],
         allow_large=g["allow_large"],
         **({"radius": g["radius"]} if g["shape"] == "disk" else {}),
+        **({"semi_axes": tuple(g["semi_axes"])} if g["shape"] == "ellipse" else {}),
     )
 
 
