@@ -18,6 +18,7 @@ measured at h = 1/16, 1/32, 1/64 they fall like h^2 (u_e at exterior points: max
 from __future__ import annotations
 
 import json
+import math
 import re
 import shutil
 import sys
@@ -117,6 +118,14 @@ def test_solve_writes_the_documented_outputs(run):
     n = round(0.5 / H)
     assert summary["converged"] and summary["dofs"] == (n + 1) ** 2
     assert summary["boundary_dofs"] == 4 * n and summary["signorini_dofs"] == n - 1
+    # the mesh facts (issue 17): 4 x 4 coarse squares of side 4h, right triangles of legs h
+    assert summary["subdomains"] == 16
+    assert summary["subdomain_diameter"] == pytest.approx(math.sqrt(2) * 4 * H, rel=1e-12)
+    assert summary["h_min"] == pytest.approx(H) and summary["h_max"] == pytest.approx(
+        math.sqrt(2) * H
+    )
+    assert summary["signorini_lengths"] == pytest.approx([0.5])
+    assert "16 subdomains of mean diameter 0.1768, h from 0.03125 to 0.04419" in proc.stdout
     assert len(summary["history"]) == summary["iterations"]
     assert summary["config"]["material"]["rho"] == "carstensen"
     for name in (

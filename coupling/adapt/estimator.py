@@ -32,6 +32,8 @@ from dolfinx import fem
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
 from petsc4py import PETSc
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 from scipy.spatial import cKDTree
 
 import bem_cpp
@@ -83,6 +85,21 @@ def _bisected(nodes: np.ndarray) -> np.ndarray:
     return np.stack([nodes, mid], axis=1).reshape(-1, 2)
 
 
+def _mass(lengths: np.ndarray, space: str) -> sp.csr_matrix:
+    """The boundary mass matrix <v_j, psi_i> of the closed polygon with side ``lengths``
+    (side i from node i to node i + 1): P1 tests, the cyclic tridiagonal
+    (l_{i-1} + l_i)/3, l_i/6; P0 tests (panel i), l_i/2 at nodes i and i + 1 (as
+    ``bem_cpp.mass``, sparse)."""
+    n = len(lengths)
+    i, j = np.arange(n), (np.arange(n) + 1) % n
+    if space == "p0":
+        half = 0.5 * lengths
+        return sp.csr_matrix((np.concatenate([half, half]), (np.r_[i, i], np.r_[i, j])), (n, n))
+    rows, cols = np.r_[i, i, j], np.r_[i, j, i]
+    vals = np.r_[(lengths + np.roll(lengths, 1)) / 3, lengths / 6, lengths / 6]
+    return sp.csr_matrix((vals, (rows, cols)), shape=(n, n))
+
+
 def bie_residual(nodes: np.ndarray, ue: np.ndarray, flux: np.ndarray, a: float, space: str):
     """h_E ||d/ds R_h||^2_E per panel (n,) of the residual R_h = (K - I)(v_h - a) - V psi_h.
 
@@ -99,12 +116,12 @@ def bie_residual(nodes: np.ndarray, ue: np.ndarray, flux: np.ndarray, a: float, 
         psi[0::2], psi[1::2] = flux, 0.5 * (flux + np.roll(flux, -1))
     else:
         psi = np.repeat(flux, 2)
-    K, M = bem_cpp.double_layer(fine, space), bem_cpp.mass(fine, space)
-    r = (K - M) @ (v - a) - bem_cpp.single_layer(fine, space) @ psi
     lengths = np.linalg.norm(np.roll(fine, -1, axis=0) - fine, axis=1)
+    r = bem_cpp.double_layer(fine, space) @ (v - a) - _mass(lengths, space) @ (v - a)
+    r -= bem_cpp.single_layer(fine, space) @ psi
     h = lengths[0::2] + lengths[1::2]
     if space == "p1":
-        R = np.linalg.solve(bem_cpp.mass(fine, "p1"), r)
+        R = spla.spsolve(_mass(lengths, "p1").tocsc(), r)
         per_fine = (np.roll(R, -1) - R) ** 2 / lengths  # int |R'|^2 on each half panel
         return h * (per_fine[0::2] + per_fine[1::2])
     per_fine = r**2 / lengths  # int R^2 of the P0 projection r / l

@@ -231,6 +231,7 @@ def _solve(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
     from coupling.app.run import run_solver
     from coupling.app.sizing import check_memory, size_of_domain
     from coupling.preconditioners import problem_arcs
+    from fem_py.mesh_facts import mesh_facts
     from fem_py.polyline import arc_length
     from coupling.io.atomic import staged_output_dir
     from coupling.io.outputs import write_outputs
@@ -261,8 +262,9 @@ def _solve(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
             arc_lengths, [arc.closed for arc in arcs], gamma
         ):
             _say(f"warning: {line}")
+        facts = mesh_facts(domain)  # collective
         if monitor is not None:
-            monitor.problem(problem, options, arc_lengths)
+            monitor.problem(problem, options, arc_lengths, facts)
         run = run_solver(comm, config, domain, problem, options, timings, monitor)
         result = run.solution
         if monitor is not None:

@@ -37,14 +37,16 @@ class ProgressMonitor:
         if self.comm.rank == 0:
             print(f"fembem: {what}", file=self.stream, flush=True)
 
-    def problem(self, problem, options, arc_lengths) -> None:
-        """The size of the assembled problem, the material, the Signorini arcs and the
+    def problem(self, problem, options, arc_lengths, facts: dict) -> None:
+        """The size of the assembled problem and its mesh (``facts``:
+        :func:`fem_py.mesh_facts.mesh_facts`), the material, the Signorini arcs and the
         method about to run."""
-        d, m = problem.domain, problem.material
+        m = problem.material
         self.stage(
             f"{problem.V.dofmap.index_map.size_global} dofs, {problem.boundary.n_gamma} on "
-            f"Gamma, {problem.n_signorini} Signorini unknowns, {d.coarse.n_subdomains} "
-            f"subdomains"
+            f"Gamma, {problem.n_signorini} Signorini unknowns, {facts['subdomains']} "
+            f"subdomains of mean diameter {facts['subdomain_diameter']:.4g}, h from "
+            f"{facts['h_min']:.4g} to {facts['h_max']:.4g}"
         )
         self.stage(f"material {m.name}: alpha = {m.alpha:.4g}, beta = {m.beta:.4g}")
         if len(arc_lengths):

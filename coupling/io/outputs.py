@@ -33,6 +33,7 @@ from coupling.io.atomic import atomic_write
 from coupling.io.levels import LEVEL_FILES, write_levels
 from coupling.io.plots import PLOT_FILES, write_plots
 from coupling.io.quantities import boundary_flux, complementarity, log_coefficient
+from fem_py.mesh_facts import mesh_facts
 from fem_py.numbering import gather_cells, gather_p1
 from fem_py.parallel import broadcast_from_root
 
@@ -142,6 +143,7 @@ def write_outputs(
     gathered = gather_p1(result.u)
     cells = None if indicators is None else gather_cells(problem.V, np.sqrt(indicators))
     pressure = boundary_flux(problem, result)
+    facts = mesh_facts(problem.domain)  # collective
     written = []
     if xdmf:
         _write_xdmf(comm, out, problem, result)
@@ -168,7 +170,7 @@ def write_outputs(
         stages = {**timings, "outputs": time.perf_counter() - tic}
         if total is not None:
             stages["total"] = total()
-        record = summary(problem, result, stages, pressure)
+        record = {**summary(problem, result, stages, pressure), **facts}
         if estimator is not None:  # the global a posteriori estimator eta
             record["estimator"] = estimator
         if error is not None:  # the energy error against the exact solution

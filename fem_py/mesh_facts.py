@@ -1,0 +1,82 @@
+"""The sizes a user checks before trusting a mesh (issue 17): the number of subdomains,
+the shortest and longest fine facet, the mean subdomain diameter and the length of each
+Signorini arc, from a distributed :class:`fem_py.geometry.Domain` (collective)."""
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from dolfinx import cpp
+from mpi4py import MPI
+
+from fem_py.coarse import SIGNORINI_TAG0
+
+__all__ = ["mesh_facts", "subdomain_diameters"]
+
+#: directions of the widths whose maximum is the diameter (within cos(pi / 16) = 0.981)
+_DIRECTIONS = 8
+
+
+def subdomain_diameters(domain: Any) -> np.ndarray:
+    """The diameter of every subdomain, (L,) on every rank (collective): the largest
+    width of its nodes over 8 directions, which is the diameter to within 2%."""
+    msh, comm = domain.mesh, domain.mesh.comm
+    n_cells = msh.topology.index_map(2).size_local
+    cells = msh.geometry.dofmap.array.reshape(-1, 3)[:n_cells]
+    part = np.full(n_cells, -1, dtype=np.int64)
+    tags = domain.cell_tags
+    own = tags.indices < n_cells
+    part[tags.indices[own]] = tags.values[own]
+    n_sub = int(domain.coarse.n_subdomains)
+    angle = np.pi * np.arange(_DIRECTIONS) / _DIRECTIONS
+    proj = msh.geometry.x[:, :2] @ np.stack([np.cos(angle), np.sin(angle)])  # (nodes, 8)
+    hi, lo = np.full((n_sub, _DIRECTIONS), -np.inf), np.full((n_sub, _DIRECTIONS), np.inf)
+    for k in range(3):  # the three nodes of every cell
+        np.maximum.at(hi, part, proj[cells[:, k]])
+        np.minimum.at(lo, part, proj[cells[:, k]])
+    comm.Allreduce(MPI.IN_PLACE, hi, op=MPI.MAX)
+    comm.Allreduce(MPI.IN_PLACE, lo, op=MPI.MIN)
+    return (hi - lo).max(axis=1)
+
+
+def _summed(comm: Any, values: np.ndarray) -> np.ndarray:
+    out = np.empty_like(values)
+    comm.Allreduce(values, out, op=MPI.SUM)
+    return out
+
+
+def mesh_facts(domain: Any) -> dict:
+    """``subdomains``, ``h_min``, ``h_max`` (shortest and longest fine facet),
+    ``subdomain_diameter`` (the mean over the subdomains, :func:`subdomain_diameters`)
+    and ``signorini_lengths`` (the length of arc k, tagged 100 + k), the same on every
+    rank (collective)."""
+    msh, comm = domain.mesh, domain.mesh.comm
+    x = msh.geometry.x[:, :2]
+    n_cells = msh.topology.index_map(2).size_local
+    cells = msh.geometry.dofmap.array.reshape(-1, 3)[:n_cells]
+    sides = np.linalg.norm(x[cells] - x[np.roll(cells, 1, axis=1)], axis=2)
+    h_min = comm.allreduce(float(sides.min(initial=np.inf)), op=MPI.MIN)
+    h_max = comm.allreduce(float(sides.max(initial=0.0)), op=MPI.MAX)
+    facets, values = domain.facet_tags.indices, domain.facet_tags.values
+    owned = facets < msh.topology.index_map(1).size_local  # each facet counted once
+    on_arc = owned & (values >= SIGNORINI_TAG0)
+    n_arcs = comm.allreduce(
+        int(values[values >= SIGNORINI_TAG0].max(initial=SIGNORINI_TAG0 - 1)),
+        op=MPI.MAX,
+    )
+    n_arcs -= SIGNORINI_TAG0 - 1
+    lengths = np.zeros(n_arcs)
+    if on_arc.any():
+        ends = cpp.mesh.entities_to_geometry(msh._mesh, 1, facets[on_arc].astype(np.int32), False)
+        np.add.at(
+            lengths,
+            values[on_arc] - SIGNORINI_TAG0,
+            np.linalg.norm(x[ends[:, 0]] - x[ends[:, 1]], axis=1),
+        )
+    return {
+        "subdomains": int(domain.coarse.n_subdomains),
+        "h_min": h_min,
+        "h_max": h_max,
+        "subdomain_diameter": float(subdomain_diameters(domain).mean()),
+        "signorini_lengths": [float(v) for v in _summed(comm, lengths)],
+    }
