@@ -206,8 +206,12 @@ def mass(nodes: ArrayLike, space: str = "p1") -> NDArray[np.float64]:
 _COMPRESSIONS = ("none", "hmatrix")
 
 # H-matrix parameters (docs/design/hmatrix.md explains the choice).
-HMATRIX_LEAF_SIZE = 64
+HMATRIX_LEAF_SIZE = 48
 HMATRIX_ETA = 2.0
+# OpenMP threads of a product (0: all); the set-up uses all. A product is many short
+# parallel loops: one thread was 2-3 times faster than two at load 8 on 2 cores
+# (docs/design/hmatrix.md); two can be at most 2 times faster on an idle machine.
+HMATRIX_PRODUCT_THREADS = 1
 # V solves: relative residual solver_tol = HMATRIX_SOLVER_TOL_FACTOR * tol.
 HMATRIX_SOLVER_TOL_FACTOR = 1e-3
 HMATRIX_MAX_ITERATIONS = 1000
@@ -352,6 +356,7 @@ def steklov_poincare(
                 preconditioner_tol=HMATRIX_PRECONDITIONER_TOL,
                 solver_tol=HMATRIX_SOLVER_TOL_FACTOR * tol,
                 max_iterations=HMATRIX_MAX_ITERATIONS,
+                product_threads=HMATRIX_PRODUCT_THREADS,
             )
         )
         if timings is not None:

@@ -39,12 +39,16 @@ PYBIND11_MODULE(_bem, m) {
       .def_readonly("nbytes_preconditioner", &bem::SteklovInfo::nbytes_preconditioner);
   py::class_<bem::SteklovPoincareOperator>(m, "SteklovPoincareOperator")
       .def(py::init([](NodesRef nodes, Space flux, bem::Index leaf_size, double eta, double tol,
-                       double preconditioner_tol, double solver_tol, int max_iterations) {
+                       double preconditioner_tol, double solver_tol, int max_iterations,
+                       int product_threads) {
              return std::make_unique<bem::SteklovPoincareOperator>(
-                 nodes, flux, bem::SteklovOptions{{leaf_size, eta, tol}, preconditioner_tol, solver_tol, max_iterations});
+                 nodes, flux,
+                 bem::SteklovOptions{{leaf_size, eta, tol, false, product_threads}, preconditioner_tol,
+                                     solver_tol, max_iterations});
            }),
            py::arg("nodes"), py::arg("flux"), py::arg("leaf_size"), py::arg("eta"), py::arg("tol"),
-           py::arg("preconditioner_tol"), py::arg("solver_tol"), py::arg("max_iterations"), Release())
+           py::arg("preconditioner_tol"), py::arg("solver_tol"), py::arg("max_iterations"),
+           py::arg("product_threads"), Release())
       .def("apply", &bem::SteklovPoincareOperator::apply, py::arg("x"), Release())
       .def("flux", &bem::SteklovPoincareOperator::flux, py::arg("x"), Release())
       .def_property_readonly("size", &bem::SteklovPoincareOperator::size)

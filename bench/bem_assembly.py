@@ -9,7 +9,16 @@ i.e. LAPACK dpotrf, best of --repeat) measured in the same run. The dense linear
 costs n^3/3 + n^3 + n^3 flops, i.e. seven Cholesky factorisations' worth, so the ratio
 cannot go below about 7. A last line times V_h, K_h and W_h alone for the largest n.
 
+A second table is the hierarchical-matrix operator (``compression="hmatrix"``, tol
+1e-10, docs/design/hmatrix.md) on the circle and on the L-shaped boundary for
+--hmatrix-sizes: set-up, memory held (``nbytes``), time of one product (best of
+--repeat), CG iterations of its V_h solve, relative product error against the dense S_h
+(n <= --error-max) and set-up and memory as fractions of the dense S_h measured in the
+same run (n <= --dense-max). The issue-20 targets are printed with met / NOT MET.
+
 Run: .venv/bin/python bench/bem_assembly.py [--sizes 512 1024 2048 4096] [--repeat 2]
+     [--hmatrix-sizes 1000 2000 4000 8000 16000 32000 64000] [--shapes circle l-shape]
+     [--dense-max 8000] [--error-max 4000] [--skip-dense-table]
 """
 from __future__ import annotations
 
@@ -23,9 +32,38 @@ import scipy.linalg
 import bem_cpp
 
 
+TOL = 1e-10
+# issue 20: set-up at n = 4,000 at most this fraction of the dense set-up (memory too)
+TARGET_FRACTION_4000 = 0.25
+TARGET_SETUP_16000 = 2.0  # s
+TARGET_NBYTES_16000 = 300e6
+TARGET_SETUP_64000 = 10.0  # s
+TARGET_ERROR = 10 * TOL
+# product time O(n log n): fitted exponent of t against n log n over n >= 4,000
+PRODUCT_EXPONENT_MAX = 1.2
+
+
 def circle(n: int, radius: float = 0.4) -> np.ndarray:
     theta = 2 * np.pi * np.arange(n) / n
     return np.c_[radius * np.cos(theta), radius * np.sin(theta)]
+
+
+def l_shape(n: int, side: float = 0.6) -> np.ndarray:
+    """The square of `side` without its upper right quarter, about n/8 panels per half
+    side (as tests/test_bem_polygons.l_shape)."""
+    s = side / 2
+    corners = np.array([[-s, -s], [s, -s], [s, 0.0], [0.0, 0.0], [0.0, s], [-s, s]])
+    sides = np.roll(corners, -1, axis=0) - corners
+    lengths = np.linalg.norm(sides, axis=1)
+    h = lengths.sum() / n
+    nodes = []
+    for a, side_vector, length in zip(corners, sides, lengths):
+        k = max(1, int(round(length / h)))
+        nodes.append(a + np.outer(np.arange(k) / k, side_vector))
+    return np.concatenate(nodes)
+
+
+SHAPES = {"circle": circle, "l-shape": l_shape}
 
 
 def best_of(repeat: int, f):
@@ -37,18 +75,140 @@ def best_of(repeat: int, f):
     return best, result
 
 
+def verdict(ok: bool) -> str:
+    return "met" if ok else "NOT MET"
+
+
+def hmatrix_table(shape: str, sizes: list[int], args: argparse.Namespace) -> dict[int, dict]:
+    """One row per n: the H-matrix operator against the dense S_h of the same run."""
+    header = (
+        f"{'n':>6} {'set-up [s]':>10} {'MB':>8} {'product [ms]':>12} {'CG':>4}"
+        f" {'rel. error':>10} {'dense [s]':>9} {'dense MB':>9} {'set-up/dense':>12}"
+        f" {'MB/dense':>8} {'load':>5}"
+    )
+    print(f"\nH-matrix S_h, {shape}, P1 flux, tol {TOL:g}")
+    print(header)
+    print("-" * len(header))
+    rows = {}
+    rng = np.random.default_rng(0)
+    for n in sizes:
+        X = SHAPES[shape](n)
+        n = len(X)
+        t_h, S_h = best_of(
+            args.hmatrix_repeat,
+            lambda: bem_cpp.steklov_poincare(X, "p1", compression="hmatrix", tol=TOL),
+        )
+        x = rng.standard_normal((n, 2))
+        t_p, _ = best_of(args.repeat, lambda op=S_h: op @ x[:, 0])
+        row = dict(setup=t_h, nbytes=S_h.nbytes, product=t_p, cg=S_h.last_iterations)
+        row.update(error=np.nan, dense=np.nan, dense_nbytes=8.0 * n * n)
+        if n <= args.dense_max:
+            t_d, S = best_of(1, lambda: bem_cpp.steklov_poincare(X, "p1"))
+            row["dense"] = t_d
+            if n <= args.error_max:
+                row["error"] = float(np.linalg.norm(S_h @ x - S @ x) / np.linalg.norm(S @ x))
+            del S
+        rows[n] = row
+        print(
+            f"{n:>6} {t_h:>10.3f} {row['nbytes'] / 1e6:>8.1f} {1e3 * t_p:>12.2f} {row['cg']:>4}"
+            f" {row['error']:>10.1e} {row['dense']:>9.3f} {row['dense_nbytes'] / 1e6:>9.1f}"
+            f" {t_h / row['dense']:>12.3f} {row['nbytes'] / row['dense_nbytes']:>8.3f}"
+            f" {os.getloadavg()[0]:>5.1f}",
+            flush=True,
+        )
+        del S_h
+    return rows
+
+
+def nearest(rows: dict[int, dict], n: int) -> int | None:
+    """The measured size within 5 % of n (the L-shape rounds its sides), if any."""
+    close = [m for m in rows if abs(m - n) <= 0.05 * n]
+    return min(close, key=lambda m: abs(m - n)) if close else None
+
+
+def print_targets(shape: str, rows: dict[int, dict]) -> None:
+    print(f"targets ({shape}):")
+    errors = [r["error"] for r in rows.values() if np.isfinite(r["error"])]
+    if errors:
+        worst = max(errors)
+        ok = worst <= TARGET_ERROR
+        print(f"  product error <= {TARGET_ERROR:.0e}: worst {worst:.1e} ({verdict(ok)})")
+    n = nearest(rows, 4000)
+    if n is not None and np.isfinite(rows[n]["dense"]):
+        r = rows[n]
+        f_t, f_m = r["setup"] / r["dense"], r["nbytes"] / r["dense_nbytes"]
+        ok_t, ok_m = f_t <= TARGET_FRACTION_4000, f_m <= TARGET_FRACTION_4000
+        print(
+            f"  n = {n}: set-up <= {TARGET_FRACTION_4000} dense: {f_t:.3f} ({verdict(ok_t)});"
+            f" memory <= {TARGET_FRACTION_4000} dense: {f_m:.3f} ({verdict(ok_m)})"
+        )
+    n = nearest(rows, 16000)
+    if n is not None:
+        r = rows[n]
+        ok_t, ok_m = r["setup"] <= TARGET_SETUP_16000, r["nbytes"] <= TARGET_NBYTES_16000
+        mb = r["nbytes"] / 1e6
+        print(
+            f"  n = {n}: set-up <= {TARGET_SETUP_16000:g} s: {r['setup']:.2f} s ({verdict(ok_t)});"
+            f" memory <= {TARGET_NBYTES_16000 / 1e6:g} MB: {mb:.1f} MB ({verdict(ok_m)})"
+        )
+    n = nearest(rows, 64000)
+    if n is not None:
+        t = rows[n]["setup"]
+        ok = t <= TARGET_SETUP_64000
+        print(f"  n = {n}: set-up <= {TARGET_SETUP_64000:g} s: {t:.2f} s ({verdict(ok)})")
+    big = sorted(m for m in rows if m >= 4000)
+    if len(big) >= 2:
+        nn = np.array(big, dtype=float)
+        t = np.array([rows[m]["product"] for m in big])
+        slope = np.polyfit(np.log(nn * np.log(nn)), np.log(t), 1)[0]
+        ok = slope <= PRODUCT_EXPONENT_MAX
+        print(
+            f"  product O(n log n): t ~ (n log n)^{slope:.2f} over n = {big[0]} ... {big[-1]}"
+            f" (<= {PRODUCT_EXPONENT_MAX}: {verdict(ok)})"
+        )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", type=int, nargs="+", default=[512, 1024, 2048, 4096])
     parser.add_argument("--repeat", type=int, default=2)
+    parser.add_argument(
+        "--hmatrix-sizes",
+        type=int,
+        nargs="+",
+        default=[1000, 2000, 4000, 8000, 16000, 32000, 64000],
+    )
+    parser.add_argument("--hmatrix-repeat", type=int, default=1, help="set-ups per n (best of)")
+    parser.add_argument(
+        "--shapes", nargs="+", choices=sorted(SHAPES), default=["circle", "l-shape"]
+    )
+    parser.add_argument("--dense-max", type=int, default=8000, help="largest n with a dense S_h")
+    parser.add_argument("--error-max", type=int, default=4000, help="largest n with the error")
+    parser.add_argument("--skip-dense-table", action="store_true")
     args = parser.parse_args()
+    if min(args.sizes + args.hmatrix_sizes) < 3 or args.repeat < 1 or args.hmatrix_repeat < 1:
+        parser.exit(2, "bem_assembly.py: sizes must be >= 3 and repeats >= 1\n")
 
     load = os.getloadavg()[0]
-    print(f"bem_cpp {bem_cpp.version()}, {os.cpu_count()} cores, load average {load:.2f}")
+    threads = os.environ.get("OMP_NUM_THREADS", "unset")
+    print(
+        f"bem_cpp {bem_cpp.version()}, {os.cpu_count()} cores, OMP_NUM_THREADS {threads},"
+        f" load average {load:.2f}"
+    )
+    if not args.skip_dense_table:
+        dense_table(args)
+    for shape in args.shapes:
+        rows = hmatrix_table(shape, args.hmatrix_sizes, args)
+        print_targets(shape, rows)
+    print(f"load average at the end {os.getloadavg()[0]:.2f}")
+
+
+def dense_table(args: argparse.Namespace) -> None:
     header = (
         f"{'n':>6} {'S_h [s]':>9} {'assembly':>9} {'cholesky':>9} {'trsm':>9} {'syrk':>9}"
         f" {'dpotrf [s]':>11} {'S/chol':>7}"
     )
+    print("\ndense S_h, circle, P1 flux")
     print(header)
     print("-" * len(header))
     for n in args.sizes:

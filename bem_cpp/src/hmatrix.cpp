@@ -38,9 +38,10 @@ void collect(const ClusterTree& rows, const ClusterTree& cols, int t, int s, dou
 
 HMatrix::HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const ClusterTree> cols,
                  const EntrySource& entries, const HMatrixOptions& options)
-    : rows_(std::move(rows)), cols_(std::move(cols)), symmetric_(options.symmetric) {
-  if (!(options.eta > 0) || !(options.tol > 0) || options.leaf_size < 1)
-    throw std::invalid_argument("HMatrix: need eta > 0, tol > 0, leaf_size >= 1");
+    : rows_(std::move(rows)), cols_(std::move(cols)), symmetric_(options.symmetric),
+      product_threads_(options.product_threads) {
+  if (!(options.eta > 0) || !(options.tol > 0) || options.leaf_size < 1 || options.product_threads < 0)
+    throw std::invalid_argument("HMatrix: need eta > 0, tol > 0, leaf_size >= 1, product_threads >= 0");
   if (symmetric_ && rows_ != cols_)
     throw std::invalid_argument("HMatrix: a symmetric matrix needs one cluster tree for rows and columns");
   collect(*rows_, *cols_, 0, 0, options.eta, symmetric_, blocks_);
@@ -86,10 +87,10 @@ Eigen::MatrixXd HMatrix::apply(const Eigen::Ref<const Eigen::MatrixXd>& X, bool 
   Eigen::MatrixXd Xp(X.rows(), nrhs);
   const std::vector<Index>& pin = in_tree.permutation();
   for (Index r = 0; r < X.rows(); ++r) Xp.row(r) = X.row(pin[static_cast<std::size_t>(r)]);
-  const int threads = omp_get_max_threads();
+  const int threads = product_threads_ > 0 ? product_threads_ : omp_get_max_threads();
   std::vector<Eigen::MatrixXd> partial(static_cast<std::size_t>(threads));
   const long count = static_cast<long>(blocks_.size());
-#pragma omp parallel
+#pragma omp parallel num_threads(threads)
   {
     Eigen::MatrixXd& Y = partial[static_cast<std::size_t>(omp_get_thread_num())];
     Y.setZero(n_out, nrhs);

@@ -34,6 +34,12 @@ PairRelation relation(Index p, Index q, Index n) {
 std::vector<Index> sorted_panels(Space space, const Index* dofs, Index m, Index n,
                                  std::vector<Index> panels) {
   panels.clear();
+  if (m == 1) {  // one dof (a row or column of ACA): two panels, or one for P0
+    const Terms t = terms(space, dofs[0], n);
+    panels.push_back(std::min(t.panel[0], t.panel[1]));
+    if (t.panel[0] != t.panel[1]) panels.push_back(std::max(t.panel[0], t.panel[1]));
+    return panels;
+  }
   panels.reserve(static_cast<std::size_t>(2 * m));
   for (Index r = 0; r < m; ++r) {
     const Terms t = terms(space, dofs[r], n);
@@ -96,6 +102,7 @@ void OperatorEntries::block(const DofSet& R, const DofSet& C, double* out, Index
   // Per-thread scratch (rows and columns of ACA call this often with small sets; fresh
   // zero-filled vectors cost more than the integrals). Every entry is written before use.
   thread_local std::vector<double> table, store;
+  thread_local std::vector<int> points;
   if (table.size() < 4 * np * nq) table.resize(4 * np * nq);
   auto at = [&](int a, int b, std::size_t ip, std::size_t iq) -> double& {
     return table[(static_cast<std::size_t>(2 * a + b) * np + ip) * nq + iq];
@@ -112,6 +119,7 @@ void OperatorEntries::block(const DofSet& R, const DofSet& C, double* out, Index
     const std::size_t ni = inner.size();
     const PanelArrays& arrays = swap ? R.arrays : C.arrays;
     if (store.size() < 4 * ni) store.resize(4 * ni);
+    if (points.size() < ni) points.resize(ni);
     PairBlockColumns col;
     for (int a = 0; a < 2; ++a)
       for (int b = 0; b < 2; ++b) {
@@ -126,11 +134,12 @@ void OperatorEntries::block(const DofSet& R, const DofSet& C, double* out, Index
         far_blocks_batch(po, arrays, queue[p], queued[p], p, !with_k, with_k, col, 1.0, 1.0);
         queued[p] = 0;
       };
+      far_field_points(po, arrays, 0, static_cast<Index>(ni), points.data());
       for (std::size_t ii = 0; ii < ni; ++ii) {
         const Index q = inner[ii];
         const PairRelation rel = relation(outer[io], q, n);
         const Panel& pq = polygon_.panel(q);
-        const int p = rel == PairRelation::Separated ? far_field_points(po, pq) : 0;
+        const int p = rel == PairRelation::Separated ? points[ii] : 0;
         if (p > 0) {
           queue[p][queued[p]++] = static_cast<Index>(ii);
           if (queued[p] == kFarBatch) flush(p);

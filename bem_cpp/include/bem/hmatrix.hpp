@@ -24,6 +24,10 @@ struct HMatrixOptions {
   /// A symmetric matrix on one cluster tree (V_h): only the blocks on and above the block
   /// diagonal are built and held; the products use each off-diagonal block twice.
   bool symmetric = false;
+  /// OpenMP threads of a product (0: omp_get_max_threads()). A product is many short
+  /// parallel loops; on an oversubscribed machine each waits for a descheduled thread
+  /// (docs/design/hmatrix.md), so the operator of S_h uses one.
+  int product_threads = 0;
 };
 
 /// Entries of one block A(I, J) (original dof order), by rows, columns or all at once.
@@ -73,6 +77,7 @@ class HMatrix {
   std::shared_ptr<const ClusterTree> rows_, cols_;
   std::vector<Block> blocks_;
   bool symmetric_ = false;
+  int product_threads_ = 0;
 };
 
 }  // namespace bem
