@@ -94,6 +94,13 @@ HMATRIX_CROSSOVER = 4096
 #: products agree with the dense S_h to a few times this (docs/design/hmatrix.md), far
 #: below the solver tolerances (1e-8 by default).
 HMATRIX_TOL = 1e-10
+#: The adaptive loop splits a subdomain (``fem_py.grading``) once its diameter over its
+#: smallest cell exceeds this many times the largest such ratio of the first mesh (d/h
+#: for a structured mesh), so that H/h in the substructuring bound (1 + log(H/h))^2
+#: stays bounded over the levels; the parts are halved until each is below the bound.
+#: 2: one level of local refinement halves h, so a graded subdomain is split every
+#: level or two (docs/design/adapt.md, "Subdomains on graded meshes").
+GRADING_SPLIT_FACTOR = 2.0
 #: Fitted convergence rates (adapt.png, the study's adaptivity part) use the levels with
 #: at least this many dofs (the pre-asymptotic coarse levels left out), or all levels
 #: when fewer than two are that large.

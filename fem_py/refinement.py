@@ -96,10 +96,13 @@ def max_facet_length(msh: Any) -> float:
 
 def _corner_angle(domain: Any) -> float | None:
     """The ``corner_angle`` the coarse structure of ``domain`` was computed with: none for
-    the square and L-shape of build_domain, fem_py.geometry.CORNER_ANGLE for the other
-    shapes and meshes (curved coarse edges). The new nodes are midpoints of straight
-    facets, so they add no bend and the coarse vertices stay the same."""
-    return None if domain.shape in ("square", "lshape") else CORNER_ANGLE
+    the grid partitions of the square and L-shape of build_domain,
+    fem_py.geometry.CORNER_ANGLE for the other shapes and meshes and for partitions made
+    of cells (curved coarse edges, e.g. after ``fem_py.grading``). The new nodes are
+    midpoints of straight facets, so they add no bend and the coarse vertices stay the
+    same."""
+    grid = domain.shape in ("square", "lshape") and domain.partition == "grid"
+    return None if grid else CORNER_ANGLE
 
 
 def refine_domain(domain: Any, cells: np.ndarray) -> Any:

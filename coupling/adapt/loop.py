@@ -5,7 +5,9 @@ Each level is a new :class:`coupling.problem.SignoriniProblem` on the refined
 :func:`coupling.solvers.solve` from the previous solution transferred to it
 (:mod:`coupling.adapt.transfer`), estimated (:mod:`coupling.adapt.estimator`) and
 marked by Doerfler's rule (:mod:`coupling.adapt.marking`); the marked cells are
-refined (:func:`fem_py.refinement.refine_domain`).
+refined (:func:`fem_py.refinement.refine_domain`) and the subdomains the refinement has
+graded are split (:func:`fem_py.grading.split_graded_subdomains`, bound
+``coupling.options.GRADING_SPLIT_FACTOR``), so that H/h stays bounded.
 """
 from __future__ import annotations
 
@@ -17,8 +19,10 @@ from coupling.adapt.estimator import Estimate, estimate
 from coupling.adapt.marking import doerfler_marking
 from coupling.adapt.transfer import transfer_iterate
 from coupling.manufactured import energy_error
-from coupling.options import DEFAULTS, SolverOptions
+from coupling.options import DEFAULTS, GRADING_SPLIT_FACTOR, SolverOptions
 from coupling.solvers import solve
+from fem_py.geometry import CORNER_ANGLE
+from fem_py.grading import split_graded_subdomains, subdomain_grading
 from fem_py.refinement import refine_domain
 
 __all__ = ["AdaptOptions", "adapt_options", "Level", "adapt"]
@@ -55,7 +59,7 @@ def adapt_options(section: dict[str, Any]) -> AdaptOptions:
 @dataclass
 class Level:
     """One level of the loop. :meth:`record` gives the JSON fields (dofs, boundary_dofs,
-    signorini_dofs, cells, estimator, terms, iterations, gradient_steps, newton_steps,
+    signorini_dofs, cells, subdomains, estimator, terms, iterations, gradient_steps, newton_steps,
     cg_iterations, converged, time; with an exact solution also error and efficiency);
     ``problem``, ``solution``, ``estimate`` and ``domain`` are the objects themselves."""
 
@@ -79,6 +83,7 @@ class Level:
             "boundary_dofs": int(p.boundary.n_gamma),
             "signorini_dofs": int(p.n_signorini),
             "cells": int(cells),
+            "subdomains": int(self.domain.coarse.n_subdomains),
             "estimator": self.estimate.total,
             "terms": dict(self.estimate.terms),
             "iterations": int(sol.iterations),
@@ -106,6 +111,7 @@ def adapt(
     monitor: Any = None,
     on_level: Callable[[Level], None] | None = None,
     exact: str = "",
+    split: bool = True,
 ) -> list[Level]:
     """Run the adaptive loop from ``domain`` (collective); return the levels.
 
@@ -127,8 +133,13 @@ def adapt(
     exact
         The exact interior solution u (an expression in x, y), when known: each level
         then records the energy error |u_h - u|_1 and the efficiency index eta / error.
+    split
+        Split the subdomains whose diameter / smallest cell exceeds GRADING_SPLIT_FACTOR
+        times the largest such ratio of the first mesh after every refinement (False:
+        keep the first partition, every subdomain graded inside).
     """
     levels: list[Level] = []
+    max_ratio = GRADING_SPLIT_FACTOR * float(subdomain_grading(domain).max()) if split else 0.0
     start = None
     previous = None
     for k in range(adapt_options.steps + 1):
@@ -149,6 +160,8 @@ def adapt(
             marked = doerfler_marking(domain.comm, est.cells, adapt_options.theta)
             level.marked = int(domain.comm.allreduce(int(marked.sum())))
             domain = refine_domain(domain, marked.nonzero()[0])
+            if split:
+                domain = split_graded_subdomains(domain, max_ratio, CORNER_ANGLE)
         if on_level is not None:
             on_level(level)
         previous = level

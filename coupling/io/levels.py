@@ -33,6 +33,7 @@ _COLUMNS = (
     "boundary_dofs",
     "signorini_dofs",
     "cells",
+    "subdomains",
     "marked",
     "estimator",
     "error",

@@ -1,0 +1,194 @@
+"""The grading of the subdomains of a locally refined mesh, and the split of the graded
+ones (METHOD.md section 6; docs/design/adapt.md, "Subdomains on graded meshes").
+
+Local refinement keeps the coarse partition (``fem_py.refinement``), so a subdomain at a
+singularity gets ever smaller cells inside while its size H stays: the ratio H/h of the
+substructuring bound (1 + log(H/h))^2 grows by about log 2 per level, and so do the
+iteration counts. :func:`subdomain_grading` measures, per subdomain, its diameter over
+its smallest cell; :func:`split_graded_subdomains` cuts every subdomain whose ratio
+exceeds a bound into parts (``fem_py.partition.partition_cells`` on its cells only,
+halving the part size until every part is below the bound), so the parts are graded
+like the mesh and H/h stays bounded.
+
+Measures (rank-independent, reduced by MIN / MAX over the ranks): the diameter of a
+subdomain is the diagonal of its bounding box (between 1 and sqrt(2) times the true
+diameter), the size of a cell its longest edge; for the square subdomains of a
+structured mesh the ratio is d/h.
+
+The split is the same for any number of ranks: the cells of a graded subdomain are sent
+to one rank (the lowest holding some; with whole subdomains per rank, ``fem_py.distribute``,
+its owner), which orders them canonically (nodes and cells by coordinates) before
+splitting; part k of old subdomain s gets the id offset_s + k, offset_s the exclusive
+prefix sum of the part counts over the old ids. Refined cells stay on their parent's
+rank, so the new subdomains are again whole on one rank.
+"""
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import numpy as np
+from dolfinx import fem
+from dolfinx import mesh as dmesh
+from mpi4py import MPI
+
+from fem_py.coarse import compute_coarse_structure
+from fem_py.meshdata import tag_array
+from fem_py.partition import partition_cells
+
+__all__ = ["subdomain_grading", "split_graded_subdomains", "split_cells"]
+
+#: Depth limit of the recursive halving (a part of 4^depth pieces would be far finer
+#: than any level refines in one step).
+_MAX_DEPTH = 12
+
+
+def _owned_cells(domain: Any) -> tuple[np.ndarray, np.ndarray]:
+    """(corners (n, 3, 2), subdomain ids (n,)) of the owned cells of ``domain``."""
+    msh = domain.mesh
+    cells = msh.topology.index_map(2)
+    n = cells.size_local
+    corners = msh.geometry.dofmap.array.reshape(-1, 3)[:n]
+    tags = tag_array(domain.cell_tags, n + cells.num_ghosts)[:n].astype(np.int64)
+    return msh.geometry.x[:, :2][corners], tags
+
+
+def _cell_sizes(p: np.ndarray) -> np.ndarray:
+    """Longest edge of every triangle p (n, 3, 2)."""
+    return np.max(np.linalg.norm(p - np.roll(p, 1, axis=1), axis=2), axis=1)
+
+
+def _ratio(p: np.ndarray) -> float:
+    """Bounding-box diagonal over the smallest longest edge of the triangles p (n, 3, 2)."""
+    flat = p.reshape(-1, 2)
+    return float(np.linalg.norm(np.ptp(flat, axis=0)) / _cell_sizes(p).min())
+
+
+def subdomain_grading(domain: Any) -> np.ndarray:
+    """Diameter / smallest cell size of every subdomain of ``domain``, (L,) float, the
+    same on every rank (collective). Diameter: bounding-box diagonal; cell size: longest
+    edge (see the module docstring)."""
+    comm = domain.comm
+    n_sub = int(domain.coarse.n_subdomains)
+    p, tags = _owned_cells(domain)
+    lo = np.full((n_sub, 2), np.inf)
+    hi = np.full((n_sub, 2), -np.inf)
+    h_min = np.full(n_sub, np.inf)
+    for k in range(3):
+        np.minimum.at(lo, tags, p[:, k])
+        np.maximum.at(hi, tags, p[:, k])
+    np.minimum.at(h_min, tags, _cell_sizes(p))
+    for array, op in ((lo, MPI.MIN), (hi, MPI.MAX), (h_min, MPI.MIN)):
+        comm.Allreduce(MPI.IN_PLACE, array, op=op)
+    return np.linalg.norm(hi - lo, axis=1) / h_min
+
+
+def _canonical(p: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Triangles p (n, 3, 2) as a canonical mesh: (x, cells, order) with the nodes sorted
+    by (rounded) coordinates, each cell's nodes increasing, and the cells sorted by their
+    node numbers; cell i of the mesh is p[order[i]]. The result depends on the set of
+    triangles only, not on their order."""
+    flat = p.reshape(-1, 2)
+    scale = float(np.max(np.ptp(flat, axis=0)))
+    key = np.round((flat - flat.min(0)) / scale, 10)
+    _, first, node = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    cells = np.sort(node.reshape(-1, 3), axis=1)
+    order = np.lexsort((cells[:, 2], cells[:, 1], cells[:, 0]))
+    return flat[first], cells[order], order
+
+
+def split_cells(x: np.ndarray, cells: np.ndarray, max_ratio: float) -> np.ndarray:
+    """Parts 0 .. m-1 of the triangles ``cells`` (node coordinates ``x``), each part of
+    ratio (bounding-box diagonal / smallest longest edge) at most ``max_ratio`` where
+    possible: a part above it is cut by ``partition_cells`` at half its size (sqrt of
+    its area / 2, about four pieces), recursively. Every part is connected and none is
+    enclosed by one other part (``partition_cells``)."""
+    x = np.asarray(x, dtype=float)[:, :2]
+    cells = np.asarray(cells, dtype=np.int64)
+    label = np.zeros(len(cells), dtype=np.int64)
+
+    def split(idx: np.ndarray, depth: int, first: int) -> int:
+        p = x[cells[idx]]
+        if depth >= _MAX_DEPTH or len(idx) < 2 or _ratio(p) <= max_ratio:
+            label[idx] = first
+            return first + 1
+        e1, e2 = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
+        area = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]).sum()
+        pieces = partition_cells(x, cells[idx], 0.5 * np.sqrt(area))
+        if pieces.max() == 0:  # cells too coarse to cut further
+            label[idx] = first
+            return first + 1
+        for k in range(int(pieces.max()) + 1):
+            first = split(idx[pieces == k], depth + 1, first)
+        return first
+
+    split(np.arange(len(cells)), 0, 0)
+    return label
+
+
+def split_graded_subdomains(domain: Any, max_ratio: float, corner_angle: float) -> Any:
+    """``domain`` with every subdomain of :func:`subdomain_grading` above ``max_ratio``
+    split by :func:`split_cells` (collective).
+
+    Returns ``domain`` itself when no subdomain is above the bound, else a new Domain
+    with the new cell tags (ids 0 .. L'-1, see the module docstring), the coarse
+    structure recomputed with ``corner_angle`` (the interfaces of the parts zigzag along
+    the cells: ``compute_coarse_structure``) and ``partition = "cells"``.
+    """
+    comm = domain.comm
+    graded = subdomain_grading(domain) > max_ratio
+    if not graded.any():
+        return domain
+    n_sub = len(graded)
+    p, tags = _owned_cells(domain)
+    present = np.full(n_sub, comm.size, dtype=np.int64)
+    present[np.unique(tags)] = comm.rank
+    comm.Allreduce(MPI.IN_PLACE, present, op=MPI.MIN)
+    holder = present  # the lowest rank holding cells of s
+    mine = np.flatnonzero(graded[tags])
+    dest = holder[tags[mine]]
+    sends = [mine[dest == r] for r in range(comm.size)]
+    received = comm.alltoall([(tags[c], p[c]) for c in sends])
+
+    parts = np.zeros(n_sub, dtype=np.int64)
+    labels_in = [np.zeros(len(t), dtype=np.int64) for t, _ in received]
+    for s in np.flatnonzero(graded & (holder == comm.rank)):
+        pieces = [(r, np.flatnonzero(t == s)) for r, (t, _) in enumerate(received)]
+        tri = np.concatenate([received[r][1][i] for r, i in pieces])
+        x, cells, order = _canonical(tri)
+        label = np.empty(len(tri), dtype=np.int64)
+        label[order] = split_cells(x, cells, max_ratio)
+        parts[s] = int(label.max()) + 1
+        start = 0
+        for r, i in pieces:
+            labels_in[r][i] = label[start : start + len(i)]
+            start += len(i)
+    comm.Allreduce(MPI.IN_PLACE, parts, op=MPI.SUM)
+    parts[~graded] = 1
+    offset = np.concatenate([[0], np.cumsum(parts)[:-1]])
+    new = offset[tags]
+    for r, lab in enumerate(comm.alltoall(labels_in)):
+        new[sends[r]] += lab
+    ct = _with_ghosts(domain.mesh, new)
+    return dataclasses.replace(
+        domain,
+        cell_tags=ct,
+        coarse=compute_coarse_structure(domain.mesh, ct, domain.facet_tags, corner_angle),
+        partition="cells",
+    )
+
+
+def _with_ghosts(msh: Any, owned: np.ndarray) -> Any:
+    """Cell tags of every local cell (owned, then ghosts) from the values ``owned`` of the
+    owned cells, the ghosts' values from their owners (a DG0 scatter)."""
+    V0 = fem.FunctionSpace(msh, ("DG", 0))
+    n = msh.topology.index_map(2).size_local
+    n_all = n + msh.topology.index_map(2).num_ghosts
+    dof = V0.dofmap.list.array.reshape(-1)[:n_all]
+    f = fem.Function(V0)
+    f.x.array[dof[:n]] = owned
+    f.x.scatter_forward()
+    values = np.rint(f.x.array[dof]).astype(np.int32)
+    ct = dmesh.meshtags(msh, 2, np.arange(n_all, dtype=np.int32), values)
+    ct.name = "subdomains"
+    return ct
