@@ -36,6 +36,8 @@ from bem_cpp import _bem
 from bem_cpp._bem import version
 
 __all__ = [
+    "boundary_operators",
+    "BoundaryOperators",
     "double_layer",
     "exterior_flux",
     "exterior_potential",
@@ -219,6 +221,77 @@ HMATRIX_MAX_ITERATIONS = 1000
 HMATRIX_PRECONDITIONER_TOL = 1e-4
 
 
+def _columnwise(apply, x: ArrayLike, n: int) -> NDArray[np.float64]:
+    """``apply`` (of an (n, k) block) to x of shape (n,) or (n, k)."""
+    arr = np.asarray(x, dtype=np.float64)
+    if arr.ndim not in (1, 2) or arr.shape[0] != n:
+        raise ValueError(f"x must have shape ({n},) or ({n}, k), got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError("x contains non-finite values")
+    y = apply(np.asfortranarray(arr.reshape(n, 1) if arr.ndim == 1 else arr))
+    return y[:, 0] if arr.ndim == 1 else y
+
+
+class BoundaryOperators:
+    r"""V_h and K_h (:func:`single_layer`, :func:`double_layer`) held as H-matrices and
+    applied, never formed: ACA blocks to the relative tolerance ``tol``, the near field
+    exact (docs/design/hmatrix.md). Built by :func:`boundary_operators`.
+
+    Attributes
+    ----------
+    shape : (n, n)
+    nbytes : int
+        Bytes held by the two H-matrices.
+    """
+
+    def __init__(self, compiled: _bem.BoundaryOperators) -> None:
+        self._op = compiled
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return (self._op.size, self._op.size)
+
+    @property
+    def nbytes(self) -> int:
+        return int(self._op.nbytes)
+
+    def single_layer(self, x: ArrayLike) -> NDArray[np.float64]:
+        """V_h x for x of shape (n,) or (n, k) (coefficients in the space of the operators)."""
+        return _columnwise(self._op.single_layer, x, self._op.size)
+
+    def double_layer(self, x: ArrayLike) -> NDArray[np.float64]:
+        """K_h x for x of shape (n,) or (n, k) (nodal values of a P1 trace)."""
+        return _columnwise(self._op.double_layer, x, self._op.size)
+
+
+def boundary_operators(
+    nodes: ArrayLike, space: str = "p1", *, tol: float = 1e-10
+) -> BoundaryOperators:
+    """V_h and K_h of the closed polygon ``nodes`` (counter-clockwise) as H-matrices
+    (:class:`BoundaryOperators`): products agree with ``single_layer(nodes, space) @ x``
+    and ``double_layer(nodes, space) @ x`` to a few times ``tol``, in O(n log n) memory.
+
+    Raises
+    ------
+    ValueError
+        Bad ``nodes``, ``space`` or ``tol``.
+    """
+    X = _nodes(nodes)
+    tol = _scalar(tol, "tol")
+    if not 0 < tol < 1:
+        raise ValueError(f"tol must lie in (0, 1), got {tol!r}")
+    return BoundaryOperators(
+        _bem.BoundaryOperators(
+            X,
+            _space(space, "space"),
+            leaf_size=HMATRIX_LEAF_SIZE,
+            eta=HMATRIX_ETA,
+            tol=tol,
+            product_threads=HMATRIX_PRODUCT_THREADS,
+        )
+    )
+
+
 class SteklovPoincareOperator:
     r"""S_h applied as an operator, never formed (docs/design/hmatrix.md).
 
@@ -264,27 +337,13 @@ class SteklovPoincareOperator:
     def info(self) -> _bem.SteklovInfo:
         return self._op.info
 
-    def _block(self, x: ArrayLike) -> tuple[NDArray[np.float64], bool]:
-        arr = np.asarray(x, dtype=np.float64)
-        n = self._op.size
-        if arr.ndim not in (1, 2) or arr.shape[0] != n:
-            raise ValueError(f"x must have shape ({n},) or ({n}, k), got {arr.shape}")
-        if not np.all(np.isfinite(arr)):
-            raise ValueError("x contains non-finite values")
-        vector = arr.ndim == 1
-        return (arr.reshape(n, 1) if vector else arr), vector
-
     def __matmul__(self, x: ArrayLike) -> NDArray[np.float64]:
         """S_h x for x of shape (n,) or (n, k) (nodal values of P1 traces)."""
-        arr, vector = self._block(x)
-        y = self._op.apply(np.asfortranarray(arr))
-        return y[:, 0] if vector else y
+        return _columnwise(self._op.apply, x, self._op.size)
 
     def flux(self, dirichlet: ArrayLike) -> NDArray[np.float64]:
         """Coefficients of psi_h = V_h^{-1}(K_h - M_h) v (``exterior_flux`` with a = 0)."""
-        arr, vector = self._block(dirichlet)
-        y = self._op.flux(np.asfortranarray(arr))
-        return y[:, 0] if vector else y
+        return _columnwise(self._op.flux, dirichlet, self._op.size)
 
     def __repr__(self) -> str:
         n = self._op.size

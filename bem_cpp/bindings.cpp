@@ -7,6 +7,7 @@
 
 #include <memory>
 
+#include "bem/boundary_operators.hpp"
 #include "bem/operators.hpp"
 #include "bem/potentials.hpp"
 #include "bem/steklov_operator.hpp"
@@ -55,6 +56,19 @@ PYBIND11_MODULE(_bem, m) {
       .def_property_readonly("nbytes", &bem::SteklovPoincareOperator::nbytes)
       .def_property_readonly("info", &bem::SteklovPoincareOperator::info)
       .def_property_readonly("last_iterations", &bem::SteklovPoincareOperator::last_iterations);
+
+  py::class_<bem::BoundaryOperators>(m, "BoundaryOperators")
+      .def(py::init([](NodesRef nodes, Space space, bem::Index leaf_size, double eta, double tol,
+                       int product_threads) {
+             return std::make_unique<bem::BoundaryOperators>(
+                 nodes, space, bem::HMatrixOptions{leaf_size, eta, tol, false, product_threads});
+           }),
+           py::arg("nodes"), py::arg("space"), py::arg("leaf_size"), py::arg("eta"), py::arg("tol"),
+           py::arg("product_threads"), Release())
+      .def("single_layer", &bem::BoundaryOperators::single_layer, py::arg("x"), Release())
+      .def("double_layer", &bem::BoundaryOperators::double_layer, py::arg("x"), Release())
+      .def_property_readonly("size", &bem::BoundaryOperators::size)
+      .def_property_readonly("nbytes", &bem::BoundaryOperators::nbytes);
 
   m.def("version", &bem::version);
   m.def("single_layer", py::overload_cast<NodesRef, Space>(&bem::single_layer), py::arg("nodes"),

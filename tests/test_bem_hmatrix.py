@@ -15,7 +15,9 @@ TOL = 1e-10
 
 
 def relative_error(S_h, S, x) -> float:
-    return float(np.linalg.norm(S_h @ x - S @ x) / np.linalg.norm(S @ x))
+    """|S_h x - S x| / |S x|; ``S_h`` an operator with @ or a function of x."""
+    y = S_h(x) if callable(S_h) else S_h @ x
+    return float(np.linalg.norm(y - S @ x) / np.linalg.norm(S @ x))
 
 
 @pytest.mark.parametrize("make", [circle, square, l_shape])
@@ -125,3 +127,24 @@ def test_capacity_above_one_is_reported():
     with pytest.raises(ValueError, match="logarithmic capacity"):
         S_h = bem_cpp.steklov_poincare(circle(400, radius=2.0), compression="hmatrix")
         S_h @ np.ones(400)
+
+
+@pytest.mark.parametrize("make", [circle, l_shape])
+@pytest.mark.parametrize("space", ["p1", "p0"])
+def test_boundary_operators_match_the_dense_matrices(make, space):
+    """bem_cpp.boundary_operators: V_h x and K_h x as H-matrix products, to 10 tol."""
+    X = make(1500)
+    layers = bem_cpp.boundary_operators(X, space, tol=TOL)
+    assert layers.shape == (len(X), len(X))
+    assert layers.nbytes < 2 * 8 * len(X) ** 2 / 2  # under half of the two dense matrices
+    x = np.random.default_rng(5).standard_normal((len(X), 2))
+    for held, dense in (
+        (layers.single_layer, bem_cpp.single_layer(X, space)),
+        (layers.double_layer, bem_cpp.double_layer(X, space)),
+    ):
+        assert relative_error(held, dense, x) <= 10 * TOL
+        assert np.allclose(held(x[:, 0]), held(x)[:, 0], rtol=0, atol=1e-14)
+    with pytest.raises(ValueError, match="x must have shape"):
+        layers.single_layer(np.zeros(3))
+    with pytest.raises(ValueError, match="tol must lie in"):
+        bem_cpp.boundary_operators(X, space, tol=2.0)

@@ -3,22 +3,9 @@
 #include <chrono>
 #include <stdexcept>
 
-#include "bem/operator_entries.hpp"
+#include "bem/boundary_operators.hpp"
 
 namespace bem {
-
-namespace {
-
-std::shared_ptr<const HMatrix> build(const Polygon& polygon, Kernel kernel, Space rows,
-                                     std::shared_ptr<const ClusterTree> row_tree,
-                                     std::shared_ptr<const ClusterTree> col_tree, const HMatrixOptions& o) {
-  const OperatorEntries entries(polygon, kernel, rows, kernel == Kernel::SingleLayer ? rows : Space::P1);
-  HMatrixOptions options = o;
-  options.symmetric = kernel == Kernel::SingleLayer;  // V_h = V_h^T: half the blocks
-  return std::make_shared<const HMatrix>(std::move(row_tree), std::move(col_tree), entries, options);
-}
-
-}  // namespace
 
 SteklovPoincareOperator::SteklovPoincareOperator(const Eigen::Ref<const Points>& nodes, Space flux,
                                                  const SteklovOptions& options)
@@ -30,9 +17,9 @@ SteklovPoincareOperator::SteklovPoincareOperator(const Eigen::Ref<const Points>&
   auto tree0 = std::make_shared<const ClusterTree>(ClusterTree::for_space(polygon_, Space::P0, o.leaf_size));
   auto tree1 = std::make_shared<const ClusterTree>(ClusterTree::for_space(polygon_, Space::P1, o.leaf_size));
   auto tree_flux = flux == Space::P0 ? tree0 : tree1;
-  V0_ = build(polygon_, Kernel::SingleLayer, Space::P0, tree0, tree0, o);
-  V_ = flux == Space::P0 ? V0_ : build(polygon_, Kernel::SingleLayer, Space::P1, tree1, tree1, o);
-  K_ = build(polygon_, Kernel::DoubleLayer, flux, tree_flux, tree1, o);
+  V0_ = layer_hmatrix(polygon_, Kernel::SingleLayer, Space::P0, tree0, tree0, o);
+  V_ = flux == Space::P0 ? V0_ : layer_hmatrix(polygon_, Kernel::SingleLayer, Space::P1, tree1, tree1, o);
+  K_ = layer_hmatrix(polygon_, Kernel::DoubleLayer, flux, tree_flux, tree1, o);
   HMatrixOptions loose = o;
   loose.tol = options.preconditioner_tol;
   preconditioner_ = std::make_unique<CalderonPreconditioner>(polygon_, flux, V0_, loose);

@@ -37,6 +37,7 @@ import scipy.sparse.linalg as spla
 from scipy.spatial import cKDTree
 
 import bem_cpp
+from coupling.options import HMATRIX_TOL
 from fem_py.coarse import SIGNORINI_TAG0
 from fem_py.forms import as_ufl_data, compile_form
 from fem_py.parallel import array_from_root
@@ -103,6 +104,9 @@ def _mass(lengths: np.ndarray, space: str) -> sp.csr_matrix:
 def bie_residual(nodes: np.ndarray, ue: np.ndarray, flux: np.ndarray, a: float, space: str):
     """h_E ||d/ds R_h||^2_E per panel (n,) of the residual R_h = (K - I)(v_h - a) - V psi_h.
 
+    V_h and K_h on the bisected boundary are applied as H-matrices
+    (``bem_cpp.boundary_operators``, blocks to :data:`coupling.options.HMATRIX_TOL`).
+
     R_h is tested with the hats (``"p1"``) or indicators (``"p0"``) of the boundary with
     every panel bisected, and L2-projected onto that space; ``"p1"``: h_E ||d/ds R_h||^2
     of the projection; ``"p0"`` (no derivative): the inverse-estimate equivalent
@@ -117,8 +121,8 @@ def bie_residual(nodes: np.ndarray, ue: np.ndarray, flux: np.ndarray, a: float, 
     else:
         psi = np.repeat(flux, 2)
     lengths = np.linalg.norm(np.roll(fine, -1, axis=0) - fine, axis=1)
-    r = bem_cpp.double_layer(fine, space) @ (v - a) - _mass(lengths, space) @ (v - a)
-    r -= bem_cpp.single_layer(fine, space) @ psi
+    layers = bem_cpp.boundary_operators(fine, space, tol=HMATRIX_TOL)  # V_h, K_h as H-matrices
+    r = layers.double_layer(v - a) - _mass(lengths, space) @ (v - a) - layers.single_layer(psi)
     h = lengths[0::2] + lengths[1::2]
     if space == "p1":
         R = spla.spsolve(_mass(lengths, "p1").tocsc(), r)
