@@ -1,5 +1,6 @@
-"""The adaptive loop under MPI: the same levels (dofs, marked cells, estimator, errors,
-contact sets) and the same refined mesh up to the ordering as in serial."""
+"""The adaptive loop under MPI: the same levels (dofs, marked cells, subdomains after the
+split of graded ones, iteration counts, estimator, errors, contact sets) and the same
+refined mesh and subdomain tags up to the ordering as in serial."""
 from __future__ import annotations
 
 import json
@@ -23,9 +24,20 @@ def test_adaptive_levels_independent_of_ranks(tmp_path, case):
     serial, par = runs[1], runs[2]
     assert len(serial["rows"]) == len(par["rows"])
     for s, p in zip(serial["rows"], par["rows"]):
-        for key in ("dofs", "boundary_dofs", "signorini_dofs", "cells", "marked", "contact_nodes"):
+        for key in (
+            "dofs",
+            "boundary_dofs",
+            "signorini_dofs",
+            "cells",
+            "subdomains",
+            "marked",
+            "contact_nodes",
+            "iterations",
+            "cg_iterations",
+        ):
             assert s[key] == p[key], key
         assert s["converged"] and p["converged"] and p["mismatch"] == 0
         assert p["estimator"] == pytest.approx(s["estimator"], rel=1e-8)
         assert p["error"] == pytest.approx(s["error"], rel=1e-8)
+    assert serial["rows"][-1]["subdomains"] > serial["rows"][0]["subdomains"]  # split
     np.testing.assert_allclose(np.array(par["cells"]), np.array(serial["cells"]), atol=1e-14)
