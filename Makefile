@@ -66,6 +66,7 @@ bench: setup
 	$(PY) bench/peers.py
 	$(PY) bench/strong_scaling.py --output bench/scaling.md
 	$(PY) bench/outputs.py
+	$(PY) bench/speed.py
 
 study: setup
 	$(PY) -m coupling.study

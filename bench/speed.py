@@ -1,0 +1,376 @@
+"""Speed as the user meets it (issue 18): the whole `fembem solve` against an independent
+Poisson pipeline on the same mesh size.
+
+For every size (the structured square [-1/4, 1/4]^2 with ``cells`` cells per side, about
+(cells + 1)^2 dofs, subdomains d = 4h, the carstensen material and the manufactured
+contact case ``coupling.manufactured.square_contact`` written as [data] expressions,
+tol 1e-8, plots and XDMF on, one rank) it runs, each in its own subprocess:
+
+- ``fembem solve`` (cold, ``[solver] nested = false``): the process wall and the stage
+  timings of its summary.json;
+- a Poisson pipeline (``--poisson CELLS``): dolfinx ``create_rectangle`` with the cells
+  of that run's mesh (the subdomains of 4 cells may round ``cells``: 250 gives 248), P1
+  stiffness and load assembly, CG + GAMG to rtol 1e-8 (the process wall; mesh,
+  assembly, GAMG set-up and CG timed inside);
+- ``fembem solve`` with ``[solver] nested = true``.
+
+The ratios, measured in the same run: whole run / Poisson pipeline (process walls;
+target <= 2.5 at 10^6 dofs and no worse at 4e6) and solve stage / Poisson solve (the
+stage from the assembled problem to the converged iterate: preconditioner, step
+estimate, iteration and, when nested, the coarser levels and the prolongation; against
+assembly + GAMG set-up + CG; target <= 1.5 at 10^6), printed as met / not met. The bare
+iteration (summary.json ``solve``) over the Poisson solve is shown too. No assertions:
+the numbers go to docs/design/speed.md.
+
+    .venv/bin/python bench/speed.py [--sizes 100,250,500,1000] [--repeat 1] [--out DIR]
+                                    [--json FILE]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+DEFAULT_SIZES = (100, 250, 500, 1000)
+#: Stages of summary.json that make up the solve stage (from the assembled problem to
+#: the converged iterate); the nested run adds its coarser levels and prolongation.
+SOLVE_STAGES = ("preconditioner", "step_estimate", "solve", "coarse_levels", "prolongation")
+TARGET_WHOLE, TARGET_SOLVE = 2.5, 1.5
+
+
+def manufactured_data() -> dict[str, str]:
+    """The [data] expressions (f, t0, u0) of ``square_contact`` with the carstensen
+    material: f = -div(rho(|grad u|) grad u), t0 = (rho(|grad u|) grad u - grad u_e).n,
+    u0 = u - u_e + g* (g* on the bottom side, selected by max(0, -ny); it vanishes at
+    both bottom corners, where the node normal is averaged). The derivatives are taken
+    by sympy; every term of u with max(0, -x) has it to the third power, so in its first
+    and second derivatives each Heaviside factor multiplies a positive power of
+    max(0, -x) (set to 1) and each DiracDelta factor a square of it (set to 0)."""
+    import sympy
+
+    from coupling.manufactured import square_contact
+    from fem_py.expressions import parse_expression
+    from fem_py.materials import make_material
+
+    sol = square_contact()
+    x, y, nx, ny = sympy.symbols("x y nx ny", real=True)
+    env = {"x": x, "y": y}
+    u = parse_expression(sol.u, env, backend="sympy")
+    ue = parse_expression(sol.ue, env, backend="sympy")
+    gap = parse_expression(sol.arcs[0].gap, env, backend="sympy")
+    rho = make_material("carstensen").rho_sym
+
+    def clean(expr):
+        expr = expr.replace(sympy.DiracDelta, lambda *a: 0)
+        return expr.replace(sympy.Heaviside, lambda *a: 1)
+
+    ux, uy = clean(sympy.diff(u, x)), clean(sympy.diff(u, y))
+    factor = rho.subs(rho.free_symbols.pop(), sympy.sqrt(ux**2 + uy**2))
+    qx, qy = factor * ux, factor * uy
+    f = -(clean(sympy.diff(qx, x)) + clean(sympy.diff(qy, y)))
+    t0 = (qx - sympy.diff(ue, x)) * nx + (qy - sympy.diff(ue, y)) * ny
+    u0 = u - ue + gap * sympy.Max(0, -ny)
+
+    def text(expr) -> str:
+        return str(expr).replace("Max(", "max(")
+
+    return {"f": text(f), "t0": text(t0), "u0": text(u0), "a": sol.a}
+
+
+def write_config(folder: Path, cells: int, data: dict[str, str]) -> Path:
+    """The configuration of the benchmark's square with ``cells`` cells per side."""
+    h = 0.5 / cells
+    path = folder / f"square-{cells}.toml"
+    path.write_text(
+        "[geometry]\n"
+        'shape = "square"\n'
+        f"h = {h!r}\nsubdomain_size = {4 * h!r}\nstructured = true\n"
+        'signorini = ["bottom"]\n'
+        '[material]\nrho = "carstensen"\n'
+        "[data]\n"
+        f"f = {json.dumps(data['f'])}\nt0 = {json.dumps(data['t0'])}\n"
+        f"u0 = {json.dumps(data['u0'])}\na = {data['a']!r}\n"
+        '[solver]\nmethod = "ssn"\ntol = 1e-8\n'
+        "[output]\nxdmf = true\nplots = true\n"
+    )
+    return path
+
+
+def _env() -> dict[str, str]:
+    return dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
+
+
+def run_solve(config: Path, out: Path, nested: bool) -> dict:
+    """One ``fembem solve`` process: its wall time and summary.json."""
+    fembem = Path(sys.executable).parent / "fembem"
+    cmd = [str(fembem), "solve", str(config), "--out", str(out), "--quiet", "--force"]
+    cmd += ["--set", f"solver.nested={'true' if nested else 'false'}"]
+    tic = time.perf_counter()
+    proc = subprocess.run(cmd, capture_output=True, text=True, env=_env())
+    wall = time.perf_counter() - tic
+    if proc.returncode != 0:
+        return {"wall": wall, "error": proc.stderr.strip().splitlines()[-1:]}
+    summary = json.loads((out / "summary.json").read_text())
+    timings = summary["timings"]
+    return {
+        "wall": wall,
+        "dofs": summary["dofs"],
+        "converged": summary["converged"],
+        "iterations": summary["iterations"],
+        "timings": timings,
+        "solve_stage": sum(timings.get(k, 0.0) for k in SOLVE_STAGES),
+        "levels": summary.get("levels"),
+        "fields": str(out / "fields.npz"),
+    }
+
+
+def run_poisson(cells: int) -> dict:
+    """The Poisson pipeline in its own process: wall time and its inner timings."""
+    cmd = [sys.executable, str(Path(__file__).resolve()), "--poisson", str(cells)]
+    tic = time.perf_counter()
+    proc = subprocess.run(cmd, capture_output=True, text=True, env=_env(), check=True)
+    wall = time.perf_counter() - tic
+    return {"wall": wall, **json.loads(proc.stdout.strip().splitlines()[-1])}
+
+
+def poisson_pipeline(cells: int) -> dict:
+    """-Laplace w = 1 in the square, w = 0 on its boundary: mesh (create_rectangle),
+    P1 assembly (stiffness and load), CG + GAMG to rtol 1e-8; the seconds of each part."""
+    tic = time.perf_counter()
+    import dolfinx.fem.petsc  # noqa: F401 - fem.petsc
+    import numpy as np
+    import ufl
+    from dolfinx import fem, mesh
+    from mpi4py import MPI
+    from petsc4py import PETSc
+
+    imports = time.perf_counter() - tic
+    comm = MPI.COMM_WORLD
+    times = {"imports": imports}
+    tic = time.perf_counter()
+    domain = mesh.create_rectangle(
+        comm, [np.array([-0.25, -0.25]), np.array([0.25, 0.25])], [cells, cells]
+    )
+    times["mesh"] = time.perf_counter() - tic
+    tic = time.perf_counter()
+    V = fem.FunctionSpace(domain, ("Lagrange", 1))
+    w, v = ufl.TrialFunction(V), ufl.TestFunction(V)
+    a = fem.form(ufl.inner(ufl.grad(w), ufl.grad(v)) * ufl.dx)
+    L = fem.form(fem.Constant(domain, PETSc.ScalarType(1.0)) * v * ufl.dx)
+    domain.topology.create_connectivity(1, 2)
+    facets = mesh.exterior_facet_indices(domain.topology)
+    bc = fem.dirichletbc(PETSc.ScalarType(0.0), fem.locate_dofs_topological(V, 1, facets), V)
+    times["forms"] = time.perf_counter() - tic
+    tic = time.perf_counter()
+    A = fem.petsc.assemble_matrix(a, bcs=[bc])
+    A.assemble()
+    b = fem.petsc.assemble_vector(L)
+    fem.petsc.apply_lifting(b, [a], [[bc]])
+    b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    fem.petsc.set_bc(b, [bc])
+    times["assembly"] = time.perf_counter() - tic
+    tic = time.perf_counter()
+    ksp = PETSc.KSP().create(comm)
+    ksp.setOperators(A)
+    ksp.setType("cg")
+    ksp.getPC().setType("gamg")
+    ksp.setTolerances(rtol=1e-8)
+    ksp.setUp()
+    times["gamg_setup"] = time.perf_counter() - tic
+    tic = time.perf_counter()
+    x = A.createVecRight()
+    ksp.solve(b, x)
+    times["cg"] = time.perf_counter() - tic
+    times["cg_iterations"] = ksp.getIterationNumber()
+    times["converged"] = ksp.getConvergedReason() > 0
+    times["dofs"] = V.dofmap.index_map.size_global
+    times["solve"] = times["assembly"] + times["gamg_setup"] + times["cg"]
+    return times
+
+
+def measure(sizes: list[int], folder: Path, log, repeat: int = 1) -> list[dict]:
+    """Every size: the cold ``fembem solve``, the Poisson pipeline and the nested
+    ``fembem solve``, ``repeat`` times in turn; each kept at its fastest run (process
+    wall; the machine is shared, and other load only ever adds time)."""
+    data = manufactured_data()
+    rows = []
+    for cells in sizes:
+        config = write_config(folder, cells, data)
+        best: dict[str, dict] = {}
+        walls: dict[str, list[float]] = {"cold": [], "poisson": [], "nested": []}
+        for _ in range(repeat):
+            for nested in (False, True):
+                key = "nested" if nested else "cold"
+                run = run_solve(config, folder / f"out-{cells}-{key}-{len(walls[key])}", nested)
+                log(f"cells = {cells}: fembem solve ({key}) {run['wall']:.1f} s")
+                walls[key].append(run["wall"])
+                if key not in best or ("error" not in run and run["wall"] < best[key]["wall"]):
+                    best[key] = run
+                if not nested:  # the same mesh size: the subdomains may round the cells
+                    side = math.isqrt(run.get("dofs", (cells + 1) ** 2)) - 1
+                    poisson = run_poisson(side)
+                    log(f"cells = {side}: Poisson pipeline {poisson['wall']:.1f} s")
+                    walls["poisson"].append(poisson["wall"])
+                    if "poisson" not in best or poisson["wall"] < best["poisson"]["wall"]:
+                        best["poisson"] = poisson
+        rows.append({"cells": cells, **best, "walls": walls, "load": os.getloadavg()[0]})
+        _compare(rows[-1])
+    return rows
+
+
+def _compare(row: dict) -> None:
+    """The nested run's largest nodal difference from the cold one, relative to max |u|."""
+    import numpy as np
+
+    if "fields" not in row["cold"] or "fields" not in row["nested"]:
+        return
+    cold, nested = np.load(row["cold"]["fields"]), np.load(row["nested"]["fields"])
+    scale = np.abs(cold["u"]).max()
+    row["nested_du"] = float(np.abs(nested["u"] - cold["u"]).max() / scale)
+
+
+def table(rows: list[dict]) -> list[str]:
+    """The markdown table of the stage timings and the ratios (one row per run)."""
+    stages = ("startup", "mesh", "forms", "steklov_poincare", "loads", "preconditioner")
+    stages += ("step_estimate", "coarse_levels", "solve", "exterior_flux", "estimator")
+    stages += ("outputs", "total")
+    head = (
+        "| N | run | its | wall [s] | "
+        + " | ".join(stages)
+        + " | solve stage | Poisson wall [s] | Poisson solve [s] | whole / Poisson "
+        "| solve stage / Poisson solve | iteration / Poisson solve |"
+    )
+    lines = [head, "|" + "---:|" * (len(stages) + 11)]
+    for row in rows:
+        p = row["poisson"]
+        for key in ("cold", "nested"):
+            r = row[key]
+            if "error" in r:
+                lines.append(f"| {p['dofs']} | {key} | error: {' '.join(r['error'])} |")
+                continue
+            t = r["timings"]
+            its = str(r["iterations"])
+            if r.get("levels"):
+                its = " / ".join(str(lv["iterations"]) for lv in r["levels"])
+            cells = " | ".join(f"{t[s]:.1f}" if s in t else "-" for s in stages)
+            lines.append(
+                f"| {r['dofs']} | {key} | {its} | {r['wall']:.1f} | {cells} "
+                f"| {r['solve_stage']:.1f} | {p['wall']:.1f} | {p['solve']:.1f} "
+                f"| {r['wall'] / p['wall']:.2f} | {r['solve_stage'] / p['solve']:.2f} "
+                f"| {t['solve'] / p['solve']:.2f} |"
+            )
+    return lines
+
+
+def poisson_table(rows: list[dict]) -> list[str]:
+    lines = [
+        "| N | process wall [s] | imports | mesh | forms | assembly | GAMG set-up | CG | CG its |",
+        "|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+    ]
+    for row in rows:
+        p = row["poisson"]
+        lines.append(
+            f"| {p['dofs']} | {p['wall']:.1f} | {p['imports']:.1f} | {p['mesh']:.1f} "
+            f"| {p['forms']:.1f} | {p['assembly']:.2f} | {p['gamg_setup']:.2f} "
+            f"| {p['cg']:.2f} | {p['cg_iterations']} |"
+        )
+    return lines
+
+
+def targets(rows: list[dict]) -> list[str]:
+    """The two targets at the largest size >= 10^6 dofs (and each size from 10^6 on)."""
+    lines = []
+    big = [r for r in rows if r["poisson"]["dofs"] >= 1e6]
+    if not big:
+        return ["Targets: not measured (no size with 10^6 dofs or more in this run)."]
+    for row in big:
+        p = row["poisson"]
+        for key in ("cold", "nested"):
+            r = row[key]
+            if "error" in r:
+                lines.append(f"- N = {p['dofs']}, {key}: the run failed")
+                continue
+            whole, solve = r["wall"] / p["wall"], r["solve_stage"] / p["solve"]
+            lines.append(
+                f"- N = {r['dofs']}, {key}: whole run / Poisson pipeline = {whole:.2f} "
+                f"(target <= {TARGET_WHOLE}): **{'met' if whole <= TARGET_WHOLE else 'not met'}**"
+                f"; solve stage / Poisson solve = {solve:.2f} (target <= {TARGET_SOLVE}): "
+                f"**{'met' if solve <= TARGET_SOLVE else 'not met'}**"
+            )
+    return lines
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument(
+        "--sizes",
+        default=",".join(map(str, DEFAULT_SIZES)),
+        help="comma-separated cells per side (N ~ (cells + 1)^2; default 100,250,500,1000; "
+        "2000 gives 4e6 dofs)",
+    )
+    parser.add_argument(
+        "--repeat",
+        type=int,
+        default=1,
+        help="runs of each measurement, the fastest kept (default 1)",
+    )
+    parser.add_argument("--out", help="folder of the runs' outputs (default: a temporary one)")
+    parser.add_argument("--json", metavar="FILE", help="write the raw records to FILE")
+    parser.add_argument("--poisson", type=int, help=argparse.SUPPRESS)
+    args = parser.parse_args(argv)
+    if args.poisson:
+        print(json.dumps(poisson_pipeline(args.poisson)))
+        return 0
+    try:
+        sizes = [int(s) for s in args.sizes.split(",")]
+    except ValueError:
+        parser.error(f"--sizes must be comma-separated integers, got {args.sizes!r}")
+    if any(s < 8 for s in sizes):
+        parser.error("--sizes: at least 8 cells per side (subdomains of 4 cells)")
+
+    def log(message: str) -> None:
+        print(message, file=sys.stderr, flush=True)
+
+    load, started = os.getloadavg(), time.strftime("%Y-%m-%d %H:%M")
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(args.out) if args.out else Path(tmp)
+        folder.mkdir(parents=True, exist_ok=True)
+        rows = measure(sizes, folder, log, max(args.repeat, 1))
+    print(
+        f"Started {started} at load average {load[0]:.1f} (1 min), {load[2]:.1f} (15 min); "
+        f"finished {time.strftime('%Y-%m-%d %H:%M')}; {os.cpu_count()} cores\n"
+    )
+    print("\n".join(table(rows)))
+    print()
+    print("\n".join(poisson_table(rows)))
+    print()
+    for row in rows:
+        walls = "; ".join(
+            f"{k} " + ", ".join(f"{w:.1f}" for w in v) for k, v in row["walls"].items()
+        )
+        print(
+            f"- N = {row['poisson']['dofs']}: process walls of every run [s]: {walls}; "
+            f"load average {row['load']:.1f} after the last"
+        )
+    for row in rows:
+        if "nested_du" in row:
+            print(
+                f"- N = {row['poisson']['dofs']}: nested - cold, max |du| / max |u| = "
+                f"{row['nested_du']:.1e}"
+            )
+    print()
+    print("\n".join(targets(rows)))
+    if args.json:
+        Path(args.json).write_text(json.dumps({"load": load, "rows": rows}, indent=1) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
