@@ -209,7 +209,9 @@ def report(result: dict[str, Any], command: str) -> str:
         "tolerance. BLMVM and BQNLS cannot reach it by their own gradient test (they stall "
         "near 1e-6 in u, the objective's round-off level for their line search); they are "
         "stopped as soon as their iterate passes this accuracy test against PGPM's "
-        "solution (an oracle: the most favourable stopping rule they could have).",
+        "solution (an oracle: the most favourable stopping rule they could have). On a mesh "
+        "where PGPM is skipped, the solutions are compared with SSN's instead (a Newton "
+        "method, converged past its tol), and `/ (a)` is left empty.",
         "",
         "Times are wall-clock seconds: `setup` is the solver's own set-up (for (a)-(b) "
         "building B and the step estimate; for (c)-(d) the Hessian pattern and, for CG + "
@@ -363,7 +365,9 @@ def _sequenced_section(result) -> list[str]:
         if len(rows) > 1:
             rows.sort(key=lambda row: row[0])
             levels = [lv["dofs"] for lv in rows[0][2]["details"]["levels"]]
-            lines = ", ".join(f"{BY_NAME[n].label.split(', ', 1)[1]} {t:.2f} s" for t, n, _ in rows)
+            lines = ", ".join(
+                f"{BY_NAME[n].label.removeprefix('SNES VI ')} {t:.2f} s" for t, n, _ in rows
+            )
             out.append(
                 f"- N = {rows[0][2]['dofs']}: {lines} (fastest on levels of "
                 + ", ".join(map(str, levels))
