@@ -10,7 +10,8 @@ geometry, which refinement does not change:
   partition is kept; the coarse structure is recomputed from the new tags
   (:func:`fem_py.coarse.compute_coarse_structure`), so the substructuring
   preconditioner applies on every level (coarse vertices and edges do not change,
-  only the fine chains along them);
+  only the fine chains along them); the adaptive loop then splits the subdomains the
+  refinement has graded (:mod:`fem_py.grading`);
 - facet tags: the midpoint of a new boundary facet lies on exactly one old boundary
   facet (its parent), whose tag (Gamma_t or Signorini arc k) it takes.
 

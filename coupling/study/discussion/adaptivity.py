@@ -42,15 +42,19 @@ def discuss_adaptivity(ad: dict[str, Any]) -> list[str]:
             + (
                 f" (CG {join(s['cg_iterations'], '{}')})"
                 if s["method"] == "ssn"
-                else f"; the finest level has a local d/h up to {s['d_over_h_max'][-1]:.0f}"
+                else f"; the finest level has d over its smallest cell "
+                f"{s['d_over_h_max'][-1]:.0f} and {s['subdomains'][-1]} subdomains of "
+                f"diameter / smallest cell at most {s['grading'][-1]:.1f}"
             )
             + "."
         )
     out += [
         "",
-        "The coarse partition is kept, so local refinement raises the local d/h (d over "
-        "the smallest cell diameter) inside the subdomains at the corner; Theorem 4.1 "
-        "bounds the PGPM count by C (1 + ln(d/h))^2 with that local ratio.",
+        "Local refinement raises the local d/h (a subdomain's diameter over its smallest "
+        "cell) inside the subdomains at the corner; Theorem 4.1 bounds the PGPM count by "
+        "C (1 + ln(d/h))^2 with that local ratio, so the loop splits every subdomain whose "
+        "ratio exceeds twice that of the first mesh (docs/design/adapt.md, 'Subdomains on "
+        "graded meshes').",
         "",
     ]
     return out
