@@ -136,3 +136,28 @@ def test_memory_error_ends_as_one_line(monkeypatch, tmp_path, capsys):
         "(26000, 26000)); use a coarser mesh (geometry.h, geometry.subdomain_size) or a "
         "machine with more memory"
     ]
+
+
+def test_memory_estimate_counts_the_hmatrix_operator_per_boundary_dof():
+    from coupling.app.sizing import (
+        BOUNDARY_BYTES,
+        HMATRIX_BOUNDARY_BYTES,
+        memory_estimate,
+    )
+    from fem_py.geometry import DomainSize
+
+    size = DomainSize(
+        dofs=16_000_000,
+        boundary_dofs=16_000,
+        signorini_dofs=4_000,
+        subdomains=10**6,
+        h_min=1e-4,
+        h_max=1.5e-4,
+    )
+    dense = memory_estimate(size, 2, boundary_operator="dense")
+    held = memory_estimate(size, 2, boundary_operator="hmatrix")
+    assert dense - held == pytest.approx(
+        BOUNDARY_BYTES * 16_000**2 - 2 * HMATRIX_BOUNDARY_BYTES * 16_000
+    )
+    # auto: the H-matrix at this boundary size (coupling.options.HMATRIX_CROSSOVER)
+    assert memory_estimate(size, 2, boundary_operator="auto") == held

@@ -241,8 +241,9 @@ def _solve(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
     # the run is written beside ``out`` and moved into place once complete
     monitor = None if args.quiet else ProgressMonitor(comm)
     size = _with_geometry_key(planned_size, config)
+    kind = config["solver"]["boundary_operator"]
     if size is not None:  # closed form: refuse before anything is built
-        check_memory(size, comm.size, plots=config["output"]["plots"])
+        check_memory(size, comm.size, plots=config["output"]["plots"], boundary_operator=kind)
     with staged_output_dir(comm, out, force=args.force) as staging:
         interrupts.staging = staging  # from here the first rank to claim it reports
         startup = process_seconds()
@@ -252,7 +253,12 @@ def _solve(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
         domain = _with_geometry_key(domain_from_config, comm, config)
         mesh_time = time.perf_counter() - tic
         if size is None:  # a gmsh mesh: refuse before the boundary matrices are formed
-            check_memory(size_of_domain(domain), comm.size, plots=config["output"]["plots"])
+            check_memory(
+                size_of_domain(domain),
+                comm.size,
+                plots=config["output"]["plots"],
+                boundary_operator=kind,
+            )
         problem, options, timings = problem_on_domain(domain, config)
         timings = {"mesh": mesh_time, **timings}
         arcs = problem_arcs(problem)
@@ -311,7 +317,12 @@ def _info(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
         how = "from the mesh"
     report = {
         **dataclasses.asdict(size),
-        "memory_estimate_bytes": memory_estimate(size, comm.size, plots=config["output"]["plots"]),
+        "memory_estimate_bytes": memory_estimate(
+            size,
+            comm.size,
+            plots=config["output"]["plots"],
+            boundary_operator=config["solver"]["boundary_operator"],
+        ),
         "memory_available_bytes": memory_available(),
         "mpi_ranks": comm.size,
         "sizes": how,

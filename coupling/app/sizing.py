@@ -8,7 +8,9 @@ runs on the square at N = 1.6e4 .. 1e6 dofs (docs/design/memory.md):
 
 (the interpreter and its libraries per rank; meshes, forms, factors and vectors per
 dof; the dense boundary matrices (V, K, W, S_h: five n x n arrays) while S_h is formed,
-n the boundary dofs; matplotlib and the rasterised images of the plots).
+n the boundary dofs; matplotlib and the rasterised images of the plots). With the
+H-matrix S_h (``[solver] boundary_operator``) the boundary term is
+HMATRIX_BOUNDARY_BYTES * n per rank instead (every rank holds the operator).
 """
 from __future__ import annotations
 
@@ -17,6 +19,7 @@ from typing import Any
 import numpy as np
 from mpi4py import MPI
 
+from coupling.distributed import boundary_operator_kind
 from fem_py.geometry import DomainSize
 
 __all__ = [
@@ -25,6 +28,7 @@ __all__ = [
     "PROCESS_BYTES",
     "DOF_BYTES",
     "BOUNDARY_BYTES",
+    "HMATRIX_BOUNDARY_BYTES",
     "memory_estimate",
     "memory_available",
     "check_memory",
@@ -34,18 +38,26 @@ __all__ = [
 PROCESS_BYTES = 200e6
 DOF_BYTES = 0.65e3
 BOUNDARY_BYTES = 5 * 8.0
+#: The H-matrix S_h operator and the estimator's V, K per boundary dof: 86 MB at n =
+#: 16,000 (circle) and 23 MB at 8,000, rounded up (docs/design/hmatrix.md)
+HMATRIX_BOUNDARY_BYTES = 8e3
 PLOT_PROCESS_BYTES = 40e6
 PLOT_DOF_BYTES = 0.02e3
 
 
-def memory_estimate(size: DomainSize, ranks: int = 1, *, plots: bool = True) -> int:
+def memory_estimate(
+    size: DomainSize, ranks: int = 1, *, plots: bool = True, boundary_operator: str = "auto"
+) -> int:
     """Bytes of peak resident memory of a solve of ``size`` on ``ranks`` ranks (all ranks
-    together), with or without the plots."""
+    together), with or without the plots, for ``[solver] boundary_operator``."""
     per_rank = PROCESS_BYTES + (PLOT_PROCESS_BYTES if plots else 0.0)
     per_dof = DOF_BYTES + (PLOT_DOF_BYTES if plots else 0.0)
-    return int(
-        ranks * per_rank + per_dof * size.dofs + BOUNDARY_BYTES * float(size.boundary_dofs) ** 2
-    )
+    n = float(size.boundary_dofs)
+    if boundary_operator_kind(boundary_operator, size.boundary_dofs) == "hmatrix":
+        boundary = ranks * HMATRIX_BOUNDARY_BYTES * n
+    else:
+        boundary = BOUNDARY_BYTES * n**2
+    return int(ranks * per_rank + per_dof * size.dofs + boundary)
 
 
 def memory_available() -> int:
@@ -68,9 +80,12 @@ def _gb(n: float) -> str:
     return f"{n / 1e9:.3g} GB"
 
 
-def check_memory(size: DomainSize, ranks: int, *, plots: bool) -> None:
+def check_memory(
+    size: DomainSize, ranks: int, *, plots: bool, boundary_operator: str = "auto"
+) -> None:
     """Refuse a run whose estimate exceeds the memory available (one-line ValueError)."""
-    need, have = memory_estimate(size, ranks, plots=plots), memory_available()
+    need = memory_estimate(size, ranks, plots=plots, boundary_operator=boundary_operator)
+    have = memory_available()
     if need > have:
         raise ValueError(
             f"the run needs about {_gb(need)} of memory ({size.dofs:.3g} dofs, "
