@@ -43,9 +43,9 @@ def test_products_match_the_dense_operator_n4000(make):
     S_h = bem_cpp.steklov_poincare(X, "p1", compression="hmatrix", tol=TOL)
     x = np.random.default_rng(1).standard_normal((len(X), 2))
     assert relative_error(S_h, S, x) <= 10 * TOL
-    # memory is a benchmark figure, not a test: measured 128 MB dense against 45.9 MB
-    # (L-shape) held by the operator at n = 4,000 (docs/design/hmatrix.md)
-    assert S_h.nbytes < S.nbytes
+    # issue 20: at most a quarter of the dense memory at n = 4,000 (nbytes does not depend
+    # on the machine; measured 0.145 circle, 0.192 L-shape, docs/design/hmatrix.md)
+    assert S_h.nbytes <= S.nbytes / 4
 
 
 @pytest.mark.parametrize("flux", ["p1", "p0"])
