@@ -28,13 +28,14 @@ import dataclasses
 from typing import Any
 
 import numpy as np
+import scipy.sparse as sp
 from dolfinx import fem
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
 from fem_py.coarse import compute_coarse_structure
 from fem_py.meshdata import tag_array
-from fem_py.partition import partition_cells
+from fem_py.partition import cell_adjacency, partition_cells
 
 __all__ = ["subdomain_grading", "split_graded_subdomains", "split_cells"]
 
@@ -123,7 +124,64 @@ def split_cells(x: np.ndarray, cells: np.ndarray, max_ratio: float) -> np.ndarra
         return first
 
     split(np.arange(len(cells)), 0, 0)
-    return label
+    return _merge_pieces(x, cells, label, max_ratio)
+
+
+def _merge_pieces(
+    x: np.ndarray, cells: np.ndarray, label: np.ndarray, max_ratio: float
+) -> np.ndarray:
+    """Merge neighbouring pieces while their union stays within ``max_ratio``: the piece
+    of smallest ratio first, into the neighbour it shares most facets with, unless that
+    leaves a piece enclosed by a single other one (touching neither the outside nor a
+    second piece). Halving leaves pieces of a few coarse cells far from the fine end."""
+    a, b, outside = cell_adjacency(cells)
+    p = x[cells]
+    h = _cell_sizes(p)
+    while True:
+        n = int(label.max()) + 1
+        lo = np.full((n, 2), np.inf)
+        hi = np.full((n, 2), -np.inf)
+        h_min = np.full(n, np.inf)
+        for k in range(3):
+            np.minimum.at(lo, label, p[:, k])
+            np.maximum.at(hi, label, p[:, k])
+        np.minimum.at(h_min, label, h)
+        cut = label[a] != label[b]
+        la, lb = label[a][cut], label[b][cut]
+        shared = sp.coo_matrix(
+            (np.ones(2 * len(la)), (np.concatenate([la, lb]), np.concatenate([lb, la]))),
+            shape=(n, n),
+        ).tocsr()
+        shared.sum_duplicates()
+        on_outside = np.bincount(label, outside, minlength=n) > 0
+        ratio = np.linalg.norm(hi - lo, axis=1) / h_min
+        merged = False
+        for u in np.lexsort((np.arange(n), ratio)):
+            row = slice(shared.indptr[u], shared.indptr[u + 1])
+            nbrs, w = shared.indices[row], shared.data[row]
+            for v in nbrs[np.lexsort((nbrs, -w))]:
+                union = np.linalg.norm(np.maximum(hi[u], hi[v]) - np.minimum(lo[u], lo[v]))
+                if union / min(h_min[u], h_min[v]) > max_ratio:
+                    continue
+                if _encloses(shared, on_outside, u, v):
+                    continue
+                label = np.where(label == max(u, v), min(u, v), label)
+                label = np.where(label > max(u, v), label - 1, label)
+                merged = True
+                break
+            if merged:
+                break
+        if not merged:
+            return label
+
+
+def _encloses(shared: sp.csr_matrix, on_outside: np.ndarray, u: int, v: int) -> bool:
+    """Whether merging pieces u and v leaves a neighbour enclosed by the union alone."""
+    for z in set(shared[[u, v]].indices.tolist()) - {u, v}:
+        others = set(shared[z].indices.tolist()) - {u, v}
+        if not others and not on_outside[z]:
+            return True
+    return False
 
 
 def split_graded_subdomains(domain: Any, max_ratio: float, corner_angle: float) -> Any:
