@@ -9,7 +9,7 @@ import numpy as np
 from dolfinx import cpp
 from mpi4py import MPI
 
-from fem_py.coarse import SIGNORINI_TAG0
+from fem_py.coarse import SIGNORINI_TAG0, as_ragged
 
 __all__ = ["mesh_facts", "subdomain_diameters"]
 
@@ -18,24 +18,28 @@ _DIRECTIONS = 8
 
 
 def subdomain_diameters(domain: Any) -> np.ndarray:
-    """The diameter of every subdomain, (L,) on every rank (collective): the largest
-    width of its nodes over 8 directions, which is the diameter to within 2%."""
-    msh, comm = domain.mesh, domain.mesh.comm
-    n_cells = msh.topology.index_map(2).size_local
-    cells = msh.geometry.dofmap.array.reshape(-1, 3)[:n_cells]
-    part = np.full(n_cells, -1, dtype=np.int64)
-    tags = domain.cell_tags
-    own = tags.indices < n_cells
-    part[tags.indices[own]] = tags.values[own]
-    n_sub = int(domain.coarse.n_subdomains)
+    """The diameter of every subdomain, (L,) on every rank: the largest width over 8
+    directions (the diameter to within 2%) of the nodes on its boundary, its coarse
+    edges (``coarse.edge_coords``, replicated: no communication)."""
+    coarse = domain.coarse
+    edges = as_ragged(coarse.edge_coords, dtype=float, item_shape=(2,))
+    sides = np.asarray(coarse.edge_subdomains, dtype=np.int64)  # (n_e, 2), -1 for Gamma
     angle = np.pi * np.arange(_DIRECTIONS) / _DIRECTIONS
-    proj = msh.geometry.x[:, :2] @ np.stack([np.cos(angle), np.sin(angle)])  # (nodes, 8)
+    proj = edges.flat @ np.stack([np.cos(angle), np.sin(angle)])  # (points, 8)
+    edge = np.repeat(np.arange(len(sides)), edges.lengths)
+    n_sub = int(coarse.n_subdomains)
     hi, lo = np.full((n_sub, _DIRECTIONS), -np.inf), np.full((n_sub, _DIRECTIONS), np.inf)
-    for k in range(3):  # the three nodes of every cell
-        np.maximum.at(hi, part, proj[cells[:, k]])
-        np.minimum.at(lo, part, proj[cells[:, k]])
-    comm.Allreduce(MPI.IN_PLACE, hi, op=MPI.MAX)
-    comm.Allreduce(MPI.IN_PLACE, lo, op=MPI.MIN)
+    for side in (0, 1):
+        part = sides[edge, side]
+        keep = part >= 0
+        order = np.argsort(part[keep], kind="stable")
+        sorted_part, values = part[keep][order], proj[keep][order]
+        if not len(sorted_part):
+            continue
+        starts = np.flatnonzero(np.r_[True, sorted_part[1:] != sorted_part[:-1]])
+        mine = sorted_part[starts]
+        hi[mine] = np.maximum(hi[mine], np.maximum.reduceat(values, starts, axis=0))
+        lo[mine] = np.minimum(lo[mine], np.minimum.reduceat(values, starts, axis=0))
     return (hi - lo).max(axis=1)
 
 

@@ -292,6 +292,7 @@ def _solve(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
             estimator=run.estimator,
             error=run.error,
             indicators=run.indicators if config["output"]["indicators"] else None,
+            facts=facts if run.problem.domain is domain else None,
         )
     if comm.rank == 0 and not args.quiet:
         state = "converged" if result.converged else "did NOT converge"

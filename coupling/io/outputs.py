@@ -118,6 +118,7 @@ def write_outputs(
     estimator: float | None = None,
     error: float | None = None,
     indicators: np.ndarray | None = None,
+    facts: dict | None = None,
 ) -> list[str]:
     """Write summary.json, fields.npz and, on request, solution.xdmf/.h5 and the plots.
 
@@ -131,7 +132,9 @@ def write_outputs(
     to adapt.csv / adapt.png (``adaptive``) or levels.csv (a nested solve,
     :mod:`coupling.io.levels`); ``estimator`` (eta) and ``error`` (|u_h - u|_1 against
     ``[data] exact``) to summary.json; ``indicators``, eta_T^2 of the owned cells (local
-    cell order), as ``indicators`` = eta_T in fields.npz, in the order of ``triangles``.
+    cell order), as ``indicators`` = eta_T in fields.npz, in the order of ``triangles``;
+    ``facts`` (:func:`fem_py.mesh_facts.mesh_facts` of ``problem.domain``, computed here
+    when not given) to summary.json.
 
     Returns
     -------
@@ -143,7 +146,7 @@ def write_outputs(
     gathered = gather_p1(result.u)
     cells = None if indicators is None else gather_cells(problem.V, np.sqrt(indicators))
     pressure = boundary_flux(problem, result)
-    facts = mesh_facts(problem.domain)  # collective
+    facts = mesh_facts(problem.domain) if facts is None else facts  # collective
     written = []
     if xdmf:
         _write_xdmf(comm, out, problem, result)
