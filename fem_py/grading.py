@@ -28,7 +28,6 @@ import dataclasses
 from typing import Any
 
 import numpy as np
-import scipy.sparse as sp
 from dolfinx import fem
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
@@ -133,52 +132,71 @@ def _merge_pieces(
     """Merge neighbouring pieces while their union stays within ``max_ratio``: the piece
     of smallest ratio first, into the neighbour it shares most facets with, unless that
     leaves a piece enclosed by a single other one (touching neither the outside nor a
-    second piece). Halving leaves pieces of a few coarse cells far from the fine end."""
+    second piece); one merge at a time, until none is possible. Halving leaves pieces of
+    a few coarse cells far from the fine end. The pieces' bounding boxes, smallest cells
+    and shared facet counts (a dense matrix: a few dozen pieces) are updated in place."""
     a, b, outside = cell_adjacency(cells)
     p = x[cells]
-    h = _cell_sizes(p)
+    n = int(label.max()) + 1
+    lo = np.full((n, 2), np.inf)
+    hi = np.full((n, 2), -np.inf)
+    h_min = np.full(n, np.inf)
+    for k in range(3):
+        np.minimum.at(lo, label, p[:, k])
+        np.maximum.at(hi, label, p[:, k])
+    np.minimum.at(h_min, label, _cell_sizes(p))
+    cut = label[a] != label[b]
+    shared = np.zeros((n, n), dtype=np.int64)
+    np.add.at(shared, (label[a][cut], label[b][cut]), 1)
+    shared += shared.T
+    on_outside = np.bincount(label, outside, minlength=n) > 0
     while True:
-        n = int(label.max()) + 1
-        lo = np.full((n, 2), np.inf)
-        hi = np.full((n, 2), -np.inf)
-        h_min = np.full(n, np.inf)
-        for k in range(3):
-            np.minimum.at(lo, label, p[:, k])
-            np.maximum.at(hi, label, p[:, k])
-        np.minimum.at(h_min, label, h)
-        cut = label[a] != label[b]
-        la, lb = label[a][cut], label[b][cut]
-        shared = sp.coo_matrix(
-            (np.ones(2 * len(la)), (np.concatenate([la, lb]), np.concatenate([lb, la]))),
-            shape=(n, n),
-        ).tocsr()
-        shared.sum_duplicates()
-        on_outside = np.bincount(label, outside, minlength=n) > 0
-        ratio = np.linalg.norm(hi - lo, axis=1) / h_min
-        merged = False
-        for u in np.lexsort((np.arange(n), ratio)):
-            row = slice(shared.indptr[u], shared.indptr[u + 1])
-            nbrs, w = shared.indices[row], shared.data[row]
-            for v in nbrs[np.lexsort((nbrs, -w))]:
-                union = np.linalg.norm(np.maximum(hi[u], hi[v]) - np.minimum(lo[u], lo[v]))
-                if union / min(h_min[u], h_min[v]) > max_ratio:
-                    continue
-                if _encloses(shared, on_outside, u, v):
-                    continue
-                label = np.where(label == max(u, v), min(u, v), label)
-                label = np.where(label > max(u, v), label - 1, label)
-                merged = True
-                break
-            if merged:
-                break
-        if not merged:
+        pair = _merge_pair(lo, hi, h_min, shared, on_outside, max_ratio)
+        if pair is None:
             return label
+        keep, gone = pair
+        lo[keep] = np.minimum(lo[keep], lo[gone])
+        hi[keep] = np.maximum(hi[keep], hi[gone])
+        h_min[keep] = min(h_min[keep], h_min[gone])
+        on_outside[keep] |= on_outside[gone]
+        shared[keep] += shared[gone]
+        shared[:, keep] += shared[:, gone]
+        shared[keep, keep] = 0
+        lo, hi, h_min, on_outside = (
+            np.delete(v, gone, axis=0) for v in (lo, hi, h_min, on_outside)
+        )
+        shared = np.delete(np.delete(shared, gone, axis=0), gone, axis=1)
+        label = np.where(label == gone, keep, label)
+        label = np.where(label > gone, label - 1, label)
 
 
-def _encloses(shared: sp.csr_matrix, on_outside: np.ndarray, u: int, v: int) -> bool:
+def _merge_pair(
+    lo: np.ndarray,
+    hi: np.ndarray,
+    h_min: np.ndarray,
+    shared: np.ndarray,
+    on_outside: np.ndarray,
+    max_ratio: float,
+) -> tuple[int, int] | None:
+    """The next merge of :func:`_merge_pieces` as (kept id, removed id), or None."""
+    n = len(h_min)
+    ratio = np.linalg.norm(hi - lo, axis=1) / h_min
+    for u in np.lexsort((np.arange(n), ratio)):
+        nbrs = np.flatnonzero(shared[u])
+        for v in nbrs[np.lexsort((nbrs, -shared[u, nbrs]))]:
+            union = np.linalg.norm(np.maximum(hi[u], hi[v]) - np.minimum(lo[u], lo[v]))
+            if union / min(h_min[u], h_min[v]) > max_ratio:
+                continue
+            if _encloses(shared, on_outside, u, v):
+                continue
+            return int(min(u, v)), int(max(u, v))
+    return None
+
+
+def _encloses(shared: np.ndarray, on_outside: np.ndarray, u: int, v: int) -> bool:
     """Whether merging pieces u and v leaves a neighbour enclosed by the union alone."""
-    for z in set(shared[[u, v]].indices.tolist()) - {u, v}:
-        others = set(shared[z].indices.tolist()) - {u, v}
+    for z in set(np.flatnonzero(shared[u] + shared[v]).tolist()) - {u, v}:
+        others = set(np.flatnonzero(shared[z]).tolist()) - {u, v}
         if not others and not on_outside[z]:
             return True
     return False
