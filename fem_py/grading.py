@@ -7,8 +7,9 @@ substructuring bound (1 + log(H/h))^2 grows by about log 2 per level, and so do 
 iteration counts. :func:`subdomain_grading` measures, per subdomain, its diameter over
 its smallest cell; :func:`split_graded_subdomains` cuts every subdomain whose ratio
 exceeds a bound into parts (``fem_py.partition.partition_cells`` on its cells only,
-halving the part size until every part is below the bound), so the parts are graded
-like the mesh and H/h stays bounded.
+halving the part size until every part is below the bound, then merging neighbouring
+parts back while their union stays below it), so the parts are graded like the mesh and
+H/h stays bounded.
 
 Measures (rank-independent, reduced by MIN / MAX over the ranks): the diameter of a
 subdomain is the diagonal of its bounding box (between 1 and sqrt(2) times the true
@@ -101,8 +102,10 @@ def split_cells(x: np.ndarray, cells: np.ndarray, max_ratio: float) -> np.ndarra
     """Parts 0 .. m-1 of the triangles ``cells`` (node coordinates ``x``), each part of
     ratio (bounding-box diagonal / smallest longest edge) at most ``max_ratio`` where
     possible: a part above it is cut by ``partition_cells`` at half its size (sqrt of
-    its area / 2, about four pieces), recursively. Every part is connected and none is
-    enclosed by one other part (``partition_cells``)."""
+    its area / 2, about four pieces), recursively; then neighbouring pieces are merged
+    while their union stays within ``max_ratio`` (:func:`_merge_pieces`). Every part is
+    connected and none is enclosed by one other part (``partition_cells``, and merges
+    that would enclose one are skipped)."""
     x = np.asarray(x, dtype=float)[:, :2]
     cells = np.asarray(cells, dtype=np.int64)
     label = np.zeros(len(cells), dtype=np.int64)
