@@ -87,9 +87,10 @@ LANCZOS_STEPS = 20  # Lanczos steps of the step estimate C0 (and of lambda_min f
 
 #: ``boundary_operator = "auto"``: the H-matrix S_h from this many boundary dofs on, the
 #: dense one below: where S_h costs less in an ssn solve (set-up + about 120 products) as
-#: an H-matrix, measured on this machine by bench/boundary_operator_crossover.py (the
-#: set-up alone is cheaper from about 1,000 on; docs/design/hmatrix.md, "The solver's S_h").
-HMATRIX_CROSSOVER = 4096
+#: an H-matrix, measured on this machine by whole `fembem solve` runs after the H-matrix
+#: speed-ups (break-even at 1,000, the H-matrix 1.7x cheaper at 2,000;
+#: docs/design/hmatrix.md, "The crossover after the set-up and product speed-ups").
+HMATRIX_CROSSOVER = 2048
 #: Relative accuracy of the H-matrix blocks of S_h (``bem_cpp.steklov_poincare`` tol):
 #: products agree with the dense S_h to a few times this (docs/design/hmatrix.md), far
 #: below the solver tolerances (1e-8 by default).
