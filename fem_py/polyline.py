@@ -55,9 +55,9 @@ def coarsened_polygon(
     ``corner_angle``) and the points ``keep`` (inserted as vertices where they lie inside
     a side, within ``tol``). Between two kept vertices, the stretch is cut into the
     fewest pieces of arc length <= ``spacing``, each ending at the first given vertex at
-    or after its even share (so sides are at most ``spacing`` plus one given side). The result is inscribed in
-    the given polygon: it departs from it by the sagitta of its sides, about
-    spacing^2 / (8 R) on a curve of radius R.
+    or after its even share (so sides are at most ``spacing`` plus one given side). The
+    result is inscribed in the given polygon: it departs from it by the sagitta of its
+    sides, about spacing^2 / (8 R) on a curve of radius R.
     """
     p = np.asarray(vertices, dtype=float)
     for q in keep:  # the points to keep become vertices
