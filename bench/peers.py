@@ -164,6 +164,7 @@ def _coarser_levels(
                 u0=values["u0"],
                 t0=values["t0"],
                 a=values["a"],
+                boundary_operator=problem.boundary_operator,
             )
 
         return build
@@ -277,9 +278,16 @@ def worker(spec: dict[str, Any]) -> None:
             return {k: PROBLEMS[name][k] for k in ("f", "t0", "u0", "a")}
 
         data = data_on(domain.mesh)
-        # the shared set-up: forms, S_h, loads (every solver builds its own B)
+        # the shared set-up: forms, S_h, loads (every solver builds its own B); the dense
+        # S_h at every size, as the PETSc peers assemble it into their Hessian
         problem = SignoriniProblem(
-            domain, material, f=data["f"], u0=data["u0"], t0=data["t0"], a=data["a"]
+            domain,
+            material,
+            f=data["f"],
+            u0=data["u0"],
+            t0=data["t0"],
+            a=data["a"],
+            boundary_operator="dense",
         )
         shared = time.perf_counter() - tic
         info = {
