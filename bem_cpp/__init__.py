@@ -232,7 +232,22 @@ def _columnwise(apply, x: ArrayLike, n: int) -> NDArray[np.float64]:
     return y[:, 0] if arr.ndim == 1 else y
 
 
-class BoundaryOperators:
+class _CompiledOperator:
+    """A compiled n x n operator of bem_cpp: its shape and the bytes it holds."""
+
+    def __init__(self, compiled: _bem.BoundaryOperators | _bem.SteklovPoincareOperator) -> None:
+        self._op = compiled
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return (self._op.size, self._op.size)
+
+    @property
+    def nbytes(self) -> int:
+        return int(self._op.nbytes)
+
+
+class BoundaryOperators(_CompiledOperator):
     r"""V_h and K_h (:func:`single_layer`, :func:`double_layer`) held as H-matrices and
     applied, never formed: ACA blocks to the relative tolerance ``tol``, the near field
     exact (docs/design/hmatrix.md). Built by :func:`boundary_operators`.
@@ -243,17 +258,6 @@ class BoundaryOperators:
     nbytes : int
         Bytes held by the two H-matrices.
     """
-
-    def __init__(self, compiled: _bem.BoundaryOperators) -> None:
-        self._op = compiled
-
-    @property
-    def shape(self) -> tuple[int, int]:
-        return (self._op.size, self._op.size)
-
-    @property
-    def nbytes(self) -> int:
-        return int(self._op.nbytes)
 
     def single_layer(self, x: ArrayLike) -> NDArray[np.float64]:
         """V_h x for x of shape (n,) or (n, k) (coefficients in the space of the operators)."""
@@ -292,7 +296,7 @@ def boundary_operators(
     )
 
 
-class SteklovPoincareOperator:
+class SteklovPoincareOperator(_CompiledOperator):
     r"""S_h applied as an operator, never formed (docs/design/hmatrix.md).
 
     .. math:: S x = \tfrac12\left(W x + (K - M)^T V^{-1} (K - M) x\right),
@@ -317,17 +321,6 @@ class SteklovPoincareOperator:
     """
 
     dtype = np.dtype(np.float64)
-
-    def __init__(self, compiled: _bem.SteklovPoincareOperator) -> None:
-        self._op = compiled
-
-    @property
-    def shape(self) -> tuple[int, int]:
-        return (self._op.size, self._op.size)
-
-    @property
-    def nbytes(self) -> int:
-        return int(self._op.nbytes)
 
     @property
     def last_iterations(self) -> int:
