@@ -22,6 +22,7 @@ from coupling.preconditioners import coarse_space
 from coupling.preconditioners.kernels import (
     coarse_vertex_pattern,
     galerkin_coarse_matrix,
+    hat_support_on_gamma,
     probing_colours,
 )
 from coupling.preconditioners.substructuring import skeleton_form
@@ -74,8 +75,15 @@ def test_galerkin_coarse_matrix_is_the_energy_of_the_coarse_functions(tmp_path):
             return a_ss @ p - a_is.T @ spla.spsolve(a_ii, a_is @ p)
 
         p = interp.toarray()
-        on_gamma = np.asarray(c.vertex_on_boundary, dtype=float)
-        dense = p.T @ schur(p) + np.diag(domain.subdomain_size * on_gamma)
+        # the boundary term: min(d, the length of Gamma each coarse hat covers); with
+        # straight coarse edges on Gamma that length is the sum of the two chords at v
+        ends = np.asarray(c.edge_vertices)[np.asarray(c.edge_on_boundary, dtype=bool)]
+        xy = np.asarray(c.vertex_coords)
+        chord = np.linalg.norm(xy[ends[:, 0]] - xy[ends[:, 1]], axis=1)
+        support = np.bincount(ends.ravel(), np.repeat(chord, 2), minlength=len(xy))
+        assert np.allclose(hat_support_on_gamma(c), support, rtol=1e-12, atol=0), name
+        weight = np.where(support > 0, np.minimum(domain.subdomain_size, support), 0.0)
+        dense = p.T @ schur(p) + np.diag(weight)
         probed = galerkin_coarse_matrix(
             c, domain.subdomain_size, lambda e: interp.T @ schur(interp @ e)
         ).toarray()

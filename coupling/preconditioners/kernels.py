@@ -14,6 +14,7 @@ from petsc4py import PETSc
 from threadpoolctl import threadpool_limits
 
 from coupling.preconditioners.edge_forms import edge_form
+from fem_py.coarse import as_ragged
 from fem_py.polyline import arc_length
 
 __all__ = [
@@ -25,6 +26,7 @@ __all__ = [
     "coarse_vertex_pattern",
     "probing_colours",
     "galerkin_coarse_matrix",
+    "hat_support_on_gamma",
     "edge_weights",
 ]
 
@@ -259,8 +261,12 @@ def probing_colours(pattern: sp.csr_matrix) -> np.ndarray:
 def galerkin_coarse_matrix(
     coarse: Any, subdomain_size: float, schur_of: Callable[[np.ndarray], np.ndarray]
 ) -> sp.csc_matrix:
-    """C = Pi^T S Pi + d sum_{v on Gamma} u(v)^2: the coarse term of METHOD.md section 6
-    with the coarse graph Laplacian replaced by the exact energy of the coarse functions.
+    """C = Pi^T S Pi + sum_{v on Gamma} d_v u(v)^2: the coarse term of METHOD.md section 6
+    with the coarse graph Laplacian replaced by the exact energy of the coarse functions,
+    and d_v = min(d, the length of Gamma the coarse hat of v covers)
+    (:func:`hat_support_on_gamma`): d as in the paper wherever the coarse vertices on
+    Gamma are at least d/2 apart, less where subdomains smaller than d meet Gamma (the
+    split subdomains of an adapted mesh), which d would over-weight.
 
     S is the Schur complement of the P1 Laplace matrix on the skeleton, so that
     (Pi e_i)^T S (Pi e_j) is the energy of the discrete harmonic extension of the
@@ -284,5 +290,22 @@ def galerkin_coarse_matrix(
     values = product[coo.row, colour[coo.col]]
     galerkin = sp.csr_matrix((values, (coo.row, coo.col)), shape=(n_v, n_v))
     galerkin = 0.5 * (galerkin + galerkin.T)  # symmetric up to the solver's round-off
-    on_boundary = np.asarray(coarse.vertex_on_boundary, dtype=float)
-    return (galerkin + sp.diags(subdomain_size * on_boundary)).tocsc()
+    support = hat_support_on_gamma(coarse)
+    weights = np.where(support > 0, np.minimum(subdomain_size, support), 0.0)
+    return (galerkin + sp.diags(weights)).tocsc()
+
+
+def hat_support_on_gamma(coarse: Any) -> np.ndarray:
+    """For every coarse vertex, the length of Gamma its coarse hat function covers (the
+    arc lengths of its coarse edges on Gamma; 0 off Gamma), (n_v,)."""
+    edges = as_ragged(coarse.edge_coords, dtype=float, item_shape=(2,))
+    ends = np.asarray(coarse.edge_vertices, dtype=np.int64)
+    on_gamma = np.asarray(coarse.edge_on_boundary, dtype=bool)
+    step = np.linalg.norm(np.diff(edges.flat, axis=0), axis=1)
+    cumulative = np.concatenate([[0.0], np.cumsum(step)])
+    first, last = edges.offsets[:-1], edges.offsets[1:] - 1
+    length = cumulative[last] - cumulative[first]  # the steps inside each edge
+    support = np.zeros(len(np.asarray(coarse.vertex_dofs)))
+    np.add.at(support, ends[on_gamma, 0], length[on_gamma])
+    np.add.at(support, ends[on_gamma, 1], length[on_gamma])
+    return support
