@@ -11,7 +11,7 @@ from mpi4py import MPI
 
 from fem_py.coarse import SIGNORINI_TAG0, as_ragged
 
-__all__ = ["mesh_facts", "subdomain_diameters"]
+__all__ = ["mesh_facts", "shortest_facet", "subdomain_diameters"]
 
 #: directions of the widths whose maximum is the diameter (within cos(pi / 16) = 0.981)
 _DIRECTIONS = 8
@@ -43,6 +43,16 @@ def subdomain_diameters(domain: Any) -> np.ndarray:
     return (hi - lo).max(axis=1)
 
 
+def shortest_facet(domain: Any) -> float:
+    """The shortest side of the owned triangles, minimised over the ranks (collective);
+    the longest is ``domain.h_max``."""
+    msh = domain.mesh
+    x = msh.geometry.x[:, :2]
+    cells = msh.geometry.dofmap.array.reshape(-1, 3)[: msh.topology.index_map(2).size_local]
+    sides = np.linalg.norm(x[cells] - x[np.roll(cells, 1, axis=1)], axis=2)
+    return msh.comm.allreduce(float(sides.min(initial=np.inf)), op=MPI.MIN)
+
+
 def _summed(comm: Any, values: np.ndarray) -> np.ndarray:
     out = np.empty_like(values)
     comm.Allreduce(values, out, op=MPI.SUM)
@@ -56,11 +66,6 @@ def mesh_facts(domain: Any) -> dict:
     rank (collective)."""
     msh, comm = domain.mesh, domain.mesh.comm
     x = msh.geometry.x[:, :2]
-    n_cells = msh.topology.index_map(2).size_local
-    cells = msh.geometry.dofmap.array.reshape(-1, 3)[:n_cells]
-    sides = np.linalg.norm(x[cells] - x[np.roll(cells, 1, axis=1)], axis=2)
-    h_min = comm.allreduce(float(sides.min(initial=np.inf)), op=MPI.MIN)
-    h_max = comm.allreduce(float(sides.max(initial=0.0)), op=MPI.MAX)
     facets, values = domain.facet_tags.indices, domain.facet_tags.values
     owned = facets < msh.topology.index_map(1).size_local  # each facet counted once
     on_arc = owned & (values >= SIGNORINI_TAG0)
@@ -79,8 +84,8 @@ def mesh_facts(domain: Any) -> dict:
         )
     return {
         "subdomains": int(domain.coarse.n_subdomains),
-        "h_min": h_min,
-        "h_max": h_max,
+        "h_min": shortest_facet(domain),
+        "h_max": float(domain.h_max),  # kept by fem_py.geometry and fem_py.refinement
         "subdomain_diameter": float(subdomain_diameters(domain).mean()),
         "signorini_lengths": [float(v) for v in _summed(comm, lengths)],
     }

@@ -16,8 +16,6 @@ from __future__ import annotations
 
 from typing import Any
 
-import numpy as np
-from mpi4py import MPI
 
 from coupling.distributed import boundary_operator_kind
 from fem_py.geometry import DomainSize
@@ -99,18 +97,15 @@ def size_of_domain(domain: Any) -> DomainSize:
     longest fine facet."""
     from fem_py.boundary import BoundaryMap
     from fem_py.forms import p1_space
+    from fem_py.mesh_facts import shortest_facet
 
     V = p1_space(domain.mesh)
     boundary = BoundaryMap(V, domain)
-    x = domain.mesh.geometry.x[:, :2]
-    cells = domain.mesh.geometry.dofmap.array.reshape(-1, 3)
-    lengths = [np.linalg.norm(x[cells[:, i]] - x[cells[:, (i + 1) % 3]], axis=1) for i in range(3)]
-    local = float(min(length.min(initial=np.inf) for length in lengths))
     return DomainSize(
         dofs=V.dofmap.index_map.size_global,
         boundary_dofs=boundary.n_gamma,
         signorini_dofs=boundary.n_signorini,
         subdomains=domain.coarse.n_subdomains,
-        h_min=domain.mesh.comm.allreduce(local, op=MPI.MIN),
+        h_min=shortest_facet(domain),
         h_max=domain.h_max,
     )
