@@ -85,6 +85,14 @@ def _vector(value: ArrayLike, n: int, name: str) -> NDArray[np.float64]:
     return arr
 
 
+def _tolerance(value: float) -> float:
+    """The relative accuracy ``tol`` of H-matrix blocks: a real number in (0, 1)."""
+    tol = _scalar(value, "tol")
+    if not 0 < tol < 1:
+        raise ValueError(f"tol must lie in (0, 1), got {tol!r}")
+    return tol
+
+
 def _scalar(value: float, name: str) -> float:
     try:
         a = float(value)
@@ -281,9 +289,7 @@ def boundary_operators(
         Bad ``nodes``, ``space`` or ``tol``.
     """
     X = _nodes(nodes)
-    tol = _scalar(tol, "tol")
-    if not 0 < tol < 1:
-        raise ValueError(f"tol must lie in (0, 1), got {tol!r}")
+    tol = _tolerance(tol)
     return BoundaryOperators(
         _bem.BoundaryOperators(
             X,
@@ -396,9 +402,7 @@ def steklov_poincare(
     if compression not in _COMPRESSIONS:
         raise ValueError(f"compression must be one of {_COMPRESSIONS}, got {compression!r}")
     if compression == "hmatrix":
-        tol = _scalar(tol, "tol")
-        if not 0 < tol < 1:
-            raise ValueError(f"tol must be in (0, 1), got {tol}")
+        tol = _tolerance(tol)
         op = SteklovPoincareOperator(
             _bem.SteklovPoincareOperator(
                 *args,
