@@ -37,6 +37,7 @@ __all__ = [
     "disk_contact",
     "ellipse_contact",
     "lshape_corner",
+    "lshape_corner_contact",
     "MANUFACTURED",
     "manufactured_problem",
     "energy_error",
@@ -250,6 +251,22 @@ def lshape_corner() -> ManufacturedSolution:
     P1 converges like N^(-1/3) in the energy norm (the adaptivity study)."""
     u = "(x**2 + y**2)**(1/3)*cos(2/3*atan2(x - y, -(x + y)))"
     return ManufacturedSolution("lshape", 0.5, (0.0, 0.0), (), u, exterior_field((-0.1, -0.1)))
+
+
+def lshape_corner_contact() -> ManufacturedSolution:
+    """The L-shape with both the corner singularity and contact: u = smooth + K eta
+    max(0, -x)^3 (the bottom side as Signorini arc, contact for x < 0, as in
+    :func:`lshape_contact`) + (1 + 4y)^2 r^(2/3) sin(2 theta/3) (:func:`lshape_corner`).
+    The factor (1 + 4y)^2 is 1 at the corner and vanishes with its y-derivative on the
+    bottom side, so the flux on the arc is that of the contact term alone; u keeps the
+    r^(2/3) singularity, f = -div(rho grad u) ~ r^(-1/3) near the corner (in L^2), and
+    uniform P1 converges like N^(-1/3) in the energy norm while the contact set is
+    known exactly: the case on which adaptivity with contact has something to gain."""
+    smooth = "0.2 + 3*x + 0.05*cos(4*pi*(y + 0.25))*sin(pi*x) + 0.3*(x + 0.1)**2"
+    corner = lshape_corner().u
+    u = f"{smooth} + {_flux_term('y + 0.25', 'x')} + (1 + 4*y)**2*{corner}"
+    arc = Arc((-0.25, -0.25), (0.25, -0.25), f"{_G}*max(0, x)**3*(0.25 - x)")
+    return ManufacturedSolution("lshape", 0.5, (0.0, 0.0), (arc,), u, exterior_field((-0.1, -0.1)))
 
 
 MANUFACTURED = {
