@@ -16,9 +16,11 @@ on the other arcs). Then
     u0 = u - u_e + g*                                   (g* = 0 on Gamma_t)
 
 The exact solution has gap g*, contact set {xi < 0} on every arc, exterior field u_e.
-Two cases are provided: the square [-1/4, 1/4]^2 with the bottom side as Signorini
-arc, and the L-shape [-1/4, 1/4]^2 minus [0, 1/4]^2 with the bottom side and the
-inner horizontal side y = 0, 0 <= x <= 1/4, as arcs.
+Cases: the square [-1/4, 1/4]^2 with the bottom side as Signorini arc; the L-shape
+[-1/4, 1/4]^2 minus [0, 1/4]^2 with the bottom side and the inner horizontal side y = 0,
+0 <= x <= 1/4, as arcs; the disk and the ellipse with their lower quarter; the L-shape's
+corner singularity without contact and with the bottom side in contact
+(:func:`lshape_corner_contact`, the case on which adaptivity gains, docs/design/adapt.md).
 """
 from __future__ import annotations
 

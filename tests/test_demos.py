@@ -152,3 +152,10 @@ def test_adaptive_lshape_demo_beats_uniform_refinement(tmp_path):
     assert -0.40 <= uniform["error_slope"] <= -0.28
     # efficiency index 3.60 .. 3.76 (adaptive), 3.24 .. 3.74 (uniform)
     assert adaptive["index_band"] <= 3.0 and uniform["index_band"] <= 3.0
+    # with contact: measured 0.0211 at 2,290 adaptive dofs against 0.0247 at 3,201 uniform
+    contact = results["contact"]
+    final = contact["adaptive"][-1]
+    larger = [r for r in contact["uniform"] if r["dofs"] >= final["dofs"]]
+    assert all(r["converged"] for r in contact["adaptive"] + contact["uniform"])
+    assert larger and final["error"] <= larger[0]["error"]
+    assert (tmp_path / "mesh.png").stat().st_size > 0
