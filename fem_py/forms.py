@@ -251,9 +251,14 @@ class InteriorForms:
         finally:
             b.destroy()
 
-    def assemble_stiffness(self) -> PETSc.Mat:
-        """The Laplace stiffness matrix int grad v_j . grad v_i dx (a new, assembled Mat)."""
-        A = fem.petsc.assemble_matrix(self._form("stiffness"))
+    def assemble_stiffness(self, A: PETSc.Mat | None = None) -> PETSc.Mat:
+        """The Laplace stiffness matrix int grad v_j . grad v_i dx, assembled into ``A``
+        (a Mat of :meth:`create_matrix`: the same P1 sparsity) or into a new Mat."""
+        if A is None:
+            A = fem.petsc.assemble_matrix(self._form("stiffness"))
+        else:
+            A.zeroEntries()
+            fem.petsc.assemble_matrix(A, self._form("stiffness"))
         A.assemble()
         return A
 

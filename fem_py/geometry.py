@@ -310,19 +310,14 @@ def domain_size(
     if shape == "polygon" or not structured:
         return None
     n = max(2, int(round(plan.csize / plan.h)))
-    cV, cells = plan.cV, [list(c) for c in plan.ccells]
-    edges: dict[tuple[int, int], int] = {}
-    for c in cells:
-        for a, b in zip(c, c[1:] + c[:1]):
-            key = (min(a, b), max(a, b))
-            edges[key] = edges.get(key, 0) + 1
-    boundary = [
-        (a, b)
-        for c in cells
-        for a, b in zip(c, c[1:] + c[:1])
-        if edges[(min(a, b), max(a, b))] == 1
-    ]
-    tags = [edge_tag(cV, a, b, plan.B, plan.arcs) for a, b in boundary]
+    cV, cells = plan.cV, np.asarray(plan.ccells, dtype=np.int64)
+    # the sides a -> b of every coarse cell, cell by cell; a boundary edge is on one cell
+    a, b = cells.ravel(), np.roll(cells, -1, axis=1).ravel()
+    key = np.minimum(a, b) * len(cV) + np.maximum(a, b)
+    _, inverse, count = np.unique(key, return_inverse=True, return_counts=True)
+    once = count[inverse] == 1
+    boundary = list(zip(a[once].tolist(), b[once].tolist()))
+    tags = [edge_tag(cV, p, q, plan.B, plan.arcs) for p, q in boundary]
     n_gamma = n * len(boundary)
     if plan.whole:
         n_s = n_gamma
@@ -331,7 +326,7 @@ def domain_size(
         n_s = sum(n * k - 1 for k in per_arc if k)
     leg = plan.csize / n
     return DomainSize(
-        dofs=node_count(len(cV), len(edges), len(cells), len(cells[0]), n),
+        dofs=node_count(len(cV), len(count), len(cells), cells.shape[1], n),
         boundary_dofs=n_gamma,
         signorini_dofs=n_s,
         subdomains=len(cells),

@@ -47,10 +47,13 @@ def shortest_facet(domain: Any) -> float:
     """The shortest side of the owned triangles, minimised over the ranks (collective);
     the longest is ``domain.h_max``."""
     msh = domain.mesh
-    x = msh.geometry.x[:, :2]
+    x0, x1 = (np.ascontiguousarray(msh.geometry.x[:, k]) for k in (0, 1))
     cells = msh.geometry.dofmap.array.reshape(-1, 3)[: msh.topology.index_map(2).size_local]
-    sides = np.linalg.norm(x[cells] - x[np.roll(cells, 1, axis=1)], axis=2)
-    return msh.comm.allreduce(float(sides.min(initial=np.inf)), op=MPI.MIN)
+    shortest2 = np.inf  # the squared length |x_a - x_b|^2 of side a-b, one side at a time
+    for a, b in ((0, 2), (1, 0), (2, 1)):
+        d0, d1 = x0[cells[:, a]] - x0[cells[:, b]], x1[cells[:, a]] - x1[cells[:, b]]
+        shortest2 = min(shortest2, float((d0 * d0 + d1 * d1).min(initial=np.inf)))
+    return msh.comm.allreduce(float(np.sqrt(shortest2)), op=MPI.MIN)
 
 
 def _summed(comm: Any, values: np.ndarray) -> np.ndarray:

@@ -13,7 +13,7 @@
 """
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from coupling.distributed import dense_matrix, gather_matrix, gather_rows
 from coupling.options import SolverOptions
@@ -27,6 +27,9 @@ from coupling.preconditioners.root import RootPreconditioner
 from coupling.preconditioners.signorini import SignoriniArc, signorini_arcs
 from coupling.preconditioners.substructuring import SubstructuringPreconditioner
 from fem_py.geometry import GAMMA_T_TAG
+
+if TYPE_CHECKING:
+    from petsc4py import PETSc
 
 __all__ = [
     "Preconditioner",
@@ -58,7 +61,9 @@ def coarse_space(domain: Any, choice: str) -> str:
     return "galerkin" if domain.partition == "cells" else "graph"
 
 
-def build_preconditioner(problem: Any, options: SolverOptions) -> Preconditioner:
+def build_preconditioner(
+    problem: Any, options: SolverOptions, *, matrix: PETSc.Mat | None = None
+) -> Preconditioner:
     """B of ``options.preconditioner`` for ``problem`` (METHOD.md sections 5-6), factored
     once (collective). The caller owns it: call ``destroy()`` on every rank when done.
 
@@ -67,6 +72,11 @@ def build_preconditioner(problem: Any, options: SolverOptions) -> Preconditioner
     rank (``fem_py.geometry.build_domain`` partitions so whenever there are at least as
     many subdomains as ranks); otherwise, and for the exact preconditioner, B is built
     from the gathered stiffness matrix and runs on rank 0 (:class:`RootPreconditioner`).
+
+    ``matrix`` (optional, from ``problem.forms.create_matrix()``, the caller's) receives
+    the stiffness matrix, which is otherwise assembled into a new Mat and destroyed: a
+    caller that needs a P1 matrix afterwards (the solvers' Jacobian) saves creating one.
+    B keeps no reference to it.
     """
     kind, comm, V = options.preconditioner, problem.comm, problem.V
     n_owned = V.dofmap.index_map.size_local
@@ -74,7 +84,12 @@ def build_preconditioner(problem: Any, options: SolverOptions) -> Preconditioner
         return IdentityPreconditioner(n_owned, problem.n_signorini)
     domain = problem.domain
     coarse = coarse_space(domain, options.coarse_space)
-    stiffness = problem.forms.assemble_stiffness()
+    stiffness = problem.forms.assemble_stiffness(matrix)
+
+    def release() -> None:
+        if matrix is None:
+            stiffness.destroy()
+
     arcs = problem_arcs(problem)
     if kind == "substructuring" and comm.size > 1:
         ranks = subdomain_ranks(
@@ -98,9 +113,9 @@ def build_preconditioner(problem: Any, options: SolverOptions) -> Preconditioner
                     coarse_space=coarse,
                 )
             finally:
-                stiffness.destroy()
+                release()
     csr = gather_matrix(stiffness)
-    stiffness.destroy()
+    release()
     x = gather_rows(comm, V.tabulate_dof_coordinates()[:n_owned, :2])
     S = dense_matrix(problem.S, "the exact preconditioner") if kind == "exact" else None
 

@@ -63,12 +63,20 @@ def estimate_extremes(
 
 
 def extremes_at(
-    functional, preconditioner, u_function, n_phi: int, *, steps: int
+    functional,
+    preconditioner,
+    u_function,
+    n_phi: int,
+    *,
+    steps: int,
+    matrix: PETSc.Mat | None = None,
 ) -> tuple[float, float]:
-    """:func:`estimate_extremes` with D^2 G assembled at the current u."""
-    jacobian = functional.forms.create_matrix()
+    """:func:`estimate_extremes` with D^2 G assembled at the current u, into ``matrix``
+    (the caller's, from ``forms.create_matrix()``) or into a new Mat destroyed here."""
+    jacobian = functional.forms.create_matrix() if matrix is None else matrix
     functional.forms.assemble_jacobian(u_function, jacobian)
     try:
         return estimate_extremes(functional, preconditioner, jacobian, n_phi, steps=steps)
     finally:
-        jacobian.destroy()
+        if matrix is None:
+            jacobian.destroy()

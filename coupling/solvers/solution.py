@@ -84,13 +84,22 @@ def build_projection(preconditioner: Preconditioner, options: SolverOptions) -> 
 
 
 def step_length(
-    functional: Any, preconditioner: Preconditioner, u: Any, n_phi: int, options: SolverOptions
+    functional: Any,
+    preconditioner: Preconditioner,
+    u: Any,
+    n_phi: int,
+    options: SolverOptions,
+    *,
+    matrix: Any = None,
 ) -> tuple[float, float, float | None]:
     """(tau, C0, lambda_min): tau = 1/C0 with C0 from Lanczos at the iterate u
     (``options.step = "auto"``; lambda_min, the momentum of apgpm, from the same run),
-    or the given step (lambda_min None)."""
+    or the given step (lambda_min None). ``matrix``: a P1 Mat of the caller's to
+    assemble D^2 G into (default: a new one)."""
     if options.step == "auto":
-        lambda_min, C0 = extremes_at(functional, preconditioner, u, n_phi, steps=LANCZOS_STEPS)
+        lambda_min, C0 = extremes_at(
+            functional, preconditioner, u, n_phi, steps=LANCZOS_STEPS, matrix=matrix
+        )
         return 1.0 / C0, C0, lambda_min
     tau = float(options.step)
     return tau, 1.0 / tau, None
@@ -109,9 +118,11 @@ def iterate(
     lambda_min: float | None,
     warm_start: bool = False,
     monitor: Monitor | None = None,
+    matrix: Any = None,
 ) -> RunResult:
     """The iteration of ``options.method`` on J_h = ``functional`` from (u, phi0); u_h is
-    left in ``u``. (``functional`` may wrap the problem's, as the baselines' budget does.)"""
+    left in ``u``. (``functional`` may wrap the problem's, as the baselines' budget does.)
+    ``matrix``: a P1 Mat of the caller's for the Jacobians (default: new ones)."""
     common = dict(tau=tau, tol=options.tol, max_iterations=options.max_iterations, monitor=monitor)
     if options.method == "ssn":
         # from a given iterate (nested iteration, adaptivity) Newton steps start at once,
@@ -127,13 +138,14 @@ def iterate(
             start_steps=SSN_WARM_START_STEPS if warm_start else SSN_START_STEPS,
             cg_max_iterations=SSN_CG_MAX_ITERATIONS,
             residual_scale=scale,
+            matrix=matrix,
             **common,
         )
     if options.method == "apgpm":
         if lambda_min is None:  # a given step: lambda_min at the start, as C0 would be
-            lambda_min = extremes_at(functional, preconditioner, u, phi0.size, steps=LANCZOS_STEPS)[
-                0
-            ]
+            lambda_min = extremes_at(
+                functional, preconditioner, u, phi0.size, steps=LANCZOS_STEPS, matrix=matrix
+            )[0]
         return apgpm(
             functional, preconditioner, projection, u, phi0, strong_convexity=lambda_min, **common
         )
@@ -176,9 +188,13 @@ def solve(
 
     timings: dict[str, float] = {}
     owned = preconditioner is None
+    # one P1 Mat for the stiffness of B, the Jacobian of the step estimate and those of
+    # the iteration (each assembled over the last): creating one costs about one assembly
+    matrix = None
     if owned:
         tic = time.perf_counter()
-        preconditioner = build_preconditioner(problem, options)
+        matrix = problem.forms.create_matrix()
+        preconditioner = build_preconditioner(problem, options, matrix=matrix)
         timings["preconditioner"] = time.perf_counter() - tic
     try:
         pc = preconditioner
@@ -202,7 +218,11 @@ def solve(
                 )
             set_owned(u, u_values)
         tic = time.perf_counter()
-        tau, C0, lambda_min = step_length(problem.functional, pc, u, phi0.size, options)
+        if matrix is None and (options.step == "auto" or options.method != "pgpm"):
+            matrix = problem.forms.create_matrix()
+        tau, C0, lambda_min = step_length(
+            problem.functional, pc, u, phi0.size, options, matrix=matrix
+        )
         timings["step_estimate"] = time.perf_counter() - tic
         tic = time.perf_counter()
         run = iterate(
@@ -217,11 +237,14 @@ def solve(
             lambda_min=lambda_min,
             warm_start=initial is not None,
             monitor=monitor,
+            matrix=matrix,
         )
         timings["solve"] = time.perf_counter() - tic
     finally:
         if owned:
             preconditioner.destroy()
+        if matrix is not None:
+            matrix.destroy()
 
     boundary = problem.boundary
     boundary_u = boundary.gather(u.vector)

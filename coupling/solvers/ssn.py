@@ -129,6 +129,7 @@ def semismooth_newton(
     cg_max_iterations: int,
     residual_scale: float | None = None,
     monitor: Monitor | None = None,
+    matrix=None,
 ) -> RunResult:
     """Semismooth Newton on the optimality system, started by ``start_steps`` PGPM steps.
 
@@ -143,6 +144,9 @@ def semismooth_newton(
     given: from a start already close to the solution (nested iteration) r_0 of the
     problem's own scale (:func:`zero_residual`) keeps the steps from being limited to a
     contraction of 0.1 each.
+
+    ``matrix`` (optional, the caller's, from ``forms.create_matrix()``) holds the
+    Jacobians of the Newton steps; by default a new Mat is created and destroyed here.
     """
     comm = functional.comm
     history = History(monitor)
@@ -162,7 +166,7 @@ def semismooth_newton(
         return warm
     phi = warm.phi
     grad = u_function.vector.duplicate()
-    jacobian = forms.create_matrix()
+    jacobian = forms.create_matrix() if matrix is None else matrix
     e_u, h_u = jacobian.createVecRight(), jacobian.createVecRight()
     energy, g_phi = functional.value_and_gradient(u_function, phi, grad)
     # the exact M_s-projection predicts the active set (an inexact one would blur it); the
@@ -265,7 +269,7 @@ def semismooth_newton(
             converged = True
             reason = f"||xi_k+1 - xi_k||_B <= {tol:g} ||xi_k+1||_B, active set settled"
             break
-    for obj in (grad, jacobian, e_u, h_u):
+    for obj in (grad, e_u, h_u) + ((jacobian,) if matrix is None else ()):
         obj.destroy()
     return history.result(
         phi,
