@@ -29,11 +29,14 @@ mpmath references to better than 1e-12 relative (measured worst cases: 7e-16 for
 """
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from bem_cpp import _bem
 from bem_cpp._bem import version
+from bem_cpp.collectives import mpi_collectives
 
 __all__ = [
     "boundary_operators",
@@ -314,11 +317,16 @@ class SteklovPoincareOperator(_CompiledOperator):
     (W on a trace space paired with the flux space; bounded iteration counts). Built by
     :func:`steklov_poincare` with ``compression="hmatrix"``.
 
+    Distributed (``comm`` of :func:`steklov_poincare`): each rank holds the blocks of its
+    own rows of V, V0 and K, and every product is collective (its rows, one Allgatherv;
+    K^T: a Reduce_scatter and an Allgatherv), with the same result on every rank.
+
     Attributes
     ----------
     shape : (n, n)
     nbytes : int
-        Bytes held (H-matrix blocks, permutations, preconditioner factors).
+        Bytes held (H-matrix blocks, permutations, preconditioner factors); distributed,
+        this rank's.
     last_iterations : int
         CG iterations of the V solve in the last product.
     info : object
@@ -356,6 +364,7 @@ def steklov_poincare(
     compression: str = "none",
     tol: float = 1e-10,
     timings: dict[str, float] | None = None,
+    comm: Any = None,
 ) -> NDArray[np.float64] | SteklovPoincareOperator:
     r"""Discrete Steklov-Poincare operator S_h of the exterior (METHOD.md (2.x), section 4).
 
@@ -385,6 +394,12 @@ def steklov_poincare(
         If given, filled with the wall-clock seconds of the stages ``assembly``
         (V_h, K_h, W_h), ``cholesky``, ``triangular_solve`` and ``rank_update``
         (``"none"``), or ``setup`` (``"hmatrix"``).
+    comm : mpi4py communicator, optional
+        ``"hmatrix"`` only: build the operator distributed over ``comm`` (collective; the
+        same ``nodes`` on every rank). Each rank holds the blocks of its rows in the
+        cluster-tree order (full storage, about 1/P of the blocks of all of V, V0, K), and
+        ``S @ x``, ``S.flux(v)`` are collective and return the same array on every rank
+        (docs/design/hmatrix.md, "Under MPI").
 
     Returns
     -------
@@ -395,14 +410,18 @@ def steklov_poincare(
     Raises
     ------
     ValueError
-        Invalid polygon, unknown compression, tol not in (0, 1), or V_h not positive
-        definite (logarithmic capacity of Gamma >= 1; rescale the geometry to diameter < 1).
+        Invalid polygon, unknown compression, tol not in (0, 1), ``comm`` without
+        ``"hmatrix"``, or V_h not positive definite (logarithmic capacity of Gamma >= 1;
+        rescale the geometry to diameter < 1).
     """
     args = (_nodes(nodes), _space(flux, "flux"))
     if compression not in _COMPRESSIONS:
         raise ValueError(f"compression must be one of {_COMPRESSIONS}, got {compression!r}")
+    if comm is not None and compression != "hmatrix":
+        raise ValueError('comm needs compression="hmatrix"')
     if compression == "hmatrix":
         tol = _tolerance(tol)
+        allgather, reduce_scatter = mpi_collectives(comm) if comm is not None else (None, None)
         op = SteklovPoincareOperator(
             _bem.SteklovPoincareOperator(
                 *args,
@@ -413,6 +432,10 @@ def steklov_poincare(
                 solver_tol=HMATRIX_SOLVER_TOL_FACTOR * tol,
                 max_iterations=HMATRIX_MAX_ITERATIONS,
                 product_threads=HMATRIX_PRODUCT_THREADS,
+                rank=0 if comm is None else comm.rank,
+                size=1 if comm is None else comm.size,
+                allgather=allgather,
+                reduce_scatter=reduce_scatter,
             )
         )
         if timings is not None:

@@ -2,6 +2,7 @@
 // in the Python wrapper bem_cpp/__init__.py. Eigen::Ref arguments map C-contiguous
 // float64 numpy arrays without copies; matrices are returned by value (moved).
 #include <pybind11/eigen.h>
+#include <pybind11/functional.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
@@ -21,6 +22,7 @@ using bem::Vector;
 using NodesRef = const Eigen::Ref<const Points>&;
 using VectorRef = const Eigen::Ref<const Vector>&;
 using Release = py::call_guard<py::gil_scoped_release>;
+using Collective = std::function<Eigen::MatrixXd(const Eigen::MatrixXd&, const std::vector<bem::Index>&)>;
 
 PYBIND11_MODULE(_bem, m) {
   m.doc() = "Compiled core of bem_cpp; use the documented wrappers in bem_cpp.";
@@ -41,15 +43,23 @@ PYBIND11_MODULE(_bem, m) {
   py::class_<bem::SteklovPoincareOperator>(m, "SteklovPoincareOperator")
       .def(py::init([](NodesRef nodes, Space flux, bem::Index leaf_size, double eta, double tol,
                        double preconditioner_tol, double solver_tol, int max_iterations,
-                       int product_threads) {
+                       int product_threads, int rank, int size, Collective allgather,
+                       Collective reduce_scatter) {
+             // allgather None: serial; otherwise the collectives of the ranks (mpi4py,
+             // called back with the GIL held by pybind11's function wrapper)
+             std::shared_ptr<const bem::Communicator> comm;
+             if (allgather)
+               comm = std::make_shared<const bem::Communicator>(
+                   bem::Communicator{rank, size, std::move(allgather), std::move(reduce_scatter)});
              return std::make_unique<bem::SteklovPoincareOperator>(
                  nodes, flux,
-                 bem::SteklovOptions{{leaf_size, eta, tol, false, product_threads}, preconditioner_tol,
+                 bem::SteklovOptions{{leaf_size, eta, tol, false, product_threads, comm}, preconditioner_tol,
                                      solver_tol, max_iterations});
            }),
            py::arg("nodes"), py::arg("flux"), py::arg("leaf_size"), py::arg("eta"), py::arg("tol"),
            py::arg("preconditioner_tol"), py::arg("solver_tol"), py::arg("max_iterations"),
-           py::arg("product_threads"), Release())
+           py::arg("product_threads"), py::arg("rank"), py::arg("size"), py::arg("allgather"),
+           py::arg("reduce_scatter"), Release())
       .def("apply", &bem::SteklovPoincareOperator::apply, py::arg("x"), Release())
       .def("flux", &bem::SteklovPoincareOperator::flux, py::arg("x"), Release())
       .def_property_readonly("size", &bem::SteklovPoincareOperator::size)

@@ -4,8 +4,9 @@ rows gathered.
 The u block of the iterations lives in a distributed PETSc vector whose owned entries
 are the contiguous global range [r0, r1) of each rank, in rank order. S_h
 (:func:`steklov_poincare`) is either dense, computed once on rank 0 and held by rows
-(:class:`RowBlocks`), or the H-matrix operator of bem_cpp, held whole by every rank
-(:class:`ReplicatedOperator`); the Signorini unknowns are replicated.
+(:class:`RowBlocks`), or the H-matrix operator of bem_cpp, distributed by rows (each rank
+holds the blocks of its rows; ``bem_cpp.steklov_poincare(..., comm=comm)``); the Signorini
+unknowns are replicated.
 """
 from __future__ import annotations
 
@@ -22,7 +23,6 @@ from fem_py.parallel import run_on_root
 
 __all__ = [
     "RowBlocks",
-    "ReplicatedOperator",
     "boundary_operator_kind",
     "steklov_poincare",
     "dense_matrix",
@@ -86,39 +86,6 @@ class RowBlocks:
         return out
 
 
-class ReplicatedOperator:
-    """A boundary operator held whole by every rank of ``comm`` (the H-matrix S_h of
-    bem_cpp under MPI, :func:`steklov_poincare`).
-
-    ``A @ z`` (and ``A.flux(v)``) for a replicated z: every rank applies its copy and
-    rank 0's result is broadcast, so that the replicated iterates stay bitwise equal on
-    all ranks whatever the round-off of the threaded products. The memory per rank is
-    that of the operator (O(n log n)); the products are not divided among the ranks
-    (bem_cpp applies S_h as a whole: V^{-1} by CG couples all rows).
-    """
-
-    def __init__(self, comm: MPI.Comm, operator: Any):
-        self.comm, self.operator, self.shape = comm, operator, tuple(operator.shape)
-
-    @property
-    def nbytes(self) -> int:
-        """Bytes of the operator on one rank."""
-        return int(self.operator.nbytes)
-
-    def _replicated(self, y: np.ndarray) -> np.ndarray:
-        y = np.ascontiguousarray(y, dtype=float)
-        if self.comm.size > 1:
-            self.comm.Bcast(y, root=0)
-        return y
-
-    def __matmul__(self, z: np.ndarray) -> np.ndarray:
-        return self._replicated(self.operator @ z)
-
-    def flux(self, v: np.ndarray) -> np.ndarray:
-        """V_h^{-1} (K_h - M_h) v, replicated (``bem_cpp.SteklovPoincareOperator.flux``)."""
-        return self._replicated(self.operator.flux(v))
-
-
 def boundary_operator_kind(choice: str, n: int) -> str:
     """``"dense"`` or ``"hmatrix"``: the S_h of ``[solver] boundary_operator = choice`` for
     n boundary dofs (``"auto"``: the H-matrix from :data:`coupling.options.HMATRIX_CROSSOVER`
@@ -137,13 +104,23 @@ def steklov_poincare(comm: MPI.Comm, nodes: np.ndarray, flux: str, choice: str) 
 
     Dense: the matrix (serial) or :class:`RowBlocks` (computed on rank 0 with every core,
     held by rows). H-matrix: ``bem_cpp.SteklovPoincareOperator`` to the relative accuracy
-    :data:`coupling.options.HMATRIX_TOL` (serial), or built by every rank and wrapped in
-    :class:`ReplicatedOperator`. Each has ``S @ z`` for a replicated z and ``S.shape``.
+    :data:`coupling.options.HMATRIX_TOL`; under MPI distributed over ``comm``: each rank
+    holds the blocks of its own rows of V_h, V0_h and K_h (``S.nbytes`` is this rank's),
+    ``S @ z`` and ``S.flux(v)`` are collective (local rows, one Allgatherv per H-matrix
+    product; K^T: Reduce_scatter and Allgatherv) and return the same bits on every rank,
+    and the CG of the V_h solves takes the serial iteration count (``S.last_iterations``;
+    docs/design/hmatrix.md, "Under MPI"). Each has ``S @ z`` for a replicated z and
+    ``S.shape``.
     """
     nodes = np.asarray(nodes, dtype=float)
     if boundary_operator_kind(choice, nodes.shape[0]) == "hmatrix":
-        op = bem_cpp.steklov_poincare(nodes, flux=flux, compression="hmatrix", tol=HMATRIX_TOL)
-        return op if comm.size == 1 else ReplicatedOperator(comm, op)
+        return bem_cpp.steklov_poincare(
+            nodes,
+            flux=flux,
+            compression="hmatrix",
+            tol=HMATRIX_TOL,
+            comm=comm if comm.size > 1 else None,
+        )
 
     def dense() -> np.ndarray:
         return bem_cpp.steklov_poincare(nodes, flux=flux)

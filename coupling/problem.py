@@ -64,9 +64,8 @@ class SignoriniProblem:
     S
         S_h (:func:`coupling.distributed.steklov_poincare`): dense, an array in serial and
         :class:`coupling.distributed.RowBlocks` under MPI; or the H-matrix operator
-        (``bem_cpp.SteklovPoincareOperator``, under MPI in a
-        :class:`coupling.distributed.ReplicatedOperator`). Only ``S @ z`` and ``S.shape``
-        are common to all.
+        (``bem_cpp.SteklovPoincareOperator``, under MPI distributed by rows and applied
+        collectively). Only ``S @ z`` and ``S.shape`` are common to all.
     boundary_operator
         The S_h chosen: ``"dense"`` or ``"hmatrix"``.
     u0

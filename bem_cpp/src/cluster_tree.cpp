@@ -115,4 +115,21 @@ std::vector<int> ClusterTree::leaves() const {
   return out;
 }
 
+std::vector<Index> ClusterTree::partition(int parts) const {
+  if (parts < 1) throw std::invalid_argument("ClusterTree::partition: need parts >= 1");
+  std::vector<Index> ends;  // leaf boundaries, increasing, ending with n
+  for (int c : leaves()) ends.push_back(cluster(c).end);
+  const Index n = size();
+  std::vector<Index> bounds(static_cast<std::size_t>(parts) + 1, 0);
+  for (int r = 1; r <= parts; ++r) {
+    const double target = static_cast<double>(r) * static_cast<double>(n) / parts;
+    Index best = 0;  // the boundary 0 is a candidate too
+    for (Index e : ends)
+      if (std::abs(static_cast<double>(e) - target) < std::abs(static_cast<double>(best) - target)) best = e;
+    bounds[static_cast<std::size_t>(r)] = std::max(best, bounds[static_cast<std::size_t>(r) - 1]);
+  }
+  bounds.back() = n;
+  return bounds;
+}
+
 }  // namespace bem

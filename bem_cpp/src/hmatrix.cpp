@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <stdexcept>
+#include <string>
 #include <utility>
 
 #include <omp.h>
@@ -10,10 +11,13 @@ namespace bem {
 
 namespace {
 
+/// The leaves of the block tree under (t, s). upper: only (t, s) on or above the block
+/// diagonal (symmetric storage). [lo, hi): only row clusters meeting these rows.
 void collect(const ClusterTree& rows, const ClusterTree& cols, int t, int s, double eta,
-             bool upper, std::vector<HMatrix::Block>& out) {
+             bool upper, Index lo, Index hi, std::vector<HMatrix::Block>& out) {
   const Cluster& ct = rows.cluster(t);
   const Cluster& cs = cols.cluster(s);
+  if (ct.end <= lo || ct.begin >= hi) return;
   // Symmetric: cluster ranges are nested or disjoint, so t starting after s (disjoint)
   // puts the whole subtree of (t, s) below the block diagonal.
   if (upper && ct.begin > cs.begin && ct.begin >= cs.end) return;
@@ -31,20 +35,75 @@ void collect(const ClusterTree& rows, const ClusterTree& cols, int t, int s, dou
     return;
   }
   for (int a : ct.children)
-    for (int c : cs.children) collect(rows, cols, a, c, eta, upper, out);
+    for (int c : cs.children) collect(rows, cols, a, c, eta, upper, lo, hi, out);
+}
+
+std::vector<Index> counts(const ClusterTree& tree, int parts) {
+  const std::vector<Index> bounds = tree.partition(parts);
+  std::vector<Index> c(static_cast<std::size_t>(parts));
+  for (int r = 0; r < parts; ++r) c[static_cast<std::size_t>(r)] = bounds[r + 1] - bounds[r];
+  return c;
+}
+
+Eigen::MatrixXd permuted(const Eigen::Ref<const Eigen::MatrixXd>& X, const ClusterTree& tree) {
+  Eigen::MatrixXd Xp(X.rows(), X.cols());
+  const std::vector<Index>& p = tree.permutation();
+  for (Index r = 0; r < X.rows(); ++r) Xp.row(r) = X.row(p[static_cast<std::size_t>(r)]);
+  return Xp;
+}
+
+Eigen::MatrixXd unpermuted(const Eigen::MatrixXd& Yp, const ClusterTree& tree) {
+  Eigen::MatrixXd Y(Yp.rows(), Yp.cols());
+  const std::vector<Index>& p = tree.permutation();
+  for (Index r = 0; r < Yp.rows(); ++r) Y.row(p[static_cast<std::size_t>(r)]) = Yp.row(r);
+  return Y;
+}
+
+void check_rows(Index got, Index expected, const char* what) {
+  if (got != expected)
+    throw std::invalid_argument(std::string("HMatrix::") + what + ": X has " + std::to_string(got) +
+                                " rows, expected " + std::to_string(expected));
 }
 
 }  // namespace
 
 HMatrix::HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const ClusterTree> cols,
                  const EntrySource& entries, const HMatrixOptions& options)
-    : rows_(std::move(rows)), cols_(std::move(cols)), symmetric_(options.symmetric),
-      product_threads_(options.product_threads) {
+    : rows_(std::move(rows)), cols_(std::move(cols)), product_threads_(options.product_threads),
+      comm_(options.comm) {
+  row_end_ = rows_->size();
+  if (comm_) {
+    if (comm_->size < 1 || comm_->rank < 0 || comm_->rank >= comm_->size || !comm_->allgather ||
+        !comm_->reduce_scatter)
+      throw std::invalid_argument("HMatrix: the communicator needs 0 <= rank < size and both collectives");
+    const std::vector<Index> bounds = rows_->partition(comm_->size);
+    row_begin_ = bounds[static_cast<std::size_t>(comm_->rank)];
+    row_end_ = bounds[static_cast<std::size_t>(comm_->rank) + 1];
+    row_counts_ = counts(*rows_, comm_->size);
+    col_counts_ = counts(*cols_, comm_->size);
+    restricted_ = true;
+  }
+  build(entries, options);
+}
+
+HMatrix::HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const ClusterTree> cols,
+                 const EntrySource& entries, const HMatrixOptions& options, Index row_begin, Index row_end)
+    : rows_(std::move(rows)), cols_(std::move(cols)), restricted_(true), row_begin_(row_begin),
+      row_end_(row_end), product_threads_(options.product_threads) {
+  if (options.comm) throw std::invalid_argument("HMatrix: a row range or a communicator, not both");
+  if (row_begin < 0 || row_begin > row_end || row_end > rows_->size())
+    throw std::invalid_argument("HMatrix: need 0 <= row_begin <= row_end <= rows");
+  build(entries, options);
+}
+
+void HMatrix::build(const EntrySource& entries, const HMatrixOptions& options) {
   if (!(options.eta > 0) || !(options.tol > 0) || options.leaf_size < 1 || options.product_threads < 0)
     throw std::invalid_argument("HMatrix: need eta > 0, tol > 0, leaf_size >= 1, product_threads >= 0");
-  if (symmetric_ && rows_ != cols_)
+  if (options.symmetric && rows_ != cols_)
     throw std::invalid_argument("HMatrix: a symmetric matrix needs one cluster tree for rows and columns");
-  collect(*rows_, *cols_, 0, 0, options.eta, symmetric_, blocks_);
+  symmetric_ = options.symmetric && !restricted_;
+  symmetric_rows_ = options.symmetric && restricted_;
+  collect(*rows_, *cols_, 0, 0, options.eta, symmetric_, row_begin_, row_end_, blocks_);
   const Index* rp = rows_->permutation().data();
   const Index* cp = cols_->permutation().data();
   // Largest blocks first, so that the dynamic schedule ends with small ones.
@@ -57,43 +116,57 @@ HMatrix::HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const 
 #pragma omp parallel for schedule(dynamic, 1)
   for (long q = 0; q < count; ++q) {
     Block& b = blocks_[order[static_cast<std::size_t>(q)]];
-    const Index* I = rp + b.r0;
-    const Index* J = cp + b.c0;
-    const std::unique_ptr<EntryBlock> e = entries.block(I, b.m, J, b.k);
+    // Row-restricted symmetric: a block below the diagonal is the transpose of the one
+    // above it, built as the symmetric storage builds that one.
+    const bool mirror = symmetric_rows_ && b.r0 > b.c0;
+    const Index* I = mirror ? cp + b.c0 : rp + b.r0;
+    const Index* J = mirror ? rp + b.r0 : cp + b.c0;
+    const Index m = mirror ? b.k : b.m, k = mirror ? b.m : b.k;
+    const std::unique_ptr<EntryBlock> e = entries.block(I, m, J, k);
     if (!b.low_rank) {
-      b.dense.resize(b.m, b.k);
+      b.dense.resize(m, k);
       e->all(b.dense.data());
-      continue;
+    } else {
+      const Slice row = [&e](Index i, double* out) { e->row(i, out); };
+      const Slice column = [&e](Index j, double* out) { e->column(j, out); };
+      b.factors = aca(m, k, row, column, options.tol, std::min(m, k));
+      recompress(b.factors, options.tol);
+      if (b.factors.rank() * (m + k) >= m * k) {  // dense is smaller
+        b.dense = b.factors.U * b.factors.V.transpose();
+        b.factors = LowRank{};
+        b.low_rank = false;
+      }
     }
-    const Slice row = [&e](Index i, double* out) { e->row(i, out); };
-    const Slice column = [&e](Index j, double* out) { e->column(j, out); };
-    b.factors = aca(b.m, b.k, row, column, options.tol, std::min(b.m, b.k));
-    recompress(b.factors, options.tol);
-    if (b.factors.rank() * (b.m + b.k) >= b.m * b.k) {  // dense is smaller
-      b.dense = b.factors.U * b.factors.V.transpose();
-      b.factors = LowRank{};
-      b.low_rank = false;
+    if (mirror) {
+      if (b.low_rank)
+        std::swap(b.factors.U, b.factors.V);
+      else
+        b.dense = Eigen::MatrixXd(b.dense.transpose());
+    }
+    if (restricted_) {  // cut to the local rows
+      const Index r0 = std::max(b.r0, row_begin_), r1 = std::min(b.r0 + b.m, row_end_);
+      if (r0 != b.r0 || r1 != b.r0 + b.m) {
+        if (b.low_rank)
+          b.factors.U = Eigen::MatrixXd(b.factors.U.middleRows(r0 - b.r0, r1 - r0));
+        else
+          b.dense = Eigen::MatrixXd(b.dense.middleRows(r0 - b.r0, r1 - r0));
+        b.r0 = r0;
+        b.m = r1 - r0;
+      }
     }
   }
 }
 
-Eigen::MatrixXd HMatrix::apply(const Eigen::Ref<const Eigen::MatrixXd>& X, bool transpose) const {
-  const ClusterTree& in_tree = transpose ? *rows_ : *cols_;
-  const ClusterTree& out_tree = transpose ? *cols_ : *rows_;
-  if (X.rows() != in_tree.size())
-    throw std::invalid_argument("HMatrix::apply: X has " + std::to_string(X.rows()) +
-                                " rows, expected " + std::to_string(in_tree.size()));
-  const Index nrhs = X.cols(), n_out = out_tree.size();
-  Eigen::MatrixXd Xp(X.rows(), nrhs);
-  const std::vector<Index>& pin = in_tree.permutation();
-  for (Index r = 0; r < X.rows(); ++r) Xp.row(r) = X.row(pin[static_cast<std::size_t>(r)]);
+void HMatrix::accumulate(const Eigen::MatrixXd& Xp, Index in0, Index out0, bool transpose,
+                         Eigen::MatrixXd& Yp) const {
+  const Index nrhs = Xp.cols();
   const int threads = product_threads_ > 0 ? product_threads_ : omp_get_max_threads();
   std::vector<Eigen::MatrixXd> partial(static_cast<std::size_t>(threads));
   const long count = static_cast<long>(blocks_.size());
 #pragma omp parallel num_threads(threads)
   {
     Eigen::MatrixXd& Y = partial[static_cast<std::size_t>(omp_get_thread_num())];
-    Y.setZero(n_out, nrhs);
+    Y.setZero(Yp.rows(), nrhs);
 #pragma omp for schedule(dynamic, 4)
     for (long q = 0; q < count; ++q) {
       const Block& b = blocks_[static_cast<std::size_t>(q)];
@@ -101,10 +174,10 @@ Eigen::MatrixXd HMatrix::apply(const Eigen::Ref<const Eigen::MatrixXd>& X, bool 
       const bool both = symmetric_ && b.r0 != b.c0;
       for (int pass = 0; pass < (both ? 2 : 1); ++pass) {
         const bool tr = pass == 1 ? !transpose : transpose;
-        const Index in0 = tr ? b.r0 : b.c0, n_in = tr ? b.m : b.k;
-        const Index out0 = tr ? b.c0 : b.r0, n_o = tr ? b.k : b.m;
-        const auto x = Xp.middleRows(in0, n_in);
-        auto y = Y.middleRows(out0, n_o);
+        const Index i0 = tr ? b.r0 : b.c0, n_in = tr ? b.m : b.k;
+        const Index o0 = tr ? b.c0 : b.r0, n_o = tr ? b.k : b.m;
+        const auto x = Xp.middleRows(i0 - (tr ? in0 : 0), n_in);
+        auto y = Y.middleRows(o0 - (tr ? 0 : out0), n_o);
         if (!b.low_rank) {
           if (tr)
             y.noalias() += b.dense.transpose() * x;
@@ -119,11 +192,46 @@ Eigen::MatrixXd HMatrix::apply(const Eigen::Ref<const Eigen::MatrixXd>& X, bool 
       }
     }
   }
-  for (std::size_t t = 1; t < partial.size(); ++t) partial[0] += partial[t];
-  Eigen::MatrixXd Y(n_out, nrhs);
-  const std::vector<Index>& pout = out_tree.permutation();
-  for (Index r = 0; r < n_out; ++r) Y.row(pout[static_cast<std::size_t>(r)]) = partial[0].row(r);
-  return Y;
+  Yp = std::move(partial[0]);
+  for (std::size_t t = 1; t < partial.size(); ++t) Yp += partial[t];
+}
+
+Eigen::MatrixXd HMatrix::apply_local(const Eigen::Ref<const Eigen::MatrixXd>& X) const {
+  check_rows(X.rows(), cols_->size(), "apply_local");
+  Eigen::MatrixXd Yp(row_end_ - row_begin_, X.cols());
+  accumulate(permuted(X, *cols_), 0, row_begin_, false, Yp);
+  return Yp;
+}
+
+Eigen::MatrixXd HMatrix::apply_transpose_local(const Eigen::Ref<const Eigen::MatrixXd>& X) const {
+  check_rows(X.rows(), rows_->size(), "apply_transpose_local");
+  if (symmetric_) throw std::logic_error("HMatrix::apply_transpose_local: symmetric storage; use apply");
+  const std::vector<Index>& p = rows_->permutation();
+  Eigen::MatrixXd Xl(row_end_ - row_begin_, X.cols());
+  for (Index r = row_begin_; r < row_end_; ++r) Xl.row(r - row_begin_) = X.row(p[static_cast<std::size_t>(r)]);
+  Eigen::MatrixXd Yp(cols_->size(), X.cols());
+  accumulate(Xl, row_begin_, 0, true, Yp);
+  return Yp;
+}
+
+Eigen::MatrixXd HMatrix::apply(const Eigen::Ref<const Eigen::MatrixXd>& X, bool transpose) const {
+  const ClusterTree& in_tree = transpose ? *rows_ : *cols_;
+  const ClusterTree& out_tree = transpose ? *cols_ : *rows_;
+  check_rows(X.rows(), in_tree.size(), "apply");
+  if (!restricted_) {
+    Eigen::MatrixXd Yp(out_tree.size(), X.cols());
+    accumulate(permuted(X, in_tree), 0, 0, transpose, Yp);
+    return unpermuted(Yp, out_tree);
+  }
+  const bool whole = row_begin_ == 0 && row_end_ == rows_->size();
+  if (!comm_ && !whole) throw std::logic_error("HMatrix::apply: a row-restricted matrix needs its communicator");
+  if (!transpose || symmetric_rows_) {  // A^T = A for a symmetric matrix
+    const Eigen::MatrixXd Yl = apply_local(X);
+    return unpermuted(comm_ ? comm_->allgather(Yl, row_counts_) : Yl, *rows_);
+  }
+  const Eigen::MatrixXd partial = apply_transpose_local(X);
+  if (!comm_) return unpermuted(partial, *cols_);
+  return unpermuted(comm_->allgather(comm_->reduce_scatter(partial, col_counts_), col_counts_), *cols_);
 }
 
 Eigen::MatrixXd HMatrix::to_dense() const {

@@ -20,6 +20,16 @@ problem = manufactured_problem(
 )
 result = solve(problem, SolverOptions(method=method, tol=1e-10, boundary_operator=kind))
 gathered = gather_p1(result.u)
+# bytes of S_h on rank 0, and of the serial operator of the same boundary (H-matrix only)
+nbytes = {}
+if kind == "hmatrix":
+    import bem_cpp
+    from coupling.options import HMATRIX_TOL
+
+    serial = bem_cpp.steklov_poincare(
+        problem.boundary.nodes, problem.flux_space, compression="hmatrix", tol=HMATRIX_TOL
+    )
+    nbytes = dict(distributed_bytes=problem.S.nbytes, serial_bytes=serial.nbytes)
 if comm.rank == 0:
     x, u, _ = gathered
     key = np.round(x, 12)  # exact ties despite 1e-18 noise in mesh coordinates
@@ -35,4 +45,5 @@ if comm.rank == 0:
         converged=result.converged,
         operator_class=type(problem.S).__name__,
         boundary_operator=problem.boundary_operator,
+        **nbytes,
     )

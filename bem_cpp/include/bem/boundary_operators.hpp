@@ -12,7 +12,8 @@
 namespace bem {
 
 /// The H-matrix of V_h (rows and columns in `rows`) or K_h (rows in `rows`, columns P1)
-/// on `polygon`, on the given cluster trees; V_h is built symmetric (half the blocks).
+/// on `polygon`, on the given cluster trees; V_h is built symmetric (serial: half the
+/// blocks; distributed: the rows of the rank, see hmatrix.hpp).
 std::shared_ptr<const HMatrix> layer_hmatrix(const Polygon& polygon, Kernel kernel, Space rows,
                                              std::shared_ptr<const ClusterTree> row_tree,
                                              std::shared_ptr<const ClusterTree> col_tree,

@@ -47,6 +47,10 @@ class ClusterTree {
   const std::vector<Index>& permutation() const { return permutation_; }
   /// Indices of the leaf clusters, in permuted order (they partition [0, n)).
   std::vector<int> leaves() const;
+  /// Bounds b_0 = 0 <= b_1 <= ... <= b_parts = n of `parts` contiguous ranges of the
+  /// permuted order (the rows of the ranks of a distributed H-matrix): b_r is the leaf
+  /// boundary nearest to r n / parts (within half a leaf of it), so that no leaf is split.
+  std::vector<Index> partition(int parts) const;
 
  private:
   int build(Index begin, Index end, const Points& points, const std::vector<Box>& supports,

@@ -6,6 +6,16 @@
 // at least one cluster a leaf) dense and exact. Products with vectors and blocks of
 // vectors run over the blocks in parallel (OpenMP). A symmetric matrix keeps the blocks
 // (t, s) with t's range starting at or before s's (half the set-up and memory).
+//
+// Row-restricted (distributed) matrix: only the blocks of the full block tree whose rows
+// meet the range [row_begin, row_end) of the permuted row order, each cut to those rows
+// (a low-rank block keeps its U rows and the whole V; no full block tree is split, so the
+// local rows are exactly those of the whole matrix). Stored in full: a symmetric matrix
+// builds a block below the diagonal as the transpose of the one above it (the same ACA
+// as the symmetric storage), so the rows equal those of the symmetric matrix. With a
+// Communicator the ranks hold the ranges of ClusterTree::partition and apply() returns
+// the whole product on every rank: local rows and one allgather (A X), or the transposed
+// local product, a reduce-scatter and an allgather (A^T X of a non-symmetric A).
 #include <Eigen/Dense>
 #include <cstddef>
 #include <functional>
@@ -14,6 +24,7 @@
 
 #include "bem/aca.hpp"
 #include "bem/cluster_tree.hpp"
+#include "bem/communicator.hpp"
 
 namespace bem {
 
@@ -28,6 +39,9 @@ struct HMatrixOptions {
   /// parallel loops; on an oversubscribed machine each waits for a descheduled thread
   /// (docs/design/hmatrix.md), so the operator of S_h uses one.
   int product_threads = 0;
+  /// Distributed: this rank holds the rows ClusterTree::partition(comm->size)[comm->rank ..
+  /// comm->rank + 1] of the row tree (full storage) and apply() is collective.
+  std::shared_ptr<const Communicator> comm;
 };
 
 /// Entries of one block A(I, J) (original dof order), by rows, columns or all at once.
@@ -58,13 +72,29 @@ class HMatrix {
 
   HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const ClusterTree> cols,
           const EntrySource& entries, const HMatrixOptions& options);
+  /// The rows [row_begin, row_end) of the permuted row order only (no communicator:
+  /// apply_local and apply_transpose_local; apply() needs all rows).
+  HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const ClusterTree> cols,
+          const EntrySource& entries, const HMatrixOptions& options, Index row_begin, Index row_end);
 
   Index rows() const { return rows_->size(); }
   Index cols() const { return cols_->size(); }
-  /// Y = A X (transpose: Y = A^T X), X and Y in the original dof order.
+  /// Y = A X (transpose: Y = A^T X), X and Y in the original dof order (collective if
+  /// distributed; the same result on every rank).
   Eigen::MatrixXd apply(const Eigen::Ref<const Eigen::MatrixXd>& X, bool transpose = false) const;
-  /// The approximation as a dense matrix in the original order (for tests).
+  /// The local rows of A X: (row_end - row_begin, k) in the permuted row order; X whole,
+  /// in the original column order.
+  Eigen::MatrixXd apply_local(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
+  /// A(local rows, :)^T X(local rows): (cols, k) in the permuted column order; X whole, in
+  /// the original row order (the sum over the ranks is A^T X).
+  Eigen::MatrixXd apply_transpose_local(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
+  /// The approximation as a dense matrix in the original order (for tests); of a
+  /// row-restricted matrix, the local rows (the others zero).
   Eigen::MatrixXd to_dense() const;
+  Index row_begin() const { return row_begin_; }
+  Index row_end() const { return row_end_; }
+  /// Built on a row range (full storage), with or without a communicator.
+  bool row_restricted() const { return restricted_; }
   /// Bytes of the blocks (dense entries and factors) and of the permutations.
   std::size_t nbytes() const;
   Index max_rank() const;
@@ -75,9 +105,17 @@ class HMatrix {
 
  private:
   std::shared_ptr<const ClusterTree> rows_, cols_;
+  void build(const EntrySource& entries, const HMatrixOptions& options);
+  /// Y (out rows, k) += the blocks (transposed: tr) times Xp (both permuted, offsets in0/out0).
+  void accumulate(const Eigen::MatrixXd& Xp, Index in0, Index out0, bool tr, Eigen::MatrixXd& Y) const;
   std::vector<Block> blocks_;
-  bool symmetric_ = false;
+  bool symmetric_ = false;       ///< symmetric storage (upper blocks, used twice)
+  bool symmetric_rows_ = false;  ///< row-restricted rows of a symmetric matrix
+  bool restricted_ = false;
+  Index row_begin_ = 0, row_end_ = 0;
   int product_threads_ = 0;
+  std::shared_ptr<const Communicator> comm_;
+  std::vector<Index> row_counts_, col_counts_;  ///< of the ranks (distributed)
 };
 
 }  // namespace bem

@@ -4,6 +4,10 @@
 //   S x = 1/2 ( W x + (K - M)^T V^{-1} (K - M) x ),   W x = D^T V0 D x (Maue),
 // with V (flux space), V0 (P0, for W) and K (rows in the flux space, columns P1)
 // H-matrices, M and D sparse, and V^{-1} by SingleLayerSolver (PCG).
+// Distributed (options.hmatrix.comm): every H-matrix holds the rows of its rank
+// (hmatrix.hpp) and every product in S, the CG and the preconditioner returns the whole
+// vector on every rank; the CG scalars then come from the same vectors on every rank, so
+// the iterates and the result are the same bits everywhere. M, D, G stay replicated (O(n)).
 #include <atomic>
 #include <memory>
 

@@ -1,0 +1,44 @@
+"""The distributed H-matrix S_h (bem_cpp.steklov_poincare(..., comm=COMM_WORLD)) against
+the serial operator built on every rank: products (1-D and 2-D), flux, CG iterations,
+bytes per rank, sameness across ranks. argv[1]: the .npz rank 0 writes; argv[2]: n;
+argv[3]: shape ("circle" or "lshape"); argv[4]: flux space."""
+import sys
+from pathlib import Path
+
+import numpy as np
+from mpi4py import MPI
+
+import bem_cpp
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from test_bem_polygons import circle, l_shape  # noqa: E402
+
+comm = MPI.COMM_WORLD
+out, n, shape, flux = sys.argv[1], int(sys.argv[2]), sys.argv[3], sys.argv[4]
+X = {"circle": circle, "lshape": l_shape}[shape](n)
+tol = 1e-10
+serial = bem_cpp.steklov_poincare(X, flux, compression="hmatrix", tol=tol)
+S = bem_cpp.steklov_poincare(X, flux, compression="hmatrix", tol=tol, comm=comm)
+z = np.random.default_rng(7).standard_normal((n, 3))
+y, y_serial = S @ z[:, 0], serial @ z[:, 0]
+iterations = (S.last_iterations, serial.last_iterations)
+Y, Y_serial = S @ z, serial @ z
+F, F_serial = S.flux(z), serial.flux(z)
+same = [np.array_equal(a, comm.bcast(a, root=0)) for a in (y, Y, F)]
+bytes_per_rank = comm.gather(S.nbytes, root=0)
+same_everywhere = comm.allreduce(all(same), op=MPI.LAND)
+if comm.rank == 0:
+    np.savez(
+        out,
+        y=y,
+        y_serial=y_serial,
+        Y=Y,
+        Y_serial=Y_serial,
+        F=F,
+        F_serial=F_serial,
+        iterations=iterations,
+        bytes_per_rank=bytes_per_rank,
+        serial_bytes=serial.nbytes,
+        same_everywhere=same_everywhere,
+        shape=S.shape,
+    )
