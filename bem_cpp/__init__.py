@@ -318,8 +318,10 @@ class SteklovPoincareOperator(_CompiledOperator):
     :func:`steklov_poincare` with ``compression="hmatrix"``.
 
     Distributed (``comm`` of :func:`steklov_poincare`): each rank holds the blocks of its
-    own rows of V, V0 and K, and every product is collective (its rows, one Allgatherv;
-    K^T: a Reduce_scatter and an Allgatherv), with the same result on every rank.
+    own rows of V, V0 and K (V, V0 in symmetric storage: the blocks on and above the
+    diagonal), and every product is collective, with the same result on every rank: K x
+    is the local rows and one Allgatherv; V x, V0 x and K^T y are partial sums, one
+    Reduce_scatter and one Allgatherv.
 
     Attributes
     ----------
@@ -397,9 +399,9 @@ def steklov_poincare(
     comm : mpi4py communicator, optional
         ``"hmatrix"`` only: build the operator distributed over ``comm`` (collective; the
         same ``nodes`` on every rank). Each rank holds the blocks of its rows in the
-        cluster-tree order (full storage, about 1/P of the blocks of all of V, V0, K), and
-        ``S @ x``, ``S.flux(v)`` are collective and return the same array on every rank
-        (docs/design/hmatrix.md, "Under MPI").
+        cluster-tree order (about 1/P of the bytes of V, V0, K; the rows balanced by
+        bytes), and ``S @ x``, ``S.flux(v)`` are collective and return the same array on
+        every rank (docs/design/hmatrix.md, "Under MPI").
 
     Returns
     -------

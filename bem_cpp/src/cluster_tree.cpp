@@ -116,17 +116,30 @@ std::vector<int> ClusterTree::leaves() const {
 }
 
 std::vector<Index> ClusterTree::partition(int parts) const {
+  return partition(parts, std::vector<double>(static_cast<std::size_t>(size()), 1.0));
+}
+
+std::vector<Index> ClusterTree::partition(int parts, const std::vector<double>& cost) const {
   if (parts < 1) throw std::invalid_argument("ClusterTree::partition: need parts >= 1");
-  std::vector<Index> ends;  // leaf boundaries, increasing, ending with n
-  for (int c : leaves()) ends.push_back(cluster(c).end);
+  if (static_cast<Index>(cost.size()) != size())
+    throw std::invalid_argument("ClusterTree::partition: need one cost per dof");
+  std::vector<Index> ends{0};  // leaf boundaries, increasing, from 0 to n
+  std::vector<double> below{0.0};  // cumulative cost at each
+  for (int c : leaves()) {
+    const Cluster& cl = cluster(c);
+    double sum = below.back();
+    for (Index k = cl.begin; k < cl.end; ++k) sum += cost[static_cast<std::size_t>(k)];
+    ends.push_back(cl.end);
+    below.push_back(sum);
+  }
   const Index n = size();
   std::vector<Index> bounds(static_cast<std::size_t>(parts) + 1, 0);
   for (int r = 1; r <= parts; ++r) {
-    const double target = static_cast<double>(r) * static_cast<double>(n) / parts;
-    Index best = 0;  // the boundary 0 is a candidate too
-    for (Index e : ends)
-      if (std::abs(static_cast<double>(e) - target) < std::abs(static_cast<double>(best) - target)) best = e;
-    bounds[static_cast<std::size_t>(r)] = std::max(best, bounds[static_cast<std::size_t>(r) - 1]);
+    const double target = static_cast<double>(r) * below.back() / parts;
+    std::size_t best = 0;
+    for (std::size_t e = 1; e < ends.size(); ++e)
+      if (std::abs(below[e] - target) < std::abs(below[best] - target)) best = e;
+    bounds[static_cast<std::size_t>(r)] = std::max(ends[best], bounds[static_cast<std::size_t>(r) - 1]);
   }
   bounds.back() = n;
   return bounds;

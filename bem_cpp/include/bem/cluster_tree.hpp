@@ -51,6 +51,9 @@ class ClusterTree {
   /// permuted order (the rows of the ranks of a distributed H-matrix): b_r is the leaf
   /// boundary nearest to r n / parts (within half a leaf of it), so that no leaf is split.
   std::vector<Index> partition(int parts) const;
+  /// The same with the cost cost[k] of position k of the permuted order: b_r is the leaf
+  /// boundary whose cumulative cost is nearest to r / parts of the total.
+  std::vector<Index> partition(int parts, const std::vector<double>& cost) const;
 
  private:
   int build(Index begin, Index end, const Points& points, const std::vector<Box>& supports,

@@ -7,15 +7,16 @@
 // vectors run over the blocks in parallel (OpenMP). A symmetric matrix keeps the blocks
 // (t, s) with t's range starting at or before s's (half the set-up and memory).
 //
-// Row-restricted (distributed) matrix: only the blocks of the full block tree whose rows
-// meet the range [row_begin, row_end) of the permuted row order, each cut to those rows
-// (a low-rank block keeps its U rows and the whole V; no full block tree is split, so the
-// local rows are exactly those of the whole matrix). Stored in full: a symmetric matrix
-// builds a block below the diagonal as the transpose of the one above it (the same ACA
-// as the symmetric storage), so the rows equal those of the symmetric matrix. With a
-// Communicator the ranks hold the ranges of ClusterTree::partition and apply() returns
-// the whole product on every rank: local rows and one allgather (A X), or the transposed
-// local product, a reduce-scatter and an allgather (A^T X of a non-symmetric A).
+// Row-restricted (distributed) matrix: only the blocks of the block tree whose rows meet
+// the range [row_begin, row_end) of the permuted row order, each cut to those rows (a
+// low-rank block keeps its U rows and the whole V; no block is split, so the entries are
+// those of the whole matrix). A symmetric matrix keeps its symmetric storage: the rank
+// holds the blocks on and above the diagonal in its rows. With a Communicator the ranks
+// hold the ranges of ClusterTree::partition, balanced by the bytes of the blocks in each
+// row (a symmetric matrix's first rows hold more blocks), and apply() returns the whole
+// product on every rank: A X of a non-symmetric A is the local rows and one allgather;
+// A^T X, and A X of a symmetric A (an off-diagonal block also acts on the rows of its
+// columns), are partial sums, one reduce-scatter and one allgather.
 #include <Eigen/Dense>
 #include <cstddef>
 #include <functional>
@@ -39,8 +40,8 @@ struct HMatrixOptions {
   /// parallel loops; on an oversubscribed machine each waits for a descheduled thread
   /// (docs/design/hmatrix.md), so the operator of S_h uses one.
   int product_threads = 0;
-  /// Distributed: this rank holds the rows ClusterTree::partition(comm->size)[comm->rank ..
-  /// comm->rank + 1] of the row tree (full storage) and apply() is collective.
+  /// Distributed: this rank holds its range of rows of the row tree (balanced by bytes,
+  /// ClusterTree::partition) and apply() is collective.
   std::shared_ptr<const Communicator> comm;
 };
 
@@ -83,17 +84,19 @@ class HMatrix {
   /// distributed; the same result on every rank).
   Eigen::MatrixXd apply(const Eigen::Ref<const Eigen::MatrixXd>& X, bool transpose = false) const;
   /// The local rows of A X: (row_end - row_begin, k) in the permuted row order; X whole,
-  /// in the original column order.
+  /// in the original column order. Not for symmetric storage.
   Eigen::MatrixXd apply_local(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
-  /// A(local rows, :)^T X(local rows): (cols, k) in the permuted column order; X whole, in
-  /// the original row order (the sum over the ranks is A^T X).
-  Eigen::MatrixXd apply_transpose_local(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
-  /// The approximation as a dense matrix in the original order (for tests); of a
-  /// row-restricted matrix, the local rows (the others zero).
+  /// The contribution of the held blocks to A X (transpose: A^T X), X whole in the original
+  /// order: (rows, k) (transpose: (cols, k)) in the permuted order; the sum over the ranks
+  /// of a distributed matrix is the product.
+  Eigen::MatrixXd apply_partial(const Eigen::Ref<const Eigen::MatrixXd>& X, bool transpose) const;
+  /// The held blocks as a dense matrix in the original order (with the transposes of the
+  /// off-diagonal ones under symmetric storage; for tests): the whole matrix, or of a
+  /// row-restricted one its contribution (summed over the ranks: the whole matrix).
   Eigen::MatrixXd to_dense() const;
   Index row_begin() const { return row_begin_; }
   Index row_end() const { return row_end_; }
-  /// Built on a row range (full storage), with or without a communicator.
+  /// Built on a row range, with or without a communicator.
   bool row_restricted() const { return restricted_; }
   /// Bytes of the blocks (dense entries and factors) and of the permutations.
   std::size_t nbytes() const;
@@ -109,8 +112,7 @@ class HMatrix {
   /// Y (out rows, k) += the blocks (transposed: tr) times Xp (both permuted, offsets in0/out0).
   void accumulate(const Eigen::MatrixXd& Xp, Index in0, Index out0, bool tr, Eigen::MatrixXd& Y) const;
   std::vector<Block> blocks_;
-  bool symmetric_ = false;       ///< symmetric storage (upper blocks, used twice)
-  bool symmetric_rows_ = false;  ///< row-restricted rows of a symmetric matrix
+  bool symmetric_ = false;  ///< symmetric storage (upper blocks, used twice)
   bool restricted_ = false;
   Index row_begin_ = 0, row_end_ = 0;
   int product_threads_ = 0;

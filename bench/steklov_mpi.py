@@ -1,0 +1,95 @@
+"""The H-matrix S_h on one rank against ``mpirun -n 2`` (distributed by rows,
+``bem_cpp.steklov_poincare(..., comm=...)``; docs/design/hmatrix.md, "Under MPI").
+
+For each shape and n: set-up wall time (the slowest rank, after a barrier), one product
+``S @ z`` (best of --repeat, each between barriers; the slowest rank), the CG iterations
+of its V_h solve and the bytes each rank holds. One rank runs the serial operator
+(symmetric storage of V_h, V0_h), two ranks the distributed one; one OpenMP / BLAS
+thread per rank. ``uptime`` is printed before and after: on the shared machine the load
+inflates wall times.
+
+Run: .venv/bin/python bench/steklov_mpi.py [--sizes 4000 16000] [--shapes circle l-shape]
+     [--repeat 5] [--ranks 1 2]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bem_assembly import circle, l_shape  # noqa: E402
+
+SHAPES = {"circle": circle, "l-shape": l_shape}
+TOL = 1e-10
+
+
+def worker(n: int, shape: str, repeat: int) -> None:
+    from mpi4py import MPI
+
+    import bem_cpp
+
+    comm = MPI.COMM_WORLD
+    X = SHAPES[shape](n)
+    comm.Barrier()
+    t0 = time.perf_counter()
+    S = bem_cpp.steklov_poincare(
+        X, "p1", compression="hmatrix", tol=TOL, comm=comm if comm.size > 1 else None
+    )
+    setup = comm.allreduce(time.perf_counter() - t0, op=MPI.MAX)
+    z = np.random.default_rng(0).standard_normal(len(X))
+    best = np.inf
+    for _ in range(repeat):
+        comm.Barrier()
+        t0 = time.perf_counter()
+        S @ z
+        best = min(best, comm.allreduce(time.perf_counter() - t0, op=MPI.MAX))
+    nbytes = comm.gather(S.nbytes, root=0)
+    if comm.rank == 0:
+        row = dict(
+            n=len(X), shape=shape, ranks=comm.size, setup=setup, product=best,
+            cg=S.last_iterations, nbytes=nbytes,
+        )  # fmt: skip
+        print(json.dumps(row), flush=True)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--sizes", type=int, nargs="+", default=[4000, 16000])
+    parser.add_argument("--shapes", nargs="+", default=list(SHAPES), choices=list(SHAPES))
+    parser.add_argument("--ranks", type=int, nargs="+", default=[1, 2])
+    parser.add_argument("--repeat", type=int, default=5)
+    parser.add_argument("--worker", nargs=2, metavar=("N", "SHAPE"))
+    args = parser.parse_args()
+    if args.worker:
+        worker(int(args.worker[0]), args.worker[1], args.repeat)
+        return
+    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
+    print(subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip())
+    print("| shape | n | ranks | set-up [s] | product [ms] | CG | MB per rank |")
+    print("|---|---|---|---|---|---|---|")
+    for shape in args.shapes:
+        for n in args.sizes:
+            for p in args.ranks:
+                cmd = ["mpirun", "--allow-run-as-root", "--oversubscribe", "-n", str(p)]
+                cmd += [sys.executable, __file__, "--worker", str(n), shape]
+                cmd += ["--repeat", str(args.repeat)]
+                out = subprocess.run(cmd, capture_output=True, text=True, env=env, check=True)
+                r = json.loads(out.stdout.strip().splitlines()[-1])
+                mb = " / ".join(f"{b / 1e6:.1f}" for b in r["nbytes"])
+                print(
+                    f"| {shape} | {n:,} | {p} | {r['setup']:.2f} | {1e3 * r['product']:.1f} "
+                    f"| {r['cg']} | {mb} |",
+                    flush=True,
+                )
+    print(subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip())
+
+
+if __name__ == "__main__":
+    main()
