@@ -2,8 +2,12 @@
 ``bem_cpp.steklov_poincare(..., comm=...)``; docs/design/hmatrix.md, "Under MPI").
 
 For each shape and n: set-up wall time (the slowest rank, after a barrier), one product
-``S @ z`` (best of --repeat, each between barriers; the slowest rank), the CG iterations
-of its V_h solve and the bytes each rank holds. One rank runs the serial operator
+``S @ z`` (best of --repeat, each between barriers; the slowest rank), the part of it
+outside the collectives (the slowest rank; on a loaded machine a rank waits in a
+collective for a descheduled partner), its CPU time (the largest of the ranks,
+collectives included: the part of the product the load does not inflate), the number
+of collectives, the CG iterations of
+its V_h solve and the bytes each rank holds. One rank runs the serial operator
 (symmetric storage of V_h, V0_h), two ranks the distributed one; one OpenMP / BLAS
 thread per rank. ``uptime`` is printed before and after: on the shared machine the load
 inflates wall times.
@@ -30,31 +34,56 @@ SHAPES = {"circle": circle, "l-shape": l_shape}
 TOL = 1e-10
 
 
+class TimedComm:
+    """The two calls of ``bem_cpp.mpi_collectives`` on an mpi4py communicator, timed."""
+
+    def __init__(self, comm) -> None:
+        self.comm, self.rank, self.size = comm, comm.rank, comm.size
+        self.seconds, self.calls = 0.0, 0
+
+    def _timed(self, f, *args, **kwargs):
+        t0 = time.perf_counter()
+        f(*args, **kwargs)
+        self.seconds += time.perf_counter() - t0
+        self.calls += 1
+
+    def Allgatherv(self, *args, **kwargs) -> None:
+        self._timed(self.comm.Allgatherv, *args, **kwargs)
+
+    def Reduce_scatter(self, *args, **kwargs) -> None:
+        self._timed(self.comm.Reduce_scatter, *args, **kwargs)
+
+
 def worker(n: int, shape: str, repeat: int) -> None:
     from mpi4py import MPI
 
     import bem_cpp
 
     comm = MPI.COMM_WORLD
+    timed = TimedComm(comm)
     X = SHAPES[shape](n)
     comm.Barrier()
     t0 = time.perf_counter()
     S = bem_cpp.steklov_poincare(
-        X, "p1", compression="hmatrix", tol=TOL, comm=comm if comm.size > 1 else None
+        X, "p1", compression="hmatrix", tol=TOL, comm=timed if comm.size > 1 else None
     )
     setup = comm.allreduce(time.perf_counter() - t0, op=MPI.MAX)
     z = np.random.default_rng(0).standard_normal(len(X))
-    best = np.inf
+    best, work, cpu = np.inf, np.inf, np.inf
     for _ in range(repeat):
         comm.Barrier()
-        t0 = time.perf_counter()
+        timed.seconds, timed.calls = 0.0, 0
+        t0, c0 = time.perf_counter(), time.process_time()
         S @ z
-        best = min(best, comm.allreduce(time.perf_counter() - t0, op=MPI.MAX))
+        wall, c = time.perf_counter() - t0, time.process_time() - c0
+        best = min(best, comm.allreduce(wall, op=MPI.MAX))
+        work = min(work, comm.allreduce(wall - timed.seconds, op=MPI.MAX))
+        cpu = min(cpu, comm.allreduce(c, op=MPI.MAX))
     nbytes = comm.gather(S.nbytes, root=0)
     if comm.rank == 0:
         row = dict(
             n=len(X), shape=shape, ranks=comm.size, setup=setup, product=best,
-            cg=S.last_iterations, nbytes=nbytes,
+            work=work, cpu=cpu, collectives=timed.calls, cg=S.last_iterations, nbytes=nbytes,
         )  # fmt: skip
         print(json.dumps(row), flush=True)
 
@@ -72,8 +101,11 @@ def main() -> None:
         return
     env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
     print(subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip())
-    print("| shape | n | ranks | set-up [s] | product [ms] | CG | MB per rank |")
-    print("|---|---|---|---|---|---|---|")
+    print(
+        "| shape | n | ranks | set-up [s] | product [ms] | outside collectives [ms] "
+        "| product CPU [ms] | collectives | CG | MB per rank |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for shape in args.shapes:
         for n in args.sizes:
             for p in args.ranks:
@@ -85,6 +117,7 @@ def main() -> None:
                 mb = " / ".join(f"{b / 1e6:.1f}" for b in r["nbytes"])
                 print(
                     f"| {shape} | {n:,} | {p} | {r['setup']:.2f} | {1e3 * r['product']:.1f} "
+                    f"| {1e3 * r['work']:.1f} | {1e3 * r['cpu']:.1f} | {r['collectives']} "
                     f"| {r['cg']} | {mb} |",
                     flush=True,
                 )
