@@ -109,9 +109,10 @@ def test_hmatrix_solve_is_the_same_on_two_ranks(tmp_path, solutions):
     out = tmp_path / "p2.npz"
     run_mpi(2, SCRIPT, str(out), str(CELLS), "ssn", "hmatrix", str(METHOD_TOL["ssn"]))
     par = np.load(out)
-    # distributed by rows (bem_cpp.steklov_poincare(..., comm=...)), not replicated
+    # distributed by rows (bem_cpp.steklov_poincare(..., comm=...)), not replicated: rank 0
+    # holds about half the serial bytes (measured 0.55; tests/test_mpi_steklov_operator.py)
     assert str(par["operator_class"]) == "SteklovPoincareOperator"
-    assert par["distributed_bytes"] < par["serial_bytes"]
+    assert par["distributed_bytes"] < 0.65 * par["serial_bytes"]
     assert par["converged"] and par["iterations"] == serial.iterations
     assert abs(par["energy"] - serial.energy) <= 1e-12 * abs(serial.energy)
     np.testing.assert_allclose(par["phi"], serial.phi, rtol=0, atol=1e-9 * abs(serial.phi).max())
