@@ -67,10 +67,16 @@ class SparseFactor:
             raise RuntimeError("this factor has been destroyed; build a new preconditioner")
         if self._ksp is None:  # empty matrix
             return np.zeros_like(b, dtype=float)
-        if b.ndim == 1:
-            self._rhs.array[:] = b
-            self._factor.solve(self._rhs, self._sol)
-            return self._sol.array.copy()
+        if b.ndim == 1:  # the Vecs wrap b and the result: no copies in and out
+            out, rhs = np.empty(self.n), np.ascontiguousarray(b, dtype=float)
+            self._rhs.placeArray(rhs)
+            self._sol.placeArray(out)
+            try:
+                self._factor.solve(self._rhs, self._sol)
+            finally:
+                self._rhs.resetArray()
+                self._sol.resetArray()
+            return out
         out = np.zeros(b.shape, order="F")
         rhs = PETSc.Mat().createDense(
             b.shape, array=np.asfortranarray(b, dtype=float), comm=PETSc.COMM_SELF
