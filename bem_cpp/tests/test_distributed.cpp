@@ -214,3 +214,27 @@ TEST(SteklovPoincareOperator, DistributedOverThreadsEqualsTheSerialOperator) {
     }
   }
 }
+
+TEST(SteklovPoincareOperator, DistributedWithMoreRanksThanLeaves) {
+  // 2 leaves of 32 dofs, 3 ranks: in each H-matrix one rank holds no rows and still takes
+  // part in the collectives
+  const Points X = test::circle(64);
+  const SteklovOptions options{{32, 1.0, 1e-10}, 1e-4, 1e-13, 1000};
+  const SteklovPoincareOperator serial(X, Space::P1, options);
+  const Eigen::MatrixXd Y = Eigen::MatrixXd::Random(64, 2), ref = serial.apply(Y);
+  ThreadGroup group(3);
+  std::vector<Eigen::MatrixXd> out(3);
+  std::vector<std::thread> ranks;
+  for (int r = 0; r < 3; ++r)
+    ranks.emplace_back([&, r] {
+      SteklovOptions o = options;
+      o.hmatrix.comm = group.communicator(r);
+      const SteklovPoincareOperator S(X, Space::P1, o);
+      out[static_cast<std::size_t>(r)] = S.apply(Y);
+    });
+  for (std::thread& t : ranks) t.join();
+  const ClusterTree tree = ClusterTree::for_space(Polygon(X), Space::P1, 32);
+  ASSERT_EQ(tree.leaves().size(), 2u);
+  for (int r = 0; r < 3; ++r) EXPECT_LT(relative(out[static_cast<std::size_t>(r)], ref), 1e-12);
+  EXPECT_EQ(tree.partition(3)[1], tree.partition(3)[2]);  // (by counts) one range is empty
+}
