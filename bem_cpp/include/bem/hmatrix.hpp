@@ -74,7 +74,7 @@ class HMatrix {
   HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const ClusterTree> cols,
           const EntrySource& entries, const HMatrixOptions& options);
   /// The rows [row_begin, row_end) of the permuted row order only (no communicator:
-  /// apply_local and apply_transpose_local; apply() needs all rows).
+  /// apply_local and apply_partial; apply() needs all rows).
   HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const ClusterTree> cols,
           const EntrySource& entries, const HMatrixOptions& options, Index row_begin, Index row_end);
 
@@ -109,7 +109,8 @@ class HMatrix {
  private:
   std::shared_ptr<const ClusterTree> rows_, cols_;
   void build(const EntrySource& entries, const HMatrixOptions& options);
-  /// Y (out rows, k) += the blocks (transposed: tr) times Xp (both permuted, offsets in0/out0).
+  /// Y = the held blocks (transposed: tr) times Xp, both permuted; Xp starts at row in0 of
+  /// the input if tr (else it is whole), Y at row out0 of the output if !tr (else whole).
   void accumulate(const Eigen::MatrixXd& Xp, Index in0, Index out0, bool tr, Eigen::MatrixXd& Y) const;
   std::vector<Block> blocks_;
   bool symmetric_ = false;  ///< symmetric storage (upper blocks, used twice)
