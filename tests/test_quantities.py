@@ -54,7 +54,10 @@ def test_pressure_converges_like_h2_and_complementarity_holds(case):
     errors = []
     for cells in (16, 32, 64):
         problem = manufactured_problem(MPI.COMM_WORLD, solution, MATERIAL, cells=cells)
-        result = solve(problem, SolverOptions(tol=1e-10))
+        # ssn stops once its iterate meets the B-norm rule; the pointwise complementarity of
+        # the recovered pressure then follows tol up to about C0 / h (measured 100-500 tol),
+        # so tol = 1e-12 puts it well below the 1e-8 checked (measured 2e-11 .. 1.5e-10)
+        result = solve(problem, SolverOptions(tol=1e-12))
         sigma = boundary_flux(problem, result)
         far = _far_from_corners(problem.boundary, 0.05)
         errors.append(np.abs(sigma - _exact_flux(solution, problem.boundary))[far].max())

@@ -18,7 +18,14 @@ per step, plus the dense S_h on the boundary block), the preconditioner is the
 substructuring B restricted to the inactive set (B_Omega^{-1} for u, M_s[I, I]^{-1} for
 phi_I). The CG tolerance follows the Newton residual r = (||grad_u J||_{B_Omega^{-1}}^2
 + ||phi - P_s(phi - tau M_s^{-1} grad_phi J)||_{M_s}^2 / tau^2)^{1/2} (inexact Newton,
-forcing term min(0.1, sqrt(r_k / r_0))). Globalisation: backtracking on J_h along the
+forcing term min(0.1, sqrt(r_k / r_0)), kept above c tol ||xi_k||_B / (tau r_k) with
+c = OVERSOLVE_SAFEGUARD: no step is solved more accurately than the stopping rule needs,
+the safeguard of Kelley, Iterative Methods for Linear and Nonlinear Equations, 1995,
+section 6.3). tau r is the B-norm of the PGPM step from the iterate ((3.19) with the
+exact projection), so the iteration stops as soon as that step meets the PGPM rule
+||step||_B <= tol ||xi||_B with the active set unchanged: the answer is one that PGPM
+would accept, without the confirming Newton step the rule on the Newton step itself
+would take. Globalisation: backtracking on J_h along the
 projected path (u + a du, max(0, phi + a dphi)); a step that does not decrease J_h after
 30 halvings is replaced by a PGPM step. A few PGPM steps start the iteration.
 
@@ -38,6 +45,7 @@ import scipy.linalg
 from mpi4py import MPI
 
 from coupling.functional import CoupledFunctional
+from coupling.options import OVERSOLVE_SAFEGUARD
 from coupling.solvers.pgpm import energy_increased, pgpm
 from coupling.solvers.projection import SignoriniProjection
 from coupling.solvers.records import (
@@ -143,10 +151,12 @@ def semismooth_newton(
     """Semismooth Newton on the optimality system, started by ``start_steps`` PGPM steps.
 
     The active set is predicted by a PGPM step in the M_s metric with the exact
-    projection (module docstring). Stops when ||xi_{k+1} - xi_k||_B <= tol ||xi_{k+1}||_B
-    (the rule of the PGPM) with an unchanged active set, or after ``max_iterations``
-    outer steps in all (the PGPM steps included). The records of the Newton steps hold
-    their CG iterations and the length taken along the Newton direction.
+    projection (module docstring). Stops when that PGPM step from the Newton iterate xi_k
+    meets the rule of the PGPM, ||step||_B = tau r_k <= tol ||xi_k||_B, with the active
+    set unchanged by the last Newton step, or when a Newton step itself has
+    ||xi_{k+1} - xi_k||_B <= tol ||xi_{k+1}||_B with an unchanged active set, or after
+    ``max_iterations`` outer steps in all (the PGPM steps included). The records of the
+    Newton steps hold their CG iterations and the length taken along the Newton direction.
 
     The CG tolerance of a step is min(0.1, sqrt(r / r_0)) times the residual r (module
     docstring), r_0 the residual of the first Newton step, or ``residual_scale`` when
@@ -188,12 +198,18 @@ def semismooth_newton(
     residual0 = residual_scale
     increases = warm.energy_increases
     active = np.zeros(phi.size, dtype=bool)
+    norm2 = None  # ||xi_k||_B^2 after a Newton step
     reason, converged, k = f"reached max_iterations = {max_iterations}", False, warm.iterations
     for k in range(warm.iterations + 1, max_iterations + 1):
         g_u = grad.array_r.copy()
         predicted, residual = _predict(preconditioner, predictor, comm, g_u, g_phi, phi, tau)
         new_active = predicted <= 0.0
         active_changed = not np.array_equal(new_active, active)
+        if norm2 is not None and not active_changed and tau * residual <= tol * np.sqrt(norm2):
+            # the PGPM step from xi_k (B-norm tau r) meets the PGPM rule: no further step
+            converged, k = True, k - 1
+            reason = f"||PGPM step at xi_k||_B <= {tol:g} ||xi_k||_B, active set settled"
+            break
         active, free = new_active, ~new_active
         residual0 = residual if residual0 is None else residual0
         forms.assemble_jacobian(u_function, jacobian)
@@ -222,6 +238,8 @@ def semismooth_newton(
         h_a_u, h_a_phi = hessian(np.zeros_like(g_u), d_phi)
         rhs = (-g_u - h_a_u, -g_phi[free] - h_a_phi[free])
         forcing = min(0.1, np.sqrt(residual / residual0))
+        if norm2 is not None:  # no more accuracy than the stopping rule asks for
+            forcing = max(forcing, OVERSOLVE_SAFEGUARD * tol * np.sqrt(norm2) / (tau * residual))
         (d_u, d_phi_free), cg_its = _pcg(
             apply_h, apply_b_inv, rhs, comm, rtol=forcing, max_iterations=cg_max_iterations
         )
