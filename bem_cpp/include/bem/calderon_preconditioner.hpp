@@ -11,9 +11,9 @@
 //            piecewise linear on the mesh refined at the midpoints: the 2D Buffa-Christiansen
 //            space); G is tridiagonal (3h_i/4 on the diagonal, h/8 beside it) and W_T is
 //            formed by Maue's identity on the refined mesh, with its own P0 H-matrix.
-#include <Eigen/Sparse>
 #include <memory>
 
+#include "bem/cyclic_tridiagonal.hpp"
 #include "bem/hmatrix.hpp"
 #include "bem/operators.hpp"
 
@@ -37,8 +37,11 @@ class CalderonPreconditioner {
   std::unique_ptr<Polygon> refined_;  ///< flux P0: nodes and midpoints
   Eigen::VectorXd h_;                 ///< panel lengths of the mesh W_T lives on
   std::shared_ptr<const HMatrix> V0_;
-  Eigen::SparseMatrix<double> G_;
-  Eigen::SparseLU<Eigen::SparseMatrix<double>> lu_, lu_t_;
+  /// G = diag(scale_) T with T cyclic tridiagonal (P1: G itself, symmetric, scale_ = 1;
+  /// P0: T = (1/8, 3/4, 1/8), scale_ = h), so G^{-1} R = T^{-1}(R / scale_) and
+  /// G^{-T} R = (T^{-T} R) / scale_ with T^T = T: O(n) solves.
+  CyclicTridiagonal T_;
+  Eigen::VectorXd scale_;
   Eigen::VectorXd c_;
 };
 
