@@ -44,7 +44,7 @@ def test_products_match_the_dense_operator_n4000(make):
     x = np.random.default_rng(1).standard_normal((len(X), 2))
     assert relative_error(S_h, S, x) <= 10 * TOL
     # issue 20: at most a quarter of the dense memory at n = 4,000 (nbytes does not depend
-    # on the machine; measured 0.145 circle, 0.192 L-shape, docs/design/hmatrix.md)
+    # on the machine; measured 0.133 circle, 0.180 L-shape, docs/design/hmatrix.md)
     assert S_h.nbytes <= S.nbytes / 4
 
 
