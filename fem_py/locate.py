@@ -43,7 +43,7 @@ def locate(
     for k in (8, 32, 128):
         k = min(k, len(triangles))
         _, cand = tree.query(points[todo], k=k)
-        cand = cand.reshape(len(todo), k)
+        cand = np.minimum(cand.reshape(len(todo), k), len(triangles) - 1)  # n: no neighbour
         lam = _barycentric(x, triangles, cand, points[todo][:, None, :])
         inside = (lam >= -tol).all(axis=2)
         hit = inside.any(axis=1)
@@ -57,14 +57,57 @@ def locate(
     return cell, bary
 
 
+def _grid_keys(coords: np.ndarray, origin: np.ndarray, quantum: float) -> np.ndarray:
+    """One int64 per point: its coordinates rounded to multiples of ``quantum``, -1 for
+    the points outside [0, 2^30] quanta from ``origin`` (none of the mesh's)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        k = np.rint((coords - origin) / quantum)
+    inside = ((k >= 0) & (k <= 2.0**30)).all(axis=1)
+    keys = np.full(len(coords), -1, dtype=np.int64)
+    ki = k[inside].astype(np.int64)
+    keys[inside] = ki[:, 0] * (1 << 31) + ki[:, 1]
+    return keys
+
+
+def _at_nodes_and_midpoints(
+    x: np.ndarray, triangles: np.ndarray, values: np.ndarray, points: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """(values, matched) at the points that coincide, up to 2^-30 of the mesh's extent,
+    with a node (the nodal value) or an edge midpoint (the mean of the edge's two values)
+    of the mesh: every node of a uniform refinement of the mesh, by sorting instead of a
+    point location."""
+    ends = triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    coords = np.concatenate([x, 0.5 * (x[ends[:, 0]] + x[ends[:, 1]])])
+    known = np.concatenate([values, 0.5 * (values[ends[:, 0]] + values[ends[:, 1]])])
+    origin = x.min(axis=0)
+    quantum = max(float(np.ptp(x, axis=0).max()), 1e-300) * 2.0**-30
+    keys = _grid_keys(coords, origin, quantum)
+    order = np.argsort(keys, kind="stable")
+    keys = keys[order]
+    wanted = _grid_keys(points, origin, quantum)
+    at = np.minimum(np.searchsorted(keys, wanted), len(keys) - 1)
+    matched = (keys[at] == wanted) & (wanted >= 0)
+    out = np.full(len(points), np.nan)
+    out[matched] = known[order[at[matched]]]
+    return out, matched
+
+
 def interpolate_p1(
     x: np.ndarray, triangles: np.ndarray, values: np.ndarray, points: np.ndarray
 ) -> np.ndarray:
-    """The P1 function of nodal ``values`` at ``points``; NaN outside the mesh."""
-    cell, bary = locate(x, triangles, points)
-    out = np.full(len(cell), np.nan)
+    """The P1 function of nodal ``values`` at ``points``; NaN outside the mesh.
+
+    Points at nodes and edge midpoints (all nodes of a uniformly refined mesh: nested
+    iteration) are matched by sorting; the others are located (:func:`locate`)."""
+    x = np.asarray(x, dtype=float)[:, :2]
+    triangles = np.asarray(triangles, dtype=np.int64)
+    values = np.asarray(values, dtype=float)
+    points = np.asarray(points, dtype=float).reshape(-1, 2)
+    if len(x) == 0 or len(triangles) == 0:
+        return np.full(len(points), np.nan)
+    out, matched = _at_nodes_and_midpoints(x, triangles, values, points)
+    rest = np.flatnonzero(~matched)
+    cell, bary = locate(x, triangles, points[rest])
     found = cell >= 0
-    out[found] = np.einsum(
-        "ij,ij->i", bary[found], np.asarray(values)[np.asarray(triangles)[cell[found]]]
-    )
+    out[rest[found]] = np.einsum("ij,ij->i", bary[found], values[triangles[cell[found]]])
     return out

@@ -40,3 +40,18 @@ def test_linear_functions_interpolate_exactly_and_outside_is_nan():
     values = interpolate_p1(x, tris, f(x), pts)
     np.testing.assert_allclose(values[:-2], f(pts[:-2]), atol=1e-13)
     assert np.isnan(values[-2:]).all()
+
+
+def test_nodes_of_the_uniform_refinement_take_the_node_and_midpoint_values():
+    """Every node of the refined mesh is a node or an edge midpoint of the coarse one: the
+    nodal value or the mean of the edge's two values (exact for any P1 field, here a
+    non-linear nodal field), found without a point location; far points are NaN, also
+    beyond the range of the sorting keys."""
+    x, tris = _mesh(8)
+    values = np.sin(7 * x[:, 0]) + x[:, 1] ** 2
+    fine, _ = _mesh(16)
+    got = interpolate_p1(x, tris, values, fine)
+    cell, bary = locate(x, tris, fine)
+    np.testing.assert_allclose(got, np.einsum("ij,ij->i", bary, values[tris[cell]]), atol=1e-15)
+    far = np.array([[3.0, 3.0], [1.0, 3.5], [1e300, 0.0], [-2.0, 0.5]])
+    assert np.isnan(interpolate_p1(x, tris, values, far)).all()
