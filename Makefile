@@ -62,6 +62,7 @@ demo: setup
 
 bench: setup
 	$(PY) bench/bem_assembly.py
+	$(PY) bench/steklov_mpi.py
 	$(PY) bench/pgpm_profile.py
 	$(PY) bench/peers.py
 	$(PY) bench/strong_scaling.py --output bench/scaling.md
