@@ -320,8 +320,9 @@ class SteklovPoincareOperator(_CompiledOperator):
     Distributed (``comm`` of :func:`steklov_poincare`): each rank holds the blocks of its
     own rows of V, V0 and K (V, V0 in symmetric storage: the blocks on and above the
     diagonal), and every product is collective, with the same result on every rank: K x
-    is the local rows and one Allgatherv; V x, V0 x and K^T y are partial sums, one
-    Reduce_scatter and one Allgatherv.
+    is the local rows and one Allgatherv; V x, V0 x and K^T y are partial sums and one
+    Allreduce (on more than 2 ranks Reduce_scatter and Allgatherv, so that every rank gets
+    the same bits).
 
     Attributes
     ----------
@@ -423,7 +424,7 @@ def steklov_poincare(
         raise ValueError('comm needs compression="hmatrix"')
     if compression == "hmatrix":
         tol = _tolerance(tol)
-        allgather, reduce_scatter = mpi_collectives(comm) if comm is not None else (None, None)
+        allgather, allreduce = mpi_collectives(comm) if comm is not None else (None, None)
         op = SteklovPoincareOperator(
             _bem.SteklovPoincareOperator(
                 *args,
@@ -437,7 +438,7 @@ def steklov_poincare(
                 rank=0 if comm is None else comm.rank,
                 size=1 if comm is None else comm.size,
                 allgather=allgather,
-                reduce_scatter=reduce_scatter,
+                allreduce=allreduce,
             )
         )
         if timings is not None:

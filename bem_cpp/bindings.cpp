@@ -44,13 +44,13 @@ PYBIND11_MODULE(_bem, m) {
       .def(py::init([](NodesRef nodes, Space flux, bem::Index leaf_size, double eta, double tol,
                        double preconditioner_tol, double solver_tol, int max_iterations,
                        int product_threads, int rank, int size, Collective allgather,
-                       Collective reduce_scatter) {
+                       Collective allreduce) {
              // allgather None: serial; otherwise the collectives of the ranks (mpi4py,
              // called back with the GIL held by pybind11's function wrapper)
              std::shared_ptr<const bem::Communicator> comm;
              if (allgather)
                comm = std::make_shared<const bem::Communicator>(
-                   bem::Communicator{rank, size, std::move(allgather), std::move(reduce_scatter)});
+                   bem::Communicator{rank, size, std::move(allgather), std::move(allreduce)});
              return std::make_unique<bem::SteklovPoincareOperator>(
                  nodes, flux,
                  bem::SteklovOptions{{leaf_size, eta, tol, false, product_threads, comm}, preconditioner_tol,
@@ -59,7 +59,7 @@ PYBIND11_MODULE(_bem, m) {
            py::arg("nodes"), py::arg("flux"), py::arg("leaf_size"), py::arg("eta"), py::arg("tol"),
            py::arg("preconditioner_tol"), py::arg("solver_tol"), py::arg("max_iterations"),
            py::arg("product_threads"), py::arg("rank"), py::arg("size"), py::arg("allgather"),
-           py::arg("reduce_scatter"), Release())
+           py::arg("allreduce"), Release())
       .def("apply", &bem::SteklovPoincareOperator::apply, py::arg("x"), Release())
       .def("flux", &bem::SteklovPoincareOperator::flux, py::arg("x"), Release())
       .def_property_readonly("size", &bem::SteklovPoincareOperator::size)

@@ -1,8 +1,8 @@
 """The two collectives of a distributed bem_cpp operator, with mpi4py.
 
 The compiled operator (``bem_cpp/include/bem/communicator.hpp``) does not link MPI: it
-calls back into Python for an Allgatherv of row blocks and a Reduce_scatter of partial
-sums, both on (rows, k) blocks whose rows are split over the ranks by ``counts``.
+calls back into Python for an Allgatherv of row blocks and for the sum of partial sums,
+both on (rows, k) blocks whose rows are split over the ranks by ``counts``.
 """
 from __future__ import annotations
 
@@ -15,14 +15,15 @@ Collective = Callable[[NDArray[np.float64], list[int]], NDArray[np.float64]]
 
 
 def mpi_collectives(comm: Any) -> tuple[Collective, Collective]:
-    """``(allgather, reduce_scatter)`` on the mpi4py communicator ``comm``.
+    """``(allgather, allreduce)`` on the mpi4py communicator ``comm``.
 
     ``allgather(local, counts)``: the (counts[rank], k) blocks of all ranks stacked in rank
-    order, (sum(counts), k), the same on every rank (MPI_Allgatherv). ``reduce_scatter(
-    partial, counts)``: this rank's rows of the sum over the ranks of the (sum(counts), k)
-    blocks (MPI_Reduce_scatter); each entry of the sum is formed on one rank only, so an
-    allgather of the pieces gives all ranks the same bits, which an MPI_Allreduce does not
-    promise.
+    order, (sum(counts), k), the same on every rank (MPI_Allgatherv). ``allreduce(partial,
+    counts)``: the sum over the ranks of the (sum(counts), k) blocks with the same bits on
+    every rank. On 2 ranks an MPI_Allreduce: each entry is one addition, and IEEE
+    addition is commutative. On more, MPI does not promise equal results on all ranks
+    (the order of the additions may differ), so MPI_Reduce_scatter forms each entry on one
+    rank (of the rows ``counts``) and MPI_Allgatherv copies it.
     """
     from mpi4py import MPI
 
@@ -37,11 +38,16 @@ def mpi_collectives(comm: Any) -> tuple[Collective, Collective]:
         comm.Allgatherv(np.ascontiguousarray(local), [out, c, offsets, MPI.DOUBLE])
         return out
 
-    def reduce_scatter(partial: NDArray[np.float64], counts: list[int]) -> NDArray[np.float64]:
+    def allreduce(partial: NDArray[np.float64], counts: list[int]) -> NDArray[np.float64]:
+        partial = np.ascontiguousarray(partial)
+        if comm.size <= 2:
+            out = np.empty_like(partial)
+            comm.Allreduce(partial, out, op=MPI.SUM)
+            return out
         k = partial.shape[1]
         c, _ = layout(counts, k)
         own = np.empty((counts[comm.rank], k))
-        comm.Reduce_scatter(np.ascontiguousarray(partial), own, recvcounts=c, op=MPI.SUM)
-        return own
+        comm.Reduce_scatter(partial, own, recvcounts=c, op=MPI.SUM)
+        return allgather(own, counts)
 
-    return allgather, reduce_scatter
+    return allgather, allreduce

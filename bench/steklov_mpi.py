@@ -53,6 +53,9 @@ class TimedComm:
     def Reduce_scatter(self, *args, **kwargs) -> None:
         self._timed(self.comm.Reduce_scatter, *args, **kwargs)
 
+    def Allreduce(self, *args, **kwargs) -> None:
+        self._timed(self.comm.Allreduce, *args, **kwargs)
+
 
 def worker(n: int, shape: str, repeat: int) -> None:
     from mpi4py import MPI

@@ -107,7 +107,8 @@ def steklov_poincare(comm: MPI.Comm, nodes: np.ndarray, flux: str, choice: str) 
     :data:`coupling.options.HMATRIX_TOL`; under MPI distributed over ``comm``: each rank
     holds the blocks of its own rows of V_h, V0_h and K_h (``S.nbytes`` is this rank's),
     ``S @ z`` and ``S.flux(v)`` are collective (K x: local rows and one Allgatherv; V x,
-    V0 x, K^T y: partial sums, one Reduce_scatter and one Allgatherv) and return the same
+    V0 x, K^T y: partial sums and one Allreduce, or Reduce_scatter and Allgatherv on more
+    than 2 ranks) and return the same
     bits on every rank,
     and the CG of the V_h solves takes the serial iteration count (``S.last_iterations``;
     docs/design/hmatrix.md, "Under MPI"). Each has ``S @ z`` for a replicated z and

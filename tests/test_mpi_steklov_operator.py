@@ -17,10 +17,15 @@ def _relative(a: np.ndarray, b: np.ndarray) -> float:
 
 
 @pytest.mark.mpi
-@pytest.mark.parametrize("shape,flux", [("circle", "p1"), ("lshape", "p1"), ("lshape", "p0")])
-def test_distributed_operator_equals_the_serial_one(tmp_path, shape, flux):
+@pytest.mark.parametrize(
+    "ranks,shape,flux",
+    [(2, "circle", "p1"), (2, "lshape", "p1"), (2, "lshape", "p0"), (3, "lshape", "p1")],
+)
+def test_distributed_operator_equals_the_serial_one(tmp_path, ranks, shape, flux):
+    """2 ranks: the sums by MPI_Allreduce; 3: by Reduce_scatter and Allgatherv
+    (bem_cpp.collectives)."""
     out = tmp_path / "s.npz"
-    run_mpi(2, SCRIPT, str(out), "2000", shape, flux)
+    run_mpi(ranks, SCRIPT, str(out), "2000", shape, flux)
     d = np.load(out)
     assert tuple(d["shape"]) == (2000, 2000)
     # Each rank holds the serial operator's blocks (symmetric storage of V, V0) cut to its
@@ -30,9 +35,11 @@ def test_distributed_operator_equals_the_serial_one(tmp_path, shape, flux):
         assert _relative(d[a], d[b]) <= 1e-12, a
     distributed, serial = d["iterations"]
     assert distributed == serial > 0
-    assert d["same_everywhere"]  # the same bits on both ranks
-    # bytes per rank: half of the H-matrices, plus what every rank holds (permutations,
-    # the sparse factors of the preconditioner, V of a low-rank block a range boundary
-    # cuts): measured 0.50-0.53 of the serial bytes; the ranks balanced to 7 %
+    assert d["same_everywhere"]  # the same bits on every rank
+    # bytes per rank: 1 / ranks of the H-matrices, plus what every rank holds
+    # (permutations, the Gram factors of the preconditioner, V of a low-rank block a range
+    # boundary cuts): measured 0.50-0.53 of the serial bytes on 2 ranks, 0.33-0.38 on 3;
+    # the ranks balanced to 7 % (2) and 12 % (3) by the byte model of the row split
     ratio = d["bytes_per_rank"] / d["serial_bytes"]
-    assert np.all(ratio < 0.65) and ratio.max() / ratio.min() < 1.1
+    assert len(ratio) == ranks
+    assert np.all(ratio < 1 / ranks + 0.1) and ratio.max() / ratio.min() < 1.2

@@ -75,7 +75,7 @@ HMatrix::HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const 
   row_end_ = rows_->size();
   if (comm_) {
     if (comm_->size < 1 || comm_->rank < 0 || comm_->rank >= comm_->size || !comm_->allgather ||
-        !comm_->reduce_scatter)
+        !comm_->allreduce)
       throw std::invalid_argument("HMatrix: the communicator needs 0 <= rank < size and both collectives");
     // Rows balanced by the bytes each will hold: a dense block k doubles per row, a
     // low-rank one about r (1 + k / m) with r = log10(1 / tol), the order of the ranks
@@ -226,8 +226,7 @@ Eigen::MatrixXd HMatrix::apply(const Eigen::Ref<const Eigen::MatrixXd>& X, bool 
   }
   if (!transpose && !symmetric_) return unpermuted(comm_->allgather(apply_local(X), row_counts_), *rows_);
   const std::vector<Index>& counts = transpose ? col_counts_ : row_counts_;
-  const Eigen::MatrixXd own = comm_->reduce_scatter(apply_partial(X, transpose), counts);
-  return unpermuted(comm_->allgather(own, counts), out_tree);
+  return unpermuted(comm_->allreduce(apply_partial(X, transpose), counts), out_tree);
 }
 
 Eigen::MatrixXd HMatrix::to_dense() const {

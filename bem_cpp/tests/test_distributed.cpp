@@ -39,16 +39,13 @@ class ThreadGroup {
       barrier();
       return out;
     };
-    c->reduce_scatter = [this, rank](const Eigen::MatrixXd& partial, const std::vector<Index>& counts) {
+    c->allreduce = [this, rank](const Eigen::MatrixXd& partial, const std::vector<Index>&) {
       slots_[static_cast<std::size_t>(rank)] = partial;
       barrier();
-      Index r0 = 0;
-      for (int r = 0; r < rank; ++r) r0 += counts[static_cast<std::size_t>(r)];
-      const Index m = counts[static_cast<std::size_t>(rank)];
-      Eigen::MatrixXd own = Eigen::MatrixXd::Zero(m, partial.cols());
-      for (int r = 0; r < size_; ++r) own += slots_[static_cast<std::size_t>(r)].middleRows(r0, m);
+      Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(partial.rows(), partial.cols());
+      for (int r = 0; r < size_; ++r) sum += slots_[static_cast<std::size_t>(r)];  // rank order
       barrier();
-      return own;
+      return sum;
     };
     return c;
   }

@@ -16,12 +16,13 @@ struct Communicator {
   /// (sum counts, k): the (counts[rank], k) blocks of all ranks stacked in rank order
   /// (MPI_Allgatherv). The result is the same on every rank.
   std::function<Eigen::MatrixXd(const Eigen::MatrixXd& local, const std::vector<Index>& counts)> allgather;
-  /// (counts[rank], k): this rank's rows of the sum over the ranks of the (sum counts, k)
-  /// partial sums (MPI_Reduce_scatter). Each entry of the sum is formed on its own rank
-  /// only, so that allgather of the pieces gives every rank the same bits (MPI_Allreduce
-  /// does not promise that).
+  /// (sum counts, k): the sum over the ranks of the (sum counts, k) partial sums, with the
+  /// same bits on every rank. On 2 ranks an MPI_Allreduce gives that (each entry is one
+  /// addition, and IEEE addition is commutative); on more the order of the additions may
+  /// differ between ranks, so MPI_Reduce_scatter forms each entry on one rank (the rows
+  /// `counts`) and MPI_Allgatherv copies it.
   std::function<Eigen::MatrixXd(const Eigen::MatrixXd& partial, const std::vector<Index>& counts)>
-      reduce_scatter;
+      allreduce;
 };
 
 }  // namespace bem

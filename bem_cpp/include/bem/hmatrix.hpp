@@ -16,7 +16,7 @@
 // row (a symmetric matrix's first rows hold more blocks), and apply() returns the whole
 // product on every rank: A X of a non-symmetric A is the local rows and one allgather;
 // A^T X, and A X of a symmetric A (an off-diagonal block also acts on the rows of its
-// columns), are partial sums, one reduce-scatter and one allgather.
+// columns), are partial sums and one allreduce (Communicator: the same bits everywhere).
 #include <Eigen/Dense>
 #include <cstddef>
 #include <functional>
