@@ -254,27 +254,30 @@ def test_adaptive_lshape_reaches_the_uniform_error_with_half_the_dofs(corner_lev
     assert better and min(better) <= dofs / 2, (dofs, error, better[:1])
 
 
-@pytest.fixture(scope="module")
-def contact_levels():
-    """The square contact case (Carstensen material), adaptive (theta = 0.5) from h = 1/16:
-    the levels with their errors (solution_errors)."""
-    solution = square_contact()
-    material = make_material("carstensen")
+def adaptive_levels(solution, rho: str, **adapt_options) -> list:
+    """The adaptive loop (theta = 0.5) of a manufactured contact case from h = 1/16 with
+    subdomains of 1/8: the levels with their errors (solution_errors)."""
     domain = build_domain(
         COMM,
-        "square",
+        solution.shape,
         h=1 / 16,
         subdomain_size=1 / 8,
         signorini=solution.signorini,
         structured=True,
     )
     levels = adapt(
-        builder_of(solution, material),
+        builder_of(solution, make_material(rho)),
         domain,
         SolverOptions(),
-        AdaptOptions(steps=5, theta=0.5),
+        AdaptOptions(theta=0.5, **adapt_options),
     )
     return [(level, solution_errors(level.problem, solution, level.solution)) for level in levels]
+
+
+@pytest.fixture(scope="module")
+def contact_levels():
+    """The square contact case (Carstensen material), 5 refinements."""
+    return adaptive_levels(square_contact(), "carstensen", steps=5)
 
 
 def bottom_flux_error(level, solution) -> float:
@@ -323,26 +326,10 @@ def test_adaptive_square_contact_keeps_the_exact_contact_set(contact_levels):
 @pytest.fixture(scope="module")
 def corner_contact_levels():
     """lshape_corner_contact (the r^(2/3) corner singularity and the bottom side in
-    contact for x < 0; linear material), adaptive (theta = 0.5) from h = 1/16 up to
-    12,000 dofs: the levels with their errors. (Its eighth level has nodes on the side
-    x = -1/4 that dolfinx's collision test missed in the previous mesh before
+    contact for x < 0; linear material) up to 12,000 dofs. (Its eighth level has nodes on
+    the side x = -1/4 that dolfinx's collision test missed in the previous mesh before
     fem_py.refinement.locate_cells fell back to barycentric location.)"""
-    solution = lshape_corner_contact()
-    domain = build_domain(
-        COMM,
-        "lshape",
-        h=1 / 16,
-        subdomain_size=1 / 8,
-        signorini=solution.signorini,
-        structured=True,
-    )
-    levels = adapt(
-        builder_of(solution, make_material("linear")),
-        domain,
-        SolverOptions(),
-        AdaptOptions(steps=12, theta=0.5, max_dofs=12000),
-    )
-    return [(level, solution_errors(level.problem, solution, level.solution)) for level in levels]
+    return adaptive_levels(lshape_corner_contact(), "linear", steps=12, max_dofs=12000)
 
 
 def test_adaptive_corner_contact_keeps_the_contact_set_and_the_optimal_rate(
