@@ -10,6 +10,7 @@
 
 #include "bem/boundary_operators.hpp"
 #include "bem/operators.hpp"
+#include "bem/potential_operator.hpp"
 #include "bem/potentials.hpp"
 #include "bem/steklov_operator.hpp"
 #include "bem/steklov_poincare.hpp"
@@ -99,4 +100,14 @@ PYBIND11_MODULE(_bem, m) {
             &bem::exterior_potential),
         py::arg("nodes"), py::arg("dirichlet"), py::arg("flux_coefficients"), py::arg("points"),
         py::arg("a"), py::arg("flux"), Release());
+  m.def(
+      "exterior_potential_hmatrix",
+      [](NodesRef nodes, VectorRef dirichlet, VectorRef flux_coefficients, NodesRef points, double a, Space flux,
+         bem::Index leaf_size, double eta, double tol, int product_threads) {
+        return bem::exterior_potential_hmatrix(nodes, dirichlet, flux_coefficients, points, a, flux,
+                                               bem::HMatrixOptions{leaf_size, eta, tol, false, product_threads});
+      },
+      py::arg("nodes"), py::arg("dirichlet"), py::arg("flux_coefficients"), py::arg("points"), py::arg("a"),
+      py::arg("flux"), py::arg("leaf_size"), py::arg("eta"), py::arg("tol"), py::arg("product_threads"),
+      Release());
 }

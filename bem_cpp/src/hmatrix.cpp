@@ -15,7 +15,8 @@ namespace {
 /// The leaves of the block tree under (t, s). upper: only (t, s) on or above the block
 /// diagonal (symmetric storage). [lo, hi): only row clusters meeting these rows.
 void collect(const ClusterTree& rows, const ClusterTree& cols, int t, int s, double eta,
-             bool upper, Index lo, Index hi, std::vector<HMatrix::Block>& out) {
+             bool upper, Index lo, Index hi, std::vector<HMatrix::Block>& out,
+             bool split_to_leaves = false) {
   const Cluster& ct = rows.cluster(t);
   const Cluster& cs = cols.cluster(s);
   if (ct.end <= lo || ct.begin >= hi) return;
@@ -23,7 +24,7 @@ void collect(const ClusterTree& rows, const ClusterTree& cols, int t, int s, dou
   // puts the whole subtree of (t, s) below the block diagonal.
   if (upper && ct.begin > cs.begin && ct.begin >= cs.end) return;
   const bool adm = admissible(ct.box, cs.box, eta);
-  if (adm || ct.leaf() || cs.leaf()) {
+  if (adm || (split_to_leaves ? ct.leaf() && cs.leaf() : ct.leaf() || cs.leaf())) {
     HMatrix::Block b;
     b.row_cluster = t;
     b.col_cluster = s;
@@ -35,8 +36,12 @@ void collect(const ClusterTree& rows, const ClusterTree& cols, int t, int s, dou
     out.push_back(std::move(b));
     return;
   }
-  for (int a : ct.children)
-    for (int c : cs.children) collect(rows, cols, a, c, eta, upper, lo, hi, out);
+  // split_to_leaves: a leaf stays whole while the other side is split
+  const int ts[2] = {ct.leaf() ? t : ct.children[0], ct.leaf() ? -1 : ct.children[1]};
+  const int ss[2] = {cs.leaf() ? s : cs.children[0], cs.leaf() ? -1 : cs.children[1]};
+  for (int a : ts)
+    for (int c : ss)
+      if (a >= 0 && c >= 0) collect(rows, cols, a, c, eta, upper, lo, hi, out, split_to_leaves);
 }
 
 std::vector<Index> counts(const std::vector<Index>& bounds) {
@@ -115,7 +120,8 @@ void HMatrix::build(const EntrySource& entries, const HMatrixOptions& options) {
   if (options.symmetric && rows_ != cols_)
     throw std::invalid_argument("HMatrix: a symmetric matrix needs one cluster tree for rows and columns");
   symmetric_ = options.symmetric;
-  collect(*rows_, *cols_, 0, 0, options.eta, symmetric_, row_begin_, row_end_, blocks_);
+  collect(*rows_, *cols_, 0, 0, options.eta, symmetric_, row_begin_, row_end_, blocks_,
+          options.split_to_leaves);
   const Index* rp = rows_->permutation().data();
   const Index* cp = cols_->permutation().data();
   // Largest blocks first, so that the dynamic schedule ends with small ones.

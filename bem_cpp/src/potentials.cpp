@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "bem/cluster_tree.hpp"
 #include "bem/far_field.hpp"
 #include "bem/log_integrals.hpp"
 
@@ -20,23 +21,56 @@ void check_size(const char* name, Index got, Index expected) {
 }
 }  // namespace
 
-Vector exterior_potential(const Polygon& polygon, const Eigen::Ref<const Vector>& dirichlet,
-                          const Eigen::Ref<const Vector>& flux_coefficients,
-                          const Eigen::Ref<const Points>& points, double a, Space flux) {
-  const Index n = polygon.size(), m = points.rows();
-  check_size("dirichlet", dirichlet.size(), n);
-  check_size("flux_coefficients", flux_coefficients.size(), n);
-  if (!dirichlet.allFinite() || !flux_coefficients.allFinite() || !std::isfinite(a))
-    throw std::invalid_argument("dirichlet, flux_coefficients and a must be finite");
-  if (!points.allFinite()) throw std::invalid_argument("points: non-finite coordinates");
+namespace {
+/// locate(polygon, z, tol) != Exterior, with the panels in the boxes of a cluster tree:
+/// the same tests on the same panels (any panel within tol: on Gamma; else the parity of
+/// the crossings of the ray to the right), skipping the clusters that cannot pass them.
+class Locator {
+ public:
+  Locator(const Polygon& polygon, double tol)
+      : polygon_(polygon), tree_(ClusterTree::for_space(polygon, Space::P0, 16)), tol_(tol),
+        margin_(1e-12 * polygon.bounding_diameter()) {}
+  bool not_exterior(Vec2 z) const { return near(0, z) || crossings(0, z) % 2 == 1; }
 
-  // Reject points inside Omega or on Gamma before any work.
-  const double tol = kOnBoundaryTolerance * polygon.bounding_diameter();
+ private:
+  bool near(int c, Vec2 z) const {
+    const Cluster& cl = tree_.cluster(c);
+    Box b;
+    b.add(z);
+    if (cl.box.distance(b) > tol_ + margin_) return false;
+    if (!cl.leaf()) return near(cl.children[0], z) || near(cl.children[1], z);
+    for (Index k = cl.begin; k < cl.end; ++k)
+      if (distance(polygon_.panel(tree_.permutation()[static_cast<std::size_t>(k)]), z) <= tol_) return true;
+    return false;
+  }
+  int crossings(int c, Vec2 z) const {
+    const Cluster& cl = tree_.cluster(c);
+    // a crossing needs min y <= z.y < max y and z.x < x <= max x (up to round-off)
+    if (cl.box.y0 > z.y || cl.box.y1 <= z.y || cl.box.x1 + margin_ < z.x) return 0;
+    if (!cl.leaf()) return crossings(cl.children[0], z) + crossings(cl.children[1], z);
+    int count = 0;
+    for (Index k = cl.begin; k < cl.end; ++k) {
+      const Panel& p = polygon_.panel(tree_.permutation()[static_cast<std::size_t>(k)]);
+      if ((p.a.y > z.y) != (p.b.y > z.y)) {
+        const double x = p.a.x + (z.y - p.a.y) * (p.b.x - p.a.x) / (p.b.y - p.a.y);
+        if (z.x < x) ++count;
+      }
+    }
+    return count;
+  }
+  const Polygon& polygon_;
+  ClusterTree tree_;
+  double tol_, margin_;
+};
+}  // namespace
+
+void check_exterior(const Polygon& polygon, const Eigen::Ref<const Points>& points) {
+  const Index m = points.rows();
+  const Locator locator(polygon, kOnBoundaryTolerance * polygon.bounding_diameter());
   std::vector<char> bad(static_cast<std::size_t>(m), 0);
 #pragma omp parallel for schedule(static)
   for (Index k = 0; k < m; ++k)
-    bad[static_cast<std::size_t>(k)] =
-        locate(polygon, {points(k, 0), points(k, 1)}, tol) != Location::Exterior;
+    bad[static_cast<std::size_t>(k)] = locator.not_exterior({points(k, 0), points(k, 1)});
   Index n_bad = 0, first = -1;
   for (Index k = 0; k < m; ++k)
     if (bad[static_cast<std::size_t>(k)]) {
@@ -50,6 +84,19 @@ Vector exterior_potential(const Polygon& polygon, const Eigen::Ref<const Vector>
       << ")); the representation formula holds only in the exterior";
     throw std::invalid_argument(s.str());
   }
+}
+
+Vector exterior_potential(const Polygon& polygon, const Eigen::Ref<const Vector>& dirichlet,
+                          const Eigen::Ref<const Vector>& flux_coefficients,
+                          const Eigen::Ref<const Points>& points, double a, Space flux) {
+  const Index n = polygon.size(), m = points.rows();
+  check_size("dirichlet", dirichlet.size(), n);
+  check_size("flux_coefficients", flux_coefficients.size(), n);
+  if (!dirichlet.allFinite() || !flux_coefficients.allFinite() || !std::isfinite(a))
+    throw std::invalid_argument("dirichlet, flux_coefficients and a must be finite");
+  if (!points.allFinite()) throw std::invalid_argument("points: non-finite coordinates");
+
+  check_exterior(polygon, points);  // before any work
 
   // Per panel j: coefficients of its integrals in pi (K w - V psi)(z), w = v - a:
   // the log moments carry psi (start/end shape, or the panel value for P0), the

@@ -43,6 +43,11 @@ struct HMatrixOptions {
   /// Distributed: this rank holds its range of rows of the row tree (balanced by bytes,
   /// ClusterTree::partition) and apply() is collective.
   std::shared_ptr<const Communicator> comm;
+  /// An inadmissible pair with one leaf cluster: a dense block (false, the square operators,
+  /// whose trees reach their leaves together) or the other cluster split further (true: a
+  /// rectangular matrix whose row tree is much deeper than the column tree, e.g. m >> n
+  /// target points of a potential; dense blocks only between two leaves).
+  bool split_to_leaves = false;
 };
 
 /// Entries of one block A(I, J) (original dof order), by rows, columns or all at once.

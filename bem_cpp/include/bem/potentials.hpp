@@ -10,6 +10,10 @@ namespace bem {
 /// Relative distance (to the bounding-box diameter) below which a point counts as on Gamma.
 constexpr double kOnBoundaryTolerance = 1e-12;
 
+/// Throws std::invalid_argument (one line: how many, the first) if a point is inside Omega
+/// or within kOnBoundaryTolerance * diameter of Gamma.
+void check_exterior(const Polygon& polygon, const Eigen::Ref<const Points>& points);
+
 /// u_e at the points z (m x 2) of the exterior. v: nodal values of the P1 Dirichlet
 /// trace, psi: coefficients of the flux in `flux` (both of length n). Throws
 /// std::invalid_argument if a point is inside Omega or within kOnBoundaryTolerance *
