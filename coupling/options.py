@@ -80,7 +80,10 @@ DATA_VARIABLES: dict[str, tuple[str, ...]] = {
 }
 
 #: Steps of the semismooth Newton method that are not part of the schema.
-SSN_START_STEPS = 5  # PGPM steps before the first Newton step
+#: PGPM steps before the first Newton step: 2 takes 3-4 outer steps fewer than 5 with the
+#: same Newton steps (+-1) and CG iterations on the square, L-shape, disk and load cases
+#: at 128 and 512 cells (docs/design/solvers.md)
+SSN_START_STEPS = 2
 SSN_WARM_START_STEPS = 0  # the same from a given iterate (nested iteration, adaptivity)
 SSN_CG_MAX_ITERATIONS = 500  # cap on the CG iterations of one Newton step
 #: c of the forcing floor c tol ||xi||_B / (tau r) of a Newton step's CG (no oversolving;
@@ -88,6 +91,10 @@ SSN_CG_MAX_ITERATIONS = 500  # cap on the CG iterations of one Newton step
 #: tol 1e-8 (0.5: 9e-9) on the manufactured square (docs/design/solvers.md).
 OVERSOLVE_SAFEGUARD = 0.1
 LANCZOS_STEPS = 20  # Lanczos steps of the step estimate C0 (and of lambda_min for apgpm)
+#: ssn needs C0 only as the scale of its few PGPM steps, its active-set prediction and
+#: stopping rule, and the largest Ritz value converges first: 10 steps give C0 1 % below
+#: the 20-step value at 1e6 dofs, the same steps and CG, u within 3e-10 (docs/design/solvers.md)
+SSN_LANCZOS_STEPS = 10
 
 #: ``boundary_operator = "auto"``: the H-matrix S_h from this many boundary dofs on, the
 #: dense one below: where S_h costs less in an ssn solve (set-up + about 120 products) as

@@ -14,6 +14,7 @@ import numpy as np
 
 from coupling.options import (
     LANCZOS_STEPS,
+    SSN_LANCZOS_STEPS,
     SSN_CG_MAX_ITERATIONS,
     SSN_START_STEPS,
     SSN_WARM_START_STEPS,
@@ -97,8 +98,9 @@ def step_length(
     or the given step (lambda_min None). ``matrix``: a P1 Mat of the caller's to
     assemble D^2 G into (default: a new one)."""
     if options.step == "auto":
+        steps = SSN_LANCZOS_STEPS if options.method == "ssn" else LANCZOS_STEPS
         lambda_min, C0 = extremes_at(
-            functional, preconditioner, u, n_phi, steps=LANCZOS_STEPS, matrix=matrix
+            functional, preconditioner, u, n_phi, steps=steps, matrix=matrix
         )
         return 1.0 / C0, C0, lambda_min
     tau = float(options.step)
