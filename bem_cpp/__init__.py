@@ -230,6 +230,11 @@ HMATRIX_SOLVER_TOL_FACTOR = 1e-3
 HMATRIX_MAX_ITERATIONS = 1000
 # flux "p0": accuracy of the refined-mesh V0 inside the Calderon preconditioner.
 HMATRIX_PRECONDITIONER_TOL = 1e-4
+# exterior_potential(compression="auto"): the H-matrix from m n / (m + n) >= this (m
+# points, n dofs: the direct sums cost ~ m n, the H-matrix ~ (m + n); measured
+# break-even, docs/design/hmatrix.md, "Potentials").
+HMATRIX_POTENTIAL_CROSSOVER = 1300.0
+_POTENTIAL_COMPRESSIONS = ("none", "hmatrix", "auto")
 
 
 def _columnwise(apply, x: ArrayLike, n: int) -> NDArray[np.float64]:
@@ -499,6 +504,8 @@ def exterior_potential(
     points: ArrayLike,
     a: float = 0.0,
     flux: str = "p1",
+    compression: str = "none",
+    tol: float = 1e-10,
 ) -> NDArray[np.float64]:
     r"""Exterior solution at points of Omega_e by the representation formula (METHOD.md section 2).
 
@@ -533,6 +540,15 @@ def exterior_potential(
         Constant term of u_e at infinity (the same as for :func:`exterior_flux`).
     flux : {"p1", "p0"}
         Space of the flux coefficients.
+    compression : {"none", "hmatrix", "auto"}
+        "none": the direct panel sums, O(m n). "hmatrix": the two potentials as
+        rectangular H-matrices from a cluster tree on the points to the dofs (ACA of the
+        same point-panel integrals in admissible blocks, the near blocks exact), then two
+        products; agrees with "none" to about ``tol`` relative to max |u_e|. "auto":
+        "hmatrix" from m n / (m + n) >= ``HMATRIX_POTENTIAL_CROSSOVER``
+        (docs/design/hmatrix.md, "Potentials").
+    tol : float
+        Relative accuracy of the H-matrix blocks, in (0, 1).
 
     Returns
     -------
@@ -554,4 +570,18 @@ def exterior_potential(
     Z = _points(points, "points")
     if not np.all(np.isfinite(Z)):
         raise ValueError("points contains non-finite values")
-    return _bem.exterior_potential(X, v, psi, Z, _scalar(a, "a"), _space(flux, "flux"))
+    if compression not in _POTENTIAL_COMPRESSIONS:
+        raise ValueError(
+            f"compression must be one of {_POTENTIAL_COMPRESSIONS}, got {compression!r}"
+        )
+    tol = _tolerance(tol)
+    args = (X, v, psi, Z, _scalar(a, "a"), _space(flux, "flux"))
+    if compression == "auto":
+        m = Z.shape[0]
+        large = m * n >= HMATRIX_POTENTIAL_CROSSOVER * (m + n)
+        compression = "hmatrix" if large else "none"
+    if compression == "none" or Z.shape[0] == 0:
+        return _bem.exterior_potential(*args)
+    return _bem.exterior_potential_hmatrix(
+        *args, HMATRIX_LEAF_SIZE, HMATRIX_ETA, tol, HMATRIX_PRODUCT_THREADS
+    )

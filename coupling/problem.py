@@ -28,7 +28,7 @@ import numpy as np
 import bem_cpp
 from coupling.distributed import boundary_operator_kind, steklov_poincare
 from coupling.functional import CoupledFunctional
-from coupling.options import DEFAULTS
+from coupling.options import DEFAULTS, HMATRIX_TOL
 from fem_py.parallel import array_from_root
 
 __all__ = ["SignoriniProblem"]
@@ -148,7 +148,9 @@ class SignoriniProblem:
 
     def exterior(self, solution: Any, points: np.ndarray) -> np.ndarray:
         """u_e at exterior points (m, 2) by the representation formula (METHOD.md section 2),
-        evaluated panel by panel for each point (bem_cpp has no compressed potential)."""
+        by direct panel sums or, from m n / (m + n) >= ``bem_cpp.HMATRIX_POTENTIAL_CROSSOVER``,
+        by the rectangular H-matrices of the potentials (``compression="auto"``, tol
+        ``coupling.options.HMATRIX_TOL``)."""
         return bem_cpp.exterior_potential(
             self.boundary.nodes,
             solution.ue,
@@ -156,4 +158,6 @@ class SignoriniProblem:
             np.asarray(points, dtype=float),
             a=self.a,
             flux=self.flux_space,
+            compression="auto",
+            tol=HMATRIX_TOL,
         )

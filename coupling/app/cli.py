@@ -359,6 +359,7 @@ def _exterior(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
     import bem_cpp
 
     from coupling.io.outputs import load_fields
+    from coupling.options import HMATRIX_TOL
 
     fields = load_fields(Path(args.result_dir))
     points = _read_points(Path(args.points))
@@ -370,6 +371,8 @@ def _exterior(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
             points,
             a=float(fields["a"]),
             flux=str(fields["flux_space"]),
+            compression="auto",
+            tol=HMATRIX_TOL,
         )
     except ValueError as err:  # a point inside Omega or on Gamma
         raise ValueError(f"--points {args.points}: {err}") from None

@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 import bem_cpp
+from coupling.options import HMATRIX_TOL
 from fem_py.locate import interpolate_p1
 from fem_py.polyline import closest_on_polygon
 
@@ -52,6 +53,8 @@ def evaluate(fields: dict, points: np.ndarray) -> dict[str, np.ndarray]:
             points[outside],
             a=float(fields["a"]),
             flux=str(fields["flux_space"]),
+            compression="auto",
+            tol=HMATRIX_TOL,
         )
     where = np.where(inside, "inside", np.where(on, "boundary", "outside"))
     return {"where": where, "u": u, "ue": ue}

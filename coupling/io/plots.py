@@ -36,6 +36,7 @@ from matplotlib.tri import Triangulation  # noqa: E402
 
 import bem_cpp  # noqa: E402
 from coupling.io.atomic import atomic_write  # noqa: E402
+from coupling.options import HMATRIX_TOL  # noqa: E402
 from fem_py.polyline import arc_length, closest_on_polygon  # noqa: E402
 
 __all__ = [
@@ -355,6 +356,8 @@ def _figure_whole_plane(
         grid,
         a=float(fields["a"]),
         flux=str(fields["flux_space"]),
+        compression="auto",
+        tol=HMATRIX_TOL,
     )
     points = np.vstack([grid, nodes])
     ue = np.concatenate([ue_grid, fields["ue"]])
