@@ -80,10 +80,9 @@ DATA_VARIABLES: dict[str, tuple[str, ...]] = {
 }
 
 #: Steps of the semismooth Newton method that are not part of the schema.
-#: PGPM steps before the first Newton step: 2 takes 3-4 outer steps fewer than 5 with the
-#: same Newton steps (+-1) and CG iterations on the square, L-shape, disk and load cases
-#: at 128 and 512 cells (docs/design/solvers.md)
-SSN_START_STEPS = 2
+#: PGPM steps before the first Newton step (2 and 3 save outer steps at 128-512 cells but
+#: not time at 1e6 dofs: docs/design/solvers.md)
+SSN_START_STEPS = 5
 SSN_WARM_START_STEPS = 0  # the same from a given iterate (nested iteration, adaptivity)
 SSN_CG_MAX_ITERATIONS = 500  # cap on the CG iterations of one Newton step
 #: c of the forcing floor c tol ||xi||_B / (tau r) of a Newton step's CG (no oversolving;
