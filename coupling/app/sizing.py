@@ -1,7 +1,7 @@
 """The size of a run before it runs: the counts of the domain and a memory estimate.
 
 Peak resident memory of ``fembem solve`` (whole process, outputs included), fitted to
-runs on the square at N = 1.6e4 .. 1e6 dofs (docs/design/memory.md):
+runs on the square at N = 1.6e4 .. 1.6e7 dofs (docs/design/memory.md):
 
     memory ~ ranks * PROCESS_BYTES + DOF_BYTES * N + BOUNDARY_BYTES * n^2
              (+ ranks * PLOT_PROCESS_BYTES + PLOT_DOF_BYTES * N with the plots)
@@ -36,7 +36,7 @@ __all__ = [
 ]
 
 PROCESS_BYTES = 200e6
-DOF_BYTES = 0.65e3
+DOF_BYTES = 1.05e3  # fitted to the H-matrix runs at 1e6, 4e6 and 1.6e7 dofs
 BOUNDARY_BYTES = 5 * 8.0
 #: The H-matrix S_h operator and the estimator's V, K per boundary dof: 86 MB at n =
 #: 16,000 (circle) and 23 MB at 8,000, rounded up (docs/design/hmatrix.md)
