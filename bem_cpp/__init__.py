@@ -230,10 +230,12 @@ HMATRIX_SOLVER_TOL_FACTOR = 1e-3
 HMATRIX_MAX_ITERATIONS = 1000
 # flux "p0": accuracy of the refined-mesh V0 inside the Calderon preconditioner.
 HMATRIX_PRECONDITIONER_TOL = 1e-4
-# exterior_potential(compression="auto"): the H-matrix from m n / (m + n) >= this (m
-# points, n dofs: the direct sums cost ~ m n, the H-matrix ~ (m + n); measured
-# break-even, docs/design/hmatrix.md, "Potentials").
-HMATRIX_POTENTIAL_CROSSOVER = 1300.0
+# exterior_potential(compression="auto"): the H-matrix for m points and n dofs when
+# m n >= DOFS m + POINTS n, i.e. DOFS / n + POINTS / m <= 1 (the direct sums cost ~ m n,
+# the H-matrix ~ DOFS m + POINTS n of those units; fitted to the measured break-even,
+# docs/design/hmatrix.md, "Potentials").
+HMATRIX_POTENTIAL_CROSSOVER_DOFS = 1300
+HMATRIX_POTENTIAL_CROSSOVER_POINTS = 1000
 _POTENTIAL_COMPRESSIONS = ("none", "hmatrix", "auto")
 
 
@@ -545,8 +547,9 @@ def exterior_potential(
         rectangular H-matrices from a cluster tree on the points to the dofs (ACA of the
         same point-panel integrals in admissible blocks, the near blocks exact), then two
         products; agrees with "none" to about ``tol`` relative to max |u_e|. "auto":
-        "hmatrix" from m n / (m + n) >= ``HMATRIX_POTENTIAL_CROSSOVER``
-        (docs/design/hmatrix.md, "Potentials").
+        "hmatrix" when m n >= ``HMATRIX_POTENTIAL_CROSSOVER_DOFS`` m +
+        ``HMATRIX_POTENTIAL_CROSSOVER_POINTS`` n (the measured break-even,
+        docs/design/hmatrix.md, "Potentials").
     tol : float
         Relative accuracy of the H-matrix blocks, in (0, 1).
 
@@ -578,7 +581,8 @@ def exterior_potential(
     args = (X, v, psi, Z, _scalar(a, "a"), _space(flux, "flux"))
     if compression == "auto":
         m = Z.shape[0]
-        large = m * n >= HMATRIX_POTENTIAL_CROSSOVER * (m + n)
+        cost = HMATRIX_POTENTIAL_CROSSOVER_DOFS * m + HMATRIX_POTENTIAL_CROSSOVER_POINTS * n
+        large = m * n >= cost
         compression = "hmatrix" if large else "none"
     if compression == "none" or Z.shape[0] == 0:
         return _bem.exterior_potential(*args)

@@ -148,9 +148,9 @@ class SignoriniProblem:
 
     def exterior(self, solution: Any, points: np.ndarray) -> np.ndarray:
         """u_e at exterior points (m, 2) by the representation formula (METHOD.md section 2),
-        by direct panel sums or, from m n / (m + n) >= ``bem_cpp.HMATRIX_POTENTIAL_CROSSOVER``,
-        by the rectangular H-matrices of the potentials (``compression="auto"``, tol
-        ``coupling.options.HMATRIX_TOL``)."""
+        by direct panel sums or, above the measured crossover (``bem_cpp``'s
+        ``HMATRIX_POTENTIAL_CROSSOVER_*``), by the rectangular H-matrices of the potentials
+        (``compression="auto"``, tol ``coupling.options.HMATRIX_TOL``)."""
         return bem_cpp.exterior_potential(
             self.boundary.nodes,
             solution.ue,

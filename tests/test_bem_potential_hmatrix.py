@@ -70,11 +70,12 @@ def test_auto_switches_at_the_crossover(monkeypatch):
     direct = bem_cpp.exterior_potential(X, v, psi, Z, a=A)
     hmatrix = bem_cpp.exterior_potential(X, v, psi, Z, a=A, compression="hmatrix")
     assert not np.array_equal(direct, hmatrix)  # the compressed path does differ in round-off
-    m, n = len(Z), len(X)
-    at = m * n / (m + n)  # the auto rule: m n / (m + n) >= crossover
-    monkeypatch.setattr(bem_cpp, "HMATRIX_POTENTIAL_CROSSOVER", at * (1 + 1e-9))
+    # the auto rule: m n >= DOFS m + POINTS n; with POINTS = 0 it switches at DOFS = n
+    n = len(X)
+    monkeypatch.setattr(bem_cpp, "HMATRIX_POTENTIAL_CROSSOVER_POINTS", 0)
+    monkeypatch.setattr(bem_cpp, "HMATRIX_POTENTIAL_CROSSOVER_DOFS", n + 1)
     assert np.array_equal(bem_cpp.exterior_potential(X, v, psi, Z, a=A, compression="auto"), direct)
-    monkeypatch.setattr(bem_cpp, "HMATRIX_POTENTIAL_CROSSOVER", at * (1 - 1e-9))
+    monkeypatch.setattr(bem_cpp, "HMATRIX_POTENTIAL_CROSSOVER_DOFS", n)
     auto = bem_cpp.exterior_potential(X, v, psi, Z, a=A, compression="auto")
     assert np.array_equal(auto, hmatrix)
 
