@@ -51,6 +51,9 @@ __all__ = [
 
 #: The figures, in the order they are written.
 PLOT_FILES = ("u.png", "boundary.png", "whole_plane.png", "history.png")
+#: The figures laid out by fig.tight_layout() when they are built: saved as they are
+#: (bbox_inches="tight" would draw them once more to find their extent).
+_LAID_OUT = ("boundary.png", "history.png")
 
 #: Pixels along the longer side of the images of u_h (about twice the drawn size at 110 dpi).
 RASTER_PIXELS = 600
@@ -461,8 +464,9 @@ def write_plots(out: Path, fields: dict, history: Sequence, *, tol: float) -> li
         fig = figures[name]()
         if fig is None:
             continue
+        bbox = None if name in _LAID_OUT else "tight"  # no second layout draw
         atomic_write(
-            Path(out) / name, lambda p: fig.savefig(p, dpi=110, bbox_inches="tight", format="png")
+            Path(out) / name, lambda p: fig.savefig(p, dpi=110, bbox_inches=bbox, format="png")
         )
         plt.close(fig)
         written.append(name)
