@@ -12,6 +12,8 @@ from typing import Any
 
 import numpy as np
 
+from fem_py.parallel import gather_to_root
+
 __all__ = ["input_indices", "gather_by_input", "gather_p1", "gather_cells"]
 
 
@@ -34,7 +36,7 @@ def gather_by_input(
 ) -> np.ndarray | None:
     """Owned ``values`` (n_owned, ...) of every rank, placed at their input indices on
     rank 0 (an array of ``n_global`` rows there; None elsewhere)."""
-    parts = comm.gather((np.asarray(input_owned), np.asarray(values)), root=0)
+    parts = gather_to_root(comm, (np.asarray(input_owned), np.asarray(values)))
     if comm.rank != 0:
         return None
     first = parts[0][1]
@@ -73,7 +75,7 @@ def gather_p1(u) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         comm, numbers[:n_owned], V.tabulate_dof_coordinates()[:n_owned, :2], n_global
     )
     values = gather_by_input(comm, numbers[:n_owned], u.x.array[:n_owned].real, n_global)
-    parts = comm.gather(_owned_triangles(V), root=0)
+    parts = gather_to_root(comm, _owned_triangles(V))
     if comm.rank != 0:
         return None
     triangles = np.concatenate(parts)
@@ -85,7 +87,7 @@ def gather_cells(V: Any, values: np.ndarray) -> np.ndarray | None:
     rank, gathered to rank 0 in the order of the triangles of :func:`gather_p1` (the same
     for any number of ranks); None on the other ranks."""
     comm = V.mesh.comm
-    parts = comm.gather((_owned_triangles(V), np.asarray(values)), root=0)
+    parts = gather_to_root(comm, (_owned_triangles(V), np.asarray(values)))
     if comm.rank != 0:
         return None
     triangles = np.concatenate([t for t, _ in parts])

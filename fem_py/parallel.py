@@ -15,7 +15,13 @@ from typing import Callable, TypeVar
 import numpy as np
 from mpi4py import MPI
 
-__all__ = ["run_on_root", "broadcast_from_root", "array_from_root", "threads_per_rank"]
+__all__ = [
+    "run_on_root",
+    "broadcast_from_root",
+    "array_from_root",
+    "gather_to_root",
+    "threads_per_rank",
+]
 
 T = TypeVar("T")
 
@@ -106,3 +112,8 @@ def array_from_root(
         result = np.empty(shape)
     comm.Bcast(result, root=0)
     return result
+
+
+def gather_to_root(comm: MPI.Comm, obj: T) -> list[T] | None:
+    """``comm.gather(obj, root=0)``, without pickling a copy on one rank: [obj] there."""
+    return [obj] if comm.size == 1 else comm.gather(obj, root=0)
