@@ -108,11 +108,9 @@ def steklov_poincare(comm: MPI.Comm, nodes: np.ndarray, flux: str, choice: str) 
     holds the blocks of its own rows of V_h, V0_h and K_h (``S.nbytes`` is this rank's),
     ``S @ z`` and ``S.flux(v)`` are collective (K x: local rows and one Allgatherv; V x,
     V0 x, K^T y: partial sums and one Allreduce, or Reduce_scatter and Allgatherv on more
-    than 2 ranks) and return the same
-    bits on every rank,
-    and the CG of the V_h solves takes the serial iteration count (``S.last_iterations``;
-    docs/design/hmatrix.md, "Under MPI"). Each has ``S @ z`` for a replicated z and
-    ``S.shape``.
+    than 2 ranks) and return the same bits on every rank, and the CG of the V_h solves
+    takes the serial iteration count (``S.last_iterations``; docs/design/hmatrix.md,
+    "Under MPI"). Each has ``S @ z`` for a replicated z and ``S.shape``.
     """
     nodes = np.asarray(nodes, dtype=float)
     if boundary_operator_kind(choice, nodes.shape[0]) == "hmatrix":

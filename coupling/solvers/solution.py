@@ -94,7 +94,8 @@ def step_length(
     matrix: Any = None,
 ) -> tuple[float, float, float | None]:
     """(tau, C0, lambda_min): tau = 1/C0 with C0 from Lanczos at the iterate u
-    (``options.step = "auto"``; lambda_min, the momentum of apgpm, from the same run),
+    (``options.step = "auto"``: LANCZOS_STEPS steps, SSN_LANCZOS_STEPS for ssn; lambda_min,
+    the momentum of apgpm, from the same run),
     or the given step (lambda_min None). ``matrix``: a P1 Mat of the caller's to
     assemble D^2 G into (default: a new one)."""
     if options.step == "auto":
