@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
-#include <string>
 
 #include "bem/log_integrals.hpp"
 #include "bem/potentials.hpp"
@@ -201,11 +200,6 @@ class PotentialBlock : public EntryBlock {
   mutable std::vector<Moments> moments_;
 };
 
-void check_size(const char* name, Index got, Index expected) {
-  if (got != expected)
-    throw std::invalid_argument(std::string(name) + ": expected " + std::to_string(expected) +
-                                " values (one per node), got " + std::to_string(got));
-}
 }  // namespace
 
 PotentialEntries::PotentialEntries(const Polygon& polygon, const Points& points, PotentialKernel kernel,
@@ -246,10 +240,7 @@ PotentialOperator::PotentialOperator(const Polygon& polygon, const Eigen::Ref<co
 
 Vector PotentialOperator::evaluate(const Eigen::Ref<const Vector>& dirichlet,
                                    const Eigen::Ref<const Vector>& flux_coefficients, double a) const {
-  check_size("dirichlet", dirichlet.size(), n_);
-  check_size("flux_coefficients", flux_coefficients.size(), n_);
-  if (!dirichlet.allFinite() || !flux_coefficients.allFinite() || !std::isfinite(a))
-    throw std::invalid_argument("dirichlet, flux_coefficients and a must be finite");
+  check_potential_data(n_, dirichlet, flux_coefficients, a);
   const Vector w = dirichlet.array() - a;
   Vector u = double_layer_->apply(w).col(0) + single_layer_->apply(flux_coefficients).col(0);
   u.array() += a;
@@ -261,10 +252,7 @@ Vector exterior_potential_hmatrix(const Eigen::Ref<const Points>& nodes, const E
                                   const Eigen::Ref<const Points>& points, double a, Space flux,
                                   const HMatrixOptions& options) {
   const Polygon polygon(nodes);
-  check_size("dirichlet", dirichlet.size(), polygon.size());
-  check_size("flux_coefficients", flux_coefficients.size(), polygon.size());
-  if (!dirichlet.allFinite() || !flux_coefficients.allFinite() || !std::isfinite(a))
-    throw std::invalid_argument("dirichlet, flux_coefficients and a must be finite");
+  check_potential_data(polygon.size(), dirichlet, flux_coefficients, a);  // before the build
   return PotentialOperator(polygon, points, flux, options).evaluate(dirichlet, flux_coefficients, a);
 }
 

@@ -86,14 +86,19 @@ void check_exterior(const Polygon& polygon, const Eigen::Ref<const Points>& poin
   }
 }
 
-Vector exterior_potential(const Polygon& polygon, const Eigen::Ref<const Vector>& dirichlet,
-                          const Eigen::Ref<const Vector>& flux_coefficients,
-                          const Eigen::Ref<const Points>& points, double a, Space flux) {
-  const Index n = polygon.size(), m = points.rows();
+void check_potential_data(Index n, const Eigen::Ref<const Vector>& dirichlet,
+                          const Eigen::Ref<const Vector>& flux_coefficients, double a) {
   check_size("dirichlet", dirichlet.size(), n);
   check_size("flux_coefficients", flux_coefficients.size(), n);
   if (!dirichlet.allFinite() || !flux_coefficients.allFinite() || !std::isfinite(a))
     throw std::invalid_argument("dirichlet, flux_coefficients and a must be finite");
+}
+
+Vector exterior_potential(const Polygon& polygon, const Eigen::Ref<const Vector>& dirichlet,
+                          const Eigen::Ref<const Vector>& flux_coefficients,
+                          const Eigen::Ref<const Points>& points, double a, Space flux) {
+  const Index n = polygon.size(), m = points.rows();
+  check_potential_data(n, dirichlet, flux_coefficients, a);
   if (!points.allFinite()) throw std::invalid_argument("points: non-finite coordinates");
 
   check_exterior(polygon, points);  // before any work

@@ -14,6 +14,11 @@ constexpr double kOnBoundaryTolerance = 1e-12;
 /// or within kOnBoundaryTolerance * diameter of Gamma.
 void check_exterior(const Polygon& polygon, const Eigen::Ref<const Points>& points);
 
+/// Throws std::invalid_argument unless the trace v and the flux coefficients psi have n
+/// values each and v, psi and a are finite.
+void check_potential_data(Index n, const Eigen::Ref<const Vector>& dirichlet,
+                          const Eigen::Ref<const Vector>& flux_coefficients, double a);
+
 /// u_e at the points z (m x 2) of the exterior. v: nodal values of the P1 Dirichlet
 /// trace, psi: coefficients of the flux in `flux` (both of length n). Throws
 /// std::invalid_argument if a point is inside Omega or within kOnBoundaryTolerance *
