@@ -19,7 +19,7 @@ from petsc4py import PETSc
 
 import bem_cpp
 from coupling.options import CHOICES, HMATRIX_CROSSOVER, HMATRIX_TOL
-from fem_py.parallel import run_on_root
+from fem_py.parallel import gather_to_root, run_on_root
 
 __all__ = [
     "RowBlocks",
@@ -155,7 +155,7 @@ def _row_blocks(ranks: int, n: int) -> tuple[np.ndarray, np.ndarray]:
 
 def gather_rows(comm: MPI.Comm, owned: np.ndarray) -> np.ndarray | None:
     """The owned rows of every rank stacked in rank order on rank 0 (None elsewhere)."""
-    parts = comm.gather(np.ascontiguousarray(owned), root=0)
+    parts = gather_to_root(comm, np.ascontiguousarray(owned))
     return np.concatenate(parts) if comm.rank == 0 else None
 
 
@@ -165,5 +165,7 @@ def gather_matrix(matrix: PETSc.Mat) -> sp.csr_matrix | None:
     r0, r1 = matrix.getOwnershipRange()
     indptr, indices, data = matrix.getValuesCSR()
     local = sp.csr_matrix((data, indices, indptr), shape=(r1 - r0, matrix.getSize()[1]))
-    parts = comm.gather(local, root=0)
-    return sp.vstack(parts).tocsr() if comm.rank == 0 else None
+    parts = gather_to_root(comm, local)
+    if comm.rank != 0:
+        return None
+    return parts[0] if len(parts) == 1 else sp.vstack(parts).tocsr()

@@ -85,16 +85,32 @@ DATA_VARIABLES: dict[str, tuple[str, ...]] = {
 SSN_START_STEPS = 5
 SSN_WARM_START_STEPS = 0  # the same from a given iterate (nested iteration, adaptivity)
 SSN_CG_MAX_ITERATIONS = 500  # cap on the CG iterations of one Newton step
+#: A Newton step after one of relative B-norm ||xi_k - xi_k-1||_B / ||xi_k||_B at most this
+#: keeps the Jacobian of the step before (no reassembly, ~0.25 s at 10^6 dofs): its error,
+#: relative O(1e-4), is below the step's CG tolerance (docs/design/solvers.md)
+SSN_JACOBIAN_REUSE_STEP = 1e-4
 #: c of the forcing floor c tol ||xi||_B / (tau r) of a Newton step's CG (no oversolving;
 #: Kelley 1995 uses 0.5): 0.1 keeps the answer within 2e-9 of the fully solved steps' at
 #: tol 1e-8 (0.5: 9e-9) on the manufactured square (docs/design/solvers.md).
 OVERSOLVE_SAFEGUARD = 0.1
+#: Nested iteration (``[solver] nested``): h grows by this factor from one level to the
+#: next coarser one, which has at least NESTED_MIN_DOFS dofs. A factor 4 makes a coarse
+#: level cost 1/16 of the fine one; the fine level then takes one Newton step more than
+#: from a factor-2 level, which costs a quarter (docs/design/nested.md).
+NESTED_COARSENING = 4
+NESTED_MIN_DOFS = 1000
 LANCZOS_STEPS = 20  # Lanczos steps of the step estimate C0 (and of lambda_min for apgpm)
 #: ssn needs C0 only as the scale of its few PGPM steps, its active-set prediction and
 #: stopping rule, and the largest Ritz value converges first: 10 steps give C0 1 % below
 #: the 20-step value at 1e6 dofs, the same steps and CG, u within 3e-10 (docs/design/solvers.md)
 SSN_LANCZOS_STEPS = 10
 
+#: The sparse Cholesky factor of A_II (one block per subdomain) keeps the mesh's numbering
+#: ("natural" ordering) when no block has more rows than this, nested dissection otherwise:
+#: at 10^6 dofs set-up 0.03 s against 0.18 s at d = 4h (9 rows per block), 0.20 against
+#: 0.53 s at 16h (225), solves as fast; at 64h (3,969) nested dissection is faster
+#: (set-up 1.6 against 1.9 s, solve 67 against 107 ms; docs/design/preconditioners.md).
+NATURAL_ORDERING_MAX_BLOCK = 1024
 #: ``boundary_operator = "auto"``: the H-matrix S_h from this many boundary dofs on, the
 #: dense one below: where S_h costs less in an ssn solve (set-up + about 120 products) as
 #: an H-matrix, measured on this machine by whole `fembem solve` runs after the H-matrix

@@ -25,7 +25,7 @@ from mpi4py import MPI
 from scipy.sparse.csgraph import connected_components
 
 from fem_py.chains import mark_closed_chains, walk_chains
-from fem_py.parallel import broadcast_from_root, run_on_root
+from fem_py.parallel import broadcast_from_root, gather_to_root, run_on_root
 
 if TYPE_CHECKING:
     from fem_py.meshdata import FacetData
@@ -344,7 +344,7 @@ def compute_coarse_structure(
     dof_tag = np.full(topo.dof_coords.shape[0], -1, dtype=np.int32)
     dof_tag[topo.dofmap.ravel()] = np.repeat(ctag[: topo.dofmap.shape[0]], 3)
     owned = np.arange(topo.n_owned_dofs)
-    gathered = comm.gather((topo.local_to_global(owned), dof_tag[owned]), root=0)
+    gathered = gather_to_root(comm, (topo.local_to_global(owned), dof_tag[owned]))
     n_dofs = V.dofmap.index_map.size_global
     n_sub = comm.allreduce(int(ctag.max(initial=-1)) + 1, op=MPI.MAX)
 

@@ -22,7 +22,7 @@ from typing import Any, Callable
 import numpy as np
 from dolfinx import mesh as dmesh
 
-from fem_py.parallel import broadcast_from_root
+from fem_py.parallel import broadcast_from_root, gather_to_root
 from fem_py.structured import StructuredRefinement
 
 __all__ = ["distribute_mesh", "distribute_structured", "subdomain_owners"]
@@ -201,7 +201,7 @@ def distribute_mesh(comm: Any, arrays: tuple | None) -> TaggedMesh:
         **({"partitioner": partitioner} if by_subdomain else {}),
     )
     # cell tags by the input index of every local cell (all cells were input on rank 0)
-    wanted = comm.gather(_local_cells(msh), root=0)
+    wanted = gather_to_root(comm, _local_cells(msh))
     values = comm.scatter(
         [np.asarray(cell_values, dtype=np.int32)[w] for w in wanted] if comm.rank == 0 else None,
         root=0,

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-__all__ = ["locate", "interpolate_p1"]
+__all__ = ["locate", "interpolate_p1", "lattice_weights"]
 
 
 def _barycentric(
@@ -69,16 +69,26 @@ def _grid_keys(coords: np.ndarray, origin: np.ndarray, quantum: float) -> np.nda
     return keys
 
 
-def _at_nodes_and_midpoints(
-    x: np.ndarray, triangles: np.ndarray, values: np.ndarray, points: np.ndarray
+def lattice_weights(divisions: int) -> np.ndarray:
+    """(k, 3) barycentric weights (i, j, l) / n, i + j + l = n = ``divisions``, of the
+    lattice points of a triangle that are not its corners: the nodes that n-fold uniform
+    refinement adds in (and on the sides of) each triangle."""
+    n = divisions
+    w = [(i, j, n - i - j) for i in range(n + 1) for j in range(n + 1 - i)]
+    return np.array([c for c in w if max(c) < n], dtype=float).reshape(-1, 3) / n
+
+
+def _at_lattice_points(
+    x: np.ndarray, triangles: np.ndarray, values: np.ndarray, points: np.ndarray, divisions: int
 ) -> tuple[np.ndarray, np.ndarray]:
     """(values, matched) at the points that coincide, up to 2^-30 of the mesh's extent,
-    with a node (the nodal value) or an edge midpoint (the mean of the edge's two values)
-    of the mesh: every node of a uniform refinement of the mesh, by sorting instead of a
+    with a node (the nodal value) or a lattice point (i a + j b + l c) / n of a triangle
+    abc, n = ``divisions`` (the P1 value there, the same weights of the corner values):
+    every node of an n-fold uniform refinement of the mesh, by sorting instead of a
     point location."""
-    ends = triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
-    coords = np.concatenate([x, 0.5 * (x[ends[:, 0]] + x[ends[:, 1]])])
-    known = np.concatenate([values, 0.5 * (values[ends[:, 0]] + values[ends[:, 1]])])
+    weights = lattice_weights(divisions)
+    coords = np.concatenate([x, np.einsum("kc,tcd->tkd", weights, x[triangles]).reshape(-1, 2)])
+    known = np.concatenate([values, (values[triangles] @ weights.T).ravel()])
     origin = x.min(axis=0)
     quantum = max(float(np.ptp(x, axis=0).max()), 1e-300) * 2.0**-30
     keys = _grid_keys(coords, origin, quantum)
@@ -93,19 +103,25 @@ def _at_nodes_and_midpoints(
 
 
 def interpolate_p1(
-    x: np.ndarray, triangles: np.ndarray, values: np.ndarray, points: np.ndarray
+    x: np.ndarray,
+    triangles: np.ndarray,
+    values: np.ndarray,
+    points: np.ndarray,
+    *,
+    divisions: int = 2,
 ) -> np.ndarray:
     """The P1 function of nodal ``values`` at ``points``; NaN outside the mesh.
 
-    Points at nodes and edge midpoints (all nodes of a uniformly refined mesh: nested
-    iteration) are matched by sorting; the others are located (:func:`locate`)."""
+    Points at nodes and at the lattice points of the ``divisions``-fold uniform refinement
+    (all nodes of such a refinement: nested iteration; 2 gives the edge midpoints) are
+    matched by sorting; the others are located (:func:`locate`)."""
     x = np.asarray(x, dtype=float)[:, :2]
     triangles = np.asarray(triangles, dtype=np.int64)
     values = np.asarray(values, dtype=float)
     points = np.asarray(points, dtype=float).reshape(-1, 2)
     if len(x) == 0 or len(triangles) == 0:
         return np.full(len(points), np.nan)
-    out, matched = _at_nodes_and_midpoints(x, triangles, values, points)
+    out, matched = _at_lattice_points(x, triangles, values, points, max(int(divisions), 1))
     rest = np.flatnonzero(~matched)
     cell, bary = locate(x, triangles, points[rest])
     found = cell >= 0

@@ -14,6 +14,8 @@ import numpy as np
 from dolfinx import fem
 from dolfinx import mesh as dmesh
 
+from fem_py.parallel import gather_to_root
+
 __all__ = ["P1Topology", "p1_topology", "FacetData", "facet_data", "gather_facet_data", "tag_array"]
 
 
@@ -131,7 +133,7 @@ def gather_facet_data(comm: Any, parts: list[FacetData]) -> FacetData | None:
     (an interior facet is seen by every rank holding both its cells). None off rank 0."""
     fields = ("dofs", "coords", "tag", "cells", "exterior")
     local = {f: np.concatenate([getattr(p, f) for p in parts]) for f in fields}
-    gathered = comm.gather(local, root=0)
+    gathered = gather_to_root(comm, local)
     if comm.rank != 0:
         return None
     allp = {f: np.concatenate([g[f] for g in gathered]) for f in fields}

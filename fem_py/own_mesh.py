@@ -23,6 +23,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from fem_py.coarse import SIGNORINI_TAG0
+from fem_py.parallel import gather_to_root
 from fem_py.partition import cell_adjacency, partition_cells
 from fem_py.shapes import GAMMA_T_TAG, Arc, diameter
 
@@ -395,7 +396,7 @@ def gather_mesh(msh: Any, facet_tags: Any, cell_tags: Any = None, names: Any = N
         ck = cell_tags.indices < n_owned
         cvals = np.full(n_owned, -1, dtype=np.int64)
         cvals[cell_tags.indices[ck]] = cell_tags.values[ck]
-    parts = comm.gather((node, x, cells, fpairs, fvals, cvals), root=0)
+    parts = gather_to_root(comm, (node, x, cells, fpairs, fvals, cvals))
     if comm.rank != 0:
         return None
     n_nodes = int(max(p[0].max(initial=-1) for p in parts)) + 1

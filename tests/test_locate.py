@@ -4,8 +4,10 @@ linear functions, points outside found in no triangle."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
-from fem_py.locate import interpolate_p1, locate
+import fem_py.locate
+from fem_py.locate import interpolate_p1, lattice_weights, locate
 
 
 def _mesh(n: int):
@@ -42,16 +44,36 @@ def test_linear_functions_interpolate_exactly_and_outside_is_nan():
     assert np.isnan(values[-2:]).all()
 
 
-def test_nodes_of_the_uniform_refinement_take_the_node_and_midpoint_values():
-    """Every node of the refined mesh is a node or an edge midpoint of the coarse one: the
-    nodal value or the mean of the edge's two values (exact for any P1 field, here a
-    non-linear nodal field), found without a point location; far points are NaN, also
-    beyond the range of the sorting keys."""
+@pytest.mark.parametrize("divisions", [2, 3, 4])
+def test_nodes_of_the_uniform_refinement_are_matched_without_a_point_location(
+    divisions, monkeypatch
+):
+    """Every node of the n-fold refined mesh is a node or a lattice point (i a + j b + l c)
+    / n of a coarse triangle: it takes that combination of the corner values (exact for
+    any P1 field, here a non-linear nodal field) and is found by sorting alone (the point
+    location is not called for any point); far points are NaN, also beyond the range of
+    the sorting keys."""
     x, tris = _mesh(8)
     values = np.sin(7 * x[:, 0]) + x[:, 1] ** 2
-    fine, _ = _mesh(16)
-    got = interpolate_p1(x, tris, values, fine)
+    fine, _ = _mesh(8 * divisions)
     cell, bary = locate(x, tris, fine)
-    np.testing.assert_allclose(got, np.einsum("ij,ij->i", bary, values[tris[cell]]), atol=1e-15)
+    expected = np.einsum("ij,ij->i", bary, values[tris[cell]])
+
+    def no_location(x, triangles, points, **kwargs):
+        assert len(points) == 0, f"{len(points)} points were located"
+        return locate(x, triangles, points, **kwargs)
+
+    monkeypatch.setattr(fem_py.locate, "locate", no_location)
+    got = interpolate_p1(x, tris, values, fine, divisions=divisions)
+    np.testing.assert_allclose(got, expected, atol=1e-15)
+    monkeypatch.undo()
     far = np.array([[3.0, 3.0], [1.0, 3.5], [1e300, 0.0], [-2.0, 0.5]])
-    assert np.isnan(interpolate_p1(x, tris, values, far)).all()
+    assert np.isnan(interpolate_p1(x, tris, values, far, divisions=divisions)).all()
+
+
+def test_lattice_weights_are_the_non_corner_points():
+    for n in (1, 2, 4):
+        w = lattice_weights(n)
+        assert w.shape == ((n + 1) * (n + 2) // 2 - 3, 3)
+        np.testing.assert_allclose(w.sum(axis=1), 1.0)
+        assert (w.max(axis=1) < 1.0).all() and len(np.unique(w, axis=0)) == len(w)

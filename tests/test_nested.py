@@ -85,7 +85,7 @@ def test_prolongation_is_exact_for_nested_meshes():
 def test_cli_nested_option(tmp_path):
     config = tmp_path / "c.toml"
     config.write_text(
-        "[geometry]\nh = 0.0078125\nsubdomain_size = 0.03125\n"
+        "[geometry]\nh = 0.00390625\nsubdomain_size = 0.015625\n"
         'signorini = ["bottom"]\n[material]\nrho = "carstensen"\n'
         '[data]\nf = "1 + x"\nt0 = "-1"\nu0 = "0.1"\n[output]\nplots = false\n'
     )
@@ -98,7 +98,7 @@ def test_cli_nested_option(tmp_path):
         assert proc.returncode == 0, proc.stderr
         runs[nested] = (json.loads((out / "summary.json").read_text()), np.load(out / "fields.npz"))
     (s_nested, f_nested), (s_cold, f_cold) = runs["true"], runs["false"]
-    assert [lv["dofs"] for lv in s_nested["levels"]] == [1089, 4225]
+    assert [lv["dofs"] for lv in s_nested["levels"]] == [1089, 16641]  # h x 4, d = 2h there
     assert "levels" not in s_cold
     assert s_nested["files"].count("levels.csv") == 1 and "levels.csv" not in s_cold["files"]
     assert not {"adapt.csv", "adapt.png"} & set(s_nested["files"])  # adaptive runs only

@@ -6,6 +6,8 @@ from typing import Any
 
 import numpy as np
 
+from fem_py.parallel import gather_to_root
+
 __all__ = ["doerfler_marking"]
 
 
@@ -19,7 +21,7 @@ def doerfler_marking(comm: Any, indicators: np.ndarray, theta: float) -> np.ndar
     if not 0.0 < theta <= 1.0:
         raise ValueError(f"theta must lie in (0, 1], got {theta!r}")
     indicators = np.asarray(indicators, dtype=float)
-    gathered = comm.gather(indicators, root=0)
+    gathered = gather_to_root(comm, indicators)
     threshold = None
     if comm.rank == 0:
         values = np.sort(np.concatenate(gathered))[::-1]

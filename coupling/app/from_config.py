@@ -8,7 +8,7 @@ from typing import Any
 
 from mpi4py import MPI
 
-from coupling.options import SolverOptions, solver_options
+from coupling.options import NESTED_COARSENING, NESTED_MIN_DOFS, SolverOptions, solver_options
 from coupling.problem import SignoriniProblem
 
 __all__ = [
@@ -74,20 +74,23 @@ def planned_size(config: dict) -> Any:
     return domain_size(shape, **kwargs)
 
 
-def coarser_configs(config: dict, *, min_dofs: int = 1000) -> list[dict]:
+def coarser_configs(
+    config: dict, *, coarsening: int = NESTED_COARSENING, min_dofs: int = NESTED_MIN_DOFS
+) -> list[dict]:
     """The configurations of the coarser levels of a nested solve, coarsest first: h
-    doubled per level with the subdomains kept, while a coarse edge keeps at least two
-    segments (2^k h <= d / 2) and the level at least ``min_dofs`` dofs (estimated as N /
-    4^k from the closed-form sizes; not limited by size for gmsh meshes)."""
+    multiplied by ``coarsening`` per level, the subdomain size d kept while a coarse edge
+    keeps at least two segments and raised to 2 h there (d_k = max(d, 2 h_k)), while the
+    level has at least ``min_dofs`` dofs (estimated as N / coarsening^(2k) from the
+    closed-form sizes). None for a mesh file (its h is not the configuration's)."""
     g = config["geometry"]
     size = planned_size(config)
-    dofs = size.dofs if size is not None else None
+    if size is None:
+        return []
     levels, k = [], 1
-    while 2**k * g["h"] <= g["subdomain_size"] / 2 and (
-        dofs is None or dofs / 4**k >= min_dofs
-    ):
-        level = {**config, "geometry": {**g, "h": g["h"] * 2**k}}
-        levels.append(level)
+    while size.dofs / coarsening ** (2 * k) >= min_dofs:
+        h = g["h"] * coarsening**k
+        sizes = {"h": h, "subdomain_size": max(g["subdomain_size"], 2 * h)}
+        levels.append({**config, "geometry": {**g, **sizes}})
         k += 1
     return levels[::-1]
 

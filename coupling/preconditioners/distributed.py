@@ -36,6 +36,7 @@ from petsc4py import PETSc
 
 from coupling.preconditioners.kernels import (
     SparseFactor,
+    fill_reducing_ordering,
     block_diagonal_edge_forms,
     coarse_matrix,
     edge_weights,
@@ -171,7 +172,7 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
             (data[~is_int], (rows[~is_int], sk_pos[cols[~is_int]])), shape=(n_i, n_sk)
         )
         self._a_si = self._a_is.T.tocsr()
-        self._interior_factor = SparseFactor(self._a_ii)
+        self._interior_factor = SparseFactor(self._a_ii, fill_reducing_ordering(self._a_ii))
 
         # the skeleton: edge forms of the edges this rank solves, Pi on all local skeleton dofs
         subdomains = np.asarray(coarse.edge_subdomains, dtype=np.int64)

@@ -11,14 +11,17 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 from petsc4py import PETSc
+from scipy.sparse.csgraph import connected_components
 from threadpoolctl import threadpool_limits
 
+from coupling.options import NATURAL_ORDERING_MAX_BLOCK
 from coupling.preconditioners.edge_forms import edge_form
 from fem_py.coarse import as_ragged
 from fem_py.polyline import arc_length
 
 __all__ = [
     "SparseFactor",
+    "fill_reducing_ordering",
     "DenseFactor",
     "block_diagonal_edge_forms",
     "TwoLevelForm",
@@ -31,13 +34,27 @@ __all__ = [
 ]
 
 
+def fill_reducing_ordering(matrix: sp.spmatrix) -> str:
+    """The PETSc ordering for the Cholesky factor of ``matrix``: "natural" when every
+    connected component of its graph (a block of a block-diagonal matrix, such as A_II:
+    one block per subdomain) has at most NATURAL_ORDERING_MAX_BLOCK rows, "nd" (nested
+    dissection) otherwise. Fill never crosses components, and within a small block the
+    mesh's own locality-preserving numbering fills about as little as nested dissection,
+    whose ordering of the whole graph costs several times the factorisation."""
+    n = matrix.shape[0]
+    if n == 0:
+        return "nd"
+    _, labels = connected_components(matrix, directed=False)
+    return "natural" if np.bincount(labels).max() <= NATURAL_ORDERING_MAX_BLOCK else "nd"
+
+
 class SparseFactor:
     """Sparse Cholesky factor of an SPD matrix, computed once (PETSc built-in, nested
-    dissection; chosen by measurement, docs/design/preconditioners.md). Works on
-    ``PETSc.COMM_SELF``: the factor is rank-local.
+    dissection by default; chosen by measurement, docs/design/preconditioners.md).
+    Works on ``PETSc.COMM_SELF``: the factor is rank-local.
     """
 
-    def __init__(self, matrix: sp.spmatrix) -> None:
+    def __init__(self, matrix: sp.spmatrix, ordering: str = "nd") -> None:
         m = sp.csr_matrix(matrix, dtype=float)
         self.n = m.shape[0]
         self._ksp = None
@@ -56,7 +73,7 @@ class SparseFactor:
         pc = self._ksp.getPC()
         pc.setType("cholesky")
         pc.setFactorSolverType("petsc")
-        pc.setFactorOrdering("nd")
+        pc.setFactorOrdering(ordering)
         self._ksp.setUp()
         self._factor = pc.getFactorMatrix()
         self._rhs, self._sol = self._mat.createVecs()

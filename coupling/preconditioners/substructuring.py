@@ -49,6 +49,7 @@ import scipy.sparse as sp
 from coupling.preconditioners.base import check_length
 from coupling.preconditioners.kernels import (
     SparseFactor,
+    fill_reducing_ordering,
     TwoLevelForm,
     block_diagonal_edge_forms,
     coarse_matrix,
@@ -226,7 +227,7 @@ class SubstructuringPreconditioner(SignoriniBlock):
         self._a_ii = a_i[:, interior].tocsr()
         self._a_is = a_i[:, skeleton].tocsr()
         self._a_si = self._a_is.T.tocsr()  # A is symmetric
-        self._interior_factor = SparseFactor(self._a_ii)
+        self._interior_factor = SparseFactor(self._a_ii, fill_reducing_ordering(self._a_ii))
         coarse_of = None
         if coarse_space == "galerkin":
             a_ss = a[skeleton][:, skeleton].tocsr()

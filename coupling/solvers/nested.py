@@ -51,7 +51,10 @@ def prolong(coarse: Any, coarse_solution: Solution, fine: Any) -> tuple[np.ndarr
     x, values, triangles = comm.bcast(gathered, root=0) if comm.size > 1 else gathered
     n_owned = fine.V.dofmap.index_map.size_local
     points = fine.V.tabulate_dof_coordinates()[:n_owned, :2]
-    u = interpolate_p1(x, triangles, values, points)
+    # an n-fold uniform refinement has n^2 times the cells: its nodes are matched by sorting
+    fine_cells = fine.V.mesh.topology.index_map(2).size_global
+    divisions = max(1, round(np.sqrt(fine_cells / len(triangles))))
+    u = interpolate_p1(x, triangles, values, points, divisions=divisions)
     lost = np.isnan(u)  # on the coarse boundary up to round-off: the nearest coarse node
     if lost.any():
         u[lost] = values[cKDTree(x).query(points[lost])[1]]

@@ -14,7 +14,7 @@ inactive set I (grad_phi J_I = 0). The Newton step solves, with H = D^2 J_h at t
     dphi_A = -phi_A,
 
 by preconditioned CG: H is applied as a product (the interior Jacobian, assembled once
-per step, plus the dense S_h on the boundary block), the preconditioner is the
+per step, plus S_h on the boundary block), the preconditioner is the
 substructuring B restricted to the inactive set (B_Omega^{-1} for u, M_s[I, I]^{-1} for
 phi_I). The CG tolerance follows the Newton residual r = (||grad_u J||_{B_Omega^{-1}}^2
 + ||phi - P_s(phi - tau M_s^{-1} grad_phi J)||_{M_s}^2 / tau^2)^{1/2} (inexact Newton,
@@ -25,7 +25,10 @@ section 6.3). tau r is the B-norm of the PGPM step from the iterate ((3.19) with
 exact projection), so the iteration stops as soon as that step meets the PGPM rule
 ||step||_B <= tol ||xi||_B with the active set unchanged: the answer is one that PGPM
 would accept, without the confirming Newton step the rule on the Newton step itself
-would take. Globalisation: backtracking on J_h along the
+would take. After a Newton step of relative B-norm at most SSN_JACOBIAN_REUSE_STEP the
+next step keeps the Jacobian (D^2 G is Lipschitz in u, so the stale Jacobian perturbs
+the step by a relative O(that norm), far below the CG tolerance of such a late step).
+Globalisation: backtracking on J_h along the
 projected path (u + a du, max(0, phi + a dphi)); a step that does not decrease J_h after
 30 halvings is replaced by a PGPM step. A few PGPM steps start the iteration.
 
@@ -45,7 +48,7 @@ import scipy.linalg
 from mpi4py import MPI
 
 from coupling.functional import CoupledFunctional
-from coupling.options import OVERSOLVE_SAFEGUARD
+from coupling.options import OVERSOLVE_SAFEGUARD, SSN_JACOBIAN_REUSE_STEP
 from coupling.solvers.pgpm import energy_increased, pgpm
 from coupling.solvers.projection import SignoriniProjection
 from coupling.solvers.records import (
@@ -198,7 +201,7 @@ def semismooth_newton(
     residual0 = residual_scale
     increases = warm.energy_increases
     active = np.zeros(phi.size, dtype=bool)
-    norm2 = None  # ||xi_k||_B^2 after a Newton step
+    norm2 = relative = None  # ||xi_k||_B^2 and ||xi_k - xi_k-1||_B / ||xi_k||_B after a Newton step
     reason, converged, k = f"reached max_iterations = {max_iterations}", False, warm.iterations
     for k in range(warm.iterations + 1, max_iterations + 1):
         g_u = grad.array_r.copy()
@@ -212,7 +215,8 @@ def semismooth_newton(
             break
         active, free = new_active, ~new_active
         residual0 = residual if residual0 is None else residual0
-        forms.assemble_jacobian(u_function, jacobian)
+        if relative is None or relative > SSN_JACOBIAN_REUSE_STEP:
+            forms.assemble_jacobian(u_function, jacobian)
         metric_free = preconditioner.signorini_metric[np.ix_(free, free)]
         factor = scipy.linalg.cho_factor(metric_free) if free.any() else None
 
