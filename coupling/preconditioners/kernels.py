@@ -5,6 +5,7 @@ interpolation Pi along coarse edges.
 """
 from __future__ import annotations
 
+import functools
 from typing import Any, Callable, Sequence
 
 import numpy as np
@@ -22,6 +23,7 @@ from fem_py.polyline import arc_length
 __all__ = [
     "SparseFactor",
     "fill_reducing_ordering",
+    "is_symmetric",
     "DenseFactor",
     "block_diagonal_edge_forms",
     "TwoLevelForm",
@@ -32,6 +34,21 @@ __all__ = [
     "hat_support_on_gamma",
     "edge_weights",
 ]
+
+
+def is_symmetric(matrix: sp.spmatrix, rtol: float = 1e-12) -> bool:
+    """Whether max |a_ij - a_ji| <= rtol max |a_ij|. With the sparsity pattern symmetric
+    (the P1 matrices) it compares the entries of A and A^T directly, one transposition
+    and no sparse subtraction."""
+    a = sp.csr_matrix(matrix, dtype=float)
+    if a.nnz == 0:
+        return True
+    a.sum_duplicates()  # canonical: sorted indices, no duplicates (as A^T's CSR is)
+    t = a.T.tocsr()
+    scale = rtol * np.abs(a.data).max()
+    if np.array_equal(a.indptr, t.indptr) and np.array_equal(a.indices, t.indices):
+        return bool(np.abs(a.data - t.data).max() <= scale)
+    return bool(abs(a - t).max() <= scale)
 
 
 def fill_reducing_ordering(matrix: sp.spmatrix) -> str:
@@ -186,20 +203,37 @@ class TwoLevelForm:
         coarse_nodes: np.ndarray,
         coarse: np.ndarray | sp.spmatrix,
     ) -> None:
-        n, n_c = interp.shape
-        restrict = sp.csr_matrix((np.ones(n_c), (np.arange(n_c), coarse_nodes)), shape=(n_c, n))
-        q = (sp.identity(n, format="csr") - interp @ restrict).tocsr()
-        self.matrix = (q.T @ a0 @ q + restrict.T @ sp.csr_matrix(coarse) @ restrict).tocsr()
+        n = interp.shape[0]
+        self.a0 = sp.csr_matrix(a0)
         self.a0_inv = sp.csr_matrix(a0_inv)
         self.interp = sp.csr_matrix(interp)
         self.interp_t = self.interp.T.tocsr()
+        self.coarse_nodes = np.asarray(coarse_nodes, dtype=np.int64)
+        self.coarse_form = sp.csr_matrix(coarse) if sp.issparse(coarse) else np.asarray(coarse)
         self.n = n
         self._coarse = (
             SparseFactor(coarse) if sp.issparse(coarse) else DenseFactor(np.asarray(coarse))
         )
 
     def matvec(self, v: np.ndarray) -> np.ndarray:
-        return self.matrix @ v
+        """B v = Q^T A0 Q v + R^T C R v with Q = I - P R, as products (no assembled B):
+        R v = v at the coarse nodes, Q^T w = w - R^T P^T w."""
+        v_c = v[self.coarse_nodes]
+        out = self.a0 @ (v - self.interp @ v_c)
+        out[self.coarse_nodes] += self.coarse_form @ v_c - self.interp_t @ out
+        return out
+
+    @functools.cached_property
+    def matrix(self) -> sp.csr_matrix:
+        """B as a sparse matrix (assembled on first use: the dense forms of small problems
+        and the metric M_s)."""
+        n, n_c = self.interp.shape
+        restrict = sp.csr_matrix(
+            (np.ones(n_c), (np.arange(n_c), self.coarse_nodes)), shape=(n_c, n)
+        )
+        q = (sp.identity(n, format="csr") - self.interp @ restrict).tocsr()
+        coarse = sp.csr_matrix(self.coarse_form)
+        return (q.T @ self.a0 @ q + restrict.T @ coarse @ restrict).tocsr()
 
     def solve(self, r: np.ndarray) -> np.ndarray:
         return self.a0_inv @ r + self.interp @ self._coarse.solve(self.interp_t @ r)
