@@ -1,11 +1,17 @@
 """Point location in a triangle mesh: the triangle that holds each point, and the P1
-interpolation there (vectorised; candidates from a k-d tree of the triangle centroids)."""
+interpolation there (vectorised; candidates from a uniform grid of squares, or a k-d tree
+of the triangle centroids on strongly graded meshes)."""
 from __future__ import annotations
 
 import numpy as np
 from scipy.spatial import cKDTree
 
 __all__ = ["locate", "interpolate_p1", "lattice_weights"]
+
+#: Point location: a grid square holding more triangles than this (a strongly graded
+#: mesh, the squares being as large as the largest triangle) switches :func:`locate` to
+#: candidates from a k-d tree of the triangle centroids.
+LOCATE_MAX_CANDIDATES = 64
 
 
 def _barycentric(
@@ -27,9 +33,11 @@ def locate(
     triangles (T, 3)); cell -1 where no triangle holds the point (within ``tol``
     relative to the triangle in barycentric coordinates).
 
-    The candidates of a point are the triangles whose centroids are nearest to it: 8,
-    then 32, then 128 of them for the points not found yet, which suffices for the
-    shape-regular meshes of this project.
+    The candidates of a point are the triangles registered in its square of a uniform
+    grid whose squares are as large as the largest triangle's bounding box (so a triangle
+    overlaps at most 2 x 2 squares): a few per point on a quasi-uniform mesh. Where a
+    square holds more than LOCATE_MAX_CANDIDATES triangles (strongly graded meshes), the
+    triangles whose centroids are nearest to the point are tried instead (k-d tree).
     """
     x = np.asarray(x, dtype=float)[:, :2]
     triangles = np.asarray(triangles, dtype=np.int64)
@@ -38,6 +46,60 @@ def locate(
     bary = np.zeros((len(points), 3))
     if len(points) == 0 or len(triangles) == 0:
         return cell, bary
+    corners = x[triangles]  # (T, 3, 2)
+    lo, hi = corners.min(axis=1), corners.max(axis=1)
+    size = max(float((hi - lo).max()), 1e-300)
+    origin = lo.min(axis=0)
+    shape = np.floor((hi.max(axis=0) - origin) / size).astype(np.int64) + 1
+    first, last = (np.floor((b - origin) / size).astype(np.int64) for b in (lo, hi))
+    squares, owners = [], []
+    for dx in (0, 1):
+        for dy in (0, 1):
+            ok = (first[:, 0] + dx <= last[:, 0]) & (first[:, 1] + dy <= last[:, 1])
+            squares.append((first[ok, 0] + dx) * shape[1] + first[ok, 1] + dy)
+            owners.append(np.flatnonzero(ok))
+    squares, owners = np.concatenate(squares), np.concatenate(owners)
+    order = np.argsort(squares, kind="stable")
+    owners = owners[order]
+    counts = np.bincount(squares, minlength=int(shape.prod()))
+    if counts.max() > LOCATE_MAX_CANDIDATES:
+        return _locate_nearest(x, triangles, points, tol)
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    # the affine map of each triangle: lambda_(1,2) = inverse(b - a, c - a) (p - a)
+    e1, e2 = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
+    det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+    inverse = np.stack([e2[:, 1], -e2[:, 0], -e1[:, 1], e1[:, 0]], axis=1) / det[:, None]
+    with np.errstate(over="ignore", invalid="ignore"):
+        ij = np.floor((points - origin) / size)
+    todo = np.flatnonzero(((ij >= 0) & (ij < shape)).all(axis=1))  # NaN: outside
+    ij = ij[todo].astype(np.int64)
+    square = ij[:, 0] * shape[1] + ij[:, 1]
+    start, count = starts[square], counts[square]
+    for k in range(int(count.max(initial=0))):
+        keep = count > k
+        todo, start, count = todo[keep], start[keep], count[keep]
+        cand = owners[start + k]
+        v = points[todo] - corners[cand, 0]
+        m = inverse[cand]
+        l1 = m[:, 0] * v[:, 0] + m[:, 1] * v[:, 1]
+        l2 = m[:, 2] * v[:, 0] + m[:, 3] * v[:, 1]
+        lam = np.stack([1.0 - l1 - l2, l1, l2], axis=1)
+        hit = (lam >= -tol).all(axis=1)
+        cell[todo[hit]] = cand[hit]
+        bary[todo[hit]] = lam[hit]
+        todo, start, count = todo[~hit], start[~hit], count[~hit]
+        if todo.size == 0:
+            break
+    return cell, bary
+
+
+def _locate_nearest(
+    x: np.ndarray, triangles: np.ndarray, points: np.ndarray, tol: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`locate` with the candidates from a k-d tree of the triangle centroids: the
+    8, then 32, then 128 nearest for the points not found yet."""
+    cell = np.full(len(points), -1, dtype=np.int64)
+    bary = np.zeros((len(points), 3))
     tree = cKDTree(x[triangles].mean(axis=1))
     todo = np.arange(len(points))
     for k in (8, 32, 128):

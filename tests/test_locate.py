@@ -25,7 +25,9 @@ def _mesh(n: int):
     return x, tris
 
 
-def test_random_points_are_in_the_triangle_that_holds_them():
+@pytest.mark.parametrize("max_candidates", [64, 0])  # 0: the k-d tree candidates
+def test_random_points_are_in_the_triangle_that_holds_them(max_candidates, monkeypatch):
+    monkeypatch.setattr(fem_py.locate, "LOCATE_MAX_CANDIDATES", max_candidates)
     x, tris = _mesh(16)
     pts = np.random.default_rng(0).uniform(0, 1, (500, 2))
     cell, bary = locate(x, tris, pts)
