@@ -11,6 +11,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+import scipy.sparse as sp
 
 from fem_py.parallel import gather_to_root
 
@@ -23,11 +24,20 @@ def input_indices(V: Any) -> np.ndarray:
     For P1 on affine triangles the dofs of a cell are its geometry nodes in the same
     local order, so the map is read off the two cell-to-node tables.
     """
-    mesh = V.mesh
+    return _input_indices(V, _cell_nodes(V))
+
+
+def _cell_nodes(V: Any) -> np.ndarray:
+    """The input indices of the nodes of every local cell (owned, then ghosts), flat:
+    3 per cell in the cell's local order (that of its P1 dofs)."""
+    nodes = np.asarray(V.mesh.geometry.input_global_indices, dtype=np.int64)
+    return nodes[V.mesh.geometry.dofmap.array]
+
+
+def _input_indices(V: Any, cell_nodes: np.ndarray) -> np.ndarray:
     index_map = V.dofmap.index_map
     out = np.empty(index_map.size_local + index_map.num_ghosts, dtype=np.int64)
-    nodes = np.asarray(mesh.geometry.input_global_indices, dtype=np.int64)
-    out[V.dofmap.list.array] = nodes[mesh.geometry.dofmap.array]
+    out[V.dofmap.list.array] = cell_nodes
     return out
 
 
@@ -46,17 +56,45 @@ def gather_by_input(
     return out
 
 
-def _owned_triangles(V: Any) -> np.ndarray:
-    """The owned cells of the P1 space ``V`` as node triples in the input numbering."""
+def _owned_triangles(V: Any, cell_nodes: np.ndarray | None = None) -> np.ndarray:
+    """The owned cells of the P1 space ``V`` as node triples in the input numbering
+    (a view of ``cell_nodes``, :func:`_cell_nodes`, computed when not given)."""
     n_cells = V.mesh.topology.index_map(V.mesh.topology.dim).size_local
-    return input_indices(V)[V.dofmap.list.array.reshape(-1, 3)[:n_cells]]
+    cell_nodes = _cell_nodes(V) if cell_nodes is None else cell_nodes
+    return cell_nodes.reshape(-1, 3)[:n_cells]
+
+
+def _joined(parts: list[np.ndarray]) -> np.ndarray:
+    """The gathered parts as one array (the part itself on one rank: no copy)."""
+    return parts[0] if len(parts) == 1 else np.concatenate(parts)
 
 
 def _cell_order(triangles: np.ndarray) -> np.ndarray:
-    """The order of the gathered triangles: by their sorted node numbers (unique per
-    cell, so the order does not depend on the partition)."""
-    key = np.sort(triangles, axis=1)
-    return np.lexsort(key.T[::-1])
+    """The order of the gathered triangles: by their sorted node numbers a < b < c,
+    lexicographically (unique per cell, so the order does not depend on the partition).
+
+    A counting sort by a (the rows of a CSR matrix, one per node, column b N + c and the
+    cell's position as its value), then each row's few cells sorted by b N + c
+    (``sort_indices``): linear in the cells plus the nodes, where a general sort of 2e6
+    triples costs several times more (docs/design/speed.md, "Outputs"). Falls back to
+    ``np.lexsort`` when b N + c would overflow int64 or two cells share their nodes.
+    """
+    t0, t1, t2 = np.asarray(triangles, dtype=np.int64).T
+    a = np.minimum(np.minimum(t0, t1), t2)
+    c = np.maximum(np.maximum(t0, t1), t2)
+    n = int(c.max()) + 1 if len(triangles) else 1
+    if n < 2**31:  # n^2 < 2^62: the columns b n + c and the matrix shape fit in int64
+        column = t0 + t1  # then b = t0 + t1 + t2 - a - c, then b n + c, in place
+        column += t2
+        column -= a
+        column -= c
+        column *= n
+        column += c
+        rows = sp.csr_matrix((np.arange(len(a)), (a, column)), shape=(n, n * n))
+        rows.sort_indices()  # (the constructor sums duplicates, which sorts them already)
+        if rows.nnz == len(a):  # no two cells with the same nodes (summed into one entry)
+            return rows.data
+    return np.lexsort((c, t0 + t1 + t2 - a - c, a))
 
 
 def gather_p1(u) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
@@ -70,15 +108,15 @@ def gather_p1(u) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     comm = V.mesh.comm
     index_map = V.dofmap.index_map
     n_owned, n_global = index_map.size_local, index_map.size_global
-    numbers = input_indices(V)
-    x = gather_by_input(
-        comm, numbers[:n_owned], V.tabulate_dof_coordinates()[:n_owned, :2], n_global
-    )
-    values = gather_by_input(comm, numbers[:n_owned], u.x.array[:n_owned].real, n_global)
-    parts = gather_to_root(comm, _owned_triangles(V))
+    cell_nodes = _cell_nodes(V)
+    numbers = _input_indices(V, cell_nodes)[:n_owned]
+    # the dof coordinates, not geometry.x: the two differ in the last bit
+    x = gather_by_input(comm, numbers, V.tabulate_dof_coordinates()[:n_owned, :2], n_global)
+    values = gather_by_input(comm, numbers, u.x.array[:n_owned].real, n_global)
+    parts = gather_to_root(comm, _owned_triangles(V, cell_nodes))
     if comm.rank != 0:
         return None
-    triangles = np.concatenate(parts)
+    triangles = _joined(parts)
     return x, values, triangles[_cell_order(triangles)]
 
 
@@ -90,5 +128,5 @@ def gather_cells(V: Any, values: np.ndarray) -> np.ndarray | None:
     parts = gather_to_root(comm, (_owned_triangles(V), np.asarray(values)))
     if comm.rank != 0:
         return None
-    triangles = np.concatenate([t for t, _ in parts])
-    return np.concatenate([v for _, v in parts])[_cell_order(triangles)]
+    triangles = _joined([t for t, _ in parts])
+    return _joined([v for _, v in parts])[_cell_order(triangles)]

@@ -55,6 +55,9 @@ PLOT_FILES = ("u.png", "boundary.png", "whole_plane.png", "history.png")
 #: (bbox_inches="tight" would draw them once more to find their extent).
 _LAID_OUT = ("boundary.png", "history.png")
 
+#: The resolution of the figures.
+_DPI = 110
+
 #: Pixels along the longer side of the images of u_h (about twice the drawn size at 110 dpi).
 RASTER_PIXELS = 600
 
@@ -106,6 +109,12 @@ def rasterise(
     triangle-pixel pairs: the time is linear in the triangles plus the pixels, and the
     scratch memory is bounded by the batch size.
 
+    The bounding boxes come from the nodes: in pixel-centre units a triangle's box holds
+    the centres from the smallest ceiling to the largest floor of its nodes' coordinates
+    (ceil and floor are monotone), so each node's four (clipped to the grid) are
+    computed once and packed into 8 bytes, and the pass over the triangles is three
+    integer gathers and a minimum and maximum per triangle.
+
     Parameters
     ----------
     x : (N, 2) array
@@ -122,19 +131,21 @@ def rasterise(
         lies in no triangle (outside Omega) are masked.
     """
     image = np.full(grid.ny * grid.nx, np.nan)
+    values = np.asarray(values, float)
     # node coordinates in pixel-centre units: the centre of pixel (i, j) is the point (j, i)
     q = (np.asarray(x, float)[:, :2] - np.asarray(grid.origin)) / grid.size - 0.5
-    last = np.array([grid.nx - 1, grid.ny - 1])
+    boxes = _node_boxes(q, grid.nx, grid.ny)
     chunk = 1 << 16  # triangles per pass over their bounding boxes
     for start in range(0, len(triangles), chunk):
         t = triangles[start : start + chunk]
-        p0, p1, p2 = q[t[:, 0]], q[t[:, 1]], q[t[:, 2]]
-        first = np.maximum(np.ceil(np.minimum(np.minimum(p0, p1), p2)), 0).astype(np.int64)
-        width = np.minimum(np.floor(np.maximum(np.maximum(p0, p1), p2)), last).astype(np.int64)
-        width -= first - 1
-        counts = np.where((width > 0).all(axis=1), width[:, 0] * width[:, 1], 0)
-        hit = np.flatnonzero(counts)  # most triangles far below the pixel size hold no centre
-        t, first, width, counts = t[hit], first[hit], width[hit], counts[hit]
+        b0, b1, b2 = (boxes.unpack(boxes.packed[t[:, k]]) for k in range(3))
+        low = np.minimum(np.minimum(b0, b1), b2)  # columns 0, 1: first centre (j, i)
+        high = np.maximum(np.maximum(b0, b1), b2)  # columns 2, 3: last centre (j, i)
+        # most triangles far below the pixel size hold no centre
+        hit = np.flatnonzero((high[:, 2] >= low[:, 0]) & (high[:, 3] >= low[:, 1]))
+        t, first = t[hit], low[hit, :2].astype(np.int64)
+        width = high[hit, 2:] - first + 1
+        counts = width[:, 0] * width[:, 1]
         ends = np.cumsum(counts)
         # batches of whole triangles with at most _BATCH pairs (or a single triangle)
         cuts = [0]
@@ -142,8 +153,33 @@ def rasterise(
             begun = ends[cuts[-1] - 1] if cuts[-1] else 0
             cuts.append(max(int(np.searchsorted(ends, begun + _BATCH, "right")), cuts[-1] + 1))
         for a, b in zip(cuts[:-1], cuts[1:]):
-            _fill(image, grid.nx, q[t[a:b]], values[t[a:b]], first[a:b], width[a:b], counts[a:b])
+            _fill(image, grid.nx, q, values, t[a:b], first[a:b], width[a:b], counts[a:b])
     return np.ma.masked_invalid(image.reshape(grid.ny, grid.nx))
+
+
+class _NodeBoxes(NamedTuple):
+    """Per node (ceil q_x, ceil q_y, floor q_x, floor q_y) in pixel-centre units, clipped
+    to [0, n] and [-1, n - 1]; ``packed`` holds the four of a node in one element, which
+    :meth:`unpack` turns back into an (m, 4) integer array."""
+
+    packed: np.ndarray
+    dtype: np.dtype
+
+    def unpack(self, packed: np.ndarray) -> np.ndarray:
+        return packed.view(self.dtype).reshape(-1, 4)
+
+
+def _node_boxes(q: np.ndarray, nx: int, ny: int) -> _NodeBoxes:
+    """The clipped ceilings and floors of the node coordinates ``q`` (N, 2) on an nx by
+    ny grid, four int16 per node in one int64 (int32 in 16 bytes for larger grids)."""
+    dtype = np.dtype(np.int16 if max(nx, ny) < 2**15 - 1 else np.int32)
+    floor = np.floor(q)
+    ceil = floor + (q != floor)
+    boxes = np.empty((len(q), 4), dtype=dtype)
+    boxes[:, :2] = np.minimum(np.maximum(ceil, 0), [nx, ny])
+    boxes[:, 2:] = np.minimum(np.maximum(floor, -1), [nx - 1, ny - 1])
+    element = np.dtype(np.int64) if dtype.itemsize == 2 else np.dtype((np.void, 16))
+    return _NodeBoxes(boxes.view(element).ravel(), dtype)
 
 
 def coarsen(
@@ -168,33 +204,35 @@ def coarsen(
     return coarse, out
 
 
-def _fill(image, nx, p, v, first, width, counts) -> None:
-    """Write the values at the pixel centres inside the triangles ``p`` (m, 3, 2) into
-    the flat ``image`` (a batch of :func:`rasterise`)."""
-    # per triangle, the barycentric coordinates l1, l2 and the value as affine functions
-    # of the pixel indices (j, i): c[:, 3 r : 3 r + 3] . (j, i, 1)
-    e1, e2 = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
+def _fill(image, nx, q, values, t, first, width, counts) -> None:
+    """Write the values at the pixel centres inside the triangles ``t`` (m, 3) into the
+    flat ``image`` (a batch of :func:`rasterise`; ``q``: the nodes in pixel-centre
+    units, ``first`` the first centre (j, i) of each bounding box, ``width`` its
+    columns and rows, ``counts`` = their product)."""
+    p0 = q[t[:, 0]]
+    e1, e2 = q[t[:, 1]] - p0, q[t[:, 2]] - p0
     with np.errstate(divide="ignore", invalid="ignore"):  # degenerate triangles: NaN, dropped
         det = 1.0 / (e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
-        g1 = np.column_stack([e2[:, 1], -e2[:, 0]]) * det[:, None]
-        g2 = np.column_stack([-e1[:, 1], e1[:, 0]]) * det[:, None]
-    gu = g1 * (v[:, 1] - v[:, 0])[:, None] + g2 * (v[:, 2] - v[:, 0])[:, None]
-    c = np.empty((len(p), 9))
-    for r, (g, base) in enumerate(((g1, 0.0), (g2, 0.0), (gu, v[:, 0]))):
-        c[:, 3 * r : 3 * r + 2] = g
-        c[:, 3 * r + 2] = base - (g * p[:, 0]).sum(axis=1)
-    k = np.repeat(np.arange(len(counts)), counts)
-    local = np.arange(len(k)) - np.repeat(np.cumsum(counts) - counts, counts)
-    w = width[k, 0]
-    j = first[k, 0] + local % w
-    i = first[k, 1] + local // w
-    ck = c[k]
-    l1 = ck[:, 0] * j + ck[:, 1] * i + ck[:, 2]
-    l2 = ck[:, 3] * j + ck[:, 4] * i + ck[:, 5]
+    # per triangle: p0 and the rows of [e1 e2]^-1, so (l1, l2) = rows (centre - p0)
+    rows = np.column_stack([p0, e2[:, 1] * det, -e2[:, 0] * det, -e1[:, 1] * det, e1[:, 0] * det])
+    if len(counts) == counts.sum():  # one centre per box (triangles below the pixel size)
+        k, j, i = None, first[:, 0], first[:, 1]
+    else:
+        k = np.repeat(np.arange(len(counts)), counts)
+        local = np.arange(len(k)) - np.repeat(np.cumsum(counts) - counts, counts)
+        w = width[k, 0]
+        j = first[k, 0] + local % w
+        i = first[k, 1] + local // w
+        rows = rows[k]
+    dx, dy = j - rows[:, 0], i - rows[:, 1]
+    l1 = rows[:, 2] * dx + rows[:, 3] * dy
+    l2 = rows[:, 4] * dx + rows[:, 5] * dy
     tol = -1e-12
-    inside = (l1 >= tol) & (l2 >= tol) & (1.0 - l1 - l2 >= tol)
-    ck, j, i = ck[inside], j[inside], i[inside]
-    image[i * nx + j] = ck[:, 6] * j + ck[:, 7] * i + ck[:, 8]
+    inside = np.flatnonzero((l1 >= tol) & (l2 >= tol) & (1.0 - l1 - l2 >= tol))
+    t = t[inside] if k is None else t[k[inside]]
+    l1, l2, v0 = l1[inside], l2[inside], values[t[:, 0]]
+    value = v0 + l1 * (values[t[:, 1]] - v0) + l2 * (values[t[:, 2]] - v0)
+    image[i[inside] * nx + j[inside]] = value
 
 
 _CONTACT = dict(ls="none", marker="o", ms=3.5, color="tab:red")
@@ -349,8 +387,12 @@ def _figure_whole_plane(
     X, Y = np.meshgrid(centre[0] + g, centre[1] + g)
     grid = np.column_stack([X.ravel(), Y.ravel()])
     h = np.linalg.norm(np.diff(_closed(nodes), axis=0), axis=1).max()
-    outside = ~PolygonPath(nodes).contains_points(grid)
-    outside[outside] = closest_on_polygon(grid[outside], nodes[_corners(nodes)])[0] > h / 20
+    # Gamma is the polygon of its corners (the other nodes lie on its sides): tested
+    # against it, not against all n nodes (O(n) per point); points on Gamma, on either
+    # side of the test, are dropped with the others closer than h/20
+    corners = nodes[_corners(nodes)]
+    outside = ~PolygonPath(corners).contains_points(grid)
+    outside[outside] = closest_on_polygon(grid[outside], corners)[0] > h / 20
     grid = grid[outside]
     ue_grid = bem_cpp.exterior_potential(
         nodes,
@@ -461,12 +503,13 @@ def write_plots(out: Path, fields: dict, history: Sequence, *, tol: float) -> li
     }
     written = []
     for name in PLOT_FILES:
-        fig = figures[name]()
+        with plt.rc_context({"figure.dpi": _DPI}):
+            fig = figures[name]()
         if fig is None:
             continue
         bbox = None if name in _LAID_OUT else "tight"  # no second layout draw
         atomic_write(
-            Path(out) / name, lambda p: fig.savefig(p, dpi=110, bbox_inches=bbox, format="png")
+            Path(out) / name, lambda p: fig.savefig(p, dpi=_DPI, bbox_inches=bbox, format="png")
         )
         plt.close(fig)
         written.append(name)
