@@ -150,7 +150,8 @@ def adapt(
         problem, data = problem_builder(domain)
         if previous is not None:
             start = transfer_iterate(previous.problem, previous.solution, problem)
-        solution = solve(problem, options, initial=start, monitor=monitor)
+        scale = previous.solution.residual_scale if previous is not None else None
+        solution = solve(problem, options, initial=start, residual_scale=scale, monitor=monitor)
         est = estimate(problem, solution, f=data.get("f", "0"), t0=data.get("t0", "0"))
         level = Level(k, domain, problem, solution, est, time.perf_counter() - tic)
         if exact:

@@ -81,9 +81,10 @@ def solve_nested(
     coarsest first).
 
     The coarsest level is solved with ``options`` from xi_0 = (0, 0); each next one,
-    ``problem`` last, from the prolonged solution (:func:`prolong`) with the step tau of
-    the level before. The solution's timings hold its own stages plus ``coarse_levels``
-    (assembly and solves of the coarser levels) and ``prolongation`` (onto ``problem``).
+    ``problem`` last, from the prolonged solution (:func:`prolong`) with the step tau and
+    (once a level has one) ssn's residual scale of the level before. The solution's
+    timings hold its own stages plus ``coarse_levels`` (assembly and solves of the
+    coarser levels) and ``prolongation`` (onto ``problem``).
     """
     levels: list[LevelRecord] = []
     previous = previous_solution = None
@@ -100,7 +101,11 @@ def solve_nested(
             initial = prolong(previous, previous_solution, level)
         prolonged = time.perf_counter()
         solution = solve(
-            level, level_options, initial=initial, monitor=monitor if level is problem else None
+            level,
+            level_options,
+            initial=initial,
+            residual_scale=None if previous is None else previous_solution.residual_scale,
+            monitor=monitor if level is problem else None,
         )
         levels.append(
             LevelRecord(

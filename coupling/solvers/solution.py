@@ -50,6 +50,9 @@ class Solution:
         The outcome of the iteration (:class:`coupling.solvers.records.RunResult`).
     tau, C0
         The step length at the end and the estimate C0 = 1/tau_0 it started from.
+    residual_scale
+        The scale of ssn's residuals from a given iterate (None for a cold start or
+        another method): passed on to the next finer level.
     timings
         Seconds per stage of the solve: ``preconditioner`` (when built here),
         ``step_estimate``, ``solve``, ``exterior_flux``.
@@ -70,6 +73,7 @@ class Solution:
     history: list[IterationRecord]
     energy_increases: int
     timings: dict[str, float]
+    residual_scale: float | None = None
 
 
 def build_projection(preconditioner: Preconditioner, options: SolverOptions) -> SignoriniProjection:
@@ -120,17 +124,18 @@ def iterate(
     tau: float,
     lambda_min: float | None,
     warm_start: bool = False,
+    residual_scale: float | None = None,
     monitor: Monitor | None = None,
     matrix: Any = None,
 ) -> RunResult:
     """The iteration of ``options.method`` on J_h = ``functional`` from (u, phi0); u_h is
     left in ``u``. (``functional`` may wrap the problem's, as the baselines' budget does.)
+    ``warm_start``: (u, phi0) is a given iterate (nested iteration, adaptivity), from which
+    ssn takes Newton steps at once, with CG tolerances relative to ``residual_scale``
+    (:func:`coupling.solvers.ssn.zero_residual`; None: the first step's residual).
     ``matrix``: a P1 Mat of the caller's for the Jacobians (default: new ones)."""
     common = dict(tau=tau, tol=options.tol, max_iterations=options.max_iterations, monitor=monitor)
     if options.method == "ssn":
-        # from a given iterate (nested iteration, adaptivity) Newton steps start at once,
-        # with CG tolerances relative to the scale of the problem's residuals
-        scale = zero_residual(functional, preconditioner, u, phi0.size, tau) if warm_start else None
         return semismooth_newton(
             functional,
             preconditioner,
@@ -140,7 +145,7 @@ def iterate(
             phi0,
             start_steps=SSN_WARM_START_STEPS if warm_start else SSN_START_STEPS,
             cg_max_iterations=SSN_CG_MAX_ITERATIONS,
-            residual_scale=scale,
+            residual_scale=residual_scale,
             matrix=matrix,
             **common,
         )
@@ -161,6 +166,7 @@ def solve(
     *,
     initial: tuple[np.ndarray, np.ndarray] | None = None,
     preconditioner: Preconditioner | None = None,
+    residual_scale: float | None = None,
     monitor: Monitor | None = None,
 ) -> Solution:
     """Solve the discrete problem (2.3) with ``options.method`` (collective).
@@ -184,6 +190,12 @@ def solve(
         A B built by :func:`coupling.preconditioners.build_preconditioner` for this
         problem, to reuse it (the caller destroys it); default: built for
         ``options.preconditioner`` here and destroyed at the end.
+    residual_scale
+        From an ``initial`` iterate, ssn's scale of the residuals (the residual at
+        xi = (0, 0), :func:`coupling.solvers.ssn.zero_residual`): that of a coarser level's
+        problem, whose residuals have the same scale (their dual norms approximate the
+        same functional's); default computed here (one gradient and one projection).
+        The solution reports the scale it used.
     monitor
         Called with every :class:`coupling.solvers.records.IterationRecord`.
     """
@@ -228,6 +240,8 @@ def solve(
         )
         timings["step_estimate"] = time.perf_counter() - tic
         tic = time.perf_counter()
+        if initial is not None and options.method == "ssn" and residual_scale is None:
+            residual_scale = zero_residual(problem.functional, pc, u, phi0.size, tau)
         run = iterate(
             problem.functional,
             problem.forms,
@@ -239,6 +253,7 @@ def solve(
             tau=tau,
             lambda_min=lambda_min,
             warm_start=initial is not None,
+            residual_scale=residual_scale,
             monitor=monitor,
             matrix=matrix,
         )
@@ -273,4 +288,5 @@ def solve(
         history=run.history,
         energy_increases=run.energy_increases,
         timings=timings,
+        residual_scale=residual_scale,
     )
