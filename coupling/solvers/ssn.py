@@ -201,6 +201,7 @@ def semismooth_newton(
     residual0 = residual_scale
     increases = warm.energy_increases
     active = np.zeros(phi.size, dtype=bool)
+    b_u = None  # B_Omega u_k, updated by the steps
     norm2 = relative = None  # ||xi_k||_B^2 and ||xi_k - xi_k-1||_B / ||xi_k||_B after a Newton step
     reason, converged, k = f"reached max_iterations = {max_iterations}", False, warm.iterations
     for k in range(warm.iterations + 1, max_iterations + 1):
@@ -278,21 +279,14 @@ def semismooth_newton(
             step = 0.0
         d_u_taken = u_function.vector.array_r - u_old
         d_phi_taken = trial_phi - phi
+        b_d_u = preconditioner.matvec_omega(d_u_taken)
         step2 = b_norm2(
-            comm,
-            d_u_taken,
-            preconditioner.matvec_omega(d_u_taken),
-            d_phi_taken,
-            preconditioner.matvec_signorini(d_phi_taken),
+            comm, d_u_taken, b_d_u, d_phi_taken, preconditioner.matvec_signorini(d_phi_taken)
         )
+        # B_Omega u_k+1 = B_Omega u_k + B_Omega du: one product per step for both norms
+        b_u = preconditioner.matvec_omega(u_old) + b_d_u if b_u is None else b_u + b_d_u
         u_now = u_function.vector.array_r
-        norm2 = b_norm2(
-            comm,
-            u_now,
-            preconditioner.matvec_omega(u_now),
-            trial_phi,
-            preconditioner.matvec_signorini(trial_phi),
-        )
+        norm2 = b_norm2(comm, u_now, b_u, trial_phi, preconditioner.matvec_signorini(trial_phi))
         phi, energy, g_phi = trial_phi, trial_energy, trial_g_phi
         relative = relative_step(step2, norm2)
         history.step(k, energy, relative, phi, tau, cg_iterations=cg_its, line_search=step)
