@@ -48,7 +48,7 @@ DEFAULTS: dict[str, dict[str, Any]] = {
         "jacobian": "ufl",
         "signorini_weight": 0.25,
         "coarse_space": "auto",
-        "nested": False,
+        "nested": True,
         "boundary_operator": "auto",
     },
     "output": {"dir": "fembem-out", "xdmf": True, "plots": True, "indicators": False},

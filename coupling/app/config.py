@@ -191,6 +191,13 @@ def parse_config(raw: dict[str, Any]) -> dict[str, dict[str, Any]]:
             'solver.preconditioner = "exact" factors the dense S_h; set solver.boundary_operator '
             '= "dense" (or "auto" for small boundaries) or use another preconditioner'
         )
+    if config["adapt"]["steps"] > 0:
+        if raw.get("solver", {}).get("nested") is True:
+            raise ConfigError(
+                "solver.nested = true and adapt.steps > 0 do not combine: the adaptive loop "
+                "already starts each level from the one before; set solver.nested = false"
+            )
+        solver["nested"] = False  # the default (true) applies to plain solves only
     geometry = config["geometry"]
     _check_mesh_keys(geometry, raw.get("geometry", {}))
     if geometry["shape"] == "polygon" and len(geometry["vertices"]) < 3:

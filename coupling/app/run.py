@@ -103,8 +103,8 @@ def run_solver(
             last.error,
         )
     records = None
-    if options.nested:
-        coarser = [_level_builder(comm, c) for c in coarser_configs(config)]
+    coarser = [_level_builder(comm, c) for c in coarser_configs(config)] if options.nested else []
+    if coarser:  # a nested solve needs a coarser level (none for small or imported meshes)
         solution, nested = solve_nested(
             problem,
             coarser,
