@@ -32,6 +32,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.collections import LineCollection  # noqa: E402
 from matplotlib.path import Path as PolygonPath  # noqa: E402
+from matplotlib.transforms import Bbox  # noqa: E402
 from matplotlib.tri import Triangulation  # noqa: E402
 
 import bem_cpp  # noqa: E402
@@ -52,7 +53,8 @@ __all__ = [
 #: The figures, in the order they are written.
 PLOT_FILES = ("u.png", "boundary.png", "whole_plane.png", "history.png")
 #: The figures laid out by fig.tight_layout() when they are built: saved as they are
-#: (bbox_inches="tight" would draw them once more to find their extent).
+#: (bbox_inches="tight" would draw them once more to find their extent); the others
+#: are cropped to the extent "tight" gives (:func:`_tight_extent`).
 _LAID_OUT = ("boundary.png", "history.png")
 
 #: The resolution of the figures.
@@ -479,6 +481,15 @@ def _figure_history(history: Sequence, tol: float):
     return fig
 
 
+def _tight_extent(fig) -> Bbox:
+    """The extent (inches) that ``savefig(bbox_inches="tight")`` crops ``fig`` to: its
+    tight bounding box, padded by ``savefig.pad_inches``, found with the renderer of the
+    figure itself. Given to ``savefig`` it saves the same PNG without the layout draw
+    that ``"tight"`` makes first (the figure is built at the saving dpi, :data:`_DPI`)."""
+    box = fig.get_tightbbox(fig.canvas.get_renderer())
+    return box.padded(plt.rcParams["savefig.pad_inches"])
+
+
 def write_plots(out: Path, fields: dict, history: Sequence, *, tol: float) -> list[str]:
     """Write the figures of :data:`PLOT_FILES` into ``out`` and return their names.
 
@@ -507,7 +518,7 @@ def write_plots(out: Path, fields: dict, history: Sequence, *, tol: float) -> li
             fig = figures[name]()
         if fig is None:
             continue
-        bbox = None if name in _LAID_OUT else "tight"  # no second layout draw
+        bbox = None if name in _LAID_OUT else _tight_extent(fig)  # no second layout draw
         atomic_write(
             Path(out) / name, lambda p: fig.savefig(p, dpi=_DPI, bbox_inches=bbox, format="png")
         )
