@@ -127,9 +127,9 @@ def _coarser_levels(
 ) -> list[Callable[[], Any]]:
     """Builders of the coarser levels of the benchmark's square for a grid-sequenced
     peer, coarsest first, from :func:`coupling.app.from_config.coarser_configs`:
-    ``nested`` the hierarchy of ``[solver] nested = true`` (the subdomains d = 4h kept),
-    ``deep`` h doubled down to DEEP_MIN_DOFS dofs (on 2 x 2 subdomains, so that d does
-    not stop the coarsening); ``data(mesh)`` gives f, t0, u0, a on a level's mesh."""
+    ``nested`` the hierarchy of ``[solver] nested = true`` (h x 4 per level, d = 4h
+    raised to 2h where needed), ``deep`` h doubled down to DEEP_MIN_DOFS dofs (on 2 x 2
+    subdomains); ``data(mesh)`` gives f, t0, u0, a on a level's mesh."""
     from coupling.app.config import parse_config
     from coupling.app.from_config import coarser_configs, domain_from_config
     from coupling.manufactured import square_contact
@@ -151,7 +151,11 @@ def _coarser_levels(
             }
         }
     )
-    levels = coarser_configs(config, min_dofs=1000 if hierarchy == "nested" else DEEP_MIN_DOFS)
+    dofs = problem.V.dofmap.index_map.size_global
+    if hierarchy == "nested":
+        levels = coarser_configs(config, dofs)
+    else:
+        levels = coarser_configs(config, dofs, coarsening=2, min_dofs=DEEP_MIN_DOFS)
 
     def builder(level_config: dict) -> Callable[[], Any]:
         def build():

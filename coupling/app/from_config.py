@@ -75,19 +75,22 @@ def planned_size(config: dict) -> Any:
 
 
 def coarser_configs(
-    config: dict, *, coarsening: int = NESTED_COARSENING, min_dofs: int = NESTED_MIN_DOFS
+    config: dict,
+    dofs: int,
+    *,
+    coarsening: int = NESTED_COARSENING,
+    min_dofs: int = NESTED_MIN_DOFS,
 ) -> list[dict]:
-    """The configurations of the coarser levels of a nested solve, coarsest first: h
-    multiplied by ``coarsening`` per level, the subdomain size d kept while a coarse edge
-    keeps at least two segments and raised to 2 h there (d_k = max(d, 2 h_k)), while the
-    level has at least ``min_dofs`` dofs (estimated as N / coarsening^(2k) from the
-    closed-form sizes). None for a mesh file (its h is not the configuration's)."""
+    """The configurations of the coarser levels of a nested solve of a configuration whose
+    mesh has ``dofs`` dofs, coarsest first: h multiplied by ``coarsening`` per level, the
+    subdomain size d kept while a coarse edge keeps at least two segments and raised to
+    2 h there (d_k = max(d, 2 h_k)), while the level has at least ``min_dofs`` dofs
+    (estimated as dofs / coarsening^(2k)). None for a mesh file (it has no h to coarsen)."""
     g = config["geometry"]
-    size = planned_size(config)
-    if size is None:
+    if g["mesh"]:
         return []
     levels, k = [], 1
-    while size.dofs / coarsening ** (2 * k) >= min_dofs:
+    while dofs / coarsening ** (2 * k) >= min_dofs:
         h = g["h"] * coarsening**k
         sizes = {"h": h, "subdomain_size": max(g["subdomain_size"], 2 * h)}
         levels.append({**config, "geometry": {**g, **sizes}})

@@ -103,7 +103,9 @@ def run_solver(
             last.error,
         )
     records = None
-    coarser = [_level_builder(comm, c) for c in coarser_configs(config)] if options.nested else []
+    dofs = problem.V.dofmap.index_map.size_global
+    levels = coarser_configs(config, dofs) if options.nested else []
+    coarser = [_level_builder(comm, c) for c in levels]
     if coarser:  # a nested solve needs a coarser level (none for small or imported meshes)
         solution, nested = solve_nested(
             problem,
