@@ -59,6 +59,9 @@ _LAID_OUT = ("boundary.png", "history.png")
 
 #: The resolution of the figures.
 _DPI = 110
+#: PNG encoding: zlib level 1 (the same pixels as the default 6 in half the time, files
+#: ~25% larger; docs/design/speed.md, "Outputs (helper, 2026-12-02)").
+_PNG = {"compress_level": 1}
 
 #: Pixels along the longer side of the images of u_h (about twice the drawn size at 110 dpi).
 RASTER_PIXELS = 600
@@ -520,7 +523,8 @@ def write_plots(out: Path, fields: dict, history: Sequence, *, tol: float) -> li
             continue
         bbox = None if name in _LAID_OUT else _tight_extent(fig)  # no second layout draw
         atomic_write(
-            Path(out) / name, lambda p: fig.savefig(p, dpi=_DPI, bbox_inches=bbox, format="png")
+            Path(out) / name,
+            lambda p: fig.savefig(p, dpi=_DPI, bbox_inches=bbox, format="png", pil_kwargs=_PNG),
         )
         plt.close(fig)
         written.append(name)
