@@ -10,13 +10,19 @@ machine, CPU time much less; the two agree on an idle one), the peak resident
 memory of the process while the full outputs are written and its rise above the memory
 held before they start (the peak is reset through /proc/self/clear_refs). Last, one
 whole `fembem solve` at --whole cells per side: outputs / total from its summary.json and
-its peak resident memory. No assertions: the numbers go to docs/design/outputs.md.
+its peak resident memory. With --pieces, the seconds of each piece of the last full
+write at the largest mesh (gathering u_h, the flux, the XDMF file, each file written,
+rasterising u_h, each figure built, the exterior potential and its triangulation). No
+assertions: the numbers go to docs/design/outputs.md and docs/design/speed.md.
 
     .venv/bin/python bench/outputs.py [--cells 100 250 500 1000] [--whole 1000] [--repeat 1]
+        [--pieces]
 """
 from __future__ import annotations
 
 import argparse
+import contextlib
+import importlib
 import json
 import os
 import platform
@@ -50,6 +56,19 @@ u0 = "0.1"
 method = "ssn"
 """
 VARIANTS = (("data", False, False), ("xdmf", True, False), ("plots", True, True))
+#: The pieces of the outputs stage that --pieces times: (module, function) pairs.
+PIECES = (
+    ("coupling.io.outputs", "gather_p1"),
+    ("coupling.io.outputs", "boundary_flux"),
+    ("coupling.io.outputs", "_write_xdmf"),
+    ("coupling.io.plots", "rasterise"),
+    ("coupling.io.plots", "_figure_u"),
+    ("coupling.io.plots", "_figure_boundary"),
+    ("coupling.io.plots", "_figure_whole_plane"),
+    ("coupling.io.plots", "_figure_history"),
+    ("bem_cpp", "exterior_potential"),
+    ("coupling.io.plots", "Triangulation"),
+)
 
 
 def write_config(folder: Path, cells: int) -> Path:
@@ -74,9 +93,43 @@ def _reset_peak() -> None:
         refs.write("5")
 
 
-def output_stage(comm: MPI.Comm, folder: Path, cells: int, repeat: int) -> dict:
+@contextlib.contextmanager
+def _timed_pieces(seconds: dict):
+    """Add the seconds of each call of :data:`PIECES` (and of each file written, keyed by
+    its name) to ``seconds`` while the block runs; the functions are restored after."""
+    saved = []
+
+    def patch(module, name, key):
+        original = getattr(module, name)
+
+        def timed(*args, **kwargs):
+            tic = time.perf_counter()
+            try:
+                return original(*args, **kwargs)
+            finally:
+                label = key(args)
+                seconds[label] = seconds.get(label, 0.0) + time.perf_counter() - tic
+
+        saved.append((module, name, original))
+        setattr(module, name, timed)
+
+    for module_name, name in PIECES:
+        patch(importlib.import_module(module_name), name, lambda args, name=name: name)
+    for module_name in ("coupling.io.outputs", "coupling.io.plots"):
+        patch(importlib.import_module(module_name), "atomic_write", lambda a: Path(a[0]).name)
+    try:
+        yield seconds
+    finally:
+        for module, name, original in reversed(saved):
+            setattr(module, name, original)
+
+
+def output_stage(
+    comm: MPI.Comm, folder: Path, cells: int, repeat: int, pieces: dict | None = None
+) -> dict:
     """Solve once, then time each variant of the outputs (fresh folder each; the best of
-    ``repeat`` writes, the peak memory of the first)."""
+    ``repeat`` writes, the peak memory of the first). With ``pieces`` (a dict) the last
+    write of the full outputs records the seconds of its pieces there."""
     config = load_config(write_config(folder, cells))
     check_data_and_material(config)
     problem, options, _ = problem_from_config(comm, config)
@@ -89,10 +142,13 @@ def output_stage(comm: MPI.Comm, folder: Path, cells: int, repeat: int) -> dict:
             out = Path(tempfile.mkdtemp(dir=folder))
             _reset_peak()
             before = _status("VmRSS")
+            last = pieces is not None and name == VARIANTS[-1][0] and k == repeat - 1
+            timers = _timed_pieces(pieces) if last else contextlib.nullcontext()
             tic, cpu = time.perf_counter(), time.process_time()
-            write_outputs(
-                comm, out, problem, result, tol=options.tol, timings={}, xdmf=xdmf, plots=plots
-            )
+            with timers:
+                write_outputs(
+                    comm, out, problem, result, tol=options.tol, timings={}, xdmf=xdmf, plots=plots
+                )
             times.append(time.perf_counter() - tic)
             row["cpu"] = time.process_time() - cpu
             if k == 0:
@@ -126,20 +182,28 @@ def main() -> None:
     parser.add_argument("--cells", type=int, nargs="+", default=[100, 250, 500, 1000])
     parser.add_argument("--whole", type=int, default=1000, help="cells per side (0: skip)")
     parser.add_argument("--repeat", type=int, default=1, help="writes per variant (the best)")
+    parser.add_argument("--pieces", action="store_true", help="time the pieces at the largest N")
     args = parser.parse_args()
     comm = MPI.COMM_WORLD
     print(f"# output stage, one rank ({platform.node()}, load average {os.getloadavg()[0]:.1f})")
     print("| N | data (s) | + xdmf (s) | + plots (s) | outputs (s) | CPU (s) | peak RSS | rise |")
     print("|---|---|---|---|---|---|---|---|")
     with tempfile.TemporaryDirectory() as tmp:
+        pieces = {}
         for cells in args.cells:
-            r = output_stage(comm, Path(tmp), cells, args.repeat)
+            last = args.pieces and cells == max(args.cells)
+            r = output_stage(comm, Path(tmp), cells, args.repeat, pieces if last else None)
             print(
                 f"| {r['N']:,} | {r['data']:.2f} | {r['xdmf']:.2f} | {r['plots']:.2f} "
                 f"| {r['outputs']:.2f} | {r['cpu']:.2f} | {r['peak'] / 1e6:,.0f} MB "
                 f"| {r['rise'] / 1e6:,.0f} MB |",
                 flush=True,
             )
+        if pieces:
+            print(f"\npieces of the last full write at {max(args.cells)} cells per side:\n")
+            print("| piece | s |\n|---|---:|")
+            for label, seconds in pieces.items():
+                print(f"| {label} | {seconds:.3f} |")
         if args.whole and comm.rank == 0:
             w = whole_run(Path(tmp), args.whole)
             t = w["timings"]
