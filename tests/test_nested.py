@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from conftest import run_cli
+from conftest import run_cli, run_mpi
 from coupling.manufactured import manufactured_problem, square_contact
 from coupling.options import SolverOptions
 from coupling.solvers import solve
@@ -104,3 +104,35 @@ def test_cli_nested_option(tmp_path):
     assert not {"adapt.csv", "adapt.png"} & set(s_nested["files"])  # adaptive runs only
     assert s_nested["iterations"] < s_cold["iterations"]
     np.testing.assert_allclose(f_nested["u"], f_cold["u"], atol=1e-12)
+
+
+@pytest.mark.mpi
+def test_nested_run_is_the_same_on_two_ranks(tmp_path):
+    """The default nested solve (levels of 1,089 and 16,641 dofs) on 1 and 2 ranks: the
+    same levels, steps and CG iterations, and u_h to round-off (the runs differ only in
+    the order of reductions; 1e-12 as in tests/test_rank_independence.py)."""
+    config = tmp_path / "c.toml"
+    config.write_text(
+        "[geometry]\nh = 0.00390625\nsubdomain_size = 0.015625\n"
+        'signorini = ["bottom"]\n[material]\nrho = "carstensen"\n'
+        '[data]\nf = "1 + x"\nt0 = "-1"\nu0 = "0.1"\n[output]\nplots = false\nxdmf = false\n'
+    )
+    runs = []
+    for nprocs, out in ((1, tmp_path / "p1"), (2, tmp_path / "p2")):
+        args = ("solve", str(config), "--out", str(out), "--quiet")
+        if nprocs == 1:
+            proc = run_cli(*args)
+            assert proc.returncode == 0, proc.stderr
+        else:
+            run_mpi(nprocs, "-m", "coupling.app.cli", *args)
+        runs.append((json.loads((out / "summary.json").read_text()), np.load(out / "fields.npz")))
+    (s1, f1), (s2, f2) = runs
+    assert s2["mpi_ranks"] == 2
+    key = lambda s: [
+        (lv["dofs"], lv["iterations"], lv["cg_iterations"]) for lv in s["levels"]
+    ]  # noqa: E731
+    assert key(s1) == key(s2) and len(s1["levels"]) == 2
+    assert [h["cg_iterations"] for h in s1["history"]] == [
+        h["cg_iterations"] for h in s2["history"]
+    ]
+    np.testing.assert_allclose(f2["u"], f1["u"], atol=1e-12 * np.abs(f1["u"]).max())
