@@ -123,10 +123,11 @@ SOLVERS: tuple[Solver, ...] = (
         selection=True,
         problems=_SELECTION,
     ),
-    # grid-sequenced SNES VI: "nested" is the hierarchy of the project's nested iteration
-    # (coupling.app.from_config.coarser_configs: h doubled with the subdomains kept, so
-    # one coarser level at d = 4h); "deep" doubles h down to about 1e3 dofs, on coarse
-    # partitions of 2 x 2 subdomains (which only B would need)
+    # grid-sequenced SNES VI: "nested" doubles h with the subdomains kept
+    # (coupling.app.from_config.coarser_configs, keep_subdomains: one coarser level at
+    # d = 4h; the peer's fastest, faster than the project's own 4h levels); "deep" doubles
+    # h down to about 1e3 dofs, on coarse partitions of 2 x 2 subdomains (which only B
+    # would need)
     Solver(
         "snes-seq-substructuring",
         "SNES VI grid-sequenced, CG + substructuring",

@@ -80,18 +80,22 @@ def coarser_configs(
     *,
     coarsening: int = NESTED_COARSENING,
     min_dofs: int = NESTED_MIN_DOFS,
+    keep_subdomains: bool = False,
 ) -> list[dict]:
     """The configurations of the coarser levels of a nested solve of a configuration whose
     mesh has ``dofs`` dofs, coarsest first: h multiplied by ``coarsening`` per level, the
     subdomain size d kept while a coarse edge keeps at least two segments and raised to
-    2 h there (d_k = max(d, 2 h_k)), while the level has at least ``min_dofs`` dofs
-    (estimated as dofs / coarsening^(2k)). None for a mesh file (it has no h to coarsen)."""
+    2 h there (d_k = max(d, 2 h_k); with ``keep_subdomains`` the levels stop there
+    instead), while the level has at least ``min_dofs`` dofs (estimated as
+    dofs / coarsening^(2k)). None for a mesh file (it has no h to coarsen)."""
     g = config["geometry"]
     if g["mesh"]:
         return []
     levels, k = [], 1
     while dofs / coarsening ** (2 * k) >= min_dofs:
         h = g["h"] * coarsening**k
+        if keep_subdomains and 2 * h > g["subdomain_size"]:
+            break
         sizes = {"h": h, "subdomain_size": max(g["subdomain_size"], 2 * h)}
         levels.append({**config, "geometry": {**g, **sizes}})
         k += 1
