@@ -27,7 +27,8 @@ T = TypeVar("T")
 
 
 def threads_per_rank(comm: MPI.Comm) -> int:
-    """BLAS/OpenMP threads for each rank: the cores of the node shared by its ranks.
+    """BLAS/OpenMP threads for each rank: the cores of the node shared by its ranks, at
+    most ``OMP_NUM_THREADS`` when the environment sets it (the user's limit holds).
 
     An application running under mpirun (the ``fembem`` command, the benchmarks) limits
     the thread pools to this, ``threadpoolctl.threadpool_limits(threads_per_rank(comm))``,
@@ -36,7 +37,9 @@ def threads_per_rank(comm: MPI.Comm) -> int:
     node = comm.Split_type(MPI.COMM_TYPE_SHARED)
     ranks_here = node.size
     node.Free()
-    return max(1, len(os.sched_getaffinity(0)) // ranks_here)
+    cores = max(1, len(os.sched_getaffinity(0)) // ranks_here)
+    limit = os.environ.get("OMP_NUM_THREADS", "").strip()
+    return min(cores, int(limit)) if limit.isdigit() and int(limit) > 0 else cores
 
 
 def run_on_root(
