@@ -23,6 +23,7 @@ import json
 import os
 import shutil
 import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Callable, Mapping
 
@@ -164,10 +165,18 @@ def write_outputs(
             flux_space=np.array(problem.flux_space),
             **({} if cells is None else {"indicators": cells}),
         )
-        atomic_write(out / "fields.npz", lambda p: np.savez(p, **fields))  # p ends in .npz
+
+        # fields.npz is written by a thread while the plots are drawn (the file writes
+        # release the GIL; no MPI call); leaving the block waits for it, also when the
+        # plots raise (KeyboardInterrupt included), so no file is left half-written
+        with ThreadPoolExecutor(max_workers=1) as pool:
+            data = pool.submit(
+                atomic_write, out / "fields.npz", lambda p: np.savez(p, **fields)  # p: .npz
+            )
+            if plots:
+                names += write_plots(out, fields, result.history, tol=tol)
+            data.result()  # its error, if any
         names.append("fields.npz")
-        if plots:
-            names += write_plots(out, fields, result.history, tol=tol)
         if levels:
             names += write_levels(out, levels, adaptive=adaptive, plot=plots)
         stages = {**timings, "outputs": time.perf_counter() - tic}
