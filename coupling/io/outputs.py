@@ -32,7 +32,7 @@ from mpi4py import MPI
 
 from coupling.io.atomic import atomic_write
 from coupling.io.levels import LEVEL_FILES, write_levels
-from coupling.io.plots import PLOT_FILES, write_plots
+from coupling.io.plots import PLOT_FILES, exterior_samples, write_plots
 from coupling.io.quantities import boundary_flux, complementarity, log_coefficient
 from fem_py.mesh_facts import mesh_facts
 from fem_py.numbering import gather_cells, gather_p1
@@ -148,60 +148,66 @@ def write_outputs(
     cells = None if indicators is None else gather_cells(problem.V, np.sqrt(indicators))
     pressure = boundary_flux(problem, result)
     facts = mesh_facts(problem.domain) if facts is None else facts  # collective
-    written = []
-    if xdmf:
-        _write_xdmf(comm, out, problem, result)
-        written += ["solution.xdmf", "solution.h5"]
+    on_gamma = dict(
+        boundary_fields(problem, result, pressure),
+        a=np.array(problem.a),
+        flux_space=np.array(problem.flux_space),
+    )
+    # Rank 0 hands two jobs that release the GIL and make no MPI call to threads: u_e on
+    # the whole-plane grid (bem_cpp), started before the collective XDMF write, and
+    # fields.npz (file writes), written while the plots are drawn. Leaving the block
+    # waits for both, also on an error (KeyboardInterrupt included), so no file is left
+    # half-written.
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        exterior = pool.submit(exterior_samples, on_gamma) if plots and comm.rank == 0 else None
+        written = []
+        if xdmf:
+            _write_xdmf(comm, out, problem, result)
+            written += ["solution.xdmf", "solution.h5"]
 
-    def write_gathered() -> list[str]:  # rank 0
-        names = list(written)
-        x, u, triangles = gathered
-        fields = dict(
-            x=x,
-            u=u,
-            triangles=triangles,
-            **boundary_fields(problem, result, pressure),
-            a=np.array(problem.a),
-            flux_space=np.array(problem.flux_space),
-            **({} if cells is None else {"indicators": cells}),
-        )
-
-        # fields.npz is written by a thread while the plots are drawn (the file writes
-        # release the GIL; no MPI call); leaving the block waits for it, also when the
-        # plots raise (KeyboardInterrupt included), so no file is left half-written
-        with ThreadPoolExecutor(max_workers=1) as pool:
+        def write_gathered() -> list[str]:  # rank 0
+            names = list(written)
+            x, u, triangles = gathered
+            fields = dict(
+                x=x,
+                u=u,
+                triangles=triangles,
+                **on_gamma,
+                **({} if cells is None else {"indicators": cells}),
+            )
             data = pool.submit(
                 atomic_write, out / "fields.npz", lambda p: np.savez(p, **fields)  # p: .npz
             )
             if plots:
-                names += write_plots(out, fields, result.history, tol=tol)
+                names += write_plots(out, fields, result.history, tol=tol, exterior=exterior.result)
             data.result()  # its error, if any
-        names.append("fields.npz")
-        if levels:
-            names += write_levels(out, levels, adaptive=adaptive, plot=plots)
-        stages = {**timings, "outputs": time.perf_counter() - tic}
-        if total is not None:
-            stages["total"] = total()
-        record = {**summary(problem, result, stages, pressure), **facts}
-        if estimator is not None:  # the global a posteriori estimator eta
-            record["estimator"] = estimator
-        if error is not None:  # the energy error against the exact solution
-            record["error"] = error
-        if levels is not None:  # a nested or adaptive solve: one record per level
-            record["levels"] = levels
-        if config is not None:
-            record["config"] = config
-        record["files"] = sorted(names + ["summary.json"])
-        # last, so that a summary.json names a complete set of files
-        atomic_write(
-            out / "summary.json", lambda p: p.write_text(json.dumps(record, indent=2, default=str))
-        )
-        names.append("summary.json")
-        for name in set(DATA_FILES + PLOT_FILES + LEVEL_FILES) - set(names):
-            (out / name).unlink(missing_ok=True)
-        return names
+            names.append("fields.npz")
+            if levels:
+                names += write_levels(out, levels, adaptive=adaptive, plot=plots)
+            stages = {**timings, "outputs": time.perf_counter() - tic}
+            if total is not None:
+                stages["total"] = total()
+            record = {**summary(problem, result, stages, pressure), **facts}
+            if estimator is not None:  # the global a posteriori estimator eta
+                record["estimator"] = estimator
+            if error is not None:  # the energy error against the exact solution
+                record["error"] = error
+            if levels is not None:  # a nested or adaptive solve: one record per level
+                record["levels"] = levels
+            if config is not None:
+                record["config"] = config
+            record["files"] = sorted(names + ["summary.json"])
+            # last, so that a summary.json names a complete set of files
+            atomic_write(
+                out / "summary.json",
+                lambda p: p.write_text(json.dumps(record, indent=2, default=str)),
+            )
+            names.append("summary.json")
+            for name in set(DATA_FILES + PLOT_FILES + LEVEL_FILES) - set(names):
+                (out / name).unlink(missing_ok=True)
+            return names
 
-    return broadcast_from_root(comm, write_gathered)  # a write error ends every rank
+        return broadcast_from_root(comm, write_gathered)  # a write error ends every rank
 
 
 def _write_xdmf(comm: MPI.Comm, out: Path, problem, result) -> None:

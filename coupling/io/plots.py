@@ -23,7 +23,7 @@ The problem is dimensionless, so the axes carry no units.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import NamedTuple, Sequence
+from typing import Callable, NamedTuple, Sequence
 
 import matplotlib
 
@@ -47,6 +47,8 @@ __all__ = [
     "rasterise",
     "coarsen",
     "write_plots",
+    "exterior_samples",
+    "ExteriorSamples",
     "true_runs",
 ]
 
@@ -375,19 +377,27 @@ def _figure_boundary(fields: dict):
     return fig
 
 
-def _figure_whole_plane(
-    fields: dict, image: np.ma.MaskedArray, u_grid: PixelGrid, resolution: int = 121
-):
-    """u_h inside and u_e outside, rasterised on one pixel grid. Outside, u_e is
-    evaluated on a coarse grid and at the boundary nodes (its discrete trace ``ue``) and
-    interpolated linearly on their Delaunay triangulation, so the colour reaches Gamma
-    with no band: exterior_potential integrates the panels near a point analytically and
-    is accurate at any distance from Gamma (its docstring); grid points closer than h/20
-    are left out only to avoid slivers. u_h (``image`` on ``u_grid``, coarsened to the
-    plane's pixels) covers every pixel whose centre is in Omega."""
-    nodes = fields["boundary_x"]
+class ExteriorSamples(NamedTuple):
+    """u_e at the points of the whole-plane grid outside Omega (:func:`exterior_samples`)."""
+
+    points: np.ndarray  # (m, 2)
+    ue: np.ndarray  # (m,)
+
+
+def _plane_square(nodes: np.ndarray) -> tuple[np.ndarray, float]:
+    """(centre, half side) of the square of whole_plane.png: Omega's box, twice as wide."""
     lo, hi = nodes.min(axis=0), nodes.max(axis=0)
-    centre, half = 0.5 * (lo + hi), (hi - lo).max()
+    return 0.5 * (lo + hi), float((hi - lo).max())
+
+
+def exterior_samples(fields: dict, resolution: int = 121) -> ExteriorSamples:
+    """u_e (the representation formula, METHOD.md section 2) on the ``resolution`` x
+    ``resolution`` grid of whole_plane.png, at its points outside Omega farther than
+    h/20 from Gamma, from the boundary arrays of ``fields`` (``boundary_x``, ``ue``,
+    ``dn_ue``, ``a``, ``flux_space``). bem_cpp releases the GIL while it evaluates, so
+    :func:`coupling.io.outputs.write_outputs` runs this in a thread."""
+    nodes = fields["boundary_x"]
+    centre, half = _plane_square(nodes)
     g = np.linspace(-1, 1, resolution) * half
     X, Y = np.meshgrid(centre[0] + g, centre[1] + g)
     grid = np.column_stack([X.ravel(), Y.ravel()])
@@ -409,8 +419,25 @@ def _figure_whole_plane(
         compression="auto",
         tol=HMATRIX_TOL,
     )
+    return ExteriorSamples(grid, ue_grid)
+
+
+def _figure_whole_plane(
+    fields: dict, image: np.ma.MaskedArray, u_grid: PixelGrid, samples: ExteriorSamples
+):
+    """u_h inside and u_e outside, rasterised on one pixel grid. Outside, u_e is
+    evaluated on a coarse grid (``samples``, :func:`exterior_samples`) and at the boundary
+    nodes (its discrete trace ``ue``) and interpolated linearly on their Delaunay
+    triangulation, so the colour reaches Gamma with no band: exterior_potential
+    integrates the panels near a point analytically and is accurate at any distance from
+    Gamma (its docstring); grid points closer than h/20 are left out only to avoid
+    slivers. u_h (``image`` on ``u_grid``, coarsened to the plane's pixels) covers every
+    pixel whose centre is in Omega."""
+    nodes = fields["boundary_x"]
+    centre, half = _plane_square(nodes)
+    grid = samples.points
     points = np.vstack([grid, nodes])
-    ue = np.concatenate([ue_grid, fields["ue"]])
+    ue = np.concatenate([samples.ue, fields["ue"]])
     ext = Triangulation(points[:, 0], points[:, 1])
     # Omega is covered by the triangles of boundary nodes alone whose centroid is inside;
     # a triangle with a grid vertex is exterior even where it cuts a corner of Omega
@@ -444,7 +471,11 @@ def _figure_whole_plane(
     fig.colorbar(im, ax=ax, shrink=0.85, label=r"$u_h$ in $\Omega$, $u_e$ outside")
     _draw_boundary(ax, fields)
     ax.set(
-        aspect="equal", xlabel="$x$", ylabel="$y$", xlim=(X.min(), X.max()), ylim=(Y.min(), Y.max())
+        aspect="equal",
+        xlabel="$x$",
+        ylabel="$y$",
+        xlim=(centre[0] - half, centre[0] + half),
+        ylim=(centre[1] - half, centre[1] + half),
     )
     ax.set_title(
         r"Whole plane: $u_h$ in $\Omega$, $u_e$ (representation formula) outside;"
@@ -493,7 +524,14 @@ def _tight_extent(fig) -> Bbox:
     return box.padded(plt.rcParams["savefig.pad_inches"])
 
 
-def write_plots(out: Path, fields: dict, history: Sequence, *, tol: float) -> list[str]:
+def write_plots(
+    out: Path,
+    fields: dict,
+    history: Sequence,
+    *,
+    tol: float,
+    exterior: Callable[[], ExteriorSamples] | None = None,
+) -> list[str]:
     """Write the figures of :data:`PLOT_FILES` into ``out`` and return their names.
 
     Parameters
@@ -505,14 +543,19 @@ def write_plots(out: Path, fields: dict, history: Sequence, *, tol: float) -> li
         ``contact``); no history.png when empty.
     tol
         The PGPM tolerance, drawn in history.png.
+    exterior
+        Returns the samples of u_e of whole_plane.png (:func:`exterior_samples` of
+        ``fields``, e.g. computed meanwhile in a thread); default: computed here.
     """
+    if exterior is None:
+        exterior = lambda: exterior_samples(fields)  # noqa: E731
     x = fields["x"]
     grid = PixelGrid.covering(x.min(axis=0), x.max(axis=0))
     image = rasterise(x, fields["triangles"], fields["u"], grid)  # for both figures of u_h
     figures = {
         "u.png": lambda: _figure_u(fields, image, grid),
         "boundary.png": lambda: _figure_boundary(fields),
-        "whole_plane.png": lambda: _figure_whole_plane(fields, image, grid),
+        "whole_plane.png": lambda: _figure_whole_plane(fields, image, grid, exterior()),
         "history.png": lambda: _figure_history(history, tol) if len(history) else None,
     }
     written = []
