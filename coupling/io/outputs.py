@@ -153,13 +153,28 @@ def write_outputs(
         a=np.array(problem.a),
         flux_space=np.array(problem.flux_space),
     )
-    # Rank 0 hands two jobs that release the GIL and make no MPI call to threads: u_e on
-    # the whole-plane grid (bem_cpp), started before the collective XDMF write, and
-    # fields.npz (file writes), written while the plots are drawn. Leaving the block
-    # waits for both, also on an error (KeyboardInterrupt included), so no file is left
+    fields = None
+    if comm.rank == 0:
+        x, u, triangles = gathered
+        fields = dict(
+            x=x,
+            u=u,
+            triangles=triangles,
+            **on_gamma,
+            **({} if cells is None else {"indicators": cells}),
+        )
+    # Rank 0 hands two jobs that release the GIL and make no MPI call to threads, both
+    # started before the collective XDMF write (which holds the GIL): u_e on the
+    # whole-plane grid (bem_cpp) and fields.npz (file writes). Leaving the block waits
+    # for both, also on an error (KeyboardInterrupt included), so no file is left
     # half-written.
     with ThreadPoolExecutor(max_workers=2) as pool:
-        exterior = pool.submit(exterior_samples, on_gamma) if plots and comm.rank == 0 else None
+        exterior = data = None
+        if comm.rank == 0:
+            exterior = pool.submit(exterior_samples, on_gamma) if plots else None
+            data = pool.submit(
+                atomic_write, out / "fields.npz", lambda p: np.savez(p, **fields)  # p: .npz
+            )
         written = []
         if xdmf:
             _write_xdmf(comm, out, problem, result)
@@ -167,17 +182,6 @@ def write_outputs(
 
         def write_gathered() -> list[str]:  # rank 0
             names = list(written)
-            x, u, triangles = gathered
-            fields = dict(
-                x=x,
-                u=u,
-                triangles=triangles,
-                **on_gamma,
-                **({} if cells is None else {"indicators": cells}),
-            )
-            data = pool.submit(
-                atomic_write, out / "fields.npz", lambda p: np.savez(p, **fields)  # p: .npz
-            )
             if plots:
                 names += write_plots(out, fields, result.history, tol=tol, exterior=exterior.result)
             data.result()  # its error, if any
