@@ -87,7 +87,7 @@ def coarser_configs(
     subdomain size d kept while a coarse edge keeps at least two segments and raised to
     2 h there (d_k = max(d, 2 h_k); with ``keep_subdomains`` the levels stop there
     instead), while the level has at least ``min_dofs`` dofs (estimated as
-    dofs / coarsening^(2k)). None for a mesh file (it has no h to coarsen)."""
+    dofs / coarsening^(2k)). No levels for a mesh file (it has no h to coarsen)."""
     g = config["geometry"]
     if g["mesh"]:
         return []
