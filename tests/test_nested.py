@@ -16,6 +16,8 @@ import pytest
 from mpi4py import MPI
 
 from conftest import run_cli, run_mpi
+from coupling.app.config import parse_config
+from coupling.app.from_config import coarser_configs
 from coupling.manufactured import manufactured_problem, square_contact
 from coupling.options import SolverOptions
 from coupling.solvers import solve
@@ -136,3 +138,26 @@ def test_nested_run_is_the_same_on_two_ranks(tmp_path):
         h["cg_iterations"] for h in s2["history"]
     ]
     np.testing.assert_allclose(f2["u"], f1["u"], atol=1e-12 * np.abs(f1["u"]).max())
+
+
+@pytest.mark.parametrize("subdomains_on_arc,levels", [(2, 1), (3, 0)])
+def test_coarser_levels_stop_where_their_geometry_is_invalid(subdomains_on_arc, levels):
+    """The 4h level raises d = 4h to 8h: a Signorini arc over an odd number of the given
+    subdomains ends between the coarse level's grid vertices, so that level is dropped
+    (the solve is cold) instead of failing a run the fine mesh allows."""
+    h = 0.5 / 128
+    d = 4 * h
+    end = -0.25 + subdomains_on_arc * d
+    config = parse_config(
+        {
+            "geometry": {
+                "h": h,
+                "subdomain_size": d,
+                "signorini": [[[-0.25, -0.25], [end, -0.25]]],
+            }
+        }
+    )
+    coarser = coarser_configs(config, 129**2)
+    assert len(coarser) == levels
+    for level in coarser:
+        assert level["geometry"]["subdomain_size"] == 2 * level["geometry"]["h"] == 8 * h

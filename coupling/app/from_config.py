@@ -87,7 +87,10 @@ def coarser_configs(
     subdomain size d kept while a coarse edge keeps at least two segments and raised to
     2 h there (d_k = max(d, 2 h_k); with ``keep_subdomains`` the levels stop there
     instead), while the level has at least ``min_dofs`` dofs (estimated as
-    dofs / coarsening^(2k)). No levels for a mesh file (it has no h to coarsen)."""
+    dofs / coarsening^(2k)) and its geometry is valid (the levels stop at the first that
+    is not, e.g. a Signorini arc end on the given subdomains' grid but not on the raised
+    d's: the solve is then cold, never an error the fine mesh does not raise). No levels
+    for a mesh file (it has no h to coarsen)."""
     g = config["geometry"]
     if g["mesh"]:
         return []
@@ -97,7 +100,12 @@ def coarser_configs(
         if keep_subdomains and 2 * h > g["subdomain_size"]:
             break
         sizes = {"h": h, "subdomain_size": max(g["subdomain_size"], 2 * h)}
-        levels.append({**config, "geometry": {**g, **sizes}})
+        level = {**config, "geometry": {**g, **sizes}}
+        try:
+            planned_size(level)  # the checks of build_domain, without a mesh
+        except ValueError:
+            break
+        levels.append(level)
         k += 1
     return levels[::-1]
 
