@@ -356,24 +356,13 @@ def _read_points(path: Path) -> np.ndarray:
 
 
 def _exterior(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
-    import bem_cpp
-
+    from coupling.io.evaluation import exterior_from_fields
     from coupling.io.outputs import load_fields
-    from coupling.options import HMATRIX_TOL
 
     fields = load_fields(Path(args.result_dir))
     points = _read_points(Path(args.points))
     try:
-        ue = bem_cpp.exterior_potential(
-            fields["boundary_x"],
-            fields["ue"],
-            fields["dn_ue"],
-            points,
-            a=float(fields["a"]),
-            flux=str(fields["flux_space"]),
-            compression="auto",
-            tol=HMATRIX_TOL,
-        )
+        ue = exterior_from_fields(fields, points)
     except ValueError as err:  # a point inside Omega or on Gamma
         raise ValueError(f"--points {args.points}: {err}") from None
     table = "x,y,ue\n" + "".join(f"{x:.17g},{y:.17g},{v:.17g}\n" for (x, y), v in zip(points, ue))

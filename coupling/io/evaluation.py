@@ -20,11 +20,29 @@ from coupling.options import HMATRIX_TOL
 from fem_py.locate import interpolate_p1
 from fem_py.polyline import closest_on_polygon
 
-__all__ = ["evaluate", "ON_GAMMA"]
+__all__ = ["evaluate", "exterior_from_fields", "ON_GAMMA"]
 
 #: points closer to Gamma than this times its bounding-box diameter count as on Gamma
 #: (10 times the distance below which the representation formula refuses a point)
 ON_GAMMA = 1e-11
+
+
+def exterior_from_fields(fields: dict, points: np.ndarray) -> np.ndarray:
+    """u_e at exterior ``points`` (m, 2) by the representation formula (METHOD.md section
+    2) from the boundary arrays of a run's fields (``boundary_x``, ``ue``, ``dn_ue``,
+    ``a``, ``flux_space``), compressed above bem_cpp's measured crossover (tol
+    :data:`coupling.options.HMATRIX_TOL`); bem_cpp's ValueError for a point inside Omega
+    or on Gamma. bem_cpp releases the GIL while it evaluates."""
+    return bem_cpp.exterior_potential(
+        fields["boundary_x"],
+        fields["ue"],
+        fields["dn_ue"],
+        points,
+        a=float(fields["a"]),
+        flux=str(fields["flux_space"]),
+        compression="auto",
+        tol=HMATRIX_TOL,
+    )
 
 
 def evaluate(fields: dict, points: np.ndarray) -> dict[str, np.ndarray]:
@@ -46,15 +64,6 @@ def evaluate(fields: dict, points: np.ndarray) -> dict[str, np.ndarray]:
     for out, key in ((u, "boundary_u"), (ue, "ue")):
         out[on] = (1.0 - t[on]) * fields[key][seg[on]] + t[on] * fields[key][nxt]
     if outside.any():
-        ue[outside] = bem_cpp.exterior_potential(
-            nodes,
-            fields["ue"],
-            fields["dn_ue"],
-            points[outside],
-            a=float(fields["a"]),
-            flux=str(fields["flux_space"]),
-            compression="auto",
-            tol=HMATRIX_TOL,
-        )
+        ue[outside] = exterior_from_fields(fields, points[outside])
     where = np.where(inside, "inside", np.where(on, "boundary", "outside"))
     return {"where": where, "u": u, "ue": ue}

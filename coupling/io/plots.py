@@ -35,9 +35,8 @@ from matplotlib.path import Path as PolygonPath  # noqa: E402
 from matplotlib.transforms import Bbox  # noqa: E402
 from matplotlib.tri import Triangulation  # noqa: E402
 
-import bem_cpp  # noqa: E402
 from coupling.io.atomic import atomic_write  # noqa: E402
-from coupling.options import HMATRIX_TOL  # noqa: E402
+from coupling.io.evaluation import exterior_from_fields  # noqa: E402
 from fem_py.polyline import arc_length, closest_on_polygon  # noqa: E402
 
 __all__ = [
@@ -409,17 +408,7 @@ def exterior_samples(fields: dict, resolution: int = 121) -> ExteriorSamples:
     outside = ~PolygonPath(corners).contains_points(grid)
     outside[outside] = closest_on_polygon(grid[outside], corners)[0] > h / 20
     grid = grid[outside]
-    ue_grid = bem_cpp.exterior_potential(
-        nodes,
-        fields["ue"],
-        fields["dn_ue"],
-        grid,
-        a=float(fields["a"]),
-        flux=str(fields["flux_space"]),
-        compression="auto",
-        tol=HMATRIX_TOL,
-    )
-    return ExteriorSamples(grid, ue_grid)
+    return ExteriorSamples(grid, exterior_from_fields(fields, grid))
 
 
 def _figure_whole_plane(
