@@ -14,15 +14,23 @@ __all__ = ["locate", "interpolate_p1", "lattice_weights"]
 LOCATE_MAX_CANDIDATES = 64
 
 
+def _affine_inverses(corners: np.ndarray) -> np.ndarray:
+    """(T, 4): the rows of inverse(b - a, c - a) of every triangle abc (``corners``
+    (T, 3, 2)), so that (lambda_1, lambda_2) = inverse (p - a)."""
+    e1, e2 = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
+    det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+    return np.stack([e2[:, 1], -e2[:, 0], -e1[:, 1], e1[:, 0]], axis=1) / det[:, None]
+
+
 def _barycentric(
-    x: np.ndarray, triangles: np.ndarray, cells: np.ndarray, points: np.ndarray
+    corners: np.ndarray, inverses: np.ndarray, cells: np.ndarray, points: np.ndarray
 ) -> np.ndarray:
-    """Barycentric coordinates (..., 3) of points (..., 2) in the triangles ``cells``."""
-    a, b, c = (x[triangles[cells, i]] for i in range(3))
-    v0, v1, v2 = b - a, c - a, points - a
-    det = v0[..., 0] * v1[..., 1] - v0[..., 1] * v1[..., 0]
-    l1 = (v2[..., 0] * v1[..., 1] - v2[..., 1] * v1[..., 0]) / det
-    l2 = (v0[..., 0] * v2[..., 1] - v0[..., 1] * v2[..., 0]) / det
+    """Barycentric coordinates (..., 3) of points (..., 2) in the triangles ``cells``
+    (...) (:func:`_affine_inverses` of the mesh's ``corners``)."""
+    v = points - corners[cells, 0]
+    m = inverses[cells]
+    l1 = m[..., 0] * v[..., 0] + m[..., 1] * v[..., 1]
+    l2 = m[..., 2] * v[..., 0] + m[..., 3] * v[..., 1]
     return np.stack([1.0 - l1 - l2, l1, l2], axis=-1)
 
 
@@ -47,6 +55,7 @@ def locate(
     if len(points) == 0 or len(triangles) == 0:
         return cell, bary
     corners = x[triangles]  # (T, 3, 2)
+    inverses = _affine_inverses(corners)
     lo, hi = corners.min(axis=1), corners.max(axis=1)
     size = max(float((hi - lo).max()), 1e-300)
     origin = lo.min(axis=0)
@@ -63,12 +72,8 @@ def locate(
     owners = owners[order]
     counts = np.bincount(squares, minlength=int(shape.prod()))
     if counts.max() > LOCATE_MAX_CANDIDATES:
-        return _locate_nearest(x, triangles, points, tol)
+        return _locate_nearest(corners, inverses, points, tol)
     starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    # the affine map of each triangle: lambda_(1,2) = inverse(b - a, c - a) (p - a)
-    e1, e2 = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
-    det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
-    inverse = np.stack([e2[:, 1], -e2[:, 0], -e1[:, 1], e1[:, 0]], axis=1) / det[:, None]
     with np.errstate(over="ignore", invalid="ignore"):
         ij = np.floor((points - origin) / size)
     todo = np.flatnonzero(((ij >= 0) & (ij < shape)).all(axis=1))  # NaN: outside
@@ -79,11 +84,7 @@ def locate(
         keep = count > k
         todo, start, count = todo[keep], start[keep], count[keep]
         cand = owners[start + k]
-        v = points[todo] - corners[cand, 0]
-        m = inverse[cand]
-        l1 = m[:, 0] * v[:, 0] + m[:, 1] * v[:, 1]
-        l2 = m[:, 2] * v[:, 0] + m[:, 3] * v[:, 1]
-        lam = np.stack([1.0 - l1 - l2, l1, l2], axis=1)
+        lam = _barycentric(corners, inverses, cand, points[todo])
         hit = (lam >= -tol).all(axis=1)
         cell[todo[hit]] = cand[hit]
         bary[todo[hit]] = lam[hit]
@@ -94,19 +95,20 @@ def locate(
 
 
 def _locate_nearest(
-    x: np.ndarray, triangles: np.ndarray, points: np.ndarray, tol: float
+    corners: np.ndarray, inverses: np.ndarray, points: np.ndarray, tol: float
 ) -> tuple[np.ndarray, np.ndarray]:
     """:func:`locate` with the candidates from a k-d tree of the triangle centroids: the
     8, then 32, then 128 nearest for the points not found yet."""
     cell = np.full(len(points), -1, dtype=np.int64)
     bary = np.zeros((len(points), 3))
-    tree = cKDTree(x[triangles].mean(axis=1))
+    n_triangles = len(corners)
+    tree = cKDTree(corners.mean(axis=1))
     todo = np.arange(len(points))
     for k in (8, 32, 128):
-        k = min(k, len(triangles))
+        k = min(k, n_triangles)
         _, cand = tree.query(points[todo], k=k)
-        cand = np.minimum(cand.reshape(len(todo), k), len(triangles) - 1)  # n: no neighbour
-        lam = _barycentric(x, triangles, cand, points[todo][:, None, :])
+        cand = np.minimum(cand.reshape(len(todo), k), n_triangles - 1)  # n: no neighbour
+        lam = _barycentric(corners, inverses, cand, points[todo][:, None, :])
         inside = (lam >= -tol).all(axis=2)
         hit = inside.any(axis=1)
         first = inside.argmax(axis=1)
@@ -114,7 +116,7 @@ def _locate_nearest(
         cell[todo[rows]] = cand[rows, first[rows]]
         bary[todo[rows]] = lam[rows, first[rows]]
         todo = todo[~hit]
-        if todo.size == 0 or k == len(triangles):
+        if todo.size == 0 or k == n_triangles:
             break
     return cell, bary
 
