@@ -27,10 +27,10 @@ exact projection), so the iteration stops as soon as that step meets the PGPM ru
 would accept, without the confirming Newton step the rule on the Newton step itself
 would take. After a Newton step of relative B-norm at most SSN_JACOBIAN_REUSE_STEP the
 next step keeps the Jacobian (D^2 G is Lipschitz in u, so the stale Jacobian perturbs
-the step by a relative O(that norm), far below the CG tolerance of such a late step).
-Globalisation: backtracking on J_h along the
-projected path (u + a du, max(0, phi + a dphi)); a step that does not decrease J_h after
-30 halvings is replaced by a PGPM step. A few PGPM steps start the iteration.
+the step by a relative O(that norm), about the CG tolerance of such a late step).
+Globalisation: backtracking on J_h along the projected path (u + a du, max(0, phi + a
+dphi)); a step that does not decrease J_h after 30 halvings is replaced by a PGPM step.
+A few PGPM steps start the iteration.
 
 The active set is predicted in the metric M_s, by the M_s projection of
 phi - tau M_s^{-1} grad_phi J (the active set of a PGPM step), not by the
