@@ -62,12 +62,13 @@ PIECES = (
     ("coupling.io.outputs", "boundary_flux"),
     ("coupling.io.outputs", "_write_xdmf"),
     ("coupling.io.plots", "rasterise"),
-    ("coupling.io.plots", "_figure_u"),
-    ("coupling.io.plots", "_figure_boundary"),
-    ("coupling.io.plots", "_figure_whole_plane"),
-    ("coupling.io.plots", "_figure_history"),
+    ("coupling.io.figures", "render"),
+    ("coupling.io.figures", "_figure_u"),
+    ("coupling.io.figures", "_figure_boundary"),
+    ("coupling.io.figures", "_figure_whole_plane"),
+    ("coupling.io.figures", "_figure_history"),
     ("bem_cpp", "exterior_potential"),
-    ("coupling.io.plots", "Triangulation"),
+    ("coupling.io.figures", "Triangulation"),
 )
 
 

@@ -3,7 +3,13 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["segment_lengths", "arc_length", "closest_on_polygon", "coarsened_polygon"]
+__all__ = [
+    "segment_lengths",
+    "arc_length",
+    "closest_on_polygon",
+    "coarsened_polygon",
+    "polygon_corners",
+]
 
 
 def segment_lengths(points: np.ndarray) -> np.ndarray:
@@ -15,6 +21,15 @@ def arc_length(points: np.ndarray) -> np.ndarray:
     """Cumulative arc length along polylines, starting at 0: (..., k, dim) -> (..., k)."""
     seg = segment_lengths(points)
     return np.concatenate([np.zeros(seg.shape[:-1] + (1,)), np.cumsum(seg, axis=-1)], axis=-1)
+
+
+def polygon_corners(nodes: np.ndarray) -> np.ndarray:
+    """Indices of the nodes (k, 2) of a closed polygon where it turns (its corners; the
+    other nodes lie on straight sides)."""
+    t = np.diff(np.concatenate([nodes, nodes[:1]]), axis=0)
+    t /= np.linalg.norm(t, axis=1)[:, None]
+    t_in = np.roll(t, 1, axis=0)
+    return np.flatnonzero(np.abs(t_in[:, 0] * t[:, 1] - t_in[:, 1] * t[:, 0]) > 1e-8)
 
 
 def closest_on_polygon(

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from conftest import run_cli, run_mpi
-from coupling.io.plots import PLOT_FILES, RASTER_PIXELS, PixelGrid, coarsen, rasterise
+from coupling.io.figure_data import PLOT_FILES, RASTER_PIXELS, PixelGrid, coarsen, rasterise
 
 FEMBEM = str(Path(sys.executable).parent / "fembem")
 

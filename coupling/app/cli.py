@@ -225,6 +225,11 @@ def _solve(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
 
     comm = MPI.COMM_WORLD
     config = _problem_inputs(args)
+    from coupling.io.figure_worker import FigureWorker
+
+    plots = config["output"]["plots"]
+    # the figure process starts first, to import matplotlib while the run imports and computes
+    worker = FigureWorker() if plots and comm.rank == 0 else None
     from coupling.app.advice import arc_warnings, material_warnings
     from coupling.app.from_config import domain_from_config, planned_size, problem_on_domain
     from coupling.app.progress import ProgressMonitor
@@ -234,7 +239,7 @@ def _solve(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
     from fem_py.mesh_facts import mesh_facts
     from fem_py.polyline import arc_length
     from coupling.io.atomic import staged_output_dir
-    from coupling.io.outputs import write_outputs
+    from coupling.io.outputs import RunOutputs
     from coupling.timing import process_seconds
 
     out = Path(args.out if args.out is not None else config["output"]["dir"])
@@ -244,7 +249,15 @@ def _solve(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
     kind = config["solver"]["boundary_operator"]
     if size is not None:  # closed form: refuse before anything is built
         check_memory(size, comm.size, plots=config["output"]["plots"], boundary_operator=kind)
-    with staged_output_dir(comm, out, force=args.force) as staging:
+    with staged_output_dir(comm, out, force=args.force) as staging, RunOutputs(
+        comm,
+        staging,
+        tol=config["solver"]["tol"],
+        xdmf=config["output"]["xdmf"],
+        plots=plots,
+        indicators=config["output"]["indicators"],
+        worker=worker,
+    ) as outputs:
         interrupts.staging = staging  # from here the first rank to claim it reports
         startup = process_seconds()
         if monitor is not None:
@@ -271,21 +284,16 @@ def _solve(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
         facts = mesh_facts(domain)  # collective
         if monitor is not None:
             monitor.problem(problem, options, arc_lengths, facts)
-        run = run_solver(comm, config, domain, problem, options, timings, monitor)
+        run = run_solver(
+            comm, config, domain, problem, options, timings, monitor, after_solve=outputs.start
+        )
         result = run.solution
         if monitor is not None:
             monitor.finished(result)
             monitor.stage(f"writing outputs to {out}")
-        write_outputs(
-            comm,
-            staging,
-            run.problem,
-            result,
-            tol=options.tol,
+        outputs.finish(
             timings={"startup": startup, **run.timings},
             total=process_seconds,
-            xdmf=config["output"]["xdmf"],
-            plots=config["output"]["plots"],
             config=config,
             levels=run.levels,
             adaptive=config["adapt"]["steps"] > 0,

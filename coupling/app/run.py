@@ -6,7 +6,7 @@ from __future__ import annotations
 import dataclasses
 import time
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -46,13 +46,18 @@ def run_solver(
     options: SolverOptions,
     timings: dict[str, float],
     monitor: Any = None,
+    after_solve: Callable[[Any, Any], None] | None = None,
 ) -> Run:
     """Solve the assembled ``problem`` on ``domain`` as the configuration asks (collective).
 
     ``timings`` are the set-up stages so far; the run adds ``solve`` (and the stages of
     :func:`coupling.solvers.solve`), ``coarse_levels`` and ``prolongation`` for a nested
     solve, ``adaptive_loop`` (every level: assembly, solves, estimates, errors,
-    refinement) for an adaptive one, and ``estimator``.
+    refinement) for an adaptive one, and ``estimator``. ``after_solve(problem,
+    solution)``, when given, is called with the final problem and its solution as soon
+    as they are known: before the estimator of a plain or nested solve, after the
+    adaptive loop (e.g. :meth:`coupling.io.outputs.RunOutputs.start`, whose work then
+    runs beside the estimator); its time is in none of the stages.
     """
     from coupling.adapt import adapt, adapt_options, estimate
     from coupling.manufactured import energy_error
@@ -93,6 +98,8 @@ def run_solver(
             exact=exact,
         )
         last = levels[-1]
+        if after_solve is not None:
+            after_solve(last.problem, last.solution)
         return Run(
             last.problem,
             last.solution,
@@ -117,6 +124,8 @@ def run_solver(
         records = [dataclasses.asdict(r) for r in nested]
     else:
         solution = solve(problem, options, monitor=monitor)
+    if after_solve is not None:
+        after_solve(problem, solution)
     tic = time.perf_counter()
     est = estimate(problem, solution, f=data["f"], t0=data["t0"])
     stages = {**timings, **solution.timings, "estimator": time.perf_counter() - tic}

@@ -13,14 +13,10 @@ import csv
 import io
 from pathlib import Path
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from coupling.io.atomic import atomic_write  # noqa: E402
-from coupling.options import SLOPE_MIN_DOFS  # noqa: E402
+from coupling.io.atomic import atomic_write
+from coupling.options import SLOPE_MIN_DOFS
 
 __all__ = ["LEVEL_FILES", "write_levels", "fitted_slope", "slope_levels"]
 
@@ -68,6 +64,11 @@ def fitted_slope(dofs, values) -> float:
 
 def _plot(path: Path, levels: list[dict]) -> None:
     """eta (and the error) against the dofs, log-log, slopes in the legend."""
+    import matplotlib
+
+    matplotlib.use("Agg")  # files only; imported here, as a plain or nested run draws nothing
+    import matplotlib.pyplot as plt
+
     dofs = [level["dofs"] for level in levels]
     fit = slope_levels(dofs)
     where = f"N >= {SLOPE_MIN_DOFS}" if not fit.all() else "all levels"

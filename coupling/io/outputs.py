@@ -23,7 +23,8 @@ import json
 import os
 import shutil
 import time
-from concurrent.futures import ThreadPoolExecutor
+import sys
+from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 from typing import Callable, Mapping
 
@@ -32,7 +33,14 @@ from mpi4py import MPI
 
 from coupling.io.atomic import atomic_write
 from coupling.io.levels import LEVEL_FILES, write_levels
-from coupling.io.plots import PLOT_FILES, exterior_samples, write_plots
+from coupling.io.figure_data import FigureInputs
+from coupling.io.figure_worker import FigureWorker, FigureWorkerError
+from coupling.io.plots import (
+    PLOT_FILES,
+    exterior_samples,
+    figure_inputs,
+    write_pngs,
+)
 from coupling.io.quantities import boundary_flux, complementarity, log_coefficient
 from fem_py.mesh_facts import mesh_facts
 from fem_py.numbering import gather_cells, gather_p1
@@ -40,6 +48,7 @@ from fem_py.parallel import broadcast_from_root
 
 __all__ = [
     "DATA_FILES",
+    "RunOutputs",
     "write_outputs",
     "boundary_fields",
     "gather_p1",
@@ -102,96 +111,142 @@ def boundary_fields(problem, result, pressure: np.ndarray) -> dict[str, np.ndarr
     )
 
 
-def write_outputs(
-    comm: MPI.Comm,
-    out: Path,
-    problem,
-    result,
-    *,
-    tol: float,
-    timings: Mapping[str, float],
-    xdmf: bool,
-    plots: bool,
-    config: dict | None = None,
-    total: Callable[[], float] | None = None,
-    levels: list[dict] | None = None,
-    adaptive: bool = False,
-    estimator: float | None = None,
-    error: float | None = None,
-    indicators: np.ndarray | None = None,
-    facts: dict | None = None,
-) -> list[str]:
-    """Write summary.json, fields.npz and, on request, solution.xdmf/.h5 and the plots.
+class RunOutputs:
+    """The outputs of one run, written in two phases around the run's last computation
+    (the a posteriori estimator).
 
-    Collective. Files of an earlier run in ``out`` that this run does not write (plots
-    when ``plots`` is false now, ...) are removed, so the folder never mixes two runs.
-    ``tol`` is the solver tolerance (drawn in history.png), ``timings`` the seconds per
-    stage of the run so far, to which summary.json adds ``outputs`` (this call) and, when
-    ``total`` (a clock of the whole process) is given, ``total`` read just before
-    summary.json, the last file, is written. ``config`` (the validated configuration)
-    is stored in summary.json. ``levels`` (one record per level) go to summary.json and
-    to adapt.csv / adapt.png (``adaptive``) or levels.csv (a nested solve,
-    :mod:`coupling.io.levels`); ``estimator`` (eta) and ``error`` (|u_h - u|_1 against
-    ``[data] exact``) to summary.json; ``indicators``, eta_T^2 of the owned cells (local
-    cell order), as ``indicators`` = eta_T in fields.npz, in the order of ``triangles``;
-    ``facts`` (:func:`fem_py.mesh_facts.mesh_facts` of ``problem.domain``, computed here
-    when not given) to summary.json.
+    :meth:`start`, right after the solve, gathers u_h, computes the boundary flux and
+    hands the rest to background work on rank 0: fields.npz (file writes), the samples
+    of u_e (bem_cpp), both in threads (they release the GIL), and the figures, drawn by
+    the figure process ``worker`` (:class:`coupling.io.figure_worker.FigureWorker`) when
+    one is given, from u_h rasterised here. :meth:`finish` writes the XDMF file
+    (collective), waits for the background work, writes the figures and, last,
+    summary.json. Without a worker the figures are drawn in :meth:`finish`, in this
+    process; so they are too, with a warning, if the worker fails.
 
-    Returns
-    -------
-    list of str
-        The names of the files written (the same on every rank).
+    Use as a context manager: leaving it (on an error or KeyboardInterrupt too) ends the
+    figure process and waits for the threads, so no file is left half-written.
+
+    Parameters
+    ----------
+    comm
+        The run's communicator (every method is collective).
+    out
+        The output folder.
+    tol
+        The solver tolerance (drawn in history.png).
+    xdmf, plots
+        Write solution.xdmf/.h5; draw the figures.
+    indicators
+        fields.npz will hold the estimator's eta_T (given to :meth:`finish`), so it is
+        written there rather than by :meth:`start`.
+    worker
+        The figure process (rank 0), or None.
     """
-    tic = time.perf_counter()
-    out = Path(out)
-    gathered = gather_p1(result.u)
-    cells = None if indicators is None else gather_cells(problem.V, np.sqrt(indicators))
-    pressure = boundary_flux(problem, result)
-    facts = mesh_facts(problem.domain) if facts is None else facts  # collective
-    on_gamma = dict(
-        boundary_fields(problem, result, pressure),
-        a=np.array(problem.a),
-        flux_space=np.array(problem.flux_space),
-    )
-    fields = None
-    if comm.rank == 0:
-        x, u, triangles = gathered
-        fields = dict(
-            x=x,
-            u=u,
-            triangles=triangles,
-            **on_gamma,
-            **({} if cells is None else {"indicators": cells}),
-        )
-    # Rank 0 hands two jobs that release the GIL and make no MPI call to threads, both
-    # started before the collective XDMF write (which holds the GIL): u_e on the
-    # whole-plane grid (bem_cpp) and fields.npz (file writes). Leaving the block waits
-    # for both, also on an error (KeyboardInterrupt included), so no file is left
-    # half-written.
-    with ThreadPoolExecutor(max_workers=2) as pool:
-        exterior = data = None
-        if comm.rank == 0:
-            exterior = pool.submit(exterior_samples, on_gamma) if plots else None
-            data = pool.submit(
-                atomic_write, out / "fields.npz", lambda p: np.savez(p, **fields)  # p: .npz
+
+    def __init__(
+        self,
+        comm: MPI.Comm,
+        out: Path,
+        *,
+        tol: float,
+        xdmf: bool,
+        plots: bool,
+        indicators: bool = False,
+        worker: FigureWorker | None = None,
+    ):
+        self.comm, self.out, self.tol = comm, Path(out), tol
+        self.xdmf, self.plots, self.indicators = xdmf, plots, indicators
+        self.worker = worker if plots and comm.rank == 0 else None
+        #: seconds spent in :meth:`start` and :meth:`finish` (summary.json's ``outputs``)
+        self.seconds = 0.0
+        self._pool = ThreadPoolExecutor(max_workers=3) if comm.rank == 0 else None
+        self._jobs: dict[str, Future] = {}
+
+    def start(self, problem, result) -> None:
+        """Gather the run's result and start the background work (collective)."""
+        tic = time.perf_counter()
+        self._problem, self._result = problem, result
+        gathered = gather_p1(result.u)
+        self._pressure = boundary_flux(problem, result)
+        if self.comm.rank == 0:
+            x, u, triangles = gathered
+            on_gamma = dict(
+                boundary_fields(problem, result, self._pressure),
+                a=np.array(problem.a),
+                flux_space=np.array(problem.flux_space),
             )
+            self._fields = dict(x=x, u=u, triangles=triangles, **on_gamma)
+            if not self.indicators:
+                self._jobs["data"] = self._pool.submit(_write_fields, self.out, self._fields)
+            if self.plots:
+                samples = self._pool.submit(exterior_samples, on_gamma)
+                inputs = figure_inputs(self._fields, result.history, tol=self.tol)
+                self._jobs["inputs"] = self._pool.submit(_with_samples, inputs, samples)
+                if self.worker is not None:
+                    self._jobs["pngs"] = self._pool.submit(
+                        lambda: self.worker.render(self._jobs["inputs"].result())
+                    )
+        self.seconds += time.perf_counter() - tic
+
+    def finish(
+        self,
+        *,
+        timings: Mapping[str, float],
+        config: dict | None = None,
+        total: Callable[[], float] | None = None,
+        levels: list[dict] | None = None,
+        adaptive: bool = False,
+        estimator: float | None = None,
+        error: float | None = None,
+        indicators: np.ndarray | None = None,
+        facts: dict | None = None,
+    ) -> list[str]:
+        """Write the rest and summary.json, last (collective; after :meth:`start`).
+
+        ``timings`` are the seconds per stage of the run so far, to which summary.json
+        adds ``outputs`` (:attr:`seconds`) and, when ``total`` (a clock of the whole
+        process) is given, ``total`` read just before summary.json is written.
+        ``config`` (the validated configuration) is stored in summary.json. ``levels``
+        (one record per level) go to summary.json and to adapt.csv / adapt.png
+        (``adaptive``) or levels.csv (a nested solve, :mod:`coupling.io.levels`);
+        ``estimator`` (eta) and ``error`` (|u_h - u|_1 against ``[data] exact``) to
+        summary.json; ``indicators``, eta_T^2 of the owned cells (local cell order), as
+        ``indicators`` = eta_T in fields.npz, in the order of ``triangles``; ``facts``
+        (:func:`fem_py.mesh_facts.mesh_facts` of the problem's domain, computed here when
+        not given) to summary.json.
+
+        Returns
+        -------
+        list of str
+            The names of the files written (the same on every rank).
+        """
+        tic = time.perf_counter()
+        problem, result, out = self._problem, self._result, self.out
+        cells = None if indicators is None else gather_cells(problem.V, np.sqrt(indicators))
+        facts = mesh_facts(problem.domain) if facts is None else facts  # collective
         written = []
-        if xdmf:
-            _write_xdmf(comm, out, problem, result)
+        if self.xdmf:
+            _write_xdmf(self.comm, out, problem, result)
             written += ["solution.xdmf", "solution.h5"]
 
         def write_gathered() -> list[str]:  # rank 0
             names = list(written)
-            if plots:
-                names += write_plots(out, fields, result.history, tol=tol, exterior=exterior.result)
-            data.result()  # its error, if any
+            if "data" not in self._jobs:  # with the indicators
+                if cells is not None:
+                    self._fields["indicators"] = cells
+                self._jobs["data"] = self._pool.submit(_write_fields, out, self._fields)
+            if self.plots:
+                names += write_pngs(out, self._pngs())
+            self._jobs["data"].result()  # its error, if any
             names.append("fields.npz")
             if levels:
-                names += write_levels(out, levels, adaptive=adaptive, plot=plots)
-            stages = {**timings, "outputs": time.perf_counter() - tic}
+                names += write_levels(out, levels, adaptive=adaptive, plot=self.plots)
+            self.seconds += time.perf_counter() - tic
+            stages = {**timings, "outputs": self.seconds}
             if total is not None:
                 stages["total"] = total()
-            record = {**summary(problem, result, stages, pressure), **facts}
+            record = {**summary(problem, result, stages, self._pressure), **facts}
             if estimator is not None:  # the global a posteriori estimator eta
                 record["estimator"] = estimator
             if error is not None:  # the energy error against the exact solution
@@ -211,7 +266,69 @@ def write_outputs(
                 (out / name).unlink(missing_ok=True)
             return names
 
-        return broadcast_from_root(comm, write_gathered)  # a write error ends every rank
+        return broadcast_from_root(self.comm, write_gathered)  # a write error ends every rank
+
+    def _pngs(self) -> dict[str, bytes]:
+        """The figures: the worker's, or drawn here (also when the worker failed)."""
+        if "pngs" in self._jobs:
+            try:
+                return self._jobs["pngs"].result()
+            except FigureWorkerError as err:
+                print(
+                    f"warning: the figure process failed ({err}); drawing the figures here",
+                    file=sys.stderr,
+                )
+        from coupling.io.figures import render
+
+        return render(self._jobs["inputs"].result())
+
+    def __enter__(self) -> RunOutputs:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if self.worker is not None:
+            self.worker.close()  # a render still waiting for it returns
+        if self._pool is not None:
+            self._pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _with_samples(inputs: FigureInputs, samples: Future) -> FigureInputs:
+    """``inputs`` with the exterior samples of ``samples`` (once computed)."""
+    points, ue = samples.result()
+    return inputs._replace(exterior_points=points, exterior_ue=ue)
+
+
+def _write_fields(out: Path, fields: dict) -> None:
+    atomic_write(out / "fields.npz", lambda p: np.savez(p, **fields))  # p: .npz
+
+
+def write_outputs(
+    comm: MPI.Comm,
+    out: Path,
+    problem,
+    result,
+    *,
+    tol: float,
+    xdmf: bool,
+    plots: bool,
+    **finish,
+) -> list[str]:
+    """Write summary.json, fields.npz and, on request, solution.xdmf/.h5 and the plots,
+    in this process (:class:`RunOutputs` in one go; ``finish``: the keywords of
+    :meth:`RunOutputs.finish`).
+
+    Collective. Files of an earlier run in ``out`` that this run does not write (plots
+    when ``plots`` is false now, ...) are removed, so the folder never mixes two runs.
+
+    Returns
+    -------
+    list of str
+        The names of the files written (the same on every rank).
+    """
+    indicators = finish.get("indicators") is not None
+    with RunOutputs(comm, out, tol=tol, xdmf=xdmf, plots=plots, indicators=indicators) as run:
+        run.start(problem, result)
+        return run.finish(**finish)
 
 
 def _write_xdmf(comm: MPI.Comm, out: Path, problem, result) -> None:

@@ -1,0 +1,106 @@
+"""A process that draws the figures while the run goes on computing.
+
+matplotlib holds the GIL while it draws, and the figures take about a second whatever
+the mesh size (imports and first draw included), so a thread would not run them beside
+the run's own Python work. :class:`FigureWorker` starts ``python -m
+coupling.io.figure_worker`` when the run starts: it imports matplotlib and draws a
+first figure (:func:`coupling.io.figures.warm_up`) while the mesh is built, then waits
+for one :class:`coupling.io.figure_data.FigureInputs` on its standard input (a few MB,
+pickled) and answers with the PNG bytes of :func:`coupling.io.figures.render` on its
+standard output. The run writes the files itself (atomically, into its staged output
+folder). The worker imports neither MPI nor the mesh libraries, so it is no MPI process
+even under mpirun; it runs in a session of its own (Ctrl-C reaches the run, which ends
+the worker) and exits when its standard input closes.
+"""
+from __future__ import annotations
+
+import os
+import pickle
+import subprocess
+import sys
+from pathlib import Path
+
+__all__ = ["FigureWorker", "FigureWorkerError"]
+
+
+class FigureWorkerError(RuntimeError):
+    """The figure process failed (its last line of error output, or how it ended)."""
+
+
+class FigureWorker:
+    """The figure process of one run (rank 0 of a run with plots), used once.
+
+    Use as a context manager: leaving it ends the process if it still runs.
+    """
+
+    def __init__(self) -> None:
+        root = str(Path(__file__).resolve().parents[2])  # the folder holding ``coupling``
+        path = os.environ.get("PYTHONPATH")
+        env = dict(
+            os.environ,
+            PYTHONPATH=root if not path else os.pathsep.join([root, path]),
+            MPLBACKEND="Agg",
+            OMP_NUM_THREADS="1",
+            OPENBLAS_NUM_THREADS="1",
+        )
+        self._process = subprocess.Popen(
+            [sys.executable, "-m", __name__],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            env=env,
+            start_new_session=True,
+        )
+
+    def render(self, inputs) -> dict[str, bytes]:
+        """The PNG bytes of the figures of ``inputs`` (:func:`coupling.io.figures.render`),
+        drawn in the worker; waits for it to finish.
+
+        Raises
+        ------
+        FigureWorkerError
+            The worker ended without an answer (its error, or its exit status).
+        """
+        try:
+            out, err = self._process.communicate(pickle.dumps(inputs, protocol=5))
+        except (BrokenPipeError, ValueError):  # it ended before reading, or was ended
+            out, err = b"", b""
+            self.close()
+        status = self._process.returncode
+        if status == 0 and out:
+            return pickle.loads(out)
+        lines = err.decode(errors="replace").strip().splitlines()
+        raise FigureWorkerError(lines[-1] if lines else f"the figure process exited with {status}")
+
+    def close(self) -> None:
+        """End the worker if it still runs."""
+        if self._process.poll() is None:
+            self._process.kill()
+        self._process.wait()
+        for stream in (self._process.stdin, self._process.stdout, self._process.stderr):
+            if stream is not None:
+                stream.close()
+
+    def __enter__(self) -> FigureWorker:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def main() -> int:
+    """The worker: warm up, read one FigureInputs, answer with the PNG bytes."""
+    from coupling.io import figures
+
+    figures.warm_up()
+    try:
+        inputs = pickle.load(sys.stdin.buffer)
+    except EOFError:  # the run ended without figures
+        return 0
+    pickle.dump(figures.render(inputs), sys.stdout.buffer, protocol=5)
+    sys.stdout.buffer.flush()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,326 @@
+"""The PNG figures of a solved problem, drawn with matplotlib (Agg) from plain arrays.
+
+- ``u.png``: u_h over Omega; Gamma_s drawn thick, red where in contact, blue where open.
+- ``boundary.png``: the gap phi_h, the flux rho du_h/dn (the contact pressure on
+  Gamma_s), the exterior flux du_e/dn and the contact set
+  against the arc length s along Gamma (counter-clockwise from ``boundary_x[0]``),
+  with Gamma_s shaded and the corners of Omega marked.
+- ``whole_plane.png``: u_h in Omega and u_e outside (representation formula,
+  METHOD.md section 2) in one colour scale; they differ across Gamma by u0 - phi.
+- ``history.png``: the relative B-norm step and the relative energy excess of each
+  iteration against the tolerance, and the size of the contact set.
+
+:func:`render` turns a :class:`FigureInputs` (an image of u_h, the boundary arrays of
+fields.npz, samples of u_e and the iteration history: a few MB at any mesh size) into
+PNG bytes. It needs neither MPI nor the mesh, so it runs in this process or in the
+figure process of :mod:`coupling.io.figure_worker`, with the same bytes.
+
+The problem is dimensionless, so the axes carry no units.
+"""
+from __future__ import annotations
+
+import io
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.collections import LineCollection  # noqa: E402
+from matplotlib.path import Path as PolygonPath  # noqa: E402
+from matplotlib.transforms import Bbox  # noqa: E402
+from matplotlib.tri import Triangulation  # noqa: E402
+
+from coupling.io.figure_data import (  # noqa: E402
+    PLOT_FILES,
+    FigureInputs,
+    PixelGrid,
+    coarsen,
+    plane_square,
+    rasterise,
+)
+from fem_py.polyline import arc_length, polygon_corners  # noqa: E402
+
+__all__ = ["render", "true_runs", "warm_up"]
+
+#: The figures laid out by fig.tight_layout() when they are built: saved as they are
+#: (bbox_inches="tight" would draw them once more to find their extent); the others
+#: are cropped to the extent "tight" gives (:func:`_tight_extent`).
+_LAID_OUT = ("boundary.png", "history.png")
+
+#: The resolution of the figures.
+_DPI = 110
+#: PNG encoding: zlib level 1 (the same pixels as the default 6 in half the time, files
+#: ~25% larger; docs/design/speed.md, "Outputs (helper, 2026-12-02)").
+_PNG = {"compress_level": 1}
+
+
+_CONTACT = dict(ls="none", marker="o", ms=3.5, color="tab:red")
+_OPEN = dict(ls="none", marker="o", ms=3.5, mfc="white", mec="tab:blue", mew=1.0)
+
+
+def _closed(a: np.ndarray) -> np.ndarray:
+    return np.concatenate([a, a[:1]])
+
+
+def _signorini_panels(fields: dict) -> np.ndarray:
+    """Panel i = [node i, node i+1] lies on Gamma_s when one of its nodes carries phi
+    (every arc has interior nodes: d >= 2h)."""
+    s = fields["signorini"]
+    return s | np.roll(s, -1)
+
+
+def true_runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """Maximal runs [i, j) of True in a cyclic boolean array (panels along Gamma)."""
+    n = len(mask)
+    if mask.all():
+        return [(0, n)]
+    start = int(np.flatnonzero(~mask)[0])  # begin the scan on a panel off the runs
+    runs, i = [], None
+    for k in range(start + 1, start + n + 1):
+        on = mask[k % n]
+        if on and i is None:
+            i = k
+        elif not on and i is not None:
+            runs.append((i, k))
+            i = None
+    return runs
+
+
+def _draw_boundary(ax, fields: dict) -> None:
+    """Gamma (thin black) and Gamma_s (thick): red where in contact (phi_h = 0 at both
+    ends of a panel), blue where the gap is open; the Signorini nodes as dots when
+    there are few enough to tell apart."""
+    nodes = fields["boundary_x"]
+    closed = _closed(nodes)
+    ax.plot(closed[:, 0], closed[:, 1], "k-", lw=0.8, zorder=4)
+    panels = _signorini_panels(fields)
+    if not panels.any():
+        return
+    shut = fields["phi"] == 0.0
+    contact = panels & shut & np.roll(shut, -1)
+    segments = np.stack([nodes, np.roll(nodes, -1, axis=0)], axis=1)
+    for mask, color, label in (
+        (contact, "tab:red", r"$\Gamma_s$ in contact ($\phi_h = 0$)"),
+        (panels & ~contact, "tab:blue", r"$\Gamma_s$ open ($\phi_h > 0$)"),
+    ):
+        ax.add_collection(
+            LineCollection(
+                segments[mask], colors=color, linewidths=3.0, capstyle="butt", label=label, zorder=5
+            )
+        )
+    sig, active = fields["signorini"], fields["active"]
+    if sig.sum() <= 64:
+        ax.plot(*nodes[sig & active].T, zorder=6, **_CONTACT)
+        ax.plot(*nodes[sig & ~active].T, zorder=6, **_OPEN)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2, fontsize=8, frameon=False)
+
+
+def _image(ax, image: np.ma.MaskedArray, grid: PixelGrid, **kwargs):
+    """``image`` drawn over the area of ``grid``; masked pixels are transparent."""
+    return ax.imshow(
+        image, origin="lower", extent=grid.extent, cmap="viridis", interpolation="nearest", **kwargs
+    )
+
+
+def _figure_u(fields: dict, image: np.ma.MaskedArray, grid: PixelGrid):
+    fig, ax = plt.subplots(figsize=(5.6, 5.2))
+    im = _image(ax, image, grid)
+    fig.colorbar(im, ax=ax, shrink=0.85, label="$u_h$")
+    _draw_boundary(ax, fields)
+    ax.set(aspect="equal", xlabel="$x$", ylabel="$y$", title=r"$u_h$ in $\Omega$")
+    return fig
+
+
+def _figure_boundary(fields: dict):
+    nodes = fields["boundary_x"]
+    n = len(nodes)
+    s = arc_length(_closed(nodes))
+    fig, axes = plt.subplots(
+        4, 1, figsize=(7.5, 8.5), sharex=True, gridspec_kw=dict(height_ratios=[3, 3, 3, 1.3])
+    )
+    # a run of Signorini panels may wrap past node 0: shade its pieces on either side
+    spans = [
+        (s[a], s[b])
+        for i, j in true_runs(_signorini_panels(fields))
+        for a, b in ((i, min(j, n)), (max(i, n) - n, j - n))
+        if b > a
+    ]
+    for ax in axes:
+        for k, span in enumerate(spans):
+            ax.axvspan(
+                *span, color="tab:orange", alpha=0.15, lw=0, label=r"$\Gamma_s$" if k == 0 else None
+            )
+        for c in polygon_corners(nodes):
+            ax.axvline(s[c], color="0.6", lw=0.6, ls=":")
+        ax.grid(alpha=0.3, lw=0.5)
+    axes[0].plot(s, _closed(fields["phi"]), ".-", ms=3, lw=1)
+    axes[0].set_ylabel(r"gap $\phi_h$")
+    axes[1].plot(s, _closed(fields["pressure"]), ".-", ms=3, lw=1, color="tab:purple")
+    axes[1].axhline(0.0, color="0.3", lw=0.6)
+    axes[1].set_ylabel(r"$\rho\, \partial u_h / \partial n$" "\n(pressure on $\\Gamma_s$)")
+    flux = fields["dn_ue"]
+    if str(fields["flux_space"]) == "p0":
+        axes[2].stairs(flux, s, color="tab:green", lw=1)
+    else:
+        axes[2].plot(s, _closed(flux), ".-", ms=3, lw=1, color="tab:green")
+    axes[2].set_ylabel(r"$\partial u_e / \partial n$")
+    sig, active = fields["signorini"], fields["active"]
+    axes[3].plot(s[:-1][sig & active], np.ones(np.count_nonzero(sig & active)), **_CONTACT)
+    axes[3].plot(s[:-1][sig & ~active], np.zeros(np.count_nonzero(sig & ~active)), **_OPEN)
+    axes[3].set(yticks=[0, 1], yticklabels=["open", "contact"], ylim=(-0.5, 1.5))
+    x0, y0 = nodes[0]
+    axes[3].set_xlabel(
+        f"arc length $s$ along $\\Gamma$, counter-clockwise from "
+        f"$({x0:.3g}, {y0:.3g})$ (dotted: corners)"
+    )
+    axes[3].set_xlim(0, s[-1])
+    if sig.any():
+        axes[0].legend(loc="upper right", fontsize=8)
+    fig.suptitle(r"Along $\Gamma$: gap, pressure, exterior flux and contact set")
+    fig.tight_layout()
+    return fig
+
+
+def _figure_whole_plane(inputs: FigureInputs):
+    """u_h inside and u_e outside, rasterised on one pixel grid. Outside, u_e is
+    evaluated on a coarse grid (the exterior samples of ``inputs``,
+    :func:`coupling.io.plots.exterior_samples`) and at the boundary
+    nodes (its discrete trace ``ue``) and interpolated linearly on their Delaunay
+    triangulation, so the colour reaches Gamma with no band: exterior_potential
+    integrates the panels near a point analytically and is accurate at any distance from
+    Gamma (its docstring); grid points closer than h/20 are left out only to avoid
+    slivers. u_h (the image of ``inputs``, coarsened to the plane's pixels) covers every
+    pixel whose centre is in Omega."""
+    fields = inputs.boundary
+    nodes = fields["boundary_x"]
+    centre, half = plane_square(nodes)
+    grid = inputs.exterior_points
+    points = np.vstack([grid, nodes])
+    ue = np.concatenate([inputs.exterior_ue, fields["ue"]])
+    ext = Triangulation(points[:, 0], points[:, 1])
+    # Omega is covered by the triangles of boundary nodes alone whose centroid is inside;
+    # a triangle with a grid vertex is exterior even where it cuts a corner of Omega
+    # (u_h is drawn over it)
+    interior = np.all(ext.triangles >= len(grid), axis=1)
+    centroids = points[ext.triangles[interior]].mean(axis=1)
+    interior[interior] = PolygonPath(nodes).contains_points(centroids)
+    exterior = ext.triangles[~interior]
+
+    pixels, inner = coarsen(inputs.image, inputs.grid, centre - half, centre + half)
+    outer = np.ma.masked_where(~inner.mask, rasterise(points, exterior, ue, pixels))
+    vmin, vmax = min(ue.min(), inputs.u_range[0]), max(ue.max(), inputs.u_range[1])
+    levels = np.linspace(vmin, vmax, 17)[1:-1]
+    fig, ax = plt.subplots(figsize=(6.2, 5.6))
+    im = _image(ax, np.ma.where(inner.mask, outer, inner), pixels, vmin=vmin, vmax=vmax)
+    xc, yc = pixels.centres()
+    for image in (outer, inner):  # each side's own contours: u_h and u_e jump across Gamma
+        if image.count() and np.ptp(image) > 0:
+            ax.contour(
+                xc,
+                yc,
+                image,
+                levels=levels,
+                colors="white",
+                linewidths=0.5,
+                alpha=0.6,
+                linestyles="solid",
+                zorder=1,
+            )
+    fig.colorbar(im, ax=ax, shrink=0.85, label=r"$u_h$ in $\Omega$, $u_e$ outside")
+    _draw_boundary(ax, fields)
+    ax.set(
+        aspect="equal",
+        xlabel="$x$",
+        ylabel="$y$",
+        xlim=(centre[0] - half, centre[0] + half),
+        ylim=(centre[1] - half, centre[1] + half),
+    )
+    ax.set_title(
+        r"Whole plane: $u_h$ in $\Omega$, $u_e$ (representation formula) outside;"
+        "\n"
+        r"across $\Gamma$ they differ by $u_0 - \phi_h$",
+        fontsize=10,
+    )
+    return fig
+
+
+def _figure_history(history: dict, tol: float):
+    it, energy = history["iteration"], history["energy"]
+    step, contact = history["step_norm"], history["contact"]
+    fig, axes = plt.subplots(
+        2, 1, figsize=(6.5, 5.5), sharex=True, gridspec_kw=dict(height_ratios=[3, 1.3])
+    )
+    ax = axes[0]
+    ax.semilogy(it, step, label=r"$\Vert\xi_{k+1} - \xi_k\Vert_B \,/\, \Vert\xi_{k+1}\Vert_B$")
+    best = energy.min()  # J* below: the lowest energy reached
+    keep = energy > best
+    ax.semilogy(
+        it[keep],
+        (energy[keep] - best) / max(abs(best), 1e-300),
+        label=r"$(J_h(\xi_k) - J^*) \,/\, |J^*|$,  $J^*$: lowest $J_h$ reached",
+    )
+    ax.axhline(tol, color="0.4", ls="--", lw=0.8, label=f"tol = {tol:g}")
+    ax.set_ylabel("relative size")
+    ax.grid(alpha=0.3, lw=0.5, which="both")
+    ax.legend(fontsize=8)
+    ax.set_title(f"Convergence ({len(it)} iterations)")
+    axes[1].step(it, contact, where="post", color="tab:red")
+    axes[1].set(xlabel="iteration $k$", ylabel="contact nodes")
+    axes[1].grid(alpha=0.3, lw=0.5)
+    fig.tight_layout()
+    return fig
+
+
+def _tight_extent(fig) -> Bbox:
+    """The extent (inches) that ``savefig(bbox_inches="tight")`` crops ``fig`` to: its
+    tight bounding box, padded by ``savefig.pad_inches``, found with the renderer of the
+    figure itself. Given to ``savefig`` it saves the same PNG without the layout draw
+    that ``"tight"`` makes first (the figure is built at the saving dpi, :data:`_DPI`)."""
+    box = fig.get_tightbbox(fig.canvas.get_renderer())
+    return box.padded(plt.rcParams["savefig.pad_inches"])
+
+
+def render(inputs: FigureInputs) -> dict[str, bytes]:
+    """The PNG files of :data:`PLOT_FILES` drawn from ``inputs``, as {name: bytes} in
+    that order (no history.png without history)."""
+    figures = {
+        "u.png": lambda: _figure_u(inputs.boundary, inputs.image, inputs.grid),
+        "boundary.png": lambda: _figure_boundary(inputs.boundary),
+        "whole_plane.png": lambda: _figure_whole_plane(inputs),
+        "history.png": lambda: (
+            _figure_history(inputs.history, inputs.tol)
+            if len(inputs.history["iteration"])
+            else None
+        ),
+    }
+    pngs = {}
+    for name in PLOT_FILES:
+        with plt.rc_context({"figure.dpi": _DPI}):
+            fig = figures[name]()
+        if fig is None:
+            continue
+        bbox = None if name in _LAID_OUT else _tight_extent(fig)  # no second layout draw
+        buffer = io.BytesIO()
+        fig.savefig(buffer, dpi=_DPI, bbox_inches=bbox, format="png", pil_kwargs=_PNG)
+        plt.close(fig)
+        pngs[name] = buffer.getvalue()
+    return pngs
+
+
+def warm_up() -> None:
+    """Draw and discard a small figure with the elements of the real ones (mathtext,
+    colour bar, legend, line collection, tight layout): matplotlib loads its fonts and
+    builds its parsers on the first draw, which the figure process does while the run
+    computes."""
+    fig, ax = plt.subplots(figsize=(2, 2))
+    im = ax.imshow(np.zeros((2, 2)), cmap="viridis")
+    fig.colorbar(im, ax=ax, label=r"$u_h$ in $\Omega$")
+    ax.add_collection(LineCollection([[(0, 0), (1, 1)]], label=r"$\Gamma_s$ ($\phi_h = 0$)"))
+    ax.semilogy([1, 2], [1, 0.1], label=r"$\Vert\xi\Vert_B$")
+    ax.contour(np.arange(3), np.arange(3), np.arange(9.0).reshape(3, 3), levels=[4.0])
+    ax.legend(fontsize=8)
+    ax.set(xlabel="$x$", title=r"$\partial u_e / \partial n$")
+    fig.tight_layout()
+    fig.savefig(io.BytesIO(), dpi=_DPI, format="png", pil_kwargs=_PNG)
+    plt.close(fig)
