@@ -1,7 +1,7 @@
 """A process that draws the figures while the run goes on computing.
 
-matplotlib holds the GIL while it draws, and the figures take about a second whatever
-the mesh size (imports and first draw included), so a thread would not run them beside
+matplotlib holds the GIL while it draws, and the figures take one to two seconds
+whatever the mesh size (imports and first draw included), so a thread would not run them beside
 the run's own Python work. :class:`FigureWorker` starts ``python -m
 coupling.io.figure_worker`` when the run starts: it imports matplotlib and draws a
 first figure (:func:`coupling.io.figures.warm_up`) while the mesh is built, then waits

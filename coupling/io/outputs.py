@@ -232,7 +232,7 @@ class RunOutputs:
 
         def write_gathered() -> list[str]:  # rank 0
             names = list(written)
-            if "data" not in self._jobs:  # with the indicators
+            if self.indicators:  # fields.npz waited for them
                 if cells is not None:
                     self._fields["indicators"] = cells
                 self._jobs["data"] = self._pool.submit(_write_fields, out, self._fields)
