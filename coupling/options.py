@@ -85,6 +85,15 @@ DATA_VARIABLES: dict[str, tuple[str, ...]] = {
 SSN_START_STEPS = 5
 SSN_WARM_START_STEPS = 0  # the same from a given iterate (nested iteration, adaptivity)
 SSN_CG_MAX_ITERATIONS = 500  # cap on the CG iterations of one Newton step
+#: Exponent p of the inexact-Newton forcing min(0.1, (r_k / r_0)^p) of a Newton step's CG:
+#: 1/2 (order 1.5) from xi_0 = 0, where the first Newton steps still move the active set
+#: by tens of nodes and accurate steps are wasted (p = 1 there: 40 CG instead of 31 at
+#: 10^6 dofs, the same 11 steps); 1 (Eisenstat and Walker's eta_k ~ ||F_k||, q-quadratic)
+#: from a given iterate (nested iteration, adaptivity), whose active set is nearly right
+#: from the first step: the finest level of a nested solve then takes 3 Newton steps
+#: instead of 4 at 6e4 .. 4e6 dofs with the same CG iterations (docs/design/nested.md)
+SSN_FORCING_EXPONENT = 0.5
+SSN_WARM_FORCING_EXPONENT = 1.0
 #: A Newton step after one of relative B-norm ||xi_k - xi_k-1||_B / ||xi_k||_B at most this
 #: keeps the Jacobian of the step before (no reassembly, ~0.25 s at 10^6 dofs): the stale
 #: Jacobian's relative error, O(this), is about the CG tolerance of such a late step. At

@@ -177,6 +177,7 @@ if comm.rank == 0:
     ax.autoscale()
     ax.legend(loc="upper right")
     ax.set_title(f"adaptive mesh with contact, {rows[-1]['dofs']} dofs")
+    args.out.mkdir(parents=True, exist_ok=True)
     fig.savefig(args.out / "mesh.png", dpi=150)
     plt.close(fig)
 say(

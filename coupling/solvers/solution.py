@@ -16,7 +16,9 @@ from coupling.options import (
     LANCZOS_STEPS,
     SSN_LANCZOS_STEPS,
     SSN_CG_MAX_ITERATIONS,
+    SSN_FORCING_EXPONENT,
     SSN_START_STEPS,
+    SSN_WARM_FORCING_EXPONENT,
     SSN_WARM_START_STEPS,
     SolverOptions,
 )
@@ -132,7 +134,8 @@ def iterate(
     left in ``u``. (``functional`` may wrap the problem's, as the baselines' budget does.)
     ``warm_start``: (u, phi0) is a given iterate (nested iteration, adaptivity), from which
     ssn takes Newton steps at once, with CG tolerances relative to ``residual_scale``
-    (:func:`coupling.solvers.ssn.zero_residual`; None: the first step's residual).
+    (:func:`coupling.solvers.ssn.zero_residual`; None: the first step's residual) and the
+    quadratic forcing (``SSN_WARM_FORCING_EXPONENT``).
     ``matrix``: a P1 Mat of the caller's for the Jacobians (default: new ones)."""
     common = dict(tau=tau, tol=options.tol, max_iterations=options.max_iterations, monitor=monitor)
     if options.method == "ssn":
@@ -145,6 +148,7 @@ def iterate(
             phi0,
             start_steps=SSN_WARM_START_STEPS if warm_start else SSN_START_STEPS,
             cg_max_iterations=SSN_CG_MAX_ITERATIONS,
+            forcing_exponent=SSN_WARM_FORCING_EXPONENT if warm_start else SSN_FORCING_EXPONENT,
             residual_scale=residual_scale,
             matrix=matrix,
             **common,

@@ -18,7 +18,8 @@ per step, plus S_h on the boundary block), the preconditioner is the
 substructuring B restricted to the inactive set (B_Omega^{-1} for u, M_s[I, I]^{-1} for
 phi_I). The CG tolerance follows the Newton residual r = (||grad_u J||_{B_Omega^{-1}}^2
 + ||phi - P_s(phi - tau M_s^{-1} grad_phi J)||_{M_s}^2 / tau^2)^{1/2} (inexact Newton,
-forcing term min(0.1, sqrt(r_k / r_0)), kept above c tol ||xi_k||_B / (tau r_k) with
+forcing term min(0.1, (r_k / r_0)^p), p = 1/2 from a cold start and p = 1 from a given
+iterate (``forcing_exponent``), kept above c tol ||xi_k||_B / (tau r_k) with
 c = OVERSOLVE_SAFEGUARD: no step is solved more accurately than the stopping rule needs,
 the safeguard of Kelley, Iterative Methods for Linear and Nonlinear Equations, 1995,
 section 6.3). tau r is the B-norm of the PGPM step from the iterate ((3.19) with the
@@ -147,6 +148,7 @@ def semismooth_newton(
     max_iterations: int,
     start_steps: int,
     cg_max_iterations: int,
+    forcing_exponent: float,
     residual_scale: float | None = None,
     monitor: Monitor | None = None,
     matrix=None,
@@ -161,11 +163,11 @@ def semismooth_newton(
     ``max_iterations`` outer steps in all (the PGPM steps included). The records of the
     Newton steps hold their CG iterations and the length taken along the Newton direction.
 
-    The CG tolerance of a step is min(0.1, sqrt(r / r_0)) times the residual r (module
-    docstring), r_0 the residual of the first Newton step, or ``residual_scale`` when
-    given: from a start already close to the solution (nested iteration) r_0 of the
-    problem's own scale (:func:`zero_residual`) keeps the steps from being limited to a
-    contraction of 0.1 each.
+    The CG tolerance of a step is min(0.1, (r / r_0)^p) times the residual r (module
+    docstring), p = ``forcing_exponent``, r_0 the residual of the first Newton step, or
+    ``residual_scale`` when given: from a start already close to the solution (nested
+    iteration) r_0 of the problem's own scale (:func:`zero_residual`) keeps the steps
+    from being limited to a contraction of 0.1 each.
 
     ``matrix`` (optional, the caller's, from ``forms.create_matrix()``) holds the
     Jacobians of the Newton steps; by default a new Mat is created and destroyed here.
@@ -242,7 +244,7 @@ def semismooth_newton(
         d_phi[active] = -phi[active]
         h_a_u, h_a_phi = hessian(np.zeros_like(g_u), d_phi)
         rhs = (-g_u - h_a_u, -g_phi[free] - h_a_phi[free])
-        forcing = min(0.1, np.sqrt(residual / residual0))
+        forcing = min(0.1, (residual / residual0) ** forcing_exponent)
         if norm2 is not None:  # no more accuracy than the stopping rule asks for
             forcing = max(forcing, OVERSOLVE_SAFEGUARD * tol * np.sqrt(norm2) / (tau * residual))
         (d_u, d_phi_free), cg_its = _pcg(
