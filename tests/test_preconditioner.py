@@ -443,6 +443,10 @@ def test_bad_input_is_rejected():
         )
     with pytest.raises(ValueError, match="end points"):
         SignoriniArc(arc.coords, np.zeros(len(arc.coords), bool), arc.unknowns)
+    nonsymmetric = prob.stiffness.tolil()
+    nonsymmetric[0, 1] += 1e-6
+    with pytest.raises(ValueError, match="symmetric"):
+        SubstructuringPreconditioner(nonsymmetric, *args[1:], **unweighted)
     pc = SubstructuringPreconditioner(*args, **unweighted)
     with pytest.raises(ValueError, match="shape"):
         pc.apply_omega(np.zeros(3))

@@ -131,6 +131,7 @@ def build_preconditioner(
             edge_form=options.edge_form,
             signorini_weight=options.signorini_weight,
             coarse_space=coarse,
+            check_symmetry=False,  # assembled above from the symmetric form
         )
 
     return build() if comm.size == 1 else RootPreconditioner(comm, n_owned, build)

@@ -170,6 +170,12 @@ class SubstructuringPreconditioner(SignoriniBlock):
         C: the paper's coarse graph Laplacian, or the exact energy Pi^T S Pi of the coarse
         functions (:func:`coupling.preconditioners.kernels.galerkin_coarse_matrix`; our
         extension, for partitions cut from a mesh's cells).
+    check_symmetry : bool
+        Whether to refuse a ``stiffness`` that is not symmetric (A_SkI is taken as
+        A_ISk^T, and A_II is factored by Cholesky). False for a matrix symmetric by
+        construction, such as the assembly of the symmetric form (grad u, grad v) that
+        :func:`coupling.preconditioners.build_preconditioner` makes: the check costs
+        about a third of the set-up (0.45 s at 10^6 dofs).
 
     Notes
     -----
@@ -195,6 +201,7 @@ class SubstructuringPreconditioner(SignoriniBlock):
         edge_form: str,
         signorini_weight: float,
         coarse_space: str,
+        check_symmetry: bool = True,
     ) -> None:
         self._init_signorini(signorini_arcs, subdomain_size, edge_form, signorini_weight)
         a = sp.csr_matrix(stiffness, dtype=float)
@@ -217,7 +224,7 @@ class SubstructuringPreconditioner(SignoriniBlock):
             )
         if np.any(np.diff(skeleton) <= 0):
             raise ValueError("coarse.skeleton_dofs must be sorted and unique")
-        if n and not is_symmetric(a):
+        if n and check_symmetry and not is_symmetric(a):
             raise ValueError(
                 "stiffness must be symmetric (the P1 Laplace matrix A); got a nonsymmetric matrix"
             )
