@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import scipy.linalg as sla
+import scipy.sparse as sp
 
 from coupling.preconditioners import (
     IdentityPreconditioner,
@@ -24,6 +25,7 @@ from coupling.preconditioners.edge_forms import (
     paper_edge_form,
     sqrt_laplacian_edge_form,
 )
+from coupling.preconditioners.kernels import is_symmetric
 from test_preconditioner_meshes import StructuredSquare, structured_square
 
 RTOL = 1e-12
@@ -450,3 +452,16 @@ def test_bad_input_is_rejected():
     pc = SubstructuringPreconditioner(*args, **unweighted)
     with pytest.raises(ValueError, match="shape"):
         pc.apply_omega(np.zeros(3))
+
+
+def test_is_symmetric_leaves_a_non_canonical_matrix_as_it_was():
+    """A CSR matrix with unsorted column indices and a duplicate entry (not canonical):
+    judged by its sum, and handed back unchanged."""
+    # [[2, -1], [-1, 2]] with row 0 stored as (1: -1), (0: 1), (0: 1)
+    indptr, indices = np.array([0, 3, 5]), np.array([1, 0, 0, 0, 1])
+    data = np.array([-1.0, 1.0, 1.0, -1.0, 2.0])
+    matrix = sp.csr_matrix((data, indices, indptr), shape=(2, 2))
+    assert is_symmetric(matrix)
+    assert np.array_equal(matrix.indices, indices) and np.array_equal(matrix.data, data)
+    matrix.data[0] = -1.5
+    assert not is_symmetric(matrix)

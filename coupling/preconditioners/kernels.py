@@ -43,7 +43,9 @@ def is_symmetric(matrix: sp.spmatrix, rtol: float = 1e-12) -> bool:
     a = sp.csr_matrix(matrix, dtype=float)
     if a.nnz == 0:
         return True
-    a.sum_duplicates()  # canonical: sorted indices, no duplicates (as A^T's CSR is)
+    if not a.has_canonical_format:  # sorted indices, no duplicates (as A^T's CSR is)
+        a = a.copy()  # the caller's matrix is left as it was
+        a.sum_duplicates()
     t = a.T.tocsr()
     scale = rtol * np.abs(a.data).max()
     if np.array_equal(a.indptr, t.indptr) and np.array_equal(a.indices, t.indices):
