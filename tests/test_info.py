@@ -118,6 +118,30 @@ def test_a_run_that_cannot_fit_is_refused(tmp_path):
     assert report["dofs"] == 50001**2 and report["memory_estimate_bytes"] > 1e11
 
 
+def test_a_refused_run_ends_its_figure_process(monkeypatch, tmp_path):
+    """The figure process starts before the size check (to import matplotlib meanwhile);
+    a run refused there ends it too."""
+    import coupling.app.cli as cli
+    import coupling.io.figure_worker as figure_worker
+
+    closed = []
+
+    class Worker:
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            closed.append(True)
+
+    monkeypatch.setattr(figure_worker, "FigureWorker", Worker)
+    config = tmp_path / "c.toml"
+    config.write_text(
+        BASE.format(shape="square", h=1e-5, d=1 / 16, structured="true", signorini='["bottom"]')
+    )
+    assert cli.main(["solve", str(config), "--out", str(tmp_path / "out")]) == 2
+    assert closed == [True]
+
+
 def test_memory_error_ends_as_one_line(monkeypatch, tmp_path, capsys):
     """A MemoryError that the estimate did not foresee (here raised on purpose by the
     command) ends as one line and exit code 2, not a traceback."""

@@ -15,6 +15,7 @@ only rank 0 prints, so a bad input ends every rank with exit code 2 and one mess
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
 import json
 import os
@@ -22,6 +23,7 @@ import signal
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -227,9 +229,18 @@ def _solve(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
     config = _problem_inputs(args)
     from coupling.io.figure_worker import FigureWorker
 
+    # the figure process starts first, to import matplotlib while the run imports and
+    # computes; it is ended on every way out of the run (a refused size included)
+    worker = FigureWorker() if config["output"]["plots"] and comm.rank == 0 else None
+    with worker if worker is not None else contextlib.nullcontext():
+        return _solve_config(args, interrupts, comm, config, worker)
+
+
+def _solve_config(
+    args: argparse.Namespace, interrupts: InterruptHandler, comm: Any, config: dict, worker: Any
+) -> int:
+    """``fembem solve`` of the validated ``config`` (the figure process ``worker`` started)."""
     plots = config["output"]["plots"]
-    # the figure process starts first, to import matplotlib while the run imports and computes
-    worker = FigureWorker() if plots and comm.rank == 0 else None
     from coupling.app.advice import arc_warnings, material_warnings
     from coupling.app.from_config import domain_from_config, planned_size, problem_on_domain
     from coupling.app.progress import ProgressMonitor
