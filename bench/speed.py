@@ -18,12 +18,14 @@ The ratios, measured in the same run: whole run / Poisson pipeline (process wall
 target <= 2.5 at 10^6 dofs and no worse at 4e6) and solve stage / Poisson solve (the
 stage from the assembled problem to the converged iterate: preconditioner, step
 estimate, iteration and, when nested, the coarser levels and the prolongation; against
-assembly + GAMG set-up + CG; target <= 1.5 at 10^6), printed as met / not met. The bare
-iteration (summary.json ``solve``) over the Poisson solve is shown too. No assertions:
-the numbers go to docs/design/speed.md.
+assembly + GAMG set-up + CG; target <= 1.5 at 10^6), the outputs' share of the run
+(target <= 10 %) and, nested, the Newton steps and CG iterations of the finest level
+(target <= 3 and about 30), printed as met / not met for every size from 10^6 dofs on.
+The bare iteration (summary.json ``solve``) over the Poisson solve is shown too. No
+assertions: the numbers go to docs/design/speed.md.
 
-    .venv/bin/python bench/speed.py [--sizes 100,250,500,1000] [--repeat 1] [--out DIR]
-                                    [--json FILE]
+    .venv/bin/python bench/speed.py [--sizes 100,250,500,1000,2000] [--repeat 1]
+                                    [--out DIR] [--json FILE]
 """
 from __future__ import annotations
 
@@ -38,11 +40,15 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-DEFAULT_SIZES = (100, 250, 500, 1000)
+DEFAULT_SIZES = (100, 250, 500, 1000, 2000)
 #: Stages of summary.json that make up the solve stage (from the assembled problem to
 #: the converged iterate); the nested run adds its coarser levels and prolongation.
 SOLVE_STAGES = ("preconditioner", "step_estimate", "solve", "coarse_levels", "prolongation")
 TARGET_WHOLE, TARGET_SOLVE = 2.5, 1.5
+#: The outputs stage's share of the run (summary.json ``outputs`` / ``total``), and the
+#: finest level of the nested run: at most this many Newton steps and about this many
+#: preconditioned CG iterations in all (issue 18).
+TARGET_OUTPUTS, TARGET_FINE_STEPS, TARGET_FINE_CG = 0.10, 3, 30
 
 
 def manufactured_data() -> dict[str, str]:
@@ -284,8 +290,14 @@ def poisson_table(rows: list[dict]) -> list[str]:
     return lines
 
 
+def _verdict(ok: bool) -> str:
+    return f"**{'met' if ok else 'not met'}**"
+
+
 def targets(rows: list[dict]) -> list[str]:
-    """The two targets at the largest size >= 10^6 dofs (and each size from 10^6 on)."""
+    """The targets at each size from 10^6 dofs on: whole run and solve stage against the
+    Poisson pipeline, the outputs' share of the run and, for the nested run, the Newton
+    steps and CG iterations of its finest level."""
     lines = []
     big = [r for r in rows if r["poisson"]["dofs"] >= 1e6]
     if not big:
@@ -298,12 +310,23 @@ def targets(rows: list[dict]) -> list[str]:
                 lines.append(f"- N = {p['dofs']}, {key}: the run failed")
                 continue
             whole, solve = r["wall"] / p["wall"], r["solve_stage"] / p["solve"]
-            lines.append(
+            share = r["timings"]["outputs"] / r["timings"]["total"]
+            line = (
                 f"- N = {r['dofs']}, {key}: whole run / Poisson pipeline = {whole:.2f} "
-                f"(target <= {TARGET_WHOLE}): **{'met' if whole <= TARGET_WHOLE else 'not met'}**"
-                f"; solve stage / Poisson solve = {solve:.2f} (target <= {TARGET_SOLVE}): "
-                f"**{'met' if solve <= TARGET_SOLVE else 'not met'}**"
+                f"(target <= {TARGET_WHOLE}): {_verdict(whole <= TARGET_WHOLE)}; solve stage "
+                f"/ Poisson solve = {solve:.2f} (target <= {TARGET_SOLVE}): "
+                f"{_verdict(solve <= TARGET_SOLVE)}; outputs {100 * share:.1f} % of the run "
+                f"(target <= {100 * TARGET_OUTPUTS:.0f} %): {_verdict(share <= TARGET_OUTPUTS)}"
             )
+            if r.get("levels"):
+                fine = r["levels"][-1]
+                steps, cg = fine["iterations"], fine["cg_iterations"]
+                ok = steps <= TARGET_FINE_STEPS and cg <= TARGET_FINE_CG
+                line += (
+                    f"; finest level {steps} Newton steps, {cg} CG iterations (target <= "
+                    f"{TARGET_FINE_STEPS}, about {TARGET_FINE_CG}): {_verdict(ok)}"
+                )
+            lines.append(line)
     return lines
 
 
@@ -312,8 +335,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--sizes",
         default=",".join(map(str, DEFAULT_SIZES)),
-        help="comma-separated cells per side (N ~ (cells + 1)^2; default 100,250,500,1000; "
-        "2000 gives 4e6 dofs)",
+        help="comma-separated cells per side (N ~ (cells + 1)^2; default "
+        f"{','.join(map(str, DEFAULT_SIZES))}: 1e4 .. 4e6 dofs)",
     )
     parser.add_argument(
         "--repeat",
