@@ -91,7 +91,7 @@ SSN_CG_MAX_ITERATIONS = 500  # cap on the CG iterations of one Newton step
 #: 10^6 dofs, the same 11 steps); 1 (Eisenstat and Walker's eta_k ~ ||F_k||, q-quadratic)
 #: from a given iterate (nested iteration, adaptivity), whose active set is nearly right
 #: from the first step: the finest level of a nested solve then takes 3 Newton steps
-#: instead of 4 at 6e4 .. 4e6 dofs with the same CG iterations (docs/design/nested.md)
+#: instead of 4 at 6e4 .. 4e6 dofs with the same CG iterations (docs/design/solvers.md)
 SSN_FORCING_EXPONENT = 0.5
 SSN_WARM_FORCING_EXPONENT = 1.0
 #: A Newton step after one of relative B-norm ||xi_k - xi_k-1||_B / ||xi_k||_B at most this
