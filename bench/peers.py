@@ -249,8 +249,8 @@ def worker(spec: dict[str, Any]) -> None:
     from coupling import baselines
     from coupling.manufactured import square_contact
     from coupling.problem import SignoriniProblem
-    from fem_py.geometry import build_domain
-    from fem_py.materials import make_material
+    from fem_py.forms import make_material
+    from fem_py.mesh import GeometrySpec, build_domain
 
     comm = MPI.COMM_WORLD
     cells, budget = int(spec["cells"]), float(spec["budget"])
@@ -263,13 +263,15 @@ def worker(spec: dict[str, Any]) -> None:
     tic = time.perf_counter()
     domain = build_domain(
         comm,
-        manufactured.shape,
-        h=h,
-        subdomain_size=4 * h,
-        center=manufactured.center,
-        width=manufactured.width,
-        signorini=manufactured.signorini,
-        structured=True,
+        GeometrySpec(
+            manufactured.shape,
+            h=h,
+            subdomain_size=4 * h,
+            center=manufactured.center,
+            width=manufactured.width,
+            signorini=manufactured.signorini,
+            structured=True,
+        ),
     )
     mesh_time = time.perf_counter() - tic
     material = make_material("carstensen")
@@ -370,7 +372,7 @@ def worker(spec: dict[str, Any]) -> None:
             "dofs": domain.mesh.topology.index_map(0).size_global,
         }
         from fem_py.boundary import BoundaryMap
-        from fem_py.forms import p1_space
+        from fem_py.dofs import p1_space
 
         V = p1_space(domain.mesh)
         boundary = BoundaryMap(V, domain)

@@ -21,7 +21,7 @@ from coupling.preconditioners import build_preconditioner
 from coupling.solvers import solve
 from coupling.solvers.projection import SignoriniProjection
 from coupling.timing import best_of as _best_of
-from fem_py.materials import make_material
+from fem_py.forms import make_material
 
 
 def best_of(fn) -> float:

@@ -62,8 +62,7 @@ def manufactured_data() -> dict[str, str]:
     import sympy
 
     from coupling.manufactured import square_contact
-    from fem_py.expressions import parse_expression
-    from fem_py.materials import make_material
+    from fem_py.forms import make_material, parse_expression
 
     sol = square_contact()
     x, y, nx, ny = sympy.symbols("x y nx ny", real=True)

@@ -53,7 +53,7 @@ def worker(cells: int, method: str) -> None:
     from coupling.options import SolverOptions
     from coupling.preconditioners import build_preconditioner
     from coupling.solvers import solve
-    from fem_py.materials import make_material
+    from fem_py.forms import make_material
     from fem_py.parallel import threads_per_rank
 
     comm = MPI.COMM_WORLD

@@ -30,7 +30,7 @@ from typing import Any, Callable
 import numpy as np
 import ufl
 
-from fem_py.expressions import numpy_function, parse_expression
+from fem_py.forms import numpy_function, parse_expression
 
 __all__ = [
     "ManufacturedSolution",
@@ -76,7 +76,7 @@ class ManufacturedSolution:
     Attributes
     ----------
     shape, width, center
-        The geometry (fem_py.geometry.build_domain arguments).
+        The geometry (fem_py.mesh.build_domain arguments).
     arcs
         The Signorini arcs, counter-clockwise end points.
     u, ue
@@ -293,18 +293,20 @@ def manufactured_problem(
     ``cells`` cells per side of the bounding square (h = width / cells) and subdomains
     of d = d_over_h * h; ``discretisation``: ``flux_space``, ``jacobian`` of the problem."""
     from coupling.problem import SignoriniProblem
-    from fem_py.geometry import build_domain
+    from fem_py.mesh import GeometrySpec, build_domain
 
     h = solution.width / cells
     curved = {"disk": {"radius": solution.radius}, "ellipse": {"semi_axes": solution.semi_axes}}
     domain = build_domain(
         comm,
-        solution.shape,
-        h=h,
-        subdomain_size=d_over_h * h,
-        center=solution.center,
-        **curved.get(solution.shape, {"width": solution.width, "structured": structured}),
-        signorini=solution.signorini,
+        GeometrySpec(
+            solution.shape,
+            h=h,
+            subdomain_size=d_over_h * h,
+            center=solution.center,
+            **curved.get(solution.shape, {"width": solution.width, "structured": structured}),
+            signorini=solution.signorini,
+        ),
     )
     data = solution.data(domain.mesh, material)
     return SignoriniProblem(
@@ -314,7 +316,7 @@ def manufactured_problem(
 
 def energy_error(problem, u_h, exact: str) -> float:
     """|u_h - u|_1, the H^1 seminorm (energy) error of ``u_h`` against the exact solution
-    ``exact`` (an expression in x, y; :mod:`fem_py.expressions`) on the problem's mesh,
+    ``exact`` (an expression in x, y; :mod:`fem_py.forms.expressions`) on the problem's mesh,
     integrated by UFL at the default quadrature of the expression (collective)."""
     from dolfinx import fem
     from mpi4py import MPI

@@ -133,7 +133,7 @@ HMATRIX_CROSSOVER = 2048
 #: products agree with the dense S_h to a few times this (docs/design/hmatrix.md), far
 #: below the solver tolerances (1e-8 by default).
 HMATRIX_TOL = 1e-10
-#: The adaptive loop splits a subdomain (``fem_py.grading``) once its diameter over its
+#: The adaptive loop splits a subdomain (``fem_py.mesh.grading``) once its diameter over its
 #: smallest cell exceeds this many times the largest such ratio of the first mesh (d/h
 #: for a structured mesh), so that H/h in the substructuring bound (1 + log(H/h))^2
 #: stays bounded over the levels; the parts are halved until each is below the bound.

@@ -8,12 +8,12 @@ is assembled and is not changed after construction; preconditioners
 Example
 -------
 >>> from mpi4py import MPI
->>> from fem_py.geometry import build_domain
->>> from fem_py.materials import make_material
+>>> from fem_py.forms import make_material
+>>> from fem_py.mesh import GeometrySpec, build_domain
 >>> from coupling.options import SolverOptions
 >>> from coupling.solvers import solve
->>> domain = build_domain(MPI.COMM_WORLD, "square", h=1/32, subdomain_size=1/8,
-...                       signorini=["bottom"])
+>>> spec = GeometrySpec("square", h=1/32, subdomain_size=1/8, signorini=["bottom"])
+>>> domain = build_domain(MPI.COMM_WORLD, spec)
 >>> problem = SignoriniProblem(domain, make_material("carstensen"), f="1", t0="-1")
 >>> solution = solve(problem, SolverOptions())
 """
@@ -40,9 +40,9 @@ class SignoriniProblem:
     Parameters
     ----------
     domain
-        ``fem_py.geometry.Domain``: mesh, tags, coarse partition, Signorini arcs.
+        ``fem_py.mesh.Domain``: mesh, tags, coarse partition, Signorini arcs.
     material
-        ``fem_py.materials.Material`` (rho).
+        ``fem_py.forms.materials.Material`` (rho).
     f, u0, t0
         Data as expression strings (fem_py parser; u0 and t0 may use nx, ny), UFL
         expressions, or (u0) a callable of boundary coordinates.
@@ -90,7 +90,8 @@ class SignoriniProblem:
         boundary_operator: str = DEFAULTS["solver"]["boundary_operator"],
     ):
         from fem_py.boundary import BoundaryMap
-        from fem_py.forms import InteriorForms, p1_space
+        from fem_py.dofs import p1_space
+        from fem_py.forms import InteriorForms
 
         self.domain, self.material, self.a = domain, material, float(a)
         self.flux_space, self.jacobian = flux_space, jacobian

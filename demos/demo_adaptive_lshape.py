@@ -32,8 +32,8 @@ from coupling.manufactured import (
 )
 from coupling.options import SolverOptions
 from coupling.problem import SignoriniProblem
-from fem_py.geometry import build_domain
-from fem_py.materials import make_material
+from fem_py.forms import make_material
+from fem_py.mesh import GeometrySpec, build_domain
 
 parser = demo_parser(
     "demo_adaptive_lshape",
@@ -78,11 +78,13 @@ def run(solution: ManufacturedSolution, theta: float, max_dofs: int) -> tuple[li
     the rows printed per level and the levels."""
     domain = build_domain(
         comm,
-        "lshape",
-        h=0.5 / args.cells,
-        subdomain_size=1.0 / args.cells,
-        structured=True,
-        signorini=solution.signorini,
+        GeometrySpec(
+            "lshape",
+            h=0.5 / args.cells,
+            subdomain_size=1.0 / args.cells,
+            structured=True,
+            signorini=solution.signorini,
+        ),
     )
     rows = []
 

@@ -35,9 +35,7 @@ from common import demo_parser, rank0_print, write_results
 from coupling.manufactured import manufactured_problem, square_contact
 from coupling.options import SolverOptions
 from coupling.solvers import solve
-from fem_py.expressions import numpy_function
-from fem_py.jacobian_check import check_jacobian
-from fem_py.materials import make_material
+from fem_py.forms import check_jacobian, make_material, numpy_function
 
 parser = demo_parser(
     "demo_jacobians",

@@ -34,7 +34,7 @@ from coupling.manufactured import (
 )
 from coupling.options import SolverOptions
 from coupling.solvers import solve
-from fem_py.materials import make_material
+from fem_py.forms import make_material
 
 args = demo_parser(
     "demo_linear_transmission",

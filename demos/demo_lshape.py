@@ -26,7 +26,7 @@ from coupling.io.outputs import write_outputs
 from coupling.manufactured import lshape_contact, manufactured_problem, solution_errors
 from coupling.options import SolverOptions
 from coupling.solvers import solve
-from fem_py.materials import make_material
+from fem_py.forms import make_material
 
 args = demo_parser(
     "demo_lshape",

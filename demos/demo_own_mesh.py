@@ -29,8 +29,8 @@ from coupling.manufactured import disk_contact, solution_errors
 from coupling.options import SolverOptions
 from coupling.problem import SignoriniProblem
 from coupling.solvers import solve
-from fem_py.geometry import domain_from_file
-from fem_py.materials import make_material
+from fem_py.forms import make_material
+from fem_py.mesh import domain_from_file
 
 args = demo_parser(
     "demo_own_mesh",

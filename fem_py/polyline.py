@@ -9,6 +9,7 @@ __all__ = [
     "closest_on_polygon",
     "coarsened_polygon",
     "polygon_corners",
+    "diameter",
 ]
 
 
@@ -105,3 +106,14 @@ def coarsened_polygon(
             inner = np.searchsorted(s[a : b + 1], targets) + a
             chosen += sorted(set(int(j) for j in inner if a < j < b)) + ([i] if i < len(p) else [])
     return p[chosen]
+
+
+def diameter(P: np.ndarray) -> float:
+    """diam of the point set ``P`` (m, 2): the largest distance between two points (for
+    many points, between two vertices of their convex hull)."""
+    if len(P) > 64:
+        from scipy.spatial import ConvexHull
+
+        P = P[ConvexHull(P).vertices]
+    d = P[:, None, :] - P[None, :, :]
+    return float(np.sqrt((d**2).sum(-1)).max())

@@ -1,4 +1,4 @@
-"""Adaptivity (coupling.adapt, fem_py.refinement; docs/design/estimator.md): each term of
+"""Adaptivity (coupling.adapt, fem_py.mesh.refinement; docs/design/estimator.md): each term of
 the estimator where it must vanish, Doerfler marking, re-tagging after local refinement,
 the transfer of the iterate, efficiency and rates of the adaptive loop, [adapt] config.
 """
@@ -30,9 +30,8 @@ from coupling.manufactured import (
 from coupling.options import SolverOptions
 from coupling.problem import SignoriniProblem
 from coupling.solvers import solve
-from fem_py.geometry import build_domain
-from fem_py.materials import make_material
-from fem_py.refinement import refine_domain
+from fem_py.forms import make_material
+from fem_py.mesh import GeometrySpec, build_domain, refine_domain
 
 COMM = MPI.COMM_WORLD
 #: u = r^(2/3) sin(2 theta/3) around the re-entrant corner (0, 0) of the L-shape, theta
@@ -65,7 +64,10 @@ def slope(n: list[float], e: list[float]) -> float:
 @pytest.fixture(scope="module")
 def square():
     return build_domain(
-        COMM, "square", h=1 / 16, subdomain_size=1 / 8, signorini=["bottom"], structured=True
+        COMM,
+        GeometrySpec(
+            "square", h=1 / 16, subdomain_size=1 / 8, signorini=["bottom"], structured=True
+        ),
     )
 
 
@@ -210,7 +212,9 @@ def corner_levels():
     """The L-shape corner singularity, adaptive (theta = 0.5) from h = 1/16."""
     solution = corner_solution()
     material = make_material("linear")
-    domain = build_domain(COMM, "lshape", h=1 / 16, subdomain_size=1 / 8, structured=True)
+    domain = build_domain(
+        COMM, GeometrySpec("lshape", h=1 / 16, subdomain_size=1 / 8, structured=True)
+    )
     levels = adapt(
         builder_of(solution, material, zero_f=True),
         domain,
@@ -244,7 +248,7 @@ def test_adaptive_lshape_reaches_the_uniform_error_with_half_the_dofs(corner_lev
     the dofs (measured: 537 and 1,643 dofs, 0.17 and 0.13 of the uniform dofs;
     docs/design/adapt.md)."""
     solution = corner_solution()
-    domain = build_domain(COMM, "lshape", h=h, subdomain_size=1 / 8, structured=True)
+    domain = build_domain(COMM, GeometrySpec("lshape", h=h, subdomain_size=1 / 8, structured=True))
     problem, _ = builder_of(solution, make_material("linear"), zero_f=True)(domain)
     uniform = solve(problem, SolverOptions())
     assert uniform.converged
@@ -259,11 +263,13 @@ def adaptive_levels(solution, rho: str, **adapt_options) -> list:
     subdomains of 1/8: the levels with their errors (solution_errors)."""
     domain = build_domain(
         COMM,
-        solution.shape,
-        h=1 / 16,
-        subdomain_size=1 / 8,
-        signorini=solution.signorini,
-        structured=True,
+        GeometrySpec(
+            solution.shape,
+            h=1 / 16,
+            subdomain_size=1 / 8,
+            signorini=solution.signorini,
+            structured=True,
+        ),
     )
     levels = adapt(
         builder_of(solution, make_material(rho)),
@@ -328,7 +334,7 @@ def corner_contact_levels():
     """lshape_corner_contact (the r^(2/3) corner singularity and the bottom side in
     contact for x < 0; linear material) up to 12,000 dofs. (Its eighth level has nodes on
     the side x = -1/4 that dolfinx's collision test missed in the previous mesh before
-    fem_py.refinement.locate_cells fell back to barycentric location.)"""
+    fem_py.mesh.refinement.locate_cells fell back to barycentric location.)"""
     return adaptive_levels(lshape_corner_contact(), "linear", steps=12, max_dofs=12000)
 
 
@@ -391,7 +397,9 @@ def test_adapt_options_and_config():
 def test_refinement_keeps_curved_coarse_edges(shape, extra):
     """Meshes whose coarse structure has curved edges (corner_angle): the new boundary
     nodes are facet midpoints, no new bend, the same coarse vertices."""
-    domain = build_domain(COMM, shape, h=1 / 16, subdomain_size=1 / 8, **extra)
+    domain = build_domain(
+        COMM, GeometrySpec(shape, h=1 / 16, subdomain_size=1 / 8, structured=False, **extra)
+    )
     n = domain.mesh.topology.index_map(2).size_local
     refined = refine_domain(domain, np.arange(0, n, 2))
     old, new = domain.coarse, refined.coarse

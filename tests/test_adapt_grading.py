@@ -1,4 +1,4 @@
-"""Subdomains on adapted meshes (fem_py.grading, issue 19): after every refinement the
+"""Subdomains on adapted meshes (fem_py.mesh.grading, issue 19): after every refinement the
 adaptive loop splits the subdomains the refinement has graded, so diameter / smallest
 cell stays bounded, every part is connected with coarse vertices on its boundary, and
 the PGPM count stays bounded over the levels (docs/design/adapt.md, "Subdomains on
@@ -14,10 +14,9 @@ from test_adapt import builder_of, corner_solution
 
 from coupling.adapt import AdaptOptions, adapt
 from coupling.options import GRADING_SPLIT_FACTOR, SolverOptions
-from fem_py.geometry import build_domain
-from fem_py.grading import split_cells, subdomain_grading
-from fem_py.materials import make_material
-from fem_py.meshdata import tag_array
+from fem_py.dofs import tag_array
+from fem_py.forms import make_material
+from fem_py.mesh import GeometrySpec, build_domain, split_cells, subdomain_grading
 from fem_py.partition import cell_adjacency
 
 COMM = MPI.COMM_WORLD
@@ -50,7 +49,9 @@ def corner_levels():
     """PGPM on the singular L-shape (h = 1/16, d = 1/8, theta = 0.5), 10 levels to
     5,371 dofs: per level the record, the largest grading ratio and partition facts."""
     assert COMM.size == 1
-    domain = build_domain(COMM, "lshape", h=1 / 16, subdomain_size=1 / 8, structured=True)
+    domain = build_domain(
+        COMM, GeometrySpec("lshape", h=1 / 16, subdomain_size=1 / 8, structured=True)
+    )
     rows = []
 
     def on_level(level):

@@ -6,7 +6,7 @@ from types import SimpleNamespace
 
 from conftest import run_cli
 from coupling.app.advice import arc_warnings, material_warnings
-from fem_py.materials import make_material
+from fem_py.forms import make_material
 
 DATA = '[data]\nf = "1"\nt0 = "-1"\n'
 

@@ -35,7 +35,7 @@ def _bench_module():
 @pytest.fixture(scope="module")
 def small_problem():
     from coupling.manufactured import manufactured_problem, square_contact
-    from fem_py.materials import make_material
+    from fem_py.forms import make_material
 
     return manufactured_problem(COMM, square_contact(), make_material("carstensen"), cells=16)
 
@@ -106,7 +106,7 @@ def test_grid_sequenced_snes_vi_reaches_the_ssn_solution(small_problem):
     level converges, and the finest in no more Newton steps than the cold start."""
     from coupling import baselines
     from coupling.manufactured import manufactured_problem, square_contact
-    from fem_py.materials import make_material
+    from fem_py.forms import make_material
 
     def coarse():
         return manufactured_problem(

@@ -14,7 +14,7 @@ from coupling.manufactured import MANUFACTURED, manufactured_problem
 from coupling.options import HMATRIX_CROSSOVER, SolverOptions
 from coupling.preconditioners import build_preconditioner
 from coupling.solvers import solve
-from fem_py.materials import make_material
+from fem_py.forms import make_material
 
 SCRIPT = str(ROOT / "tests" / "mpi" / "boundary_operator_check.py")
 #: 128 cells per side: 512 boundary dofs on the square and on the L-shape, eight

@@ -65,7 +65,7 @@ EXTERIOR_POINTS = np.array([[0.6, 0.0], [0.0, 0.6], [-0.3, 0.3], [0.26, -0.26], 
 
 
 def exact(expression: str, points: np.ndarray) -> np.ndarray:
-    from fem_py.expressions import numpy_function
+    from fem_py.forms import numpy_function
 
     return numpy_function(expression, ("x", "y"))(points[:, 0], points[:, 1])
 
@@ -327,7 +327,7 @@ def test_debug_shows_the_traceback(tmp_path):
 
 # ---------------------------------------------------------------- check-jacobian
 def test_check_jacobian_passes_for_carstensen_with_json_report(tmp_path):
-    from fem_py.jacobian_check import MATRIX_TOL, SLOPE_TOL
+    from fem_py.forms.jacobian_check import MATRIX_TOL, SLOPE_TOL
 
     path = tmp_path / "c.toml"
     path.write_text('[geometry]\nh = 0.0625\n[material]\nrho = "carstensen"\n')

@@ -27,8 +27,8 @@ from coupling.preconditioners.kernels import (
 )
 from coupling.preconditioners.substructuring import skeleton_form
 from coupling.problem import SignoriniProblem
-from fem_py.geometry import build_domain, domain_from_file
-from fem_py.materials import make_material
+from fem_py.forms import make_material
+from fem_py.mesh import GeometrySpec, build_domain, domain_from_file
 from mesh_files import square_msh
 
 COMM = MPI.COMM_WORLD
@@ -38,7 +38,10 @@ def _domains(tmp_path):
     h = 1 / 24
     return {
         "lshape": build_domain(
-            COMM, "lshape", h=h, subdomain_size=4 * h, signorini=["bottom"], structured=False
+            COMM,
+            GeometrySpec(
+                "lshape", h=h, subdomain_size=4 * h, signorini=["bottom"], structured=False
+            ),
         ),
         "imported": domain_from_file(
             COMM,

@@ -59,12 +59,12 @@ def test_errors_name_the_key(raw, message):
 
 
 def test_ellipse_keys():
-    from coupling.app.from_config import geometry_arguments
+    from coupling.app.from_config import geometry_spec
 
     config = parse_config({"geometry": {"shape": "ellipse", "semi_axes": [1, 0.25]}})
     assert config["geometry"]["semi_axes"] == [1.0, 0.25]
-    shape, kwargs = geometry_arguments(config)
-    assert shape == "ellipse" and kwargs["semi_axes"] == (1.0, 0.25) and "radius" not in kwargs
+    spec = geometry_spec(config)
+    assert spec.shape == "ellipse" and spec.semi_axes == (1.0, 0.25)
 
 
 def test_missing_file_and_bad_toml(tmp_path):

@@ -49,19 +49,21 @@ def _assert_arcs(domain, axes, arcs, center=(0.0, 0.0)) -> None:
 def test_ellipse_domain(axes):
     """Gamma and the arcs have the ellipse's lengths (up to the inscribed polygon's
     O(h^2)), the arc ends are coarse vertices, about area/d^2 subdomains."""
-    from fem_py.geometry import build_domain
+    from fem_py.mesh import GeometrySpec, build_domain
     from fem_py.polyline import segment_lengths
 
     h, d, center = 0.02, 0.08, (0.05, -0.02)
     arcs = [(-3 * math.pi / 4, -math.pi / 4), (0.5, 2.0)]
     domain = build_domain(
         COMM,
-        "ellipse",
-        h=h,
-        subdomain_size=d,
-        center=center,
-        semi_axes=axes,
-        signorini=[[_point(axes, t, center) for t in arc] for arc in arcs],
+        GeometrySpec(
+            "ellipse",
+            h=h,
+            subdomain_size=d,
+            center=center,
+            semi_axes=axes,
+            signorini=[[_point(axes, t, center) for t in arc] for arc in arcs],
+        ),
     )
     assert domain.shape == "ellipse" and domain.h == h and domain.h_max <= 2 * h
     V = domain.vertices
@@ -80,21 +82,23 @@ def test_ellipse_domain(axes):
 def test_ellipse_whole_boundary_and_arcs_next_to_its_vertices():
     """``"all"``, and arc ends within h/2 of the ends of the axes (pieces across a vertex;
     mirror images about an axis as arc ends)."""
-    from fem_py.geometry import build_domain
+    from fem_py.mesh import GeometrySpec, build_domain
 
     axes, h = (0.3, 0.2), 0.02
     whole = build_domain(
-        COMM, "ellipse", h=h, subdomain_size=4 * h, semi_axes=axes, signorini="all"
+        COMM, GeometrySpec("ellipse", h=h, subdomain_size=4 * h, semi_axes=axes, signorini="all")
     )
     assert whole.arcs[0].length == pytest.approx(_length(axes, 0, 2 * math.pi), rel=1e-3)
     arcs = [(-0.01, 0.01), (math.pi / 2 + 0.02, math.pi - 0.003)]
     domain = build_domain(
         COMM,
-        "ellipse",
-        h=h,
-        subdomain_size=4 * h,
-        semi_axes=axes,
-        signorini=[[_point(axes, t) for t in arc] for arc in arcs],
+        GeometrySpec(
+            "ellipse",
+            h=h,
+            subdomain_size=4 * h,
+            semi_axes=axes,
+            signorini=[[_point(axes, t) for t in arc] for arc in arcs],
+        ),
     )
     assert np.abs(np.hypot(*(domain.vertices / axes).T) - 1).max() < 1e-12
     _assert_arcs(domain, axes, arcs)
@@ -127,19 +131,23 @@ def test_ellipse_whole_boundary_and_arcs_next_to_its_vertices():
 )
 def test_ellipse_bad_arguments(kwargs, message):
     """One-line errors, raised by the closed-form size check before any meshing."""
-    from fem_py.geometry import domain_size
+    from fem_py.mesh import GeometrySpec, domain_size
 
     args = {**dict(h=0.02, subdomain_size=0.08, semi_axes=(0.3, 0.2)), **kwargs}
     with pytest.raises(ValueError, match=message) as err:
-        domain_size("ellipse", **args)
+        domain_size(GeometrySpec("ellipse", **args))
     assert "\n" not in str(err.value)
 
 
 def test_large_ellipse_with_allow_large():
-    from fem_py.geometry import domain_size
+    from fem_py.mesh import GeometrySpec, domain_size
 
     assert (
-        domain_size("ellipse", h=0.1, subdomain_size=0.4, semi_axes=(0.6, 0.2), allow_large=True)
+        domain_size(
+            GeometrySpec(
+                "ellipse", h=0.1, subdomain_size=0.4, semi_axes=(0.6, 0.2), allow_large=True
+            )
+        )
         is None
     )
 
@@ -154,7 +162,7 @@ def test_manufactured_solution_on_an_ellipse_converges_like_h2():
     from coupling.manufactured import ellipse_contact, manufactured_problem, solution_errors
     from coupling.options import SolverOptions
     from coupling.solvers import solve
-    from fem_py.materials import make_material
+    from fem_py.forms import make_material
 
     solution, material = ellipse_contact((0.3, 0.2)), make_material("carstensen")
     errors = []

@@ -22,7 +22,7 @@ from coupling.io.quantities import boundary_flux
 from coupling.manufactured import square_contact, manufactured_problem
 from coupling.options import SolverOptions
 from coupling.solvers import solve
-from fem_py.materials import make_material
+from fem_py.forms import make_material
 
 CONFIG = """
 [geometry]

@@ -9,9 +9,10 @@ from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
 from fem_py.boundary import BoundaryMap
-from fem_py.forms import InteriorForms, p1_space
-from fem_py.geometry import SIGNORINI_TAG0, build_domain
-from fem_py.materials import make_material
+from fem_py.dofs import p1_space
+from fem_py.forms import InteriorForms, make_material
+from fem_py.mesh import GeometrySpec, build_domain
+from fem_py.tags import SIGNORINI_TAG0
 
 COMM = MPI.COMM_WORLD
 POLY = [(0.0, 0.0), (0.5, 0.0), (0.6, 0.35), (0.3, 0.55), (-0.05, 0.4)]
@@ -27,8 +28,8 @@ CASES = {
 
 @pytest.fixture(scope="module", params=list(CASES))
 def case(request):
-    kw = dict(CASES[request.param])
-    dom = build_domain(COMM, kw.pop("shape"), h=1 / 16, subdomain_size=1 / 8, **kw)
+    kw = {"structured": False, **CASES[request.param]}
+    dom = build_domain(COMM, GeometrySpec(kw.pop("shape"), h=1 / 16, subdomain_size=1 / 8, **kw))
     V = p1_space(dom.mesh)
     return dom, V, BoundaryMap(V, dom)
 
@@ -153,7 +154,7 @@ def test_boundary_data(case):
 
 
 def test_square_node_normals():
-    dom = build_domain(COMM, "square", h=1 / 8, subdomain_size=1 / 4, structured=True)
+    dom = build_domain(COMM, GeometrySpec("square", h=1 / 8, subdomain_size=1 / 4, structured=True))
     bm = BoundaryMap(p1_space(dom.mesh), dom)
     assert np.allclose(
         bm.node_normals[0], [-np.sqrt(0.5), -np.sqrt(0.5)], atol=1e-15

@@ -1,4 +1,4 @@
-"""fem_py.coarse.Ragged (the coarse-edge chains as one flat array + offsets) against a
+"""fem_py.partition.coarse.Ragged (the coarse-edge chains as one flat array + offsets) against a
 tuple-of-arrays reference, the pack/unpack round trip of CoarseStructure, and the
 sorting helpers of _coarse_from_skeleton against the NumPy calls they replace.
 
@@ -9,15 +9,8 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from fem_py.coarse import (
-    CoarseStructure,
-    Ragged,
-    _first_index,
-    _pack,
-    _sort_rows,
-    _unpack,
-    as_ragged,
-)
+from fem_py.partition import CoarseStructure, Ragged, as_ragged
+from fem_py.partition.coarse import _first_index, _pack, _sort_rows, _unpack
 
 LENGTHS = [3, 0, 5, 3, 1, 5, 2, 3]
 
@@ -159,15 +152,13 @@ def test_first_index_equals_minimum_at(shuffle):
 
 
 def test_pack_unpack_round_trip():
-    from fem_py.geometry import build_domain
+    from fem_py.mesh import GeometrySpec, build_domain
 
     c = build_domain(
         MPI.COMM_SELF,
-        "square",
-        h=1 / 16,
-        subdomain_size=1 / 4,
-        structured=True,
-        signorini=["bottom"],
+        GeometrySpec(
+            "square", h=1 / 16, subdomain_size=1 / 4, structured=True, signorini=["bottom"]
+        ),
     ).coarse
     assert isinstance(c.edge_dofs, Ragged) and isinstance(c.edge_coords, Ragged)
     fields = _pack(c)

@@ -1,4 +1,4 @@
-"""fem_py.expressions: values of a table of expressions in all three backends, and the
+"""fem_py.forms.expressions: values of a table of expressions in all three backends, and the
 rejection of everything outside the grammar (no eval: injection attempts must fail)."""
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import ufl
 from dolfinx import fem, mesh
 from mpi4py import MPI
 
-from fem_py.expressions import Expression, from_sympy, numpy_function, parse_expression
+from fem_py.forms import Expression, from_sympy, numpy_function, parse_expression
 
 # (text, reference numpy function of x, y)
 TABLE = [

@@ -9,10 +9,15 @@ from dolfinx import fem
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from fem_py.forms import InteriorForms, assemble_boundary_load, compile_form, p1_space
-from fem_py.geometry import build_domain
-from fem_py.jacobian_check import check_jacobian
-from fem_py.materials import make_material
+from fem_py.dofs import p1_space
+from fem_py.forms import (
+    InteriorForms,
+    assemble_boundary_load,
+    check_jacobian,
+    compile_form,
+    make_material,
+)
+from fem_py.mesh import GeometrySpec, build_domain
 
 COMM = MPI.COMM_WORLD
 MATERIALS = [
@@ -27,7 +32,9 @@ AREA = 0.25  # square of width 0.5
 
 @pytest.fixture(scope="module")
 def domain():
-    return build_domain(COMM, "square", h=1 / 16, subdomain_size=1 / 4, structured=False)
+    return build_domain(
+        COMM, GeometrySpec("square", h=1 / 16, subdomain_size=1 / 4, structured=False)
+    )
 
 
 @pytest.fixture(scope="module")

@@ -1,4 +1,4 @@
-"""fem_py.geometry: mesh and coarse-partition invariants (METHOD.md section 6) for the
+"""fem_py.mesh: mesh and coarse-partition invariants (METHOD.md section 6) for the
 square, the L-shape and a polygon, structured and unstructured, and the error cases."""
 from __future__ import annotations
 
@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from fem_py.forms import p1_space
-from fem_py.geometry import GAMMA_T_TAG, SIGNORINI_TAG0, build_domain
+from fem_py.dofs import p1_space
+from fem_py.mesh import GeometrySpec, build_domain
+from fem_py.tags import GAMMA_T_TAG, SIGNORINI_TAG0
 
 COMM = MPI.COMM_WORLD
 H, D = 1.0 / 32, 1.0 / 8
@@ -30,8 +31,8 @@ CASES = {
 
 @pytest.fixture(scope="module", params=list(CASES))
 def domain(request):
-    kw = dict(CASES[request.param])
-    return build_domain(COMM, kw.pop("shape"), h=H, subdomain_size=D, **kw)
+    kw = {"structured": False, **CASES[request.param]}
+    return build_domain(COMM, GeometrySpec(kw.pop("shape"), h=H, subdomain_size=D, **kw))
 
 
 def _serial_mesh_data(dom):
@@ -161,7 +162,9 @@ def test_arcs_and_boundary_edges(domain):
 
 
 def test_structured_is_uniform():
-    dom = build_domain(COMM, "square", h=1 / 16, subdomain_size=1 / 4, structured=True)
+    dom = build_domain(
+        COMM, GeometrySpec("square", h=1 / 16, subdomain_size=1 / 4, structured=True)
+    )
     seg = dom.coarse.edge_segments()
     assert np.all(seg == 4)  # n = d/h per coarse edge
     assert dom.coarse.n_dofs == 9 * 9 and dom.coarse.n_subdomains == 4
@@ -173,18 +176,25 @@ def test_structured_is_uniform():
 
 def test_whole_boundary_flag():
     dom = build_domain(
-        COMM, "square", h=1 / 16, subdomain_size=1 / 4, structured=True, signorini="all"
+        COMM,
+        GeometrySpec("square", h=1 / 16, subdomain_size=1 / 4, structured=True, signorini="all"),
     )
     assert dom.signorini_is_whole_boundary and dom.arcs[0].whole
     assert np.all(dom.coarse.edge_arc[dom.coarse.edge_on_boundary] == 0)
     assert not build_domain(
-        COMM, "square", h=1 / 16, subdomain_size=1 / 4, signorini=["bottom"]
+        COMM,
+        GeometrySpec(
+            "square", h=1 / 16, subdomain_size=1 / 4, signorini=["bottom"], structured=False
+        ),
     ).signorini_is_whole_boundary
 
 
 def test_allow_large():
     dom = build_domain(
-        COMM, "square", h=1 / 4, subdomain_size=1 / 2, width=1.0, structured=True, allow_large=True
+        COMM,
+        GeometrySpec(
+            "square", h=1 / 4, subdomain_size=1 / 2, width=1.0, structured=True, allow_large=True
+        ),
     )
     assert dom.diameter == pytest.approx(np.sqrt(2), rel=1e-15)
 
@@ -247,5 +257,5 @@ ERRORS = [
 @pytest.mark.parametrize("args, kw, match", ERRORS, ids=[e[2] for e in ERRORS])
 def test_errors(args, kw, match):
     with pytest.raises(ValueError) as err:
-        build_domain(COMM, *args, **kw)
+        build_domain(COMM, GeometrySpec(*args, **{"structured": False, **kw}))
     assert match in str(err.value) and "\n" not in str(err.value)

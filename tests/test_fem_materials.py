@@ -1,11 +1,11 @@
-"""fem_py.materials: g' = t rho, rho' against finite differences, closed forms, the
+"""fem_py.forms.materials: g' = t rho, rho' against finite differences, closed forms, the
 structural check of METHOD.md section 1 and the error messages."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from fem_py.materials import make_material
+from fem_py.forms import make_material
 
 MATERIALS = [
     ("linear", {}),

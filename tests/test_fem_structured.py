@@ -1,11 +1,11 @@
-"""The structured refinement written down piece by piece (fem_py.structured): every
+"""The structured refinement written down piece by piece (fem_py.mesh.structured): every
 piece agrees with the whole, the triangles tile the coarse cells, and the ghosts and
 boundary segments it reports agree with a brute-force facet search."""
 import numpy as np
 import pytest
 
-from fem_py.shapes import grid_partition as _grid_partition
-from fem_py.structured import lattice, refine
+from fem_py.mesh.shapes import grid_partition as _grid_partition
+from fem_py.mesh.structured import lattice, refine
 
 
 def _areas(x, tris):

@@ -168,7 +168,7 @@ def test_memory_estimate_counts_the_hmatrix_operator_per_boundary_dof():
         HMATRIX_BOUNDARY_BYTES,
         memory_estimate,
     )
-    from fem_py.geometry import DomainSize
+    from fem_py.mesh import DomainSize
 
     size = DomainSize(
         dofs=16_000_000,

@@ -7,6 +7,10 @@ coupling.{problem, manufactured} -> coupling.preconditioners -> coupling.solvers
 coupling.io -> coupling.app -> coupling.{study, baselines}. The command line loads the
 study and the benchmark only when asked for (an import inside a function of
 coupling.app.cli).
+
+Inside a package the subpackages are layered too (``INNER_LAYERS``, one entry per
+package), with no exception for imports inside functions; and no module of any package
+takes part in an import circle, imports inside functions included.
 """
 from __future__ import annotations
 
@@ -34,6 +38,20 @@ LAYERS = [
 #: (importing module, imported package) pairs allowed upwards, inside functions only
 LAZY_UPWARDS = {("coupling.app.cli", "coupling.study")}
 
+#: The layers inside a package, lowest first (one entry per package). fem_py: the MPI
+#: helpers, point-set geometry, facet tags and the geometry spec -> the P1 dofs -> the
+#: subdomain partitions -> the meshes of Omega -> the forms -> the boundary map.
+INNER_LAYERS = {
+    "fem_py": [
+        ("fem_py.parallel", "fem_py.polyline", "fem_py.tags", "fem_py.spec"),
+        ("fem_py.dofs",),
+        ("fem_py.partition",),
+        ("fem_py.mesh",),
+        ("fem_py.forms",),
+        ("fem_py.boundary",),
+    ],
+}
+
 
 def _modules() -> list[tuple[str, Path]]:
     out = []
@@ -49,6 +67,14 @@ def _layer(module: str) -> int | None:
     if module in PACKAGES:  # a package's own __init__ imports nothing of its own
         return 0
     for i, names in enumerate(LAYERS):
+        if any(module == n or module.startswith(n + ".") for n in names):
+            return i
+    return None
+
+
+def _inner_layer(module: str) -> int | None:
+    package = module.split(".")[0]
+    for i, names in enumerate(INNER_LAYERS.get(package, ())):
         if any(module == n or module.startswith(n + ".") for n in names):
             return i
     return None
@@ -98,3 +124,50 @@ def test_no_private_names_across_modules(name, path):
 def test_module_size(name, path):
     lines = len(path.read_text().splitlines())
     assert lines <= MAX_LINES, f"{name} has {lines} lines (at most {MAX_LINES}): split it"
+
+
+@pytest.mark.parametrize("name,path", MODULES, ids=[m for m, _ in MODULES])
+def test_imports_point_down_inside_the_package(name, path):
+    package = name.split(".")[0]
+    if package not in INNER_LAYERS or name == package:
+        return
+    own = _inner_layer(name)
+    assert own is not None, f"{name} is in no layer of INNER_LAYERS[{package!r}]: add it"
+    for module, _, _ in _imports(ast.parse(path.read_text())):
+        if module.split(".")[0] != package:
+            continue
+        other = _inner_layer(module)
+        assert other is not None, f"{name} imports {module}, which is in no layer"
+        assert other <= own, f"{name} (layer {own}) imports {module} (layer {other})"
+
+
+def _import_graph() -> dict[str, set[str]]:
+    """module -> the project modules it imports (at module level or inside functions)."""
+    names = {name for name, _ in MODULES}
+    graph = {}
+    for name, path in MODULES:
+        graph[name] = set()
+        for module, imported, _ in _imports(ast.parse(path.read_text())):
+            # ``from package import module`` imports the module
+            targets = [f"{module}.{n}" for n in imported if f"{module}.{n}" in names]
+            graph[name].update(targets or ([module] if module in names else []))
+        graph[name].discard(name)
+    return graph
+
+
+def test_no_import_circles():
+    graph = _import_graph()
+    done: set[str] = set()
+
+    def visit(node: str, path: list[str]) -> None:
+        if node in path:
+            circle = path[path.index(node) :] + [node]
+            raise AssertionError("import circle: " + " -> ".join(circle))
+        if node in done:
+            return
+        for other in sorted(graph[node]):
+            visit(other, path + [node])
+        done.add(node)
+
+    for node in sorted(graph):
+        visit(node, [])

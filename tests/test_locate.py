@@ -1,4 +1,4 @@
-"""Point location in a triangle mesh (fem_py.locate) against exact answers: nodes and
+"""Point location in a triangle mesh (fem_py.mesh.location) against exact answers: nodes and
 random points of a structured mesh of the unit square, P1 interpolation exact for
 linear functions, points outside found in no triangle."""
 from __future__ import annotations
@@ -6,8 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import fem_py.locate
-from fem_py.locate import interpolate_p1, lattice_weights, locate
+import fem_py.mesh.location
+from fem_py.mesh import interpolate_p1, locate
+from fem_py.mesh.location import lattice_weights
 
 
 def _mesh(n: int):
@@ -27,7 +28,7 @@ def _mesh(n: int):
 
 @pytest.mark.parametrize("max_candidates", [64, 0])  # 0: the k-d tree candidates
 def test_random_points_are_in_the_triangle_that_holds_them(max_candidates, monkeypatch):
-    monkeypatch.setattr(fem_py.locate, "LOCATE_MAX_CANDIDATES", max_candidates)
+    monkeypatch.setattr(fem_py.mesh.location, "LOCATE_MAX_CANDIDATES", max_candidates)
     x, tris = _mesh(16)
     pts = np.random.default_rng(0).uniform(0, 1, (500, 2))
     cell, bary = locate(x, tris, pts)
@@ -65,7 +66,7 @@ def test_nodes_of_the_uniform_refinement_are_matched_without_a_point_location(
         assert len(points) == 0, f"{len(points)} points were located"
         return locate(x, triangles, points, **kwargs)
 
-    monkeypatch.setattr(fem_py.locate, "locate", no_location)
+    monkeypatch.setattr(fem_py.mesh.location, "locate", no_location)
     got = interpolate_p1(x, tris, values, fine, divisions=divisions)
     np.testing.assert_allclose(got, expected, atol=1e-15)
     monkeypatch.undo()

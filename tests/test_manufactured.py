@@ -21,7 +21,7 @@ from mpi4py import MPI
 from coupling.manufactured import MANUFACTURED, manufactured_problem, solution_errors
 from coupling.options import SolverOptions
 from coupling.solvers import solve
-from fem_py.materials import make_material
+from fem_py.forms import make_material
 
 MIN_ORDER = {
     "square": {"energy": 0.9, "nodal_u": 1.6, "gap": 1.8, "ue_exterior": 1.8},

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from conftest import ROOT, run_mpi
-from fem_py.distribute import subdomain_owners
-from fem_py.shapes import grid_partition
+from fem_py.mesh.distribute import subdomain_owners
+from fem_py.mesh.shapes import grid_partition
 
 SCRIPT = str(ROOT / "tests" / "mpi" / "distributed_preconditioner_check.py")
 

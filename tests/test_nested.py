@@ -22,7 +22,7 @@ from coupling.manufactured import manufactured_problem, square_contact
 from coupling.options import SolverOptions
 from coupling.solvers import solve
 from coupling.solvers.nested import prolong, solve_nested
-from fem_py.materials import make_material
+from fem_py.forms import make_material
 
 MATERIAL = make_material("carstensen")
 

@@ -104,8 +104,8 @@ def _solve_file(path, **kw):
     from coupling.options import SolverOptions
     from coupling.problem import SignoriniProblem
     from coupling.solvers import solve
-    from fem_py.geometry import domain_from_file
-    from fem_py.materials import make_material
+    from fem_py.forms import make_material
+    from fem_py.mesh import domain_from_file
 
     domain = domain_from_file(COMM, str(path), subdomain_size=0.16, signorini=["contact"], **kw)
     problem = SignoriniProblem(domain, make_material("carstensen"), f="2", t0="-1")
@@ -126,7 +126,7 @@ def test_msh_22_and_41_give_the_same_domain_and_solution(disk_files):
 def test_physical_subdomains_and_whole_boundary(disk_files):
     domain, _, result = _solve_file(disk_files[4.1], subdomains="physical")
     assert domain.coarse.n_subdomains == 1 and result.converged
-    from fem_py.geometry import domain_from_file
+    from fem_py.mesh import domain_from_file
 
     whole = domain_from_file(COMM, str(disk_files[4.1]), subdomain_size=0.1, signorini="all")
     assert whole.signorini_is_whole_boundary
@@ -138,7 +138,7 @@ def test_domain_from_mesh_equals_the_file_route(disk_files):
     import gmsh
     from dolfinx.io import gmshio
 
-    from fem_py.geometry import domain_from_file, domain_from_mesh
+    from fem_py.mesh import domain_from_file, domain_from_mesh
 
     gmsh.initialize()
     gmsh.option.setNumber("General.Terminal", 0)
@@ -156,11 +156,14 @@ def test_domain_from_mesh_equals_the_file_route(disk_files):
 
 
 def test_disk_shape():
-    from fem_py.geometry import build_domain
+    from fem_py.mesh import GeometrySpec, build_domain
 
     c = 0.25 / math.sqrt(2)
     domain = build_domain(
-        COMM, "disk", h=0.02, subdomain_size=0.08, radius=0.25, signorini=[[(-c, -c), (c, -c)]]
+        COMM,
+        GeometrySpec(
+            "disk", h=0.02, subdomain_size=0.08, radius=0.25, signorini=[[(-c, -c), (c, -c)]]
+        ),
     )
     assert domain.shape == "disk" and domain.h == 0.02
     assert np.isclose(domain.arcs[0].length, 0.25 * math.pi / 2, rtol=1e-3)
@@ -168,7 +171,9 @@ def test_disk_shape():
     ends = np.array([domain.arcs[0].start, domain.arcs[0].end])
     assert np.linalg.norm(domain.coarse.vertex_coords[:, None] - ends, axis=2).min(0).max() < 1e-12
     with pytest.raises(ValueError, match="signorini arc 0: point .* is not on the circle"):
-        build_domain(COMM, "disk", h=0.02, subdomain_size=0.08, signorini=[[(0, 0), (c, -c)]])
+        build_domain(
+            COMM, GeometrySpec("disk", h=0.02, subdomain_size=0.08, signorini=[[(0, 0), (c, -c)]])
+        )
 
 
 # ------------------------------------------------------------------ convergence, iterations
@@ -177,8 +182,8 @@ def test_manufactured_solution_on_a_disk_from_a_file_converges_like_h2(tmp_path)
     from coupling.options import SolverOptions
     from coupling.problem import SignoriniProblem
     from coupling.solvers import solve
-    from fem_py.geometry import domain_from_file
-    from fem_py.materials import make_material
+    from fem_py.forms import make_material
+    from fem_py.mesh import domain_from_file
 
     solution, material = disk_contact(), make_material("carstensen")
     errors = []
@@ -204,8 +209,8 @@ def test_imported_square_iterations_against_the_generated_one(tmp_path):
     from coupling.options import SolverOptions
     from coupling.problem import SignoriniProblem
     from coupling.solvers import solve
-    from fem_py.geometry import build_domain, domain_from_file
-    from fem_py.materials import make_material
+    from fem_py.forms import make_material
+    from fem_py.mesh import GeometrySpec, build_domain, domain_from_file
 
     h = 1 / 32
     path = square_msh(tmp_path / "sq.msh", h)
@@ -213,7 +218,10 @@ def test_imported_square_iterations_against_the_generated_one(tmp_path):
     for kind in ("generated", "imported"):
         if kind == "generated":
             domain = build_domain(
-                COMM, "square", h=h, subdomain_size=4 * h, signorini=["bottom"], structured=False
+                COMM,
+                GeometrySpec(
+                    "square", h=h, subdomain_size=4 * h, signorini=["bottom"], structured=False
+                ),
             )
         else:
             domain = domain_from_file(COMM, str(path), subdomain_size=4 * h, signorini=["bottom"])
@@ -327,7 +335,7 @@ def test_finely_drawn_polygon_gets_subdomains_of_size_d(structured):
     spacing) and the 480-gon 21,515 dofs (boundary nodes at every vertex); now the
     polygon is resampled at h (unstructured, automatic partition) or d (structured,
     coarse triangles), keeping its corners and the arc ends (issue 17's targets)."""
-    from fem_py.geometry import build_domain
+    from fem_py.mesh import GeometrySpec, build_domain
 
     h, d = 1 / 64, 1 / 16
     sizes = {}
@@ -337,12 +345,14 @@ def test_finely_drawn_polygon_gets_subdomains_of_size_d(structured):
         arc = [V[n * 5 // 8].tolist(), V[n * 7 // 8].tolist()]
         domain = build_domain(
             COMM,
-            "polygon",
-            h=h,
-            subdomain_size=d,
-            vertices=V.tolist(),
-            signorini=[arc],
-            structured=structured,
+            GeometrySpec(
+                "polygon",
+                h=h,
+                subdomain_size=d,
+                vertices=V.tolist(),
+                signorini=[arc],
+                structured=structured,
+            ),
         )
         area = 0.5 * n * 0.25**2 * np.sin(2 * np.pi / n)
         dofs = domain.mesh.topology.index_map(0).size_global

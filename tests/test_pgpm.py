@@ -23,15 +23,18 @@ from coupling.solvers import solve
 from coupling.solvers.apgpm import apgpm
 from coupling.solvers.lanczos import estimate_extremes
 from coupling.solvers.projection import SignoriniProjection
-from fem_py.geometry import build_domain
-from fem_py.materials import make_material
+from fem_py.forms import make_material
+from fem_py.mesh import GeometrySpec, build_domain
 
 COMM = MPI.COMM_WORLD
 
 
 def linear_transmission_problem(cells: int = 16) -> SignoriniProblem:
     domain = build_domain(
-        COMM, "square", h=0.5 / cells, subdomain_size=2.0 / cells, signorini=[], structured=True
+        COMM,
+        GeometrySpec(
+            "square", h=0.5 / cells, subdomain_size=2.0 / cells, signorini=[], structured=True
+        ),
     )
     return SignoriniProblem(
         domain, make_material("linear"), f="1 + x", u0="x*y", t0="0.3*nx - y", a=0.2

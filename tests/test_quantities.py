@@ -20,7 +20,7 @@ from coupling.io.quantities import boundary_flux, complementarity, log_coefficie
 from coupling.manufactured import MANUFACTURED, manufactured_problem
 from coupling.options import SolverOptions
 from coupling.solvers import solve
-from fem_py.materials import make_material
+from fem_py.forms import make_material
 
 MATERIAL = make_material("carstensen")
 

@@ -18,7 +18,7 @@ integral equation of METHOD.md section 2, evaluated by Galerkin matrices of bem_
 the boundary with every panel bisected (on the coarse boundary it is zero by
 construction of psi_h) and L2-projected there. Per cell, per term:
 :class:`Estimate`. Interior terms by UFL with a DG0 test function (any material of
-fem_py.materials); note that for P1, sigma_h is constant on each cell, so the volume
+fem_py.forms.materials); note that for P1, sigma_h is constant on each cell, so the volume
 term reduces to h_T^2 ||f||^2 for every material.
 """
 from __future__ import annotations
@@ -38,9 +38,9 @@ from scipy.spatial import cKDTree
 
 import bem_cpp
 from coupling.options import HMATRIX_TOL
-from fem_py.coarse import SIGNORINI_TAG0
 from fem_py.forms import as_ufl_data, compile_form
 from fem_py.parallel import array_from_root
+from fem_py.tags import SIGNORINI_TAG0
 
 __all__ = ["Estimate", "estimate", "contact_pressure", "bie_residual", "TERMS"]
 

@@ -1,12 +1,12 @@
 """The adaptive loop solve -> estimate -> mark -> refine (METHOD.md section 10).
 
 Each level is a new :class:`coupling.problem.SignoriniProblem` on the refined
-:class:`fem_py.geometry.Domain` (built by the caller's ``problem_builder``), solved by
+:class:`fem_py.mesh.Domain` (built by the caller's ``problem_builder``), solved by
 :func:`coupling.solvers.solve` from the previous solution transferred to it
 (:mod:`coupling.adapt.transfer`), estimated (:mod:`coupling.adapt.estimator`) and
 marked by Doerfler's rule (:mod:`coupling.adapt.marking`); the marked cells are
-refined (:func:`fem_py.refinement.refine_domain`) and the subdomains the refinement has
-graded are split (:func:`fem_py.grading.split_graded_subdomains`, bound
+refined (:func:`fem_py.mesh.refinement.refine_domain`) and the subdomains the refinement has
+graded are split (:func:`fem_py.mesh.grading.split_graded_subdomains`, bound
 ``coupling.options.GRADING_SPLIT_FACTOR``), so that H/h stays bounded.
 """
 from __future__ import annotations
@@ -21,9 +21,7 @@ from coupling.adapt.transfer import transfer_iterate
 from coupling.manufactured import energy_error
 from coupling.options import DEFAULTS, GRADING_SPLIT_FACTOR, SolverOptions
 from coupling.solvers import solve
-from fem_py.geometry import CORNER_ANGLE
-from fem_py.grading import split_graded_subdomains, subdomain_grading
-from fem_py.refinement import refine_domain
+from fem_py.mesh import CORNER_ANGLE, refine_domain, split_graded_subdomains, subdomain_grading
 
 __all__ = ["AdaptOptions", "adapt_options", "Level", "adapt"]
 
@@ -122,7 +120,7 @@ def adapt(
         and the data it was built with, ``{"f": ..., "t0": ...}`` (text, numbers or UFL
         on domain.mesh) for the estimator.
     domain
-        The first (coarsest) :class:`fem_py.geometry.Domain`.
+        The first (coarsest) :class:`fem_py.mesh.Domain`.
     options, adapt_options
         The ``[solver]`` and ``[adapt]`` sections. ``steps`` refinements give up to
         steps + 1 levels; the loop stops before a level of more than ``max_dofs`` dofs.

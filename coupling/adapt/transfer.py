@@ -1,7 +1,7 @@
 """The iterate of one level as the start of the next (nested iteration).
 
 The refined mesh keeps the old nodes and adds edge midpoints, so both transfers are
-exact interpolations: u_h by P1 interpolation (:func:`fem_py.refinement.transfer_p1`:
+exact interpolations: u_h by P1 interpolation (:func:`fem_py.mesh.refinement.transfer_p1`:
 old values, averages at midpoints), the gap phi_h along Gamma likewise (the old gap as
 a piecewise linear function on the old boundary polygon, 0 on Gamma_t, read at the new
 Signorini nodes). The step is clipped at 0 so the start lies in D_h.
@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from fem_py.refinement import boundary_transfer, transfer_p1
+from fem_py.mesh import boundary_transfer, transfer_p1
 
 __all__ = ["transfer_iterate"]
 

@@ -247,7 +247,7 @@ def _solve_config(
     from coupling.app.run import run_solver
     from coupling.app.sizing import check_memory, size_of_domain
     from coupling.preconditioners import problem_arcs
-    from fem_py.mesh_facts import mesh_facts
+    from fem_py.mesh import mesh_facts
     from fem_py.polyline import arc_length
     from coupling.io.atomic import staged_output_dir
     from coupling.io.outputs import RunOutputs
@@ -423,7 +423,7 @@ def _check_jacobian(args: argparse.Namespace, interrupts: InterruptHandler) -> i
     from mpi4py import MPI
 
     from coupling.app.from_config import domain_from_config, material_from_config
-    from fem_py.jacobian_check import check_jacobian
+    from fem_py.forms import check_jacobian
 
     comm = MPI.COMM_WORLD
     config = _problem_inputs(args)

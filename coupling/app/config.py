@@ -312,8 +312,7 @@ def check_data_and_material(config: dict[str, dict[str, Any]]) -> None:
     """
     import ufl
 
-    from fem_py.expressions import parse_expression
-    from fem_py.materials import make_material
+    from fem_py.forms import make_material, parse_expression
 
     domain = ufl.Mesh(ufl.VectorElement("Lagrange", ufl.triangle, 1))
     x, n = ufl.SpatialCoordinate(domain), ufl.FacetNormal(domain)
@@ -338,7 +337,7 @@ def check_data_and_material(config: dict[str, dict[str, Any]]) -> None:
 
 
 def geometry_error(err: ValueError) -> ValueError:
-    """Name the [geometry] key of an error raised by ``fem_py.geometry.build_domain``.
+    """Name the [geometry] key of an error raised by ``fem_py.mesh.build_domain``.
 
     Its messages start with the name of the argument at fault, which is the key of the
     same name (``signorini arc 0: point ... is not on the boundary``); a too large

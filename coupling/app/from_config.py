@@ -12,7 +12,7 @@ from coupling.options import NESTED_COARSENING, NESTED_MIN_DOFS, SolverOptions, 
 from coupling.problem import SignoriniProblem
 
 __all__ = [
-    "geometry_arguments",
+    "geometry_spec",
     "domain_from_config",
     "planned_size",
     "coarser_configs",
@@ -22,56 +22,42 @@ __all__ = [
 ]
 
 
-def geometry_arguments(config: dict) -> tuple[str, dict[str, Any]]:
-    """(shape, keyword arguments) of ``fem_py.geometry.build_domain`` and ``domain_size``
-    for the [geometry] section of a validated configuration."""
+def geometry_spec(config: dict) -> Any:
+    """The ``fem_py.mesh.GeometrySpec`` of the [geometry] section of a validated
+    configuration."""
+    from fem_py.mesh import GeometrySpec
+
     g = config["geometry"]
-    if g["mesh"]:  # a mesh file: fem_py.geometry.domain_from_file
-        return "mesh", dict(
-            path=g["mesh"],
-            subdomain_size=g["subdomain_size"],
-            signorini=g["signorini"],
-            subdomains=g["subdomains"],
-            allow_large=g["allow_large"],
-        )
-    return g["shape"], dict(
-        h=g["h"],
-        subdomain_size=g["subdomain_size"],
-        center=tuple(g["center"]),
-        width=g["width"],
-        vertices=g["vertices"] or None,
-        signorini=g["signorini"],
-        structured=g["structured"],
-        allow_large=g["allow_large"],
-        **({"radius": g["radius"]} if g["shape"] == "disk" else {}),
-        **({"semi_axes": tuple(g["semi_axes"])} if g["shape"] == "ellipse" else {}),
+    return GeometrySpec(
+        **{
+            **g,
+            "center": tuple(g["center"]),
+            "vertices": tuple(map(tuple, g["vertices"])),
+            "semi_axes": tuple(g["semi_axes"]),
+            "signorini": g["signorini"] if g["signorini"] == "all" else tuple(g["signorini"]),
+        }
     )
 
 
 def domain_from_config(comm: MPI.Comm, config: dict) -> Any:
-    """The ``fem_py.geometry.Domain`` of a validated configuration (collective)."""
-    from fem_py.geometry import build_domain, domain_from_file
+    """The ``fem_py.mesh.Domain`` of a validated configuration (collective)."""
+    from fem_py.mesh import build_domain
 
-    shape, kwargs = geometry_arguments(config)
-    if shape == "mesh":
-        return domain_from_file(comm, **kwargs)
-    return build_domain(comm, shape, **kwargs)
+    return build_domain(comm, geometry_spec(config))
 
 
 def planned_size(config: dict) -> Any:
-    """The ``fem_py.geometry.DomainSize`` of the configuration's domain in closed form (no
+    """The ``fem_py.mesh.DomainSize`` of the configuration's domain in closed form (no
     mesh), or None when only meshing tells (a mesh file: then its existence is checked)."""
-    from fem_py.geometry import domain_size
+    from fem_py.mesh import domain_size
 
-    shape, kwargs = geometry_arguments(config)
-    if shape == "mesh":
-        if not Path(kwargs["path"]).is_file():  # before an output folder is made
-            raise ValueError(
-                f"mesh: file {kwargs['path']!r} not found; give the path of a gmsh .msh "
-                "file (relative to the configuration file's folder)"
-            )
-        return None
-    return domain_size(shape, **kwargs)
+    spec = geometry_spec(config)
+    if spec.mesh and not Path(spec.mesh).is_file():  # before an output folder is made
+        raise ValueError(
+            f"mesh: file {spec.mesh!r} not found; give the path of a gmsh .msh "
+            "file (relative to the configuration file's folder)"
+        )
+    return domain_size(spec)
 
 
 def coarser_configs(
@@ -111,8 +97,8 @@ def coarser_configs(
 
 
 def material_from_config(config: dict) -> Any:
-    """The ``fem_py.materials.Material`` of a validated configuration."""
-    from fem_py.materials import make_material
+    """The ``fem_py.forms.materials.Material`` of a validated configuration."""
+    from fem_py.forms import make_material
 
     m = config["material"]
     return make_material(m["rho"], p=m["p"], eps=m["eps"])

@@ -39,7 +39,7 @@ class ProgressMonitor:
 
     def problem(self, problem, options, arc_lengths, facts: dict) -> None:
         """The size of the assembled problem and its mesh (``facts``:
-        :func:`fem_py.mesh_facts.mesh_facts`), the material, the Signorini arcs and the
+        :func:`fem_py.mesh.facts.mesh_facts`), the material, the Signorini arcs and the
         method about to run."""
         m = problem.material
         self.stage(

@@ -20,7 +20,7 @@ from typing import Any
 
 
 from coupling.distributed import boundary_operator_kind
-from fem_py.geometry import DomainSize
+from fem_py.mesh import DomainSize
 
 __all__ = [
     "PLOT_PROCESS_BYTES",
@@ -98,8 +98,8 @@ def size_of_domain(domain: Any) -> DomainSize:
     """The sizes of a built domain (collective): the P1 counts, L, and the shortest and
     longest fine facet."""
     from fem_py.boundary import BoundaryMap
-    from fem_py.forms import p1_space
-    from fem_py.mesh_facts import shortest_facet
+    from fem_py.dofs import p1_space
+    from fem_py.mesh import shortest_facet
 
     V = p1_space(domain.mesh)
     boundary = BoundaryMap(V, domain)

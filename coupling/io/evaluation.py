@@ -1,7 +1,7 @@
 """u_h and u_e at any points, from the fields of a finished run (``fembem evaluate``).
 
 Each point is located against the mesh of fields.npz (P1 triangles,
-:func:`fem_py.locate.locate`) and against Gamma:
+:func:`fem_py.mesh.location.locate`) and against Gamma:
 
 - ``inside`` Omega: u = u_h (linear interpolation in its triangle); u_e does not apply;
 - on Gamma (closer than 1e-11 times the diameter of Gamma's bounding box): u = u_h and
@@ -17,7 +17,7 @@ import numpy as np
 
 import bem_cpp
 from coupling.options import HMATRIX_TOL
-from fem_py.locate import interpolate_p1
+from fem_py.mesh import interpolate_p1
 from fem_py.polyline import closest_on_polygon
 
 __all__ = ["evaluate", "exterior_from_fields", "ON_GAMMA"]

@@ -1,7 +1,7 @@
 """Outputs of a run: summary.json, fields.npz, solution.xdmf and PNG plots.
 
 fields.npz holds, in the input numbering of the mesh nodes (the same for any number of
-ranks, :mod:`fem_py.numbering`), ``x`` (N, 2), ``u`` (N,) and ``triangles`` (n_cells,
+ranks, :mod:`fem_py.dofs.numbering`), ``x`` (N, 2), ``u`` (N,) and ``triangles`` (n_cells,
 3); along Gamma, counter-clockwise from the first polygon vertex, ``boundary_x`` (n, 2),
 ``boundary_u``, the gap ``phi`` (0 on Gamma_t), ``ue`` = u + phi - u0, ``active`` (bool:
 Signorini node in contact), ``signorini`` (bool: node carrying a phi unknown), all (n,);
@@ -42,8 +42,8 @@ from coupling.io.plots import (
     write_pngs,
 )
 from coupling.io.quantities import boundary_flux, complementarity, log_coefficient
-from fem_py.mesh_facts import mesh_facts
-from fem_py.numbering import gather_cells, gather_p1
+from fem_py.dofs import gather_cells, gather_p1
+from fem_py.mesh import mesh_facts
 from fem_py.parallel import broadcast_from_root
 
 __all__ = [
@@ -213,7 +213,7 @@ class RunOutputs:
         ``estimator`` (eta) and ``error`` (|u_h - u|_1 against ``[data] exact``) to
         summary.json; ``indicators``, eta_T^2 of the owned cells (local cell order), as
         ``indicators`` = eta_T in fields.npz, in the order of ``triangles``; ``facts``
-        (:func:`fem_py.mesh_facts.mesh_facts` of the problem's domain, computed here when
+        (:func:`fem_py.mesh.facts.mesh_facts` of the problem's domain, computed here when
         not given) to summary.json.
 
         Returns

@@ -26,7 +26,7 @@ from coupling.preconditioners.exact import ExactPreconditioner
 from coupling.preconditioners.root import RootPreconditioner
 from coupling.preconditioners.signorini import SignoriniArc, signorini_arcs
 from coupling.preconditioners.substructuring import SubstructuringPreconditioner
-from fem_py.geometry import GAMMA_T_TAG
+from fem_py.tags import GAMMA_T_TAG
 
 if TYPE_CHECKING:
     from petsc4py import PETSc
@@ -69,7 +69,7 @@ def build_preconditioner(
 
     Under MPI the substructuring preconditioner is distributed by subdomains
     (:class:`DistributedSubstructuringPreconditioner`) when every subdomain lies on one
-    rank (``fem_py.geometry.build_domain`` partitions so whenever there are at least as
+    rank (``fem_py.mesh.build_domain`` partitions so whenever there are at least as
     many subdomains as ranks); otherwise, and for the exact preconditioner, B is built
     from the gathered stiffness matrix and runs on rank 0 (:class:`RootPreconditioner`).
 

@@ -1,7 +1,7 @@
 """The substructuring preconditioner of METHOD.md section 6, distributed by subdomains.
 
 With the mesh partitioned so that every subdomain lies whole on one rank
-(``fem_py.geometry.subdomain_owners``), B_Omega^{-1} g needs no gathering:
+(``fem_py.mesh.distribute.subdomain_owners``), B_Omega^{-1} g needs no gathering:
 
 1. x_I = A_II^{-1} g_I: the interior dofs of a subdomain are owned by its rank, so
    each rank factors its own block of A_II (its subdomains' Dirichlet problems).
@@ -43,7 +43,7 @@ from coupling.preconditioners.kernels import (
     galerkin_coarse_matrix,
 )
 from coupling.preconditioners.signorini import SignoriniArc, SignoriniBlock
-from fem_py.coarse import as_ragged
+from fem_py.partition import as_ragged
 
 __all__ = ["DistributedSubstructuringPreconditioner", "subdomain_ranks"]
 
@@ -106,7 +106,7 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
     index_map
         The dof index map of the P1 space (owned range, ghosts).
     coarse
-        ``fem_py.coarse.CoarseStructure`` (replicated, global dof numbers).
+        ``fem_py.partition.coarse.CoarseStructure`` (replicated, global dof numbers).
     subdomain_rank
         (L,) owner rank of each subdomain (:func:`subdomain_ranks`).
     subdomain_size, signorini_arcs, edge_form, signorini_weight, coarse_space
@@ -161,7 +161,7 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
         ):
             raise ValueError(
                 "a subdomain interior dof couples to a dof owned by another rank: "
-                "the mesh is not partitioned by subdomains (use fem_py.geometry.build_domain)"
+                "the mesh is not partitioned by subdomains (use fem_py.mesh.build_domain)"
             )
         is_int = int_pos[cols] >= 0
         n_i, n_sk = self._int.size, self._sk.size

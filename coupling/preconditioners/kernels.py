@@ -17,7 +17,7 @@ from threadpoolctl import threadpool_limits
 
 from coupling.options import NATURAL_ORDERING_MAX_BLOCK
 from coupling.preconditioners.edge_forms import edge_form
-from fem_py.coarse import as_ragged
+from fem_py.partition import as_ragged
 from fem_py.polyline import arc_length
 
 __all__ = [

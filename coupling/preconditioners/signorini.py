@@ -217,7 +217,7 @@ def signorini_arcs(
         ``fem_py.boundary.BoundaryMap``: boundary nodes in counter-clockwise order, their
         dofs, the facet tag of every panel and the positions of the phi unknowns.
     coarse_vertex_dofs
-        Dofs of the coarse vertices (``fem_py.coarse.CoarseStructure.vertex_dofs``).
+        Dofs of the coarse vertices (``fem_py.partition.coarse.CoarseStructure.vertex_dofs``).
     transmission_tag
         The facet tag of Gamma_t (every other tag is one Signorini arc).
 

@@ -8,7 +8,7 @@ import scipy.linalg
 from petsc4py import PETSc
 
 from coupling.solvers.records import global_dot
-from fem_py.numbering import input_indices
+from fem_py.dofs import input_indices
 
 __all__ = ["estimate_extremes", "extremes_at"]
 

@@ -23,8 +23,8 @@ from scipy.spatial import cKDTree
 from coupling.options import SolverOptions
 from coupling.solvers.records import Monitor
 from coupling.solvers.solution import Solution, solve
-from fem_py.locate import interpolate_p1
-from fem_py.numbering import gather_p1
+from fem_py.dofs import gather_p1
+from fem_py.mesh import interpolate_p1
 from fem_py.polyline import closest_on_polygon
 
 __all__ = ["LevelRecord", "prolong", "solve_nested"]

@@ -2,7 +2,7 @@
 (issue 19; docs/design/estimator.md): dofs, energy error, estimator, efficiency index
 and fitted rates per level, and how the PGPM and ssn counts move with the local mesh
 grading (Theorem 4.1: (1 + ln(d/h))^2 with the local d/h), which the loop bounds by
-splitting the graded subdomains (fem_py.grading; docs/design/adapt.md)."""
+splitting the graded subdomains (fem_py.mesh.grading; docs/design/adapt.md)."""
 from __future__ import annotations
 
 from typing import Any
@@ -19,9 +19,8 @@ from coupling.study.base import Figures, Part, Table, Tables
 from coupling.study.common import join, log
 from coupling.study.sizes import Sizes
 from coupling.study.writer import ResultWriter
-from fem_py.geometry import build_domain
-from fem_py.grading import subdomain_grading
-from fem_py.materials import make_material
+from fem_py.forms import make_material
+from fem_py.mesh import GeometrySpec, build_domain, subdomain_grading
 
 __all__ = ["PART", "REFINEMENTS", "METHODS", "run", "summarize", "plot", "summary_markdown"]
 
@@ -46,7 +45,9 @@ def _levels(comm: Any, theta: float, method: str, max_dofs: int) -> list[dict]:
         )
         return problem, data
 
-    domain = build_domain(comm, "lshape", h=FIRST_H, subdomain_size=SUBDOMAIN, structured=True)
+    domain = build_domain(
+        comm, GeometrySpec("lshape", h=FIRST_H, subdomain_size=SUBDOMAIN, structured=True)
+    )
     levels = adapt(
         build,
         domain,

@@ -20,7 +20,7 @@ from coupling.options import SolverOptions
 from coupling.preconditioners import Preconditioner, build_preconditioner
 from coupling.problem import SignoriniProblem
 from coupling.solvers import Solution, solve
-from fem_py.materials import make_material
+from fem_py.forms import make_material
 
 __all__ = [
     "Case",

@@ -275,7 +275,7 @@ PART = Part(
     "variants",
     "Part 5: edge forms and Jacobians",
     "The two edge forms A^0_gamma of METHOD.md section 6 and the two Jacobians of "
-    "fem_py/forms.py.",
+    "fem_py/forms/interior.py.",
     run,
     summarize,
     plot,

@@ -16,8 +16,8 @@ from test_adapt import builder_of, corner_solution  # noqa: E402
 from coupling.adapt import AdaptOptions, adapt  # noqa: E402
 from coupling.manufactured import solution_errors, square_contact  # noqa: E402
 from coupling.options import SolverOptions  # noqa: E402
-from fem_py.geometry import build_domain  # noqa: E402
-from fem_py.materials import make_material  # noqa: E402
+from fem_py.forms import make_material  # noqa: E402
+from fem_py.mesh import GeometrySpec, build_domain  # noqa: E402
 
 comm = MPI.COMM_WORLD
 case = sys.argv[2]
@@ -38,7 +38,8 @@ else:
         3,
     )
 domain = build_domain(
-    comm, shape, h=1 / 16, subdomain_size=1 / 8, signorini=exact.signorini, structured=True
+    comm,
+    GeometrySpec(shape, h=1 / 16, subdomain_size=1 / 8, signorini=exact.signorini, structured=True),
 )
 levels = adapt(
     builder_of(exact, material, zero_f=zero_f),

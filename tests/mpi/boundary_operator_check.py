@@ -11,7 +11,7 @@ from coupling.io.outputs import gather_p1
 from coupling.manufactured import manufactured_problem, square_contact
 from coupling.options import SolverOptions
 from coupling.solvers import solve
-from fem_py.materials import make_material
+from fem_py.forms import make_material
 
 comm = MPI.COMM_WORLD
 cells, method, kind = int(sys.argv[2]), sys.argv[3], sys.argv[4]

@@ -16,8 +16,8 @@ from coupling.preconditioners.distributed import (
     subdomain_ranks,
 )
 from coupling.problem import SignoriniProblem
-from fem_py.geometry import build_domain
-from fem_py.materials import make_material
+from fem_py.forms import make_material
+from fem_py.mesh import GeometrySpec, build_domain
 
 MESHES = {
     "square": dict(shape="square", h=1 / 32, subdomain_size=1 / 8, signorini=["bottom"]),
@@ -34,7 +34,7 @@ MESHES = {
 comm = MPI.COMM_WORLD
 report = {}
 for name, kwargs in MESHES.items():
-    domain = build_domain(comm, **kwargs)
+    domain = build_domain(comm, GeometrySpec(**{"structured": False, **kwargs}))
     problem = SignoriniProblem(domain, make_material("linear"), f="1")
     index_map = problem.V.dofmap.index_map
     n_cells = domain.mesh.topology.index_map(2).size_local

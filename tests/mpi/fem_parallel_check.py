@@ -16,10 +16,9 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from fem_py.boundary import BoundaryMap
-from fem_py.forms import InteriorForms, p1_space
-from fem_py.geometry import build_domain
-from fem_py.jacobian_check import check_jacobian
-from fem_py.materials import make_material
+from fem_py.dofs import p1_space
+from fem_py.forms import InteriorForms, check_jacobian, make_material
+from fem_py.mesh import GeometrySpec, build_domain
 
 DOMAINS = {
     "square": dict(
@@ -73,8 +72,8 @@ def compute(comm) -> dict:
     out = {}
     material = make_material("carstensen")
     for name, kw in DOMAINS.items():
-        kw = dict(kw)
-        dom = build_domain(comm, kw.pop("shape"), **kw)
+        kw = {"structured": False, **kw}
+        dom = build_domain(comm, GeometrySpec(kw.pop("shape"), **kw))
         V = p1_space(dom.mesh)
         bm = BoundaryMap(V, dom)
         forms = InteriorForms(V, material, "sin(3*x)*y")

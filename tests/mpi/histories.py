@@ -10,7 +10,7 @@ from coupling.io.outputs import gather_p1
 from coupling.manufactured import MANUFACTURED, manufactured_problem
 from coupling.options import SolverOptions
 from coupling.solvers import solve
-from fem_py.materials import make_material
+from fem_py.forms import make_material
 
 comm = MPI.COMM_WORLD
 out = {}

@@ -8,8 +8,8 @@ from mpi4py import MPI
 from coupling.options import SolverOptions
 from coupling.problem import SignoriniProblem
 from coupling.solvers import solve
-from fem_py.geometry import domain_from_file
-from fem_py.materials import make_material
+from fem_py.forms import make_material
+from fem_py.mesh import domain_from_file
 
 comm = MPI.COMM_WORLD
 domain = domain_from_file(comm, sys.argv[1], subdomain_size=0.16, signorini=["contact"])

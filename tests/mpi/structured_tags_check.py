@@ -7,8 +7,8 @@ import numpy as np
 from dolfinx.mesh import compute_midpoints
 from mpi4py import MPI
 
-from fem_py.coarse import SIGNORINI_TAG0
-from fem_py.geometry import GAMMA_T_TAG, build_domain
+from fem_py.mesh import GeometrySpec, build_domain
+from fem_py.tags import GAMMA_T_TAG, SIGNORINI_TAG0
 
 CASES = {
     "square": dict(shape="square", h=1 / 40, subdomain_size=1 / 10, signorini=["bottom"]),
@@ -19,7 +19,7 @@ CASES = {
 
 
 def check(comm, case):
-    d = build_domain(comm, center=(0.5, 0.5), width=0.5, structured=True, **case)
+    d = build_domain(comm, GeometrySpec(center=(0.5, 0.5), width=0.5, structured=True, **case))
     m = d.mesh
     n_cells = m.topology.index_map(2).size_local + m.topology.index_map(2).num_ghosts
     n_facets = m.topology.index_map(1).size_local + m.topology.index_map(1).num_ghosts

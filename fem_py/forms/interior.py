@@ -10,17 +10,15 @@ With V_h the continuous P1 space and u in V_h,
 
 The residual is ``ufl.derivative`` of the energy. The Jacobian is either
 ``ufl.derivative`` of the residual (``"ufl"``) or the hand-written tangent rho^ of
-METHOD.md section 6 (``"handwritten"``); see :mod:`fem_py.materials` for how both stay
+METHOD.md section 6 (``"handwritten"``); see :mod:`fem_py.forms.materials` for how both stay
 finite at grad u = 0.
 
-:func:`p1_space` is the only place the P1 space is created, so that every module sees
-the same global dof numbering.
+The P1 space is ``fem_py.dofs.p1.p1_space``, the only place it is created, so that every
+module sees the same global dof numbering.
 """
 from __future__ import annotations
 
-import contextlib
-import logging
-from typing import Any, Iterator
+from typing import Any
 
 import numpy as np
 import ufl
@@ -28,14 +26,13 @@ from dolfinx import cpp, fem, la
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from fem_py.expressions import parse_expression
-from fem_py.materials import Material
+from fem_py.dofs.p1 import quiet_jit
+from fem_py.forms.expressions import parse_expression
+from fem_py.forms.materials import Material
 
 __all__ = [
-    "p1_space",
     "spatial_variables",
     "as_ufl_data",
-    "quiet_jit",
     "compile_form",
     "InteriorForms",
     "assemble_boundary_load",
@@ -54,17 +51,6 @@ P1_EXACT = {"quadrature_degree": 0}
 #: O(h^2) discretisation error; UFL's own estimate for composite expressions (e.g. the
 #: manufactured f = -div(rho(|grad u|) grad u)) can exceed 1000 points per cell.
 DATA_QUADRATURE = {"quadrature_degree": 6}
-
-
-def p1_space(mesh: Any) -> fem.FunctionSpace:
-    """The continuous P1 space V_h(Omega) on ``mesh`` (the single place it is created).
-
-    The dofmap construction is deterministic, so every call on the same mesh gives the
-    same global dof numbering (CoarseStructure and BoundaryMap rely on this; checked
-    in parallel by tests/test_fem_mpi.py).
-    """
-    with quiet_jit():
-        return fem.FunctionSpace(mesh, ("Lagrange", 1))
 
 
 def spatial_variables(mesh: Any, *, boundary: bool = False) -> dict[str, Any]:
@@ -91,25 +77,6 @@ def as_ufl_data(value: Any, mesh: Any, *, boundary: bool = False, what: str = "d
     )
 
 
-@contextlib.contextmanager
-def quiet_jit() -> Iterator[None]:
-    """Silence the INFO lines of cold FFCx/CFFI compiles for the duration of the block.
-
-    distutils raises the root logger to INFO and ffcx installs a root handler, so cold
-    compiles print gcc command lines. The handler levels are raised to WARNING and
-    restored afterwards (no lasting change of the global logging state).
-    """
-    handlers = list(logging.getLogger().handlers)
-    saved = [h.level for h in handlers]
-    try:
-        for h in handlers:
-            h.setLevel(max(h.level, logging.WARNING))
-        yield
-    finally:
-        for h, lvl in zip(handlers, saved):
-            h.setLevel(lvl)
-
-
 def compile_form(form: Any, jit_params: dict | None = None) -> fem.FormMetaClass:
     """``fem.form`` with quiet JIT output."""
     with quiet_jit():
@@ -124,7 +91,7 @@ class InteriorForms:
     V
         The space from :func:`p1_space`.
     material
-        A :class:`fem_py.materials.Material`.
+        A :class:`fem_py.forms.materials.Material`.
     f
         Volume load: text in x, y, a number, a UFL expression, or None (zero).
     jacobian
@@ -152,7 +119,7 @@ class InteriorForms:
             raise ValueError(f"jacobian must be one of {JACOBIANS}, got {jacobian!r}")
         if not isinstance(material, Material):
             raise ValueError(
-                f"material must be a fem_py.materials.Material, got {type(material).__name__}; "
+                f"material must be a fem_py.forms.Material, got {type(material).__name__}; "
                 "use make_material"
             )
         self.V = V

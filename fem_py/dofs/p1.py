@@ -1,4 +1,4 @@
-"""Low-level helpers shared by geometry and boundary: P1 dof topology and facet data.
+"""The P1 space of a distributed mesh (created here only), its dof topology and facet data.
 
 Vertex, geometry-node and dof indices differ in DOLFINx 0.5.2 (they only coincide in
 serial by chance), so everything here goes through the P1 dofmap:
@@ -7,8 +7,10 @@ pairs with coordinates, which makes the result independent of the partition.
 """
 from __future__ import annotations
 
+import contextlib
+import logging
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Iterator
 
 import numpy as np
 from dolfinx import fem
@@ -16,7 +18,46 @@ from dolfinx import mesh as dmesh
 
 from fem_py.parallel import gather_to_root
 
-__all__ = ["P1Topology", "p1_topology", "FacetData", "facet_data", "gather_facet_data", "tag_array"]
+__all__ = [
+    "p1_space",
+    "quiet_jit",
+    "P1Topology",
+    "p1_topology",
+    "FacetData",
+    "facet_data",
+    "gather_facet_data",
+    "tag_array",
+]
+
+
+@contextlib.contextmanager
+def quiet_jit() -> Iterator[None]:
+    """Silence the INFO lines of cold FFCx/CFFI compiles for the duration of the block.
+
+    distutils raises the root logger to INFO and ffcx installs a root handler, so cold
+    compiles print gcc command lines. The handler levels are raised to WARNING and
+    restored afterwards (no lasting change of the global logging state).
+    """
+    handlers = list(logging.getLogger().handlers)
+    saved = [h.level for h in handlers]
+    try:
+        for h in handlers:
+            h.setLevel(max(h.level, logging.WARNING))
+        yield
+    finally:
+        for h, lvl in zip(handlers, saved):
+            h.setLevel(lvl)
+
+
+def p1_space(mesh: Any) -> fem.FunctionSpace:
+    """The continuous P1 space V_h(Omega) on ``mesh`` (the single place it is created).
+
+    The dofmap construction is deterministic, so every call on the same mesh gives the
+    same global dof numbering (CoarseStructure and BoundaryMap rely on this; checked
+    in parallel by tests/test_fem_mpi.py).
+    """
+    with quiet_jit():
+        return fem.FunctionSpace(mesh, ("Lagrange", 1))
 
 
 @dataclass

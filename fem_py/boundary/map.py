@@ -35,12 +35,12 @@ from dolfinx import fem
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from fem_py.coarse import SIGNORINI_TAG0
-from fem_py.expressions import Expression
-from fem_py.meshdata import exterior_facets, facet_data, gather_facet_data, p1_topology, tag_array
+from fem_py.boundary.order import closed_polygon, walk_boundary
+from fem_py.dofs.p1 import exterior_facets, facet_data, gather_facet_data, p1_topology, tag_array
+from fem_py.forms.expressions import Expression
 from fem_py.parallel import broadcast_from_root
-from fem_py.polyline import arc_length, segment_lengths
-from fem_py.shapes import GAMMA_T_TAG
+from fem_py.polyline import segment_lengths
+from fem_py.tags import GAMMA_T_TAG
 
 __all__ = ["BoundaryMap"]
 
@@ -48,8 +48,8 @@ __all__ = ["BoundaryMap"]
 class BoundaryMap:
     """Boundary nodes in counter-clockwise order and the maps T, E (METHOD.md section 4).
 
-    ``BoundaryMap(V, domain)`` (collective) with ``V = fem_py.forms.p1_space(mesh)`` and
-    a :class:`fem_py.geometry.Domain` (the walk starts at its first polygon vertex), or
+    ``BoundaryMap(V, domain)`` (collective) with ``V = fem_py.dofs.p1_space(mesh)`` and
+    a :class:`fem_py.mesh.Domain` (the walk starts at its first polygon vertex), or
     ``BoundaryMap(V, facet_tags, start=point)`` with the facet tags alone (default
     start: the boundary node with the smallest y, then x - a corner of Omega). Every
     rank holds the same arrays.
@@ -59,7 +59,7 @@ class BoundaryMap:
     nodes : (n_gamma, 2) float
         Boundary nodes, counter-clockwise, first node not repeated.
     dofs : (n_gamma,) int64
-        Global P1 dofs of ``nodes`` (numbering of ``fem_py.forms.p1_space``).
+        Global P1 dofs of ``nodes`` (numbering of ``fem_py.dofs.p1_space``).
     s : (n_gamma,) float
         Arc length from ``nodes[0]`` counter-clockwise; ``length`` is |Gamma_h|.
     panel_tags : (n_gamma,) int
@@ -105,7 +105,7 @@ class BoundaryMap:
         )
         n_dofs = V.dofmap.index_map.size_global
         arrays = broadcast_from_root(
-            comm, lambda: _walk(fd, n_dofs, start), error_prefix="boundary map"
+            comm, lambda: walk_boundary(fd, n_dofs, start), error_prefix="boundary map"
         )
         for key, value in arrays.items():
             setattr(self, key, value)
@@ -113,7 +113,7 @@ class BoundaryMap:
     @classmethod
     def from_domain(cls, domain: Any, V: fem.FunctionSpace | None = None) -> "BoundaryMap":
         """Collective: ``BoundaryMap(p1_space(domain.mesh), domain)``."""
-        from fem_py.forms import p1_space
+        from fem_py.dofs.p1 import p1_space
 
         return cls(p1_space(domain.mesh) if V is None else V, domain)
 
@@ -128,7 +128,7 @@ class BoundaryMap:
 
     @property
     def panel_lengths(self) -> np.ndarray:
-        return segment_lengths(_closed(self.nodes))
+        return segment_lengths(closed_polygon(self.nodes))
 
     def on_gamma_t(self) -> np.ndarray:
         """Panel mask of Gamma_t (tag 1)."""
@@ -189,7 +189,7 @@ class BoundaryMap:
     def interpolate_boundary(self, expr: str | Callable | float) -> np.ndarray:
         """Nodal values (boundary order) of boundary data such as u0.
 
-        ``expr`` is text in x, y, nx, ny (fem_py.expressions), a number, or a callable
+        ``expr`` is text in x, y, nx, ny (fem_py.forms.expressions), a number, or a callable
         ``f(x, y)`` or ``f(x, y, nx, ny)`` on arrays. (nx, ny) is the node normal of the
         module docstring.
         """
@@ -217,65 +217,3 @@ class BoundaryMap:
                 "boundary data is not finite at some boundary node; check the expression"
             )
         return out
-
-
-def _walk(fd: Any, n_dofs: int, start: Any) -> dict:
-    """Rank 0: order the gathered exterior facets (oriented, Omega on the left) into the
-    counter-clockwise cycle of boundary nodes and derive the boundary-map arrays."""
-    a, b = fd.dofs[:, 0], fd.dofs[:, 1]
-    nf = len(a)
-    if nf < 3:
-        raise RuntimeError(f"only {nf} boundary facets")
-    order = np.argsort(a)
-    a_sorted = a[order]
-    if np.any(np.diff(a_sorted) == 0) or not np.array_equal(a_sorted, np.sort(b)):
-        raise RuntimeError("the boundary is not a closed curve with consistently oriented facets")
-    if start is None:
-        xy = fd.coords[:, 0]
-        f0 = int(np.lexsort((xy[:, 0], xy[:, 1]))[0])
-    else:
-        f0 = int(
-            np.argmin(np.linalg.norm(fd.coords[:, 0] - np.asarray(start, float)[None, :2], axis=1))
-        )
-    facets = np.empty(nf, dtype=np.int64)
-    f = f0
-    for i in range(nf):
-        facets[i] = f
-        f = int(order[np.searchsorted(a_sorted, b[f])])  # the facet leaving the end node
-        if f == f0 and i != nf - 1:
-            raise RuntimeError(
-                f"the boundary has several components ({i + 1} of {nf} facets in the first); "
-                "Omega must be simply connected"
-            )
-    nodes = fd.coords[facets, 0].astype(float)
-    x, y = nodes[:, 0], nodes[:, 1]
-    area = 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
-    if area <= 0:
-        raise RuntimeError(
-            f"boundary walk has shoelace area {area:g} <= 0 (expected counter-clockwise)"
-        )
-    tags = fd.tag[facets].astype(np.int64)
-    polygon = _closed(nodes)
-    seg = np.diff(polygon, axis=0)
-    plen = segment_lengths(polygon)
-    pn = np.stack([seg[:, 1], -seg[:, 0]], axis=1) / plen[:, None]
-    nn = pn + np.roll(pn, 1, axis=0)
-    nn /= np.linalg.norm(nn, axis=1)[:, None]
-    sig = np.flatnonzero((tags >= SIGNORINI_TAG0) & (tags == np.roll(tags, 1)))
-    return dict(
-        nodes=nodes,
-        dofs=a[facets].astype(np.int64),
-        s=arc_length(polygon)[:-1],
-        length=float(plen.sum()),
-        panel_tags=tags,
-        panel_normals=pn,
-        node_normals=nn,
-        signorini=sig.astype(np.int64),
-        arc_of_signorini=(tags[sig] - SIGNORINI_TAG0).astype(np.int64),
-        n_dofs=int(n_dofs),
-    )
-
-
-def _closed(nodes: np.ndarray) -> np.ndarray:
-    """The closed polygon of the boundary nodes: (n, 2) -> (n + 1, 2), first node last."""
-    return np.concatenate([nodes, nodes[:1]])

@@ -22,7 +22,7 @@ One parsed tree is evaluated with one of three backends:
 - ``"numpy"``: variables are arrays (or floats); the result is a float array of the
   broadcast shape of the variables.
 - ``"sympy"``: variables are sympy symbols; numbers become exact rationals, so that
-  sympy can integrate and differentiate (used by :mod:`fem_py.materials`).
+  sympy can integrate and differentiate (used by :mod:`fem_py.forms.materials`).
 
 :func:`from_sympy` translates sympy results (g and rho' of a material) back to UFL
 or numpy.

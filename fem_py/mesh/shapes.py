@@ -4,14 +4,14 @@ Omega is a polygon: the square, the L-shape (the square minus its upper-right
 quarter) or a given simple counter-clockwise polygon (:func:`check_polygon`). Its
 boundary Gamma is parametrised by arc length from the first vertex, counter-clockwise
 (:class:`BoundaryCurve`). On Gamma lie the Signorini arcs (:class:`Arc`, parsed by
-:func:`parse_arcs` from the ``signorini`` argument of ``fem_py.geometry.build_domain``),
+:func:`parse_arcs` from the ``signorini`` argument of ``fem_py.mesh.build_domain``),
 and every coarse boundary edge carries the facet tag of the part of Gamma it lies in
 (:func:`edge_tag`): ``GAMMA_T_TAG`` on Gamma_t, ``SIGNORINI_TAG0 + k`` on arc k.
 
 The coarse cells of the square and the L-shape are squares of a uniform grid
 (:func:`grid_partition`); arc end points are inserted into them as extra coarse
 vertices (:func:`insert_boundary_points`). The coarse triangles of a polygon come from
-gmsh (``fem_py.gmsh_mesh``).
+gmsh (``fem_py.mesh.gmsh_mesh``).
 """
 from __future__ import annotations
 
@@ -21,27 +21,23 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from fem_py.coarse import SIGNORINI_TAG0
-from fem_py.polyline import arc_length, segment_lengths
+from fem_py.polyline import arc_length, diameter, segment_lengths
+from fem_py.tags import GAMMA_T_TAG, SIGNORINI_TAG0
 
 __all__ = [
     "Arc",
     "BoundaryCurve",
-    "GAMMA_T_TAG",
     "SHAPES",
     "SQUARE_SIDES",
     "LSHAPE_SIDES",
     "check_polygon",
     "checked_center",
-    "diameter",
     "edge_tag",
     "grid_partition",
     "insert_boundary_points",
     "parse_arcs",
 ]
 
-#: Facet tag of Gamma_t (the exterior facets outside every Signorini arc).
-GAMMA_T_TAG = 1
 SHAPES = ("square", "lshape", "polygon")
 SQUARE_SIDES = ("bottom", "right", "top", "left")
 LSHAPE_SIDES = ("bottom", "right", "notch_bottom", "notch_left", "top", "left")
@@ -65,15 +61,6 @@ class Arc:
 
 
 # ======================================================================= polygons
-def diameter(P: np.ndarray) -> float:
-    """diam of the point set ``P`` (m, 2): the largest distance between two points (for
-    many points, between two vertices of their convex hull)."""
-    if len(P) > 64:
-        from scipy.spatial import ConvexHull
-
-        P = P[ConvexHull(P).vertices]
-    d = P[:, None, :] - P[None, :, :]
-    return float(np.sqrt((d**2).sum(-1)).max())
 
 
 def checked_center(center: Any) -> tuple[float, float]:
@@ -230,7 +217,7 @@ def _side_names(shape: str, m: int) -> dict[str, int]:
 
 
 def parse_arcs(signorini: Any, shape: str, boundary: BoundaryCurve) -> tuple[tuple[Arc, ...], bool]:
-    """The Signorini arcs of ``signorini`` (the grammar of the ``fem_py.geometry`` module
+    """The Signorini arcs of ``signorini`` (the grammar of the ``fem_py.mesh`` module
     docstring) on the boundary of a ``shape``.
 
     Point pairs are snapped onto a polygon vertex within ``boundary.tol``.

@@ -24,8 +24,9 @@ from typing import Any
 import numpy as np
 from petsc4py import PETSc
 
-from fem_py.forms import InteriorForms, p1_space
-from fem_py.materials import Material
+from fem_py.dofs.p1 import p1_space
+from fem_py.forms.interior import InteriorForms
+from fem_py.forms.materials import Material
 
 __all__ = ["check_jacobian", "MATRIX_TOL", "SLOPE_TOL"]
 
@@ -59,7 +60,7 @@ def check_jacobian(domain: Any, material: Material, *, n_states: int = 3, seed: 
     Parameters
     ----------
     domain
-        A :class:`fem_py.geometry.Domain` (or anything with a ``mesh``).
+        A :class:`fem_py.mesh.Domain` (or anything with a ``mesh``).
     material
         The material to check.
     n_states

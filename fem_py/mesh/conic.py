@@ -7,9 +7,9 @@ checks the Signorini arcs (point pairs on the curve, from the first to the secon
 counter-clockwise, or ``"all"``) and returns them as parameter pairs; :func:`conic_mesh`
 meshes Omega with gmsh at size h (call it on one rank: circle arcs for the disk, ellipse
 arcs otherwise, each piece below pi, the arc ends as mesh nodes) and returns it with one
-physical curve group per arc (``arc<k>``), ready for ``fem_py.own_mesh.prepare_mesh`` and
-the automatic partition into subdomains; :func:`conic_domain` is the
-``fem_py.geometry.build_domain`` of both shapes.
+physical curve group per arc (``arc<k>``), ready for ``fem_py.mesh.own_mesh.prepare_mesh`` and
+the automatic partition into subdomains; :func:`conic_domain` builds the domain of
+both shapes (``fem_py.mesh.build_domain``).
 """
 from __future__ import annotations
 
@@ -19,7 +19,10 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from fem_py.shapes import checked_center
+from fem_py.mesh.domain import domain_from_prepared
+from fem_py.mesh.own_mesh import mesh_of_model, prepare_mesh
+from fem_py.mesh.shapes import checked_center
+from fem_py.spec import GeometrySpec
 
 __all__ = ["CONICS", "conic_axes", "conic_arcs", "conic_mesh", "conic_plan", "conic_domain"]
 
@@ -103,11 +106,9 @@ def _overlap(a, b) -> bool:
 
 def conic_mesh(center: tuple[float, float], axes: tuple[float, float], h: float, arcs: Any) -> Any:
     """The ellipse of semi-axes ``axes`` (a circle when they are equal) meshed at size h by
-    gmsh (one session) as a ``fem_py.own_mesh.MeshFile`` with the curve groups ``arc0``,
+    gmsh (one session) as a ``fem_py.mesh.own_mesh.MeshFile`` with the curve groups ``arc0``,
     ``arc1``, ... (``arcs`` from :func:`conic_arcs`; with ``"all"`` the group ``all``)."""
     import gmsh
-
-    from fem_py.own_mesh import mesh_of_model
 
     cuts = set()
     if arcs != "all":
@@ -210,45 +211,33 @@ def conic_axes(shape: str, radius: float, semi_axes: Sequence[float] | None) -> 
     return _positive("semi_axes a", a), _positive("semi_axes b", b)
 
 
-def conic_plan(
-    shape: str,
-    h: float,
-    subdomain_size: float,
-    center: Sequence[float],
-    radius: float,
-    semi_axes: Sequence[float] | None,
-    signorini: Any,
-    allow_large: bool,
-) -> tuple:
+def conic_plan(spec: GeometrySpec) -> tuple:
     """Checks of a disk or an ellipse (identical on every rank, no communication): (h, d,
     center, semi-axes (a, b), arcs of :func:`conic_arcs`)."""
-    h, d = _positive("h", h), _positive("subdomain_size", subdomain_size)
-    axes = conic_axes(shape, radius, semi_axes)
+    shape = spec.shape
+    h, d = _positive("h", spec.h), _positive("subdomain_size", spec.subdomain_size)
+    axes = conic_axes(shape, spec.radius, spec.semi_axes)
     if d < 2 * h:
         raise ValueError(
             f"subdomain_size d={d:g} is smaller than 2h={2 * h:g}; increase "
             "subdomain_size or decrease h"
         )
-    cx, cy = checked_center(center)
+    cx, cy = checked_center(spec.center)
     diam = 2 * max(axes)
-    if diam >= 1.0 and not allow_large:
+    if diam >= 1.0 and not spec.allow_large:
         what = "the radius" if shape == "disk" else "semi_axes"
         raise ValueError(
             f"diam(Omega) = {diam:.4g} >= 1: the single-layer operator may not be "
             f"elliptic (METHOD.md section 2); shrink {what}, or opt out with "
             "allow_large (geometry.allow_large = true) at your own risk"
         )
-    return h, d, (cx, cy), axes, conic_arcs(signorini, (cx, cy), axes)
+    return h, d, (cx, cy), axes, conic_arcs(spec.signorini, (cx, cy), axes)
 
 
-def conic_domain(comm: Any, shape: str, *args: Any) -> Any:
-    """``fem_py.geometry.build_domain`` of the disk or the ellipse (collective): gmsh on
-    rank 0, then as a mesh file (``fem_py.geometry.domain_from_prepared``); ``args``: those
-    of :func:`conic_plan` after ``shape``."""
-    from fem_py.geometry import domain_from_prepared
-    from fem_py.own_mesh import prepare_mesh
-
-    h, d, c, axes, arcs = conic_plan(shape, *args)
+def conic_domain(comm: Any, spec: GeometrySpec) -> Any:
+    """The domain of the disk or the ellipse of ``spec`` (collective): gmsh on rank 0,
+    then as a mesh file (``fem_py.mesh.domain.domain_from_prepared``)."""
+    h, d, c, axes, arcs = conic_plan(spec)
     names = "all" if arcs == "all" else [f"arc{k}" for k in range(len(arcs))]
     domain = domain_from_prepared(
         comm,
@@ -256,6 +245,6 @@ def conic_domain(comm: Any, shape: str, *args: Any) -> Any:
             conic_mesh(c, axes, h, arcs), signorini=names, subdomain_size=d, allow_large=True
         ),
         d,
-        shape,
+        spec.shape,
     )
     return dataclasses.replace(domain, h=h)

@@ -2,9 +2,9 @@
 the unstructured fine mesh of a coarse partition.
 
 :func:`mesh_with_gmsh` runs one gmsh session (it initialises and finalises gmsh
-itself) and returns plain arrays; ``fem_py.geometry.build_domain`` calls it on rank 0
+itself) and returns plain arrays; ``fem_py.mesh.build_domain`` calls it on rank 0
 only (``fem_py.parallel.run_on_root``) and hands the arrays to
-``fem_py.distribute.distribute_mesh``. Each coarse cell is its own gmsh plane surface,
+``fem_py.mesh.distribute.distribute_mesh``. Each coarse cell is its own gmsh plane surface,
 sharing the coarse edges with its neighbours, with its own physical group, so the fine
 mesh is conforming and every fine cell carries its subdomain id.
 """
@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from fem_py.shapes import Arc, BoundaryCurve, edge_tag
+from fem_py.mesh.shapes import Arc, BoundaryCurve, edge_tag
 
 __all__ = ["mesh_with_gmsh"]
 

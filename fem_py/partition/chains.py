@@ -1,7 +1,7 @@
-"""Curved coarse edges (``fem_py.coarse`` with ``corner_angle``): walks along the chains
+"""Curved coarse edges (``fem_py.partition.coarse`` with ``corner_angle``): walks along the chains
 of skeleton facets between coarse vertices.
 
-The skeleton is given as in ``fem_py.coarse``: ``inv`` (n_f, 2) the node numbers of the
+The skeleton is given as in ``fem_py.partition.coarse``: ``inv`` (n_f, 2) the node numbers of the
 facets (exterior facets counter-clockwise), ``incident``/``first`` the facets at every
 node (those of node i are ``incident[first[i]:]``, two for a chain node), ``is_vertex``
 the coarse vertex flags.

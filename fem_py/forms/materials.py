@@ -16,7 +16,7 @@ name           rho(t)                              g(t)
 linear         1                                   t^2/2
 carstensen     2 + 1/(1+t)                         t^2 + t - ln(1+t)
 power          (eps^2+t^2)^((p-2)/2), p>1, eps>0   ((eps^2+t^2)^(p/2) - eps^p)/p
-expression     any string in t (fem_py.expressions) sympy: int_0^t s rho(s) ds (closed form)
+expression     any string in t (fem_py.forms.expressions) sympy: int_0^t s rho(s) ds (closed form)
 =============  ==================================  ==========================================
 
 Safety at grad u = 0 (what is done, and why). The energy is written as a function of
@@ -52,7 +52,7 @@ from typing import Any, Callable
 import numpy as np
 import sympy
 
-from fem_py.expressions import Expression, from_sympy
+from fem_py.forms.expressions import Expression, from_sympy
 
 __all__ = ["Material", "make_material", "BUILTIN_MATERIALS", "S0", "check_grid"]
 
@@ -242,7 +242,7 @@ def make_material(
     Parameters
     ----------
     name_or_expression
-        A built-in name, or an expression in ``t`` for rho(t) (fem_py.expressions
+        A built-in name, or an expression in ``t`` for rho(t) (fem_py.forms.expressions
         grammar), e.g. ``"2 + 1/(1+t)"``; sympy derives g and rho'.
     p, eps
         Exponent (> 1) and regularisation (> 0) of ``power``: rho = (eps^2+t^2)^((p-2)/2).

@@ -99,7 +99,7 @@ def _cell_order(triangles: np.ndarray) -> np.ndarray:
 
 def gather_p1(u) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     """Gather a P1 Function to rank 0 in the input numbering of the mesh nodes
-    (:mod:`fem_py.numbering`), the same for any number of ranks.
+    (:mod:`fem_py.dofs.numbering`), the same for any number of ranks.
 
     Returns (x (N, 2), values (N,), triangles (n_cells, 3)) on rank 0, None elsewhere;
     the triangles (counter-clockwise as in the mesh) are sorted by their node numbers.

@@ -206,7 +206,7 @@ def _smooth(label: np.ndarray, a: np.ndarray, b: np.ndarray, n: int) -> np.ndarr
 
 def part_diameters(x: np.ndarray, cells: np.ndarray, label: np.ndarray) -> np.ndarray:
     """Diameter of every part (the largest distance between two of its nodes), (L,)."""
-    from fem_py.shapes import diameter
+    from fem_py.polyline import diameter
 
     out = np.zeros(int(label.max()) + 1)
     for k in range(len(out)):

@@ -1,6 +1,6 @@
 """The sizes a user checks before trusting a mesh (issue 17): the number of subdomains,
 the shortest and longest fine facet, the mean subdomain diameter and the length of each
-Signorini arc, from a distributed :class:`fem_py.geometry.Domain` (collective)."""
+Signorini arc, from a distributed :class:`fem_py.mesh.Domain` (collective)."""
 from __future__ import annotations
 
 from typing import Any
@@ -9,7 +9,8 @@ import numpy as np
 from dolfinx import cpp
 from mpi4py import MPI
 
-from fem_py.coarse import SIGNORINI_TAG0, as_ragged
+from fem_py.partition.coarse import as_ragged
+from fem_py.tags import SIGNORINI_TAG0
 
 __all__ = ["mesh_facts", "shortest_facet", "subdomain_diameters"]
 
@@ -88,7 +89,7 @@ def mesh_facts(domain: Any) -> dict:
     return {
         "subdomains": int(domain.coarse.n_subdomains),
         "h_min": shortest_facet(domain),
-        "h_max": float(domain.h_max),  # kept by fem_py.geometry and fem_py.refinement
+        "h_max": float(domain.h_max),  # kept by fem_py.mesh and fem_py.mesh.refinement
         "subdomain_diameter": float(subdomain_diameters(domain).mean()),
         "signorini_lengths": [float(v) for v in _summed(comm, lengths)],
     }

@@ -6,9 +6,9 @@ the substructuring preconditioner are rank-local; cells are ghosted in DOLFINx's
 shared-facet mode. Two inputs:
 
 - :func:`distribute_mesh`: a mesh held whole on rank 0 (the gmsh arrays of
-  ``fem_py.gmsh_mesh``), distributed the way ``gmshio.model_to_mesh`` does it
+  ``fem_py.mesh.gmsh_mesh``), distributed the way ``gmshio.model_to_mesh`` does it
   (``create_mesh`` + ``distribute_entity_data`` + ``meshtags_from_entities``);
-- :func:`distribute_structured`: a structured refinement (``fem_py.structured``),
+- :func:`distribute_structured`: a structured refinement (``fem_py.mesh.structured``),
   written down in parallel: each rank makes the triangles of its own coarse cells and a
   block of the node coordinates, and the tags follow from the closed-form numbering.
 
@@ -22,8 +22,8 @@ from typing import Any, Callable
 import numpy as np
 from dolfinx import mesh as dmesh
 
+from fem_py.mesh.structured import StructuredRefinement
 from fem_py.parallel import broadcast_from_root, gather_to_root
-from fem_py.structured import StructuredRefinement
 
 __all__ = ["distribute_mesh", "distribute_structured", "subdomain_owners"]
 
@@ -166,7 +166,7 @@ def distribute_mesh(comm: Any, arrays: tuple | None) -> TaggedMesh:
         The communicator of the mesh.
     arrays
         On rank 0, (x (n, 2), cells (n_c, 3), subdomain id of every cell 0 .. L-1,
-        boundary facets (n_f, 2) as node numbers, facet tags) (``fem_py.gmsh_mesh``);
+        boundary facets (n_f, 2) as node numbers, facet tags) (``fem_py.mesh.gmsh_mesh``);
         ignored on the other ranks.
 
     Returns

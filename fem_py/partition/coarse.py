@@ -24,16 +24,15 @@ import scipy.sparse as sp
 from mpi4py import MPI
 from scipy.sparse.csgraph import connected_components
 
-from fem_py.chains import mark_closed_chains, walk_chains
 from fem_py.parallel import broadcast_from_root, gather_to_root, run_on_root
+from fem_py.partition.chains import mark_closed_chains, walk_chains
+from fem_py.tags import SIGNORINI_TAG0
 
 if TYPE_CHECKING:
-    from fem_py.meshdata import FacetData
+    from fem_py.dofs.p1 import FacetData
 
-__all__ = ["CoarseStructure", "Ragged", "as_ragged", "compute_coarse_structure", "SIGNORINI_TAG0"]
+__all__ = ["CoarseStructure", "Ragged", "as_ragged", "compute_coarse_structure"]
 
-#: Facet tag of the first Signorini arc (arc k has tag SIGNORINI_TAG0 + k).
-SIGNORINI_TAG0 = 100
 _COLLINEAR_TOL = 1e-9
 
 
@@ -227,7 +226,7 @@ def as_ragged(seq: Any, dtype: Any = None, item_shape: tuple = ()) -> Ragged:
 class CoarseStructure:
     """The coarse partition as seen by the fine mesh (identical on every rank).
 
-    Dof numbers are global dofs of ``fem_py.forms.p1_space(mesh)``.
+    Dof numbers are global dofs of ``fem_py.dofs.p1_space(mesh)``.
 
     Attributes
     ----------
@@ -313,8 +312,8 @@ def compute_coarse_structure(
     between subdomains may zigzag, their chains are ordered by walking them, and a
     closed chain without a coarse vertex gets two. None: the straight edges above.
     """
-    from fem_py.forms import p1_space
-    from fem_py.meshdata import (
+    from fem_py.dofs.p1 import p1_space
+    from fem_py.dofs.p1 import (
         exterior_facets,
         facet_data,
         gather_facet_data,

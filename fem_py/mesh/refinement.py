@@ -1,4 +1,4 @@
-"""Local refinement of a :class:`fem_py.geometry.Domain` and P1 transfer to the refined mesh.
+"""Local refinement of a :class:`fem_py.mesh.Domain` and P1 transfer to the refined mesh.
 
 ``dolfinx.mesh.refine(mesh, edges)`` (DOLFINx 0.5.2, Plaza) bisects the marked edges and
 whatever edges keep the mesh conforming, but transfers no tags after a local refinement
@@ -8,10 +8,10 @@ geometry, which refinement does not change:
 - cell tags: a child lies inside its parent, so the subdomain of a new cell is the tag of
   the old cell containing its midpoint. Subdomains stay unions of cells and the coarse
   partition is kept; the coarse structure is recomputed from the new tags
-  (:func:`fem_py.coarse.compute_coarse_structure`), so the substructuring
+  (:func:`fem_py.partition.coarse.compute_coarse_structure`), so the substructuring
   preconditioner applies on every level (coarse vertices and edges do not change,
   only the fine chains along them); the adaptive loop then splits the subdomains the
-  refinement has graded (:mod:`fem_py.grading`);
+  refinement has graded (:mod:`fem_py.mesh.grading`);
 - facet tags: the midpoint of a new boundary facet lies on exactly one old boundary
   facet (its parent), whose tag (Gamma_t or Signorini arc k) it takes.
 
@@ -31,19 +31,17 @@ from typing import Any
 import numpy as np
 from dolfinx import cpp, fem, geometry
 from dolfinx import mesh as dmesh
-from mpi4py import MPI
 
-from fem_py.coarse import compute_coarse_structure
-from fem_py.geometry import CORNER_ANGLE
-from fem_py.locate import locate
-from fem_py.meshdata import tag_array
+from fem_py.dofs.p1 import tag_array
+from fem_py.mesh.domain import CORNER_ANGLE, max_facet_length
+from fem_py.mesh.location import locate
+from fem_py.partition.coarse import compute_coarse_structure
 
 __all__ = [
     "refine_domain",
     "transfer_p1",
     "boundary_transfer",
     "locate_cells",
-    "max_facet_length",
 ]
 
 
@@ -52,7 +50,7 @@ def locate_cells(msh: Any, points: np.ndarray) -> np.ndarray:
 
     dolfinx's collision test (GJK, an absolute tolerance) misses some points that lie on
     the boundary of the mesh up to round-off (a node 6e-17 off a corner's side after
-    several refinements); those get the cell of :func:`fem_py.locate.locate` (barycentric
+    several refinements); those get the cell of :func:`fem_py.mesh.location.locate` (barycentric
     coordinates to 1e-12 relative)."""
     pts = np.zeros((len(points), 3))
     pts[:, : points.shape[1]] = points[:, :3]
@@ -96,20 +94,11 @@ def _facet_segments(msh: Any, facets: np.ndarray) -> tuple[np.ndarray, np.ndarra
     return x[geo[:, 0]], x[geo[:, 1]]
 
 
-def max_facet_length(msh: Any) -> float:
-    """The longest facet of ``msh`` (all ranks)."""
-    msh.topology.create_entities(1)
-    n = msh.topology.index_map(1).size_local
-    a, b = _facet_segments(msh, np.arange(n, dtype=np.int32))
-    loc = float(np.linalg.norm(b - a, axis=1).max(initial=0.0))
-    return msh.comm.allreduce(loc, op=MPI.MAX)
-
-
 def _corner_angle(domain: Any) -> float | None:
     """The ``corner_angle`` the coarse structure of ``domain`` was computed with: none for
     the grid partitions of the square and L-shape of build_domain,
-    fem_py.geometry.CORNER_ANGLE for the other shapes and meshes and for partitions made
-    of cells (curved coarse edges, e.g. after ``fem_py.grading``). The new nodes are
+    fem_py.mesh.CORNER_ANGLE for the other shapes and meshes and for partitions made
+    of cells (curved coarse edges, e.g. after ``fem_py.mesh.grading``). The new nodes are
     midpoints of straight facets, so they add no bend and the coarse vertices stay the
     same."""
     grid = domain.shape in ("square", "lshape") and domain.partition == "grid"
@@ -117,7 +106,7 @@ def _corner_angle(domain: Any) -> float | None:
 
 
 def refine_domain(domain: Any, cells: np.ndarray) -> Any:
-    """Refine ``domain`` (a :class:`fem_py.geometry.Domain`) at the local cells ``cells``
+    """Refine ``domain`` (a :class:`fem_py.mesh.Domain`) at the local cells ``cells``
     (every edge of a marked cell is bisected, plus the closure of Plaza's refinement) and
     return the refined Domain with re-built tags and coarse structure (collective).
     """

@@ -1,13 +1,13 @@
 """Users' own meshes: a gmsh .msh file or given arrays, checked and prepared on one rank.
 
 :func:`read_msh` reads a gmsh MSH 2.2 or 4.1 file with the gmsh Python API (one gmsh
-session, arrays out, like ``fem_py.gmsh_mesh``). :func:`prepare_mesh` checks a triangle
+session, arrays out, like ``fem_py.mesh.gmsh_mesh``). :func:`prepare_mesh` checks a triangle
 mesh (one connected, simply connected body: the exterior problem needs one Omega whose
 boundary is one closed curve), turns the Signorini curve groups into facet tags (one
 Signorini arc, tag ``SIGNORINI_TAG0 + k``, per connected piece of the groups) and gives
 every cell its subdomain: the automatic partition of ``fem_py.partition`` (size d) or the
-physical surface groups. The arrays are those of ``fem_py.gmsh_mesh`` (``MeshArrays``),
-for ``fem_py.distribute.distribute_mesh``.
+physical surface groups. The arrays are those of ``fem_py.mesh.gmsh_mesh`` (``MeshArrays``),
+for ``fem_py.mesh.distribute.distribute_mesh``.
 
 Every error is a one-line ``ValueError`` whose first word is the argument (the
 ``[geometry]`` key) at fault: ``mesh``, ``signorini``, ``subdomains``, ``diam(Omega)``.
@@ -22,10 +22,11 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from fem_py.coarse import SIGNORINI_TAG0
+from fem_py.mesh.shapes import Arc
 from fem_py.parallel import gather_to_root
-from fem_py.partition import cell_adjacency, partition_cells
-from fem_py.shapes import GAMMA_T_TAG, Arc, diameter
+from fem_py.partition.cells import cell_adjacency, partition_cells
+from fem_py.polyline import diameter
+from fem_py.tags import GAMMA_T_TAG, SIGNORINI_TAG0
 
 __all__ = ["MeshFile", "PreparedMesh", "read_msh", "mesh_of_model", "prepare_mesh", "gather_mesh"]
 
@@ -51,7 +52,7 @@ class MeshFile:
 
 @dataclass
 class PreparedMesh:
-    """What ``fem_py.geometry`` needs from a checked mesh: the ``MeshArrays``, Omega's
+    """What ``fem_py.mesh`` needs from a checked mesh: the ``MeshArrays``, Omega's
     boundary nodes counter-clockwise (``polygon``), the arcs and the sizes."""
 
     arrays: tuple
@@ -270,7 +271,7 @@ def _group_arcs(mesh: MeshFile, loop: np.ndarray, signorini: Any) -> tuple[np.nd
 
 
 def _arcs(polygon: np.ndarray, tags: np.ndarray, whole: bool) -> tuple:
-    """The :class:`fem_py.shapes.Arc` of every Signorini tag along ``polygon``."""
+    """The :class:`fem_py.mesh.shapes.Arc` of every Signorini tag along ``polygon``."""
     closed = np.vstack([polygon, polygon[:1]])
     s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(closed, axis=0), axis=1))])
     if whole:
@@ -418,10 +419,10 @@ def gather_mesh(msh: Any, facet_tags: Any, cell_tags: Any = None, names: Any = N
 
 
 def polygon_mesh(boundary: Any, ends: list, h: float, arcs: tuple) -> MeshFile:
-    """A gmsh mesh of size h of the polygon of ``boundary`` (a ``fem_py.shapes.
+    """A gmsh mesh of size h of the polygon of ``boundary`` (a ``fem_py.mesh.shapes.
     BoundaryCurve``) with the arc ends ``ends`` as nodes, as a :class:`MeshFile` whose
     curve groups ``arc<k>`` hold the boundary facets inside arc k (call on one rank)."""
-    from fem_py.gmsh_mesh import mesh_with_gmsh
+    from fem_py.mesh.gmsh_mesh import mesh_with_gmsh
 
     x, tri, _ = mesh_with_gmsh(boundary, None, ends, h, h, arcs, fine=False)
     cells = np.asarray(tri, dtype=np.int64)

@@ -1,7 +1,7 @@
 """The grading of the subdomains of a locally refined mesh, and the split of the graded
 ones (METHOD.md section 6; docs/design/adapt.md, "Subdomains on graded meshes").
 
-Local refinement keeps the coarse partition (``fem_py.refinement``), so a subdomain at a
+Local refinement keeps the coarse partition (``fem_py.mesh.refinement``), so a subdomain at a
 singularity gets ever smaller cells inside while its size H stays: the ratio H/h of the
 substructuring bound (1 + log(H/h))^2 grows by about log 2 per level, and so do the
 iteration counts. :func:`subdomain_grading` measures, per subdomain, its diameter over
@@ -17,7 +17,7 @@ diameter), the size of a cell its longest edge; for the square subdomains of a
 structured mesh the ratio is d/h.
 
 The split is the same for any number of ranks: the cells of a graded subdomain are sent
-to one rank (the lowest holding some; with whole subdomains per rank, ``fem_py.distribute``,
+to one rank (the lowest holding some; with whole subdomains per rank, ``fem_py.mesh.distribute``,
 its owner), which orders them canonically (nodes and cells by coordinates) before
 splitting; part k of old subdomain s gets the id offset_s + k, offset_s the exclusive
 prefix sum of the part counts over the old ids. Refined cells stay on their parent's
@@ -33,9 +33,9 @@ from dolfinx import fem
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
-from fem_py.coarse import compute_coarse_structure
-from fem_py.meshdata import tag_array
-from fem_py.partition import cell_adjacency, partition_cells
+from fem_py.dofs.p1 import tag_array
+from fem_py.partition.cells import cell_adjacency, partition_cells
+from fem_py.partition.coarse import compute_coarse_structure
 
 __all__ = ["subdomain_grading", "split_graded_subdomains", "split_cells"]
 

@@ -1,0 +1,244 @@
+"""The :class:`Domain`: a distributed mesh of Omega with its coarse subdomain partition
+(METHOD.md sections 1, 4 and 6), and the domains of a user's mesh.
+
+Tags
+----
+- cell tags: subdomain id 0 .. L-1 (``Domain.cell_tags``, dim 2);
+- facet tags (dim 1, exterior facets): ``fem_py.tags``: 1 on Gamma_t, 100 + k on the k-th
+  Signorini arc.
+
+:func:`domain_from_file` (a gmsh mesh file) and :func:`domain_from_mesh` (a DOLFINx mesh
+and its tags) prepare the mesh on rank 0 (``fem_py.mesh.own_mesh``: checks, Signorini
+tags, the automatic partition ``fem_py.partition.cells`` or the given subdomains);
+:func:`domain_from_prepared` distributes such a prepared mesh by whole subdomains
+(``fem_py.mesh.distribute``) and recovers its coarse structure
+(``fem_py.partition.coarse``), its coarse edges curved (``CORNER_ANGLE``).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from mpi4py import MPI
+
+from fem_py.mesh.distribute import distribute_mesh
+from fem_py.mesh.own_mesh import gather_mesh, prepare_mesh, read_msh
+from fem_py.parallel import broadcast_from_root, run_on_root
+from fem_py.partition.coarse import CoarseStructure, compute_coarse_structure
+from fem_py.polyline import diameter
+
+__all__ = [
+    "CORNER_ANGLE",
+    "Domain",
+    "DomainSize",
+    "check_size",
+    "domain_from_file",
+    "domain_from_mesh",
+    "domain_from_prepared",
+    "is_positive_number",
+    "max_facet_length",
+]
+
+
+@dataclass(frozen=True, eq=False)
+class Domain:
+    """A meshed Omega with its coarse partition (see the module docstring).
+
+    Attributes
+    ----------
+    mesh, cell_tags, facet_tags
+        DOLFINx mesh; subdomain id of each cell (dim 2); 1 / 100+k on exterior facets.
+    coarse : CoarseStructure
+    arcs : tuple of Arc
+    h, subdomain_size
+        The requested fine and coarse sizes.
+    shape : str
+    vertices : (m, 2) float
+        Polygon vertices of Omega, counter-clockwise (the first one is a corner).
+    signorini_is_whole_boundary : bool
+    structured : bool
+    coarse_size : float
+        Actual coarse size (coarse square side, or mean coarse edge length for a polygon).
+    h_max : float
+        Longest fine facet.
+    partition : "grid" (a generated coarse grid) or "cells" (groups of a mesh's cells)
+    """
+
+    mesh: Any
+    cell_tags: Any
+    facet_tags: Any
+    coarse: CoarseStructure
+    arcs: tuple
+    h: float
+    subdomain_size: float
+    shape: str
+    vertices: np.ndarray
+    signorini_is_whole_boundary: bool
+    structured: bool
+    coarse_size: float
+    h_max: float
+    partition: str = "grid"
+
+    @property
+    def comm(self) -> Any:
+        return self.mesh.comm
+
+    @property
+    def diameter(self) -> float:
+        return diameter(self.vertices)
+
+
+@dataclass(frozen=True)
+class DomainSize:
+    """The sizes of a domain (and of its P1 problem) as ``build_domain`` will make it.
+
+    Attributes
+    ----------
+    dofs, boundary_dofs, signorini_dofs
+        P1 nodes in Omega, on Gamma, and carrying a phi unknown.
+    subdomains
+        Coarse cells L.
+    h_min, h_max
+        The shortest and the longest fine facet.
+    """
+
+    dofs: int
+    boundary_dofs: int
+    signorini_dofs: int
+    subdomains: int
+    h_min: float
+    h_max: float
+
+
+#: A bend of Gamma by more than this (radians) makes a coarse vertex of a mesh from a
+#: file or of a curved shape (``fem_py.partition.coarse``: corners stay coarse vertices, a smooth
+#: curve does not fill with them).
+CORNER_ANGLE = math.pi / 6
+
+
+def is_positive_number(val: Any) -> bool:
+    return (
+        not isinstance(val, bool)
+        and isinstance(val, (int, float, np.floating, np.integer))
+        and math.isfinite(val)
+        and val > 0
+    )
+
+
+def check_size(d: Any) -> float:
+    if not is_positive_number(d):
+        raise ValueError(f"subdomain_size must be a positive number, got {d!r}")
+    return float(d)
+
+
+def domain_from_file(
+    comm: Any,
+    path: str,
+    *,
+    subdomain_size: float,
+    signorini: Any = (),
+    subdomains: str = "auto",
+    allow_large: bool = False,
+) -> Domain:
+    """The :class:`Domain` of a gmsh mesh file (MSH 2.2 or 4.1, 2D linear triangles).
+
+    Rank 0 reads and checks the file (``fem_py.mesh.own_mesh``) and partitions it (``subdomains
+    = "auto"``: subdomains of size about ``subdomain_size``; ``"physical"``: the
+    physical surface groups); the mesh is then distributed by whole subdomains.
+    ``signorini`` names physical curve groups (or ``"all"``). Collective; a bad file or
+    argument raises the same one-line ``ValueError`` on every rank before the mesh is
+    distributed.
+    """
+    d = check_size(subdomain_size)
+    return domain_from_prepared(
+        comm,
+        lambda: prepare_mesh(
+            read_msh(path),
+            signorini=signorini,
+            subdomain_size=d,
+            subdomains=subdomains,
+            allow_large=allow_large,
+        ),
+        d,
+        "mesh",
+    )
+
+
+def domain_from_mesh(
+    mesh: Any,
+    facet_tags: Any,
+    signorini: Any = (),
+    subdomain_size: float | None = None,
+    cell_tags: Any = None,
+    names: dict[str, int] | None = None,
+    allow_large: bool = False,
+) -> Domain:
+    """The :class:`Domain` of a DOLFINx triangle mesh (collective, on ``mesh.comm``).
+
+    ``facet_tags`` mark boundary parts; ``signorini`` lists the tags (or names, through
+    ``names``: name -> tag) of Gamma_s, or ``"all"``. Subdomains: ``cell_tags`` (one
+    subdomain per tag value) when given, else the automatic partition of size
+    ``subdomain_size``. The mesh is gathered on rank 0 and distributed anew by whole
+    subdomains, so the returned ``Domain.mesh`` is a new mesh.
+    """
+    if subdomain_size is None and cell_tags is None:
+        raise ValueError("subdomain_size: give subdomain_size (or cell_tags as subdomains)")
+    d = check_size(subdomain_size) if subdomain_size is not None else 1.0
+    gathered = gather_mesh(mesh, facet_tags, cell_tags, names)
+    comm = mesh.comm
+    return domain_from_prepared(
+        comm,
+        lambda: prepare_mesh(
+            gathered,
+            signorini=[str(s) for s in signorini] if not isinstance(signorini, str) else signorini,
+            subdomain_size=d,
+            subdomains="auto" if cell_tags is None else "physical",
+            allow_large=allow_large,
+        ),
+        d,
+        "mesh",
+    )
+
+
+def domain_from_prepared(comm: Any, prepare: Any, d: float, shape: str) -> Domain:
+    """``prepare()`` (a ``fem_py.mesh.own_mesh.PreparedMesh``) on rank 0, its errors raised on
+    every rank; the mesh distributed by whole subdomains, its coarse edges curved."""
+    prepared = run_on_root(comm, prepare)
+    meta = broadcast_from_root(
+        comm, lambda: (prepared.polygon, prepared.arcs, prepared.whole, prepared.subdomain_size)
+    )
+    polygon, arcs, whole, d = meta
+    msh, ct0, ft = distribute_mesh(comm, prepared.arrays if comm.rank == 0 else None)
+    coarse = compute_coarse_structure(msh, ct0, ft, corner_angle=CORNER_ANGLE)
+    h_max = max_facet_length(msh)
+    return Domain(
+        mesh=msh,
+        cell_tags=ct0,
+        facet_tags=ft,
+        coarse=coarse,
+        arcs=arcs,
+        h=h_max,
+        subdomain_size=d,
+        shape=shape,
+        vertices=np.asarray(polygon, dtype=float),
+        signorini_is_whole_boundary=bool(whole),
+        structured=False,
+        coarse_size=d,
+        h_max=h_max,
+        partition="cells",
+    )
+
+
+def max_facet_length(msh: Any) -> float:
+    """The longest fine facet: the longest side of the local triangles, maximised over ranks."""
+    x = msh.geometry.x[:, :2]
+    corners = msh.geometry.dofmap.array.reshape(-1, 3)
+    # take: faster than x[...] for (n, 2) rows (measurements: docs/design/fem_py.md)
+    p = [x.take(corners[:, k], axis=0) for k in range(3)]
+    loc = max(
+        float(np.einsum("ij,ij->i", d, d).max(initial=0.0))
+        for d in (p[1] - p[0], p[2] - p[1], p[0] - p[2])
+    )
+    return math.sqrt(msh.comm.allreduce(loc, op=MPI.MAX))
