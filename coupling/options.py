@@ -2,8 +2,12 @@
 
 :data:`DEFAULTS` is the TOML schema of ``fembem`` (section -> key -> default; the type
 of a default is the expected type), :data:`CHOICES` the keys restricted to a fixed set of
-strings. :class:`SolverOptions` is the ``[solver]`` section as a frozen dataclass: the
-one object a solve takes (:func:`coupling.solvers.solve`). The lower layers
+strings. The ``[geometry]`` defaults are those of :class:`fem_py.spec.GeometrySpec` (the
+geometry layer's own type); every other section is a frozen dataclass here whose
+defaults are read from :data:`DEFAULTS`: :class:`SolverOptions` (the one object a solve
+takes, :func:`coupling.solvers.solve`), :class:`MaterialOptions`, :class:`DataOptions`,
+:class:`AdaptOptions` and :class:`OutputOptions`; :class:`RunConfig` holds the six (the
+application makes it once, ``coupling.app.config``). The lower layers
 (preconditioners, solvers, projection) take their parameters as required arguments,
 so no default is written twice.
 """
@@ -13,24 +17,32 @@ import dataclasses
 from dataclasses import dataclass, field
 from typing import Any
 
-__all__ = ["DEFAULTS", "CHOICES", "DATA_VARIABLES", "SolverOptions", "solver_options"]
+from fem_py.spec import GeometrySpec
+
+__all__ = [
+    "DEFAULTS",
+    "CHOICES",
+    "DATA_VARIABLES",
+    "SolverOptions",
+    "solver_options",
+    "MaterialOptions",
+    "DataOptions",
+    "AdaptOptions",
+    "OutputOptions",
+    "RunConfig",
+]
+
+
+def _toml(value: Any) -> Any:
+    """A default as TOML reads it (arrays are lists)."""
+    return [_toml(v) for v in value] if isinstance(value, tuple) else value
+
 
 #: Every key of the schema with its default value.
 DEFAULTS: dict[str, dict[str, Any]] = {
+    # the fields of GeometrySpec, but its dimension (derived from the shape or mesh file)
     "geometry": {
-        "shape": "square",
-        "center": [0.0, 0.0],
-        "width": 0.5,
-        "vertices": [],
-        "h": 1.0 / 32,
-        "subdomain_size": 1.0 / 8,
-        "structured": True,
-        "signorini": [],
-        "allow_large": False,
-        "mesh": "",
-        "subdomains": "auto",
-        "radius": 0.25,
-        "semi_axes": [0.3, 0.2],
+        f.name: _toml(f.default) for f in dataclasses.fields(GeometrySpec) if f.name != "dim"
     },
     "material": {"rho": "linear", "p": 2.0, "eps": 1.0},
     "data": {"f": "0", "u0": "0", "t0": "0", "a": 0.0, "exact": ""},
@@ -146,8 +158,12 @@ GRADING_SPLIT_FACTOR = 2.0
 SLOPE_MIN_DOFS = 1000
 
 
+def _default(section: str, key: str) -> Any:
+    return field(default=DEFAULTS[section][key])
+
+
 def _solver_default(key: str) -> Any:
-    return field(default=DEFAULTS["solver"][key])
+    return _default("solver", key)
 
 
 @dataclass(frozen=True)
@@ -201,3 +217,87 @@ def solver_options(section: dict[str, Any]) -> SolverOptions:
     """:class:`SolverOptions` from a validated ``[solver]`` section."""
     names = {f.name for f in dataclasses.fields(SolverOptions)}
     return SolverOptions(**{k: v for k, v in section.items() if k in names})
+
+
+@dataclass(frozen=True)
+class MaterialOptions:
+    """The ``[material]`` section: the built-in material ``rho`` (``linear``,
+    ``carstensen``, ``power`` or an expression in t) and the power law's ``p`` and
+    ``eps`` (``fem_py.forms.make_material``)."""
+
+    rho: str = _default("material", "rho")
+    p: float = _default("material", "p")
+    eps: float = _default("material", "eps")
+
+
+@dataclass(frozen=True)
+class DataOptions:
+    """The ``[data]`` section: the expressions f, u0, t0 (:data:`DATA_VARIABLES`), the
+    constant ``a`` of the exterior solution and the exact interior solution ``exact``
+    ("" when none is known)."""
+
+    f: str = _default("data", "f")
+    u0: str = _default("data", "u0")
+    t0: str = _default("data", "t0")
+    a: float = _default("data", "a")
+    exact: str = _default("data", "exact")
+
+
+@dataclass(frozen=True)
+class AdaptOptions:
+    """The ``[adapt]`` section: ``steps`` refinements (0: no adaptivity), Doerfler's
+    ``theta`` in (0, 1], and ``max_dofs``: no level beyond this many dofs is solved."""
+
+    steps: int = _default("adapt", "steps")
+    theta: float = _default("adapt", "theta")
+    max_dofs: int = _default("adapt", "max_dofs")
+
+    def __post_init__(self) -> None:
+        if not 0.0 < self.theta <= 1.0:
+            raise ValueError(f"AdaptOptions.theta must lie in (0, 1], got {self.theta!r}")
+        if self.steps < 0 or self.max_dofs <= 0:
+            raise ValueError(
+                f"AdaptOptions: steps >= 0 and max_dofs > 0, got {self.steps}, {self.max_dofs}"
+            )
+
+
+@dataclass(frozen=True)
+class OutputOptions:
+    """The ``[output]`` section: the folder ``dir``, and whether to write solution.xdmf,
+    the figures and the estimator's indicators (``coupling.io.outputs.RunOutputs``)."""
+
+    dir: str = _default("output", "dir")
+    xdmf: bool = _default("output", "xdmf")
+    plots: bool = _default("output", "plots")
+    indicators: bool = _default("output", "indicators")
+
+
+@dataclass(frozen=True)
+class RunConfig:
+    """A run's configuration, typed: one frozen value per section of :data:`DEFAULTS`.
+
+    Made once from the TOML by ``coupling.app.config.load_config`` (which validates it);
+    the library below the application takes the sections it needs, never the whole.
+    """
+
+    geometry: GeometrySpec = field(default_factory=GeometrySpec)
+    material: MaterialOptions = field(default_factory=MaterialOptions)
+    data: DataOptions = field(default_factory=DataOptions)
+    solver: SolverOptions = field(default_factory=SolverOptions)
+    adapt: AdaptOptions = field(default_factory=AdaptOptions)
+    output: OutputOptions = field(default_factory=OutputOptions)
+
+    def __post_init__(self) -> None:
+        if self.solver.nested and self.adapt.steps > 0:
+            raise ValueError(
+                "solver.nested = true and adapt.steps > 0 do not combine: the adaptive loop "
+                "already starts each level from the one before; set solver.nested = false"
+            )
+
+    def as_dict(self) -> dict[str, dict[str, Any]]:
+        """Section -> key -> value as TOML reads it (arrays as lists), the keys of
+        :data:`DEFAULTS` (summary.json's ``config``)."""
+        return {
+            section: {key: _toml(getattr(getattr(self, section), key)) for key in keys}
+            for section, keys in DEFAULTS.items()
+        }

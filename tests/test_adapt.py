@@ -377,12 +377,12 @@ def test_adaptive_corner_contact_is_no_worse_than_a_uniform_mesh_of_as_many_dofs
 
 
 def test_adapt_options_and_config():
-    assert parse_config({})["adapt"] == {"steps": 0, "theta": 0.5, "max_dofs": 200000}
-    assert dataclasses.asdict(AdaptOptions()) == parse_config({})["adapt"]
+    assert parse_config({}).as_dict()["adapt"] == {"steps": 0, "theta": 0.5, "max_dofs": 200000}
+    assert AdaptOptions() == parse_config({}).adapt
     for key, value in (("theta", 0.0), ("theta", 1.5), ("steps", -1), ("max_dofs", 0)):
         with pytest.raises(ConfigError, match=f"adapt.{key}"):
             parse_config({"adapt": {key: value}})
-    assert parse_config({"adapt": {"theta": 1, "steps": 3}})["adapt"]["theta"] == 1.0
+    assert parse_config({"adapt": {"theta": 1, "steps": 3}}).adapt.theta == 1.0
     with pytest.raises(ValueError, match="theta"):
         AdaptOptions(theta=0.0)
 

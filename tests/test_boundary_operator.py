@@ -140,9 +140,9 @@ def test_auto_chooses_by_the_crossover():
 
 
 def test_config_validates_the_choice():
-    assert parse_config({})["solver"]["boundary_operator"] == "auto"
+    assert parse_config({}).solver.boundary_operator == "auto"
     assert (
-        parse_config({"solver": {"boundary_operator": "hmatrix"}})["solver"]["boundary_operator"]
+        parse_config({"solver": {"boundary_operator": "hmatrix"}}).solver.boundary_operator
         == "hmatrix"
     )
     with pytest.raises(ConfigError, match='solver.boundary_operator must be one of "auto"'):

@@ -2,11 +2,12 @@
 import pytest
 
 from coupling.app.config import ConfigError, load_config, parse_config
-from coupling.options import DEFAULTS
+from coupling.options import DEFAULTS, RunConfig
 
 
 def test_empty_configuration_is_all_defaults():
-    assert parse_config({}) == DEFAULTS
+    assert parse_config({}) == RunConfig()
+    assert parse_config({}).as_dict() == DEFAULTS
 
 
 def test_values_are_converted_and_overrides_applied(tmp_path):
@@ -18,11 +19,11 @@ def test_values_are_converted_and_overrides_applied(tmp_path):
     config = load_config(
         path, ["material.rho=carstensen", "solver.tol=1e-6", "geometry.structured=false"]
     )
-    assert config["geometry"]["h"] == 0.05
-    assert config["geometry"]["signorini"] == ["bottom", ((0.0, 0.0), (0.25, 0.0))]
-    assert config["material"]["rho"] == "carstensen"
-    assert config["solver"]["tol"] == 1e-6 and config["solver"]["step"] == 0.5
-    assert config["geometry"]["structured"] is False
+    assert config.geometry.h == 0.05
+    assert config.geometry.signorini == ("bottom", ((0.0, 0.0), (0.25, 0.0)))
+    assert config.material.rho == "carstensen"
+    assert config.solver.tol == 1e-6 and config.solver.step == 0.5
+    assert config.geometry.structured is False
 
 
 @pytest.mark.parametrize(
@@ -59,12 +60,9 @@ def test_errors_name_the_key(raw, message):
 
 
 def test_ellipse_keys():
-    from coupling.app.from_config import geometry_spec
-
     config = parse_config({"geometry": {"shape": "ellipse", "semi_axes": [1, 0.25]}})
-    assert config["geometry"]["semi_axes"] == [1.0, 0.25]
-    spec = geometry_spec(config)
-    assert spec.shape == "ellipse" and spec.semi_axes == (1.0, 0.25)
+    assert config.geometry.shape == "ellipse" and config.geometry.semi_axes == (1.0, 0.25)
+    assert config.as_dict()["geometry"]["semi_axes"] == [1.0, 0.25]
 
 
 def test_missing_file_and_bad_toml(tmp_path):

@@ -160,4 +160,4 @@ def test_coarser_levels_stop_where_their_geometry_is_invalid(subdomains_on_arc, 
     coarser = coarser_configs(config, 129**2)
     assert len(coarser) == levels
     for level in coarser:
-        assert level["geometry"]["subdomain_size"] == 2 * level["geometry"]["h"] == 8 * h
+        assert level.geometry.subdomain_size == 2 * level.geometry.h == 8 * h

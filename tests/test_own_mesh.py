@@ -301,7 +301,7 @@ def test_relative_mesh_path_is_relative_to_the_configuration_file(tmp_path):
     (tmp_path / "sub").mkdir()
     config = tmp_path / "sub" / "c.toml"
     config.write_text('[geometry]\nmesh = "m.msh"\nsignorini = ["contact"]\n')
-    assert load_config(config)["geometry"]["mesh"] == str(tmp_path / "sub" / "m.msh")
+    assert load_config(config).geometry.mesh == str(tmp_path / "sub" / "m.msh")
 
 
 # ------------------------------------------------------------------ the demo

@@ -2,7 +2,7 @@
 marking (:mod:`.marking`), refinement and transfer of the iterate (:mod:`.transfer`) and
 the loop solve -> estimate -> mark -> refine (:mod:`.loop`); docs/design/estimator.md."""
 from coupling.adapt.estimator import Estimate, estimate
-from coupling.adapt.loop import AdaptOptions, Level, adapt, adapt_options
+from coupling.adapt.loop import AdaptOptions, Level, adapt
 from coupling.adapt.marking import doerfler_marking
 
 __all__ = [
@@ -12,5 +12,4 @@ __all__ = [
     "AdaptOptions",
     "Level",
     "adapt",
-    "adapt_options",
 ]

@@ -12,46 +12,18 @@ graded are split (:func:`fem_py.mesh.grading.split_graded_subdomains`, bound
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Callable
 
 from coupling.adapt.estimator import Estimate, estimate
 from coupling.adapt.marking import doerfler_marking
 from coupling.adapt.transfer import transfer_iterate
 from coupling.manufactured import energy_error
-from coupling.options import DEFAULTS, GRADING_SPLIT_FACTOR, SolverOptions
+from coupling.options import GRADING_SPLIT_FACTOR, AdaptOptions, SolverOptions
 from coupling.solvers import solve
 from fem_py.mesh import CORNER_ANGLE, refine_domain, split_graded_subdomains, subdomain_grading
 
-__all__ = ["AdaptOptions", "adapt_options", "Level", "adapt"]
-
-
-def _default(key: str) -> Any:
-    return field(default=DEFAULTS["adapt"][key])
-
-
-@dataclass(frozen=True)
-class AdaptOptions:
-    """The ``[adapt]`` section (defaults in coupling.options.DEFAULTS): ``steps``
-    refinements (0: no adaptivity), Doerfler's ``theta`` in (0, 1], and ``max_dofs``: no
-    level beyond this many dofs is solved."""
-
-    steps: int = _default("steps")
-    theta: float = _default("theta")
-    max_dofs: int = _default("max_dofs")
-
-    def __post_init__(self) -> None:
-        if not 0.0 < self.theta <= 1.0:
-            raise ValueError(f"AdaptOptions.theta must lie in (0, 1], got {self.theta!r}")
-        if self.steps < 0 or self.max_dofs <= 0:
-            raise ValueError(
-                f"AdaptOptions: steps >= 0 and max_dofs > 0, got {self.steps}, {self.max_dofs}"
-            )
-
-
-def adapt_options(section: dict[str, Any]) -> AdaptOptions:
-    """:class:`AdaptOptions` from a validated ``[adapt]`` section."""
-    return AdaptOptions(**section)
+__all__ = ["AdaptOptions", "Level", "adapt"]
 
 
 @dataclass

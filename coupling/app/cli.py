@@ -196,8 +196,9 @@ def _run_script_main(relative: str, argv: list[str]) -> int:
     return runpy.run_path(str(path))["main"](argv)
 
 
-def _problem_inputs(args: argparse.Namespace) -> dict:
-    """The validated configuration of ``args``: schema, data expressions and material.
+def _problem_inputs(args: argparse.Namespace) -> Any:
+    """The validated :class:`coupling.options.RunConfig` of ``args``: schema, data
+    expressions and material.
 
     Everything here is cheap and identical on every rank, so a bad input fails fast and
     on all ranks alike (no rank waits in a collective call for another).
@@ -231,16 +232,16 @@ def _solve(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
 
     # the figure process starts first, to import matplotlib while the run imports and
     # computes; it is ended on every way out of the run (a refused size included)
-    worker = FigureWorker() if config["output"]["plots"] and comm.rank == 0 else None
+    worker = FigureWorker() if config.output.plots and comm.rank == 0 else None
     with worker if worker is not None else contextlib.nullcontext():
         return _solve_config(args, interrupts, comm, config, worker)
 
 
 def _solve_config(
-    args: argparse.Namespace, interrupts: InterruptHandler, comm: Any, config: dict, worker: Any
+    args: argparse.Namespace, interrupts: InterruptHandler, comm: Any, config: Any, worker: Any
 ) -> int:
     """``fembem solve`` of the validated ``config`` (the figure process ``worker`` started)."""
-    plots = config["output"]["plots"]
+    plots, kind = config.output.plots, config.solver.boundary_operator
     from coupling.app.advice import arc_warnings, material_warnings
     from coupling.app.from_config import domain_from_config, planned_size, problem_on_domain
     from coupling.app.progress import ProgressMonitor
@@ -253,21 +254,14 @@ def _solve_config(
     from coupling.io.outputs import RunOutputs
     from coupling.timing import process_seconds
 
-    out = Path(args.out if args.out is not None else config["output"]["dir"])
+    out = Path(args.out if args.out is not None else config.output.dir)
     # the run is written beside ``out`` and moved into place once complete
     monitor = None if args.quiet else ProgressMonitor(comm)
     size = _with_geometry_key(planned_size, config)
-    kind = config["solver"]["boundary_operator"]
     if size is not None:  # closed form: refuse before anything is built
-        check_memory(size, comm.size, plots=config["output"]["plots"], boundary_operator=kind)
+        check_memory(size, comm.size, plots=plots, boundary_operator=kind)
     with staged_output_dir(comm, out, force=args.force) as staging, RunOutputs(
-        comm,
-        staging,
-        tol=config["solver"]["tol"],
-        xdmf=config["output"]["xdmf"],
-        plots=plots,
-        indicators=config["output"]["indicators"],
-        worker=worker,
+        comm, staging, config.output, tol=config.solver.tol, worker=worker
     ) as outputs:
         interrupts.staging = staging  # from here the first rank to claim it reports
         startup = process_seconds()
@@ -277,12 +271,7 @@ def _solve_config(
         domain = _with_geometry_key(domain_from_config, comm, config)
         mesh_time = time.perf_counter() - tic
         if size is None:  # a gmsh mesh: refuse before the boundary matrices are formed
-            check_memory(
-                size_of_domain(domain),
-                comm.size,
-                plots=config["output"]["plots"],
-                boundary_operator=kind,
-            )
+            check_memory(size_of_domain(domain), comm.size, plots=plots, boundary_operator=kind)
         problem, options, timings = problem_on_domain(domain, config)
         timings = {"mesh": mesh_time, **timings}
         arcs = problem_arcs(problem)
@@ -295,9 +284,7 @@ def _solve_config(
         facts = mesh_facts(domain)  # collective
         if monitor is not None:
             monitor.problem(problem, options, arc_lengths, facts)
-        run = run_solver(
-            comm, config, domain, problem, options, timings, monitor, after_solve=outputs.start
-        )
+        run = run_solver(comm, config, domain, problem, timings, monitor, after_solve=outputs.start)
         result = run.solution
         if monitor is not None:
             monitor.finished(result)
@@ -307,10 +294,10 @@ def _solve_config(
             total=process_seconds,
             config=config,
             levels=run.levels,
-            adaptive=config["adapt"]["steps"] > 0,
+            adaptive=config.adapt.steps > 0,
             estimator=run.estimator,
             error=run.error,
-            indicators=run.indicators if config["output"]["indicators"] else None,
+            indicators=run.indicators,
             facts=facts if run.problem.domain is domain else None,
         )
     if comm.rank == 0 and not args.quiet:
@@ -340,8 +327,8 @@ def _info(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
         "memory_estimate_bytes": memory_estimate(
             size,
             comm.size,
-            plots=config["output"]["plots"],
-            boundary_operator=config["solver"]["boundary_operator"],
+            plots=config.output.plots,
+            boundary_operator=config.solver.boundary_operator,
         ),
         "memory_available_bytes": memory_available(),
         "mpi_ranks": comm.size,

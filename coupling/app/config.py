@@ -1,6 +1,7 @@
-"""Run configuration: validation of the TOML schema of :mod:`coupling.options`.
+"""Run configuration: the TOML schema of :mod:`coupling.options` validated into the
+typed :class:`coupling.options.RunConfig`, made once here.
 
-A configuration has five sections; every key has a default, so an empty file is a
+A configuration has six sections; every key has a default, so an empty file is a
 valid (linear, contact-free) problem. Unknown sections or keys, wrong types and
 out-of-range values raise :class:`ConfigError`, a ``ValueError`` whose one-line
 message names the key and says what to do.
@@ -14,7 +15,18 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
-from coupling.options import CHOICES, DATA_VARIABLES, DEFAULTS
+from coupling.options import (
+    CHOICES,
+    DATA_VARIABLES,
+    DEFAULTS,
+    AdaptOptions,
+    DataOptions,
+    MaterialOptions,
+    OutputOptions,
+    RunConfig,
+    solver_options,
+)
+from fem_py.spec import GeometrySpec
 
 __all__ = [
     "ConfigError",
@@ -158,19 +170,53 @@ def _check_signorini(value: Any) -> str | list:
     return arcs
 
 
-def parse_config(raw: dict[str, Any]) -> dict[str, dict[str, Any]]:
+def parse_config(raw: dict[str, Any], folder: str | Path | None = None) -> RunConfig:
     """Validate a raw configuration mapping and fill in the defaults.
 
     Parameters
     ----------
     raw
         Mapping section -> {key: value}, as read from TOML.
+    folder
+        The configuration file's folder: a relative ``geometry.mesh`` is relative to it.
 
     Returns
     -------
-    dict
-        A new mapping with all sections and keys of :data:`DEFAULTS`.
+    RunConfig
     """
+    config = _checked(raw)
+    mesh = config["geometry"]["mesh"]
+    if mesh and folder is not None and not Path(mesh).is_absolute():
+        config["geometry"]["mesh"] = str(Path(folder) / mesh)
+    try:
+        return _typed(config)
+    except ValueError as err:  # a combination RunConfig refuses
+        raise ConfigError(str(err)) from None
+
+
+def _typed(config: dict[str, dict[str, Any]]) -> RunConfig:
+    """The :class:`RunConfig` of validated sections (TOML arrays become tuples)."""
+    g = config["geometry"]
+    signorini = g["signorini"]
+    geometry = {
+        **g,
+        "center": tuple(g["center"]),
+        "vertices": tuple(tuple(v) for v in g["vertices"]),
+        "semi_axes": tuple(g["semi_axes"]),
+        "signorini": signorini if signorini == "all" else tuple(signorini),
+    }
+    return RunConfig(
+        geometry=GeometrySpec(**geometry),
+        material=MaterialOptions(**config["material"]),
+        data=DataOptions(**config["data"]),
+        solver=solver_options(config["solver"]),
+        adapt=AdaptOptions(**config["adapt"]),
+        output=OutputOptions(**config["output"]),
+    )
+
+
+def _checked(raw: dict[str, Any]) -> dict[str, dict[str, Any]]:
+    """Every section and key of :data:`DEFAULTS`, the given ones checked."""
     config = copy.deepcopy(DEFAULTS)
     for section, table in raw.items():
         if section not in DEFAULTS:
@@ -191,12 +237,7 @@ def parse_config(raw: dict[str, Any]) -> dict[str, dict[str, Any]]:
             'solver.preconditioner = "exact" factors the dense S_h; set solver.boundary_operator '
             '= "dense" (or "auto" for small boundaries) or use another preconditioner'
         )
-    if config["adapt"]["steps"] > 0:
-        if raw.get("solver", {}).get("nested") is True:
-            raise ConfigError(
-                "solver.nested = true and adapt.steps > 0 do not combine: the adaptive loop "
-                "already starts each level from the one before; set solver.nested = false"
-            )
+    if config["adapt"]["steps"] > 0 and raw.get("solver", {}).get("nested") is not True:
         solver["nested"] = False  # the default (true) applies to plain solves only
     geometry = config["geometry"]
     _check_mesh_keys(geometry, raw.get("geometry", {}))
@@ -272,7 +313,7 @@ def apply_override(raw: dict[str, Any], assignment: str) -> None:
     raw[section][key] = value
 
 
-def load_config(path: str | Path | None, overrides: list[str] = ()) -> dict[str, dict[str, Any]]:
+def load_config(path: str | Path | None, overrides: list[str] = ()) -> RunConfig:
     """Read a TOML file (or nothing), apply ``section.key=value`` overrides, validate."""
     raw: dict[str, Any] = {}
     if path is not None:
@@ -288,15 +329,10 @@ def load_config(path: str | Path | None, overrides: list[str] = ()) -> dict[str,
             raise ConfigError(f"{path}: invalid TOML ({err}); fix the syntax") from None
     for assignment in overrides:
         apply_override(raw, assignment)
-    config = parse_config(raw)
-    mesh = config["geometry"]["mesh"]
-    if mesh and path is not None and not Path(mesh).is_absolute():
-        # a relative mesh path is relative to the configuration file's folder
-        config["geometry"]["mesh"] = str(Path(path).parent / mesh)
-    return config
+    return parse_config(raw, None if path is None else Path(path).parent)
 
 
-def check_data_and_material(config: dict[str, dict[str, Any]]) -> None:
+def check_data_and_material(config: RunConfig) -> None:
     """Parse the [data] expressions and build the material of a validated configuration.
 
     Cheap (no mesh, no MPI): run it before the mesh is built so that a misspelt
@@ -318,19 +354,20 @@ def check_data_and_material(config: dict[str, dict[str, Any]]) -> None:
     x, n = ufl.SpatialCoordinate(domain), ufl.FacetNormal(domain)
     values = {"x": x[0], "y": x[1], "nx": n[0], "ny": n[1]}
     for key, names in DATA_VARIABLES.items():
-        if key == "exact" and not config["data"][key]:
+        text = getattr(config.data, key)
+        if key == "exact" and not text:
             continue  # no exact solution known
         try:
-            parse_expression(config["data"][key], {name: values[name] for name in names})
+            parse_expression(text, {name: values[name] for name in names})
         except ValueError as err:
             raise ConfigError(f"data.{key}: {err}") from None
-    material = config["material"]
+    material = config.material
     try:
-        make_material(material["rho"], p=material["p"], eps=material["eps"])
+        make_material(material.rho, p=material.p, eps=material.eps)
     except ValueError as err:
         # the power law's own parameters are named in its messages ("needs p > 1")
         key = next(
-            (k for k in ("p", "eps") if material["rho"] == "power" and f"needs {k} " in str(err)),
+            (k for k in ("p", "eps") if material.rho == "power" and f"needs {k} " in str(err)),
             "rho",
         )
         raise ConfigError(f"material.{key}: {err}") from None

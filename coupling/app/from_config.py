@@ -1,18 +1,19 @@
-"""From a validated configuration (:mod:`coupling.app.config`) to the objects of the
-library: the domain, the material, the assembled problem and the solver options."""
+"""From a validated configuration (:class:`coupling.options.RunConfig`, made by
+:mod:`coupling.app.config`) to the objects of the library: the domain, the material, the
+assembled problem and the solver options."""
 from __future__ import annotations
 
+import dataclasses
 import time
 from pathlib import Path
 from typing import Any
 
 from mpi4py import MPI
 
-from coupling.options import NESTED_COARSENING, NESTED_MIN_DOFS, SolverOptions, solver_options
+from coupling.options import NESTED_COARSENING, NESTED_MIN_DOFS, RunConfig, SolverOptions
 from coupling.problem import SignoriniProblem
 
 __all__ = [
-    "geometry_spec",
     "domain_from_config",
     "planned_size",
     "coarser_configs",
@@ -22,52 +23,35 @@ __all__ = [
 ]
 
 
-def geometry_spec(config: dict) -> Any:
-    """The ``fem_py.mesh.GeometrySpec`` of the [geometry] section of a validated
-    configuration."""
-    from fem_py.mesh import GeometrySpec
-
-    g = config["geometry"]
-    return GeometrySpec(
-        **{
-            **g,
-            "center": tuple(g["center"]),
-            "vertices": tuple(map(tuple, g["vertices"])),
-            "semi_axes": tuple(g["semi_axes"]),
-            "signorini": g["signorini"] if g["signorini"] == "all" else tuple(g["signorini"]),
-        }
-    )
-
-
-def domain_from_config(comm: MPI.Comm, config: dict) -> Any:
+def domain_from_config(comm: MPI.Comm, config: RunConfig) -> Any:
     """The ``fem_py.mesh.Domain`` of a validated configuration (collective)."""
     from fem_py.mesh import build_domain
 
-    return build_domain(comm, geometry_spec(config))
+    return build_domain(comm, config.geometry)
 
 
-def planned_size(config: dict) -> Any:
+def planned_size(config: RunConfig) -> Any:
     """The ``fem_py.mesh.DomainSize`` of the configuration's domain in closed form (no
     mesh), or None when only meshing tells (a mesh file: then its existence is checked)."""
     from fem_py.mesh import domain_size
 
-    spec = geometry_spec(config)
-    if spec.mesh and not Path(spec.mesh).is_file():  # before an output folder is made
+    mesh = config.geometry.mesh
+    if mesh and not Path(mesh).is_file():  # before an output folder is made
         raise ValueError(
-            f"mesh: file {spec.mesh!r} not found; give the path of a gmsh .msh "
+            f"mesh: file {mesh!r} not found; give the path of a gmsh .msh "
             "file (relative to the configuration file's folder)"
         )
-    return domain_size(spec)
+    return domain_size(config.geometry)
 
 
 def coarser_configs(
-    config: dict,
+    config: RunConfig,
     dofs: int,
     *,
     coarsening: int = NESTED_COARSENING,
     min_dofs: int = NESTED_MIN_DOFS,
     keep_subdomains: bool = False,
-) -> list[dict]:
+) -> list[RunConfig]:
     """The configurations of the coarser levels of a nested solve of a configuration whose
     mesh has ``dofs`` dofs, coarsest first: h multiplied by ``coarsening`` per level, the
     subdomain size d kept while a coarse edge keeps at least two segments and raised to
@@ -77,16 +61,16 @@ def coarser_configs(
     is not, e.g. a Signorini arc end on the given subdomains' grid but not on the raised
     d's: the solve is then cold, never an error the fine mesh does not raise). No levels
     for a mesh file (it has no h to coarsen)."""
-    g = config["geometry"]
-    if g["mesh"]:
+    g = config.geometry
+    if g.mesh:
         return []
     levels, k = [], 1
     while dofs / coarsening ** (2 * k) >= min_dofs:
-        h = g["h"] * coarsening**k
-        if keep_subdomains and 2 * h > g["subdomain_size"]:
+        h = g.h * coarsening**k
+        if keep_subdomains and 2 * h > g.subdomain_size:
             break
-        sizes = {"h": h, "subdomain_size": max(g["subdomain_size"], 2 * h)}
-        level = {**config, "geometry": {**g, **sizes}}
+        geometry = dataclasses.replace(g, h=h, subdomain_size=max(g.subdomain_size, 2 * h))
+        level = dataclasses.replace(config, geometry=geometry)
         try:
             planned_size(level)  # the checks of build_domain, without a mesh
         except ValueError:
@@ -96,28 +80,27 @@ def coarser_configs(
     return levels[::-1]
 
 
-def material_from_config(config: dict) -> Any:
-    """The ``fem_py.forms.materials.Material`` of a validated configuration."""
+def material_from_config(config: RunConfig) -> Any:
+    """The ``fem_py.forms.Material`` of a validated configuration."""
     from fem_py.forms import make_material
 
-    m = config["material"]
-    return make_material(m["rho"], p=m["p"], eps=m["eps"])
+    m = config.material
+    return make_material(m.rho, p=m.p, eps=m.eps)
 
 
 def problem_on_domain(
-    domain: Any, config: dict
+    domain: Any, config: RunConfig
 ) -> tuple[SignoriniProblem, SolverOptions, dict[str, float]]:
     """The assembled problem on ``domain``, the solver options and the problem's stage
     timings, for a validated configuration (collective)."""
-    data = config["data"]
-    options = solver_options(config["solver"])
+    data, options = config.data, config.solver
     problem = SignoriniProblem(
         domain,
         material_from_config(config),
-        f=data["f"],
-        u0=data["u0"],
-        t0=data["t0"],
-        a=data["a"],
+        f=data.f,
+        u0=data.u0,
+        t0=data.t0,
+        a=data.a,
         flux_space=options.flux_space,
         jacobian=options.jacobian,
         boundary_operator=options.boundary_operator,
@@ -126,7 +109,7 @@ def problem_on_domain(
 
 
 def problem_from_config(
-    comm: MPI.Comm, config: dict
+    comm: MPI.Comm, config: RunConfig
 ) -> tuple[SignoriniProblem, SolverOptions, dict[str, float]]:
     """The assembled problem, the solver options and the set-up timings (``mesh`` and the
     problem's stages) of a validated configuration (collective)."""

@@ -12,7 +12,7 @@ import numpy as np
 
 from coupling.app.config import ConfigError
 from coupling.app.from_config import coarser_configs, domain_from_config, problem_on_domain
-from coupling.options import SolverOptions
+from coupling.options import RunConfig
 
 __all__ = ["Run", "run_solver"]
 
@@ -33,47 +33,41 @@ class Run:
     error: float | None = None
 
 
-def _level_builder(comm: Any, config: dict):
+def _level_builder(comm: Any, config: RunConfig):
     """A builder of the problem of one coarser level (called when the level starts)."""
     return lambda: problem_on_domain(domain_from_config(comm, config), config)[0]
 
 
 def run_solver(
     comm: Any,
-    config: dict,
+    config: RunConfig,
     domain: Any,
     problem: Any,
-    options: SolverOptions,
     timings: dict[str, float],
     monitor: Any = None,
     after_solve: Callable[[Any, Any], None] | None = None,
 ) -> Run:
-    """Solve the assembled ``problem`` on ``domain`` as the configuration asks (collective).
+    """Solve the assembled ``problem`` on ``domain`` as ``config`` asks (collective): with
+    ``config.solver``, adaptively as ``config.adapt`` says or nested over coarser levels of
+    ``config.geometry``, the estimator on the data ``config.data``.
 
-    ``timings`` are the set-up stages so far; the run adds ``solve`` (and the stages of
-    :func:`coupling.solvers.solve`), ``coarse_levels`` and ``prolongation`` for a nested
-    solve, ``adaptive_loop`` (every level: assembly, solves, estimates, errors,
-    refinement) for an adaptive one, and ``estimator``. ``after_solve(problem,
-    solution)``, when given, is called with the final problem and its solution as soon
-    as they are known: before the estimator of a plain or nested solve, after the
-    adaptive loop (e.g. :meth:`coupling.io.outputs.RunOutputs.start`, whose work then
-    runs beside the estimator); its time is in none of the stages.
+        ``timings`` are the set-up stages so far; the run adds ``solve`` (and the stages of
+        :func:`coupling.solvers.solve`), ``coarse_levels`` and ``prolongation`` for a nested
+        solve, ``adaptive_loop`` (every level: assembly, solves, estimates, errors,
+        refinement) for an adaptive one, and ``estimator``. ``after_solve(problem,
+        solution)``, when given, is called with the final problem and its solution as soon
+        as they are known: before the estimator of a plain or nested solve, after the
+        adaptive loop (e.g. :meth:`coupling.io.outputs.RunOutputs.start`, whose work then
+        runs beside the estimator); its time is in none of the stages.
     """
-    from coupling.adapt import adapt, adapt_options, estimate
+    from coupling.adapt import adapt, estimate
     from coupling.manufactured import energy_error
     from coupling.solvers import solve
     from coupling.solvers.nested import solve_nested
 
-    data, steps = config["data"], config["adapt"]["steps"]
-    exact = data["exact"]
-    if steps > 0:
-        if options.nested:
-            raise ConfigError(
-                "solver.nested = true and adapt.steps > 0 do not combine: the "
-                "adaptive loop already starts each level from the one before; "
-                "set solver.nested = false"
-            )
-        settings = adapt_options(config["adapt"])
+    data, settings, options = config.data, config.adapt, config.solver
+    exact = data.exact
+    if settings.steps > 0:
         dofs = problem.V.dofmap.index_map.size_global
         if dofs > settings.max_dofs:
             raise ConfigError(
@@ -81,11 +75,12 @@ def run_solver(
                 f"mesh's {dofs} dofs; raise it or coarsen the mesh (geometry.h)"
             )
         first = [problem]
+        loads = {"f": data.f, "t0": data.t0}  # the estimator's data on every level
 
         def build(level_domain: Any) -> tuple[Any, dict]:
             if first:  # the starting level is the problem assembled already
-                return first.pop(), data
-            return problem_on_domain(level_domain, config)[0], data
+                return first.pop(), loads
+            return problem_on_domain(level_domain, config)[0], loads
 
         tic = time.perf_counter()
         levels = adapt(
@@ -127,7 +122,7 @@ def run_solver(
     if after_solve is not None:
         after_solve(problem, solution)
     tic = time.perf_counter()
-    est = estimate(problem, solution, f=data["f"], t0=data["t0"])
+    est = estimate(problem, solution, f=data.f, t0=data.t0)
     stages = {**timings, **solution.timings, "estimator": time.perf_counter() - tic}
     error = energy_error(problem, solution.u, exact) if exact else None
     return Run(problem, solution, stages, records, float(est.total), est.cells, error)

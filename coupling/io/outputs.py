@@ -42,6 +42,7 @@ from coupling.io.plots import (
     write_pngs,
 )
 from coupling.io.quantities import boundary_flux, complementarity, log_coefficient
+from coupling.options import OutputOptions, RunConfig
 from fem_py.dofs import gather_cells, gather_p1
 from fem_py.mesh import mesh_facts
 from fem_py.parallel import broadcast_from_root
@@ -133,13 +134,12 @@ class RunOutputs:
         The run's communicator (every method is collective).
     out
         The output folder.
+    options
+        The ``[output]`` section: write solution.xdmf/.h5 (``xdmf``), draw the figures
+        (``plots``), add the estimator's eta_T (given to :meth:`finish`) to fields.npz
+        (``indicators``: it is then written there rather than by :meth:`start`).
     tol
         The solver tolerance (drawn in history.png).
-    xdmf, plots
-        Write solution.xdmf/.h5; draw the figures.
-    indicators
-        fields.npz will hold the estimator's eta_T (given to :meth:`finish`), so it is
-        written there rather than by :meth:`start`.
     worker
         The figure process (rank 0), or None.
     """
@@ -148,16 +148,14 @@ class RunOutputs:
         self,
         comm: MPI.Comm,
         out: Path,
+        options: OutputOptions,
         *,
         tol: float,
-        xdmf: bool,
-        plots: bool,
-        indicators: bool = False,
         worker: FigureWorker | None = None,
     ):
         self.comm, self.out, self.tol = comm, Path(out), tol
-        self.xdmf, self.plots, self.indicators = xdmf, plots, indicators
-        self.worker = worker if plots and comm.rank == 0 else None
+        self.xdmf, self.plots, self.indicators = options.xdmf, options.plots, options.indicators
+        self.worker = worker if self.plots and comm.rank == 0 else None
         #: seconds spent in :meth:`start` and :meth:`finish` (summary.json's ``outputs``)
         self.seconds = 0.0
         self._pool = ThreadPoolExecutor(max_workers=3) if comm.rank == 0 else None
@@ -193,7 +191,7 @@ class RunOutputs:
         self,
         *,
         timings: Mapping[str, float],
-        config: dict | None = None,
+        config: RunConfig | None = None,
         total: Callable[[], float] | None = None,
         levels: list[dict] | None = None,
         adaptive: bool = False,
@@ -207,12 +205,13 @@ class RunOutputs:
         ``timings`` are the seconds per stage of the run so far, to which summary.json
         adds ``outputs`` (:attr:`seconds`) and, when ``total`` (a clock of the whole
         process) is given, ``total`` read just before summary.json is written.
-        ``config`` (the validated configuration) is stored in summary.json. ``levels``
+        ``config`` (the run's configuration) is stored in summary.json. ``levels``
         (one record per level) go to summary.json and to adapt.csv / adapt.png
         (``adaptive``) or levels.csv (a nested solve, :mod:`coupling.io.levels`);
         ``estimator`` (eta) and ``error`` (|u_h - u|_1 against ``[data] exact``) to
         summary.json; ``indicators``, eta_T^2 of the owned cells (local cell order), as
-        ``indicators`` = eta_T in fields.npz, in the order of ``triangles``; ``facts``
+        ``indicators`` = eta_T in fields.npz, in the order of ``triangles`` (when the
+        options ask for them); ``facts``
         (:func:`fem_py.mesh.facts.mesh_facts` of the problem's domain, computed here when
         not given) to summary.json.
 
@@ -223,7 +222,8 @@ class RunOutputs:
         """
         tic = time.perf_counter()
         problem, result, out = self._problem, self._result, self.out
-        cells = None if indicators is None else gather_cells(problem.V, np.sqrt(indicators))
+        wanted = self.indicators and indicators is not None
+        cells = gather_cells(problem.V, np.sqrt(indicators)) if wanted else None
         facts = mesh_facts(problem.domain) if facts is None else facts  # collective
         written = []
         if self.xdmf:
@@ -254,7 +254,7 @@ class RunOutputs:
             if levels is not None:  # a nested or adaptive solve: one record per level
                 record["levels"] = levels
             if config is not None:
-                record["config"] = config
+                record["config"] = config.as_dict()
             record["files"] = sorted(names + ["summary.json"])
             # last, so that a summary.json names a complete set of files
             atomic_write(
@@ -325,8 +325,8 @@ def write_outputs(
     list of str
         The names of the files written (the same on every rank).
     """
-    indicators = finish.get("indicators") is not None
-    with RunOutputs(comm, out, tol=tol, xdmf=xdmf, plots=plots, indicators=indicators) as run:
+    options = OutputOptions(xdmf=xdmf, plots=plots, indicators=finish.get("indicators") is not None)
+    with RunOutputs(comm, out, options, tol=tol) as run:
         run.start(problem, result)
         return run.finish(**finish)
 

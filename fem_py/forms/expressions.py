@@ -30,6 +30,7 @@ or numpy.
 from __future__ import annotations
 
 import ast
+import builtins
 import math
 from typing import Any, Callable, Mapping
 
@@ -70,80 +71,36 @@ _BINOPS = {ast.Add: "+", ast.Sub: "-", ast.Mult: "*", ast.Div: "/", ast.Pow: "**
 _UNARY = {ast.USub: "-", ast.UAdd: "+"}
 
 
-def _ufl_functions() -> dict[str, Callable]:
-    import ufl
+#: The object of each function of :data:`FUNCTIONS` in each backend's module, by name
+#: (ufl, numpy, sympy, math; "" where Python's builtin of the same name serves). From
+#: sympy, :func:`from_sympy` maps these back (and the inverse functions).
+_NAMES: dict[str, tuple[str, str, str, str]] = {
+    "sin": ("sin", "sin", "sin", "sin"),
+    "cos": ("cos", "cos", "cos", "cos"),
+    "tan": ("tan", "tan", "tan", "tan"),
+    "exp": ("exp", "exp", "exp", "exp"),
+    "log": ("ln", "log", "log", "log"),
+    "sqrt": ("sqrt", "sqrt", "sqrt", "sqrt"),
+    "abs": ("", "abs", "Abs", ""),
+    "sinh": ("sinh", "sinh", "sinh", "sinh"),
+    "cosh": ("cosh", "cosh", "cosh", "cosh"),
+    "tanh": ("tanh", "tanh", "tanh", "tanh"),
+    "atan2": ("atan_2", "arctan2", "atan2", "atan2"),
+    "max": ("max_value", "maximum", "Max", ""),
+    "min": ("min_value", "minimum", "Min", ""),
+}
+_MODULES = ("ufl", "numpy", "sympy", "math")
 
+
+def _functions(module: str) -> dict[str, Callable]:
+    """The functions of :data:`FUNCTIONS` in ``module`` (one of :data:`_MODULES`; math:
+    constant folding, all arguments plain numbers, for the ufl backend)."""
+    import importlib
+
+    lib, column = importlib.import_module(module), _MODULES.index(module)
     return {
-        "sin": ufl.sin,
-        "cos": ufl.cos,
-        "tan": ufl.tan,
-        "exp": ufl.exp,
-        "log": ufl.ln,
-        "sqrt": ufl.sqrt,
-        "abs": abs,
-        "sinh": ufl.sinh,
-        "cosh": ufl.cosh,
-        "tanh": ufl.tanh,
-        "atan2": ufl.atan_2,
-        "max": ufl.max_value,
-        "min": ufl.min_value,
-    }
-
-
-def _numpy_functions() -> dict[str, Callable]:
-    return {
-        "sin": np.sin,
-        "cos": np.cos,
-        "tan": np.tan,
-        "exp": np.exp,
-        "log": np.log,
-        "sqrt": np.sqrt,
-        "abs": np.abs,
-        "sinh": np.sinh,
-        "cosh": np.cosh,
-        "tanh": np.tanh,
-        "atan2": np.arctan2,
-        "max": np.maximum,
-        "min": np.minimum,
-    }
-
-
-def _sympy_functions() -> dict[str, Callable]:
-    import sympy
-
-    return {
-        "sin": sympy.sin,
-        "cos": sympy.cos,
-        "tan": sympy.tan,
-        "exp": sympy.exp,
-        "log": sympy.log,
-        "sqrt": sympy.sqrt,
-        "abs": sympy.Abs,
-        "sinh": sympy.sinh,
-        "cosh": sympy.cosh,
-        "tanh": sympy.tanh,
-        "atan2": sympy.atan2,
-        "max": sympy.Max,
-        "min": sympy.Min,
-    }
-
-
-def _math_functions() -> dict[str, Callable]:
-    """Constant folding (all arguments are plain numbers) for the ufl backend."""
-    return {
-        "sin": math.sin,
-        "cos": math.cos,
-        "tan": math.tan,
-        "exp": math.exp,
-        "log": math.log,
-        "sqrt": math.sqrt,
-        "abs": abs,
-        "sinh": math.sinh,
-        "cosh": math.cosh,
-        "tanh": math.tanh,
-        "atan2": math.atan2,
-        "max": max,
-        "min": min,
+        name: getattr(lib, names[column]) if names[column] else getattr(builtins, name)
+        for name, names in _NAMES.items()
     }
 
 
@@ -304,7 +261,7 @@ class Expression:
                 k: np.asarray(v, dtype=float) for k, v in variables.items() if k in self.used_names
             }
             with np.errstate(all="ignore"):
-                value = self._eval(self._tree, arrays, _numpy_functions(), "numpy")
+                value = self._eval(self._tree, arrays, _functions("numpy"), "numpy")
                 shape = np.broadcast_shapes(*(a.shape for a in arrays.values())) if arrays else ()
                 return (
                     np.array(np.broadcast_to(np.asarray(value, dtype=float), shape), dtype=float)
@@ -314,9 +271,9 @@ class Expression:
         if backend == "ufl":
             import ufl
 
-            value = self._eval(self._tree, variables, _ufl_functions(), "ufl")
+            value = self._eval(self._tree, variables, _functions("ufl"), "ufl")
             return ufl.as_ufl(value)
-        return self._eval(self._tree, variables, _sympy_functions(), "sympy")
+        return self._eval(self._tree, variables, _functions("sympy"), "sympy")
 
     def _eval(self, node: ast.AST, env: Mapping[str, Any], funcs: dict, backend: str) -> Any:
         if isinstance(node, ast.Constant):
@@ -359,7 +316,7 @@ class Expression:
         name = node.func.id
         args = [self._eval(a, env, funcs, backend) for a in node.args]
         if backend == "ufl" and all(isinstance(a, float) for a in args):
-            funcs = _math_functions()
+            funcs = _functions("math")
         try:
             return funcs[name](*args)
         except (ValueError, ZeroDivisionError, OverflowError) as err:
@@ -403,8 +360,12 @@ def numpy_function(text: str, names: tuple[str, ...]) -> Callable[..., np.ndarra
 
 # ------------------------------------------------------------- sympy -> backend
 def _sympy_table(backend: str) -> dict:
+    """sympy's function classes -> those of ``backend`` ("ufl" or "numpy"): the
+    functions of :data:`_NAMES` (sqrt is a power in sympy) and the inverse functions."""
     import sympy
 
+    functions = _functions(backend)
+    table = {getattr(sympy, n[2]): functions[name] for name, n in _NAMES.items() if name != "sqrt"}
     if backend == "ufl":
         import ufl
 
@@ -417,50 +378,14 @@ def _sympy_table(backend: str) -> dict:
         def atanh(a):
             return 0.5 * ufl.ln((1.0 + a) / (1.0 - a))
 
-        return {
-            sympy.exp: ufl.exp,
-            sympy.log: ufl.ln,
-            sympy.sin: ufl.sin,
-            sympy.cos: ufl.cos,
-            sympy.tan: ufl.tan,
-            sympy.sinh: ufl.sinh,
-            sympy.cosh: ufl.cosh,
-            sympy.tanh: ufl.tanh,
-            sympy.asin: ufl.asin,
-            sympy.acos: ufl.acos,
-            sympy.atan: ufl.atan,
-            sympy.asinh: asinh,
-            sympy.acosh: acosh,
-            sympy.atanh: atanh,
-            sympy.erf: ufl.erf,
-            sympy.Abs: abs,
-            sympy.atan2: ufl.atan_2,
-            sympy.Max: ufl.max_value,
-            sympy.Min: ufl.min_value,
-        }
-    from scipy import special
+        inverse = (ufl.asin, ufl.acos, ufl.atan, asinh, acosh, atanh, ufl.erf)
+    else:
+        from scipy import special
 
-    return {
-        sympy.exp: np.exp,
-        sympy.log: np.log,
-        sympy.sin: np.sin,
-        sympy.cos: np.cos,
-        sympy.tan: np.tan,
-        sympy.sinh: np.sinh,
-        sympy.cosh: np.cosh,
-        sympy.tanh: np.tanh,
-        sympy.asin: np.arcsin,
-        sympy.acos: np.arccos,
-        sympy.atan: np.arctan,
-        sympy.asinh: np.arcsinh,
-        sympy.acosh: np.arccosh,
-        sympy.atanh: np.arctanh,
-        sympy.erf: special.erf,
-        sympy.Abs: np.abs,
-        sympy.atan2: np.arctan2,
-        sympy.Max: np.maximum,
-        sympy.Min: np.minimum,
-    }
+        inverse = (np.arcsin, np.arccos, np.arctan, np.arcsinh, np.arccosh, np.arctanh)
+        inverse += (special.erf,)
+    names = (sympy.asin, sympy.acos, sympy.atan, sympy.asinh, sympy.acosh, sympy.atanh)
+    return {**table, **dict(zip(names + (sympy.erf,), inverse))}
 
 
 def from_sympy(expr: Any, variables: Mapping[str, Any], backend: str = "ufl") -> Any:

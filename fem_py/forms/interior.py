@@ -173,17 +173,16 @@ class InteriorForms:
 
     def _coefficients(self, key: str) -> dict | None:
         """The packed coefficients of form ``key`` at the current state, or None (dolfinx
-        packs them). The energy, the residual and the Jacobian at one u pack u once
-        (about 20 ms each at 10^6 dofs): the pack is kept with a copy of the state it
-        was packed at and reused while the state is unchanged (compared exactly). The
-        cache holds one packed array (3 values per cell: 48 MB at 10^6 dofs) and one copy
-        of the local state (8 MB)."""
+        packs them). The energy, the residual and the Jacobian at one u pack u once: the
+        pack is kept with a copy of the state it was packed at and reused while the state
+        is unchanged (compared exactly); one pack is held at a time (its cost and size:
+        docs/design/fem_py.md, "Packed coefficients of the interior forms")."""
         form = self._form(key)
         if not self._state_only(form):
             return None
         state = self._u.x.array
         if self._packed is None or not np.array_equal(self._packed_state, state):
-            self._packed = None  # (2e6, 3) floats at 10^6 dofs: not two of them at once
+            self._packed = None  # the old pack freed first: never two at once
             self._packed = cpp.fem.pack_coefficients(form)
             self._packed_state = state.copy()
         return self._packed

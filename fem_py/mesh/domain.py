@@ -39,6 +39,7 @@ __all__ = [
     "domain_from_prepared",
     "is_positive_number",
     "max_facet_length",
+    "tagged_domain",
 ]
 
 
@@ -211,23 +212,38 @@ def domain_from_prepared(comm: Any, prepare: Any, d: float, shape: str) -> Domai
     )
     polygon, arcs, whole, d = meta
     msh, ct0, ft = distribute_mesh(comm, prepared.arrays if comm.rank == 0 else None)
-    coarse = compute_coarse_structure(msh, ct0, ft, corner_angle=CORNER_ANGLE)
-    h_max = max_facet_length(msh)
-    return Domain(
-        mesh=msh,
-        cell_tags=ct0,
-        facet_tags=ft,
-        coarse=coarse,
+    return tagged_domain(
+        msh,
+        ct0,
+        ft,
+        corner_angle=CORNER_ANGLE,
         arcs=arcs,
-        h=h_max,
         subdomain_size=d,
         shape=shape,
         vertices=np.asarray(polygon, dtype=float),
         signorini_is_whole_boundary=bool(whole),
         structured=False,
         coarse_size=d,
-        h_max=h_max,
         partition="cells",
+    )
+
+
+def tagged_domain(
+    mesh: Any, cell_tags: Any, facet_tags: Any, corner_angle: float | None = None, **fields: Any
+) -> Domain:
+    """The :class:`Domain` of a distributed mesh and its tags (collective): its coarse
+    structure recovered (``corner_angle``: ``compute_coarse_structure``) and its longest
+    facet measured; ``fields``: the other fields of the domain (``h`` defaults to the
+    longest facet)."""
+    coarse = compute_coarse_structure(mesh, cell_tags, facet_tags, corner_angle=corner_angle)
+    h_max = max_facet_length(mesh)
+    return Domain(
+        mesh=mesh,
+        cell_tags=cell_tags,
+        facet_tags=facet_tags,
+        coarse=coarse,
+        h_max=h_max,
+        **{"h": h_max, **fields},
     )
 
 

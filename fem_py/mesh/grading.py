@@ -65,20 +65,26 @@ def _ratio(p: np.ndarray) -> float:
     return float(np.linalg.norm(np.ptp(flat, axis=0)) / _cell_sizes(p).min())
 
 
+def _boxes(p: np.ndarray, label: np.ndarray, n: int) -> tuple:
+    """The bounding boxes (lo, hi: (n, 2)) and the smallest cell size (n,) of the parts
+    0 .. n-1 of the triangles ``p`` (m, 3, 2) labelled ``label``."""
+    lo = np.full((n, 2), np.inf)
+    hi = np.full((n, 2), -np.inf)
+    h_min = np.full(n, np.inf)
+    for k in range(3):
+        np.minimum.at(lo, label, p[:, k])
+        np.maximum.at(hi, label, p[:, k])
+    np.minimum.at(h_min, label, _cell_sizes(p))
+    return lo, hi, h_min
+
+
 def subdomain_grading(domain: Any) -> np.ndarray:
     """Diameter / smallest cell size of every subdomain of ``domain``, (L,) float, the
     same on every rank (collective). Diameter: bounding-box diagonal; cell size: longest
     edge (see the module docstring)."""
     comm = domain.comm
-    n_sub = int(domain.coarse.n_subdomains)
     p, tags = _owned_cells(domain)
-    lo = np.full((n_sub, 2), np.inf)
-    hi = np.full((n_sub, 2), -np.inf)
-    h_min = np.full(n_sub, np.inf)
-    for k in range(3):
-        np.minimum.at(lo, tags, p[:, k])
-        np.maximum.at(hi, tags, p[:, k])
-    np.minimum.at(h_min, tags, _cell_sizes(p))
+    lo, hi, h_min = _boxes(p, tags, int(domain.coarse.n_subdomains))
     for array, op in ((lo, MPI.MIN), (hi, MPI.MAX), (h_min, MPI.MIN)):
         comm.Allreduce(MPI.IN_PLACE, array, op=op)
     return np.linalg.norm(hi - lo, axis=1) / h_min
@@ -141,13 +147,7 @@ def _merge_pieces(
     a, b, outside = cell_adjacency(cells)
     p = x[cells]
     n = int(label.max()) + 1
-    lo = np.full((n, 2), np.inf)
-    hi = np.full((n, 2), -np.inf)
-    h_min = np.full(n, np.inf)
-    for k in range(3):
-        np.minimum.at(lo, label, p[:, k])
-        np.maximum.at(hi, label, p[:, k])
-    np.minimum.at(h_min, label, _cell_sizes(p))
+    lo, hi, h_min = _boxes(p, label, n)
     cut = label[a] != label[b]
     shared = np.zeros((n, n), dtype=np.int64)
     np.add.at(shared, (label[a][cut], label[b][cut]), 1)

@@ -69,7 +69,7 @@ from fem_py.mesh.domain import (
     DomainSize,
     domain_from_prepared,
     is_positive_number,
-    max_facet_length,
+    tagged_domain,
 )
 from fem_py.mesh.gmsh_mesh import mesh_with_gmsh
 from fem_py.mesh.own_mesh import polygon_mesh, prepare_mesh
@@ -85,7 +85,6 @@ from fem_py.mesh.shapes import (
 )
 from fem_py.mesh.structured import node_count, refine
 from fem_py.parallel import broadcast_from_root, run_on_root
-from fem_py.partition.coarse import compute_coarse_structure
 from fem_py.polyline import coarsened_polygon, diameter, segment_lengths
 from fem_py.spec import GeometrySpec
 from fem_py.tags import SIGNORINI_TAG0
@@ -267,13 +266,10 @@ def polygon_domain(comm: Any, spec: GeometrySpec) -> Domain:
         )
     else:
         msh, ct0, ft = distribute_mesh(comm, arrays)
-    coarse = compute_coarse_structure(msh, ct0, ft)
-    h_max = max_facet_length(msh)
-    return Domain(
-        mesh=msh,
-        cell_tags=ct0,
-        facet_tags=ft,
-        coarse=coarse,
+    return tagged_domain(
+        msh,
+        ct0,
+        ft,
         arcs=arcs,
         h=h,
         subdomain_size=d,
@@ -282,7 +278,6 @@ def polygon_domain(comm: Any, spec: GeometrySpec) -> Domain:
         signorini_is_whole_boundary=whole,
         structured=bool(structured),
         coarse_size=float(csize),
-        h_max=h_max,
     )
 
 
