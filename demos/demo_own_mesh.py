@@ -30,7 +30,7 @@ from coupling.options import SolverOptions
 from coupling.problem import SignoriniProblem
 from coupling.solvers import solve
 from fem_py.forms import make_material
-from fem_py.mesh import domain_from_file
+from fem_py.mesh import GeometrySpec, build_domain
 
 args = demo_parser(
     "demo_own_mesh",
@@ -77,7 +77,9 @@ comm.barrier()
 # ## Read, partition, solve
 
 # %%
-domain = domain_from_file(comm, str(msh_file), subdomain_size=4 * h, signorini=["contact"])
+domain = build_domain(
+    comm, GeometrySpec(mesh=str(msh_file), subdomain_size=4 * h, signorini=["contact"])
+)
 solution, material = disk_contact(), make_material("carstensen")
 problem = SignoriniProblem(domain, material, **solution.data(domain.mesh, material))
 options = SolverOptions()

@@ -28,7 +28,7 @@ from coupling.preconditioners.kernels import (
 from coupling.preconditioners.substructuring import skeleton_form
 from coupling.problem import SignoriniProblem
 from fem_py.forms import make_material
-from fem_py.mesh import GeometrySpec, build_domain, domain_from_file
+from fem_py.mesh import GeometrySpec, build_domain
 from mesh_files import square_msh
 
 COMM = MPI.COMM_WORLD
@@ -43,11 +43,13 @@ def _domains(tmp_path):
                 "lshape", h=h, subdomain_size=4 * h, signorini=["bottom"], structured=False
             ),
         ),
-        "imported": domain_from_file(
+        "imported": build_domain(
             COMM,
-            str(square_msh(tmp_path / "sq.msh", h)),
-            subdomain_size=4 * h,
-            signorini=["bottom"],
+            GeometrySpec(
+                mesh=str(square_msh(tmp_path / "sq.msh", h)),
+                subdomain_size=4 * h,
+                signorini=["bottom"],
+            ),
         ),
     }
 

@@ -1,4 +1,4 @@
-"""fem_py.partition.coarse.Ragged (the coarse-edge chains as one flat array + offsets) against a
+"""fem_py.partition.Ragged (the coarse-edge chains as one flat array + offsets) against a
 tuple-of-arrays reference, the pack/unpack round trip of CoarseStructure, and the
 sorting helpers of _coarse_from_skeleton against the NumPy calls they replace.
 

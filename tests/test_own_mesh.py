@@ -105,9 +105,11 @@ def _solve_file(path, **kw):
     from coupling.problem import SignoriniProblem
     from coupling.solvers import solve
     from fem_py.forms import make_material
-    from fem_py.mesh import domain_from_file
+    from fem_py.mesh import GeometrySpec, build_domain
 
-    domain = domain_from_file(COMM, str(path), subdomain_size=0.16, signorini=["contact"], **kw)
+    domain = build_domain(
+        COMM, GeometrySpec(mesh=str(path), subdomain_size=0.16, signorini=["contact"], **kw)
+    )
     problem = SignoriniProblem(domain, make_material("carstensen"), f="2", t0="-1")
     return domain, problem, solve(problem, SolverOptions(tol=1e-10))
 
@@ -126,9 +128,11 @@ def test_msh_22_and_41_give_the_same_domain_and_solution(disk_files):
 def test_physical_subdomains_and_whole_boundary(disk_files):
     domain, _, result = _solve_file(disk_files[4.1], subdomains="physical")
     assert domain.coarse.n_subdomains == 1 and result.converged
-    from fem_py.mesh import domain_from_file
+    from fem_py.mesh import GeometrySpec, build_domain
 
-    whole = domain_from_file(COMM, str(disk_files[4.1]), subdomain_size=0.1, signorini="all")
+    whole = build_domain(
+        COMM, GeometrySpec(mesh=str(disk_files[4.1]), subdomain_size=0.1, signorini="all")
+    )
     assert whole.signorini_is_whole_boundary
 
 
@@ -138,7 +142,7 @@ def test_domain_from_mesh_equals_the_file_route(disk_files):
     import gmsh
     from dolfinx.io import gmshio
 
-    from fem_py.mesh import domain_from_file, domain_from_mesh
+    from fem_py.mesh import GeometrySpec, build_domain, domain_from_mesh
 
     gmsh.initialize()
     gmsh.option.setNumber("General.Terminal", 0)
@@ -149,7 +153,9 @@ def test_domain_from_mesh_equals_the_file_route(disk_files):
     api = domain_from_mesh(
         msh, ft, signorini=["contact"], subdomain_size=0.16, names={"contact": 1}
     )
-    ref = domain_from_file(COMM, str(disk_files[4.1]), subdomain_size=0.16, signorini=["contact"])
+    ref = build_domain(
+        COMM, GeometrySpec(mesh=str(disk_files[4.1]), subdomain_size=0.16, signorini=["contact"])
+    )
     assert api.coarse.n_subdomains == ref.coarse.n_subdomains
     assert api.coarse.n_vertices == ref.coarse.n_vertices
     assert np.isclose(api.arcs[0].length, ref.arcs[0].length)
@@ -183,14 +189,16 @@ def test_manufactured_solution_on_a_disk_from_a_file_converges_like_h2(tmp_path)
     from coupling.problem import SignoriniProblem
     from coupling.solvers import solve
     from fem_py.forms import make_material
-    from fem_py.mesh import domain_from_file
+    from fem_py.mesh import GeometrySpec, build_domain
 
     solution, material = disk_contact(), make_material("carstensen")
     errors = []
     for h, version in ((1 / 32, 2.2), (1 / 64, 4.1), (1 / 128, 4.1)):
         path = disk_msh(tmp_path / f"d{h}.msh", h, version=version) if COMM.rank == 0 else None
         path = COMM.bcast(str(path), root=0)
-        domain = domain_from_file(COMM, path, subdomain_size=4 * h, signorini=["contact"])
+        domain = build_domain(
+            COMM, GeometrySpec(mesh=path, subdomain_size=4 * h, signorini=["contact"])
+        )
         data = solution.data(domain.mesh, material)
         problem = SignoriniProblem(domain, material, **data)
         result = solve(problem, SolverOptions())
@@ -210,7 +218,7 @@ def test_imported_square_iterations_against_the_generated_one(tmp_path):
     from coupling.problem import SignoriniProblem
     from coupling.solvers import solve
     from fem_py.forms import make_material
-    from fem_py.mesh import GeometrySpec, build_domain, domain_from_file
+    from fem_py.mesh import GeometrySpec, build_domain
 
     h = 1 / 32
     path = square_msh(tmp_path / "sq.msh", h)
@@ -224,7 +232,9 @@ def test_imported_square_iterations_against_the_generated_one(tmp_path):
                 ),
             )
         else:
-            domain = domain_from_file(COMM, str(path), subdomain_size=4 * h, signorini=["bottom"])
+            domain = build_domain(
+                COMM, GeometrySpec(mesh=str(path), subdomain_size=4 * h, signorini=["bottom"])
+            )
         problem = SignoriniProblem(domain, make_material("carstensen"), f="2", t0="-1")
         counts[kind] = [solve(problem, SolverOptions(method=m)).iterations for m in ("pgpm", "ssn")]
     assert counts["imported"][1] <= 15

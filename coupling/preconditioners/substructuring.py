@@ -33,7 +33,7 @@ Input data contract (produced by ``fem_py``): continuous P1 on a triangulation o
 Omega with nodes 0..N-1; ``stiffness`` the P1 Laplace matrix A; ``coarse`` an object
 with the numpy attributes ``vertex_coords (n_v, 2)``, ``vertex_dofs (n_v,)``,
 ``vertex_on_boundary (n_v,)``, ``edge_vertices (n_e, 2)``, ``edge_dofs`` (a
-``fem_py.partition.coarse.Ragged`` or any sequence of n_e arrays: the fine nodes along each
+``fem_py.partition.Ragged`` or any sequence of n_e arrays: the fine nodes along each
 coarse edge from end 0 to end 1, ends included),
 ``edge_on_boundary``, ``edge_arc``, ``skeleton_dofs`` (sorted), ``interior_dofs``,
 ``n_subdomains``, ``subdomain_of_interior_dof``; node coordinates ``x (N, 2)``; the

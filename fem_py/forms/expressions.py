@@ -75,16 +75,9 @@ _UNARY = {ast.USub: "-", ast.UAdd: "+"}
 #: (ufl, numpy, sympy, math; "" where Python's builtin of the same name serves). From
 #: sympy, :func:`from_sympy` maps these back (and the inverse functions).
 _NAMES: dict[str, tuple[str, str, str, str]] = {
-    "sin": ("sin", "sin", "sin", "sin"),
-    "cos": ("cos", "cos", "cos", "cos"),
-    "tan": ("tan", "tan", "tan", "tan"),
-    "exp": ("exp", "exp", "exp", "exp"),
+    **{name: (name,) * 4 for name in ("sin", "cos", "tan", "exp", "sqrt", "sinh", "cosh", "tanh")},
     "log": ("ln", "log", "log", "log"),
-    "sqrt": ("sqrt", "sqrt", "sqrt", "sqrt"),
     "abs": ("", "abs", "Abs", ""),
-    "sinh": ("sinh", "sinh", "sinh", "sinh"),
-    "cosh": ("cosh", "cosh", "cosh", "cosh"),
-    "tanh": ("tanh", "tanh", "tanh", "tanh"),
     "atan2": ("atan_2", "arctan2", "atan2", "atan2"),
     "max": ("max_value", "maximum", "Max", ""),
     "min": ("min_value", "minimum", "Min", ""),

@@ -10,7 +10,6 @@ from fem_py.mesh.domain import (
     CORNER_ANGLE,
     Domain,
     DomainSize,
-    domain_from_file,
     domain_from_mesh,
     domain_from_prepared,
 )
@@ -31,7 +30,6 @@ __all__ = [
     "SHAPES",
     "boundary_transfer",
     "build_domain",
-    "domain_from_file",
     "domain_from_mesh",
     "domain_from_prepared",
     "domain_size",

@@ -22,14 +22,7 @@ __all__ = ["build_domain", "domain_size"]
 
 def _planar_domain(comm: Any, spec: GeometrySpec) -> Domain:
     if spec.mesh:
-        return domain_from_file(
-            comm,
-            spec.mesh,
-            subdomain_size=spec.subdomain_size,
-            signorini=spec.signorini,
-            subdomains=spec.subdomains,
-            allow_large=spec.allow_large,
-        )
+        return domain_from_file(comm, spec)
     if spec.shape in CONICS:
         return conic_domain(comm, spec)
     return polygon_domain(comm, spec)

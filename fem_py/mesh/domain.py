@@ -28,6 +28,7 @@ from fem_py.mesh.own_mesh import gather_mesh, prepare_mesh, read_msh
 from fem_py.parallel import broadcast_from_root, run_on_root
 from fem_py.partition.coarse import CoarseStructure, compute_coarse_structure
 from fem_py.polyline import diameter
+from fem_py.spec import GeometrySpec
 
 __all__ = [
     "CORNER_ANGLE",
@@ -134,33 +135,26 @@ def check_size(d: Any) -> float:
     return float(d)
 
 
-def domain_from_file(
-    comm: Any,
-    path: str,
-    *,
-    subdomain_size: float,
-    signorini: Any = (),
-    subdomains: str = "auto",
-    allow_large: bool = False,
-) -> Domain:
-    """The :class:`Domain` of a gmsh mesh file (MSH 2.2 or 4.1, 2D linear triangles).
+def domain_from_file(comm: Any, spec: GeometrySpec) -> Domain:
+    """The :class:`Domain` of the gmsh mesh file ``spec.mesh`` (MSH 2.2 or 4.1, 2D linear
+    triangles; ``build_domain`` of a spec with ``mesh``).
 
-    Rank 0 reads and checks the file (``fem_py.mesh.own_mesh``) and partitions it (``subdomains
-    = "auto"``: subdomains of size about ``subdomain_size``; ``"physical"``: the
-    physical surface groups); the mesh is then distributed by whole subdomains.
-    ``signorini`` names physical curve groups (or ``"all"``). Collective; a bad file or
-    argument raises the same one-line ``ValueError`` on every rank before the mesh is
-    distributed.
+    Rank 0 reads and checks the file (``fem_py.mesh.own_mesh``) and partitions it
+    (``spec.subdomains = "auto"``: subdomains of size about ``spec.subdomain_size``;
+    ``"physical"``: the physical surface groups); the mesh is then distributed by whole
+    subdomains. ``spec.signorini`` names physical curve groups (or ``"all"``). Collective;
+    a bad file or argument raises the same one-line ``ValueError`` on every rank before
+    the mesh is distributed.
     """
-    d = check_size(subdomain_size)
+    d = check_size(spec.subdomain_size)
     return domain_from_prepared(
         comm,
         lambda: prepare_mesh(
-            read_msh(path),
-            signorini=signorini,
+            read_msh(spec.mesh),
+            signorini=spec.signorini,
             subdomain_size=d,
-            subdomains=subdomains,
-            allow_large=allow_large,
+            subdomains=spec.subdomains,
+            allow_large=spec.allow_large,
         ),
         d,
         "mesh",
@@ -170,11 +164,11 @@ def domain_from_file(
 def domain_from_mesh(
     mesh: Any,
     facet_tags: Any,
-    signorini: Any = (),
+    signorini: Any = GeometrySpec.signorini,
     subdomain_size: float | None = None,
     cell_tags: Any = None,
     names: dict[str, int] | None = None,
-    allow_large: bool = False,
+    allow_large: bool = GeometrySpec.allow_large,
 ) -> Domain:
     """The :class:`Domain` of a DOLFINx triangle mesh (collective, on ``mesh.comm``).
 

@@ -9,7 +9,7 @@ import numpy as np
 from dolfinx import cpp
 from mpi4py import MPI
 
-from fem_py.partition.coarse import as_ragged
+from fem_py.partition.ragged import as_ragged
 from fem_py.tags import SIGNORINI_TAG0
 
 __all__ = ["mesh_facts", "shortest_facet", "subdomain_diameters"]

@@ -26,6 +26,7 @@ from fem_py.mesh.shapes import Arc
 from fem_py.parallel import gather_to_root
 from fem_py.partition.cells import cell_adjacency, partition_cells
 from fem_py.polyline import diameter
+from fem_py.spec import GeometrySpec
 from fem_py.tags import GAMMA_T_TAG, SIGNORINI_TAG0
 
 __all__ = ["MeshFile", "PreparedMesh", "read_msh", "mesh_of_model", "prepare_mesh", "gather_mesh"]
@@ -302,8 +303,8 @@ def prepare_mesh(
     *,
     signorini: Any,
     subdomain_size: float,
-    subdomains: str = "auto",
-    allow_large: bool = False,
+    subdomains: str = GeometrySpec.subdomains,
+    allow_large: bool = GeometrySpec.allow_large,
 ) -> PreparedMesh:
     """Check ``mesh``, tag its Signorini groups and partition it into subdomains.
 

@@ -9,10 +9,12 @@ from coupling.options import SolverOptions
 from coupling.problem import SignoriniProblem
 from coupling.solvers import solve
 from fem_py.forms import make_material
-from fem_py.mesh import domain_from_file
+from fem_py.mesh import GeometrySpec, build_domain
 
 comm = MPI.COMM_WORLD
-domain = domain_from_file(comm, sys.argv[1], subdomain_size=0.16, signorini=["contact"])
+domain = build_domain(
+    comm, GeometrySpec(mesh=sys.argv[1], subdomain_size=0.16, signorini=["contact"])
+)
 problem = SignoriniProblem(domain, make_material("carstensen"), f="2", t0="-1")
 result = solve(problem, SolverOptions(tol=1e-10))
 if comm.rank == 0:
