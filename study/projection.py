@@ -18,6 +18,7 @@ import numpy as np
 from coupling.options import LANCZOS_STEPS
 from coupling.solvers import RunResult
 from coupling.solvers.lanczos import extremes_at
+from coupling.solvers.loop import IterationContext
 from coupling.solvers.pgpm import pgpm
 from coupling.solvers.projection import ProjectionResult, SignoriniProjection
 from coupling.solvers.solution import build_projection
@@ -101,16 +102,15 @@ def run_pgpm(case: Case, projection: Projection) -> tuple[RunResult, np.ndarray,
         tau = 1.0 / extremes_at(problem.functional, pc, u, phi0.size, steps=LANCZOS_STEPS)[1]
     else:
         tau = float(options.step)
-    run = pgpm(
-        problem.functional,
-        pc,
-        projection,
-        u,
-        phi0,
-        tau=tau,
+    context = IterationContext(
+        functional=problem.functional,
+        preconditioner=pc,
+        projection=projection,
+        u=u,
         tol=options.tol,
         max_iterations=options.max_iterations,
     )
+    run = pgpm(context, phi0, tau=tau)
     return run, u.x.array.copy(), time.perf_counter() - tic
 
 

@@ -22,6 +22,7 @@ from coupling.problem import SignoriniProblem
 from coupling.solvers import solve
 from coupling.solvers.apgpm import apgpm
 from coupling.solvers.lanczos import estimate_extremes
+from coupling.solvers.loop import IterationContext
 from coupling.solvers.projection import SignoriniProjection
 from fem_py.geometry import build_domain
 from fem_py.materials import make_material
@@ -190,12 +191,19 @@ def test_accelerated_method_accepts_its_strong_convexity(carstensen):
         max_iterations=options.projection_max_iterations,
         lambda_max=pc.lambda_max_signorini,
     )
-    common = dict(tau=result.tau, tol=options.tol, max_iterations=options.max_iterations)
-    run = apgpm(problem.functional, pc, projection, u, phi0, strong_convexity=low, **common)
+    context = IterationContext(
+        functional=problem.functional,
+        preconditioner=pc,
+        projection=projection,
+        u=u,
+        tol=options.tol,
+        max_iterations=options.max_iterations,
+    )
+    run = apgpm(context, phi0, tau=result.tau, strong_convexity=low)
     assert run.iterations == result.iterations
     assert np.array_equal(run.phi, result.phi)
     with pytest.raises(ValueError, match="strong_convexity"):
-        apgpm(problem.functional, pc, projection, u, phi0, strong_convexity=0.0, **common)
+        apgpm(context, phi0, tau=result.tau, strong_convexity=0.0)
     pc.destroy()
 
 

@@ -19,7 +19,7 @@ from coupling.options import SolverOptions
 from coupling.preconditioners import Preconditioner, build_preconditioner
 from coupling.problem import SignoriniProblem
 from coupling.solvers import RunResult
-from coupling.solvers.solution import build_projection, iterate, step_length
+from coupling.solvers.solution import iterate, iteration_context, step_length
 
 __all__ = ["solve_project", "run_method"]
 
@@ -39,22 +39,12 @@ def run_method(
     estimate and of the iteration in seconds.
     """
     phi0 = np.zeros(problem.n_signorini)
-    projection = build_projection(preconditioner, options)
     tic = time.perf_counter()
     tau, C0, lambda_min = step_length(functional, preconditioner, u_function, phi0.size, options)
     step_estimate = time.perf_counter() - tic
+    context = iteration_context(functional, problem.forms, preconditioner, u_function, options)
     tic = time.perf_counter()
-    run = iterate(
-        functional,
-        problem.forms,
-        options,
-        preconditioner,
-        projection,
-        u_function,
-        phi0,
-        tau=tau,
-        lambda_min=lambda_min,
-    )
+    run = iterate(context, options, phi0, tau=tau, lambda_min=lambda_min)
     return run, C0, step_estimate, time.perf_counter() - tic
 
 
