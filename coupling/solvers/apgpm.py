@@ -77,7 +77,7 @@ def apgpm(
     g_u, gradient_at_xi_k = grad.array_r.copy(), True
     b_u = preconditioner.matvec_omega(u_k)  # carried along, as in PGPM
     u_prev, phi_prev, b_prev, with_momentum = u_k, phi_k, b_u, False
-    loop = Loop(context)
+    loop = Loop(context, "||xi_k+1 - y_k||_B <= {tol:g} ||xi_k+1||_B")
     for k in loop.steps():
         beta = momentum(tau, mu) if with_momentum else 0.0
         restarted = False
@@ -125,13 +125,6 @@ def apgpm(
         u_prev, phi_prev, b_prev = u_k, phi_k, b_u
         u_k, phi_k, b_u, energy = u_new, projected.phi, b_new, new_energy
         loop.end_step(
-            k,
-            energy,
-            step2,
-            norm2,
-            phi_k,
-            tau,
-            rule="||xi_k+1 - y_k||_B <= {tol:g} ||xi_k+1||_B",
-            projection_iterations=projected.iterations,
+            k, energy, step2, norm2, phi_k, tau, projection_iterations=projected.iterations
         )
     return loop.result(phi_k, energy, tau, release=(grad,))

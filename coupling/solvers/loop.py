@@ -76,6 +76,8 @@ class Loop:
     ----------
     context
         The iteration's context (``tol``, ``max_iterations``, ``monitor``).
+    rule
+        The stopping rule, as the reason of a converged run (``{tol:g}`` is filled in).
     first
         The first step's number (after the PGPM steps that started an ssn run).
     history
@@ -87,12 +89,13 @@ class Loop:
     def __init__(
         self,
         context: IterationContext,
+        rule: str,
         *,
         first: int = 1,
         history: list[IterationRecord] | None = None,
         increases: int = 0,
     ):
-        self.tol, self.max_iterations = context.tol, context.max_iterations
+        self.tol, self.max_iterations, self.rule = context.tol, context.max_iterations, rule
         self.history = History(context.monitor)
         self.history.extend(history or [])
         self.first = first
@@ -118,18 +121,16 @@ class Loop:
         phi: np.ndarray,
         tau: float,
         *,
-        rule: str,
         settled: bool = True,
         **counts,
     ) -> float:
-        """Record step k (relative step sqrt(step2 / norm2)) and stop when it is at most
-        ``tol`` and ``settled``; ``rule`` names the test (``{tol:g}`` is filled in),
-        ``counts`` are the inner iteration fields of the record. Returns the relative
-        step."""
+        """Record step k (relative step sqrt(step2 / norm2)) and stop by the loop's rule
+        when it is at most ``tol`` and ``settled``; ``counts`` are the inner iteration
+        fields of the record. Returns the relative step."""
         relative = relative_step(step2, norm2)
         self.history.step(k, energy, relative, phi, tau, **counts)
         if relative <= self.tol and settled:
-            self.stop(rule, k)
+            self.stop(self.rule, k)
         return relative
 
     def stop(self, rule: str, iterations: int) -> None:
@@ -141,13 +142,5 @@ class Loop:
         """Destroy the PETSc objects of ``release``; the :class:`RunResult` of the run."""
         for obj in release:
             obj.destroy()
-        return RunResult(
-            phi=phi,
-            converged=self.converged,
-            reason=self.reason,
-            iterations=self.iterations,
-            energy=energy,
-            tau=tau,
-            history=list(self.history),
-            energy_increases=self.increases,
-        )
+        outcome = (self.converged, self.reason, self.iterations, energy, tau)
+        return RunResult(phi, *outcome, list(self.history), self.increases)

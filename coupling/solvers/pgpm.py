@@ -58,7 +58,7 @@ def pgpm(context: IterationContext, phi0: np.ndarray, *, tau: float) -> RunResul
     energy, g_phi = functional.value_and_gradient(u_function, phi_k, grad)
     g_u = grad.array_r.copy()
     b_u = preconditioner.matvec_omega(u_k)
-    loop = Loop(context)
+    loop = Loop(context, "||xi_k+1 - xi_k||_B <= {tol:g} ||xi_k+1||_B")
     for k in loop.steps():
         r_u = preconditioner.apply_omega(g_u)
         r_phi = preconditioner.apply_signorini(g_phi)
@@ -84,13 +84,6 @@ def pgpm(context: IterationContext, phi0: np.ndarray, *, tau: float) -> RunResul
         g_u, g_phi = grad.array_r.copy(), new_g_phi
         u_k, phi_k, b_u, energy = u_new, projected.phi, b_new, new_energy
         loop.end_step(
-            k,
-            energy,
-            step2,
-            norm2,
-            phi_k,
-            tau,
-            rule="||xi_k+1 - xi_k||_B <= {tol:g} ||xi_k+1||_B",
-            projection_iterations=projected.iterations,
+            k, energy, step2, norm2, phi_k, tau, projection_iterations=projected.iterations
         )
     return loop.result(phi_k, energy, tau, release=(grad,))

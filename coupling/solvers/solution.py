@@ -6,6 +6,7 @@ is built here unless one is passed in; progress goes to the caller's monitor.
 """
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass
 from typing import Any
@@ -297,19 +298,12 @@ def solve(
     timings["exterior_flux"] = time.perf_counter() - tic
     return Solution(
         u=u,
-        phi=run.phi,
         contact=run.phi <= 0.0,
         boundary_u=boundary_u,
         ue=ue,
         flux=flux,
-        converged=run.converged,
-        reason=run.reason,
-        iterations=run.iterations,
-        energy=run.energy,
-        tau=run.tau,
         C0=C0,
-        history=run.history,
-        energy_increases=run.energy_increases,
         timings=timings,
         residual_scale=residual_scale,
+        **{f.name: getattr(run, f.name) for f in dataclasses.fields(RunResult)},
     )

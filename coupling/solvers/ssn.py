@@ -346,6 +346,7 @@ def semismooth_newton(
     norm2 = relative = None  # ||xi_k||_B^2 and ||xi_k - xi_k-1||_B / ||xi_k||_B after a Newton step
     loop = Loop(
         context,
+        "||xi_k+1 - xi_k||_B <= {tol:g} ||xi_k+1||_B, active set settled",
         first=warm.iterations + 1,
         history=warm.history,
         increases=warm.energy_increases,
@@ -396,7 +397,6 @@ def semismooth_newton(
             norm2,
             phi,
             tau,
-            rule="||xi_k+1 - xi_k||_B <= {tol:g} ||xi_k+1||_B, active set settled",
             settled=not active_changed,
             cg_iterations=cg_its,
             line_search=trial.step,
