@@ -103,12 +103,7 @@ def run_pgpm(case: Case, projection: Projection) -> tuple[RunResult, np.ndarray,
     else:
         tau = float(options.step)
     context = IterationContext(
-        functional=problem.functional,
-        preconditioner=pc,
-        projection=projection,
-        u=u,
-        tol=options.tol,
-        max_iterations=options.max_iterations,
+        problem.functional, pc, projection, u, options.tol, options.max_iterations
     )
     run = pgpm(context, phi0, tau=tau)
     return run, u.x.array.copy(), time.perf_counter() - tic

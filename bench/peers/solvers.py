@@ -41,6 +41,42 @@ class Solver:
 
 
 _SELECTION = ("manufactured",)
+#: The peers run on the coarser meshes and the manufactured data only.
+_CANDIDATE = dict(max_cells=250, problems=_SELECTION)
+#: The linear solvers of the SNES VI peers and their labels.
+LINEAR_LABELS = {
+    "substructuring": "CG + substructuring",
+    "mumps-cholesky": "MUMPS Cholesky (AMD)",
+    "mumps-cholesky-auto": "MUMPS Cholesky (default ordering)",
+    "mumps": "MUMPS LU (AMD)",
+    "hypre": "CG + BoomerAMG",
+    "gamg": "CG + GAMG",
+    "petsc-lu": "PETSc LU (nd)",
+}
+
+
+def _snes(linear_solver: str, **extra: Any) -> Solver:
+    """SNES VI from x = 0 with ``linear_solver`` (the linear-solver selection)."""
+    label = f"SNES VI, {LINEAR_LABELS[linear_solver]}"
+    options = {"linear_solver": linear_solver}
+    return Solver(f"snes-{linear_solver}", label, "c", "snes", options, selection=True, **extra)
+
+
+def _sequenced(linear_solver: str, hierarchy: str, **extra: Any) -> Solver:
+    """SNES VI grid-sequenced over the ``hierarchy`` ("nested" or "deep") of levels."""
+    deep = hierarchy == "deep"
+    name = f"snes-seq-{linear_solver}" + ("-deep" if deep else "")
+    label = "SNES VI grid-sequenced" + (" to 1e3 dofs" if deep else "")
+    label += f", {LINEAR_LABELS[linear_solver]}"
+    options = {"linear_solver": linear_solver, "hierarchy": hierarchy}
+    return Solver(name, label, "c", "snes-sequenced", options, sequenced_selection=True, **extra)
+
+
+def _tao(kind: str, label: str, options: dict, **extra: Any) -> Solver:
+    """TAO bound-constrained minimisation of J_h with the method ``kind``."""
+    return Solver(f"tao-{kind}", f"TAO {label}", "d", "tao", {"kind": kind, **options}, **extra)
+
+
 SOLVERS: tuple[Solver, ...] = (
     Solver("pgpm", "PGPM + substructuring", "a", "project", {"method": "pgpm"}, quick=True),
     Solver(
@@ -55,144 +91,27 @@ SOLVERS: tuple[Solver, ...] = (
     ),
     Solver("apgpm", "APGPM + substructuring", "b", "project", {"method": "apgpm"}, quick=True),
     Solver("ssn", "SSN + substructuring", "b", "project", {"method": "ssn"}, quick=True),
-    Solver(
-        "snes-substructuring",
-        "SNES VI, CG + substructuring",
-        "c",
-        "snes",
-        {"linear_solver": "substructuring"},
-        selection=True,
-        quick=True,
-    ),
-    Solver(
-        "snes-mumps-cholesky",
-        "SNES VI, MUMPS Cholesky (AMD)",
-        "c",
-        "snes",
-        {"linear_solver": "mumps-cholesky"},
-        selection=True,
-        quick=True,
-    ),
-    Solver(
-        "snes-mumps-cholesky-auto",
-        "SNES VI, MUMPS Cholesky (default ordering)",
-        "c",
-        "snes",
-        {"linear_solver": "mumps-cholesky-auto"},
-        max_cells=250,
-        selection=True,
-        problems=_SELECTION,
-    ),
-    Solver(
-        "snes-mumps",
-        "SNES VI, MUMPS LU (AMD)",
-        "c",
-        "snes",
-        {"linear_solver": "mumps"},
-        max_cells=250,
-        selection=True,
-        problems=_SELECTION,
-    ),
-    Solver(
-        "snes-hypre",
-        "SNES VI, CG + BoomerAMG",
-        "c",
-        "snes",
-        {"linear_solver": "hypre"},
-        max_cells=250,
-        selection=True,
-        problems=_SELECTION,
-    ),
-    Solver(
-        "snes-gamg",
-        "SNES VI, CG + GAMG",
-        "c",
-        "snes",
-        {"linear_solver": "gamg"},
-        max_cells=250,
-        selection=True,
-        problems=_SELECTION,
-    ),
-    Solver(
-        "snes-petsc-lu",
-        "SNES VI, PETSc LU (nd)",
-        "c",
-        "snes",
-        {"linear_solver": "petsc-lu"},
-        max_cells=100,
-        selection=True,
-        problems=_SELECTION,
-    ),
+    _snes("substructuring", quick=True),
+    _snes("mumps-cholesky", quick=True),
+    _snes("mumps-cholesky-auto", **_CANDIDATE),
+    _snes("mumps", **_CANDIDATE),
+    _snes("hypre", **_CANDIDATE),
+    _snes("gamg", **_CANDIDATE),
+    _snes("petsc-lu", max_cells=100, problems=_SELECTION),
     # grid-sequenced SNES VI: "nested" doubles h with the subdomains kept
     # (coupling.app.from_config.coarser_configs, keep_subdomains: one coarser level at
     # d = 4h; the peer's fastest, faster than the project's own 4h levels); "deep" doubles
     # h down to about 1e3 dofs, on coarse partitions of 2 x 2 subdomains (which only B
     # would need)
-    Solver(
-        "snes-seq-substructuring",
-        "SNES VI grid-sequenced, CG + substructuring",
-        "c",
-        "snes-sequenced",
-        {"linear_solver": "substructuring", "hierarchy": "nested"},
-        sequenced_selection=True,
-        quick=True,
-    ),
-    Solver(
-        "snes-seq-mumps-cholesky",
-        "SNES VI grid-sequenced, MUMPS Cholesky (AMD)",
-        "c",
-        "snes-sequenced",
-        {"linear_solver": "mumps-cholesky", "hierarchy": "nested"},
-        max_cells=250,
-        sequenced_selection=True,
-        problems=_SELECTION,
-    ),
-    Solver(
-        "snes-seq-mumps-cholesky-deep",
-        "SNES VI grid-sequenced to 1e3 dofs, MUMPS Cholesky (AMD)",
-        "c",
-        "snes-sequenced",
-        {"linear_solver": "mumps-cholesky", "hierarchy": "deep"},
-        sequenced_selection=True,
-        quick=True,
-    ),
-    Solver(
-        "snes-seq-hypre-deep",
-        "SNES VI grid-sequenced to 1e3 dofs, CG + BoomerAMG",
-        "c",
-        "snes-sequenced",
-        {"linear_solver": "hypre", "hierarchy": "deep"},
-        max_cells=250,
-        sequenced_selection=True,
-        problems=_SELECTION,
-    ),
-    Solver(
-        "snes-seq-gamg-deep",
-        "SNES VI grid-sequenced to 1e3 dofs, CG + GAMG",
-        "c",
-        "snes-sequenced",
-        {"linear_solver": "gamg", "hierarchy": "deep"},
-        max_cells=250,
-        sequenced_selection=True,
-        problems=_SELECTION,
-    ),
-    Solver("tao-blmvm", "TAO BLMVM", "d", "tao", {"kind": "blmvm", "oracle": True}, budget=120.0),
-    Solver("tao-bqnls", "TAO BQNLS", "d", "tao", {"kind": "bqnls", "oracle": True}, budget=120.0),
-    Solver(
-        "tao-bnls",
-        "TAO BNLS, MUMPS Cholesky",
-        "d",
-        "tao",
-        {"kind": "bnls", "linear_solver": "mumps-cholesky"},
-        quick=True,
-    ),
-    Solver(
-        "tao-bntr",
-        "TAO BNTR, MUMPS Cholesky",
-        "d",
-        "tao",
-        {"kind": "bntr", "linear_solver": "mumps-cholesky"},
-    ),
+    _sequenced("substructuring", "nested", quick=True),
+    _sequenced("mumps-cholesky", "nested", **_CANDIDATE),
+    _sequenced("mumps-cholesky", "deep", quick=True),
+    _sequenced("hypre", "deep", **_CANDIDATE),
+    _sequenced("gamg", "deep", **_CANDIDATE),
+    _tao("blmvm", "BLMVM", {"oracle": True}, budget=120.0),
+    _tao("bqnls", "BQNLS", {"oracle": True}, budget=120.0),
+    _tao("bnls", "BNLS, MUMPS Cholesky", {"linear_solver": "mumps-cholesky"}, quick=True),
+    _tao("bntr", "BNTR, MUMPS Cholesky", {"linear_solver": "mumps-cholesky"}),
     Solver("poisson", "Poisson, CG + GAMG (yardstick)", "e", "poisson", quick=True),
 )
 BY_NAME = {s.name: s for s in SOLVERS}

@@ -63,6 +63,22 @@ class MemoryWindow:
         self.peak, self.delta = peak, max(peak - self.base, 0.0)
 
 
+def _measured(result: Any, memory: MemoryWindow) -> dict[str, Any]:
+    """The fields of a solve's record from its result and its memory window."""
+    return dict(
+        converged=bool(result.converged),
+        reason=result.reason,
+        iterations=result.iterations,
+        linear_iterations=result.linear_iterations,
+        setup=result.setup,
+        solve=result.solve,
+        total=result.setup + result.solve,
+        peak_mb=memory.peak,
+        delta_mb=memory.delta,
+        exact_memory=memory.exact,
+    )
+
+
 def _relative(a: np.ndarray, b: np.ndarray) -> float:
     scale = np.linalg.norm(b)
     return float(np.linalg.norm(a - b) / scale) if scale > 0 else float(np.linalg.norm(a))
@@ -279,18 +295,7 @@ def worker(spec: dict[str, Any]) -> None:
                 )
                 continue
             record.update(
-                converged=bool(result.converged),
-                reason=result.reason,
-                iterations=result.iterations,
-                linear_iterations=result.linear_iterations,
-                evaluations=result.evaluations,
-                setup=result.setup,
-                solve=result.solve,
-                total=result.setup + result.solve,
-                peak_mb=memory.peak,
-                delta_mb=memory.delta,
-                exact_memory=memory.exact,
-                details=result.details,
+                _measured(result, memory), evaluations=result.evaluations, details=result.details
             )
             if solver.name == "ssn" and reference is None and result.converged:
                 # PGPM skipped on this mesh: the default method is the reference
@@ -322,17 +327,5 @@ def worker(spec: dict[str, Any]) -> None:
         boundary = BoundaryMap(V, domain)
         with MemoryWindow() as memory:
             result = baselines.poisson_yardstick(V, boundary.dofs)
-        record.update(
-            converged=bool(result.converged),
-            reason=result.reason,
-            iterations=result.iterations,
-            linear_iterations=result.linear_iterations,
-            setup=result.setup,
-            solve=result.solve,
-            total=result.setup + result.solve,
-            peak_mb=memory.peak,
-            delta_mb=memory.delta,
-            exact_memory=memory.exact,
-            dofs=V.dofmap.index_map.size_global,
-        )
+        record.update(_measured(result, memory), dofs=V.dofmap.index_map.size_global)
         emit(record)

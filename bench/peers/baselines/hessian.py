@@ -3,12 +3,12 @@
 P^T S_h P on the boundary and Signorini unknowns (z = T u + E phi = P x)."""
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 from petsc4py import PETSc
 
-from bench.peers.baselines.budget import Budget, require_serial
+from bench.peers.baselines.budget import Budget, PeerResult, require_serial
 from coupling.distributed import dense_matrix
 from coupling.problem import SignoriniProblem
 
@@ -79,6 +79,24 @@ class Evaluator:
         """(u, phi) of ``x``, copied."""
         values = x.array_r
         return values[: self.n_u].copy(), values[self.n_u :].copy()
+
+    def run(
+        self, solver: Any, solve: Callable[[], Any], describe: Callable[[int], str], x, **fields
+    ) -> PeerResult:
+        """Run ``solve()`` (the SNES or TAO ``solver`` on ``x``) within the budget; the
+        result at ``x``, with the further ``fields`` of :class:`PeerResult`."""
+        converged, reason, seconds = self.budget.run(solve, solver.getConvergedReason, describe)
+        u, phi = self.split(x)
+        return PeerResult(
+            u=u,
+            phi=phi,
+            converged=converged,
+            reason=reason,
+            iterations=solver.getIterationNumber(),
+            solve=seconds,
+            evaluations=self.evaluations,
+            **fields,
+        )
 
     def destroy(self) -> None:
         self.grad_u.destroy()

@@ -140,20 +140,13 @@ def solve_snes_vi(
     krylov = count_krylov(ksp)
     setup = time.perf_counter() - tic
 
-    converged, reason_text, solve = clock.run(
-        lambda: snes.solve(None, x), snes.getConvergedReason, snes_reason
-    )
-    u, phi = ev.split(x)
-    result = PeerResult(
-        u=u,
-        phi=phi,
-        converged=converged,
-        reason=reason_text,
-        iterations=snes.getIterationNumber(),
+    result = ev.run(
+        snes,
+        lambda: snes.solve(None, x),
+        snes_reason,
+        x,
         linear_iterations=krylov[0],
         setup=setup,
-        solve=solve,
-        evaluations=ev.evaluations,
         details={
             "hessian_nnz": hessian.nnz,
             "time_function": spent["function"],

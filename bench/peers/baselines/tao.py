@@ -113,20 +113,13 @@ def solve_tao(
         krylov = count_krylov(tao.getKSP())
     setup = time.perf_counter() - tic
 
-    converged, reason_text, solve = clock.run(
-        lambda: tao.solve(x), tao.getConvergedReason, tao_reason
-    )
-    u, phi = ev.split(x)
-    result = PeerResult(
-        u=u,
-        phi=phi,
-        converged=converged,
-        reason=reason_text,
-        iterations=tao.getIterationNumber(),
+    result = ev.run(
+        tao,
+        lambda: tao.solve(x),
+        tao_reason,
+        x,
         linear_iterations=krylov[0],
         setup=setup,
-        solve=solve,
-        evaluations=ev.evaluations,
         details={"hessian_nnz": hessian.nnz if hessian else 0},
     )
     for obj in (tao, x, g, lower, upper):
