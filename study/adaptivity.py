@@ -16,7 +16,7 @@ from coupling.manufactured import lshape_corner
 from coupling.options import SLOPE_MIN_DOFS, SolverOptions
 from coupling.problem import SignoriniProblem
 from study.base import Figures, Part, Table, Tables
-from study.common import join, log
+from study.common import join, log, table_head
 from study.sizes import Sizes
 from study.writer import ResultWriter
 from fem_py.geometry import build_domain
@@ -234,17 +234,21 @@ def plot(tables: Tables, writer: ResultWriter) -> Figures:
     for ax in (left, right):
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=7)
-    return [(writer.save_figure(fig, "adaptivity"), "Uniform against adaptive refinement")]
+    return [writer.figure(fig, "adaptivity", "Uniform against adaptive refinement")]
 
 
 def summary_markdown(summary: dict[str, Any]) -> str:
     """Rates, efficiency band and counts per series; the dofs the adaptive loop needs for
     the error of each uniform level."""
-    lines = [
-        "| series | levels (dofs) | error slope | eta slope | eta / error | "
-        "outer iterations per level | CG per level |",
-        "|---|---|---|---|---|---|---|",
-    ]
+    lines = table_head(
+        "series",
+        "levels (dofs)",
+        "error slope",
+        "eta slope",
+        "eta / error",
+        "outer iterations per level",
+        "CG per level",
+    )
     for name, s in summary["series"].items():
         lines.append(
             f"| {name} | {len(s['dofs'])} ({s['dofs'][0]} .. {s['dofs'][-1]}) | "
@@ -252,11 +256,9 @@ def summary_markdown(summary: dict[str, Any]) -> str:
             f"{s['efficiency_min']:.2f} .. {s['efficiency_max']:.2f} | "
             f"{join(s['iterations'], '{}')} | {join(s['cg_iterations'], '{}')} |"
         )
-    lines += [
-        "",
-        "| uniform dofs | uniform error | fewest adaptive dofs with that error | fraction |",
-        "|---|---|---|---|",
-    ]
+    lines += [""] + table_head(
+        "uniform dofs", "uniform error", "fewest adaptive dofs with that error", "fraction"
+    )
     for item in summary["dofs_fraction"]:
         a, f = item["adaptive_dofs"], item["fraction"]
         lines.append(

@@ -186,6 +186,19 @@ def log_ticks(ax: Any, values: Sequence[float]) -> None:
     ax.minorticks_off()
 
 
+def table_head(*columns: str) -> list[str]:
+    """The header and the rule of a markdown table with ``columns``."""
+    return ["| " + " | ".join(columns) + " |", "|" + "---|" * len(columns)]
+
+
+def finish_axes(ax: Any, xlabel: str, ylabel: str, *, legend_size: int = 8) -> None:
+    """Label the axes, draw the grid and the legend (one figure panel done)."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=legend_size)
+
+
 def legend_below(fig: Any, axes: Any, ncol: int = 3) -> None:
     """One legend for all axes, below the figure (no curve hidden behind it)."""
     handles, labels = {}, []

@@ -94,14 +94,16 @@ def write_readme(out: Path, prov: dict[str, Any]) -> None:
     (out / "README.md").write_text("\n".join(lines) + "\n")
 
 
+DESCRIPTION = (
+    "Reproducibility study of METHOD.md section 7: PGPM iterations, spectra, inexact "
+    "projection, discretisation errors, edge forms and Jacobians. Writes markdown tables, "
+    "CSV files and PNG plots, linked from DIR/README.md."
+)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The options of ``python -m study``."""
-    parser = argparse.ArgumentParser(
-        prog="python -m study",
-        description="Reproducibility study of METHOD.md section 7: PGPM iterations, "
-        "spectra, inexact projection, discretisation errors, edge forms and Jacobians. "
-        "Writes markdown tables, CSV files and PNG plots, linked from DIR/README.md.",
-    )
+    parser = argparse.ArgumentParser(prog="python -m study", description=DESCRIPTION)
     parser.add_argument(
         "--quick",
         action="store_true",

@@ -222,7 +222,7 @@ def plot(tables: Tables, writer: ResultWriter) -> Figures:
         ax.set_visible(False)
     for ax in axes[:, 0]:
         ax.set_ylabel("error")
-    return [(writer.save_figure(fig, "errors"), "Discretisation errors against h")]
+    return [writer.figure(fig, "errors", "Discretisation errors against h")]
 
 
 def summary_markdown(summary: dict[str, Any]) -> str:

@@ -17,6 +17,7 @@ from study.common import (
     Case,
     check_solver_fields,
     describe,
+    finish_axes,
     fit_log_squared,
     fraction,
     log,
@@ -24,6 +25,7 @@ from study.common import (
     options_columns,
     power_slope,
     setup_case,
+    table_head,
 )
 from study.pencil import DENSE_MAX, PencilOperators, jacobian_at
 from study.sizes import WIDTH, Sizes
@@ -264,8 +266,9 @@ def plot(tables: Tables, writer: ResultWriter) -> Figures:
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     files = [
-        (
-            writer.save_figure(fig, "iterations_h"),
+        writer.figure(
+            fig,
+            "iterations_h",
             "Iterations against 1/h at fixed d/h "
             "(substructuring; pgpm, apgpm, ssn), and PGPM with the identity and exact "
             "preconditioners",
@@ -293,23 +296,15 @@ def plot(tables: Tables, writer: ResultWriter) -> Figures:
     log_ticks(
         ax, [r for s in summary["series"].values() if s["varies"] == "d/h" for r in s["d_over_h"]]
     )
-    ax.set_xlabel("d/h")
-    ax.set_ylabel("iterations to tol")
     ax.set_title("Iterations against d/h (fixed d)")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    files.append(
-        (
-            writer.save_figure(fig, "iterations_ratio"),
-            "Iterations against d/h at fixed d with the fitted C (1 + ln(d/h))^2",
-        )
-    )
-    return files
+    finish_axes(ax, "d/h", "iterations to tol")
+    caption = "Iterations against d/h at fixed d with the fitted C (1 + ln(d/h))^2"
+    return files + [writer.figure(fig, "iterations_ratio", caption)]
 
 
 def summary_markdown(summary: dict[str, Any]) -> str:
     """The counts of every series and their fit."""
-    lines = ["| series | iterations | max/min | fit |", "|---|---|---|---|"]
+    lines = table_head("series", "iterations", "max/min", "fit")
     for label, s in summary["series"].items():
         if "fit" in s:
             f = s["fit"]

@@ -31,6 +31,7 @@ from study.common import (
     log_ticks,
     power_slope,
     setup_case,
+    table_head,
 )
 from study.sizes import WIDTH, Sizes
 from study.writer import ResultWriter
@@ -258,8 +259,9 @@ def plot(tables: Tables, writer: ResultWriter) -> Figures:
     legend_below(fig, axes)
     fig.suptitle("Inexact projection: outer count and inner work")
     return [
-        (
-            writer.save_figure(fig, "projection"),
+        writer.figure(
+            fig,
+            "projection",
             "Outer iterations (left) and inner iterations per step (right) of the inexact "
             "projection for several rho_in and caps, against the exact projection",
         )
@@ -268,11 +270,14 @@ def plot(tables: Tables, writer: ResultWriter) -> Figures:
 
 def summary_markdown(summary: dict[str, Any]) -> str:
     """Outer and inner counts per configuration with their fitted exponents."""
-    lines = [
-        "| configuration | outer iterations | inner per step | total inner | fitted p "
-        "(outer ~ h^-p) | fitted p (inner/step ~ h^-p) |",
-        "|---|---|---|---|---|---|",
-    ]
+    lines = table_head(
+        "configuration",
+        "outer iterations",
+        "inner per step",
+        "total inner",
+        "fitted p (outer ~ h^-p)",
+        "fitted p (inner/step ~ h^-p)",
+    )
     for key, s in summary["configs"].items():
         lines.append(
             f"| {key} | {', '.join(str(x) for x in s['outer'])} | "

@@ -13,6 +13,7 @@ from coupling.solvers import IterationRecord
 from study.base import Figures, Part, Table, Tables
 from study.common import (
     describe,
+    finish_axes,
     fit_log_squared,
     fraction,
     join,
@@ -21,6 +22,7 @@ from study.common import (
     power_slope,
     series_rows,
     setup_case,
+    table_head,
 )
 from study.pencil import DENSE_MAX, PencilOperators, jacobian_at, stiffness_matrix
 from study.sizes import REFERENCE_KAPPA, WIDTH, Sizes
@@ -379,8 +381,9 @@ def plot(tables: Tables, writer: ResultWriter) -> Figures:
         ax.legend(fontsize=8)
     fig.suptitle("Spectral condition of B^-1 A and B^-1 D^2 J_h")
     files = [
-        (
-            writer.save_figure(fig, "spectrum_kappa"),
+        writer.figure(
+            fig,
+            "spectrum_kappa",
             "kappa of B^-1 A and B^-1 D^2 J_h(xi_h): fixed d/h (left), fixed d (right)",
         )
     ]
@@ -395,7 +398,7 @@ def plot(tables: Tables, writer: ResultWriter) -> Figures:
     ax.set_ylabel("cond(M_s)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
-    files.append((writer.save_figure(fig, "spectrum_cond_ms"), "cond(M_s) against 1/h"))
+    files.append(writer.figure(fig, "spectrum_cond_ms", "cond(M_s) against 1/h"))
     fig, ax = writer.subplots(figsize=(6.5, 4.5))
     for r in summary["rates"]:
         x = np.array(r["cells"], float)
@@ -417,25 +420,14 @@ def plot(tables: Tables, writer: ResultWriter) -> Figures:
             label=f"observed early, {r['series']}",
         )
     log_ticks(ax, [c for r in summary["rates"] for c in r["cells"]])
-    ax.set_xlabel("cells per side")
-    ax.set_ylabel("per-step contraction q")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7)
-    files.append(
-        (
-            writer.save_figure(fig, "spectrum_rates"),
-            "PGPM contraction per step: predicted from the spectrum against observed",
-        )
-    )
-    return files
+    finish_axes(ax, "cells per side", "per-step contraction q", legend_size=7)
+    caption = "PGPM contraction per step: predicted from the spectrum against observed"
+    return files + [writer.figure(fig, "spectrum_rates", caption)]
 
 
 def summary_markdown(summary: dict[str, Any]) -> str:
     """kappa and its fit per series, cond(M_s) and its exponents, the reference check."""
-    lines = [
-        "| series | operator | kappa | max/min | fit C (1 + ln(d/h))^2 |",
-        "|---|---|---|---|---|",
-    ]
+    lines = table_head("series", "operator", "kappa", "max/min", "fit C (1 + ln(d/h))^2")
     for s in summary["kappa"]:
         fit = (
             f"C = {s['fit']['C']:.3g}, free exponent {s['fit']['exponent']:.2f}"
@@ -446,12 +438,13 @@ def summary_markdown(summary: dict[str, Any]) -> str:
             f"| {s['series']} | {s['operator']} | {join(s['kappa'])} | "
             f"{s['max_over_min']:.2f} | {fit} |"
         )
-    lines += [
-        "",
-        "| cond(M_s), series | cond | fitted p of h^-p | local slopes | "
-        "cond h / (1 + ln^2(d/h)) |",
-        "|---|---|---|---|---|",
-    ]
+    lines += [""] + table_head(
+        "cond(M_s), series",
+        "cond",
+        "fitted p of h^-p",
+        "local slopes",
+        "cond h / (1 + ln^2(d/h))",
+    )
     for s in summary["cond"]:
         lines.append(
             f"| {s['series']} | {join(s['cond'], '{:.1f}')} | {s['slope']:.2f} | "

@@ -18,6 +18,7 @@ from study.common import (
     log_ticks,
     series_rows,
     setup_case,
+    table_head,
 )
 from study.pencil import PencilOperators, stiffness_matrix
 from study.sizes import WIDTH, Sizes
@@ -37,15 +38,8 @@ def run(comm: Any, sizes: Sizes) -> list[Table]:
         for form in ("paper", "sqrt-laplacian"):
             case = setup_case(comm, cells, r, edge_form=form)
             result, seconds = case.solve()
-            row = {
-                "series": series,
-                "edge_form": form,
-                "cells": cells,
-                **describe(case.problem),
-                "iterations": result.iterations,
-                "converged": result.converged,
-                "solve_s": seconds,
-            }
+            row = {"series": series, "edge_form": form, "cells": cells, **describe(case.problem)}
+            row.update(iterations=result.iterations, converged=result.converged, solve_s=seconds)
             if cells <= sizes.edge_kappa_max_cells:
                 lo, hi = PencilOperators(
                     case.problem, case.preconditioner, stiffness_matrix(case.problem)
@@ -226,10 +220,7 @@ def plot(tables: Tables, writer: ResultWriter) -> Figures:
         ax.grid(True, which="both", alpha=0.3)
     legend_below(fig, axes, ncol=2)
     files = [
-        (
-            writer.save_figure(fig, "variants_edge_forms"),
-            "Edge forms: iterations (left) and kappa (right)",
-        )
+        writer.figure(fig, "variants_edge_forms", "Edge forms: iterations (left) and kappa (right)")
     ]
     hist = tables["jacobian_histories"]
     if hist:
@@ -251,9 +242,8 @@ def plot(tables: Tables, writer: ResultWriter) -> Figures:
         axes[0].legend()
         fig.suptitle(f"Iteration histories, ufl and handwritten Jacobians, cells = {cells}")
         files.append(
-            (
-                writer.save_figure(fig, "variants_jacobian_histories"),
-                "Iteration histories with the two Jacobians",
+            writer.figure(
+                fig, "variants_jacobian_histories", "Iteration histories with the two Jacobians"
             )
         )
     return files
@@ -261,7 +251,7 @@ def plot(tables: Tables, writer: ResultWriter) -> Figures:
 
 def summary_markdown(summary: dict[str, Any]) -> str:
     """Iterations and kappa of the edge forms."""
-    lines = ["| series | edge form | cells | iterations | kappa |", "|---|---|---|---|---|"]
+    lines = table_head("series", "edge form", "cells", "iterations", "kappa")
     for s in summary["edge"]:
         kappa = join([k for k in s["kappa"] if k is not None])
         lines.append(

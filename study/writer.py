@@ -111,6 +111,11 @@ class ResultWriter:
         plt.close(fig)
         return f"{name}.png"
 
+    def figure(self, fig: Any, name: str, caption: str) -> tuple[str, str]:
+        """Write ``fig`` as ``<name>.png`` (:meth:`save_figure`); the (file, caption) entry
+        of a part's figure list."""
+        return self.save_figure(fig, name), caption
+
     def write_part(
         self,
         part: str,
