@@ -121,9 +121,11 @@ HMATRIX_CROSSOVER = 2048
 #: below the solver tolerances (1e-8 by default).
 HMATRIX_TOL = 1e-10
 #: The adaptive loop splits a subdomain (``fem_py.grading``) once its diameter over its
-#: smallest cell exceeds this many times the largest such ratio of the first mesh, so that
-#: H/h in the bound (1 + log(H/h))^2 stays bounded (docs/design/adapt.md, "Subdomains on
-#: graded meshes").
+#: smallest cell exceeds this many times the largest such ratio of the first mesh (d/h
+#: for a structured mesh), so that H/h in the substructuring bound (1 + log(H/h))^2
+#: stays bounded over the levels; the parts are halved until each is below the bound.
+#: 2: one level of local refinement halves h, so a graded subdomain is split every
+#: level or two (docs/design/adapt.md, "Subdomains on graded meshes").
 GRADING_SPLIT_FACTOR = 2.0
 #: Fitted convergence rates (adapt.png, the study's adaptivity part) use the levels with
 #: at least this many dofs (the pre-asymptotic coarse levels left out), or all levels

@@ -11,16 +11,8 @@ from petsc4py import PETSc
 
 from bench.peers.baselines.budget import Budget, PeerResult
 from bench.peers.baselines.hessian import CoupledHessian, Evaluator
-from bench.peers.baselines.linear import (
-    KRYLOV_RTOL,
-    LINEAR_SOLVERS,
-    clear_options,
-    count_krylov,
-    linear_options,
-    new_prefix,
-    python_pc,
-    set_options,
-)
+from bench.peers.baselines import linear
+from bench.peers.baselines.linear import KRYLOV_RTOL, LINEAR_SOLVERS
 from coupling.problem import SignoriniProblem
 
 __all__ = ["TAO_TYPES", "solve_tao", "tao_reason"]
@@ -73,15 +65,15 @@ def solve_tao(
     ev = Evaluator(problem, clock)
     x, g = ev.create_vec(), ev.create_vec()
     lower, upper = ev.bounds()
-    prefix = new_prefix("tao")
+    prefix = linear.new_prefix("tao")
     options: dict[str, Any] = {"tao_type": kind, "tao_max_funcs": 10 * max_iterations}
     if kind in _NEWTON_TAO:
         # BNTR needs a trust-region CG; STCG is also BNLS's default. With an exact
         # factor as preconditioner one STCG step is the Newton step.
         options.update(
-            linear_options(prefix, "tao_bnk_", linear_solver, krylov_rtol, ksp_type="stcg")
+            linear.linear_options(prefix, "tao_bnk_", linear_solver, krylov_rtol, ksp_type="stcg")
         )
-    set_options(prefix, options)
+    linear.set_options(prefix, options)
     tao = PETSc.TAO().create(PETSc.COMM_SELF)
     tao.setOptionsPrefix(prefix)
     tao.setObjectiveGradient(lambda _tao, xv, gv: ev.objective_gradient(xv, gv), g)
@@ -109,8 +101,8 @@ def solve_tao(
     tao.setFromOptions()
     krylov = [0]
     if kind in _NEWTON_TAO:
-        python_pc(tao.getKSP(), prefix + "tao_bnk_", linear_solver, None)
-        krylov = count_krylov(tao.getKSP())
+        linear.python_pc(tao.getKSP(), prefix + "tao_bnk_", linear_solver, None)
+        krylov = linear.count_krylov(tao.getKSP())
     setup = time.perf_counter() - tic
 
     result = ev.run(
@@ -127,5 +119,5 @@ def solve_tao(
     if hessian is not None:
         hessian.destroy()
     ev.destroy()
-    clear_options(prefix, options)
+    linear.clear_options(prefix, options)
     return result
