@@ -36,9 +36,7 @@ import time
 import numpy as np
 from mpi4py import MPI
 
-from common import demo_parser, rank0_print, write_results
-from coupling.io.atomic import prepare_output_dir
-from coupling.io.outputs import write_outputs
+from common import demo_parser, rank0_print, write_results, write_solve_outputs
 from coupling.manufactured import manufactured_problem, solution_errors, square_contact
 from coupling.options import SolverOptions
 from coupling.solvers import solve
@@ -122,23 +120,14 @@ say(f"energy-norm convergence rate: {rate:.2f} (theory: 1)")
 # %% [markdown]
 # ## Outputs of the finer run
 #
-# `write_outputs` writes what `fembem solve` writes: summary.json (with the seconds of
-# every stage of the assembly and of the solve), fields.npz, solution.xdmf (open it in
-# ParaView) and the PNG figures.
+# `write_solve_outputs` (demos/common.py, with `coupling.io.outputs.write_outputs`) writes
+# what `fembem solve` writes: summary.json (with the seconds of every stage of the
+# assembly and of the solve), fields.npz, solution.xdmf (open it in ParaView) and the PNG
+# figures.
 
 # %%
 out = args.out
-prepare_output_dir(comm, out, force=True)
-files = write_outputs(
-    comm,
-    out,
-    problem,
-    result,
-    tol=options.tol,
-    timings={**problem.timings, **result.timings},
-    xdmf=True,
-    plots=True,
-)
+files = write_solve_outputs(comm, out, problem, result, options)
 results = write_results(comm, out, dict(rows=rows, energy_rate=rate))
 say(f"\nplots:  {', '.join(str(out / f) for f in files if f.endswith('.png'))}")
 say(f"fields: {out / 'fields.npz'} (u on the mesh; gap, u_e, du_e/dn, contact set on Gamma)")
