@@ -15,7 +15,7 @@ from typing import Any, Callable
 
 from mpi4py import MPI
 
-__all__ = ["demo_parser", "rank0_print", "write_results", "write_solve_outputs"]
+__all__ = ["demo_parser", "rank0_print", "solve_row", "write_results", "write_solve_outputs"]
 
 
 def demo_parser(
@@ -42,6 +42,13 @@ def rank0_print(comm: MPI.Comm) -> Callable[..., None]:
             print(*items, flush=True)
 
     return say
+
+
+def solve_row(cells: int, result, **columns: Any) -> dict[str, Any]:
+    """One row of a demo's table of solves on the square of width 0.5: the mesh (cells
+    per side, h), whether and in how many steps ``result`` converged, and ``columns``."""
+    row = dict(cells=cells, h=0.5 / cells, converged=bool(result.converged))
+    return dict(row, iterations=int(result.iterations), **columns)
 
 
 def write_solve_outputs(comm: MPI.Comm, out: Path, problem, result, options) -> list[str]:

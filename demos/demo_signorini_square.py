@@ -36,7 +36,7 @@ import time
 import numpy as np
 from mpi4py import MPI
 
-from common import demo_parser, rank0_print, write_results, write_solve_outputs
+from common import demo_parser, rank0_print, solve_row, write_results, write_solve_outputs
 from coupling.manufactured import manufactured_problem, solution_errors, square_contact
 from coupling.options import SolverOptions
 from coupling.solvers import solve
@@ -90,12 +90,10 @@ for cells in (args.cells // 2, args.cells):
     result = solve(problem, options)
     errors = solution_errors(problem, solution, result)
     rows.append(
-        dict(
-            cells=cells,
-            h=0.5 / cells,
+        solve_row(
+            cells,
+            result,
             dofs=problem.V.dofmap.index_map.size_global,
-            converged=bool(result.converged),
-            iterations=int(result.iterations),
             contact_nodes=int(np.count_nonzero(result.contact)),
             signorini_nodes=problem.n_signorini,
             seconds=time.perf_counter() - tic,

@@ -113,17 +113,10 @@ def iteration_context(
     ``max_iterations`` and projection, :func:`build_projection`) on J_h = ``functional``
     (the problem's, or one that wraps it, as the baselines' budget does) from the
     iterate in ``u``; ``matrix``: a P1 Mat of the caller's for the Jacobians."""
-    return IterationContext(
-        functional=functional,
-        preconditioner=preconditioner,
-        projection=build_projection(preconditioner, options),
-        u=u,
-        tol=options.tol,
-        max_iterations=options.max_iterations,
-        monitor=monitor,
-        forms=forms,
-        matrix=matrix,
-    )
+    projection = build_projection(preconditioner, options)
+    stop = dict(tol=options.tol, max_iterations=options.max_iterations)
+    extra = dict(monitor=monitor, forms=forms, matrix=matrix)
+    return IterationContext(functional, preconditioner, projection, u, **stop, **extra)
 
 
 def step_length(
