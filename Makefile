@@ -64,13 +64,13 @@ bench: setup
 	$(PY) bench/bem_assembly.py
 	$(PY) bench/steklov_mpi.py
 	$(PY) bench/pgpm_profile.py
-	$(PY) bench/peers.py
+	$(PY) -m bench.peers
 	$(PY) bench/strong_scaling.py --output bench/scaling.md
 	$(PY) bench/outputs.py
 	$(PY) bench/speed.py
 
 study: setup
-	$(PY) -m coupling.study
+	$(PY) -m study
 
 clean:
 	rm -rf build $(VENV) *.egg-info bem_cpp/*.so

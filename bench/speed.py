@@ -241,6 +241,13 @@ def _compare(row: dict) -> None:
     row["nested_du"] = float(np.abs(nested["u"] - cold["u"]).max() / scale)
 
 
+def _runs(rows: list[dict]):
+    """(the Poisson record, "cold" or "nested", the run's record) of every run of ``rows``."""
+    for row in rows:
+        for key in ("cold", "nested"):
+            yield row["poisson"], key, row[key]
+
+
 def table(rows: list[dict]) -> list[str]:
     """The markdown table of the stage timings and the ratios (one row per run)."""
     stages = ("startup", "mesh", "forms", "steklov_poincare", "loads", "preconditioner")
@@ -253,24 +260,21 @@ def table(rows: list[dict]) -> list[str]:
         "| solve stage / Poisson solve | iteration / Poisson solve |"
     )
     lines = [head, "|" + "---:|" * (len(stages) + 11)]
-    for row in rows:
-        p = row["poisson"]
-        for key in ("cold", "nested"):
-            r = row[key]
-            if "error" in r:
-                lines.append(f"| {p['dofs']} | {key} | error: {' '.join(r['error'])} |")
-                continue
-            t = r["timings"]
-            its = str(r["iterations"])
-            if r.get("levels"):
-                its = " / ".join(str(lv["iterations"]) for lv in r["levels"])
-            cells = " | ".join(f"{t[s]:.1f}" if s in t else "-" for s in stages)
-            lines.append(
-                f"| {r['dofs']} | {key} | {its} | {r['wall']:.1f} | {cells} "
-                f"| {r['solve_stage']:.1f} | {p['wall']:.1f} | {p['solve']:.1f} "
-                f"| {r['wall'] / p['wall']:.2f} | {r['solve_stage'] / p['solve']:.2f} "
-                f"| {t['solve'] / p['solve']:.2f} |"
-            )
+    for p, key, r in _runs(rows):
+        if "error" in r:
+            lines.append(f"| {p['dofs']} | {key} | error: {' '.join(r['error'])} |")
+            continue
+        t = r["timings"]
+        its = str(r["iterations"])
+        if r.get("levels"):
+            its = " / ".join(str(lv["iterations"]) for lv in r["levels"])
+        cells = " | ".join(f"{t[s]:.1f}" if s in t else "-" for s in stages)
+        lines.append(
+            f"| {r['dofs']} | {key} | {its} | {r['wall']:.1f} | {cells} "
+            f"| {r['solve_stage']:.1f} | {p['wall']:.1f} | {p['solve']:.1f} "
+            f"| {r['wall'] / p['wall']:.2f} | {r['solve_stage'] / p['solve']:.2f} "
+            f"| {t['solve'] / p['solve']:.2f} |"
+        )
     return lines
 
 
@@ -301,31 +305,28 @@ def targets(rows: list[dict]) -> list[str]:
     big = [r for r in rows if r["poisson"]["dofs"] >= 1e6]
     if not big:
         return ["Targets: not measured (no size with 10^6 dofs or more in this run)."]
-    for row in big:
-        p = row["poisson"]
-        for key in ("cold", "nested"):
-            r = row[key]
-            if "error" in r:
-                lines.append(f"- N = {p['dofs']}, {key}: the run failed")
-                continue
-            whole, solve = r["wall"] / p["wall"], r["solve_stage"] / p["solve"]
-            share = r["timings"]["outputs"] / r["timings"]["total"]
-            line = (
-                f"- N = {r['dofs']}, {key}: whole run / Poisson pipeline = {whole:.2f} "
-                f"(target <= {TARGET_WHOLE}): {_verdict(whole <= TARGET_WHOLE)}; solve stage "
-                f"/ Poisson solve = {solve:.2f} (target <= {TARGET_SOLVE}): "
-                f"{_verdict(solve <= TARGET_SOLVE)}; outputs {100 * share:.1f} % of the run "
-                f"(target <= {100 * TARGET_OUTPUTS:.0f} %): {_verdict(share <= TARGET_OUTPUTS)}"
+    for p, key, r in _runs(big):
+        if "error" in r:
+            lines.append(f"- N = {p['dofs']}, {key}: the run failed")
+            continue
+        whole, solve = r["wall"] / p["wall"], r["solve_stage"] / p["solve"]
+        share = r["timings"]["outputs"] / r["timings"]["total"]
+        line = (
+            f"- N = {r['dofs']}, {key}: whole run / Poisson pipeline = {whole:.2f} "
+            f"(target <= {TARGET_WHOLE}): {_verdict(whole <= TARGET_WHOLE)}; solve stage "
+            f"/ Poisson solve = {solve:.2f} (target <= {TARGET_SOLVE}): "
+            f"{_verdict(solve <= TARGET_SOLVE)}; outputs {100 * share:.1f} % of the run "
+            f"(target <= {100 * TARGET_OUTPUTS:.0f} %): {_verdict(share <= TARGET_OUTPUTS)}"
+        )
+        if r.get("levels"):
+            fine = r["levels"][-1]
+            steps, cg = fine["iterations"], fine["cg_iterations"]
+            ok = steps <= TARGET_FINE_STEPS and cg <= TARGET_FINE_CG
+            line += (
+                f"; finest level {steps} Newton steps, {cg} CG iterations (target <= "
+                f"{TARGET_FINE_STEPS}, about {TARGET_FINE_CG}): {_verdict(ok)}"
             )
-            if r.get("levels"):
-                fine = r["levels"][-1]
-                steps, cg = fine["iterations"], fine["cg_iterations"]
-                ok = steps <= TARGET_FINE_STEPS and cg <= TARGET_FINE_CG
-                line += (
-                    f"; finest level {steps} Newton steps, {cg} CG iterations (target <= "
-                    f"{TARGET_FINE_STEPS}, about {TARGET_FINE_CG}): {_verdict(ok)}"
-                )
-            lines.append(line)
+        lines.append(line)
     return lines
 
 

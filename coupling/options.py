@@ -92,54 +92,41 @@ DATA_VARIABLES: dict[str, tuple[str, ...]] = {
 }
 
 #: Steps of the semismooth Newton method that are not part of the schema.
-#: PGPM steps before the first Newton step (2 and 3 save outer steps at 128-512 cells but
-#: not time at 1e6 dofs: docs/design/solvers.md)
+#: PGPM steps before the first Newton step: fewer cost time at 10^6 dofs
+#: (docs/design/solvers.md, "ssn's start").
 SSN_START_STEPS = 5
 SSN_WARM_START_STEPS = 0  # the same from a given iterate (nested iteration, adaptivity)
 SSN_CG_MAX_ITERATIONS = 500  # cap on the CG iterations of one Newton step
 #: Exponent p of the inexact-Newton forcing min(0.1, (r_k / r_0)^p) of a Newton step's CG:
-#: 1/2 (order 1.5) from xi_0 = 0, where the first Newton steps still move the active set
-#: by tens of nodes and accurate steps are wasted (p = 1 there: 40 CG instead of 31 at
-#: 10^6 dofs, the same 11 steps); 1 (Eisenstat and Walker's eta_k ~ ||F_k||, q-quadratic)
-#: from a given iterate (nested iteration, adaptivity), whose active set is nearly right
-#: from the first step: the finest level of a nested solve then takes 3 Newton steps
-#: instead of 4 at 6e4 .. 4e6 dofs with the same CG iterations (docs/design/solvers.md)
+#: 1/2 from xi_0 = 0 (the active set still moves), 1 (q-quadratic) from a given iterate
+#: (docs/design/solvers.md, "The forcing from a given iterate").
 SSN_FORCING_EXPONENT = 0.5
 SSN_WARM_FORCING_EXPONENT = 1.0
-#: A Newton step after one of relative B-norm ||xi_k - xi_k-1||_B / ||xi_k||_B at most this
-#: keeps the Jacobian of the step before (no reassembly, ~0.25 s at 10^6 dofs): the stale
-#: Jacobian's relative error, O(this), is about the CG tolerance of such a late step. At
-#: 10^6 dofs 3 of the 6 Newton steps of a cold solve (3 of 4 on a nested finest level)
-#: keep it, with the same steps and CG iterations as with every Jacobian assembled
-#: (docs/design/solvers.md)
+#: A Newton step after one of relative B-norm at most this keeps the Jacobian of the step
+#: before: its error, O(this), is about such a step's CG tolerance
+#: (docs/design/solvers.md, "ssn keeps the Jacobian after small steps").
 SSN_JACOBIAN_REUSE_STEP = 1e-3
-#: c of the forcing floor c tol ||xi||_B / (tau r) of a Newton step's CG (no oversolving;
-#: Kelley 1995 uses 0.5): 0.1 keeps the answer within 2e-9 of the fully solved steps' at
-#: tol 1e-8 (0.5: 9e-9) on the manufactured square (docs/design/solvers.md).
+#: c of the forcing floor c tol ||xi||_B / (tau r) of a Newton step's CG (no oversolving),
+#: small enough to keep the answer well within tol (docs/design/solvers.md, "ssn's
+#: stopping rule and the oversolving safeguard").
 OVERSOLVE_SAFEGUARD = 0.1
 #: Nested iteration (``[solver] nested``): h grows by this factor from one level to the
-#: next coarser one, which has at least NESTED_MIN_DOFS dofs. A factor 4 makes a coarse
-#: level cost 1/16 of the fine one; the fine level then takes one Newton step more than
-#: from a factor-2 level, which costs a quarter (docs/design/nested.md).
+#: next coarser one, which has at least NESTED_MIN_DOFS dofs; a coarse level then costs
+#: 1/16 of the fine one (docs/design/nested.md, "Coarser levels at 4h").
 NESTED_COARSENING = 4
 NESTED_MIN_DOFS = 1000
 LANCZOS_STEPS = 20  # Lanczos steps of the step estimate C0 (and of lambda_min for apgpm)
-#: ssn needs C0 only as the scale of its few PGPM steps, its active-set prediction and
-#: stopping rule, and the largest Ritz value converges first: 10 steps give C0 1 % below
-#: the 20-step value at 1e6 dofs, the same steps and CG, u within 3e-10 (docs/design/solvers.md)
+#: Lanczos steps of ssn's C0, only the scale of its PGPM steps, prediction and stopping
+#: rule; the largest Ritz value converges first (docs/design/solvers.md, "ssn's start").
 SSN_LANCZOS_STEPS = 10
 
 #: The sparse Cholesky factor of A_II (one block per subdomain) keeps the mesh's numbering
 #: ("natural" ordering) when no block has more rows than this, nested dissection otherwise:
-#: at 10^6 dofs set-up 0.03 s against 0.18 s at d = 4h (9 rows per block), 0.20 against
-#: 0.53 s at 16h (225), solves as fast; at 64h (3,969) nested dissection is faster
-#: (set-up 1.6 against 1.9 s, solve 67 against 107 ms; docs/design/preconditioners.md).
+#: small blocks fill little either way (docs/design/preconditioners.md, "Set-up cuts").
 NATURAL_ORDERING_MAX_BLOCK = 1024
 #: ``boundary_operator = "auto"``: the H-matrix S_h from this many boundary dofs on, the
-#: dense one below: where S_h costs less in an ssn solve (set-up + about 120 products) as
-#: an H-matrix, measured on this machine by whole `fembem solve` runs after the H-matrix
-#: speed-ups (break-even at 1,000, the H-matrix 1.7x cheaper at 2,000;
-#: docs/design/hmatrix.md, "The crossover after the set-up and product speed-ups").
+#: dense one below, where the H-matrix is clearly the cheaper in a whole solve
+#: (docs/design/hmatrix.md, "The crossover after the set-up and product speed-ups").
 HMATRIX_CROSSOVER = 2048
 #: Relative accuracy of the H-matrix blocks of S_h (``bem_cpp.steklov_poincare`` tol):
 #: products agree with the dense S_h to a few times this (docs/design/hmatrix.md), far

@@ -1,4 +1,5 @@
-"""The preamble the demos share: their command line, printing on rank 0, results.json.
+"""The preamble the demos share: their command line, printing on rank 0, results.json
+and the outputs of a solve.
 
 Every demo takes ``--cells N`` (its mesh size) and ``--out DIR`` (default
 ``out/<demo name>``) and writes the numbers it prints to DIR/results.json, which the
@@ -14,7 +15,7 @@ from typing import Any, Callable
 
 from mpi4py import MPI
 
-__all__ = ["demo_parser", "rank0_print", "write_results"]
+__all__ = ["demo_parser", "rank0_print", "solve_row", "write_results", "write_solve_outputs"]
 
 
 def demo_parser(
@@ -41,6 +42,27 @@ def rank0_print(comm: MPI.Comm) -> Callable[..., None]:
             print(*items, flush=True)
 
     return say
+
+
+def solve_row(cells: int, result, **columns: Any) -> dict[str, Any]:
+    """One row of a demo's table of solves on the square of width 0.5: the mesh (cells
+    per side, h), whether and in how many steps ``result`` converged, and ``columns``."""
+    row = dict(cells=cells, h=0.5 / cells, converged=bool(result.converged))
+    return dict(row, iterations=int(result.iterations), **columns)
+
+
+def write_solve_outputs(comm: MPI.Comm, out: Path, problem, result, options) -> list[str]:
+    """Write what ``fembem solve`` writes for ``result`` (``coupling.io.outputs``:
+    summary.json with the seconds of every stage, fields.npz, solution.xdmf and the PNG
+    figures) into ``out``, emptied first; return the file names. Collective."""
+    from coupling.io.atomic import prepare_output_dir
+    from coupling.io.outputs import write_outputs
+
+    prepare_output_dir(comm, out, force=True)
+    timings = {**problem.timings, **result.timings}
+    return write_outputs(
+        comm, out, problem, result, tol=options.tol, timings=timings, xdmf=True, plots=True
+    )
 
 
 def write_results(comm: MPI.Comm, out: Path, results: dict[str, Any]) -> Path:

@@ -25,7 +25,7 @@
 import numpy as np
 from mpi4py import MPI
 
-from common import demo_parser, rank0_print, write_results
+from common import demo_parser, rank0_print, solve_row, write_results
 from coupling.manufactured import (
     ManufacturedSolution,
     exterior_field,
@@ -77,15 +77,7 @@ for cells in (args.cells // 4, args.cells // 2, args.cells):
     problem = manufactured_problem(comm, solution, material, cells=cells)
     result = solve(problem, options)
     errors = solution_errors(problem, solution, result)
-    rows.append(
-        dict(
-            cells=cells,
-            h=0.5 / cells,
-            converged=bool(result.converged),
-            iterations=int(result.iterations),
-            **errors,
-        )
-    )
+    rows.append(solve_row(cells, result, **errors))
 
 say(
     f"\n{'h':>9} {'its':>5} {'|u-u_h|_1':>10} {'rate':>5} {'max|u-u_h|':>10} {'rate':>5} "

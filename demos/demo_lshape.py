@@ -20,9 +20,7 @@
 # %%
 from mpi4py import MPI
 
-from common import demo_parser, rank0_print, write_results
-from coupling.io.atomic import prepare_output_dir
-from coupling.io.outputs import write_outputs
+from common import demo_parser, rank0_print, write_results, write_solve_outputs
 from coupling.manufactured import lshape_contact, manufactured_problem, solution_errors
 from coupling.options import SolverOptions
 from coupling.solvers import solve
@@ -100,17 +98,7 @@ say(f"nodes in the wrong state away from the switch points: {errors['contact_mis
 
 # %%
 out = args.out
-prepare_output_dir(comm, out, force=True)
-files = write_outputs(
-    comm,
-    out,
-    problem,
-    result,
-    tol=options.tol,
-    timings={**problem.timings, **result.timings},
-    xdmf=True,
-    plots=True,
-)
+files = write_solve_outputs(comm, out, problem, result, options)
 results = write_results(
     comm,
     out,

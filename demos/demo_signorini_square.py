@@ -36,9 +36,7 @@ import time
 import numpy as np
 from mpi4py import MPI
 
-from common import demo_parser, rank0_print, write_results
-from coupling.io.atomic import prepare_output_dir
-from coupling.io.outputs import write_outputs
+from common import demo_parser, rank0_print, solve_row, write_results, write_solve_outputs
 from coupling.manufactured import manufactured_problem, solution_errors, square_contact
 from coupling.options import SolverOptions
 from coupling.solvers import solve
@@ -92,12 +90,10 @@ for cells in (args.cells // 2, args.cells):
     result = solve(problem, options)
     errors = solution_errors(problem, solution, result)
     rows.append(
-        dict(
-            cells=cells,
-            h=0.5 / cells,
+        solve_row(
+            cells,
+            result,
             dofs=problem.V.dofmap.index_map.size_global,
-            converged=bool(result.converged),
-            iterations=int(result.iterations),
             contact_nodes=int(np.count_nonzero(result.contact)),
             signorini_nodes=problem.n_signorini,
             seconds=time.perf_counter() - tic,
@@ -122,23 +118,14 @@ say(f"energy-norm convergence rate: {rate:.2f} (theory: 1)")
 # %% [markdown]
 # ## Outputs of the finer run
 #
-# `write_outputs` writes what `fembem solve` writes: summary.json (with the seconds of
-# every stage of the assembly and of the solve), fields.npz, solution.xdmf (open it in
-# ParaView) and the PNG figures.
+# `write_solve_outputs` (demos/common.py, with `coupling.io.outputs.write_outputs`) writes
+# what `fembem solve` writes: summary.json (with the seconds of every stage of the
+# assembly and of the solve), fields.npz, solution.xdmf (open it in ParaView) and the PNG
+# figures.
 
 # %%
 out = args.out
-prepare_output_dir(comm, out, force=True)
-files = write_outputs(
-    comm,
-    out,
-    problem,
-    result,
-    tol=options.tol,
-    timings={**problem.timings, **result.timings},
-    xdmf=True,
-    plots=True,
-)
+files = write_solve_outputs(comm, out, problem, result, options)
 results = write_results(comm, out, dict(rows=rows, energy_rate=rate))
 say(f"\nplots:  {', '.join(str(out / f) for f in files if f.endswith('.png'))}")
 say(f"fields: {out / 'fields.npz'} (u on the mesh; gap, u_e, du_e/dn, contact set on Gamma)")

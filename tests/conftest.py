@@ -10,6 +10,15 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
+#: [material] and [data] of the tests' load case: carstensen, f = 1 + x, t0 = -1, u0 = 0.1
+LOAD_CASE = '[material]\nrho = "carstensen"\n[data]\nf = "1 + x"\nt0 = "-1"\nu0 = "0.1"\n'
+
+
+def load_config(geometry: str, **sections: str) -> str:
+    """The TOML text of the load case on ``geometry`` (the lines of [geometry]), then the
+    ``sections`` (name -> their lines), e.g. ``solver='method = "ssn"'``."""
+    text = f"[geometry]\n{geometry}\n{LOAD_CASE}"
+    return text + "".join(f"[{name}]\n{lines}\n" for name, lines in sections.items())
 
 
 def run_mpi(

@@ -17,6 +17,14 @@ def _name(gmsh, dim, tags, tag, name):
     gmsh.model.setPhysicalName(dim, gmsh.model.addPhysicalGroup(dim, tags, tag), name)
 
 
+def _write(gmsh, path: Path, h: float, version: float = 4.1) -> None:
+    """Mesh the 2D model with cells of size at most h; write it as a .msh file."""
+    gmsh.option.setNumber("Mesh.MeshSizeMax", h)
+    gmsh.option.setNumber("Mesh.MshFileVersion", version)
+    gmsh.model.mesh.generate(2)
+    gmsh.write(str(path))
+
+
 def disk_msh(path: Path, h: float, *, radius: float = 0.25, version: float = 4.1) -> Path:
     """The disk of ``radius`` about 0: curve groups "contact" (the lower quarter, angles
     -3pi/4 .. -pi/4), "free" (the rest), "left" (a piece of "free", for overlaps), surface
@@ -34,10 +42,7 @@ def disk_msh(path: Path, h: float, *, radius: float = 0.25, version: float = 4.1
         _name(gmsh, 1, arcs[1:], 2, "free")
         _name(gmsh, 1, [arcs[2]], 3, "left")
         _name(gmsh, 2, [s], 4, "omega")
-        gmsh.option.setNumber("Mesh.MeshSizeMax", h)
-        gmsh.option.setNumber("Mesh.MshFileVersion", version)
-        gmsh.model.mesh.generate(2)
-        gmsh.write(str(path))
+        _write(gmsh, path, h, version)
     finally:
         gmsh.finalize()
     return Path(path)
@@ -57,9 +62,7 @@ def square_msh(path: Path, h: float, *, width: float = 0.5) -> Path:
         _name(gmsh, 1, [L[0]], 1, "bottom")
         _name(gmsh, 1, L[1:], 2, "rest")
         _name(gmsh, 2, [s], 3, "omega")
-        gmsh.option.setNumber("Mesh.MeshSizeMax", h)
-        gmsh.model.mesh.generate(2)
-        gmsh.write(str(path))
+        _write(gmsh, path, h)
     finally:
         gmsh.finalize()
     return Path(path)

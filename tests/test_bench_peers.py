@@ -1,4 +1,4 @@
-"""The peer benchmark (bench/peers.py) and the PETSc baselines (coupling/baselines/).
+"""The peer benchmark (bench/peers/) and the PETSc baselines (bench/peers/baselines/).
 
 The quick benchmark checks that every solver reaches the PGPM solution, not the
 timings. Tolerances: PGPM stops at its default tol = 1e-8 on the B-norm step, which
@@ -8,28 +8,19 @@ leaves an error of about 1e-8 (u) and 2e-6 (phi) relative to the exact minimiser
 """
 from __future__ import annotations
 
-import importlib.util
 import json
-import sys
 
 import numpy as np
 import pytest
 import scipy.sparse as sp
 from mpi4py import MPI
 
-from conftest import ROOT
+from bench.peers import baselines
+from bench.peers.cli import main as bench_main
+from bench.peers.solvers import TOL_PHI, TOL_U
 
 COMM = MPI.COMM_WORLD
 pytestmark = pytest.mark.skipif(COMM.size > 1, reason="the peer benchmark is serial")
-
-
-def _bench_module():
-    if "bench_peers" not in sys.modules:  # registered first: dataclasses look it up
-        spec = importlib.util.spec_from_file_location("bench_peers", ROOT / "bench" / "peers.py")
-        module = importlib.util.module_from_spec(spec)
-        sys.modules["bench_peers"] = module
-        spec.loader.exec_module(module)
-    return sys.modules["bench_peers"]
 
 
 @pytest.fixture(scope="module")
@@ -45,13 +36,11 @@ def test_hessian_matrix_equals_the_hessian_action(small_problem):
     (D^2G matrix + dense S_h product) at a nonlinear state: equal to round-off."""
     from dolfinx import fem
 
-    from coupling.baselines import CoupledHessian
-
     p = small_problem
     u = fem.Function(p.V)
     x = p.V.tabulate_dof_coordinates()
     u.x.array[:] = np.sin(3 * x[:, 0]) + x[:, 1] ** 2
-    hessian = CoupledHessian(p)
+    hessian = baselines.CoupledHessian(p)
     H = hessian.assemble(u)
     rng = np.random.default_rng(1)
     n_u, n_s = u.x.array.size, p.n_signorini
@@ -78,8 +67,6 @@ def test_hessian_matrix_equals_the_hessian_action(small_problem):
 def test_peers_reach_the_pgpm_minimiser(small_problem):
     """SNES VI (direct and CG + substructuring) and TAO BNLS reach the minimiser of J_h
     that PGPM reaches; the Newton solvers converge in a handful of steps."""
-    from coupling import baselines
-
     ref = baselines.solve_project(small_problem, "pgpm", tol=1e-12, max_iterations=5000)
     assert ref.converged
     runs = [
@@ -104,7 +91,6 @@ def test_grid_sequenced_snes_vi_reaches_the_ssn_solution(small_problem):
     past their tolerances (ssn at tol 1e-12, SNES VI at rtol 1e-10 of ||F(0)||), so they
     agree to round-off amplified by the conditioning, as the cold peers above; every
     level converges, and the finest in no more Newton steps than the cold start."""
-    from coupling import baselines
     from coupling.manufactured import manufactured_problem, square_contact
     from fem_py.forms import make_material
 
@@ -132,15 +118,12 @@ def test_grid_sequenced_snes_vi_reaches_the_ssn_solution(small_problem):
 
 
 def test_budget_stops_a_solver(small_problem):
-    from coupling import baselines
-
     run = baselines.solve_tao(small_problem, "blmvm", gttol=1e-30, budget=0.2)
     assert not run.converged and "budget" in run.reason
 
 
 def test_quick_benchmark_solvers_agree(tmp_path, capsys):
-    bench = _bench_module()
-    code = bench.main(["--quick", "--json", "--out", str(tmp_path)])
+    code = bench_main(["--quick", "--json", "--out", str(tmp_path)])
     result = json.loads(capsys.readouterr().out)
     solves = [r for r in result["records"] if r["type"] == "solve"]
     assert not [r for r in result["records"] if r["type"] == "crash"]
@@ -161,7 +144,7 @@ def test_quick_benchmark_solvers_agree(tmp_path, capsys):
     for r in solves:
         assert r["status"] == "ok", (r["problem"], r["dofs"], r["solver"], r.get("reason"))
         if r["solver"] not in ("pgpm", "poisson"):
-            assert r["du"] <= bench.TOL_U and r["dphi"] <= bench.TOL_PHI
+            assert r["du"] <= TOL_U and r["dphi"] <= TOL_PHI
     assert code == 0
     assert (tmp_path / "peers.png").stat().st_size > 0
     assert "| / (a) |" in (tmp_path / "results.md").read_text()
@@ -170,6 +153,6 @@ def test_quick_benchmark_solvers_agree(tmp_path, capsys):
 def test_benchmark_refuses_mpirun():
     from conftest import run_mpi
 
-    proc = run_mpi(2, str(ROOT / "bench" / "peers.py"), "--quick", check=False, timeout=120)
+    proc = run_mpi(2, "-m", "bench.peers", "--quick", check=False, timeout=120)
     assert proc.returncode == 2
     assert "serial" in proc.stderr and "without mpirun" in proc.stderr

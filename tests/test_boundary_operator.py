@@ -174,7 +174,7 @@ def test_dense_only_paths_refuse_the_hmatrix_in_one_line(problems):
         build_preconditioner(hmatrix, SolverOptions(preconditioner="exact"))
     assert "the exact preconditioner needs the dense S_h" in str(err.value)
     assert "\n" not in str(err.value)
-    from coupling.baselines import CoupledHessian
+    from bench.peers.baselines import CoupledHessian
 
     with pytest.raises(ValueError, match="SNES VI / TAO Newton peers needs the dense S_h"):
         CoupledHessian(hmatrix)

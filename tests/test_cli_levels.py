@@ -11,21 +11,11 @@ import json
 import numpy as np
 import pytest
 
-from conftest import run_cli
+from conftest import load_config, run_cli
 
-CONFIG = """
-[geometry]
-shape = "lshape"
-h = 0.015625
-subdomain_size = 0.0625
-signorini = ["bottom"]
-[material]
-rho = "carstensen"
-[data]
-f = "1 + x"
-t0 = "-1"
-u0 = "0.1"
-"""
+CONFIG = load_config(
+    'shape = "lshape"\nh = 0.015625\nsubdomain_size = 0.0625\nsignorini = ["bottom"]'
+)
 
 #: u = r^(2/3) sin(2 theta/3) at the re-entrant corner (tests/test_adapt.py, CORNER) with
 #: u_e = 0: u0 = u, t0 = grad u . n = -(2/3) r^(-1/3) (cos(theta/3) nx + sin(theta/3) ny),

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from conftest import run_cli, run_mpi
+from conftest import load_config, run_cli, run_mpi
 from coupling.io.evaluation import evaluate
 from coupling.io.outputs import boundary_fields, gather_p1
 from coupling.io.quantities import boundary_flux
@@ -24,19 +24,9 @@ from coupling.options import SolverOptions
 from coupling.solvers import solve
 from fem_py.forms import make_material
 
-CONFIG = """
-[geometry]
-shape = "lshape"
-h = 0.03125
-subdomain_size = 0.125
-signorini = ["bottom"]
-[material]
-rho = "carstensen"
-[data]
-f = "1 + x"
-t0 = "-1"
-u0 = "0.1"
-"""
+CONFIG = load_config(
+    'shape = "lshape"\nh = 0.03125\nsubdomain_size = 0.125\nsignorini = ["bottom"]'
+)
 
 
 def test_manufactured_values_converge():

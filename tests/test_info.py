@@ -11,25 +11,14 @@ from pathlib import Path
 
 import pytest
 
-from conftest import ROOT, run_cli
+from conftest import ROOT, load_config, run_cli
 
 FEMBEM = str(Path(sys.executable).parent / "fembem")
-BASE = """
-[geometry]
-shape = "{shape}"
-h = {h}
-subdomain_size = {d}
-structured = {structured}
-signorini = {signorini}
-[material]
-rho = "carstensen"
-[data]
-f = "1 + x"
-t0 = "-1"
-u0 = "0.1"
-[solver]
-method = "ssn"
-"""
+BASE = load_config(
+    'shape = "{shape}"\nh = {h}\nsubdomain_size = {d}\nstructured = {structured}\n'
+    "signorini = {signorini}",
+    solver='method = "ssn"',
+)
 CASES = [
     dict(shape="square", h=1 / 32, d=1 / 8, structured="true", signorini='["bottom"]'),
     dict(shape="square", h=1 / 40, d=1 / 10, structured="true", signorini='"all"'),

@@ -14,23 +14,12 @@ from pathlib import Path
 
 import pytest
 
-from conftest import ROOT, run_cli
+from conftest import ROOT, load_config, run_cli
 
 FEMBEM = [str(Path(sys.executable).parent / "fembem")]
-CONFIG = """
-[geometry]
-h = {h}
-subdomain_size = {d}
-signorini = ["bottom"]
-[material]
-rho = "carstensen"
-[data]
-f = "1 + x"
-t0 = "-1"
-u0 = "0.1"
-[solver]
-method = "pgpm"
-"""
+CONFIG = load_config(
+    'h = {h}\nsubdomain_size = {d}\nsignorini = ["bottom"]', solver='method = "pgpm"'
+)
 #: the stage lines of `fembem solve` (coupling.app.progress) and what follows each
 STAGES = {
     "set-up": "fembem: building the mesh",

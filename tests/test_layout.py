@@ -4,9 +4,8 @@ no module grows past the size one can read in a sitting.
 Layers, lowest first (a module may import its own layer and the layers below):
 fem_py and bem_cpp -> coupling.options -> coupling.{distributed, functional, timing} ->
 coupling.{problem, manufactured} -> coupling.preconditioners -> coupling.solvers ->
-coupling.io -> coupling.app -> coupling.{study, baselines}. The command line loads the
-study and the benchmark only when asked for (an import inside a function of
-coupling.app.cli).
+coupling.io -> coupling.app. The research code beside the library (study/ and bench/,
+not installed) reads the library and is never imported by it.
 
 Inside a package the subpackages are layered too (``INNER_LAYERS``, one entry per
 package), with no exception for imports inside functions; and no module of any package
@@ -33,10 +32,11 @@ LAYERS = [
     ("coupling.adapt",),
     ("coupling.io",),
     ("coupling.app",),
-    ("coupling.study", "coupling.baselines"),
 ]
 #: (importing module, imported package) pairs allowed upwards, inside functions only
-LAZY_UPWARDS = {("coupling.app.cli", "coupling.study")}
+LAZY_UPWARDS: set[tuple[str, str]] = set()
+#: the research code beside the library: it imports the library, never the other way
+RESEARCH = ("study", "bench")
 
 #: The layers inside a package, lowest first (one entry per package). fem_py: the MPI
 #: helpers, point-set geometry, facet tags and the geometry spec -> the P1 dofs -> the
@@ -124,6 +124,13 @@ def test_no_private_names_across_modules(name, path):
 def test_module_size(name, path):
     lines = len(path.read_text().splitlines())
     assert lines <= MAX_LINES, f"{name} has {lines} lines (at most {MAX_LINES}): split it"
+
+
+@pytest.mark.parametrize("name,path", MODULES, ids=[m for m, _ in MODULES])
+def test_library_never_imports_the_research_code(name, path):
+    for module, _, _ in _imports(ast.parse(path.read_text())):
+        top = module.split(".")[0]
+        assert top not in RESEARCH, f"{name} imports {module}: the library cannot use {top}/"
 
 
 @pytest.mark.parametrize("name,path", MODULES, ids=[m for m, _ in MODULES])

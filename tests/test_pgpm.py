@@ -22,7 +22,7 @@ from coupling.problem import SignoriniProblem
 from coupling.solvers import solve
 from coupling.solvers.apgpm import apgpm
 from coupling.solvers.lanczos import estimate_extremes
-from coupling.solvers.projection import SignoriniProjection
+from coupling.solvers.solution import iteration_context
 from fem_py.forms import make_material
 from fem_py.mesh import GeometrySpec, build_domain
 
@@ -185,20 +185,14 @@ def test_accelerated_method_accepts_its_strong_convexity(carstensen):
     jacobian.destroy()
     assert 0.0 < low < high and high == pytest.approx(result.C0, rel=1e-12)
     phi0 = np.zeros(problem.n_signorini)
-    # the projection of the solve (the exact one: its warm start does not change its result)
-    projection = SignoriniProjection(
-        pc.signorini_metric,
-        options.projection,
-        rho_in=options.projection_tol,
-        max_iterations=options.projection_max_iterations,
-        lambda_max=pc.lambda_max_signorini,
-    )
-    common = dict(tau=result.tau, tol=options.tol, max_iterations=options.max_iterations)
-    run = apgpm(problem.functional, pc, projection, u, phi0, strong_convexity=low, **common)
+    # the context and projection of the solve (the exact one: its warm start does not
+    # change its result)
+    context = iteration_context(problem.functional, problem.forms, pc, u, options)
+    run = apgpm(context, phi0, tau=result.tau, strong_convexity=low)
     assert run.iterations == result.iterations
     assert np.array_equal(run.phi, result.phi)
     with pytest.raises(ValueError, match="strong_convexity"):
-        apgpm(problem.functional, pc, projection, u, phi0, strong_convexity=0.0, **common)
+        apgpm(context, phi0, tau=result.tau, strong_convexity=0.0)
     pc.destroy()
 
 

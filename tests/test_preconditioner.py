@@ -26,26 +26,9 @@ from coupling.preconditioners.edge_forms import (
     sqrt_laplacian_edge_form,
 )
 from coupling.preconditioners.kernels import is_symmetric
-from test_preconditioner_meshes import StructuredSquare, structured_square
+from test_preconditioner_meshes import structured_square, substructuring
 
 RTOL = 1e-12
-
-
-def substructuring(
-    prob: StructuredSquare, *, edge_form: str = "paper", signorini_weight: float = 1.0
-) -> SubstructuringPreconditioner:
-    """B of METHOD.md section 6 for ``prob``: the paper's edge form (5.1) and B_s
-    unweighted (omega = 1), the definitions the references below read, unless told."""
-    return SubstructuringPreconditioner(
-        prob.stiffness,
-        prob.coarse,
-        prob.x,
-        prob.d,
-        prob.arcs,
-        edge_form=edge_form,
-        signorini_weight=signorini_weight,
-        coarse_space="graph",
-    )
 
 
 # ---------------------------------------------------------------- references

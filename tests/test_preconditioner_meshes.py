@@ -14,7 +14,7 @@ from types import SimpleNamespace
 import numpy as np
 import scipy.sparse as sp
 
-from coupling.preconditioners import SignoriniArc
+from coupling.preconditioners import SignoriniArc, SubstructuringPreconditioner
 
 
 @dataclass
@@ -205,4 +205,21 @@ def structured_square(
         boundary_nodes=boundary_nodes,
         arcs=tuple(arcs),
         signorini_nodes=signorini_nodes,
+    )
+
+
+def substructuring(
+    prob: StructuredSquare, *, edge_form: str = "paper", signorini_weight: float = 1.0
+) -> SubstructuringPreconditioner:
+    """B of METHOD.md section 6 for ``prob``: the paper's edge form (5.1) and B_s
+    unweighted (omega = 1), the definitions the references below read, unless told."""
+    return SubstructuringPreconditioner(
+        prob.stiffness,
+        prob.coarse,
+        prob.x,
+        prob.d,
+        prob.arcs,
+        edge_form=edge_form,
+        signorini_weight=signorini_weight,
+        coarse_space="graph",
     )

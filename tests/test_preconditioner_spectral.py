@@ -14,8 +14,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from coupling.preconditioners import SubstructuringPreconditioner
-from test_preconditioner_meshes import structured_square
+from test_preconditioner_meshes import structured_square, substructuring
 
 try:
     from bem_cpp import steklov_poincare
@@ -46,16 +45,7 @@ def coupled_problem(n: int, ratio: int, signorini_weight: float = 1.0):
         ]
     ).tocsr()
     stiff = sp.block_diag([prob.stiffness, sp.csr_matrix((n_s, n_s))]).tocsr()
-    pc = SubstructuringPreconditioner(
-        prob.stiffness,
-        prob.coarse,
-        prob.x,
-        prob.d,
-        prob.arcs,
-        edge_form="paper",
-        signorini_weight=signorini_weight,
-        coarse_space="graph",
-    )
+    pc = substructuring(prob, signorini_weight=signorini_weight)
     return stiff, trace, s_h, pc, n_nodes
 
 
@@ -127,16 +117,7 @@ def signorini_conditions(ns: list[int], ratio_of_n, edge_form: str = "paper") ->
     conds = []
     for n in ns:
         prob = structured_square(n, ratio_of_n(n))
-        pc = SubstructuringPreconditioner(
-            prob.stiffness,
-            prob.coarse,
-            prob.x,
-            prob.d,
-            prob.arcs,
-            edge_form=edge_form,
-            signorini_weight=1.0,
-            coarse_space="graph",
-        )
+        pc = substructuring(prob, edge_form=edge_form)
         lam = np.linalg.eigvalsh(pc.signorini_metric)
         conds.append(lam[-1] / lam[0])
         pc.destroy()

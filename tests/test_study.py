@@ -1,4 +1,4 @@
-"""``fembem study --quick``: the files are produced, linked and sane (coupling/study/).
+"""``python -m study --quick``: the files are produced, linked and sane (study/).
 
 The quick study runs once for the module (about a minute on 2 cores). The checks are
 on the figures' meaning, not on fixed numbers: iteration counts positive and below
@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from coupling import study
+import study
 
 pytestmark = pytest.mark.slow
 
@@ -51,7 +51,7 @@ def test_every_part_writes_linked_tables_and_plots(out):
             "numpy",
             "scipy",
             "git commit",
-            "fembem study --quick",
+            "python -m study --quick",
         ):
             assert needle in text, (part, needle)
     assert "## Discussion" in readme and (out / "study.json").exists()

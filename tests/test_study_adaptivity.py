@@ -1,4 +1,4 @@
-"""The study's ``adaptivity`` part (coupling/study/adaptivity.py) at a small size: its
+"""The study's ``adaptivity`` part (study/adaptivity.py) at a small size: its
 table, summary, page and figure, and the issue 19 targets it reports on the singular
 L-shape (rates, half the dofs, efficiency band) where the small sizes can show them."""
 from __future__ import annotations
@@ -9,9 +9,9 @@ import re
 import pytest
 from mpi4py import MPI
 
-from coupling.study import QUICK, REGISTRY, ResultWriter, read_csv
-from coupling.study.driver import run_part
-from coupling.study.provenance import provenance
+from study import QUICK, REGISTRY, ResultWriter, read_csv
+from study.driver import run_part
+from study.provenance import provenance
 
 MAX_DOFS = 1200  # levels 65 .. 961 (adaptive), 65 .. 833 (uniform)
 

@@ -167,33 +167,7 @@ def build_parser() -> argparse.ArgumentParser:
     check.add_argument("--json", action="store_true", help="print the report as JSON")
     common(check)
 
-    # the study and the benchmark have their own options: everything after the
-    # subcommand is passed on (``fembem study --help`` shows them)
-    sub.add_parser(
-        "study",
-        add_help=False,
-        help="reproduce the paper's claims: tables and "
-        "plots in docs/study (see `fembem study --help`)",
-    )
-    sub.add_parser(
-        "bench",
-        add_help=False,
-        help="benchmark against PETSc SNES VI and TAO " "(see `fembem bench --help`)",
-    )
     return parser
-
-
-def _run_script_main(relative: str, argv: list[str]) -> int:
-    """``main(argv)`` of a script of this source tree (bench/ is not an installed package)."""
-    import runpy
-
-    path = Path(__file__).resolve().parents[2] / relative
-    if not path.is_file():
-        raise FileNotFoundError(
-            f"{relative} not found: run `fembem bench` from an editable "
-            "install of the source tree (make setup)"
-        )
-    return runpy.run_path(str(path))["main"](argv)
 
 
 def _problem_inputs(args: argparse.Namespace) -> Any:
@@ -444,12 +418,6 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _main(argv: list[str], interrupts: InterruptHandler) -> int:
-    if argv[:1] == ["study"]:
-        from coupling.study import main as study  # loaded only when asked for
-
-        return study(argv[1:])
-    if argv[:1] == ["bench"]:
-        return _run_script_main("bench/peers.py", argv[1:])
     parser = build_parser()
     args = parser.parse_args(argv)
     if args.command is None:

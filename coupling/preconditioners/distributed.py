@@ -254,13 +254,18 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
         local[self._sk] = values_sk
         return local
 
+    def _owned(self, v: np.ndarray, name: str) -> np.ndarray:
+        """``v`` as floats, refused unless it holds the owned entries."""
+        v = np.asarray(v, dtype=float)
+        if v.shape != (self.n_omega,):
+            raise ValueError(
+                f"{name} must have shape ({self.n_omega},), the owned entries, got {v.shape}"
+            )
+        return v
+
     def apply_omega(self, g: np.ndarray) -> np.ndarray:
         """u = B_Omega^{-1} g on the owned entries: the four steps of the module docstring."""
-        g = np.asarray(g, dtype=float)
-        if g.shape != (self.n_omega,):
-            raise ValueError(
-                f"g must have shape ({self.n_omega},), the owned entries, got {g.shape}"
-            )
+        g = self._owned(g, "g")
         x_i = self._interior_factor.solve(g[self._int])
         r = g - self._exchange.reverse_add(self._on_skeleton(self._a_si @ x_i))
         r_sk = self._exchange.forward(r)[self._sk]
@@ -275,11 +280,7 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
 
     def matvec_omega(self, u: np.ndarray) -> np.ndarray:
         """B_Omega u on the owned entries (METHOD.md section 6, B_Sk = Q^T A^0 Q + R^T C R)."""
-        u = np.asarray(u, dtype=float)
-        if u.shape != (self.n_omega,):
-            raise ValueError(
-                f"u must have shape ({self.n_omega},), the owned entries, got {u.shape}"
-            )
+        u = self._owned(u, "u")
         u_sk = self._exchange.forward(u)[self._sk]
         u_i = u[self._int]
         y = self._a_is @ u_sk

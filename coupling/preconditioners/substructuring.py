@@ -174,8 +174,8 @@ class SubstructuringPreconditioner(SignoriniBlock):
         Whether to refuse a ``stiffness`` that is not symmetric (A_SkI is taken as
         A_ISk^T, and A_II is factored by Cholesky). False for a matrix symmetric by
         construction, such as the assembly of the symmetric form (grad u, grad v) that
-        :func:`coupling.preconditioners.build_preconditioner` makes: the check costs
-        about a third of the set-up (0.45 s at 10^6 dofs).
+        :func:`coupling.preconditioners.build_preconditioner` makes: the check is a
+        sizeable part of the set-up (docs/design/preconditioners.md, "Set-up cuts").
 
     Notes
     -----

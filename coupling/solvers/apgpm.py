@@ -25,17 +25,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from coupling.solvers.loop import IterationContext, Loop
 from coupling.solvers.pgpm import energy_increased
-from coupling.solvers.projection import SignoriniProjection
-from coupling.solvers.records import (
-    History,
-    Monitor,
-    RunResult,
-    b_norm2,
-    global_dot,
-    relative_step,
-    set_owned,
-)
+from coupling.solvers.records import RunResult, b_norm2, global_dot, set_owned
 
 __all__ = ["apgpm", "MU_SAFETY", "momentum"]
 
@@ -54,29 +46,15 @@ def momentum(tau: float, mu: float) -> float:
 
 
 def apgpm(
-    functional,
-    preconditioner,
-    projection: SignoriniProjection,
-    u_function,
-    phi0: np.ndarray,
-    *,
-    tau: float,
-    tol: float,
-    max_iterations: int,
-    strong_convexity: float,
-    backtrack: bool = True,
-    monitor: Monitor | None = None,
+    context: IterationContext, phi0: np.ndarray, *, tau: float, strong_convexity: float
 ) -> RunResult:
-    """Run APGPM (module docstring) from (u_function, phi0).
+    """Run APGPM (module docstring) from (context.u, phi0).
 
     Parameters
     ----------
-    functional, preconditioner, projection, u_function, phi0, tau, max_iterations
-        As for :func:`coupling.solvers.pgpm.pgpm`.
-    backtrack, monitor
-        As for :func:`coupling.solvers.pgpm.pgpm`.
-    tol
-        Stop when ||xi_{k+1} - y_k||_B <= tol ||xi_{k+1}||_B.
+    context, phi0, tau
+        As for :func:`coupling.solvers.pgpm.pgpm`; the stopping rule is
+        ||xi_{k+1} - y_k||_B <= tol ||xi_{k+1}||_B.
     strong_convexity
         mu, an estimate of lambda_min(B^{-1} D^2 J_h): the smallest Ritz value of
         :func:`coupling.solvers.lanczos.estimate_extremes`, computed with C0.
@@ -85,7 +63,12 @@ def apgpm(
         raise ValueError(
             f"strong_convexity must be > 0 (lambda_min of B^-1 D^2 J_h), " f"got {strong_convexity}"
         )
-    comm = functional.comm
+    functional, preconditioner, projection = (
+        context.functional,
+        context.preconditioner,
+        context.projection,
+    )
+    comm, u_function = context.comm, context.u
     mu = strong_convexity
     grad = u_function.vector.duplicate()
     u_k = u_function.vector.array_r.copy()
@@ -94,12 +77,8 @@ def apgpm(
     g_u, gradient_at_xi_k = grad.array_r.copy(), True
     b_u = preconditioner.matvec_omega(u_k)  # carried along, as in PGPM
     u_prev, phi_prev, b_prev, with_momentum = u_k, phi_k, b_u, False
-    history = History(monitor)
-    increases = 0
-    reason = f"reached max_iterations = {max_iterations}"
-    converged = False
-    k = 0
-    for k in range(1, max_iterations + 1):
+    loop = Loop(context, "||xi_k+1 - y_k||_B <= {tol:g} ||xi_k+1||_B")
+    for k in loop.steps():
         beta = momentum(tau, mu) if with_momentum else 0.0
         restarted = False
         while True:
@@ -120,10 +99,10 @@ def apgpm(
                 projected = comm.bcast(projected, root=0)
             new_energy = functional.value(u_function, projected.phi)
             increased = energy_increased(energy, new_energy)
-            increases += int(increased)
+            loop.increases += int(increased)
             if increased and beta > 0.0:  # function restart: a plain step from xi_k
                 beta, restarted = 0.0, True
-            elif increased and backtrack and tau > 1e-12:
+            elif increased and context.backtrack and tau > 1e-12:
                 tau *= 0.5
             else:
                 break
@@ -145,18 +124,7 @@ def apgpm(
         gradient_at_xi_k = False
         u_prev, phi_prev, b_prev = u_k, phi_k, b_u
         u_k, phi_k, b_u, energy = u_new, projected.phi, b_new, new_energy
-        relative = relative_step(step2, norm2)
-        history.step(k, energy, relative, phi_k, tau, projection_iterations=projected.iterations)
-        if relative <= tol:
-            converged, reason = True, f"||xi_k+1 - y_k||_B <= {tol:g} ||xi_k+1||_B"
-            break
-    grad.destroy()
-    return history.result(
-        phi_k,
-        converged=converged,
-        reason=reason,
-        iterations=k,
-        energy=energy,
-        tau=tau,
-        energy_increases=increases,
-    )
+        loop.end_step(
+            k, energy, step2, norm2, phi_k, tau, projection_iterations=projected.iterations
+        )
+    return loop.result(phi_k, energy, tau, release=(grad,))

@@ -13,15 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from coupling.solvers.projection import SignoriniProjection
-from coupling.solvers.records import (
-    History,
-    Monitor,
-    RunResult,
-    b_norm2,
-    relative_step,
-    set_owned,
-)
+from coupling.solvers.loop import IterationContext, Loop
+from coupling.solvers.records import RunResult, b_norm2, set_owned
 
 __all__ = ["pgpm", "energy_increased"]
 
@@ -31,19 +24,7 @@ def energy_increased(old: float, new: float) -> bool:
     return new - old > 1e-13 * (abs(old) + abs(new))
 
 
-def pgpm(
-    functional,
-    preconditioner,
-    projection: SignoriniProjection,
-    u_function,
-    phi0: np.ndarray,
-    *,
-    tau: float,
-    tol: float,
-    max_iterations: int,
-    backtrack: bool = True,
-    monitor: Monitor | None = None,
-) -> RunResult:
+def pgpm(context: IterationContext, phi0: np.ndarray, *, tau: float) -> RunResult:
     """Run Algorithm 3.1 ((3.3)-(3.4), in the block form (3.21)-(3.22)).
 
     xi_{k+1} = P(xi_k - tau B^{-1} DJ_h(xi_k)), stopped when
@@ -55,42 +36,30 @@ def pgpm(
 
     Parameters
     ----------
-    functional
-        J_h (:class:`coupling.functional.CoupledFunctional`).
-    preconditioner
-        B: ``apply_omega`` (B_Omega^{-1}), ``matvec_omega`` (B_Omega), ``apply_signorini``
-        (M_s^{-1}) and ``matvec_signorini`` (M_s), on owned entries.
-    projection
-        P_s in the M_s metric.
-    u_function
-        dolfinx Function holding u_0 on entry and u_h on exit.
+    context
+        J_h, B, P_s, the Function u (u_0 on entry, u_h on exit), ``tol``,
+        ``max_iterations``, the monitor and ``backtrack``: when a step would increase
+        J_h (tau too large for the current state), halve tau and redo it; every increase
+        is counted in the result either way.
     phi0
         phi_0 (negative entries are set to 0).
     tau
         Step length (1/C0).
-    tol
-        Stop when ||xi_{k+1} - xi_k||_B <= tol ||xi_{k+1}||_B.
-    max_iterations
-        Iteration cap.
-    backtrack
-        When a step would increase J_h (tau too large for the current state), halve tau
-        and redo it; every increase is counted in the result either way.
-    monitor
-        Called with each :class:`~coupling.solvers.records.IterationRecord`.
     """
-    comm = functional.comm
+    functional, preconditioner, projection = (
+        context.functional,
+        context.preconditioner,
+        context.projection,
+    )
+    comm, u_function = context.comm, context.u
     grad = u_function.vector.duplicate()
     u_k = u_function.vector.array_r.copy()
     phi_k = np.maximum(np.asarray(phi0, dtype=float), 0.0)
     energy, g_phi = functional.value_and_gradient(u_function, phi_k, grad)
     g_u = grad.array_r.copy()
     b_u = preconditioner.matvec_omega(u_k)
-    history = History(monitor)
-    increases = 0
-    reason = f"reached max_iterations = {max_iterations}"
-    converged = False
-    k = 0
-    for k in range(1, max_iterations + 1):
+    loop = Loop(context, "||xi_k+1 - xi_k||_B <= {tol:g} ||xi_k+1||_B")
+    for k in loop.steps():
         r_u = preconditioner.apply_omega(g_u)
         r_phi = preconditioner.apply_signorini(g_phi)
         while True:
@@ -100,8 +69,8 @@ def pgpm(
                 projected = comm.bcast(projected, root=0)
             new_energy, new_g_phi = functional.value_and_gradient(u_function, projected.phi, grad)
             increased = energy_increased(energy, new_energy)
-            increases += int(increased)
-            if not (increased and backtrack and tau > 1e-12):
+            loop.increases += int(increased)
+            if not (increased and context.backtrack and tau > 1e-12):
                 break
             tau *= 0.5
         u_new = u_function.vector.array_r.copy()
@@ -114,18 +83,7 @@ def pgpm(
         step2 = b_norm2(comm, d_u, b_new - b_u, d_phi, m_d_phi)
         g_u, g_phi = grad.array_r.copy(), new_g_phi
         u_k, phi_k, b_u, energy = u_new, projected.phi, b_new, new_energy
-        relative = relative_step(step2, norm2)
-        history.step(k, energy, relative, phi_k, tau, projection_iterations=projected.iterations)
-        if relative <= tol:
-            converged, reason = True, f"||xi_k+1 - xi_k||_B <= {tol:g} ||xi_k+1||_B"
-            break
-    grad.destroy()
-    return history.result(
-        phi_k,
-        converged=converged,
-        reason=reason,
-        iterations=k,
-        energy=energy,
-        tau=tau,
-        energy_increases=increases,
-    )
+        loop.end_step(
+            k, energy, step2, norm2, phi_k, tau, projection_iterations=projected.iterations
+        )
+    return loop.result(phi_k, energy, tau, release=(grad,))

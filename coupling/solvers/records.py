@@ -100,29 +100,6 @@ class History(list):
         contact = int(np.count_nonzero(phi <= 0.0))
         self.add(IterationRecord(iteration, energy, step_norm, contact, tau, **counts))
 
-    def result(
-        self,
-        phi: np.ndarray,
-        *,
-        converged: bool,
-        reason: str,
-        iterations: int,
-        energy: float,
-        tau: float,
-        energy_increases: int,
-    ) -> "RunResult":
-        """The :class:`RunResult` of the run these records belong to."""
-        return RunResult(
-            phi=phi,
-            converged=converged,
-            reason=reason,
-            iterations=iterations,
-            energy=energy,
-            tau=tau,
-            history=list(self),
-            energy_increases=energy_increases,
-        )
-
 
 def global_dot(comm: MPI.Comm, a: np.ndarray, b: np.ndarray) -> float:
     """a^T b over the owned entries of every rank (one Allreduce)."""

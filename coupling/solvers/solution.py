@@ -6,6 +6,7 @@ is built here unless one is passed in; progress goes to the caller's monitor.
 """
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass
 from typing import Any
@@ -25,12 +26,20 @@ from coupling.options import (
 from coupling.preconditioners import Preconditioner, build_preconditioner
 from coupling.solvers.apgpm import apgpm
 from coupling.solvers.lanczos import extremes_at
+from coupling.solvers.loop import IterationContext
 from coupling.solvers.pgpm import pgpm
 from coupling.solvers.projection import SignoriniProjection
 from coupling.solvers.records import IterationRecord, Monitor, RunResult, set_owned
-from coupling.solvers.ssn import semismooth_newton, zero_residual
+from coupling.solvers.ssn import NewtonSettings, semismooth_newton, zero_residual
 
-__all__ = ["Solution", "solve", "build_projection", "step_length", "iterate"]
+__all__ = [
+    "Solution",
+    "solve",
+    "build_projection",
+    "iteration_context",
+    "step_length",
+    "iterate",
+]
 
 
 @dataclass
@@ -90,6 +99,26 @@ def build_projection(preconditioner: Preconditioner, options: SolverOptions) -> 
     )
 
 
+def iteration_context(
+    functional: Any,
+    forms: Any,
+    preconditioner: Preconditioner,
+    u: Any,
+    options: SolverOptions,
+    *,
+    monitor: Monitor | None = None,
+    matrix: Any = None,
+) -> IterationContext:
+    """The :class:`~coupling.solvers.loop.IterationContext` of ``options`` (its ``tol``,
+    ``max_iterations`` and projection, :func:`build_projection`) on J_h = ``functional``
+    (the problem's, or one that wraps it, as the baselines' budget does) from the
+    iterate in ``u``; ``matrix``: a P1 Mat of the caller's for the Jacobians."""
+    projection = build_projection(preconditioner, options)
+    stop = dict(tol=options.tol, max_iterations=options.max_iterations)
+    extra = dict(monitor=monitor, forms=forms, matrix=matrix)
+    return IterationContext(functional, preconditioner, projection, u, **stop, **extra)
+
+
 def step_length(
     functional: Any,
     preconditioner: Preconditioner,
@@ -115,53 +144,41 @@ def step_length(
 
 
 def iterate(
-    functional: Any,
-    forms: Any,
+    context: IterationContext,
     options: SolverOptions,
-    preconditioner: Preconditioner,
-    projection: SignoriniProjection,
-    u: Any,
     phi0: np.ndarray,
     *,
     tau: float,
     lambda_min: float | None,
     warm_start: bool = False,
     residual_scale: float | None = None,
-    monitor: Monitor | None = None,
-    matrix: Any = None,
 ) -> RunResult:
-    """The iteration of ``options.method`` on J_h = ``functional`` from (u, phi0); u_h is
-    left in ``u``. (``functional`` may wrap the problem's, as the baselines' budget does.)
+    """The iteration of ``options.method`` in ``context`` (:func:`iteration_context`)
+    from (context.u, phi0); u_h is left in ``context.u``.
     ``warm_start``: (u, phi0) is a given iterate (nested iteration, adaptivity), from which
     ssn takes Newton steps at once, with CG tolerances relative to ``residual_scale``
     (:func:`coupling.solvers.ssn.zero_residual`; None: the first step's residual) and the
-    quadratic forcing (``SSN_WARM_FORCING_EXPONENT``).
-    ``matrix``: a P1 Mat of the caller's for the Jacobians (default: new ones)."""
-    common = dict(tau=tau, tol=options.tol, max_iterations=options.max_iterations, monitor=monitor)
+    quadratic forcing (``SSN_WARM_FORCING_EXPONENT``)."""
     if options.method == "ssn":
-        return semismooth_newton(
-            functional,
-            preconditioner,
-            projection,
-            forms,
-            u,
-            phi0,
+        newton = NewtonSettings(
             start_steps=SSN_WARM_START_STEPS if warm_start else SSN_START_STEPS,
             cg_max_iterations=SSN_CG_MAX_ITERATIONS,
             forcing_exponent=SSN_WARM_FORCING_EXPONENT if warm_start else SSN_FORCING_EXPONENT,
             residual_scale=residual_scale,
-            matrix=matrix,
-            **common,
         )
+        return semismooth_newton(context, phi0, tau=tau, newton=newton)
     if options.method == "apgpm":
         if lambda_min is None:  # a given step: lambda_min at the start, as C0 would be
             lambda_min = extremes_at(
-                functional, preconditioner, u, phi0.size, steps=LANCZOS_STEPS, matrix=matrix
+                context.functional,
+                context.preconditioner,
+                context.u,
+                phi0.size,
+                steps=LANCZOS_STEPS,
+                matrix=context.matrix,
             )[0]
-        return apgpm(
-            functional, preconditioner, projection, u, phi0, strong_convexity=lambda_min, **common
-        )
-    return pgpm(functional, preconditioner, projection, u, phi0, **common)
+        return apgpm(context, phi0, tau=tau, strong_convexity=lambda_min)
+    return pgpm(context, phi0, tau=tau)
 
 
 def solve(
@@ -217,7 +234,6 @@ def solve(
         timings["preconditioner"] = time.perf_counter() - tic
     try:
         pc = preconditioner
-        projection = build_projection(pc, options)
         u = fem.Function(problem.V, name="u")
         phi0 = np.zeros(problem.n_signorini)
         if initial is not None:
@@ -243,23 +259,20 @@ def solve(
             problem.functional, pc, u, phi0.size, options, matrix=matrix
         )
         timings["step_estimate"] = time.perf_counter() - tic
+        context = iteration_context(
+            problem.functional, problem.forms, pc, u, options, monitor=monitor, matrix=matrix
+        )
         tic = time.perf_counter()
         if initial is not None and options.method == "ssn" and residual_scale is None:
             residual_scale = zero_residual(problem.functional, pc, u, phi0.size, tau)
         run = iterate(
-            problem.functional,
-            problem.forms,
+            context,
             options,
-            pc,
-            projection,
-            u,
             phi0,
             tau=tau,
             lambda_min=lambda_min,
             warm_start=initial is not None,
             residual_scale=residual_scale,
-            monitor=monitor,
-            matrix=matrix,
         )
         timings["solve"] = time.perf_counter() - tic
     finally:
@@ -278,19 +291,12 @@ def solve(
     timings["exterior_flux"] = time.perf_counter() - tic
     return Solution(
         u=u,
-        phi=run.phi,
         contact=run.phi <= 0.0,
         boundary_u=boundary_u,
         ue=ue,
         flux=flux,
-        converged=run.converged,
-        reason=run.reason,
-        iterations=run.iterations,
-        energy=run.energy,
-        tau=run.tau,
         C0=C0,
-        history=run.history,
-        energy_increases=run.energy_increases,
         timings=timings,
         residual_scale=residual_scale,
+        **{f.name: getattr(run, f.name) for f in dataclasses.fields(RunResult)},
     )

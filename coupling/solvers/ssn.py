@@ -42,27 +42,50 @@ so the local convergence of the active-set Newton method is kept.
 """
 from __future__ import annotations
 
-from typing import Callable
+from dataclasses import dataclass, replace
+from typing import Callable, NamedTuple
 
 import numpy as np
 import scipy.linalg
 from mpi4py import MPI
 
-from coupling.functional import CoupledFunctional
 from coupling.options import OVERSOLVE_SAFEGUARD, SSN_JACOBIAN_REUSE_STEP
+from coupling.solvers.loop import IterationContext, Loop
 from coupling.solvers.pgpm import energy_increased, pgpm
 from coupling.solvers.projection import SignoriniProjection
-from coupling.solvers.records import (
-    History,
-    Monitor,
-    RunResult,
-    b_norm2,
-    global_dot,
-    relative_step,
-    set_owned,
-)
+from coupling.solvers.records import RunResult, b_norm2, global_dot, set_owned
 
-__all__ = ["semismooth_newton"]
+__all__ = [
+    "NewtonSettings",
+    "semismooth_newton",
+    "newton_direction",
+    "line_search",
+    "forcing_term",
+    "zero_residual",
+]
+
+
+@dataclass(frozen=True)
+class NewtonSettings:
+    """The settings of an ssn run beside its :class:`~coupling.solvers.loop.IterationContext`
+    (their values: ``coupling.options``, SSN_*).
+
+    Attributes
+    ----------
+    start_steps
+        PGPM steps before the first Newton step.
+    cg_max_iterations
+        CG iterations per Newton step at most.
+    forcing_exponent
+        p of the forcing term min(0.1, (r / r_0)^p) (:func:`forcing_term`).
+    residual_scale
+        r_0; None: the residual of the first Newton step.
+    """
+
+    start_steps: int
+    cg_max_iterations: int
+    forcing_exponent: float
+    residual_scale: float | None = None
 
 
 def _pcg(
@@ -135,25 +158,147 @@ def zero_residual(functional, preconditioner, u_function, n_phi: int, tau: float
     return float(residual)
 
 
-def semismooth_newton(
-    functional: CoupledFunctional,
-    preconditioner,
-    projection: SignoriniProjection,
-    forms,
-    u_function,
-    phi0: np.ndarray,
+class Hessian:
+    """D^2 J_h at the iterate as a product: the interior Jacobian, assembled into a Mat
+    (the context's, or a new one destroyed with this), plus S_h on the boundary block."""
+
+    def __init__(self, context: IterationContext):
+        self.functional, self.forms = context.functional, context.forms
+        self.owns_matrix = context.matrix is None
+        self.matrix = context.forms.create_matrix() if self.owns_matrix else context.matrix
+        self.e_u, self.h_u = self.matrix.createVecRight(), self.matrix.createVecRight()
+
+    def assemble(self, u_function) -> None:
+        """Assemble the interior Jacobian at u."""
+        self.forms.assemble_jacobian(u_function, self.matrix)
+
+    def __call__(self, e_u_owned: np.ndarray, e_phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """D^2 J_h (e_u, e_phi): (owned entries of the u part, the phi part)."""
+        self.e_u.array[:] = e_u_owned
+        h_phi = self.functional.hessian_action(self.matrix, self.e_u, e_phi, self.h_u)
+        return self.h_u.array_r.copy(), h_phi
+
+    def destroy(self) -> None:
+        for obj in (self.e_u, self.h_u) + ((self.matrix,) if self.owns_matrix else ()):
+            obj.destroy()
+
+
+def forcing_term(
+    residual: float,
+    residual0: float,
+    exponent: float,
+    *,
+    tol: float,
+    norm2: float | None,
+    tau: float,
+) -> float:
+    """The CG tolerance of a Newton step: min(0.1, (r / r_0)^p), kept above
+    OVERSOLVE_SAFEGUARD tol ||xi_k||_B / (tau r) once ||xi_k||_B^2 = ``norm2`` is known
+    (no more accuracy than the stopping rule asks for; module docstring)."""
+    forcing = min(0.1, (residual / residual0) ** exponent)
+    if norm2 is not None:
+        forcing = max(forcing, OVERSOLVE_SAFEGUARD * tol * np.sqrt(norm2) / (tau * residual))
+    return forcing
+
+
+def newton_direction(
+    context: IterationContext,
+    hessian: Hessian,
+    phi: np.ndarray,
+    active: np.ndarray,
+    gradient: tuple[np.ndarray, np.ndarray],
+    *,
+    rtol: float,
+    cg_max_iterations: int,
+) -> tuple[np.ndarray, np.ndarray, int]:
+    """The Newton direction of the active-set system (module docstring): dphi_A = -phi_A,
+    and (du, dphi_I) from H_[(u,I),(u,I)] (du, dphi_I) = -(grad_u J, grad_phi J_I)
+    - H_[(u,I),A] dphi_A by CG to ``rtol``, preconditioned by B_Omega^{-1} and
+    M_s[I, I]^{-1}. ``gradient`` = (grad_u J owned, grad_phi J) at the iterate; returns
+    (du owned, dphi, the CG iterations)."""
+    preconditioner, comm = context.preconditioner, context.comm
+    g_u, g_phi = gradient
+    free = ~active
+    metric_free = preconditioner.signorini_metric[np.ix_(free, free)]
+    factor = scipy.linalg.cho_factor(metric_free) if free.any() else None
+
+    def apply_h(p):
+        e_phi = np.zeros(phi.size)
+        e_phi[free] = p[1]
+        h_u_owned, h_phi = hessian(p[0], e_phi)
+        return h_u_owned, h_phi[free]
+
+    def apply_b_inv(r):
+        return (
+            preconditioner.apply_omega(r[0]),
+            scipy.linalg.cho_solve(factor, r[1]) if factor is not None else r[1],
+        )
+
+    d_phi = np.zeros(phi.size)
+    d_phi[active] = -phi[active]
+    h_a_u, h_a_phi = hessian(np.zeros_like(g_u), d_phi)
+    rhs = (-g_u - h_a_u, -g_phi[free] - h_a_phi[free])
+    (d_u, d_phi_free), cg_its = _pcg(
+        apply_h, apply_b_inv, rhs, comm, rtol=rtol, max_iterations=cg_max_iterations
+    )
+    d_phi[free] = d_phi_free
+    if comm.size > 1:  # one copy of the replicated unknowns
+        d_phi = comm.bcast(d_phi, root=0)
+    return d_u, d_phi, cg_its
+
+
+class Trial(NamedTuple):
+    """Where the line search ends: phi, J_h and grad_phi J_h there (u is in the context's
+    Function), the length taken along the Newton direction (0: a PGPM step instead) and
+    the energy increases met on the way."""
+
+    phi: np.ndarray
+    energy: float
+    g_phi: np.ndarray
+    step: float
+    increases: int
+
+
+def line_search(
+    context: IterationContext,
+    grad,
+    u_old: np.ndarray,
+    phi: np.ndarray,
+    energy: float,
+    direction: tuple[np.ndarray, np.ndarray],
     *,
     tau: float,
-    tol: float,
-    max_iterations: int,
-    start_steps: int,
-    cg_max_iterations: int,
-    forcing_exponent: float,
-    residual_scale: float | None = None,
-    monitor: Monitor | None = None,
-    matrix=None,
+) -> Trial:
+    """Backtracking on J_h along the projected path (u + a du, max(0, phi + a dphi)),
+    a = 1, 1/2, ...: the first a that does not increase J_h (``energy`` at (u_old, phi));
+    after 30 halvings one PGPM step (step length tau) from (u_old, phi) instead. The
+    trial's u is left in ``context.u``, grad_u J_h there in ``grad``."""
+    functional, u_function = context.functional, context.u
+    d_u, d_phi = direction
+    increases = 0
+    step = 1.0
+    for _ in range(30):
+        set_owned(u_function, u_old + step * d_u)
+        trial_phi = np.maximum(0.0, phi + step * d_phi)
+        trial_energy, trial_g_phi = functional.value_and_gradient(u_function, trial_phi, grad)
+        if not energy_increased(energy, trial_energy):
+            break
+        increases += 1
+        step *= 0.5
+    else:  # no decrease along the Newton path: fall back to one PGPM step
+        set_owned(u_function, u_old)
+        run = pgpm(replace(context, tol=0.0, max_iterations=1, monitor=None), phi, tau=tau)
+        trial_phi, trial_energy = run.phi, run.energy
+        trial_g_phi = functional.gradient(u_function, trial_phi, grad)
+        step = 0.0
+    return Trial(trial_phi, trial_energy, trial_g_phi, step, increases)
+
+
+def semismooth_newton(
+    context: IterationContext, phi0: np.ndarray, *, tau: float, newton: NewtonSettings
 ) -> RunResult:
-    """Semismooth Newton on the optimality system, started by ``start_steps`` PGPM steps.
+    """Semismooth Newton on the optimality system, started by ``newton.start_steps`` PGPM
+    steps.
 
     The active set is predicted by a PGPM step in the M_s metric with the exact
     projection (module docstring). Stops when that PGPM step from the Newton iterate xi_k
@@ -162,36 +307,31 @@ def semismooth_newton(
     ||xi_{k+1} - xi_k||_B <= tol ||xi_{k+1}||_B with an unchanged active set, or after
     ``max_iterations`` outer steps in all (the PGPM steps included). The records of the
     Newton steps hold their CG iterations and the length taken along the Newton direction.
+    Each step: the direction (:func:`newton_direction`, CG tolerance
+    :func:`forcing_term`), then the line search (:func:`line_search`).
 
     The CG tolerance of a step is min(0.1, (r / r_0)^p) times the residual r (module
-    docstring), p = ``forcing_exponent``, r_0 the residual of the first Newton step, or
-    ``residual_scale`` when given: from a start already close to the solution (nested
-    iteration) r_0 of the problem's own scale (:func:`zero_residual`) keeps the steps
-    from being limited to a contraction of 0.1 each.
+    docstring), p = ``newton.forcing_exponent``, r_0 the residual of the first Newton
+    step, or ``newton.residual_scale`` when given: from a start already close to the
+    solution (nested iteration) r_0 of the problem's own scale (:func:`zero_residual`)
+    keeps the steps from being limited to a contraction of 0.1 each.
 
-    ``matrix`` (optional, the caller's, from ``forms.create_matrix()``) holds the
-    Jacobians of the Newton steps; by default a new Mat is created and destroyed here.
+    ``context.forms`` assembles the Jacobians of the Newton steps, into ``context.matrix``
+    when given (else into a new Mat, destroyed here).
     """
-    comm = functional.comm
-    history = History(monitor)
-    warm = pgpm(
-        functional,
-        preconditioner,
-        projection,
-        u_function,
-        phi0,
-        tau=tau,
-        tol=tol,
-        max_iterations=min(start_steps, max_iterations),
-        monitor=monitor,
+    functional, preconditioner, projection = (
+        context.functional,
+        context.preconditioner,
+        context.projection,
     )
-    history.extend(warm.history)
-    if warm.converged or warm.iterations >= max_iterations:
+    comm, u_function, tol = context.comm, context.u, context.tol
+    start = replace(context, max_iterations=min(newton.start_steps, context.max_iterations))
+    warm = pgpm(start, phi0, tau=tau)
+    if warm.converged or warm.iterations >= context.max_iterations:
         return warm
     phi = warm.phi
     grad = u_function.vector.duplicate()
-    jacobian = forms.create_matrix() if matrix is None else matrix
-    e_u, h_u = jacobian.createVecRight(), jacobian.createVecRight()
+    hessian = Hessian(context)
     energy, g_phi = functional.value_and_gradient(u_function, phi, grad)
     # the exact M_s-projection predicts the active set (an inexact one would blur it); the
     # solver's own projection serves when it is exact (one factor of M_s and of its inverse)
@@ -200,87 +340,47 @@ def semismooth_newton(
         if projection.method == "exact"
         else SignoriniProjection.exact(preconditioner.signorini_metric)
     )
-    residual0 = residual_scale
-    increases = warm.energy_increases
+    residual0 = newton.residual_scale
     active = np.zeros(phi.size, dtype=bool)
     b_u = None  # B_Omega u_k, updated by the steps
     norm2 = relative = None  # ||xi_k||_B^2 and ||xi_k - xi_k-1||_B / ||xi_k||_B after a Newton step
-    reason, converged, k = f"reached max_iterations = {max_iterations}", False, warm.iterations
-    for k in range(warm.iterations + 1, max_iterations + 1):
+    loop = Loop(
+        context,
+        "||xi_k+1 - xi_k||_B <= {tol:g} ||xi_k+1||_B, active set settled",
+        first=warm.iterations + 1,
+        history=warm.history,
+        increases=warm.energy_increases,
+    )
+    for k in loop.steps():
         g_u = grad.array_r.copy()
         predicted, residual = _predict(preconditioner, predictor, comm, g_u, g_phi, phi, tau)
         new_active = predicted <= 0.0
         active_changed = not np.array_equal(new_active, active)
         if norm2 is not None and not active_changed and tau * residual <= tol * np.sqrt(norm2):
             # the PGPM step from xi_k (B-norm tau r) meets the PGPM rule: no further step
-            converged, k = True, k - 1
-            reason = f"||PGPM step at xi_k||_B <= {tol:g} ||xi_k||_B, active set settled"
-            break
-        active, free = new_active, ~new_active
+            loop.stop("||PGPM step at xi_k||_B <= {tol:g} ||xi_k||_B, active set settled", k - 1)
+            continue
+        active = new_active
         residual0 = residual if residual0 is None else residual0
         if relative is None or relative > SSN_JACOBIAN_REUSE_STEP:
-            forms.assemble_jacobian(u_function, jacobian)
-        metric_free = preconditioner.signorini_metric[np.ix_(free, free)]
-        factor = scipy.linalg.cho_factor(metric_free) if free.any() else None
-
-        def hessian(e_u_owned: np.ndarray, e_phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-            e_u.array[:] = e_u_owned
-            h_phi = functional.hessian_action(jacobian, e_u, e_phi, h_u)
-            return h_u.array_r.copy(), h_phi
-
-        def apply_h(p):
-            e_phi = np.zeros(phi.size)
-            e_phi[free] = p[1]
-            h_u_owned, h_phi = hessian(p[0], e_phi)
-            return h_u_owned, h_phi[free]
-
-        def apply_b_inv(r):
-            return (
-                preconditioner.apply_omega(r[0]),
-                scipy.linalg.cho_solve(factor, r[1]) if factor is not None else r[1],
-            )
-
-        d_phi = np.zeros(phi.size)
-        d_phi[active] = -phi[active]
-        h_a_u, h_a_phi = hessian(np.zeros_like(g_u), d_phi)
-        rhs = (-g_u - h_a_u, -g_phi[free] - h_a_phi[free])
-        forcing = min(0.1, (residual / residual0) ** forcing_exponent)
-        if norm2 is not None:  # no more accuracy than the stopping rule asks for
-            forcing = max(forcing, OVERSOLVE_SAFEGUARD * tol * np.sqrt(norm2) / (tau * residual))
-        (d_u, d_phi_free), cg_its = _pcg(
-            apply_h, apply_b_inv, rhs, comm, rtol=forcing, max_iterations=cg_max_iterations
+            hessian.assemble(u_function)
+        rtol = forcing_term(
+            residual, residual0, newton.forcing_exponent, tol=tol, norm2=norm2, tau=tau
         )
-        d_phi[free] = d_phi_free
-        if comm.size > 1:  # one copy of the replicated unknowns
-            d_phi = comm.bcast(d_phi, root=0)
-
+        d_u, d_phi, cg_its = newton_direction(
+            context,
+            hessian,
+            phi,
+            active,
+            (g_u, g_phi),
+            rtol=rtol,
+            cg_max_iterations=newton.cg_max_iterations,
+        )
         u_old = u_function.vector.array_r.copy()
-        step = 1.0
-        for _ in range(30):
-            set_owned(u_function, u_old + step * d_u)
-            trial_phi = np.maximum(0.0, phi + step * d_phi)
-            trial_energy, trial_g_phi = functional.value_and_gradient(u_function, trial_phi, grad)
-            if not energy_increased(energy, trial_energy):
-                break
-            increases += 1
-            step *= 0.5
-        else:  # no decrease along the Newton path: fall back to one PGPM step
-            set_owned(u_function, u_old)
-            run = pgpm(
-                functional,
-                preconditioner,
-                projection,
-                u_function,
-                phi,
-                tau=tau,
-                tol=0.0,
-                max_iterations=1,
-            )
-            trial_phi, trial_energy = run.phi, run.energy
-            trial_g_phi = functional.gradient(u_function, trial_phi, grad)
-            step = 0.0
+        trial = line_search(context, grad, u_old, phi, energy, (d_u, d_phi), tau=tau)
+        loop.increases += trial.increases
         d_u_taken = u_function.vector.array_r - u_old
-        d_phi_taken = trial_phi - phi
+        d_phi_taken = trial.phi - phi
         b_d_u = preconditioner.matvec_omega(d_u_taken)
         step2 = b_norm2(
             comm, d_u_taken, b_d_u, d_phi_taken, preconditioner.matvec_signorini(d_phi_taken)
@@ -288,22 +388,17 @@ def semismooth_newton(
         # B_Omega u_k+1 = B_Omega u_k + B_Omega du: one product per step for both norms
         b_u = preconditioner.matvec_omega(u_old) + b_d_u if b_u is None else b_u + b_d_u
         u_now = u_function.vector.array_r
-        norm2 = b_norm2(comm, u_now, b_u, trial_phi, preconditioner.matvec_signorini(trial_phi))
-        phi, energy, g_phi = trial_phi, trial_energy, trial_g_phi
-        relative = relative_step(step2, norm2)
-        history.step(k, energy, relative, phi, tau, cg_iterations=cg_its, line_search=step)
-        if relative <= tol and not active_changed:
-            converged = True
-            reason = f"||xi_k+1 - xi_k||_B <= {tol:g} ||xi_k+1||_B, active set settled"
-            break
-    for obj in (grad, e_u, h_u) + ((jacobian,) if matrix is None else ()):
-        obj.destroy()
-    return history.result(
-        phi,
-        converged=converged,
-        reason=reason,
-        iterations=k,
-        energy=energy,
-        tau=tau,
-        energy_increases=increases,
-    )
+        norm2 = b_norm2(comm, u_now, b_u, trial.phi, preconditioner.matvec_signorini(trial.phi))
+        phi, energy, g_phi = trial.phi, trial.energy, trial.g_phi
+        relative = loop.end_step(
+            k,
+            energy,
+            step2,
+            norm2,
+            phi,
+            tau,
+            settled=not active_changed,
+            cg_iterations=cg_its,
+            line_search=trial.step,
+        )
+    return loop.result(phi, energy, tau, release=(grad, hessian))

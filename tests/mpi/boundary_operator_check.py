@@ -4,14 +4,13 @@ u at the nodes sorted by coordinates, phi, the flux, the class of S_h) to the .n
 argv[1]; argv[2] cells per side, argv[3] the method."""
 import sys
 
-import numpy as np
 from mpi4py import MPI
 
-from coupling.io.outputs import gather_p1
 from coupling.manufactured import manufactured_problem, square_contact
 from coupling.options import SolverOptions
 from coupling.solvers import solve
 from fem_py.forms import make_material
+from saved import save_solve
 
 comm = MPI.COMM_WORLD
 cells, method, kind = int(sys.argv[2]), sys.argv[3], sys.argv[4]
@@ -19,7 +18,6 @@ problem = manufactured_problem(
     comm, square_contact(), make_material("carstensen"), cells=cells, boundary_operator=kind
 )
 result = solve(problem, SolverOptions(method=method, tol=1e-10, boundary_operator=kind))
-gathered = gather_p1(result.u)
 # bytes of S_h on rank 0, and of the serial operator of the same boundary (H-matrix only)
 nbytes = {}
 if kind == "hmatrix":
@@ -30,20 +28,12 @@ if kind == "hmatrix":
         problem.boundary.nodes, problem.flux_space, compression="hmatrix", tol=HMATRIX_TOL
     )
     nbytes = dict(distributed_bytes=problem.S.nbytes, serial_bytes=serial.nbytes)
-if comm.rank == 0:
-    x, u, _ = gathered
-    key = np.round(x, 12)  # exact ties despite 1e-18 noise in mesh coordinates
-    order = np.lexsort((key[:, 1], key[:, 0]))
-    np.savez(
-        sys.argv[1],
-        iterations=result.iterations,
-        energy=result.energy,
-        x=x[order],
-        u=u[order],
-        phi=result.phi,
-        flux=result.flux,
-        converged=result.converged,
-        operator_class=type(problem.S).__name__,
-        boundary_operator=problem.boundary_operator,
-        **nbytes,
-    )
+save_solve(
+    comm,
+    sys.argv[1],
+    result,
+    flux=result.flux,
+    operator_class=type(problem.S).__name__,
+    boundary_operator=problem.boundary_operator,
+    **nbytes,
+)

@@ -3,15 +3,14 @@
 .npz in argv[1]."""
 import sys
 
-import numpy as np
 from mpi4py import MPI
 
-from coupling.io.outputs import gather_p1
 from coupling.manufactured import manufactured_problem, square_contact
 from coupling.options import SolverOptions
 from coupling.preconditioners import build_preconditioner
 from coupling.solvers import solve
 from fem_py.forms import make_material
+from saved import save_solve
 
 comm = MPI.COMM_WORLD
 cells, preconditioner = int(sys.argv[2]), sys.argv[3]
@@ -20,18 +19,4 @@ options = SolverOptions(preconditioner=preconditioner, tol=1e-10)
 B = build_preconditioner(problem, options)  # built here to report its class
 result = solve(problem, options, preconditioner=B)
 B.destroy()
-gathered = gather_p1(result.u)
-if comm.rank == 0:
-    x, u, _ = gathered
-    key = np.round(x, 12)  # exact ties despite 1e-18 noise in mesh coordinates
-    order = np.lexsort((key[:, 1], key[:, 0]))
-    np.savez(
-        sys.argv[1],
-        iterations=result.iterations,
-        energy=result.energy,
-        x=x[order],
-        u=u[order],
-        phi=result.phi,
-        converged=result.converged,
-        preconditioner_class=type(B).__name__,
-    )
+save_solve(comm, sys.argv[1], result, preconditioner_class=type(B).__name__)
