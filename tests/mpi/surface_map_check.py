@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import json
 import sys
+import tempfile
+from pathlib import Path
 
 import numpy as np
 from dolfinx import fem
@@ -15,6 +17,11 @@ from mpi4py import MPI
 from fem_py.boundary.surface import SurfaceMap
 from fem_py.mesh.ball import ball_mesh
 from fem_py.mesh.box import box_mesh
+from fem_py.mesh.tet_distribute import solid_mesh
+from fem_py.mesh.tet_file import read_tet_msh
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from solid_files import solid_msh  # noqa: E402
 
 
 def _arrays(V, tags, signorini) -> dict:
@@ -46,15 +53,23 @@ def _arrays(V, tags, signorini) -> dict:
 
 
 def compute(comm: MPI.Comm) -> dict:
-    """The surface arrays of the box (n = 4, Signorini on bottom and left) and of the
-    ball (Signorini on its lower hemisphere)."""
+    """The surface arrays of the box (n = 4, Signorini on bottom and left), of the ball
+    (Signorini on its lower hemisphere) and of a gmsh file (an unstructured cube,
+    Signorini on its group "bottom")."""
     msh, tags, names = box_mesh(comm, [0.1, -0.2, 0.3], 0.5, 0.125)
     V = fem.FunctionSpace(msh, ("Lagrange", 1))
     box = _arrays(V, tags, [names["bottom"], names["left"]])
     msh, tags, names = ball_mesh(comm, [0.0, 0.1, 0.0], 0.4, 0.15)
     V = fem.FunctionSpace(msh, ("Lagrange", 1))
     ball = _arrays(V, tags, [names["bottom"]])
-    return {"box": box, "ball": ball}
+    solid = None
+    if comm.rank == 0:
+        with tempfile.TemporaryDirectory() as tmp:
+            solid = read_tet_msh(solid_msh(Path(tmp) / "cube.msh", h=0.3))
+    msh, tags, names = solid_mesh(comm, solid)
+    V = fem.FunctionSpace(msh, ("Lagrange", 1))
+    file = _arrays(V, tags, [names["bottom"]])
+    return {"box": box, "ball": ball, "file": file}
 
 
 if __name__ == "__main__":
