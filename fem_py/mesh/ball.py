@@ -20,6 +20,7 @@ import numpy as np
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
+from fem_py.mesh.args3d import checked_point, checked_positive
 from fem_py.parallel import run_on_root
 
 __all__ = ["BALL_FACES", "EQUATOR_TAG", "VOLUME_TAG", "ball_mesh", "check_ball"]
@@ -34,24 +35,11 @@ VOLUME_TAG = 1
 def check_ball(center: Any, radius: Any, h: Any) -> tuple[np.ndarray, float, float]:
     """(center (3,), radius, h) as finite numbers with radius, h > 0 and h <= radius;
     else a one-line ``ValueError`` naming the key at fault."""
-    try:
-        c = np.asarray([float(v) for v in center], dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(f"center must be a point [x, y, z], got {center!r}") from None
-    if c.shape != (3,) or not np.all(np.isfinite(c)):
-        raise ValueError(f"center must be a point [x, y, z] of finite numbers, got {center!r}")
-    out = []
-    for key, value in (("radius", radius), ("h", h)):
-        try:
-            v = float(value)
-        except (TypeError, ValueError):
-            raise ValueError(f"{key} must be a positive number, got {value!r}") from None
-        if not (np.isfinite(v) and v > 0):
-            raise ValueError(f"{key} must be a positive number, got {value!r}")
-        out.append(v)
-    if out[1] > out[0]:
-        raise ValueError(f"h = {out[1]:g} exceeds the radius {out[0]:g}; take h <= radius")
-    return c, out[0], out[1]
+    c = checked_point(center)
+    radius, h = checked_positive("radius", radius), checked_positive("h", h)
+    if h > radius:
+        raise ValueError(f"h = {h:g} exceeds the radius {radius:g}; take h <= radius")
+    return c, radius, h
 
 
 def ball_mesh(

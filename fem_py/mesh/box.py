@@ -19,6 +19,8 @@ import numpy as np
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
+from fem_py.mesh.args3d import checked_point, checked_positive
+
 __all__ = ["BOX_FACES", "BoxCounts", "box_counts", "box_mesh", "check_box", "cubes_per_side"]
 
 #: Face name -> (coordinate axis, 0 for its minimum / 1 for its maximum); the facet tag of
@@ -66,22 +68,8 @@ def box_counts(n: int) -> BoxCounts:
 def check_box(center: Any, width: Any, h: Any) -> tuple[np.ndarray, float, float]:
     """(center (3,), width, h) as finite numbers with width, h > 0; else a one-line
     ``ValueError`` naming the key at fault."""
-    try:
-        c = np.asarray([float(v) for v in center], dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(f"center must be a point [x, y, z], got {center!r}") from None
-    if c.shape != (3,) or not np.all(np.isfinite(c)):
-        raise ValueError(f"center must be a point [x, y, z] of finite numbers, got {center!r}")
-    out = []
-    for key, value in (("width", width), ("h", h)):
-        try:
-            v = float(value)
-        except (TypeError, ValueError):
-            raise ValueError(f"{key} must be a positive number, got {value!r}") from None
-        if not (np.isfinite(v) and v > 0):
-            raise ValueError(f"{key} must be a positive number, got {value!r}")
-        out.append(v)
-    return c, out[0], out[1]
+    c = checked_point(center)
+    return c, checked_positive("width", width), checked_positive("h", h)
 
 
 def box_mesh(
