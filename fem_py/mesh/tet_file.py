@@ -10,9 +10,10 @@ with the ``[geometry]`` key at fault.
 """
 from __future__ import annotations
 
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Iterator
 
 import numpy as np
 
@@ -25,7 +26,7 @@ from fem_py.mesh.tet_checks import (
     file_dimension,
 )
 
-__all__ = ["SolidFile", "check_solid", "msh_dimension", "read_tet_msh"]
+__all__ = ["SolidFile", "check_solid", "msh_dimension", "opened_msh", "read_tet_msh"]
 
 #: gmsh element types: 4 the 4-node tetrahedron, 2 the 3-node triangle.
 _TETRAHEDRON, _TRIANGLE = 4, 2
@@ -47,8 +48,11 @@ class SolidFile:
     source: str = "the mesh"
 
 
-def _open(path: str | Path) -> Any:
-    """A gmsh session with ``path`` open (the caller finalises it), or a one-line error."""
+@contextmanager
+def opened_msh(path: str | Path) -> Iterator[Any]:
+    """``with opened_msh(path) as gmsh:`` a gmsh session with the mesh file ``path`` open
+    (one rank; finalised on leaving), or a one-line ``mesh: ...`` error for a missing or
+    unreadable file. For any reader of gmsh files, 2D or 3D."""
     import gmsh
 
     path = Path(path)
@@ -59,16 +63,18 @@ def _open(path: str | Path) -> Any:
             "to the configuration file's folder)"
         )
     gmsh.initialize(readConfigFiles=False)
-    gmsh.option.setNumber("General.Terminal", 0)
     try:
-        gmsh.open(name)
-    except Exception as err:  # noqa: BLE001 - gmsh raises a bare Exception
+        gmsh.option.setNumber("General.Terminal", 0)
+        try:
+            gmsh.open(name)
+        except Exception as err:  # noqa: BLE001 - gmsh raises a bare Exception
+            raise ValueError(
+                f"mesh: {name!r} is not a gmsh mesh file ({str(err).splitlines()[0]}); save "
+                "the mesh from gmsh in MSH 2.2 or 4.1 format"
+            ) from None
+        yield gmsh
+    finally:
         gmsh.finalize()
-        raise ValueError(
-            f"mesh: {name!r} is not a gmsh mesh file ({str(err).splitlines()[0]}); save the "
-            "mesh from gmsh in MSH 2.2 or 4.1 format"
-        ) from None
-    return gmsh
 
 
 def _kinds_and_nodes(gmsh: Any) -> tuple[list[ElementKind], np.ndarray, np.ndarray]:
@@ -85,12 +91,9 @@ def _kinds_and_nodes(gmsh: Any) -> tuple[list[ElementKind], np.ndarray, np.ndarr
 def msh_dimension(path: str | Path) -> int:
     """3 for a file of linear tetrahedra, 2 for plane triangles (``fem_py.mesh.
     tet_checks.file_dimension``); call on one rank."""
-    gmsh = _open(path)
-    try:
+    with opened_msh(path) as gmsh:
         kinds, _, x = _kinds_and_nodes(gmsh)
         return file_dimension(kinds, x, repr(str(path)))
-    finally:
-        gmsh.finalize()
 
 
 def read_tet_msh(path: str | Path) -> SolidFile:
@@ -103,8 +106,7 @@ def read_tet_msh(path: str | Path) -> SolidFile:
         higher-order or non-tetrahedral volume elements.
     """
     name = repr(str(path))
-    gmsh = _open(path)
-    try:
+    with opened_msh(path) as gmsh:
         kinds, tags, x = _kinds_and_nodes(gmsh)
         if file_dimension(kinds, x, name) != 3:
             raise ValueError(
@@ -127,8 +129,6 @@ def read_tet_msh(path: str | Path) -> SolidFile:
                 found = [gmsh.model.mesh.getElementsByType(_TETRAHEDRON, e)[0] for e in entities]
                 found = np.concatenate(found) if found else np.zeros(0, cell_tags.dtype)
                 volumes[key] = np.flatnonzero(np.isin(cell_tags, found))
-    finally:
-        gmsh.finalize()
     # keep the nodes the tetrahedra use (gmsh also stores the geometry's points)
     used = np.unique(cells)
     remap = np.full(len(tags), -1, dtype=np.int64)
