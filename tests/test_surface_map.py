@@ -1,8 +1,8 @@
 """The 3D boundary map fem_py.boundary.surface.SurfaceMap (METHOD.md sections 4, 11):
 the surface of the box and of the ball, oriented out of Omega, checked against exact
 areas, volumes and normals; the Signorini nodes; T, E, gather and scatter_add; the
-refusal of surfaces that are not one closed oriented surface; and the same arrays on 1
-and 2 ranks (tests/mpi/surface_map_check.py)."""
+refusal of surfaces that are not one closed oriented surface; and the same arrays on 1,
+2 and 3 ranks (tests/mpi/surface_map_check.py)."""
 from __future__ import annotations
 
 import json
@@ -196,17 +196,22 @@ def test_bad_signorini_argument():
 
 # ------------------------------------------------------------------- 1 rank = 2 ranks
 @pytest.mark.mpi
-def test_one_rank_equals_two(tmp_path):
+def test_one_rank_equals_two_and_three(tmp_path):
     result = {}
-    for ranks in (1, 2):
+    for ranks in (1, 2, 3):
         out = tmp_path / f"surface{ranks}.json"
         run_mpi(ranks, str(SCRIPT), str(out), timeout=240)
         result[ranks] = json.loads(out.read_text())
-    ser, par = result[1], result[2]
+    ser = result[1]
+    for ranks, par in ((2, result[2]), (3, result[3])):
+        _assert_same(ser, par, ranks)
+
+
+def _assert_same(ser, par, ranks):
     assert set(par) == set(ser)
     for name in ser:
         p, s = par[name], ser[name]
-        assert p["ranks"] == 2 and s["ranks"] == 1
+        assert p["ranks"] == ranks and s["ranks"] == 1
         # integer arrays and the coordinates (copies of the mesh input): equal
         for key in ("nodes", "triangles", "triangle_tags", "signorini", "on_signorini"):
             assert np.array_equal(p[key], s[key]), (name, key)
@@ -217,3 +222,6 @@ def test_one_rank_equals_two(tmp_path):
         # nodes (round-off of the interpolation), and T^T T 1 counted once per node
         assert np.allclose(p["trace"], s["trace"], rtol=1e-14, atol=1e-14), name
         assert p["scatter_sum"] == s["scatter_sum"] == len(s["nodes"]), name
+    refused = par["box"]["refused_everywhere"]
+    assert len(refused) == ranks and len(set(refused)) == 1
+    assert refused[0].startswith("signorini: facet tag 99 is on no boundary triangle")

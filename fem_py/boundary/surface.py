@@ -101,10 +101,11 @@ class SurfaceMap(BoundaryVectors):
         local = _owned_triangles(V, facet_tags)
         parts = gather_to_root(msh.comm, local)
         n_dofs = V.dofmap.index_map.size_global
+        # a ValueError of rank 0 (a surface that is not closed, an unknown Signorini
+        # tag) is raised as it is on every rank
         arrays = broadcast_from_root(
             msh.comm,
             lambda: surface_arrays(*(np.concatenate(a) for a in zip(*parts)), wanted, n_dofs),
-            error_prefix="surface map",
         )
         for key, value in arrays.items():
             setattr(self, key, value)

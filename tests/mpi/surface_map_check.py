@@ -59,6 +59,12 @@ def compute(comm: MPI.Comm) -> dict:
     msh, tags, names = box_mesh(comm, [0.1, -0.2, 0.3], 0.5, 0.125)
     V = fem.FunctionSpace(msh, ("Lagrange", 1))
     box = _arrays(V, tags, [names["bottom"], names["left"]])
+    try:  # an unknown Signorini tag: the same one-line ValueError on every rank
+        SurfaceMap(V, tags, [99])
+        refused = ""
+    except ValueError as err:
+        refused = str(err)
+    box["refused_everywhere"] = comm.allgather(refused)
     msh, tags, names = ball_mesh(comm, [0.0, 0.1, 0.0], 0.4, 0.15)
     V = fem.FunctionSpace(msh, ("Lagrange", 1))
     ball = _arrays(V, tags, [names["bottom"]])
