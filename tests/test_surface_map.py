@@ -109,6 +109,19 @@ def test_trace_extension_gather_scatter():
         s.scatter_add(w[:-1], v)
 
 
+def test_interpolate_boundary():
+    _, _, s = _box(3)
+    x, y, z = s.nodes.T
+    assert np.array_equal(s.interpolate_boundary(lambda x, y, z: x + 2 * y - z), x + 2 * y - z)
+    values = s.interpolate_boundary(lambda x, y, z, nx, ny, nz: nz)
+    assert np.array_equal(values, s.node_normals[:, 2])
+    assert np.array_equal(s.interpolate_boundary(2), np.full(s.n_gamma, 2.0))
+    with pytest.raises(ValueError, match="number or a callable"):
+        s.interpolate_boundary("x")
+    with pytest.raises(ValueError, match="not finite"):
+        s.interpolate_boundary(lambda x, y, z: np.where(x > 0, np.nan, 0.0))
+
+
 def test_ball_surface():
     radius, h = 0.5, 0.15
     msh, tags, names = ball_mesh(COMM, CENTER, radius, h)

@@ -29,7 +29,8 @@ coordinates, orders and checks them, and broadcasts; every rank holds the same a
 """
 from __future__ import annotations
 
-from typing import Any
+import inspect
+from typing import Any, Callable
 
 import numpy as np
 import scipy.sparse as sp
@@ -113,6 +114,31 @@ class SurfaceMap(BoundaryVectors):
     @property
     def n_triangles(self) -> int:
         return len(self.triangles)
+
+    def interpolate_boundary(self, expr: Callable | float) -> np.ndarray:
+        """Nodal values (in the map's order) of boundary data such as u0.
+
+        ``expr`` is a number or a callable on arrays, ``f(x, y, z)`` or
+        ``f(x, y, z, nx, ny, nz)`` with (nx, ny, nz) the node normals (text goes through
+        the expressions module's ``numpy_function`` first).
+        """
+        if callable(expr):
+            try:
+                nargs = len(inspect.signature(expr).parameters)
+            except (TypeError, ValueError):
+                nargs = 6
+            args = (*self.nodes.T, *self.node_normals.T)
+            out = expr(*args[: 3 if nargs == 3 else 6])
+        elif isinstance(expr, (int, float, np.floating, np.integer)) and not isinstance(expr, bool):
+            out = float(expr)
+        else:
+            raise ValueError(
+                f"boundary data must be a number or a callable, got {type(expr).__name__}"
+            )
+        out = np.broadcast_to(np.asarray(out, dtype=float), (self.n_gamma,)).copy()
+        if not np.all(np.isfinite(out)):
+            raise ValueError("boundary data is not finite at some boundary node; check it")
+        return out
 
 
 def _signorini_tags(signorini: Any) -> tuple[int, ...] | None:
