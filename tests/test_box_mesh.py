@@ -12,6 +12,7 @@ from dolfinx import fem
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
+from fem_py.mesh.args3d import signorini_tags
 from fem_py.mesh.ball import BALL_FACES, EQUATOR_TAG, ball_mesh, check_ball
 from fem_py.mesh.box import BOX_FACES, box_counts, box_mesh, check_box, cubes_per_side
 
@@ -114,3 +115,15 @@ def test_bad_ball_one_line(args, word):
     with pytest.raises(ValueError) as err:
         check_ball(*args)
     assert str(err.value).startswith(word) and "\n" not in str(err.value)
+
+
+def test_signorini_names_to_tags():
+    names = {face: k + 1 for k, face in enumerate(BOX_FACES)}
+    assert signorini_tags(["top", "bottom", "top"], names) == (1, 2)
+    assert signorini_tags("left", names) == (3,)
+    assert signorini_tags("all", names) == "all" and signorini_tags([], names) == ()
+    assert signorini_tags([7], {"7": 2}) == (2,)
+    for bad, word in ((["botom"], "unknown face or group 'botom'"), (["all", "top"], "combined")):
+        with pytest.raises(ValueError, match=word) as err:
+            signorini_tags(bad, names)
+        assert str(err.value).startswith("signorini:") and "\n" not in str(err.value)
