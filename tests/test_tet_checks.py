@@ -15,6 +15,7 @@ from fem_py.mesh.tet_checks import (
     check_body,
     check_signorini_groups,
     file_dimension,
+    row_codes,
 )
 from fem_py.mesh.tet_file import check_solid, msh_dimension, read_tet_msh
 from solid_files import solid_msh
@@ -188,3 +189,10 @@ def test_missing_and_unreadable_files(tmp_path):
     with pytest.raises(ValueError, match="not a gmsh mesh file") as err:
         read_tet_msh(bad)
     _one_line(err, "mesh")
+
+
+@pytest.mark.parametrize("scale", [1, 10**7])  # int64 codes, then the rows' bytes
+def test_row_codes(scale):
+    rows = np.array([[1, 2, 3], [3, 2, 1], [1, 2, 3], [0, 0, 0]]) * scale
+    codes = row_codes(rows)
+    assert codes[0] == codes[2] and len(np.unique(codes)) == 3

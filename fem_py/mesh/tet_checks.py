@@ -31,6 +31,7 @@ __all__ = [
     "check_body",
     "check_signorini_groups",
     "file_dimension",
+    "row_codes",
 ]
 
 #: The faces of a tetrahedron (a, b, c, d), each ordered so that its normal (right-hand
@@ -51,12 +52,14 @@ class ElementKind(NamedTuple):
 class BodyFacts:
     """The pieces of a tetrahedral mesh: ``bodies`` (cells joined through faces),
     ``surfaces`` (boundary triangles joined through edges), the Euler characteristic of
-    the surface and the number of edges on other than two boundary triangles."""
+    the surface, the number of edges on other than two boundary triangles and of faces
+    on more than two tetrahedra."""
 
     bodies: int
     surfaces: int
     euler_characteristic: int
     nonmanifold_edges: int
+    overlapping_faces: int
 
 
 def file_dimension(kinds: Iterable[ElementKind], x: np.ndarray, source: str) -> int:
@@ -128,8 +131,9 @@ def boundary_faces(cells: np.ndarray, x: np.ndarray | None = None) -> tuple[np.n
         cells[negative] = cells[negative][:, [0, 2, 1, 3]]
     faces = cells[:, _FACES].reshape(-1, 3)
     owner = np.repeat(np.arange(len(cells)), 4)
-    key = np.sort(faces, axis=1)
-    _, inverse, counts = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+    _, inverse, counts = np.unique(
+        row_codes(np.sort(faces, axis=1)), return_inverse=True, return_counts=True
+    )
     inverse = inverse.ravel()
     once = counts[inverse] == 1
     twice = np.flatnonzero(counts[inverse] == 2)
@@ -138,15 +142,28 @@ def boundary_faces(cells: np.ndarray, x: np.ndarray | None = None) -> tuple[np.n
     return faces[once], owner[once], inner, int(np.sum(counts > 2))
 
 
+def row_codes(rows: np.ndarray) -> np.ndarray:
+    """One number per row of non-negative ints (k, r): equal rows, equal numbers (int64
+    while the rows fit, else the rows' bytes)."""
+    rows = np.ascontiguousarray(rows, dtype=np.int64)
+    base = int(rows.max(initial=0)) + 1
+    if base ** rows.shape[1] < 2**63:
+        code = np.zeros(len(rows), dtype=np.int64)
+        for column in rows.T:
+            code = code * base + column
+        return code
+    return rows.view(np.dtype((np.void, rows.dtype.itemsize * rows.shape[1]))).ravel()
+
+
 def body_facts(cells: np.ndarray) -> BodyFacts:
     """Count the bodies and surfaces of a tetrahedral mesh (module docstring)."""
     cells = np.asarray(cells, dtype=np.int64)
     n = len(cells)
-    faces, _, inner, _ = boundary_faces(cells)
+    faces, _, inner, over = boundary_faces(cells)
     graph = sp.csr_matrix((np.ones(len(inner)), (inner[:, 0], inner[:, 1])), shape=(n, n))
     bodies = connected_components(graph, directed=False)[0] if n else 0
     edges = np.sort(faces[:, [[0, 1], [1, 2], [2, 0]]].reshape(-1, 2), axis=1)
-    _, edge_id, per_edge = np.unique(edges, axis=0, return_inverse=True, return_counts=True)
+    _, edge_id, per_edge = np.unique(row_codes(edges), return_inverse=True, return_counts=True)
     edge_id = edge_id.ravel()
     m = len(faces)
     # triangles joined through their edges: triangle -> edge incidence, squared
@@ -160,6 +177,7 @@ def body_facts(cells: np.ndarray) -> BodyFacts:
         surfaces=int(surfaces),
         euler_characteristic=int(n_vertices - len(per_edge) + m),
         nonmanifold_edges=int(np.sum(per_edge != 2)),
+        overlapping_faces=over,
     )
 
 
@@ -176,12 +194,12 @@ def check_body(cells: np.ndarray, source: str) -> BodyFacts:
     cells = np.asarray(cells, dtype=np.int64)
     if cells.ndim != 2 or cells.shape[1] != 4 or len(cells) == 0:
         raise ValueError(f"mesh: {source} holds no tetrahedra; give a 3D tetrahedral mesh")
-    if boundary_faces(cells)[3]:
+    facts = body_facts(cells)
+    if facts.overlapping_faces:
         raise ValueError(
             f"mesh: {source} has faces shared by more than two tetrahedra (overlapping "
             "cells); remesh the volume"
         )
-    facts = body_facts(cells)
     if facts.bodies > 1:
         raise ValueError(
             f"mesh: {source} holds {facts.bodies} separate bodies; the exterior problem "
@@ -266,6 +284,5 @@ def _rows_in(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Mask of the rows of ``a`` (k, 3) that are rows of ``b`` (j, 3), both sorted rows."""
     if len(a) == 0 or len(b) == 0:
         return np.zeros(len(a), dtype=bool)
-    base = int(max(a.max(), b.max())) + 1
-    code = lambda r: (r[:, 0] * base + r[:, 1]) * base + r[:, 2]  # noqa: E731
-    return np.isin(code(a), code(b))
+    codes = row_codes(np.vstack([a, b]))
+    return np.isin(codes[: len(a)], codes[len(a) :])

@@ -17,7 +17,7 @@ from dolfinx import cpp
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
-from fem_py.mesh.tet_checks import boundary_faces
+from fem_py.mesh.tet_checks import boundary_faces, row_codes
 from fem_py.mesh.tet_file import SolidFile
 from fem_py.parallel import run_on_root
 
@@ -44,17 +44,18 @@ def group_tags(
         ``mesh: ...`` for an unknown group or a boundary triangle in two groups.
     """
     keys = list(solid.surfaces) if groups is None else [str(g) for g in groups]
+    unknown = [k for k in keys if k not in solid.surfaces]
+    if unknown:
+        raise ValueError(f"mesh: {solid.source} has no physical surface group {unknown[0]!r}")
     boundary = np.sort(boundary_faces(solid.cells)[0], axis=1)
-    base = len(solid.x) + 1
-    code = lambda r: (r[:, 0] * base + r[:, 1]) * base + r[:, 2]  # noqa: E731
-    boundary_code = code(boundary)
+    surfaces = [np.sort(np.reshape(solid.surfaces[k], (-1, 3)), axis=1) for k in keys]
+    codes = row_codes(np.vstack([boundary, *surfaces]).astype(np.int64))
+    boundary_code, offset = codes[: len(boundary)], len(boundary)
     owner = np.full(len(boundary), -1, dtype=np.int64)
     names: dict[str, int] = {}
     for k, key in enumerate(keys):
-        if key not in solid.surfaces:
-            raise ValueError(f"mesh: {solid.source} has no physical surface group {key!r}")
-        tri = np.sort(np.asarray(solid.surfaces[key], dtype=np.int64).reshape(-1, 3), axis=1)
-        on = np.isin(boundary_code, code(tri))
+        on = np.isin(boundary_code, codes[offset : offset + len(surfaces[k])])
+        offset += len(surfaces[k])
         clash = on & (owner >= 0)
         if clash.any():
             other = keys[int(owner[clash][0])]
