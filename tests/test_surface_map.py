@@ -11,6 +11,7 @@ import math
 import numpy as np
 import pytest
 from dolfinx import fem
+from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
 from conftest import ROOT, run_mpi
@@ -197,6 +198,15 @@ def test_missing_signorini_tag():
     tri, x = _tetrahedron()
     with pytest.raises(ValueError, match="facet tag 7 is on no boundary triangle"):
         surface_arrays(*_arrays(tri, x), (7,), 4)
+
+
+def test_needs_tetrahedra_and_p1():
+    square = dmesh.create_unit_square(COMM, 2, 2)
+    with pytest.raises(ValueError, match="linear tetrahedra"):
+        SurfaceMap(fem.FunctionSpace(square, ("Lagrange", 1)), None)
+    V, _, _ = _box(1)
+    with pytest.raises(ValueError, match="scalar P1"):
+        SurfaceMap(fem.FunctionSpace(V.mesh, ("Lagrange", 2)), None)
 
 
 def test_bad_signorini_argument():

@@ -95,8 +95,11 @@ class SurfaceMap(BoundaryVectors):
     def __init__(self, V: fem.FunctionSpace, facet_tags: Any, signorini: Any = ()):
         wanted = _signorini_tags(signorini)
         msh = V.mesh
-        if msh.topology.dim != 3 or msh.topology.cell_type != dmesh.CellType.tetrahedron:
-            raise ValueError("SurfaceMap needs a mesh of tetrahedra")
+        if msh.topology.cell_type != dmesh.CellType.tetrahedron:
+            raise ValueError("SurfaceMap needs a mesh of linear tetrahedra")
+        n_cells = msh.topology.index_map(3).size_local + msh.topology.index_map(3).num_ghosts
+        if msh.geometry.dofmap.array.size != 4 * n_cells:
+            raise ValueError("SurfaceMap needs a mesh of linear tetrahedra")
         if V.dofmap.index_map_bs != 1 or V.dofmap.dof_layout.num_dofs != 4:
             raise ValueError("SurfaceMap needs the scalar P1 space of the mesh")
         local = _owned_triangles(V, facet_tags)
