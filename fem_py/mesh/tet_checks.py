@@ -102,7 +102,8 @@ def file_dimension(kinds: Iterable[ElementKind], x: np.ndarray, source: str) -> 
     if np.abs(x[:, 2]).max(initial=0.0) > 1e-10 * scale:
         raise ValueError(
             f"mesh: {source} holds a surface mesh only (triangles in space, no "
-            "tetrahedra); mesh the volume too (gmsh: Mesh > 3D) and save again"
+            "tetrahedra); mesh the volume too (gmsh: Mesh > 3D) and, if the file has "
+            "physical groups, add a physical volume (gmsh saves only grouped elements)"
         )
     return 2
 
