@@ -1,0 +1,160 @@
+"""Users' own 3D meshes: a gmsh .msh file (MSH 2.2 or 4.1) of linear tetrahedra with
+named physical groups, read and checked on one rank (METHOD.md section 11).
+
+:func:`read_tet_msh` reads the tetrahedra, the physical surface groups (as boundary
+triangles, for the Signorini patches) and the physical volume groups; a group without
+a name is called by its number, as text. :func:`check_solid` applies the checks of
+``fem_py.mesh.tet_checks``: one body with a connected exterior, Signorini names that are
+surface groups on the boundary. Errors are one-line ``ValueError`` messages starting
+with the ``[geometry]`` key at fault.
+"""
+from __future__ import annotations
+
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Iterator
+
+import numpy as np
+
+from fem_py.mesh.tet_checks import (
+    BodyFacts,
+    ElementKind,
+    boundary_faces,
+    check_body,
+    check_signorini_groups,
+    file_dimension,
+)
+
+__all__ = ["SolidFile", "check_solid", "msh_dimension", "opened_msh", "read_tet_msh"]
+
+#: gmsh element types: 4 the 4-node tetrahedron, 2 the 3-node triangle.
+_TETRAHEDRON, _TRIANGLE = 4, 2
+
+
+@dataclass
+class SolidFile:
+    """A tetrahedral mesh with its physical groups (node numbers 0 .. n-1).
+
+    ``surfaces``: group key (its name, or its tag as text when unnamed) -> (k, 3) node
+    triples; ``volumes``: group key -> the indices of its cells; ``source``: what to call
+    it in messages (the file name).
+    """
+
+    x: np.ndarray
+    cells: np.ndarray
+    surfaces: dict[str, np.ndarray] = field(default_factory=dict)
+    volumes: dict[str, np.ndarray] = field(default_factory=dict)
+    source: str = "the mesh"
+
+
+@contextmanager
+def opened_msh(path: str | Path) -> Iterator[Any]:
+    """``with opened_msh(path) as gmsh:`` a gmsh session with the mesh file ``path`` open
+    (one rank; finalised on leaving), or a one-line ``mesh: ...`` error for a missing or
+    unreadable file. For any reader of gmsh files, 2D or 3D."""
+    import gmsh
+
+    path = Path(path)
+    name = str(path)
+    if not path.is_file():
+        raise ValueError(
+            f"mesh: file {name!r} not found; give the path of a gmsh .msh file (relative "
+            "to the configuration file's folder)"
+        )
+    gmsh.initialize(readConfigFiles=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        try:
+            gmsh.open(name)
+        except Exception as err:  # noqa: BLE001 - gmsh raises a bare Exception
+            raise ValueError(
+                f"mesh: {name!r} is not a gmsh mesh file ({str(err).splitlines()[0]}); save "
+                "the mesh from gmsh in MSH 2.2 or 4.1 format"
+            ) from None
+        yield gmsh
+    finally:
+        gmsh.finalize()
+
+
+def _kinds_and_nodes(gmsh: Any) -> tuple[list[ElementKind], np.ndarray, np.ndarray]:
+    """The element kinds of the open model, its node tags (sorted) and coordinates."""
+    kinds = [
+        ElementKind(*gmsh.model.mesh.getElementProperties(int(t))[:4])
+        for t in gmsh.model.mesh.getElementTypes()
+    ]
+    tags, xyz, _ = gmsh.model.mesh.getNodes()
+    order = np.argsort(tags)
+    return kinds, np.asarray(tags)[order], xyz.reshape(-1, 3)[order]
+
+
+def msh_dimension(path: str | Path) -> int:
+    """3 for a file of linear tetrahedra, 2 for plane triangles (``fem_py.mesh.
+    tet_checks.file_dimension``); call on one rank."""
+    with opened_msh(path) as gmsh:
+        kinds, _, x = _kinds_and_nodes(gmsh)
+        return file_dimension(kinds, x, repr(str(path)))
+
+
+def read_tet_msh(path: str | Path) -> SolidFile:
+    """Read a gmsh mesh file of linear tetrahedra and its physical groups (one rank).
+
+    Raises
+    ------
+    ValueError
+        ``mesh: ...``: a missing or unreadable file, a 2D file, a surface-only file,
+        higher-order or non-tetrahedral volume elements.
+    """
+    name = repr(str(path))
+    with opened_msh(path) as gmsh:
+        kinds, tags, x = _kinds_and_nodes(gmsh)
+        if file_dimension(kinds, x, name) != 3:
+            raise ValueError(
+                f"mesh: {name} is a 2D mesh (plane triangles); give a mesh of tetrahedra "
+                "for a 3D body"
+            )
+        cell_tags, cell_nodes = gmsh.model.mesh.getElementsByType(_TETRAHEDRON)
+        cells = np.searchsorted(tags, cell_nodes).reshape(-1, 4)
+        cell_tags = np.asarray(cell_tags)
+        surfaces: dict[str, np.ndarray] = {}
+        volumes: dict[str, np.ndarray] = {}
+        for dim, tag in gmsh.model.getPhysicalGroups():
+            key = gmsh.model.getPhysicalName(dim, tag) or str(tag)
+            entities = gmsh.model.getEntitiesForPhysicalGroup(dim, tag)
+            if dim == 2:
+                tri = [gmsh.model.mesh.getElementsByType(_TRIANGLE, e)[1] for e in entities]
+                nodes = np.concatenate(tri) if tri else np.zeros(0, np.uint64)
+                surfaces[key] = np.searchsorted(tags, nodes).reshape(-1, 3)
+            elif dim == 3:
+                found = [gmsh.model.mesh.getElementsByType(_TETRAHEDRON, e)[0] for e in entities]
+                found = np.concatenate(found) if found else np.zeros(0, cell_tags.dtype)
+                volumes[key] = np.flatnonzero(np.isin(cell_tags, found))
+    # keep the nodes the tetrahedra use (gmsh also stores the geometry's points)
+    used = np.unique(cells)
+    remap = np.full(len(tags), -1, dtype=np.int64)
+    remap[used] = np.arange(len(used))
+    surfaces = {k: remap[v] for k, v in surfaces.items()}
+    surfaces = {k: v[(v >= 0).all(axis=1)] for k, v in surfaces.items()}
+    return SolidFile(x[used].copy(), remap[cells], surfaces, volumes, name)
+
+
+def check_solid(solid: SolidFile, signorini: Any = ()) -> tuple[BodyFacts, tuple | None]:
+    """Check ``solid`` for the exterior problem and its Signorini group names.
+
+    Returns
+    -------
+    facts : BodyFacts
+        One body, one surface; its Euler characteristic.
+    names : tuple of str or None
+        The Signorini surface groups (None for ``"all"``).
+
+    Raises
+    ------
+    ValueError
+        Several bodies, a cavity, a non-manifold surface; a Signorini name that is no
+        group, a volume group, or a group off the boundary.
+    """
+    facts = check_body(solid.cells, solid.source)
+    boundary = boundary_faces(solid.cells)[0]
+    names = check_signorini_groups(signorini, solid.surfaces, solid.volumes, boundary, solid.source)
+    return facts, names
