@@ -30,12 +30,10 @@ import inspect
 from typing import Any, Callable
 
 import numpy as np
-import scipy.sparse as sp
 from dolfinx import fem
-from mpi4py import MPI
-from petsc4py import PETSc
 
 from fem_py.boundary.order import closed_polygon, walk_boundary
+from fem_py.boundary.vectors import BoundaryVectors
 from fem_py.dofs.p1 import exterior_facets, facet_data, gather_facet_data, p1_topology, tag_array
 from fem_py.forms.expressions import Expression
 from fem_py.parallel import broadcast_from_root
@@ -45,7 +43,7 @@ from fem_py.tags import GAMMA_T_TAG
 __all__ = ["BoundaryMap"]
 
 
-class BoundaryMap:
+class BoundaryMap(BoundaryVectors):
     """Boundary nodes in counter-clockwise order and the maps T, E (METHOD.md section 4).
 
     ``BoundaryMap(V, domain)`` (collective) with ``V = fem_py.dofs.p1_space(mesh)`` and
@@ -119,71 +117,12 @@ class BoundaryMap:
 
     # ------------------------------------------------------------ sizes
     @property
-    def n_gamma(self) -> int:
-        return len(self.dofs)
-
-    @property
-    def n_signorini(self) -> int:
-        return len(self.signorini)
-
-    @property
     def panel_lengths(self) -> np.ndarray:
         return segment_lengths(closed_polygon(self.nodes))
 
     def on_gamma_t(self) -> np.ndarray:
         """Panel mask of Gamma_t (tag 1)."""
         return self.panel_tags == GAMMA_T_TAG
-
-    # ------------------------------------------------------------ matrices
-    def trace_matrix(self) -> sp.csr_matrix:
-        """T (n_gamma x N): T[i, dofs[i]] = 1 (global dof columns)."""
-        n = self.n_gamma
-        return sp.csr_matrix((np.ones(n), (np.arange(n), self.dofs)), shape=(n, self.n_dofs))
-
-    def extension_matrix(self) -> sp.csr_matrix:
-        """E (n_gamma x n_s): E[signorini[j], j] = 1."""
-        m = self.n_signorini
-        return sp.csr_matrix((np.ones(m), (self.signorini, np.arange(m))), shape=(self.n_gamma, m))
-
-    # ------------------------------------------------------------ PETSc vectors
-    def _owned(self, vec: PETSc.Vec) -> tuple[np.ndarray, np.ndarray]:
-        """(boundary positions, local indices) of the boundary dofs owned by this rank
-        in the layout of ``vec`` (computed once per ownership range)."""
-        key = vec.getOwnershipRange()
-        cached = self.__dict__.setdefault("_owned_cache", {})
-        if key not in cached:
-            mine = np.flatnonzero((self.dofs >= key[0]) & (self.dofs < key[1]))
-            cached[key] = (mine, (self.dofs[mine] - key[0]).astype(np.int32))
-        return cached[key]
-
-    def gather(self, vec: PETSc.Vec) -> np.ndarray:
-        """T u for a distributed PETSc Vec u: boundary-order values on every rank (collective)."""
-        positions, local = self._owned(vec)
-        out = np.zeros(self.n_gamma)
-        out[positions] = vec.array_r[local]
-        comm = vec.comm.tompi4py()
-        if comm.size > 1:
-            comm.Allreduce(MPI.IN_PLACE, out, op=MPI.SUM)
-        return out
-
-    def scatter_add(
-        self, values: np.ndarray, vec: PETSc.Vec, *, refresh_ghosts: bool = True
-    ) -> PETSc.Vec:
-        """vec += T^T values (each rank adds to the entries it owns; ``values`` must be
-        the same on every rank). With ``refresh_ghosts`` the ghost entries of a ghosted
-        ``vec`` are refreshed (collective); without, only owned entries are valid."""
-        values = np.asarray(values, dtype=float)
-        if values.shape != (self.n_gamma,):
-            raise ValueError(f"values must have shape ({self.n_gamma},), got {values.shape}")
-        positions, local = self._owned(vec)
-        owned = vec.getArray()
-        owned[local] += values[positions]
-        if refresh_ghosts:
-            try:
-                vec.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-            except PETSc.Error:  # not a ghosted Vec: nothing to refresh
-                pass
-        return vec
 
     # ------------------------------------------------------------ data
     def interpolate_boundary(self, expr: str | Callable | float) -> np.ndarray:

@@ -152,7 +152,7 @@ class Material:
         t = ufl.sqrt(s)
         c1 = ufl.conditional(ufl.gt(s, S0), self.rho(t), self.rho0)
         c2 = ufl.conditional(ufl.gt(s, S0), self.drho(t) / t, 0.0)
-        return c1 * ufl.Identity(2) + c2 * ufl.outer(x, x)
+        return c1 * ufl.Identity(ufl.shape(x)[0]) + c2 * ufl.outer(x, x)
 
     def flux(self, x: Any) -> Any:
         """UFL rho(|x|) x (the flux of (1.1)), safe at x = 0."""

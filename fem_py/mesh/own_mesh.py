@@ -23,6 +23,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from fem_py.mesh.shapes import Arc
+from fem_py.mesh.tet_file import opened_msh
 from fem_py.parallel import gather_to_root
 from fem_py.partition.cells import cell_adjacency, partition_cells
 from fem_py.polyline import diameter
@@ -75,28 +76,8 @@ def read_msh(path: str | Path) -> MeshFile:
         ``mesh: ...``: a missing file, a file gmsh cannot read as a mesh, a 3D mesh,
         quadrilaterals or higher-order cells.
     """
-    import gmsh
-
-    path = Path(path)
-    name = str(path)
-    if not path.is_file():
-        raise ValueError(
-            f"mesh: file {name!r} not found; give the path of a gmsh .msh file (relative "
-            "to the configuration file's folder)"
-        )
-    gmsh.initialize(readConfigFiles=False)
-    gmsh.option.setNumber("General.Terminal", 0)
-    try:
-        try:
-            gmsh.open(name)
-        except Exception as err:  # noqa: BLE001 - gmsh raises a bare Exception
-            raise ValueError(
-                f"mesh: {name!r} is not a gmsh mesh file ({str(err).splitlines()[0]}); "
-                "save the mesh from gmsh in MSH 2.2 or 4.1 format"
-            ) from None
-        return mesh_of_model(name)
-    finally:
-        gmsh.finalize()
+    with opened_msh(path):
+        return mesh_of_model(str(Path(path)))
 
 
 def mesh_of_model(name: str) -> MeshFile:
