@@ -23,6 +23,7 @@ __all__ = [
     "DEFAULTS",
     "CHOICES",
     "DATA_VARIABLES",
+    "DATA_VARIABLES_3D",
     "SolverOptions",
     "solver_options",
     "MaterialOptions",
@@ -69,7 +70,7 @@ DEFAULTS: dict[str, dict[str, Any]] = {
 
 #: Keys whose value must be one of a fixed set of strings.
 CHOICES: dict[tuple[str, str], tuple[str, ...]] = {
-    ("geometry", "shape"): ("square", "lshape", "polygon", "disk", "ellipse"),
+    ("geometry", "shape"): ("square", "lshape", "polygon", "disk", "ellipse", "box", "ball"),
     ("geometry", "subdomains"): ("auto", "physical"),
     ("solver", "method"): ("pgpm", "apgpm", "ssn"),
     ("solver", "preconditioner"): ("substructuring", "identity", "exact"),
@@ -81,14 +82,21 @@ CHOICES: dict[tuple[str, str], tuple[str, ...]] = {
     ("solver", "boundary_operator"): ("auto", "dense", "hmatrix"),
 }
 
-#: The variables each expression of [data] may use: boundary data also see the outward
-#: unit normal (nx, ny). ``a`` is a number, not an expression; ``exact`` (the exact
-#: interior solution u, "" when none is known) is checked only when given.
+#: The variables each expression of [data] may use in 2D: boundary data also see the
+#: outward unit normal (nx, ny). ``a`` is a number, not an expression; ``exact`` (the
+#: exact interior solution u, "" when none is known) is checked only when given.
 DATA_VARIABLES: dict[str, tuple[str, ...]] = {
     "f": ("x", "y"),
     "u0": ("x", "y", "nx", "ny"),
     "t0": ("x", "y", "nx", "ny"),
     "exact": ("x", "y"),
+}
+#: The same for a body in R^3: z and nz too (METHOD.md section 11).
+DATA_VARIABLES_3D: dict[str, tuple[str, ...]] = {
+    "f": ("x", "y", "z"),
+    "u0": ("x", "y", "z", "nx", "ny", "nz"),
+    "t0": ("x", "y", "z", "nx", "ny", "nz"),
+    "exact": ("x", "y", "z"),
 }
 
 #: Steps of the semismooth Newton method that are not part of the schema.

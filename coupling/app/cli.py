@@ -197,6 +197,21 @@ def _with_geometry_key(build, *args):
         raise named from None
 
 
+def _refuse_solid(comm: Any, config: Any) -> None:
+    """A 3D body is meshed (``fembem info``, ``fembem check-jacobian``) but not solved:
+    the 3D boundary element operators S_h are not built yet (one-line ValueError)."""
+    from fem_py.mesh import spec_dimension
+
+    g = config.geometry
+    if _with_geometry_key(spec_dimension, g, comm) != 3:
+        return
+    what = f"mesh: {g.mesh!r} is a 3D mesh of" if g.mesh else f"shape: {g.shape!r} is"
+    raise ValueError(
+        f"geometry.{what} a body in R^3: fembem info and check-jacobian take it, but fembem "
+        "solve needs the 3D boundary element operators, not built yet; use a planar geometry"
+    )
+
+
 def _solve(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
     from mpi4py import MPI
 
@@ -232,6 +247,7 @@ def _solve_config(
     # the run is written beside ``out`` and moved into place once complete
     monitor = None if args.quiet else ProgressMonitor(comm)
     size = _with_geometry_key(planned_size, config)
+    _refuse_solid(comm, config)
     if size is not None:  # closed form: refuse before anything is built
         check_memory(size, comm.size, plots=plots, boundary_operator=kind)
     with staged_output_dir(comm, out, force=args.force) as staging, RunOutputs(

@@ -18,6 +18,7 @@ from typing import Any
 from coupling.options import (
     CHOICES,
     DATA_VARIABLES,
+    DATA_VARIABLES_3D,
     DEFAULTS,
     AdaptOptions,
     DataOptions,
@@ -26,7 +27,7 @@ from coupling.options import (
     RunConfig,
     solver_options,
 )
-from fem_py.spec import GeometrySpec
+from fem_py.spec import PLANAR_ONLY, SOLID_SHAPES, GeometrySpec
 
 __all__ = [
     "ConfigError",
@@ -105,7 +106,7 @@ def _check_value(section: str, key: str, value: Any) -> Any:
     if (section, key) in _POSITIVE and not value > 0:
         raise ConfigError(f"{name} must be positive, got {value!r}")
     if (section, key) == ("geometry", "center"):
-        value = _point(name, value)
+        value = _point(name, value, sizes=(2, 3))
     if (section, key) == ("geometry", "semi_axes"):
         value = _semi_axes(name, value)
     if (section, key) == ("geometry", "vertices"):
@@ -119,17 +120,25 @@ def _check_value(section: str, key: str, value: Any) -> Any:
     return value
 
 
-def _point(name: str, value: Any) -> list[float]:
+def _point(name: str, value: Any, sizes: tuple[int, ...] = (2,)) -> list[float]:
+    """A point of finite numbers with one of ``sizes`` coordinates ([x, y] or [x, y, z])."""
     if (
         not isinstance(value, list)
-        or len(value) != 2
+        or len(value) not in sizes
         or not all(
             isinstance(c, (int, float)) and not isinstance(c, bool) and math.isfinite(c)
             for c in value
         )
     ):
-        raise ConfigError(f"{name} must be a point [x, y] of two numbers, got {value!r}")
-    return [float(value[0]), float(value[1])]
+        raise ConfigError(f"{name} must be {_POINTS[sizes]}, got {value!r}")
+    return [float(c) for c in value]
+
+
+_POINTS = {
+    (2,): "a point [x, y] of two numbers",
+    (3,): "a point [x, y, z] of three numbers",
+    (2, 3): "a point [x, y] of two numbers (or [x, y, z] for a 3D shape)",
+}
 
 
 def _semi_axes(name: str, value: list) -> list[float]:
@@ -190,8 +199,8 @@ def parse_config(raw: dict[str, Any], folder: str | Path | None = None) -> RunCo
         config["geometry"]["mesh"] = str(Path(folder) / mesh)
     try:
         return _typed(config)
-    except ValueError as err:  # a combination RunConfig refuses
-        raise ConfigError(str(err)) from None
+    except ValueError as err:  # a combination RunConfig (or GeometrySpec) refuses
+        raise ConfigError(str(geometry_error(err))) from None
 
 
 def _typed(config: dict[str, dict[str, Any]]) -> RunConfig:
@@ -241,6 +250,7 @@ def _checked(raw: dict[str, Any]) -> dict[str, dict[str, Any]]:
         solver["nested"] = False  # the default (true) applies to plain solves only
     geometry = config["geometry"]
     _check_mesh_keys(geometry, raw.get("geometry", {}))
+    _check_dimension_keys(geometry, raw.get("geometry", {}))
     if geometry["shape"] == "polygon" and len(geometry["vertices"]) < 3:
         raise ConfigError(
             "geometry.vertices must list at least 3 points [x, y] in "
@@ -283,6 +293,33 @@ def _check_mesh_keys(geometry: dict[str, Any], given: dict[str, Any]) -> None:
         raise ConfigError(
             "geometry.signorini: with geometry.mesh give names of physical curve groups "
             '(["contact", ...]) or "all", not coordinate arcs'
+        )
+
+
+def _check_dimension_keys(geometry: dict[str, Any], given: dict[str, Any]) -> None:
+    """A 3D body (``shape = "box"`` or ``"ball"``, or a mesh file of tetrahedra, whose
+    dimension is read only when a planar key is given) refuses the keys that mean nothing
+    in R^3 (``fem_py.spec.PLANAR_ONLY``) and takes a center [x, y, z]; a planar shape a
+    center [x, y]."""
+    from fem_py.mesh import spec_dimension
+
+    planar = [key for key in PLANAR_ONLY if key in given]
+    if geometry["mesh"]:
+        if not planar:
+            return
+        try:
+            dim = spec_dimension(GeometrySpec(mesh=geometry["mesh"]))
+        except ValueError as err:
+            raise ConfigError(str(geometry_error(err))) from None
+    else:
+        dim = 3 if geometry["shape"] in SOLID_SHAPES else 2
+    if dim == 3 and planar:
+        key = planar[0]
+        raise ConfigError(f"geometry.{key}: {PLANAR_ONLY[key]}; drop geometry.{key} for a 3D body")
+    if "center" in given and len(geometry["center"]) != dim:
+        raise ConfigError(
+            f"geometry.center must be {_POINTS[(dim,)]} for shape {geometry['shape']!r}, "
+            f"got {given['center']!r}"
         )
 
 
@@ -335,11 +372,12 @@ def load_config(path: str | Path | None, overrides: list[str] = ()) -> RunConfig
 def check_data_and_material(config: RunConfig) -> None:
     """Parse the [data] expressions and build the material of a validated configuration.
 
-    Cheap (no mesh, no MPI): run it before the mesh is built so that a misspelt
-    function or a material violating the structure condition of METHOD.md section 1
-    fails at once. The expressions are evaluated symbolically with UFL on an abstract
-    triangle domain, the code path of ``fem_py.forms``, so constant sub-expressions
-    that cannot be evaluated (``1/0``, ``log(-1)``) are caught too.
+    Cheap (no mesh, no MPI; a mesh file is opened for its dimension): run it before the
+    mesh is built so that a misspelt function or a material violating the structure
+    condition of METHOD.md section 1 fails at once. The expressions are evaluated
+    symbolically with UFL on an abstract triangle (tetrahedron in 3D) domain, the code
+    path of ``fem_py.forms``, so constant sub-expressions that cannot be evaluated
+    (``1/0``, ``log(-1)``) are caught too.
 
     Raises
     ------
@@ -350,10 +388,17 @@ def check_data_and_material(config: RunConfig) -> None:
 
     from fem_py.forms import make_material, parse_expression
 
-    domain = ufl.Mesh(ufl.VectorElement("Lagrange", ufl.triangle, 1))
-    x, n = ufl.SpatialCoordinate(domain), ufl.FacetNormal(domain)
-    values = {"x": x[0], "y": x[1], "nx": n[0], "ny": n[1]}
-    for key, names in DATA_VARIABLES.items():
+    from fem_py.forms import spatial_variables
+    from fem_py.mesh import spec_dimension
+
+    try:  # a mesh file tells its dimension (read here, on every rank)
+        dim = spec_dimension(config.geometry)
+    except ValueError as err:
+        raise ConfigError(str(geometry_error(err))) from None
+    cell = ufl.tetrahedron if dim == 3 else ufl.triangle
+    domain = ufl.Mesh(ufl.VectorElement("Lagrange", cell, 1))
+    values = spatial_variables(domain, boundary=True)
+    for key, names in (DATA_VARIABLES_3D if dim == 3 else DATA_VARIABLES).items():
         text = getattr(config.data, key)
         if key == "exact" and not text:
             continue  # no exact solution known

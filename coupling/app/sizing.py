@@ -95,19 +95,20 @@ def check_memory(
 
 
 def size_of_domain(domain: Any) -> DomainSize:
-    """The sizes of a built domain (collective): the P1 counts, L, and the shortest and
-    longest fine facet."""
-    from fem_py.boundary import BoundaryMap
+    """The sizes of a built domain (collective): the P1 counts, L (0 in 3D: no coarse
+    partition), and the shortest and longest fine facet (edge in 3D)."""
+    from fem_py.boundary import boundary_map
     from fem_py.dofs import p1_space
     from fem_py.mesh import shortest_facet
 
     V = p1_space(domain.mesh)
-    boundary = BoundaryMap(V, domain)
+    boundary = boundary_map(V, domain)
+    solid = domain.dim == 3
     return DomainSize(
         dofs=V.dofmap.index_map.size_global,
         boundary_dofs=boundary.n_gamma,
         signorini_dofs=boundary.n_signorini,
-        subdomains=domain.coarse.n_subdomains,
-        h_min=shortest_facet(domain),
+        subdomains=0 if solid else domain.coarse.n_subdomains,
+        h_min=domain.h_min if solid else shortest_facet(domain),
         h_max=domain.h_max,
     )

@@ -39,6 +39,7 @@ from dolfinx import mesh as dmesh
 from scipy.sparse.csgraph import connected_components
 
 from fem_py.boundary.vectors import BoundaryVectors
+from fem_py.forms.expressions import Expression
 from fem_py.parallel import broadcast_from_root, gather_to_root
 
 __all__ = ["SurfaceMap", "surface_arrays"]
@@ -121,11 +122,15 @@ class SurfaceMap(BoundaryVectors):
     def interpolate_boundary(self, expr: Callable | float) -> np.ndarray:
         """Nodal values (in the map's order) of boundary data such as u0.
 
-        ``expr`` is a number or a callable on arrays, ``f(x, y, z)`` or
-        ``f(x, y, z, nx, ny, nz)`` with (nx, ny, nz) the node normals (text goes through
-        the expressions module's ``numpy_function`` first).
+        ``expr`` is text in x, y, z, nx, ny, nz (``fem_py.forms.expressions``), a number or
+        a callable on arrays, ``f(x, y, z)`` or ``f(x, y, z, nx, ny, nz)`` with
+        (nx, ny, nz) the node normals.
         """
-        if callable(expr):
+        if isinstance(expr, str):
+            names = ("x", "y", "z", "nx", "ny", "nz")
+            values = (*self.nodes.T, *self.node_normals.T)
+            out = Expression(expr, names).evaluate(dict(zip(names, values)), "numpy")
+        elif callable(expr):
             try:
                 nargs = len(inspect.signature(expr).parameters)
             except (TypeError, ValueError):
@@ -136,7 +141,7 @@ class SurfaceMap(BoundaryVectors):
             out = float(expr)
         else:
             raise ValueError(
-                f"boundary data must be a number or a callable, got {type(expr).__name__}"
+                f"boundary data must be text, a number or a callable, got {type(expr).__name__}"
             )
         out = np.broadcast_to(np.asarray(out, dtype=float), (self.n_gamma,)).copy()
         if not np.all(np.isfinite(out)):

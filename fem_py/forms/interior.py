@@ -37,6 +37,7 @@ __all__ = [
     "InteriorForms",
     "assemble_boundary_load",
     "JACOBIANS",
+    "COORDINATES",
 ]
 
 JACOBIANS = ("ufl", "handwritten")
@@ -53,13 +54,20 @@ P1_EXACT = {"quadrature_degree": 0}
 DATA_QUADRATURE = {"quadrature_degree": 6}
 
 
+#: The coordinate names of the expressions, by the dimension of Omega; the normal's
+#: components are these with an ``n`` in front (nx, ny[, nz]).
+COORDINATES = {2: ("x", "y"), 3: ("x", "y", "z")}
+
+
 def spatial_variables(mesh: Any, *, boundary: bool = False) -> dict[str, Any]:
-    """UFL values of the expression variables: x, y (and nx, ny, the outward unit normal)."""
+    """UFL values of the expression variables: x, y (z in 3D) and on the boundary nx, ny
+    (nz), the outward unit normal (METHOD.md section 11 for 3D)."""
     X = ufl.SpatialCoordinate(mesh)
-    out = {"x": X[0], "y": X[1]}
+    names = COORDINATES[X.ufl_shape[0]]
+    out = {name: X[k] for k, name in enumerate(names)}
     if boundary:
         n = ufl.FacetNormal(mesh)
-        out.update(nx=n[0], ny=n[1])
+        out.update({f"n{name}": n[k] for k, name in enumerate(names)})
     return out
 
 
@@ -93,7 +101,7 @@ class InteriorForms:
     material
         A :class:`fem_py.forms.materials.Material`.
     f
-        Volume load: text in x, y, a number, a UFL expression, or None (zero).
+        Volume load: text in x, y (z in 3D), a number, a UFL expression, or None (zero).
     jacobian
         Default Jacobian kind of :meth:`assemble_jacobian`: ``"ufl"`` or ``"handwritten"``.
     jit_params
@@ -286,7 +294,8 @@ def assemble_boundary_load(
 ) -> PETSc.Vec:
     """m_t,j = int_Gamma t0 v_j ds over the whole boundary (METHOD.md section 4).
 
-    ``t0`` is text in x, y, nx, ny (outward unit normal, ``ufl.FacetNormal``), a number
+    ``t0`` is text in x, y, nx, ny (z, nz in 3D; the outward unit normal
+    ``ufl.FacetNormal``), a number
     or a UFL expression. Returns a new ghosted Vec (caller destroys it); its
     boundary-order values are ``BoundaryMap.gather(m_t)``.
     """

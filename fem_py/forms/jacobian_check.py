@@ -37,15 +37,19 @@ _EXACT_RATIO = 1e-10
 
 
 def _random_mode_function(V: Any, rng: np.random.Generator, n_modes: int = 4) -> Any:
-    """A smooth random function sum a_k sin(w_k . x + c_k) of unit-size gradients."""
+    """A smooth random function sum a_k sin(w_k . x + c_k) of unit-size gradients (x in
+    R^2 or R^3, the mesh's dimension)."""
     from dolfinx import fem
 
+    dim = V.mesh.geometry.dim
     a = rng.normal(size=n_modes)
-    w = rng.normal(scale=4.0, size=(n_modes, 2))
+    w = rng.normal(scale=4.0, size=(n_modes, dim))
     c = rng.uniform(0.0, 2 * np.pi, size=n_modes)
     f = fem.Function(V)
     f.interpolate(
-        lambda x: sum(a[k] * np.sin(w[k, 0] * x[0] + w[k, 1] * x[1] + c[k]) for k in range(n_modes))
+        lambda x: sum(
+            a[k] * np.sin(sum(w[k, d] * x[d] for d in range(dim)) + c[k]) for k in range(n_modes)
+        )
     )
     return f
 
@@ -60,7 +64,8 @@ def check_jacobian(domain: Any, material: Material, *, n_states: int = 3, seed: 
     Parameters
     ----------
     domain
-        A :class:`fem_py.mesh.Domain` (or anything with a ``mesh``).
+        A :class:`fem_py.mesh.Domain` or :class:`fem_py.mesh.SolidDomain` (anything with
+        a ``mesh``, of triangles or tetrahedra).
     material
         The material to check.
     n_states

@@ -1,10 +1,11 @@
 """Omega meshed and distributed with its coarse partition: the :class:`Domain` built from a
 :class:`GeometrySpec` (``build``: the square, the L-shape and polygons in ``polygon``, the
-disk and the ellipse in ``conic``, users' mesh files in ``own_mesh``; the pieces:
+disk and the ellipse in ``conic``, users' mesh files in ``own_mesh``; in 3D the
+:class:`SolidDomain` of the box, the ball and tetrahedral files in ``solid``; the pieces:
 ``shapes``, ``structured``, ``gmsh_mesh``, ``distribute``), its local refinement
 and the split of the subdomains it grades (``refinement``, ``grading``), point location
 (``location``) and the facts a user checks (``facts``)."""
-from fem_py.mesh.build import build_domain, domain_size
+from fem_py.mesh.build import build_domain, domain_size, spec_dimension
 from fem_py.mesh.conic import CONICS
 from fem_py.mesh.domain import (
     CORNER_ANGLE,
@@ -18,6 +19,7 @@ from fem_py.mesh.grading import split_cells, split_graded_subdomains, subdomain_
 from fem_py.mesh.location import interpolate_p1, locate
 from fem_py.mesh.refinement import boundary_transfer, locate_cells, refine_domain, transfer_p1
 from fem_py.mesh.shapes import SHAPES, Arc
+from fem_py.mesh.solid import SolidDomain
 from fem_py.spec import GeometrySpec
 
 __all__ = [
@@ -28,6 +30,7 @@ __all__ = [
     "DomainSize",
     "GeometrySpec",
     "SHAPES",
+    "SolidDomain",
     "boundary_transfer",
     "build_domain",
     "domain_from_mesh",
@@ -39,6 +42,7 @@ __all__ = [
     "mesh_facts",
     "refine_domain",
     "shortest_facet",
+    "spec_dimension",
     "split_cells",
     "split_graded_subdomains",
     "subdomain_grading",

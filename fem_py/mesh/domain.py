@@ -83,6 +83,9 @@ class Domain:
     h_max: float
     partition: str = "grid"
 
+    #: Omega's dimension (``fem_py.mesh.solid.SolidDomain.dim`` is 3).
+    dim = 2
+
     @property
     def comm(self) -> Any:
         return self.mesh.comm
