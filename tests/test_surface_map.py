@@ -117,8 +117,11 @@ def test_interpolate_boundary():
     values = s.interpolate_boundary(lambda x, y, z, nx, ny, nz: nz)
     assert np.array_equal(values, s.node_normals[:, 2])
     assert np.array_equal(s.interpolate_boundary(2), np.full(s.n_gamma, 2.0))
-    with pytest.raises(ValueError, match="number or a callable"):
-        s.interpolate_boundary("x")
+    # text in x, y, z, nx, ny, nz (issue 31: the data of a 3D run)
+    text = s.interpolate_boundary("x + 2*y - z + nz")
+    assert np.array_equal(text, x + 2 * y - z + s.node_normals[:, 2])
+    with pytest.raises(ValueError, match="text, a number or a callable"):
+        s.interpolate_boundary(None)
     with pytest.raises(ValueError, match="not finite"):
         s.interpolate_boundary(lambda x, y, z: np.where(x > 0, np.nan, 0.0))
 
