@@ -82,9 +82,8 @@ HMatrix::HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const 
     if (comm_->size < 1 || comm_->rank < 0 || comm_->rank >= comm_->size || !comm_->allgather ||
         !comm_->allreduce)
       throw std::invalid_argument("HMatrix: the communicator needs 0 <= rank < size and both collectives");
-    // Rows balanced by the bytes each will hold: a dense block k doubles per row, a
-    // low-rank one about r (1 + k / m) with r = log10(1 / tol), the order of the ranks
-    // of the admissible blocks (measured 8-20 at tol 1e-10; only the balance depends on it).
+    // Rows balanced by the bytes each will hold, ranks modelled as log10(1 / tol)
+    // (docs/design/hmatrix.md, "Under MPI").
     std::vector<Block> all;
     collect(*rows_, *cols_, 0, 0, options.eta, options.symmetric, 0, rows_->size(), all);
     const double r = std::max(1.0, -std::log10(options.tol));
