@@ -43,9 +43,8 @@ PYBIND11_MODULE(_bem, m) {
       .def_readonly("nbytes_preconditioner", &bem::SteklovInfo::nbytes_preconditioner);
   py::class_<bem::SteklovPoincareOperator>(m, "SteklovPoincareOperator")
       .def(py::init([](NodesRef nodes, Space flux, bem::Index leaf_size, double eta, double tol,
-                       double preconditioner_tol, double solver_tol, int max_iterations,
-                       int product_threads, int rank, int size, Collective allgather,
-                       Collective allreduce) {
+                       double preconditioner_tol, double solver_tol, int max_iterations, int product_threads, int rank,
+                       int size, Collective allgather, Collective allreduce) {
              // allgather None: serial; otherwise the collectives of the ranks (mpi4py,
              // called back with the GIL held by pybind11's function wrapper)
              std::shared_ptr<const bem::Communicator> comm;
@@ -54,13 +53,14 @@ PYBIND11_MODULE(_bem, m) {
                    bem::Communicator{rank, size, std::move(allgather), std::move(allreduce)});
              return std::make_unique<bem::SteklovPoincareOperator>(
                  nodes, flux,
-                 bem::SteklovOptions{{leaf_size, eta, tol, false, product_threads, comm}, preconditioner_tol,
-                                     solver_tol, max_iterations});
+                 bem::SteklovOptions{{leaf_size, eta, tol, false, product_threads, comm},
+                                     preconditioner_tol,
+                                     solver_tol,
+                                     max_iterations});
            }),
            py::arg("nodes"), py::arg("flux"), py::arg("leaf_size"), py::arg("eta"), py::arg("tol"),
-           py::arg("preconditioner_tol"), py::arg("solver_tol"), py::arg("max_iterations"),
-           py::arg("product_threads"), py::arg("rank"), py::arg("size"), py::arg("allgather"),
-           py::arg("allreduce"), Release())
+           py::arg("preconditioner_tol"), py::arg("solver_tol"), py::arg("max_iterations"), py::arg("product_threads"),
+           py::arg("rank"), py::arg("size"), py::arg("allgather"), py::arg("allreduce"), Release())
       .def("apply", &bem::SteklovPoincareOperator::apply, py::arg("x"), Release())
       .def("flux", &bem::SteklovPoincareOperator::flux, py::arg("x"), Release())
       .def_property_readonly("size", &bem::SteklovPoincareOperator::size)
@@ -69,8 +69,7 @@ PYBIND11_MODULE(_bem, m) {
       .def_property_readonly("last_iterations", &bem::SteklovPoincareOperator::last_iterations);
 
   py::class_<bem::BoundaryOperators>(m, "BoundaryOperators")
-      .def(py::init([](NodesRef nodes, Space space, bem::Index leaf_size, double eta, double tol,
-                       int product_threads) {
+      .def(py::init([](NodesRef nodes, Space space, bem::Index leaf_size, double eta, double tol, int product_threads) {
              return std::make_unique<bem::BoundaryOperators>(
                  nodes, space, bem::HMatrixOptions{leaf_size, eta, tol, false, product_threads});
            }),
@@ -82,24 +81,21 @@ PYBIND11_MODULE(_bem, m) {
       .def_property_readonly("nbytes", &bem::BoundaryOperators::nbytes);
 
   m.def("version", &bem::version);
-  m.def("single_layer", py::overload_cast<NodesRef, Space>(&bem::single_layer), py::arg("nodes"),
-        py::arg("space"), Release());
-  m.def("double_layer", py::overload_cast<NodesRef, Space>(&bem::double_layer), py::arg("nodes"),
-        py::arg("space"), Release());
+  m.def("single_layer", py::overload_cast<NodesRef, Space>(&bem::single_layer), py::arg("nodes"), py::arg("space"),
+        Release());
+  m.def("double_layer", py::overload_cast<NodesRef, Space>(&bem::double_layer), py::arg("nodes"), py::arg("space"),
+        Release());
   m.def("hypersingular", py::overload_cast<NodesRef>(&bem::hypersingular), py::arg("nodes"), Release());
-  m.def("mass", py::overload_cast<NodesRef, Space>(&bem::mass), py::arg("nodes"), py::arg("space"),
-        Release());
-  m.def("steklov_poincare", py::overload_cast<NodesRef, Space>(&bem::steklov_poincare),
-        py::arg("nodes"), py::arg("flux"), Release());
-  m.def("steklov_poincare_timed", &bem::steklov_poincare_timed, py::arg("nodes"), py::arg("flux"),
-        Release());
-  m.def("exterior_flux", py::overload_cast<NodesRef, VectorRef, double, Space>(&bem::exterior_flux),
-        py::arg("nodes"), py::arg("dirichlet"), py::arg("a"), py::arg("flux"), Release());
+  m.def("mass", py::overload_cast<NodesRef, Space>(&bem::mass), py::arg("nodes"), py::arg("space"), Release());
+  m.def("steklov_poincare", py::overload_cast<NodesRef, Space>(&bem::steklov_poincare), py::arg("nodes"),
+        py::arg("flux"), Release());
+  m.def("steklov_poincare_timed", &bem::steklov_poincare_timed, py::arg("nodes"), py::arg("flux"), Release());
+  m.def("exterior_flux", py::overload_cast<NodesRef, VectorRef, double, Space>(&bem::exterior_flux), py::arg("nodes"),
+        py::arg("dirichlet"), py::arg("a"), py::arg("flux"), Release());
   m.def("exterior_potential",
-        py::overload_cast<NodesRef, VectorRef, VectorRef, NodesRef, double, Space>(
-            &bem::exterior_potential),
-        py::arg("nodes"), py::arg("dirichlet"), py::arg("flux_coefficients"), py::arg("points"),
-        py::arg("a"), py::arg("flux"), Release());
+        py::overload_cast<NodesRef, VectorRef, VectorRef, NodesRef, double, Space>(&bem::exterior_potential),
+        py::arg("nodes"), py::arg("dirichlet"), py::arg("flux_coefficients"), py::arg("points"), py::arg("a"),
+        py::arg("flux"), Release());
   m.def(
       "exterior_potential_hmatrix",
       [](NodesRef nodes, VectorRef dirichlet, VectorRef flux_coefficients, NodesRef points, double a, Space flux,
@@ -108,6 +104,5 @@ PYBIND11_MODULE(_bem, m) {
                                                bem::HMatrixOptions{leaf_size, eta, tol, false, product_threads});
       },
       py::arg("nodes"), py::arg("dirichlet"), py::arg("flux_coefficients"), py::arg("points"), py::arg("a"),
-      py::arg("flux"), py::arg("leaf_size"), py::arg("eta"), py::arg("tol"), py::arg("product_threads"),
-      Release());
+      py::arg("flux"), py::arg("leaf_size"), py::arg("eta"), py::arg("tol"), py::arg("product_threads"), Release());
 }

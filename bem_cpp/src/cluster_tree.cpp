@@ -42,11 +42,9 @@ bool admissible(const Box& t, const Box& s, double eta) {
   return d > 0.0 && std::min(t.diameter(), s.diameter()) <= eta * d;
 }
 
-ClusterTree::ClusterTree(const Eigen::Ref<const Matrix>& points, const std::vector<Box>& supports,
-                         Index leaf_size) {
+ClusterTree::ClusterTree(const Eigen::Ref<const Matrix>& points, const std::vector<Box>& supports, Index leaf_size) {
   const Index n = points.rows();
-  if (n < 1 || static_cast<Index>(supports.size()) != n || leaf_size < 1 ||
-      (points.cols() != 2 && points.cols() != 3))
+  if (n < 1 || static_cast<Index>(supports.size()) != n || leaf_size < 1 || (points.cols() != 2 && points.cols() != 3))
     throw std::invalid_argument(
         "ClusterTree: need n >= 1 points in 2 or 3 dimensions, one support each, leaf_size >= 1");
   permutation_.resize(static_cast<std::size_t>(n));
@@ -55,8 +53,8 @@ ClusterTree::ClusterTree(const Eigen::Ref<const Matrix>& points, const std::vect
   build(0, n, points, supports, leaf_size);
 }
 
-int ClusterTree::build(Index begin, Index end, const Eigen::Ref<const Matrix>& points,
-                       const std::vector<Box>& supports, Index leaf_size) {
+int ClusterTree::build(Index begin, Index end, const Eigen::Ref<const Matrix>& points, const std::vector<Box>& supports,
+                       Index leaf_size) {
   const int id = static_cast<int>(clusters_.size());
   clusters_.emplace_back();
   Cluster c;
@@ -82,8 +80,7 @@ int ClusterTree::build(Index begin, Index end, const Eigen::Ref<const Matrix>& p
     auto cut = std::stable_partition(first, last, [&](Index i) { return points(i, axis) < mid; });
     if (cut == first || cut == last) {
       cut = first + (end - begin) / 2;
-      std::nth_element(first, cut, last,
-                       [&](Index a, Index b) { return points(a, axis) < points(b, axis); });
+      std::nth_element(first, cut, last, [&](Index a, Index b) { return points(a, axis) < points(b, axis); });
     }
     const Index split = begin + (cut - first);
     c.children[0] = build(begin, split, points, supports, leaf_size);
@@ -138,7 +135,7 @@ std::vector<Index> ClusterTree::partition(int parts, const std::vector<double>& 
   if (parts < 1) throw std::invalid_argument("ClusterTree::partition: need parts >= 1");
   if (static_cast<Index>(cost.size()) != size())
     throw std::invalid_argument("ClusterTree::partition: need one cost per dof");
-  std::vector<Index> ends{0};  // leaf boundaries, increasing, from 0 to n
+  std::vector<Index> ends{0};      // leaf boundaries, increasing, from 0 to n
   std::vector<double> below{0.0};  // cumulative cost at each
   for (int c : leaves()) {
     const Cluster& cl = cluster(c);
