@@ -1,4 +1,5 @@
-"""Galerkin BEM for the 2D Laplace operator on a closed polygon.
+"""Galerkin BEM for the Laplace operator on a closed polygon (2D) or a closed triangulated
+surface (3D: pass ``triangles=``, METHOD.md section 11, docs/design/bem3d.md).
 
 Operators follow the factor-2 convention of METHOD.md section 2 with
 G(x, y) = -(1/2 pi) log|x - y|::
@@ -27,7 +28,8 @@ mpmath references to better than 1e-12 relative (docs/design/quadrature.md).
 
 Modules: ``checks`` (input validation), ``defaults`` (every default), ``operators``
 (dense Galerkin matrices), ``compressed`` (H-matrix operators and S_h), ``potentials``
-(the representation formula); this module only re-exports their public names.
+(the representation formula), ``surfaces`` (test surfaces in 3D); this module only
+re-exports their public names.
 """
 from __future__ import annotations
 

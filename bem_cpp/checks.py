@@ -30,7 +30,47 @@ def points(value: ArrayLike, name: str, rows: str = "m") -> NDArray[np.float64]:
 
 
 def nodes(value: ArrayLike) -> NDArray[np.float64]:
+    arr = np.asarray(value)
+    if arr.ndim == 2 and arr.shape[1] == 3:
+        raise ValueError(
+            f"nodes of shape {arr.shape} are the vertices of a surface: pass triangles=(m, 3) too"
+        )
     return points(value, "nodes", "n")
+
+
+def surface(
+    vertices: ArrayLike, triangles: ArrayLike
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """The (n, 3) float64 vertices and (m, 3) int64 triangles of a surface, as the compiled
+    code reads them (its Surface checks closedness, orientation and the rest)."""
+    try:
+        X = np.ascontiguousarray(vertices, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError("vertices must be a real (n, 3) array") from None
+    if X.ndim != 2 or X.shape[1] != 3:
+        raise ValueError(f"vertices must have shape (n, 3), got {X.shape}")
+    T = np.asarray(triangles)
+    if T.ndim != 2 or T.shape[1] != 3:
+        raise ValueError(f"triangles must have shape (m, 3), got {T.shape}")
+    if T.size and not np.issubdtype(T.dtype, np.integer):
+        raise ValueError(f"triangles must hold integer vertex indices, got dtype {T.dtype}")
+    return X, np.ascontiguousarray(T, dtype=np.int64)
+
+
+def boundary(
+    value: ArrayLike, triangles: ArrayLike | None
+) -> tuple[NDArray[np.float64]] | tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """The arguments of the compiled functions for Gamma: ``(nodes,)`` of a polygon (2D,
+    ``triangles`` None) or ``(vertices, triangles)`` of a surface (3D)."""
+    return (nodes(value),) if triangles is None else surface(value, triangles)
+
+
+def dofs(geometry: tuple, space: _bem.Space) -> int:
+    """Number of dofs of ``space`` on the checked ``geometry`` (:func:`boundary`): the nodes
+    (2D), the vertices (3D, P1) or the triangles (3D, P0)."""
+    if len(geometry) == 2 and space == _bem.Space.P0:
+        return geometry[1].shape[0]
+    return geometry[0].shape[0]
 
 
 def vector(value: ArrayLike, n: int, name: str) -> NDArray[np.float64]:

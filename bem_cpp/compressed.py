@@ -4,9 +4,11 @@
 docs/design/hmatrix.md)."""
 from __future__ import annotations
 
+import time
 from typing import Any
 
 import numpy as np
+import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
 
 import bem_cpp._bem as _bem
@@ -139,6 +141,7 @@ def steklov_poincare(
     tol: float = 1e-10,
     timings: dict[str, float] | None = None,
     comm: Any = None,
+    triangles: ArrayLike | None = None,
 ) -> NDArray[np.float64] | SteklovPoincareOperator:
     r"""Discrete Steklov-Poincare operator S_h of the exterior (METHOD.md (2.x), section 4).
 
@@ -174,6 +177,12 @@ def steklov_poincare(
         cluster-tree order (about 1/P of the bytes of V, V0, K; the rows balanced by
         bytes), and ``S @ x``, ``S.flux(v)`` are collective and return the same array on
         every rank (docs/design/hmatrix.md, "Under MPI").
+    triangles : (m, 3) array_like of int, optional
+        3D: the triangles of the closed surface whose vertices are ``nodes`` (n, 3)
+        (METHOD.md section 11). ``compression`` may then also be ``"auto"`` (the H-matrix
+        from ``HMATRIX_SURFACE_AUTO_DOFS`` vertices on); ``"hmatrix"`` needs the P1 flux
+        and preconditions the V solves by M^{-1} (W + c c^T) M^{-1} (docs/design/bem3d.md);
+        dense, V_h is factorised by Cholesky (scipy) and S_h symmetrised explicitly.
 
     Returns
     -------
@@ -188,6 +197,10 @@ def steklov_poincare(
         ``"hmatrix"``, or V_h not positive definite (logarithmic capacity of Gamma >= 1;
         rescale the geometry to diameter < 1).
     """
+    if triangles is not None:
+        return _surface_steklov_poincare(
+            checks.surface(nodes, triangles), flux, compression, tol, timings, comm
+        )
     args = (checks.nodes(nodes), checks.space(flux, "flux"))
     if compression not in defaults.COMPRESSIONS:
         raise ValueError(f"compression must be one of {defaults.COMPRESSIONS}, got {compression!r}")
@@ -224,4 +237,75 @@ def steklov_poincare(
         triangular_solve=t.triangular_solve,
         rank_update=t.rank_update,
     )
+    return S
+
+
+def _surface_steklov_poincare(
+    geometry: tuple[NDArray[np.float64], NDArray[np.int64]],
+    flux: str,
+    compression: str,
+    tol: float,
+    timings: dict[str, float] | None,
+    comm: Any,
+) -> NDArray[np.float64] | SteklovPoincareOperator:
+    """:func:`steklov_poincare` of a closed surface (its ``triangles`` given)."""
+    space = checks.space(flux, "flux")
+    if compression not in defaults.SURFACE_COMPRESSIONS:
+        raise ValueError(
+            f"compression must be one of {defaults.SURFACE_COMPRESSIONS}, got {compression!r}"
+        )
+    if compression == "auto":
+        large = geometry[0].shape[0] >= defaults.HMATRIX_SURFACE_AUTO_DOFS
+        compression = "hmatrix" if large else "none"
+    if comm is not None and compression != "hmatrix":
+        raise ValueError('comm needs compression="hmatrix"')
+    if compression == "none":
+        return _dense_surface_steklov_poincare(geometry, space, timings)
+    if flux != "p1":
+        raise ValueError('compression="hmatrix" on a surface needs flux="p1"')
+    tol = checks.tolerance(tol)
+    allgather, allreduce = mpi_collectives(comm) if comm is not None else (None, None)
+    op = SteklovPoincareOperator(
+        _bem.SurfaceSteklovOperator(
+            *geometry,
+            leaf_size=defaults.HMATRIX_SURFACE_LEAF_SIZE,
+            eta=defaults.HMATRIX_SURFACE_ETA,
+            tol=tol,
+            solver_tol=defaults.HMATRIX_SOLVER_TOL_FACTOR * tol,
+            max_iterations=defaults.HMATRIX_MAX_ITERATIONS,
+            product_threads=defaults.HMATRIX_PRODUCT_THREADS,
+            rank=0 if comm is None else comm.rank,
+            size=1 if comm is None else comm.size,
+            allgather=allgather,
+            allreduce=allreduce,
+        )
+    )
+    if timings is not None:
+        timings.update(setup=op.info.setup_seconds)
+    return op
+
+
+def _dense_surface_steklov_poincare(
+    geometry: tuple[NDArray[np.float64], NDArray[np.int64]],
+    space: _bem.Space,
+    timings: dict[str, float] | None,
+) -> NDArray[np.float64]:
+    """S_h = 1/2 (W_h + Y^T Y), Y = L^{-1} (K_h - M_h), V_h = L L^T (dense)."""
+    t0 = time.perf_counter()
+    V, K, W = _bem.surface_operators(*geometry, space)
+    B = K - _bem.mass(*geometry, space)
+    t1 = time.perf_counter()
+    L = scipy.linalg.cholesky(V, lower=True)
+    t2 = time.perf_counter()
+    Y = scipy.linalg.solve_triangular(L, B, lower=True)
+    t3 = time.perf_counter()
+    S = 0.5 * (W + Y.T @ Y)
+    S = 0.5 * (S + S.T)
+    if timings is not None:
+        timings.update(
+            assembly=t1 - t0,
+            cholesky=t2 - t1,
+            triangular_solve=t3 - t2,
+            rank_update=time.perf_counter() - t3,
+        )
     return S

@@ -18,6 +18,8 @@ def exterior_potential(
     flux: str = "p1",
     compression: str = "none",
     tol: float = 1e-10,
+    *,
+    triangles: ArrayLike | None = None,
 ) -> NDArray[np.float64]:
     r"""Exterior solution at points of Omega_e by the representation formula (METHOD.md section 2).
 
@@ -59,6 +61,12 @@ def exterior_potential(
         docs/design/hmatrix.md, "Potentials").
     tol : float
         Relative accuracy of the H-matrix blocks, in (0, 1).
+    triangles : (m, 3) array_like of int, optional
+        3D: the triangles of the surface whose vertices are ``nodes`` (n, 3); ``points``
+        (k, 3); G = 1/(4 pi |x - y|), direct sums over the triangles (``compression`` and
+        ``tol`` unused), each triangle split into four until z is 1.5 of its diameters
+        from every piece (docs/design/bem3d.md); points inside Omega or on Gamma are found
+        by the solid angle of Gamma (4 pi inside, 0 outside) and refused.
 
     Returns
     -------
@@ -73,6 +81,10 @@ def exterior_potential(
         gives a, on Gamma the jump of the double layer is undefined), so such points are
         rejected rather than flagged; the message counts them and names the first.
     """
+    if triangles is not None:
+        return _surface_potential(
+            checks.surface(nodes, triangles), dirichlet, flux_coefficients, points, a, flux
+        )
     X = checks.nodes(nodes)
     n = X.shape[0]
     v = checks.vector(dirichlet, n, "dirichlet")
@@ -103,3 +115,26 @@ def exterior_potential(
         tol,
         defaults.HMATRIX_PRODUCT_THREADS,
     )
+
+
+def _surface_potential(
+    geometry: tuple[NDArray[np.float64], NDArray[np.int64]],
+    dirichlet: ArrayLike,
+    flux_coefficients: ArrayLike,
+    points: ArrayLike,
+    a: float,
+    flux: str,
+) -> NDArray[np.float64]:
+    """:func:`exterior_potential` of a closed surface: direct sums over the triangles."""
+    space = checks.space(flux, "flux")
+    v = checks.vector(dirichlet, geometry[0].shape[0], "dirichlet")
+    psi = checks.vector(flux_coefficients, checks.dofs(geometry, space), "flux_coefficients")
+    try:
+        Z = np.ascontiguousarray(points, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError("points must be a real (k, 3) array") from None
+    if Z.ndim != 2 or Z.shape[1] != 3:
+        raise ValueError(f"points must have shape (k, 3), got {Z.shape}")
+    if not np.all(np.isfinite(Z)):
+        raise ValueError("points contains non-finite values")
+    return _bem.exterior_potential(*geometry, v, psi, Z, checks.scalar(a, "a"), space)

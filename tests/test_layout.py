@@ -21,7 +21,7 @@ MAX_LINES = 600
 
 LAYERS = [
     # bem_cpp inside, one module per layer: the compiled core, then checks, operators, ...
-    ("bem_cpp._bem", "bem_cpp.collectives", "bem_cpp.defaults"),
+    ("bem_cpp._bem", "bem_cpp.collectives", "bem_cpp.defaults", "bem_cpp.surfaces"),
     ("bem_cpp.checks",),
     ("bem_cpp.operators",),
     ("bem_cpp.compressed",),
