@@ -142,8 +142,8 @@ TEST(PairBlocks, AdjacentClosedForms) {
 TEST(PairBlocks, SymmetryUnderExchange) {
   // v(i, j) = v(j, i)^T and kij(i, j) = kji(j, i), with different outer/inner roles.
   const Panel p = make_panel({0.0, 0.0}, {0.3, 0.05});
-  for (const Panel& q : {make_panel({0.5, 0.2}, {0.35, 0.4}), make_panel({0.3, 0.05}, {0.1, 0.4}),
-                         make_panel({2.0, 1.0}, {1.9, 1.3})}) {
+  for (const Panel& q :
+       {make_panel({0.5, 0.2}, {0.35, 0.4}), make_panel({0.3, 0.05}, {0.1, 0.4}), make_panel({2.0, 1.0}, {1.9, 1.3})}) {
     const PairRelation r = (q.a.x == p.b.x && q.a.y == p.b.y) ? PairRelation::EndToStart : PairRelation::Separated;
     const PairRelation rs = r == PairRelation::EndToStart ? PairRelation::StartToEnd : PairRelation::Separated;
     PairBlocks B, C;

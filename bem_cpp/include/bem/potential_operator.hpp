@@ -47,8 +47,7 @@ class PotentialOperator {
  public:
   /// Throws std::invalid_argument as exterior_potential does for points inside Omega or on
   /// Gamma. options.split_to_leaves is set (the point tree is usually the deeper one).
-  PotentialOperator(const Polygon& polygon, const Eigen::Ref<const Points>& points, Space flux,
-                    HMatrixOptions options);
+  PotentialOperator(const Polygon& polygon, const Eigen::Ref<const Points>& points, Space flux, HMatrixOptions options);
   /// u_e at the points (dirichlet, flux_coefficients of length n).
   Vector evaluate(const Eigen::Ref<const Vector>& dirichlet, const Eigen::Ref<const Vector>& flux_coefficients,
                   double a) const;

@@ -22,8 +22,7 @@ class SingleLayerSolver {
   /// largest number of iterations over the columns. Throws std::invalid_argument naming
   /// the logarithmic capacity if V is found indefinite (p^T V p <= 0), std::runtime_error
   /// if a column has not converged in max_iterations.
-  int solve(const Eigen::Ref<const Eigen::MatrixXd>& B, Eigen::MatrixXd& X, double tol,
-            int max_iterations) const;
+  int solve(const Eigen::Ref<const Eigen::MatrixXd>& B, Eigen::MatrixXd& X, double tol, int max_iterations) const;
 
  private:
   std::shared_ptr<const HMatrix> V_;

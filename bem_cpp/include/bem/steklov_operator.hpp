@@ -21,14 +21,14 @@ namespace bem {
 struct SteklovOptions {
   HMatrixOptions hmatrix;
   double preconditioner_tol;  ///< flux P0: tolerance of the refined-mesh V0 of the preconditioner
-  double solver_tol;   ///< relative residual of the V solves
-  int max_iterations;  ///< of each V solve
+  double solver_tol;          ///< relative residual of the V solves
+  int max_iterations;         ///< of each V solve
 };
 
 /// What the set-up built.
 struct SteklovInfo {
   double setup_seconds = 0;
-  Index max_rank = 0;          ///< largest rank of a low-rank block (V, V0, K)
+  Index max_rank = 0;  ///< largest rank of a low-rank block (V, V0, K)
   std::size_t nbytes_v = 0, nbytes_v0 = 0, nbytes_k = 0, nbytes_preconditioner = 0;
 };
 
