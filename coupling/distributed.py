@@ -98,9 +98,12 @@ def boundary_operator_kind(choice: str, n: int) -> str:
     return choice
 
 
-def steklov_poincare(comm: MPI.Comm, nodes: np.ndarray, flux: str, choice: str) -> Any:
+def steklov_poincare(
+    comm: MPI.Comm, nodes: np.ndarray, flux: str, choice: str, triangles: np.ndarray | None = None
+) -> Any:
     """S_h of the boundary ``nodes`` (replicated, (n, 2)) for ``[solver] boundary_operator
-    = choice`` (collective).
+    = choice`` (collective); in 3D ``nodes`` (n, 3) are the vertices of the surface
+    ``triangles`` (m, 3) (METHOD.md section 11, the same S_h formula).
 
     Dense: the matrix (serial) or :class:`RowBlocks` (computed on rank 0 with every core,
     held by rows). H-matrix: ``bem_cpp.SteklovPoincareOperator`` to the relative accuracy
@@ -113,6 +116,7 @@ def steklov_poincare(comm: MPI.Comm, nodes: np.ndarray, flux: str, choice: str) 
     "Under MPI"). Each has ``S @ z`` for a replicated z and ``S.shape``.
     """
     nodes = np.asarray(nodes, dtype=float)
+    surface = {} if triangles is None else {"triangles": np.asarray(triangles)}
     if boundary_operator_kind(choice, nodes.shape[0]) == "hmatrix":
         return bem_cpp.steklov_poincare(
             nodes,
@@ -120,10 +124,11 @@ def steklov_poincare(comm: MPI.Comm, nodes: np.ndarray, flux: str, choice: str) 
             compression="hmatrix",
             tol=HMATRIX_TOL,
             comm=comm if comm.size > 1 else None,
+            **surface,
         )
 
     def dense() -> np.ndarray:
-        return bem_cpp.steklov_poincare(nodes, flux=flux)
+        return bem_cpp.steklov_poincare(nodes, flux=flux, **surface)
 
     return dense() if comm.size == 1 else RowBlocks.from_root(comm, dense)
 

@@ -40,11 +40,14 @@ class SignoriniProblem:
     Parameters
     ----------
     domain
-        ``fem_py.mesh.Domain``: mesh, tags, coarse partition, Signorini arcs.
+        ``fem_py.mesh.Domain``: mesh, tags, coarse partition, Signorini arcs; or a
+        ``fem_py.mesh.SolidDomain`` (3D: the boundary map is the ``SurfaceMap``, S_h the
+        3D operator of bem_cpp on its triangles, METHOD.md section 11).
     material
         ``fem_py.forms.materials.Material`` (rho).
     f, u0, t0
-        Data as expression strings (fem_py parser; u0 and t0 may use nx, ny), UFL
+        Data as expression strings (fem_py parser, in x, y (z); u0 and t0 may use nx,
+        ny (nz)), UFL
         expressions, or (u0) a callable of boundary coordinates.
     a
         The constant of (1.3).
@@ -89,7 +92,7 @@ class SignoriniProblem:
         jacobian: str = DEFAULTS["solver"]["jacobian"],
         boundary_operator: str = DEFAULTS["solver"]["boundary_operator"],
     ):
-        from fem_py.boundary import BoundaryMap
+        from fem_py.boundary import boundary_map
         from fem_py.dofs import p1_space
         from fem_py.forms import InteriorForms
 
@@ -100,13 +103,15 @@ class SignoriniProblem:
         tic = time.perf_counter()
         self.V = p1_space(domain.mesh)
         self.forms = InteriorForms(self.V, material, f, jacobian=jacobian)
-        self.boundary = BoundaryMap(self.V, domain)
+        self.boundary = boundary_map(self.V, domain)
         timings["forms"] = time.perf_counter() - tic
 
         tic = time.perf_counter()
         nodes = self.boundary.nodes
         self.boundary_operator = boundary_operator_kind(boundary_operator, nodes.shape[0])
-        self.S = steklov_poincare(self.comm, nodes, flux_space, self.boundary_operator)
+        self.S = steklov_poincare(
+            self.comm, nodes, flux_space, self.boundary_operator, **self._surface
+        )
         timings["steklov_poincare"] = time.perf_counter() - tic
 
         tic = time.perf_counter()
@@ -130,6 +135,12 @@ class SignoriniProblem:
         object.__setattr__(self, name, value)
 
     @property
+    def _surface(self) -> dict[str, Any]:
+        """The boundary's triangles for bem_cpp in 3D (``triangles=``); nothing in 2D."""
+        triangles = getattr(self.boundary, "triangles", None)
+        return {} if triangles is None else {"triangles": triangles}
+
+    @property
     def n_signorini(self) -> int:
         """n_s, the number of phi unknowns."""
         return int(self.boundary.signorini.size)
@@ -143,13 +154,15 @@ class SignoriniProblem:
         nodes = self.boundary.nodes
         return array_from_root(
             self.comm,
-            lambda: bem_cpp.exterior_flux(nodes, ue, a=self.a, flux=self.flux_space),
+            lambda: bem_cpp.exterior_flux(
+                nodes, ue, a=self.a, flux=self.flux_space, **self._surface
+            ),
             all_cores=True,
         )
 
     def exterior(self, solution: Any, points: np.ndarray) -> np.ndarray:
-        """u_e at exterior points (m, 2) by the representation formula (METHOD.md section 2),
-        by direct panel sums or, above the measured crossover (``bem_cpp``'s
+        """u_e at exterior points (m, 2) ((m, 3) in 3D) by the representation formula
+        (METHOD.md section 2), by direct panel sums or, above the measured crossover (``bem_cpp``'s
         ``HMATRIX_POTENTIAL_CROSSOVER_*``), by the rectangular H-matrices of the potentials
         (``compression="auto"``, tol ``coupling.options.HMATRIX_TOL``)."""
         return bem_cpp.exterior_potential(
@@ -161,4 +174,5 @@ class SignoriniProblem:
             flux=self.flux_space,
             compression="auto",
             tol=HMATRIX_TOL,
+            **self._surface,
         )

@@ -198,8 +198,9 @@ def _with_geometry_key(build, *args):
 
 
 def _refuse_solid(comm: Any, config: Any) -> None:
-    """A 3D body is meshed (``fembem info``, ``fembem check-jacobian``) but not solved:
-    the 3D boundary element operators S_h are not built yet (one-line ValueError)."""
+    """A 3D body is meshed (``fembem info``, ``fembem check-jacobian``) and solved by the
+    library (``coupling.problem.SignoriniProblem``), but ``fembem solve`` does not write
+    its outputs yet (one-line ValueError)."""
     from fem_py.mesh import spec_dimension
 
     g = config.geometry
@@ -208,7 +209,7 @@ def _refuse_solid(comm: Any, config: Any) -> None:
     what = f"mesh: {g.mesh!r} is a 3D mesh of" if g.mesh else f"shape: {g.shape!r} is"
     raise ValueError(
         f"geometry.{what} a body in R^3: fembem info and check-jacobian take it, but fembem "
-        "solve needs the 3D boundary element operators, not built yet; use a planar geometry"
+        "solve does not write 3D outputs yet; use a planar geometry"
     )
 
 

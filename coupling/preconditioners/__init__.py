@@ -83,14 +83,20 @@ def build_preconditioner(
     if kind == "identity":
         return IdentityPreconditioner(n_owned, problem.n_signorini)
     domain = problem.domain
-    coarse = coarse_space(domain, options.coarse_space)
+    if kind == "substructuring" and domain.dim == 3:
+        raise ValueError(
+            "preconditioner: substructuring is the planar preconditioner (METHOD.md section "
+            '6); for a 3D body set [solver] preconditioner = "exact" (small problems)'
+        )
+    substructuring = kind == "substructuring"
+    coarse = coarse_space(domain, options.coarse_space) if substructuring else None
     stiffness = problem.forms.assemble_stiffness(matrix)
 
     def release() -> None:
         if matrix is None:
             stiffness.destroy()
 
-    arcs = problem_arcs(problem)
+    arcs = problem_arcs(problem) if substructuring else None
     if kind == "substructuring" and comm.size > 1:
         ranks = subdomain_ranks(
             comm,
@@ -116,7 +122,7 @@ def build_preconditioner(
                 release()
     csr = gather_matrix(stiffness)
     release()
-    x = gather_rows(comm, V.tabulate_dof_coordinates()[:n_owned, :2])
+    x = gather_rows(comm, V.tabulate_dof_coordinates()[:n_owned, :2]) if substructuring else None
     S = dense_matrix(problem.S, "the exact preconditioner") if kind == "exact" else None
 
     def build() -> Preconditioner:
