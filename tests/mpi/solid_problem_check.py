@@ -1,0 +1,29 @@
+"""The box pressed onto its bottom face (tests/test_solid_problem.py) solved by ssn with
+the exact preconditioner on any number of ranks; rank 0 writes the iterations, phi and
+u at the nodes sorted by their coordinates (independent of the partition) to argv[1]."""
+import sys
+
+import numpy as np
+from mpi4py import MPI
+
+from coupling.options import SolverOptions
+from coupling.problem import SignoriniProblem
+from coupling.solvers import solve
+from fem_py.forms import make_material
+from fem_py.mesh import GeometrySpec, build_domain
+
+comm = MPI.COMM_WORLD
+n = int(sys.argv[2])
+domain = build_domain(comm, GeometrySpec("box", width=0.5, h=0.5 / n, signorini=["bottom"]))
+problem = SignoriniProblem(
+    domain, make_material("carstensen"), f="1", t0="-1", u0="0.02*x", boundary_operator="dense"
+)
+solution = solve(problem, SolverOptions(preconditioner="exact", nested=False))
+owned = problem.V.dofmap.index_map.size_local
+x = problem.V.tabulate_dof_coordinates()[:owned]
+parts = comm.gather((x, solution.u.x.array[:owned].copy()), root=0)
+if comm.rank == 0:
+    x = np.concatenate([p[0] for p in parts])
+    u = np.concatenate([p[1] for p in parts])
+    order = np.lexsort(np.round(x, 12).T[::-1])
+    np.savez(sys.argv[1], u=u[order], phi=solution.phi, iterations=solution.iterations)
