@@ -10,14 +10,14 @@ we need
 Every material is held as sympy expressions in the symbol t, translated to UFL or numpy
 on demand. Built-ins (``make_material``):
 
-=============  ==================================  ==========================================
-name           rho(t)                              g(t)
-=============  ==================================  ==========================================
-linear         1                                   t^2/2
-carstensen     2 + 1/(1+t)                         t^2 + t - ln(1+t)
-power          (eps^2+t^2)^((p-2)/2), p>1, eps>0   ((eps^2+t^2)^(p/2) - eps^p)/p
-expression     any string in t (fem_py.expressions) sympy: int_0^t s rho(s) ds (closed form)
-=============  ==================================  ==========================================
+=============  ====================================  ==========================================
+name           rho(t)                                g(t)
+=============  ====================================  ==========================================
+linear         1                                     t^2/2
+carstensen     2 + 1/(1+t)                           t^2 + t - ln(1+t)
+power          (eps^2+t^2)^((p-2)/2), p>1, eps>0     ((eps^2+t^2)^(p/2) - eps^p)/p
+expression     any string in t (fem_py.expressions)  sympy: int_0^t s rho(s) ds (closed form)
+=============  ====================================  ==========================================
 
 Safety at grad u = 0 (what is done, and why). The energy is written as a function of
 s = |grad u|^2, ``G2(s) = g(sqrt(s))``, so that linear and power materials involve no

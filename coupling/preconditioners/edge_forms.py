@@ -6,7 +6,8 @@ that vanishes at a and b is given by its m = n - 1 interior values, and the edge
 A^0_gamma is an m x m symmetric positive definite matrix, spectrally equivalent to
 the H^{1/2}_00(gamma) norm uniformly in h:
 
-``"paper"`` (METHOD.md (5.1), the paper's formula)
+``"paper"`` (METHOD.md (5.1), the paper's formula)::
+
     |phi|^2 = sum_{i<j} h_i h_j (phi_i - phi_j)^2 / |x_i - x_j|^2
               + sum_i h_i phi_i^2 (1/|x_i - a| + 1/|x_i - b|),
     h_i = (|x_i - x_{i-1}| + |x_{i+1} - x_i|) / 2.

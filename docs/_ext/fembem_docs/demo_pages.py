@@ -1,0 +1,175 @@
+"""The demo gallery: a page per demos/demo_*.py with its printed tables and figures.
+
+Each demo runs at a small size (:data:`SMALL`, the sizes the tests use) through
+run_cells.py, which marks the end of every code cell's output; the page interleaves
+the script's Markdown cells, its code cells, what each printed and the figures it
+wrote. A run is kept in _build/demo-runs/<demo> and reused while the demo and the
+sources of fem_py, bem_cpp and coupling are unchanged (a hash of them).
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+import re
+import shutil
+import subprocess
+import sys
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+from sphinx.util import logging
+
+from . import run_cells
+
+logger = logging.getLogger(__name__)
+
+#: Arguments of each demo in the docs build (small sizes, as tests/test_demos.py), and
+#: the number of MPI ranks (None: no mpirun).
+SMALL: dict[str, tuple[list[str], int | None]] = {
+    "demo_signorini_square": (["--cells", "16"], None),
+    "demo_linear_transmission": (["--cells", "16"], None),
+    "demo_lshape": (["--cells", "16"], None),
+    "demo_jacobians": (["--cells", "16", "--repeat", "2"], None),
+    "demo_mpi": (["--cells", "16"], 2),
+    "demo_own_mesh": (["--cells", "16"], None),
+    "demo_adaptive_lshape": (
+        ["--cells", "8", "--steps", "12", "--max-dofs", "13000"],
+        None,
+    ),
+}
+TIMEOUT = 600  # seconds per demo
+
+
+def _sources_hash(root: Path, demo: Path, args: list[str], nprocs: int | None) -> str:
+    digest = hashlib.sha256(repr((args, nprocs)).encode())
+    files = [demo, root / "demos" / "common.py", Path(run_cells.__file__)]
+    for package in ("fem_py", "bem_cpp", "coupling"):
+        files += sorted((root / package).rglob("*.py")) + sorted((root / package).rglob("*.so"))
+    for path in files:
+        digest.update(str(path.relative_to(root) if path.is_relative_to(root) else path).encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
+def _run(root: Path, demo: Path, runs: Path) -> Path:
+    """Run ``demo`` (or reuse its run); return the run folder (stdout.txt, out/)."""
+    args, nprocs = SMALL[demo.stem]
+    folder = runs / demo.stem
+    key = _sources_hash(root, demo, args, nprocs)
+    if (folder / "key").is_file() and (folder / "key").read_text() == key:
+        return folder
+    shutil.rmtree(folder, ignore_errors=True)
+    folder.mkdir(parents=True)
+    cmd = [sys.executable, run_cells.__file__, str(demo), *args, "--out", str(folder / "out")]
+    if nprocs:
+        mpirun = shutil.which("mpirun")
+        if mpirun is None:
+            raise RuntimeError("mpirun not found: `make setup` installs openmpi-bin")
+        cmd = [mpirun, "--allow-run-as-root", "--oversubscribe", "-n", str(nprocs), *cmd]
+    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MPLBACKEND="Agg")
+    proc = subprocess.run(cmd, capture_output=True, text=True, cwd=root, env=env, timeout=TIMEOUT)
+    if proc.returncode != 0:
+        raise RuntimeError(f"{demo.name} {' '.join(args)} failed:\n{proc.stderr[-3000:]}")
+    (folder / "stdout.txt").write_text(proc.stdout)
+    (folder / "key").write_text(key)
+    return folder
+
+
+def _outputs(stdout: str) -> dict[int, tuple[str, list[str]]]:
+    """Cell index -> (what the cell printed, the figures it wrote)."""
+    found: dict[int, tuple[str, list[str]]] = {}
+    text: list[str] = []
+    for line in stdout.splitlines():
+        m = re.fullmatch(rf"{run_cells.MARK} (\d+) (.*)@@", line)
+        if m:
+            figures = [f for f in m.group(2).split(",") if f]
+            found[int(m.group(1))] = ("\n".join(text).strip("\n"), figures)
+            text = []
+        else:
+            text.append(line)
+    return found
+
+
+def _markdown(source: str) -> str:
+    return "\n".join(re.sub(r"^# ?", "", line) for line in source.splitlines())
+
+
+def _page(demo: Path, folder: Path, figures_dir: Path, rel_figures: str) -> str:
+    args, nprocs = SMALL[demo.stem]
+    outputs = _outputs((folder / "stdout.txt").read_text())
+    out_dir = str(folder / "out")
+    command = f"python demos/{demo.name} {' '.join(args)}"
+    if nprocs:
+        command = f"mpirun -n {nprocs} {command}"
+    lines: list[str] = []
+    for index, (kind, source) in enumerate(run_cells.cells(demo.read_text())):
+        if kind == "markdown":
+            lines += [_markdown(source), ""]
+            if index == 0:
+                lines += [
+                    "```{admonition} On this page",
+                    f"The script {{ref}}`demos/{demo.name} <{demo.stem}-source>`, run for this page "
+                    f"at a small size, `{command}`: the numbers printed below are "
+                    "those of that run (the text quotes the default size).",
+                    "```",
+                    "",
+                ]
+            continue
+        lines += ["```python", source, "```", ""]
+        printed, figures = outputs.get(index, ("", []))
+        if printed:
+            printed = printed.replace(out_dir, f"out/{demo.stem}")
+            lines += ["```text", printed, "```", ""]
+        for name in figures:
+            target = figures_dir / name
+            target.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(folder / "out" / name, target)
+            lines += [f"![{name}, written by the cell above]({rel_figures}/{name})", ""]
+    lines += [f"({demo.stem}-source)=", "## The script", ""]
+    lines += [f"```{{literalinclude}} ../../demos/{demo.name}", ":language: python", "```", ""]
+    return "\n".join(lines)
+
+
+def demos(root: Path) -> list[Path]:
+    return sorted((root / "demos").glob("demo_*.py"))
+
+
+def write_demo_pages(target: Path, root: Path, runs: Path) -> None:
+    """Run the demos (two at a time) and write target/<demo>.md and target/index.md."""
+    scripts = demos(root)
+    unknown = [d.name for d in scripts if d.stem not in SMALL]
+    if unknown:
+        raise RuntimeError(
+            f"docs/_ext/fembem_docs/demo_pages.py: give the small size of {', '.join(unknown)} "
+            "in SMALL (the arguments of its docs run)"
+        )
+    target.mkdir(parents=True, exist_ok=True)
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        folders = list(pool.map(lambda d: _run(root, d, runs), scripts))
+    for demo, folder in zip(scripts, folders):
+        figures = target / "_figures" / demo.stem
+        shutil.rmtree(figures, ignore_errors=True)
+        _write_if_changed(target / f"{demo.stem}.md", _page(demo, folder, figures, f"_figures/{demo.stem}"))
+    index = [
+        "# Demos",
+        "",
+        "Commented scripts in `demos/`, written as `# %%` cells (open them as notebooks with",
+        "jupytext). Each takes `--cells N` (the mesh size) and `--out DIR` (default",
+        "`out/<demo name>`), prints its tables on rank 0 and writes the numbers to",
+        "`DIR/results.json`; the test suite runs each at a small size and checks those",
+        "numbers. The pages below show each script with what it printed and drew when",
+        "run at a small size for this site.",
+        "",
+        "```{toctree}",
+        ":maxdepth: 1",
+        "",
+        *[d.stem for d in scripts],
+        "```",
+        "",
+    ]
+    _write_if_changed(target / "index.md", "\n".join(index))
+
+
+def _write_if_changed(path: Path, text: str) -> None:
+    if not path.is_file() or path.read_text() != text:
+        path.write_text(text)
