@@ -25,7 +25,6 @@ extensions = [
     "sphinx.ext.autodoc",
     "sphinx.ext.napoleon",
     "sphinx.ext.mathjax",
-    "sphinx.ext.viewcode",
     "fembem_docs",
 ]
 
@@ -58,7 +57,10 @@ napoleon_google_docstring = False
 
 # MathJax 2.7 from libjs-mathjax, copied into _static/mathjax by fembem_docs (offline)
 mathjax_path = "mathjax/MathJax.js?config=TeX-AMS_SVG"
-mathjax2_config = {"tex2jax": {"processEscapes": True}}
+# MyST marks its pages tex2jax_ignore and its maths class "math": process only those
+mathjax2_config = {
+    "tex2jax": {"processEscapes": True, "processClass": "math", "ignoreClass": "tex2jax_ignore"}
+}
 
 html_theme = "furo"
 html_title = "fembem"

@@ -230,7 +230,7 @@ def _plan(
     if diam >= 1.0 and not allow_large:
         raise ValueError(
             f"diam(Omega) = {diam:.4g} >= 1: the single-layer operator may not be "
-            "elliptic (METHOD.md section 2); shrink the domain, or opt out with "
+            "elliptic (docs/method.md section 2); shrink the domain, or opt out with "
             "allow_large (geometry.allow_large = true) at your own risk"
         )
     B = BoundaryCurve(P)

@@ -175,15 +175,15 @@ def _check_structure(name: str, rho_np: Callable[[np.ndarray], np.ndarray]) -> t
     if (r <= 0).any():
         i = int(np.argmax(r <= 0))
         raise ValueError(
-            f"material {name!r}: rho({t[i]:.6g}) = {r[i]:.6g} <= 0; METHOD.md section 1 implies "
-            "rho(t) >= alpha > 0, make rho positive"
+            f"material {name!r}: rho({t[i]:.6g}) = {r[i]:.6g} <= 0; docs/method.md section 1 "
+            "implies rho(t) >= alpha > 0, make rho positive"
         )
     q = np.diff(t * r) / np.diff(t)
     if not (q > 0).all():
         i = int(np.argmax(q <= 0))
         raise ValueError(
             f"material {name!r}: t*rho(t) is not strictly increasing near t = {t[i]:.6g}; "
-            "METHOD.md section 1 needs alpha (t-s) <= t rho(t) - s rho(s)"
+            "docs/method.md section 1 needs alpha (t-s) <= t rho(t) - s rho(s)"
         )
     return float(q.min()), float(q.max())
 

@@ -24,7 +24,7 @@ def pgpm_series(it: dict) -> dict:
 
 def claims_table(summaries: Summaries) -> list[str]:
     """One line per claim of METHOD.md section 7, with the criterion that decides it."""
-    lines = ["| claim (METHOD.md 7) | measured | criterion | verdict |", "|---|---|---|---|"]
+    lines = ["| claim (docs/method.md 7) | measured | criterion | verdict |", "|---|---|---|---|"]
     it, spec, err = (summaries.get(k) for k in ("iterations", "spectrum", "errors"))
     if it:
         fixed = [

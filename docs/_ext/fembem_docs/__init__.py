@@ -16,7 +16,8 @@
   code cell, what it printed and the figures it wrote (the demos run at small sizes,
   ``demo_pages.SMALL``; the runs are cached under _build/demo-runs, keyed by the
   sources).
-- MathJax 2.7 from Debian's libjs-mathjax, copied into the build (offline).
+- MathJax 2.7 from Debian's libjs-mathjax, copied into the build (offline), and
+  Debian furo's script made loadable as a classic script.
 """
 from __future__ import annotations
 
@@ -39,7 +40,9 @@ MATHJAX_PARTS = (
     "extensions",
     "jax/element",
     "jax/input/TeX",
+    "jax/output/PreviewHTML",
     "jax/output/SVG/jax.js",
+    "jax/output/SVG/config.js",
     "jax/output/SVG/autoload",
     "jax/output/SVG/fonts/TeX",
     "localization/en",
@@ -54,9 +57,7 @@ def _generate_pages(app: Sphinx) -> None:
     )
 
 
-def _copy_mathjax(app: Sphinx, exception: Exception | None) -> None:
-    if exception is not None or app.builder.format != "html":
-        return
+def _copy_mathjax(app: Sphinx) -> None:
     if not (MATHJAX / "MathJax.js").is_file():
         raise RuntimeError(f"{MATHJAX}/MathJax.js not found: install libjs-mathjax (make docs)")
     target = Path(app.outdir) / "_static" / "mathjax"
@@ -71,9 +72,36 @@ def _copy_mathjax(app: Sphinx, exception: Exception | None) -> None:
             shutil.copy2(src, dst)
 
 
+_FURO_IMPORT = 'import Gumshoe from "./gumshoe-patched.js";'
+
+
+def _furo_classic_scripts(app: Sphinx) -> None:
+    """Debian's furo ships scripts/furo.js unbundled, as an ES module (its first line
+    imports gumshoe), but loads it as a classic script: the browser rejects it, and
+    modules cannot load from file:// pages anyway. Load gumshoe (a UMD script that
+    defines window.Gumshoe) first, and furo.js without its import line (_copy_assets)."""
+    if app.config.html_theme == "furo":
+        app.add_js_file("scripts/gumshoe-patched.js", priority=199)
+
+
+def _fix_furo_script(app: Sphinx) -> None:
+    script = Path(app.outdir) / "_static" / "scripts" / "furo.js"
+    if script.is_file():
+        text = script.read_text()
+        if text.startswith(_FURO_IMPORT):
+            script.write_text(text[len(_FURO_IMPORT) :])
+
+
+def _copy_assets(app: Sphinx, exception: Exception | None) -> None:
+    if exception is None and app.builder.format == "html":
+        _fix_furo_script(app)
+        _copy_mathjax(app)
+
+
 def setup(app: Sphinx) -> dict:
     app.connect("builder-inited", _generate_pages)
-    app.connect("build-finished", _copy_mathjax)
+    app.connect("builder-inited", _furo_classic_scripts)
+    app.connect("build-finished", _copy_assets)
     app.connect("autodoc-process-docstring", docstrings.escape_bars)
     app.connect("autodoc-process-docstring", docstrings.link_method)
     app.connect("missing-reference", docstrings.reexported_reference)

@@ -90,8 +90,16 @@ def _outputs(stdout: str) -> dict[int, tuple[str, list[str]]]:
     return found
 
 
+_ROLE = re.compile(r":(mod|func|class|meth|data):`([^`]+)`")  # reStructuredText roles
+_METHOD = re.compile(r"docs/method\.md,? sections? (\d+)")
+
+
 def _markdown(source: str) -> str:
-    return "\n".join(re.sub(r"^# ?", "", line) for line in source.splitlines())
+    """A Markdown cell's text: its comment marks removed, the reStructuredText roles of
+    the scripts written as MyST roles, and the method's sections linked."""
+    text = "\n".join(re.sub(r"^# ?", "", line) for line in source.splitlines())
+    text = _ROLE.sub(r"{py:\1}`\2`", text)
+    return _METHOD.sub(lambda m: f"{{ref}}`docs/method.md section {m[1]} <method-{m[1]}>`", text)
 
 
 def _page(demo: Path, folder: Path, figures_dir: Path, rel_figures: str) -> str:
@@ -108,8 +116,8 @@ def _page(demo: Path, folder: Path, figures_dir: Path, rel_figures: str) -> str:
             if index == 0:
                 lines += [
                     "```{admonition} On this page",
-                    f"The script {{ref}}`demos/{demo.name} <{demo.stem}-source>`, run for this page "
-                    f"at a small size, `{command}`: the numbers printed below are "
+                    f"The script {{ref}}`demos/{demo.name} <{demo.stem}-source>`, run for this "
+                    f"page at a small size, `{command}`: the numbers printed below are "
                     "those of that run (the text quotes the default size).",
                     "```",
                     "",
@@ -149,7 +157,9 @@ def write_demo_pages(target: Path, root: Path, runs: Path) -> None:
     for demo, folder in zip(scripts, folders):
         figures = target / "_figures" / demo.stem
         shutil.rmtree(figures, ignore_errors=True)
-        _write_if_changed(target / f"{demo.stem}.md", _page(demo, folder, figures, f"_figures/{demo.stem}"))
+        _write_if_changed(
+            target / f"{demo.stem}.md", _page(demo, folder, figures, f"_figures/{demo.stem}")
+        )
     index = [
         "# Demos",
         "",
