@@ -52,6 +52,7 @@ suppress_warnings = ["ref.python"]
 autodoc_default_options = {"members": True, "show-inheritance": True, "ignore-module-all": True}
 autodoc_member_order = "bysource"
 autodoc_typehints = "description"
+autodoc_typehints_description_target = "documented"  # no lists of undocumented params
 napoleon_numpy_docstring = True
 napoleon_google_docstring = False
 
