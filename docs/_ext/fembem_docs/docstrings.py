@@ -6,8 +6,8 @@ Sphinx without changing the sources:
 
 - :func:`escape_bars`: a ``|`` outside literals and tables is an absolute value, not a
   reStructuredText substitution, so it is escaped;
-- :func:`link_method`: "docs/method.md section N" (or "(the method, section N)") becomes a
-  link to that section of the method page.
+- :func:`link_method`: "docs/method.md section N" becomes a link to that section of the
+  method page.
 
 :func:`external_reference` keeps the build nitpicky for the project's own names only: a
 reference that cannot be resolved is an error when it names something of fem_py,
@@ -26,7 +26,9 @@ from sphinx.application import Sphinx
 
 PACKAGES = ("fem_py", "bem_cpp", "coupling")
 _LITERAL = re.compile(r"(``.*?``|`[^`]*`)")
-_METHOD = re.compile(r"docs/method\.md,? sections? (\d+)")
+#: "docs/method.md section 6" and the same with the older name of that page
+_METHOD_SECTION = re.compile(r"(?:docs/method|METHOD)\.md,? sections? (\d+)")
+_METHOD = re.compile(r"(?<![/\w])(?:docs/method|METHOD)\.md")
 
 
 _TABLE_ROW = re.compile(r"^\s*(\+[-=+]+\+|\|.*\|)\s*$")  # a grid table's border or row
@@ -52,14 +54,22 @@ def escape_bars(app: Sphinx, what: str, name: str, obj: Any, options: Any, lines
             in_literal_block = True
 
 
+def _link(text: str) -> str:
+    if _METHOD_SECTION.search(text):
+        return _METHOD_SECTION.sub(
+            lambda m: f":ref:`{m[0].replace('METHOD.md', 'docs/method.md')} <method-{m[1]}>`",
+            text,
+        )
+    return _METHOD.sub(":doc:`docs/method.md </method>`", text)
+
+
 def link_method(app: Sphinx, what: str, name: str, obj: Any, options: Any, lines: list) -> None:
-    """autodoc-process-docstring: link "docs/method.md section N" to the method page."""
+    """autodoc-process-docstring: link "docs/method.md section N" (or "METHOD.md section
+    N", the name the docstrings used before the site) to that section of the method page,
+    and a bare "docs/method.md" to the page."""
     for i, line in enumerate(lines):
-        if "``" not in line:
-            lines[i] = _METHOD.sub(
-                lambda m: f":ref:`docs/method.md section {m.group(1)} <method-{m.group(1)}>`",
-                line,
-            )
+        parts = _LITERAL.split(line)
+        lines[i] = "".join(p if k % 2 else _link(p) for k, p in enumerate(parts))
 
 
 def _lookup(target: str) -> Any:
