@@ -29,6 +29,8 @@ import pytest
 
 from conftest import ROOT
 
+pytestmark = pytest.mark.slow  # builds the site: 1-4 minutes on 2 cores
+
 DOCS = ROOT / "docs"
 HTML = DOCS / "_build" / "html"
 SHOTS = DOCS / "_build" / "screenshots"
@@ -38,8 +40,8 @@ PAGES = {"index.html": True, "demos/demo_signorini_square.html": True, "method.h
 
 @pytest.fixture(scope="module")
 def site() -> Path:
-    """The built site (the `make docs` command, incremental)."""
-    pytest.importorskip  # noqa: B018 (Sphinx is a Debian package of `make docs`: no skip)
+    """The built site (the `make docs` command, incremental). Sphinx and Chromium are
+    Debian packages that `make test` installs (DOCS_DEBS): their absence is a failure."""
     cmd = [sys.executable, "-m", "sphinx", "-b", "html", "-W", "--keep-going", "-n", "-q"]
     proc = subprocess.run(
         [*cmd, str(DOCS), str(HTML)], capture_output=True, text=True, cwd=ROOT, timeout=900
