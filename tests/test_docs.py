@@ -164,6 +164,7 @@ def _browser(*args: str) -> subprocess.CompletedProcess:
         "--headless",
         "--no-sandbox",
         "--disable-gpu",
+        "--disable-dev-shm-usage",  # containers have a small /dev/shm
         "--hide-scrollbars",
         "--allow-file-access-from-files",
         "--virtual-time-budget=20000",
