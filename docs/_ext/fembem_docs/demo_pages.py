@@ -102,7 +102,8 @@ def _markdown(source: str) -> str:
     return _METHOD.sub(lambda m: f"{{ref}}`docs/method.md section {m[1]} <method-{m[1]}>`", text)
 
 
-def _page(demo: Path, folder: Path, figures_dir: Path, rel_figures: str) -> str:
+def _page(demo: Path, folder: Path, figures_dir: Path, rel_figures: str) -> tuple[str, list[str]]:
+    """The page of ``demo`` and the figures it shows, in order."""
     args, nprocs = SMALL[demo.stem]
     outputs = _outputs((folder / "stdout.txt").read_text())
     out_dir = str(folder / "out")
@@ -110,6 +111,7 @@ def _page(demo: Path, folder: Path, figures_dir: Path, rel_figures: str) -> str:
     if nprocs:
         command = f"mpirun -n {nprocs} {command}"
     lines: list[str] = []
+    shown: list[str] = []
     for index, (kind, source) in enumerate(run_cells.cells(demo.read_text())):
         if kind == "markdown":
             lines += [_markdown(source), ""]
@@ -132,14 +134,42 @@ def _page(demo: Path, folder: Path, figures_dir: Path, rel_figures: str) -> str:
             target = figures_dir / name
             target.parent.mkdir(parents=True, exist_ok=True)
             shutil.copy2(folder / "out" / name, target)
+            shown.append(name)
             lines += [f"![{name}, written by the cell above]({rel_figures}/{name})", ""]
     lines += [f"({demo.stem}-source)=", "## The script", ""]
     lines += [f"```{{literalinclude}} ../../demos/{demo.name}", ":language: python", "```", ""]
-    return "\n".join(lines)
+    return "\n".join(lines), shown
+
+
+def _title(demo: Path) -> str:
+    first = run_cells.cells(demo.read_text())[0][1]
+    return _markdown(first).splitlines()[0].lstrip("# ").strip()
+
+
+def _gallery(scripts: list[Path], figures: dict[str, list[str]]) -> list[str]:
+    """A two-column table of the demos: title and the first figure each one draws."""
+    cells = []
+    for demo in scripts:
+        cell = [f"[{_title(demo)}]({demo.stem}.md)"]
+        if figures[demo.stem]:
+            name = min(figures[demo.stem], key=lambda f: f != "whole_plane.png")  # else first
+            cell += ["", f"[![{name}](_figures/{demo.stem}/{name})]({demo.stem}.md)"]
+        cells.append(cell)
+    lines = ["```{list-table}", ":widths: 50 50", ""]
+    for i in range(0, len(cells), 2):
+        row = cells[i : i + 2] + ([["&nbsp;"]] if i + 1 == len(cells) else [])
+        for j, cell in enumerate(row):
+            lines.append(("* - " if j == 0 else "  - ") + cell[0])
+            lines += [("    " + text) if text else "" for text in cell[1:]]
+    return lines + ["```", ""]
+
+
+#: The demo shown first (``make demo`` runs it); the others follow by name.
+MAIN_DEMO = "demo_signorini_square"
 
 
 def demos(root: Path) -> list[Path]:
-    return sorted((root / "demos").glob("demo_*.py"))
+    return sorted((root / "demos").glob("demo_*.py"), key=lambda p: (p.stem != MAIN_DEMO, p.name))
 
 
 def write_demo_pages(target: Path, root: Path, runs: Path) -> None:
@@ -154,12 +184,12 @@ def write_demo_pages(target: Path, root: Path, runs: Path) -> None:
     target.mkdir(parents=True, exist_ok=True)
     with ThreadPoolExecutor(max_workers=2) as pool:
         folders = list(pool.map(lambda d: _run(root, d, runs), scripts))
+    shown: dict[str, list[str]] = {}
     for demo, folder in zip(scripts, folders):
         figures = target / "_figures" / demo.stem
         shutil.rmtree(figures, ignore_errors=True)
-        _write_if_changed(
-            target / f"{demo.stem}.md", _page(demo, folder, figures, f"_figures/{demo.stem}")
-        )
+        text, shown[demo.stem] = _page(demo, folder, figures, f"_figures/{demo.stem}")
+        _write_if_changed(target / f"{demo.stem}.md", text)
     index = [
         "# Demos",
         "",
@@ -170,8 +200,10 @@ def write_demo_pages(target: Path, root: Path, runs: Path) -> None:
         "numbers. The pages below show each script with what it printed and drew when",
         "run at a small size for this site.",
         "",
+        "",
+        *_gallery(scripts, shown),
         "```{toctree}",
-        ":maxdepth: 1",
+        ":hidden:",
         "",
         *[d.stem for d in scripts],
         "```",
