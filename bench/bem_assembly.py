@@ -1,5 +1,5 @@
 """Benchmark of the discrete Steklov-Poincare operator S_h (P1 flux) on the circle of
-radius 0.4 (METHOD.md section 4).
+radius 0.4 (docs/method.md section 4).
 
 For each n the table gives the wall time of ``bem_cpp.steklov_poincare`` (best of
 --repeat runs), its stages (assembly of V_h, K_h, W_h in one pass over the panel pairs;

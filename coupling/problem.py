@@ -1,6 +1,6 @@
 """The discrete problem (2.3), assembled once: interior forms, boundary map, S_h, loads, J_h.
 
-The pipeline, in the order of METHOD.md: interior forms (fem_py) -> boundary map ->
+The pipeline, in the order of docs/method.md: interior forms (fem_py) -> boundary map ->
 S_h (bem_cpp) -> J_h (:mod:`coupling.functional`). A :class:`SignoriniProblem` holds what
 is assembled and is not changed after construction; preconditioners
 (:mod:`coupling.preconditioners`) and solves (:func:`coupling.solvers.solve`) read it.
@@ -136,7 +136,7 @@ class SignoriniProblem:
 
     def exterior_flux(self, ue: np.ndarray) -> np.ndarray:
         """Coefficients of psi_h ~ du_e/dn from the trace ``ue`` (boundary order,
-        replicated): V_h psi_h = (K_h - M_h)(ue - a) (METHOD.md section 2), by the dense
+        replicated): V_h psi_h = (K_h - M_h)(ue - a) (docs/method.md section 2), by the dense
         Cholesky solve on rank 0 or by the H-matrix operator's CG solve (collective)."""
         if self.boundary_operator == "hmatrix":
             return self.S.flux(np.asarray(ue, dtype=float) - self.a)
@@ -148,7 +148,7 @@ class SignoriniProblem:
         )
 
     def exterior(self, solution: Any, points: np.ndarray) -> np.ndarray:
-        """u_e at exterior points (m, 2) by the representation formula (METHOD.md section 2),
+        """u_e at exterior points (m, 2) by the representation formula (docs/method.md section 2),
         by direct panel sums or, above the measured crossover (``bem_cpp``'s
         ``HMATRIX_POTENTIAL_CROSSOVER_*``), by the rectangular H-matrices of the potentials
         (``compression="auto"``, tol ``coupling.options.HMATRIX_TOL``)."""

@@ -4,7 +4,7 @@
 # Omega is the square [-1/4, 1/4]^2 without its upper-right quarter; its re-entrant
 # corner (0, 0) has the interior angle 3 pi/2, where the harmonic function
 # u = r^(2/3) sin(2 theta/3) (theta measured from the side x = 0, y > 0) has an
-# unbounded gradient (METHOD.md section 10). With the linear material, f = 0 and the
+# unbounded gradient (docs/method.md section 10). With the linear material, f = 0 and the
 # transmission data u0, t0 manufactured from u and an exterior field u_e, the discrete
 # solution converges like N^(-1/3) in the energy norm on uniform meshes (N dofs).
 #

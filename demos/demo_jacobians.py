@@ -17,7 +17,7 @@
 #    remainder must fall like eps^2);
 # 4. solves the contact problem once with each Jacobian and compares the iterates.
 #    The Jacobian enters the solver through the step size tau = 1/C0,
-#    C0 = lambda_max(B^-1 D^2 J_h(xi_0)) (METHOD.md section 5), so equal matrices
+#    C0 = lambda_max(B^-1 D^2 J_h(xi_0)) (docs/method.md section 5), so equal matrices
 #    must give the same iterates up to round-off.
 #
 # Run: `python demos/demo_jacobians.py [--cells N] [--repeat R] [--out DIR]` (results.json

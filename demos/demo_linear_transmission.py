@@ -1,7 +1,7 @@
 # %% [markdown]
 # # The linear transmission problem with a known solution
 #
-# The simplest case of the coupled problem (METHOD.md section 1): rho = 1 (the
+# The simplest case of the coupled problem (docs/method.md section 1): rho = 1 (the
 # Laplace equation inside), no Signorini part (Gamma_t = Gamma), so (1.1)-(1.4) read
 #
 #     -Laplace u = f  in Omega,   Laplace u_e = 0 outside,   u_e = a + b log|x| + o(1),
@@ -11,7 +11,7 @@
 # :class:`coupling.manufactured.ManufacturedSolution` with no Signorini arc), solve on
 # three meshes and print the errors: the energy error |u - u_h|_1 falls like h, the
 # nodal errors of u_h and the error of u_e (evaluated outside by the representation
-# formula of METHOD.md section 2) like h^2.
+# formula of docs/method.md section 2) like h^2.
 #
 # Without contact J_h is a quadratic functional: PGPM would be a preconditioned
 # Richardson iteration for the FEM-BEM system (K + T^T S_h T) u = b, and the default

@@ -40,7 +40,7 @@ say = rank0_print(comm)
 # ## Solve
 #
 # The arc end points are corners of the coarse partition (subdomains of size d = 4h),
-# as the substructuring preconditioner requires (METHOD.md section 6); the L-shape's
+# as the substructuring preconditioner requires (docs/method.md section 6); the L-shape's
 # corners and the arcs' ends lie on the coarse grid for any `cells` divisible by 8.
 
 # %%

@@ -7,7 +7,7 @@
 # rest) - and then does what `geometry.mesh = "disk.msh"` with `signorini = ["contact"]`
 # does in a configuration: rank 0 reads the file, the mesh is split automatically into
 # connected subdomains of size d (``fem_py.partition``) and distributed by whole
-# subdomains, and the group ends become coarse vertices (METHOD.md section 6).
+# subdomains, and the group ends become coarse vertices (docs/method.md section 6).
 #
 # The data are those of the manufactured solution
 # :func:`coupling.manufactured.disk_contact` (Carstensen material), in contact on the

@@ -20,7 +20,7 @@ DIMENSIONS = (2,)
 
 @dataclass(frozen=True)
 class GeometrySpec:
-    """Omega, its mesh and its coarse partition into subdomains (METHOD.md sections 1, 6).
+    """Omega, its mesh and its coarse partition into subdomains (docs/method.md sections 1, 6).
 
     Attributes
     ----------
@@ -44,7 +44,7 @@ class GeometrySpec:
         the second), side names, or ``"all"``; with ``mesh``, names of physical curve
         groups. () for none (``fem_py.mesh.polygon``).
     allow_large
-        Allow diam(Omega) >= 1 (then V is not guaranteed elliptic, METHOD.md section 2).
+        Allow diam(Omega) >= 1 (then V is not guaranteed elliptic, docs/method.md section 2).
     mesh
         A gmsh mesh file (MSH 2.2 or 4.1, linear triangles) instead of a generated shape.
     subdomains

@@ -1,4 +1,4 @@
-"""V_h, K_h, W_h and M_h against the circle values of METHOD.md section 2 and exact
+"""V_h, K_h, W_h and M_h against the circle values of docs/method.md section 2 and exact
 identities on polygons.
 
 Circle |x| = R (factor-2 convention): V cos(m t) = (R/m) cos(m t), V 1 = -2 R log R;
@@ -142,7 +142,7 @@ def test_mass_matrices():
 
 
 def test_hypersingular_is_maue():
-    """W_h = D^T V0_h D with D the arc-length derivative of the hats (METHOD.md section 9)."""
+    """W_h = D^T V0_h D with D the arc-length derivative of the hats (docs/method.md section 9)."""
     X = square(24)
     n = len(X)
     h = np.linalg.norm(np.roll(X, -1, axis=0) - X, axis=1)

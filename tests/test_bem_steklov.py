@@ -1,5 +1,5 @@
 """Discrete Steklov-Poincare operator S_h = 1/2 (W_h + (K_h - M_h)^T V_h^{-1} (K_h - M_h))
-(METHOD.md (2.x), section 4).
+(docs/method.md (2.x), section 4).
 
 Circle |x| = R: S cos(m t) = (m/R) cos(m t), S 1 = -1/(R log R). Rayleigh quotients of
 the interpolated modes converge at O(h^2) (geometry and interpolation; measured 2.55

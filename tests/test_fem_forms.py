@@ -1,4 +1,4 @@
-"""fem_py.forms: energy, residual and the two Jacobians (METHOD.md 2.1, 4.1), loads and
+"""fem_py.forms: energy, residual and the two Jacobians (docs/method.md 2.1, 4.1), loads and
 the stiffness matrix, against exact values and finite differences."""
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """fem_py.forms.materials: g' = t rho, rho' against finite differences, closed forms, the
-structural check of METHOD.md section 1 and the error messages."""
+structural check of docs/method.md section 1 and the error messages."""
 from __future__ import annotations
 
 import numpy as np

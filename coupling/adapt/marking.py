@@ -1,4 +1,4 @@
-"""Doerfler marking (METHOD.md section 10): the smallest set M of cells with
+"""Doerfler marking (docs/method.md section 10): the smallest set M of cells with
 sum_M eta_T^2 >= theta sum_T eta_T^2, 0 < theta <= 1 (Doerfler, SINUM 33, 1996)."""
 from __future__ import annotations
 

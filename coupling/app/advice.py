@@ -14,7 +14,7 @@ CONDITION_MAX = 1e3
 
 
 def material_warnings(material: Any) -> list[str]:
-    """A small alpha or a large beta/alpha (METHOD.md section 1): the constants of the
+    """A small alpha or a large beta/alpha (docs/method.md section 1): the constants of the
     structure condition alpha (t - s) <= t rho(t) - s rho(s) <= beta (t - s) bound the
     condition of the interior energy, so the iteration counts grow with beta/alpha."""
     alpha, beta = material.alpha, material.beta

@@ -336,7 +336,7 @@ def check_data_and_material(config: RunConfig) -> None:
     """Parse the [data] expressions and build the material of a validated configuration.
 
     Cheap (no mesh, no MPI): run it before the mesh is built so that a misspelt
-    function or a material violating the structure condition of METHOD.md section 1
+    function or a material violating the structure condition of docs/method.md section 1
     fails at once. The expressions are evaluated symbolically with UFL on an abstract
     triangle domain, the code path of ``fem_py.forms``, so constant sub-expressions
     that cannot be evaluated (``1/0``, ``log(-1)``) are caught too.

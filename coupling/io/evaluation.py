@@ -6,7 +6,7 @@ Each point is located against the mesh of fields.npz (P1 triangles,
 - ``inside`` Omega: u = u_h (linear interpolation in its triangle); u_e does not apply;
 - on Gamma (closer than 1e-11 times the diameter of Gamma's bounding box): u = u_h and
   u_e = the trace u + phi - u0, both linear along the panel;
-- ``outside``: u_e by the representation formula (METHOD.md section 2); u does not
+- ``outside``: u_e by the representation formula (docs/method.md section 2); u does not
   apply.
 
 Values that do not apply are NaN (empty in the CSV).
@@ -28,7 +28,7 @@ ON_GAMMA = 1e-11
 
 
 def exterior_from_fields(fields: dict, points: np.ndarray) -> np.ndarray:
-    """u_e at exterior ``points`` (m, 2) by the representation formula (METHOD.md section
+    """u_e at exterior ``points`` (m, 2) by the representation formula (docs/method.md section
     2) from the boundary arrays of a run's fields (``boundary_x``, ``ue``, ``dn_ue``,
     ``a``, ``flux_space``), compressed above bem_cpp's measured crossover (tol
     :data:`coupling.options.HMATRIX_TOL`); bem_cpp's ValueError for a point inside Omega

@@ -6,7 +6,7 @@
   against the arc length s along Gamma (counter-clockwise from ``boundary_x[0]``),
   with Gamma_s shaded and the corners of Omega marked.
 - ``whole_plane.png``: u_h in Omega and u_e outside (representation formula,
-  METHOD.md section 2) in one colour scale; they differ across Gamma by u0 - phi.
+  docs/method.md section 2) in one colour scale; they differ across Gamma by u0 - phi.
 - ``history.png``: the relative B-norm step and the relative energy excess of each
   iteration against the tolerance, and the size of the contact set.
 

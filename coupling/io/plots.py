@@ -52,7 +52,7 @@ class ExteriorSamples(NamedTuple):
 
 
 def exterior_samples(fields: dict, resolution: int = 121) -> ExteriorSamples:
-    """u_e (the representation formula, METHOD.md section 2) on the ``resolution`` x
+    """u_e (the representation formula, docs/method.md section 2) on the ``resolution`` x
     ``resolution`` grid of whole_plane.png, at its points outside Omega farther than
     h/20 from Gamma, from the boundary arrays of ``fields`` (``boundary_x``, ``ue``,
     ``dn_ue``, ``a``, ``flux_space``). bem_cpp releases the GIL while it evaluates, so

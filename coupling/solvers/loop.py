@@ -2,7 +2,7 @@
 of an outer step (record it, test the stopping rule, stop) and of the run (release the
 work objects, build the result), written once.
 
-The stopping rules all compare a relative B-norm step with ``tol`` (METHOD.md (3.18):
+The stopping rules all compare a relative B-norm step with ``tol`` (docs/method.md (3.18):
 ||xi||_B^2 = u^T B_Omega u + phi^T M_s phi); what the step is differs by method.
 """
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """What every iteration shares: the record of one step, the outcome of a run, and the
-B inner product of the stopping rule (METHOD.md (3.18): B = B_Omega + B_s).
+B inner product of the stopping rule (docs/method.md (3.18): B = B_Omega + B_s).
 
     ||xi||_B^2 = u^T B_Omega u + phi^T M_s phi,
 

@@ -1,6 +1,6 @@
 """Semismooth Newton (primal-dual active set) for the discrete problem (2.3): our extension.
 
-Optimality system of min J_h(u, phi) over phi >= 0 (METHOD.md sections 4-5), written
+Optimality system of min J_h(u, phi) over phi >= 0 (docs/method.md sections 4-5), written
 with the natural residual of one PGPM step in the metric M_s of B_s ((3.19), (3.22)):
 
     grad_u J = 0,   phi = P_s(phi - tau M_s^{-1} grad_phi J)

@@ -45,7 +45,7 @@ _BUILDERS: dict[int, tuple[Callable[..., Domain], Callable[..., DomainSize | Non
 
 def build_domain(comm: Any, spec: GeometrySpec) -> Domain:
     """Mesh Omega with a coarse partition into subdomains of size about
-    ``spec.subdomain_size`` (METHOD.md sections 1, 4 and 6).
+    ``spec.subdomain_size`` (docs/method.md sections 1, 4 and 6).
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""Distribute a triangle mesh over the ranks by whole subdomains (METHOD.md section 6).
+"""Distribute a triangle mesh over the ranks by whole subdomains (docs/method.md section 6).
 
 Every rank gets whole subdomains (:func:`subdomain_owners`, passed to
 ``dolfinx.mesh.create_mesh`` as its partitioner), so the local Dirichlet problems of
@@ -39,7 +39,7 @@ def subdomain_owners(
     Recursive coordinate bisection of the subdomain centroids, weighted by the cell
     count: a group of subdomains for ``k`` ranks is cut across its longer extent at
     the weighted position k//2 : k - k//2. The partition is deterministic (the same
-    for every run), and the local Dirichlet problems of METHOD.md section 6 become
+    for every run), and the local Dirichlet problems of docs/method.md section 6 become
     rank-local.
 
     Parameters

@@ -1,5 +1,5 @@
 """The :class:`Domain`: a distributed mesh of Omega with its coarse subdomain partition
-(METHOD.md sections 1, 4 and 6), and the domains of a user's mesh.
+(docs/method.md sections 1, 4 and 6), and the domains of a user's mesh.
 
 Tags
 ----

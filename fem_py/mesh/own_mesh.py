@@ -313,7 +313,7 @@ def prepare_mesh(
     if diam >= 1.0 and not allow_large:
         raise ValueError(
             f"diam(Omega) = {diam:.4g} >= 1 for {source}: the single-layer operator may not "
-            "be elliptic (METHOD.md section 2); scale the mesh down, or opt out with "
+            "be elliptic (docs/method.md section 2); scale the mesh down, or opt out with "
             "allow_large (geometry.allow_large = true) at your own risk"
         )
     tags, whole = _group_arcs(mesh, loop, signorini)

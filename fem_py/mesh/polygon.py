@@ -1,4 +1,4 @@
-"""The polygonal Omegas: the square, the L-shape and a given polygon (METHOD.md sections
+"""The polygonal Omegas: the square, the L-shape and a given polygon (docs/method.md sections
 1, 4 and 6), meshed with a coarse subdomain partition.
 
 :func:`polygon_domain` makes a coarse partition of Omega into L subdomains of size about
@@ -29,7 +29,7 @@ A sequence of arcs, each one of
 
 Arc end points become coarse vertices (inserted into the coarse mesh when needed; with
 ``structured=True`` on the square or L-shape they must already be coarse grid vertices),
-so every coarse boundary edge lies in Gamma_t or in one arc (METHOD.md section 6).
+so every coarse boundary edge lies in Gamma_t or in one arc (docs/method.md section 6).
 
 Modules
 -------
@@ -167,7 +167,7 @@ def _plan(spec: GeometrySpec) -> _Plan:
     if diam >= 1.0 and not spec.allow_large:
         raise ValueError(
             f"diam(Omega) = {diam:.4g} >= 1: the single-layer operator may not be "
-            "elliptic (METHOD.md section 2); shrink the domain, or opt out with "
+            "elliptic (docs/method.md section 2); shrink the domain, or opt out with "
             "allow_large (geometry.allow_large = true) at your own risk"
         )
     B = BoundaryCurve(P)

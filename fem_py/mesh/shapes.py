@@ -1,4 +1,4 @@
-"""The shapes of Omega and the description of its boundary (METHOD.md sections 1, 4, 6).
+"""The shapes of Omega and the description of its boundary (docs/method.md sections 1, 4, 6).
 
 Omega is a polygon: the square, the L-shape (the square minus its upper-right
 quarter) or a given simple counter-clockwise polygon (:func:`check_polygon`). Its

@@ -1,5 +1,5 @@
 """Users' own 3D meshes: a gmsh .msh file (MSH 2.2 or 4.1) of linear tetrahedra with
-named physical groups, read and checked on one rank (METHOD.md section 11).
+named physical groups, read and checked on one rank (docs/method.md section 11).
 
 :func:`read_tet_msh` reads the tetrahedra, the physical surface groups (as boundary
 triangles, for the Signorini patches) and the physical volume groups; a group without

@@ -1,4 +1,4 @@
-"""J_h on x = (u, phi) in one sequential PETSc Vec, and its Hessian H(x) (METHOD.md
+"""J_h on x = (u, phi) in one sequential PETSc Vec, and its Hessian H(x) (docs/method.md
 (4.1)) as one SeqAIJ matrix: the sparse P1 matrix D^2G plus the dense block
 P^T S_h P on the boundary and Signorini unknowns (z = T u + E phi = P x)."""
 from __future__ import annotations
