@@ -17,6 +17,8 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("fem_py", "bem_cpp", "coupling")
 MAX_LINES = 600
+#: the research code beside the library: it imports the library, never the other way
+RESEARCH = ("study", "bench")
 
 LAYERS = [
     ("fem_py", "bem_cpp"),
@@ -31,8 +33,6 @@ LAYERS = [
 ]
 #: (importing module, imported package) pairs allowed upwards, inside functions only
 LAZY_UPWARDS: set[tuple[str, str]] = set()
-#: the research code beside the library: it imports the library, never the other way
-RESEARCH = ("study", "bench")
 
 
 def _modules() -> list[tuple[str, Path]]:
@@ -86,6 +86,13 @@ def test_imports_point_down(name, path):
 
 
 @pytest.mark.parametrize("name,path", MODULES, ids=[m for m, _ in MODULES])
+def test_library_never_imports_the_research_code(name, path):
+    for module, _, _ in _imports(ast.parse(path.read_text())):
+        top = module.split(".")[0]
+        assert top not in RESEARCH, f"{name} imports {module}: the library cannot use {top}/"
+
+
+@pytest.mark.parametrize("name,path", MODULES, ids=[m for m, _ in MODULES])
 def test_no_private_names_across_modules(name, path):
     for module, names, _ in _imports(ast.parse(path.read_text())):
         if _layer(module) is None or module == name:
@@ -98,10 +105,3 @@ def test_no_private_names_across_modules(name, path):
 def test_module_size(name, path):
     lines = len(path.read_text().splitlines())
     assert lines <= MAX_LINES, f"{name} has {lines} lines (at most {MAX_LINES}): split it"
-
-
-@pytest.mark.parametrize("name,path", MODULES, ids=[m for m, _ in MODULES])
-def test_library_never_imports_the_research_code(name, path):
-    for module, _, _ in _imports(ast.parse(path.read_text())):
-        top = module.split(".")[0]
-        assert top not in RESEARCH, f"{name} imports {module}: the library cannot use {top}/"
