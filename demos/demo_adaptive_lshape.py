@@ -22,7 +22,7 @@
 import numpy as np
 from mpi4py import MPI
 
-from common import demo_parser, rank0_print, write_results
+from common import demo_parser, start_demo, write_results
 from coupling.adapt import AdaptOptions, adapt
 from coupling.manufactured import (
     ManufacturedSolution,
@@ -39,13 +39,12 @@ parser = demo_parser(
     "demo_adaptive_lshape",
     "Adaptive refinement at the re-entrant corner of an L-shape.",
     cells=8,
-    cells_help="cells per side of the bounding square of the first mesh (default 8)",
+    cells_help="cells per side of the bounding square of the first mesh",
 )
 parser.add_argument("--steps", type=int, default=12, help="adaptive refinements (default 12)")
 parser.add_argument("--max-dofs", type=int, default=40000, help="largest level (default 40000)")
-args = parser.parse_args()
 comm = MPI.COMM_WORLD
-say = rank0_print(comm)
+args, say = start_demo(parser, comm)
 
 # %% [markdown]
 # ## The singular solution

@@ -31,22 +31,16 @@ from dolfinx import fem
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from common import demo_parser, rank0_print, write_results
+from common import demo_parser, start_demo, write_results
 from coupling.manufactured import manufactured_problem, square_contact
 from coupling.options import SolverOptions
 from coupling.solvers import solve
 from fem_py.forms import check_jacobian, make_material, numpy_function
 
-parser = demo_parser(
-    "demo_jacobians",
-    "UFL-derived against handwritten Jacobians.",
-    cells=256,
-    cells_help="cells per side of the square (h = 0.5/cells; default 256)",
-)
+parser = demo_parser("demo_jacobians", "UFL-derived against handwritten Jacobians.", cells=256)
 parser.add_argument("--repeat", type=int, default=10, help="timed assemblies of each matrix")
-args = parser.parse_args()
 comm = MPI.COMM_WORLD
-say = rank0_print(comm)
+args, say = start_demo(parser, comm)
 
 # %% [markdown]
 # ## Assembly at a nonlinear state

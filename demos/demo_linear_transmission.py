@@ -25,7 +25,7 @@
 import numpy as np
 from mpi4py import MPI
 
-from common import demo_parser, rank0_print, solve_row, write_results
+from common import demo_parser, solve_row, start_demo, write_results
 from coupling.manufactured import (
     ManufacturedSolution,
     exterior_field,
@@ -36,14 +36,11 @@ from coupling.options import SolverOptions
 from coupling.solvers import solve
 from fem_py.forms import make_material
 
-args = demo_parser(
-    "demo_linear_transmission",
-    "Linear transmission problem, known solution.",
-    cells=128,
-    cells_help="cells per side of the finest mesh; the others have N/2, N/4",
-).parse_args()
+description = "Linear transmission problem, known solution."
+cells_help = "cells per side of the finest mesh; the others have N/2, N/4"
+parser = demo_parser("demo_linear_transmission", description, cells=128, cells_help=cells_help)
 comm = MPI.COMM_WORLD
-say = rank0_print(comm)
+args, say = start_demo(parser, comm)
 
 # %% [markdown]
 # ## The exact solution

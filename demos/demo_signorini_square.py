@@ -36,21 +36,25 @@ import time
 import numpy as np
 from mpi4py import MPI
 
-from common import demo_parser, rank0_print, solve_row, write_results, write_solve_outputs
+from common import (
+    OUTPUTS_HELP,
+    demo_parser,
+    solve_row,
+    start_demo,
+    write_results,
+    write_solve_outputs,
+)
 from coupling.manufactured import manufactured_problem, solution_errors, square_contact
 from coupling.options import SolverOptions
 from coupling.solvers import solve
 from fem_py.forms import make_material
 
-args = demo_parser(
-    "demo_signorini_square",
-    "Nonlinear Signorini contact on a square (manufactured solution with a known contact set).",
-    cells=128,
-    cells_help="cells per side of the finest mesh (h = 0.5/cells; default 128)",
-    out_help="folder for the plots, fields and results.json",
-).parse_args()
+description = (
+    "Nonlinear Signorini contact on a square (manufactured solution with a known contact set)."
+)
+parser = demo_parser("demo_signorini_square", description, cells=128, out_help=OUTPUTS_HELP)
 comm = MPI.COMM_WORLD
-say = rank0_print(comm)
+args, say = start_demo(parser, comm)
 
 # %% [markdown]
 # ## The material and the exact solution

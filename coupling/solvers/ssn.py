@@ -57,6 +57,8 @@ from coupling.solvers.records import RunResult, b_norm2, global_dot, set_owned
 
 __all__ = [
     "NewtonSettings",
+    "Hessian",
+    "Trial",
     "semismooth_newton",
     "newton_direction",
     "line_search",

@@ -86,17 +86,9 @@ class Evaluator:
         """Run ``solve()`` (the SNES or TAO ``solver`` on ``x``) within the budget; the
         result at ``x``, with the further ``fields`` of :class:`PeerResult`."""
         converged, reason, seconds = self.budget.run(solve, solver.getConvergedReason, describe)
+        outcome = dict(converged=converged, reason=reason, iterations=solver.getIterationNumber())
         u, phi = self.split(x)
-        return PeerResult(
-            u=u,
-            phi=phi,
-            converged=converged,
-            reason=reason,
-            iterations=solver.getIterationNumber(),
-            solve=seconds,
-            evaluations=self.evaluations,
-            **fields,
-        )
+        return PeerResult(u, phi, **outcome, solve=seconds, evaluations=self.evaluations, **fields)
 
     def destroy(self) -> None:
         self.grad_u.destroy()
