@@ -99,3 +99,35 @@ def bad_msh(path: Path, kind: str) -> Path:
     finally:
         gmsh.finalize()
     return Path(path)
+
+
+def notched_msh(path: Path, h: float) -> Path:
+    """The OpenCASCADE body of issue 29: the rectangle [-0.3, 0.3] x [-0.2, 0.2] minus the
+    disk of radius 0.12 about (0, 0.2); curve groups "bottom" (y = -0.2), "notch" (the
+    circular arc) and "free" (the rest), surface group "omega"."""
+    gmsh = _session()
+    try:
+        occ = gmsh.model.occ
+        body, _ = occ.cut(
+            [(2, occ.addRectangle(-0.3, -0.2, 0, 0.6, 0.4))],
+            [(2, occ.addDisk(0, 0.2, 0, 0.12, 0.12))],
+        )
+        occ.synchronize()
+        groups: dict[str, list[int]] = {"bottom": [], "notch": [], "free": []}
+        for _, tag in gmsh.model.getBoundary(body, oriented=False):
+            x0, y0, _, x1, y1, _ = gmsh.model.getBoundingBox(1, abs(tag))
+            if y1 < -0.19:
+                groups["bottom"].append(abs(tag))
+            elif y0 > 0.05 and abs(x0) < 0.13 and abs(x1) < 0.13:
+                groups["notch"].append(abs(tag))
+            else:
+                groups["free"].append(abs(tag))
+        for k, (name, tags) in enumerate(groups.items()):
+            _name(gmsh, 1, tags, k + 1, name)
+        _name(gmsh, 2, [t for _, t in body], 4, "omega")
+        gmsh.option.setNumber("Mesh.MeshSizeMax", h)
+        gmsh.model.mesh.generate(2)
+        gmsh.write(str(path))
+    finally:
+        gmsh.finalize()
+    return Path(path)
