@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 
 from conftest import run_mpi
@@ -65,3 +66,17 @@ def test_adaptive_run_on_a_mesh_file_is_the_same_on_1_2_3_ranks(tmp_path):
             assert p["converged"]
             # the solves stop at tol = 1e-8 relative: the estimators agree to that order
             assert p["estimator"] == pytest.approx(s["estimator"], rel=1e-6)
+
+
+def test_marking_takes_cells_tied_to_round_off_alike():
+    """Cells with equal indicators (a symmetric mesh) are marked alike however round-off
+    (which depends on the number of ranks) orders them."""
+    from mpi4py import MPI
+
+    from coupling.adapt import doerfler_marking
+
+    exact = np.array([4.0, 3.0, 3.0, 2.0])  # theta = 0.5: 4 + 3 reaches 6 of 12
+    for eps in (0.0, 1e-12, -1e-12):
+        eta = exact * np.array([1.0, 1.0 + eps, 1.0 - eps, 1.0])
+        marked = doerfler_marking(MPI.COMM_SELF, eta, 0.5)
+        assert marked.tolist() == [True, True, True, False], eps
