@@ -81,6 +81,9 @@ from fem_py.shapes import (
     checked_center,
     diameter,
     edge_tag,
+    grid_cells_per_side,
+    grid_counts,
+    grid_outline,
     grid_partition,
     insert_boundary_points,
     parse_arcs,
@@ -94,6 +97,7 @@ __all__ = [
     "DomainSize",
     "build_domain",
     "domain_size",
+    "mesh_size_estimate",
     "domain_from_file",
     "domain_from_mesh",
     "domain_from_prepared",
@@ -218,14 +222,20 @@ class _Plan:
 
 
 def _plan(
-    shape, h, subdomain_size, center, width, vertices, signorini, structured, allow_large
+    shape, h, subdomain_size, center, width, vertices, signorini, structured, allow_large, grid=True
 ) -> _Plan:
     """Validate the arguments of :func:`build_domain` and lay out its coarse grid
-    (identically on every rank, before any collective call)."""
+    (identically on every rank, before any collective call); ``grid=False``: the same
+    checks without the coarse cells of the square and L-shape (O(1) memory, for sizes)."""
     h, d, P, (cx, cy) = _validate(shape, h, subdomain_size, center, width, vertices)
     cV = ccells = csize = None
     if shape != "polygon":
-        P, cV, ccells, csize = grid_partition(shape, (cx, cy), float(width), d)
+        nc = grid_cells_per_side(shape, float(width), d)
+        csize = float(width) / nc
+        if grid:
+            P, cV, ccells, csize = grid_partition(shape, (cx, cy), float(width), d)
+        else:
+            P = grid_outline(shape, (cx, cy), float(width), nc)
     diam = diameter(P)
     if diam >= 1.0 and not allow_large:
         raise ValueError(
@@ -242,15 +252,17 @@ def _plan(
         arcs, whole = parse_arcs(signorini, shape, B)
     if shape != "polygon":
         if structured:
-            for q in ends:
-                if np.linalg.norm(cV - q, axis=1).min() > B.tol:
+            corner = np.array([cx - float(width) / 2, cy - float(width) / 2])
+            for q in ends:  # the nearest grid point, in closed form
+                off = (q - corner) / csize
+                if np.linalg.norm((off - np.round(off)) * csize) > B.tol:
                     raise ValueError(
                         f"signorini: arc end ({q[0]:g}, {q[1]:g}) is not a coarse "
                         "grid vertex, which structured=True requires; move it to a "
                         f"multiple of the coarse size {csize:g} or use "
                         "structured=False"
                     )
-        else:
+        elif grid:
             cV, ccells = insert_boundary_points(cV, ccells, ends, B.tol)
     return _Plan(h, d, P, B, arcs, whole, ends, cV, ccells, csize)
 
@@ -292,8 +304,10 @@ def domain_size(
     semi_axes: Sequence[float] | None = None,
 ) -> DomainSize | None:
     """The sizes of ``build_domain(comm, shape, ...)`` (same arguments) in closed form,
-    without a mesh: for the structured square and L-shape; None where only meshing
-    tells (gmsh meshes). Raises the errors ``build_domain`` raises for the arguments.
+    without a mesh and in O(1) memory (no coarse grid either): for the structured square
+    and L-shape; None where only meshing tells (gmsh meshes: see
+    :func:`mesh_size_estimate`). Raises the errors ``build_domain`` raises for the
+    arguments.
 
     The fine nodes number ``fem_py.structured.node_count`` for n = max(2, round(c/h))
     segments per coarse edge (c the coarse size); every coarse boundary
@@ -305,33 +319,98 @@ def domain_size(
         conic_plan(shape, h, subdomain_size, center, radius, semi_axes, signorini, allow_large)
         return None
     plan = _plan(
-        shape, h, subdomain_size, center, width, vertices, signorini, structured, allow_large
+        shape,
+        h,
+        subdomain_size,
+        center,
+        width,
+        vertices,
+        signorini,
+        structured,
+        allow_large,
+        grid=False,
     )
     if shape == "polygon" or not structured:
         return None
     n = max(2, int(round(plan.csize / plan.h)))
-    cV, cells = plan.cV, np.asarray(plan.ccells, dtype=np.int64)
-    # the sides a -> b of every coarse cell, cell by cell; a boundary edge is on one cell
-    a, b = cells.ravel(), np.roll(cells, -1, axis=1).ravel()
-    key = np.minimum(a, b) * len(cV) + np.maximum(a, b)
-    _, inverse, count = np.unique(key, return_inverse=True, return_counts=True)
-    once = count[inverse] == 1
-    boundary = list(zip(a[once].tolist(), b[once].tolist()))
-    tags = [edge_tag(cV, p, q, plan.B, plan.arcs) for p, q in boundary]
-    n_gamma = n * len(boundary)
+    n_vertices, n_edges, n_cells, n_boundary = grid_counts(shape, round(width / plan.csize))
+    n_gamma = n * n_boundary
     if plan.whole:
         n_s = n_gamma
-    else:
-        per_arc = [tags.count(SIGNORINI_TAG0 + k) for k in range(len(plan.arcs))]
-        n_s = sum(n * k - 1 for k in per_arc if k)
+    else:  # arc ends are coarse vertices: an arc covers length / csize coarse edges
+        n_s = sum(n * int(round(arc.length / plan.csize)) - 1 for arc in plan.arcs)
     leg = plan.csize / n
     return DomainSize(
-        dofs=node_count(len(cV), len(count), len(cells), cells.shape[1], n),
+        dofs=node_count(n_vertices, n_edges, n_cells, 4, n),
         boundary_dofs=n_gamma,
         signorini_dofs=n_s,
-        subdomains=len(cells),
+        subdomains=n_cells,
         h_min=leg,
         h_max=math.sqrt(2.0) * leg,
+    )
+
+
+#: P1 nodes of a gmsh mesh of size h per unit area, times h^2: 2 / sqrt(3), the nodes of
+#: equilateral triangles of side h (measured 1.20-1.44 on the square, L-shape, disk and
+#: ellipse at h = 0.02 .. 0.005, the excess from the boundary, counted apart below)
+GMSH_NODES_PER_AREA = 2.0 / math.sqrt(3.0)
+
+
+def mesh_size_estimate(
+    shape: str,
+    *,
+    h: float,
+    subdomain_size: float,
+    center: Sequence[float] = (0.0, 0.0),
+    width: float = 0.5,
+    vertices: Sequence[Sequence[float]] | None = None,
+    signorini: Any = (),
+    structured: bool = False,
+    allow_large: bool = False,
+    radius: float = 0.25,
+    semi_axes: Sequence[float] | None = None,
+) -> DomainSize:
+    """The sizes of a gmsh mesh of ``build_domain(comm, shape, ...)`` estimated before
+    meshing, in O(1) memory, from the area A and the perimeter G of Omega and h: dofs
+    about GMSH_NODES_PER_AREA A / h^2 + G / (2 h), boundary dofs G / h, Signorini dofs
+    the arcs' length / h, A / d^2 subdomains (a slight underestimate: to refuse a run
+    that cannot fit before its mesh exists; :func:`domain_size` is exact where it can
+    be). Raises the errors ``build_domain`` raises for the arguments."""
+    if shape in CONICS:
+        h, d, _, (a, b), arcs = conic_plan(
+            shape, h, subdomain_size, center, radius, semi_axes, signorini, allow_large
+        )
+        area = math.pi * a * b
+        gamma = math.pi * (3 * (a + b) - math.sqrt((3 * a + b) * (a + 3 * b)))  # Ramanujan
+        if arcs == "all":
+            contact = gamma
+        else:  # an arc's share of the parameter angle, a fair share of the length
+            contact = sum(((t1 - t0) % (2 * math.pi)) / (2 * math.pi) for t0, t1 in arcs) * gamma
+    else:
+        plan = _plan(
+            shape,
+            h,
+            subdomain_size,
+            center,
+            width,
+            vertices,
+            signorini,
+            structured,
+            allow_large,
+            grid=False,
+        )
+        h, d, P = plan.h, plan.d, plan.P
+        x, y = P[:, 0], P[:, 1]
+        area = 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
+        gamma = float(plan.B.len.sum())
+        contact = gamma if plan.whole else sum(arc.length for arc in plan.arcs)
+    return DomainSize(
+        dofs=int(GMSH_NODES_PER_AREA * area / h**2 + gamma / (2 * h)),
+        boundary_dofs=int(gamma / h),
+        signorini_dofs=int(contact / h),
+        subdomains=max(1, int(area / d**2)),
+        h_min=h,
+        h_max=h,
     )
 
 

@@ -253,7 +253,12 @@ def _solve_config(
     """``fembem solve`` of the validated ``config`` (the figure process ``worker`` started)."""
     plots = config["output"]["plots"]
     from coupling.app.advice import arc_warnings, material_warnings
-    from coupling.app.from_config import domain_from_config, planned_size, problem_on_domain
+    from coupling.app.from_config import (
+        domain_from_config,
+        estimated_size,
+        planned_size,
+        problem_on_domain,
+    )
     from coupling.app.progress import ProgressMonitor
     from coupling.app.run import run_solver
     from coupling.app.sizing import check_memory, size_of_domain
@@ -269,8 +274,10 @@ def _solve_config(
     monitor = None if args.quiet else ProgressMonitor(comm)
     size = _with_geometry_key(planned_size, config)
     kind = config["solver"]["boundary_operator"]
-    if size is not None:  # closed form: refuse before anything is built
-        check_memory(size, comm.size, plots=config["output"]["plots"], boundary_operator=kind)
+    # refuse before anything is built: closed form, else estimated from the area and h
+    rough = size if size is not None else _with_geometry_key(estimated_size, config)
+    if rough is not None:
+        check_memory(rough, comm.size, plots=config["output"]["plots"], boundary_operator=kind)
     with staged_output_dir(comm, out, force=args.force) as staging, RunOutputs(
         comm,
         staging,
@@ -336,7 +343,7 @@ def _solve_config(
 def _info(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
     from mpi4py import MPI
 
-    from coupling.app.from_config import domain_from_config, planned_size
+    from coupling.app.from_config import domain_from_config, estimated_size, planned_size
     from coupling.app.sizing import memory_available, memory_estimate, size_of_domain
 
     comm = MPI.COMM_WORLD
@@ -344,8 +351,20 @@ def _info(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
     size = _with_geometry_key(planned_size, config)
     how = "closed form"
     if size is None:
-        size = size_of_domain(_with_geometry_key(domain_from_config, comm, config))
-        how = "from the mesh"
+        size = _with_geometry_key(estimated_size, config)
+        how = "estimated from the area and h: the mesh would not fit in memory"
+        if (
+            size is None
+            or memory_estimate(
+                size,
+                comm.size,
+                plots=config["output"]["plots"],
+                boundary_operator=config["solver"]["boundary_operator"],
+            )
+            <= memory_available()
+        ):  # a mesh that cannot fit is not built to be counted
+            size = size_of_domain(_with_geometry_key(domain_from_config, comm, config))
+            how = "from the mesh"
     report = {
         **dataclasses.asdict(size),
         "memory_estimate_bytes": memory_estimate(

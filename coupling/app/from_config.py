@@ -15,6 +15,7 @@ __all__ = [
     "geometry_arguments",
     "domain_from_config",
     "planned_size",
+    "estimated_size",
     "coarser_configs",
     "material_from_config",
     "problem_on_domain",
@@ -72,6 +73,16 @@ def planned_size(config: dict) -> Any:
             )
         return None
     return domain_size(shape, **kwargs)
+
+
+def estimated_size(config: dict) -> Any:
+    """The ``fem_py.geometry.DomainSize`` of a generated gmsh mesh estimated before
+    meshing (``fem_py.geometry.mesh_size_estimate``: from the area and h), or None for a
+    mesh file (it is the size it is)."""
+    from fem_py.geometry import mesh_size_estimate
+
+    shape, kwargs = geometry_arguments(config)
+    return None if shape == "mesh" else mesh_size_estimate(shape, **kwargs)
 
 
 def coarser_configs(
