@@ -1,11 +1,12 @@
 """Command line ``fembem``: ``solve``, ``evaluate``, ``exterior`` and ``check-jacobian``
 (README.md).
 
-Exit codes: 0 success, 1 a check failed (check-jacobian), 2 bad input (one line on
-stderr naming the configuration key or file and the fix; a traceback only with
---debug), 3 the solver did not converge (outputs are still written), 130 and 143
-interrupted by SIGINT (Ctrl-C) and SIGTERM (one line on stderr; the output folder is
-left as it was).
+Exit codes: 0 success, 1 a check failed (check-jacobian) or an internal error (a bug:
+one line, the traceback with --debug), 2 bad input (one line on stderr naming the
+configuration key or file and the fix; a traceback only with --debug), 3 the solver did
+not converge (outputs are still written), 130 and 143 interrupted by SIGINT (Ctrl-C) and
+SIGTERM (one line on stderr; the output folder is left as it was); under mpirun an
+interrupt ends with mpirun's own exit code, 1, and the line "interrupted".
 
 Under mpirun every rank runs the same command on MPI.COMM_WORLD. The inputs are
 validated identically on every rank before the first collective call, errors raised
@@ -72,13 +73,23 @@ class InterruptHandler:
         else:
             report = _rank() == 0
         if report:
-            name = signal.Signals(signum).name
-            print(
-                f"fembem: interrupted by {name}; no output of this run was kept",
-                file=sys.stderr,
-                flush=True,
-            )
+            print(f"fembem: {interrupt_line(signum)}", file=sys.stderr, flush=True)
         raise Interrupted(signum)
+
+
+def _world_size() -> int:
+    """The number of MPI ranks, without starting MPI if it is not started yet."""
+    if "mpi4py.MPI" in sys.modules:
+        return sys.modules["mpi4py.MPI"].COMM_WORLD.size
+    return int(os.environ.get("OMPI_COMM_WORLD_SIZE", os.environ.get("PMI_SIZE", "1")))
+
+
+def interrupt_line(signum: int) -> str:
+    """The line that reports an interrupt: the signal by name in a serial run; under
+    mpirun only "interrupted", since mpirun turns the user's Ctrl-C into a SIGTERM to
+    every rank (and itself exits with code 1)."""
+    how = "interrupted" if _world_size() > 1 else f"interrupted by {signal.Signals(signum).name}"
+    return f"{how}; no output of this run was kept"
 
 
 def _rank() -> int:
