@@ -9,6 +9,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from conftest import ROOT, run_cli
 from coupling.io.atomic import remove_stale_staging
 
@@ -77,3 +79,28 @@ def test_a_live_runs_staging_folder_is_kept(tmp_path):
         os.close(fd)
     assert live.is_dir() and unlocked.is_dir() and not dead.exists()
     assert remove_stale_staging(out) == [live]  # its run has ended now
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_run_stuck_in_native_code_ends_on_a_signal(tmp_path, signum):
+    config = tmp_path / "c.toml"
+    config.write_text(CONFIG.format(h=1 / 16, d=1 / 4))
+    out = tmp_path / "out"
+    script = str(ROOT / "tests" / "mpi" / "stuck_in_native_code.py")
+    proc = subprocess.Popen(
+        [sys.executable, script, "solve", str(config), "--out", str(out)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=ROOT,
+    )
+    for line in proc.stdout:
+        if line.startswith("stuck"):
+            proc.send_signal(signum)
+            break
+    # before issue 29 it never ended; the helper ends it WATCHDOG_GRACE_SECONDS after
+    _, stderr = proc.communicate(timeout=60)
+    assert proc.returncode in (-signum, 128 + signum), stderr  # by the signal, as a shell sees
+    lines = [ln for ln in stderr.splitlines() if ln.strip()]
+    assert lines == [f"fembem: interrupted by {signum.name}; no output of this run was kept"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["c.toml"]  # no staging folder left

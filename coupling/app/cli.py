@@ -61,7 +61,18 @@ class InterruptHandler:
     before, rank 0 does."""
 
     def __init__(self) -> None:
-        self.staging: Path | None = None
+        self._staging: Path | None = None
+        self.watchdog: Any = None  # coupling.app.watchdog.SignalWatchdog, when running
+
+    @property
+    def staging(self) -> Path | None:
+        return self._staging
+
+    @staging.setter
+    def staging(self, path: Path) -> None:
+        self._staging = path
+        if self.watchdog is not None:
+            self.watchdog.staging(path)
 
     def __call__(self, signum: int, frame: object) -> None:
         for s in EXIT_INTERRUPTED:  # a second signal must not interrupt the clean-up
@@ -74,6 +85,8 @@ class InterruptHandler:
             report = _rank() == 0
         if report:
             print(f"fembem: {interrupt_line(signum)}", file=sys.stderr, flush=True)
+        if self.watchdog is not None:
+            self.watchdog.reported()  # also when another rank reports: once is enough
         raise Interrupted(signum)
 
 
@@ -482,6 +495,8 @@ def _check_jacobian(args: argparse.Namespace, interrupts: InterruptHandler) -> i
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the exit code. SIGINT and SIGTERM end it with one
     line and exit code 130 or 143 wherever they arrive."""
+    from coupling.app.watchdog import SignalWatchdog
+
     interrupts = InterruptHandler()
     previous = {s: signal.signal(s, interrupts) for s in EXIT_INTERRUPTED}
     import petsc4py
@@ -489,10 +504,14 @@ def main(argv: list[str] | None = None) -> int:
     # signals stay Python's (PETSc's handlers would print a crash report instead)
     petsc4py.init([sys.argv[0], "-no_signal_handler"])
     try:
-        return _main(sys.argv[1:] if argv is None else list(argv), interrupts)
+        # a helper process ends the run if a signal finds it stuck in native code
+        with SignalWatchdog({s: interrupt_line(s) for s in EXIT_INTERRUPTED}, _rank()) as dog:
+            interrupts.watchdog = dog
+            return _main(sys.argv[1:] if argv is None else list(argv), interrupts)
     except Interrupted as err:  # reported by the handler
         return EXIT_INTERRUPTED[err.signum]
     finally:
+        interrupts.watchdog = None
         for s, handler in previous.items():
             signal.signal(s, handler)
 
