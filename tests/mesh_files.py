@@ -131,3 +131,24 @@ def notched_msh(path: Path, h: float) -> Path:
     finally:
         gmsh.finalize()
     return Path(path)
+
+
+def t1_msh(path: Path, lc: float = 0.02) -> Path:
+    """gmsh's tutorial t1.geo: the rectangle [0, 0.1] x [0, 0.3] with the unnamed curve
+    group 5 (bottom, right and left sides: ``Physical Curve(5) = {1, 2, 4}``) and the
+    surface group "My surface"."""
+    gmsh = _session()
+    try:
+        geo = gmsh.model.geo
+        p = [geo.addPoint(x, y, 0, lc) for x, y in [(0, 0), (0.1, 0), (0.1, 0.3), (0, 0.3)]]
+        lines = [geo.addLine(p[0], p[1]), geo.addLine(p[2], p[1]), geo.addLine(p[2], p[3])]
+        lines.append(geo.addLine(p[3], p[0]))
+        s = geo.addPlaneSurface([geo.addCurveLoop([4, 1, -2, 3])])
+        geo.synchronize()
+        gmsh.model.addPhysicalGroup(1, [1, 2, 4], 5)
+        _name(gmsh, 2, [s], 6, "My surface")
+        gmsh.model.mesh.generate(2)
+        gmsh.write(str(path))
+    finally:
+        gmsh.finalize()
+    return Path(path)

@@ -286,9 +286,7 @@ def _solve_config(
     from coupling.app.progress import ProgressMonitor
     from coupling.app.run import run_solver
     from coupling.app.sizing import check_memory, size_of_domain
-    from coupling.preconditioners import problem_arcs
     from fem_py.mesh_facts import mesh_facts
-    from fem_py.polyline import arc_length
     from coupling.io.atomic import staged_output_dir
     from coupling.io.outputs import RunOutputs
     from coupling.timing import process_seconds
@@ -327,14 +325,17 @@ def _solve_config(
             )
         problem, options, timings = problem_on_domain(domain, config)
         timings = {"mesh": mesh_time, **timings}
-        arcs = problem_arcs(problem)
-        arc_lengths = [float(arc_length(arc.coords)[-1]) for arc in arcs]
+        facts = mesh_facts(domain)  # collective
+        # the length of each entry of geometry.signorini, a closed "all" whole (as in
+        # summary.json); only an arc given by two points has ends the user may have swapped
+        arc_lengths = facts["signorini_lengths"]
+        entries = config["geometry"]["signorini"]
+        chosen_ends = [] if entries == "all" else [not isinstance(e, str) for e in entries]
         gamma = float(problem.boundary.panel_lengths.sum())
         for line in material_warnings(problem.material) + arc_warnings(
-            arc_lengths, [arc.closed for arc in arcs], gamma
+            arc_lengths, [not ends for ends in chosen_ends], gamma
         ):
             _say(f"warning: {line}")
-        facts = mesh_facts(domain)  # collective
         if monitor is not None:
             monitor.problem(problem, options, arc_lengths, facts)
         run = run_solver(
