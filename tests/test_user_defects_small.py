@@ -3,9 +3,11 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 
 from conftest import run_cli
+from coupling.io.plots import _BOUNDARY_FIELDS
 from mesh_files import t1_msh
 
 
@@ -36,3 +38,34 @@ def test_the_printed_length_of_all_is_the_whole_boundary(tmp_path):
     proc, summary = _solve(tmp_path, toml)
     assert summary["signorini_lengths"] == pytest.approx([2.0])
     assert "fembem: Signorini arcs of length 2\n" in proc.stdout + proc.stderr
+
+
+def test_history_shows_the_quantity_the_stopping_rule_tested():
+    """Item 9: ssn stops when the PGPM step from its last iterate is below tol, a quantity
+    no record holds (the last Newton step is above tol): history.png draws it."""
+    from mpi4py import MPI
+
+    from coupling.io.figures import _figure_history
+    from coupling.io.plots import figure_inputs
+    from coupling.manufactured import manufactured_problem, square_contact
+    from coupling.options import SolverOptions
+    from coupling.solvers import solve
+    from fem_py.materials import make_material
+
+    problem = manufactured_problem(
+        MPI.COMM_SELF, square_contact(), make_material("carstensen"), cells=32
+    )
+    options = SolverOptions()
+    solution = solve(problem, options)
+    assert solution.converged and "PGPM step at xi_k" in solution.reason
+    assert solution.stop_measure <= options.tol < solution.history[-1].step_norm
+    fields = {"x": np.eye(3)[:, :2], "triangles": np.array([[0, 1, 2]]), "u": np.zeros(3)}
+    fields |= {k: np.zeros(1) for k in _BOUNDARY_FIELDS}
+    inputs = figure_inputs(
+        fields, solution.history, tol=options.tol, stop_measure=solution.stop_measure
+    )
+    fig = _figure_history(inputs.history, options.tol)
+    drawn = {line.get_label(): line for line in fig.axes[0].get_lines()}
+    (test,) = [line for label, line in drawn.items() if label.startswith("stopping test")]
+    assert list(test.get_xdata()) == [solution.history[-1].iteration]
+    assert list(test.get_ydata()) == [solution.stop_measure]

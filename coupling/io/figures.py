@@ -260,6 +260,15 @@ def _figure_history(history: dict, tol: float):
         (energy[keep] - best) / max(abs(best), 1e-300),
         label=r"$(J_h(\xi_k) - J^*) \,/\, |J^*|$,  $J^*$: lowest $J_h$ reached",
     )
+    stop = history.get("stop", np.zeros(0))
+    if len(stop) and len(it):  # the stopping rule tested the PGPM step from the last iterate
+        ax.semilogy(
+            it[-1:],
+            stop,
+            "v",
+            color="k",
+            label=r"stopping test: $\Vert$PGPM step at $\xi_k\Vert_B \,/\, \Vert\xi_k\Vert_B$",
+        )
     ax.axhline(tol, color="0.4", ls="--", lw=0.8, label=f"tol = {tol:g}")
     ax.set_ylabel("relative size")
     ax.grid(alpha=0.3, lw=0.5, which="both")

@@ -78,6 +78,9 @@ class RunResult:
     tau: float
     history: list[IterationRecord] = field(default_factory=list)
     energy_increases: int = 0
+    #: the relative B-norm the stopping rule tested when it stopped the run, when that is
+    #: not the last record's ``step_norm`` (ssn stopping at the PGPM step from xi_k)
+    stop_measure: float | None = None
 
 
 class History(list):
@@ -110,6 +113,7 @@ class History(list):
         energy: float,
         tau: float,
         energy_increases: int,
+        stop_measure: float | None = None,
     ) -> "RunResult":
         """The :class:`RunResult` of the run these records belong to."""
         return RunResult(
@@ -121,6 +125,7 @@ class History(list):
             tau=tau,
             history=list(self),
             energy_increases=energy_increases,
+            stop_measure=stop_measure,
         )
 
 

@@ -205,6 +205,7 @@ def semismooth_newton(
     active = np.zeros(phi.size, dtype=bool)
     b_u = None  # B_Omega u_k, updated by the steps
     norm2 = relative = None  # ||xi_k||_B^2 and ||xi_k - xi_k-1||_B / ||xi_k||_B after a Newton step
+    stop_measure = None  # ||PGPM step at xi_k||_B / ||xi_k||_B when that test stops the run
     reason, converged, k = f"reached max_iterations = {max_iterations}", False, warm.iterations
     for k in range(warm.iterations + 1, max_iterations + 1):
         g_u = grad.array_r.copy()
@@ -214,6 +215,7 @@ def semismooth_newton(
         if norm2 is not None and not active_changed and tau * residual <= tol * np.sqrt(norm2):
             # the PGPM step from xi_k (B-norm tau r) meets the PGPM rule: no further step
             converged, k = True, k - 1
+            stop_measure = tau * residual / np.sqrt(norm2)
             reason = f"||PGPM step at xi_k||_B <= {tol:g} ||xi_k||_B, active set settled"
             break
         active, free = new_active, ~new_active
@@ -306,4 +308,5 @@ def semismooth_newton(
         energy=energy,
         tau=tau,
         energy_increases=increases,
+        stop_measure=stop_measure,
     )
