@@ -69,3 +69,21 @@ def test_history_shows_the_quantity_the_stopping_rule_tested():
     (test,) = [line for label, line in drawn.items() if label.startswith("stopping test")]
     assert list(test.get_xdata()) == [solution.history[-1].iteration]
     assert list(test.get_ydata()) == [solution.stop_measure]
+
+
+def test_a_truncated_mesh_file_is_said_to_be_cut_short(tmp_path):
+    """Items 10 and 11: a mesh file cut short is reported as such, with the section and
+    where it ends, and the key is named once."""
+    from mesh_files import square_msh
+
+    whole = square_msh(tmp_path / "whole.msh", 0.05).read_bytes()
+    cut = whole[: whole.index(b"$Elements") + 200]
+    (tmp_path / "cut.msh").write_bytes(cut)
+    config = tmp_path / "c.toml"
+    config.write_text('[geometry]\nmesh = "cut.msh"\nsubdomain_size = 0.125\n')
+    proc = run_cli("info", str(config))
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("fembem: error: geometry.mesh: '"), lines
+    assert "cut short: its $Elements section" in lines[0] and f"byte {len(cut)}" in lines[0]
+    assert "mesh: mesh:" not in lines[0] and "not a gmsh mesh file" not in lines[0]

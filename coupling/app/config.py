@@ -356,4 +356,6 @@ def geometry_error(err: ValueError) -> ValueError:
     key = "allow_large" if word == "diam(Omega)" else word
     if key not in DEFAULTS["geometry"]:
         return err
+    if message.startswith(f"{key}: "):  # "mesh: ..." names its key once, not twice
+        message = message[len(key) + 2 :]
     return ConfigError(f"geometry.{key}: {message}")
