@@ -7,6 +7,7 @@ __all__ = [
     "segment_lengths",
     "arc_length",
     "closest_on_polygon",
+    "inside_polygon",
     "coarsened_polygon",
     "polygon_corners",
 ]
@@ -30,6 +31,26 @@ def polygon_corners(nodes: np.ndarray) -> np.ndarray:
     t /= np.linalg.norm(t, axis=1)[:, None]
     t_in = np.roll(t, 1, axis=0)
     return np.flatnonzero(np.abs(t_in[:, 0] * t[:, 1] - t_in[:, 1] * t[:, 0]) > 1e-8)
+
+
+def inside_polygon(points: np.ndarray, vertices: np.ndarray, *, block: int = 1 << 20) -> np.ndarray:
+    """Whether each point (m, 2) lies inside the closed polygon through ``vertices``
+    (k, 2): an odd number of its sides crosses the horizontal ray to the right of the
+    point (exact in floating point up to the crossing abscissa; points on a side may
+    fall either way). Work in blocks of about ``block`` point-side pairs."""
+    points = np.asarray(points, dtype=float).reshape(-1, 2)
+    a = np.asarray(vertices, dtype=float)
+    b = np.roll(a, -1, axis=0)
+    m = len(points)
+    out = np.empty(m, dtype=bool)
+    step = max(1, block // max(len(a), 1))
+    for lo in range(0, m, step):
+        x, y = points[lo : lo + step, :1], points[lo : lo + step, 1:]
+        spans = (a[:, 1] > y) != (b[:, 1] > y)  # (b, k): the side spans the ray's height
+        with np.errstate(divide="ignore", invalid="ignore"):
+            cross = a[:, 0] + (y - a[:, 1]) * (b[:, 0] - a[:, 0]) / (b[:, 1] - a[:, 1])
+        out[lo : lo + step] = np.count_nonzero(spans & (cross > x), axis=1) % 2 == 1
+    return out
 
 
 def closest_on_polygon(

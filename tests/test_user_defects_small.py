@@ -87,3 +87,19 @@ def test_a_truncated_mesh_file_is_said_to_be_cut_short(tmp_path):
     assert len(lines) == 1 and lines[0].startswith("fembem: error: geometry.mesh: '"), lines
     assert "cut short: its $Elements section" in lines[0] and f"byte {len(cut)}" in lines[0]
     assert "mesh: mesh:" not in lines[0] and "not a gmsh mesh file" not in lines[0]
+
+
+def test_evaluate_echoes_the_points_and_tells_outside_from_inside(tmp_path):
+    """Item 13: the coordinates come back as written, and a point 1e-10 outside Omega
+    (beyond the on-Gamma tolerance, 1e-11 of Gamma's diameter) is outside."""
+    toml = '[geometry]\nh = 0.0625\nsubdomain_size = 0.125\nsignorini = ["bottom"]\n'
+    toml += '[data]\nf = "1"\n[output]\nplots = false\nxdmf = false\n'
+    _solve(tmp_path, toml, "--quiet")
+    points = tmp_path / "p.csv"
+    rows = ["0.1,0.1", "0.2500000001,0.0", "0.25, 0.0625", "1e-1,-0.25", "0.2499999999,0"]
+    points.write_text("x,y\n" + "\n".join(rows) + "\n")
+    proc = run_cli("evaluate", str(tmp_path / "out"), "--points", str(points))
+    assert proc.returncode == 0, proc.stderr
+    table = [ln.split(",") for ln in proc.stdout.strip().splitlines()[1:]]
+    assert [f"{r[0]},{r[1]}" for r in table] == [ln.replace(" ", "") for ln in rows]
+    assert [r[2] for r in table] == ["inside", "outside", "boundary", "boundary", "inside"]

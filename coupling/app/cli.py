@@ -187,7 +187,9 @@ def build_parser() -> argparse.ArgumentParser:
         "Evaluate the solution at the points of a CSV file (two columns x, y; an optional "
         "header line) from the fields.npz of RESULT_DIR: each row x,y,where,u,ue with "
         "where = inside (u = u_h), boundary (u_h and the trace u_e) or outside (u_e by the "
-        "representation formula); a value that does not apply is empty.",
+        "representation formula); a value that does not apply is empty. A point closer to "
+        "Gamma than 1e-11 times the diameter of its bounding box is on Gamma (boundary); "
+        "x,y are echoed as given.",
         "write the table here",
     )
 
@@ -411,8 +413,9 @@ def _info(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
     return EXIT_OK
 
 
-def _read_points(path: Path) -> np.ndarray:
-    """The (m, 2) points of a CSV file of x,y rows (an optional header line)."""
+def _read_points(path: Path) -> tuple[np.ndarray, list[str]]:
+    """The (m, 2) points of a CSV file of x,y rows (an optional header line), and each
+    row's "x,y" as written there (echoed in the output as given)."""
     if not path.is_file():
         raise FileNotFoundError(
             f"--points: file {str(path)!r} not found; give a CSV file of " "x,y rows"
@@ -426,7 +429,7 @@ def _read_points(path: Path) -> np.ndarray:
         raise ValueError(f"--points {path}: every row must be two numbers x,y") from None
     if points.ndim != 2 or points.shape[1] != 2 or not np.isfinite(points).all():
         raise ValueError(f"--points {path}: every row must be two finite numbers x,y")
-    return points
+    return points, [",".join(v.strip() for v in ln.split(",")) for ln in lines]
 
 
 def _exterior(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
@@ -434,12 +437,12 @@ def _exterior(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
     from coupling.io.outputs import load_fields
 
     fields = load_fields(Path(args.result_dir))
-    points = _read_points(Path(args.points))
+    points, given = _read_points(Path(args.points))
     try:
         ue = exterior_from_fields(fields, points)
     except ValueError as err:  # a point inside Omega or on Gamma
         raise ValueError(f"--points {args.points}: {err}") from None
-    table = "x,y,ue\n" + "".join(f"{x:.17g},{y:.17g},{v:.17g}\n" for (x, y), v in zip(points, ue))
+    table = "x,y,ue\n" + "".join(f"{xy},{v:.17g}\n" for xy, v in zip(given, ue))
     _write_table(table, args.out)
     return EXIT_OK
 
@@ -460,15 +463,15 @@ def _evaluate(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
     from coupling.io.outputs import load_fields
 
     fields = load_fields(Path(args.result_dir))
-    points = _read_points(Path(args.points))
+    points, given = _read_points(Path(args.points))
     values = evaluate(fields, points)
 
     def number(v: float) -> str:
         return "" if np.isnan(v) else f"{v:.17g}"
 
-    rows = zip(points, values["where"], values["u"], values["ue"])
+    rows = zip(given, values["where"], values["u"], values["ue"])
     table = "x,y,where,u,ue\n" + "".join(
-        f"{x:.17g},{y:.17g},{w},{number(u)},{number(ue)}\n" for (x, y), w, u, ue in rows
+        f"{xy},{w},{number(u)},{number(ue)}\n" for xy, w, u, ue in rows
     )
     _write_table(table, args.out)
     return EXIT_OK
