@@ -103,3 +103,22 @@ def test_evaluate_echoes_the_points_and_tells_outside_from_inside(tmp_path):
     table = [ln.split(",") for ln in proc.stdout.strip().splitlines()[1:]]
     assert [f"{r[0]},{r[1]}" for r in table] == [ln.replace(" ", "") for ln in rows]
     assert [r[2] for r in table] == ["inside", "outside", "boundary", "boundary", "inside"]
+
+
+@pytest.mark.mpi
+@pytest.mark.parametrize("nprocs", [1, 2])
+def test_readme_dolfinx_mesh_example_runs(tmp_path, nprocs):
+    """Item 15: the README's way from gmshio.model_to_mesh to domain_from_mesh runs,
+    serially and on 2 ranks, and prints what the README says."""
+    import re
+
+    from conftest import ROOT, run_mpi
+
+    readme = (ROOT / "README.md").read_text()
+    section = readme[readme.index("### A DOLFINx mesh with facet tags") :]
+    (code,) = re.findall(r"```python\n(.*?)```", section, re.S)[:1]
+    script = tmp_path / "example.py"
+    script.write_text(code)
+    proc = run_mpi(nprocs, str(script), cwd=tmp_path)
+    (printed,) = re.findall(r"it prints `(.*?)`", " ".join(section.split()))[:1]
+    assert printed.startswith("converged: True;") and printed in proc.stdout, proc.stdout
