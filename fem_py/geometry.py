@@ -71,7 +71,7 @@ from fem_py.conic import CONICS, conic_domain, conic_plan
 from fem_py.distribute import distribute_mesh, distribute_structured, subdomain_owners
 from fem_py.gmsh_mesh import mesh_with_gmsh
 from fem_py.parallel import broadcast_from_root, run_on_root
-from fem_py.polyline import coarsened_polygon, segment_lengths
+from fem_py.polyline import CORNER_ANGLE, coarsened_polygon, segment_lengths
 from fem_py.shapes import (
     GAMMA_T_TAG,
     SHAPES,
@@ -514,12 +514,6 @@ def build_domain(
         coarse_size=float(csize),
         h_max=h_max,
     )
-
-
-#: A bend of Gamma by more than this (radians) makes a coarse vertex of a mesh from a
-#: file or of a curved shape (``fem_py.coarse``: corners stay coarse vertices, a smooth
-#: curve does not fill with them).
-CORNER_ANGLE = math.pi / 6
 
 
 def domain_from_file(

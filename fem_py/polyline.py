@@ -10,7 +10,13 @@ __all__ = [
     "inside_polygon",
     "coarsened_polygon",
     "polygon_corners",
+    "CORNER_ANGLE",
 ]
+
+#: A bend of Gamma by more than this (radians) is a corner: it makes a coarse vertex of a
+#: mesh from a file or of a curved shape (``fem_py.coarse``: corners stay coarse vertices,
+#: a smooth curve does not fill with them), and a corner in the figures.
+CORNER_ANGLE = np.pi / 6
 
 
 def segment_lengths(points: np.ndarray) -> np.ndarray:
@@ -24,13 +30,18 @@ def arc_length(points: np.ndarray) -> np.ndarray:
     return np.concatenate([np.zeros(seg.shape[:-1] + (1,)), np.cumsum(seg, axis=-1)], axis=-1)
 
 
-def polygon_corners(nodes: np.ndarray) -> np.ndarray:
+def polygon_corners(nodes: np.ndarray, min_angle: float = 0.0) -> np.ndarray:
     """Indices of the nodes (k, 2) of a closed polygon where it turns (its corners; the
-    other nodes lie on straight sides)."""
+    other nodes lie on straight sides); with ``min_angle`` > 0 only where it turns by
+    more than that (radians: the corners of a curve drawn by a fine polygon)."""
     t = np.diff(np.concatenate([nodes, nodes[:1]]), axis=0)
     t /= np.linalg.norm(t, axis=1)[:, None]
     t_in = np.roll(t, 1, axis=0)
-    return np.flatnonzero(np.abs(t_in[:, 0] * t[:, 1] - t_in[:, 1] * t[:, 0]) > 1e-8)
+    cross = t_in[:, 0] * t[:, 1] - t_in[:, 1] * t[:, 0]
+    if min_angle <= 0.0:
+        return np.flatnonzero(np.abs(cross) > 1e-8)
+    dot = np.einsum("kd,kd->k", t_in, t)
+    return np.flatnonzero(np.abs(np.arctan2(cross, dot)) > min_angle)
 
 
 def inside_polygon(points: np.ndarray, vertices: np.ndarray, *, block: int = 1 << 20) -> np.ndarray:

@@ -122,3 +122,100 @@ def test_readme_dolfinx_mesh_example_runs(tmp_path, nprocs):
     proc = run_mpi(nprocs, str(script), cwd=tmp_path)
     (printed,) = re.findall(r"it prints `(.*?)`", " ".join(section.split()))[:1]
     assert printed.startswith("converged: True;") and printed in proc.stdout, proc.stdout
+
+
+@pytest.fixture(scope="module")
+def disk_fields(tmp_path_factory):
+    """fields.npz of a contact run on the disk (a curved Gamma) and on the square."""
+    from coupling.io.outputs import load_fields
+
+    out = {}
+    wide = "vertices = [[-0.3, -0.1], [0.3, -0.1], [0.3, 0.1], [-0.3, 0.1]]\n"
+    for shape, extra in (
+        ("disk", "radius = 0.25\nstructured = false\n"),
+        ("square", ""),
+        ("polygon", wide),
+    ):
+        folder = tmp_path_factory.mktemp(shape)
+        (folder / "c.toml").write_text(
+            f'[geometry]\nshape = "{shape}"\n{extra}h = 0.03125\nsubdomain_size = 0.125\n'
+            + {"disk": 'signorini = "all"\n', "square": 'signorini = ["bottom"]\n'}.get(
+                shape, 'signorini = ["side0"]\n'
+            )
+            + '[data]\nf = "2"\nt0 = "-1 - 2*x"\n[output]\nplots = false\nxdmf = false\n'
+        )
+        proc = run_cli("solve", str(folder / "c.toml"), "--out", str(folder / "out"), "--quiet")
+        assert proc.returncode == 0, proc.stderr
+        out[shape] = load_fields(folder / "out")
+    return out
+
+
+def _dotted(fig) -> int:
+    return sum(1 for ax in fig.axes for line in ax.get_lines() if line.get_linestyle() == ":")
+
+
+def test_boundary_figure_marks_corners_not_curve_nodes(disk_fields):
+    """Item 12: no dotted "corner" line at every node of a curve; four on the square."""
+    from coupling.io.figures import _figure_boundary
+
+    assert _dotted(_figure_boundary(disk_fields["disk"])) == 0
+    assert _dotted(_figure_boundary(disk_fields["square"])) == 4 * 4  # 4 corners, 4 axes
+
+
+def test_pressure_axis_is_not_flattened_by_corner_spikes(disk_fields):
+    """Item 12: the pressure axis spans the pressure away from the corners."""
+    from coupling.io.figures import _figure_boundary
+
+    fields = dict(disk_fields["square"])
+    pressure = fields["pressure"].copy()
+    typical = np.abs(pressure).max()
+    pressure[0] = 1e3 * typical  # a spike at the corner (-0.25, -0.25), node 0
+    fields["pressure"] = pressure
+    lo, hi = _figure_boundary(fields).axes[1].get_ylim()
+    assert hi < 2 * typical and lo > -2 * typical
+
+
+def test_u_figure_open_contact_is_visible_and_legend_clear_of_the_label(disk_fields):
+    """Item 12: the open part of Gamma_s is drawn in a colour far from every colour of
+    the colormap, and the legend does not overlap the x label."""
+    import matplotlib
+
+    from coupling.io.figures import _figure_u
+    from coupling.io.plots import figure_inputs
+
+    fields = disk_fields["polygon"]  # wide: short axes
+    inputs = figure_inputs(fields, [], tol=1e-8)
+    fig = _figure_u(fields, inputs.image, inputs.grid)
+    (ax,) = [a for a in fig.axes if a.get_legend() is not None]
+    drawn = {c.get_label(): c for c in ax.collections}
+    (open_part,) = [c for label, c in drawn.items() if "open" in label]
+    rgb = open_part.get_colors()[0][:3]
+    cmap = matplotlib.colormaps["viridis"](np.linspace(0, 1, 256))[:, :3]
+    assert np.linalg.norm(cmap - rgb, axis=1).min() > 0.3
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    legend = ax.get_legend().get_window_extent(renderer)
+    label = ax.xaxis.label.get_window_extent(renderer)
+    assert not legend.overlaps(label)
+
+
+def test_adapt_figure_labels_what_it_draws(tmp_path):
+    """Item 12: without an exact solution adapt.png draws the estimator only, and says so."""
+    import matplotlib.pyplot as plt
+
+    from coupling.io import levels
+
+    saved = {}
+    original = plt.Figure.savefig
+
+    def keep(fig, *args, **kwargs):
+        saved["label"] = fig.axes[0].get_ylabel()
+        return original(fig, *args, **kwargs)
+
+    plt.Figure.savefig = keep
+    try:
+        rows = [{"dofs": 100 * 4**k, "estimator": 2.0**-k} for k in range(3)]
+        levels._plot(tmp_path / "adapt.png", rows)
+    finally:
+        plt.Figure.savefig = original
+    assert saved["label"] == "estimator"

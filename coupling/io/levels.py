@@ -80,7 +80,7 @@ def _plot(path: Path, levels: list[dict]) -> None:
         values = [level[key] for level in levels]
         ax.loglog(dofs, values, style, label=f"{label} (slope {fitted_slope(dofs, values):.2f})")
     ax.set_xlabel("dofs N")
-    ax.set_ylabel("estimator, error")
+    ax.set_ylabel(", ".join(key for key, _, _ in series))  # what is drawn
     ax.grid(alpha=0.3, which="both", lw=0.5)
     ax.legend(title=f"slopes fitted over {where}", fontsize=9, title_fontsize=8)
     ax.set_title(f"Adaptive refinement ({len(levels)} levels)")
