@@ -219,3 +219,16 @@ def test_adapt_figure_labels_what_it_draws(tmp_path):
     finally:
         plt.Figure.savefig = original
     assert saved["label"] == "estimator"
+
+
+def test_an_adaptive_run_draws_its_final_mesh(tmp_path):
+    """Item 12: mesh.png, the adapted mesh, beside adapt.png."""
+    toml = '[geometry]\nshape = "lshape"\nh = 0.0625\nsubdomain_size = 0.125\n'
+    toml += '[data]\nf = "1"\n[adapt]\nsteps = 2\n[solver]\nnested = false\n'
+    toml += "[output]\nxdmf = false\n"
+    _, summary = _solve(tmp_path, toml, "--quiet")
+    assert {"adapt.png", "mesh.png"} <= set(summary["files"])
+    from matplotlib.image import imread
+
+    image = imread(tmp_path / "out" / "mesh.png")
+    assert image.shape[0] > 500 and image[..., :3].min() < 0.2  # drawn lines

@@ -27,7 +27,9 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib import patheffects  # noqa: E402
 from matplotlib.collections import LineCollection  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.path import Path as PolygonPath  # noqa: E402
 from matplotlib.transforms import Bbox, ScaledTranslation  # noqa: E402
 from matplotlib.tri import Triangulation  # noqa: E402
@@ -64,9 +66,10 @@ _OPEN_LINE = "white"
 #: inches between the bottom of the axes and the legend under them (tick labels and the
 #: x label take about 0.4)
 _LEGEND_DROP = 0.5
-#: nodes of Gamma next to a corner (on either side) whose pressure is left out of the
-#: pressure axis' range: P1 fluxes spike at corners and would flatten the rest
-_CORNER_NODES = 2
+#: the share of |Gamma| on either side of a corner whose pressure is left out of the
+#: pressure axis' range: the flux is singular at corners, and its P1 spikes (a few
+#: nodes wide on a locally refined mesh) would flatten the rest
+_CORNER_SHARE = 0.03
 
 
 def _closed(a: np.ndarray) -> np.ndarray:
@@ -110,13 +113,13 @@ def _draw_boundary(ax, fields: dict) -> None:
     shut = fields["phi"] == 0.0
     contact = panels & shut & np.roll(shut, -1)
     segments = np.stack([nodes, np.roll(nodes, -1, axis=0)], axis=1)
-    ax.add_collection(  # the black edge of the open part
-        LineCollection(segments[panels & ~contact], colors="k", linewidths=4.6, zorder=5)
-    )
+    edged = [patheffects.Stroke(linewidth=4.6, foreground="k"), patheffects.Normal()]
+    handles = []
     for mask, color, label in (
         (contact, "tab:red", r"$\Gamma_s$ in contact ($\phi_h = 0$)"),
         (panels & ~contact, _OPEN_LINE, r"$\Gamma_s$ open ($\phi_h > 0$)"),
     ):
+        effects = edged if color == _OPEN_LINE else None
         ax.add_collection(
             LineCollection(
                 segments[mask],
@@ -125,8 +128,10 @@ def _draw_boundary(ax, fields: dict) -> None:
                 capstyle="butt",
                 label=label,
                 zorder=5,
+                path_effects=effects,
             )
         )
+        handles.append(Line2D([], [], color=color, lw=3.0, label=label, path_effects=effects))
     sig, active = fields["signorini"], fields["active"]
     if sig.sum() <= 64:
         ax.plot(*nodes[sig & active].T, zorder=6, **_CONTACT)
@@ -134,6 +139,7 @@ def _draw_boundary(ax, fields: dict) -> None:
     # below the tick labels and the x label, whatever the height of the axes (Omega's shape)
     below = ax.transAxes + ScaledTranslation(0.0, -_LEGEND_DROP, ax.figure.dpi_scale_trans)
     ax.legend(
+        handles=handles,
         loc="upper center",
         bbox_to_anchor=(0.5, 0.0),
         bbox_transform=below,
@@ -143,13 +149,18 @@ def _draw_boundary(ax, fields: dict) -> None:
     )
 
 
-def _pressure_range(pressure: np.ndarray, corners: np.ndarray) -> tuple[float, float]:
-    """y-limits of the pressure axis: the range of the pressure away from the corners
-    (``_CORNER_NODES`` nodes on either side left out), with 0 and a 5 % margin; the
-    spikes at corners run off the axis instead of flattening the rest."""
-    n = len(pressure)
-    near = np.zeros(n, dtype=bool)
-    for k in range(-_CORNER_NODES, _CORNER_NODES + 1):
+def _pressure_range(
+    pressure: np.ndarray, s: np.ndarray, corners: np.ndarray
+) -> tuple[float, float]:
+    """y-limits of the pressure axis: the range of the pressure at the nodes (arc length
+    ``s``, the closing node last) farther than ``_CORNER_SHARE`` |Gamma| from every
+    corner and not next to one, with 0 and a 5 % margin; the spikes at corners run off
+    the axis instead of flattening the rest."""
+    n, length = len(pressure), s[-1]
+    gap = np.abs(s[:n, None] - s[np.asarray(corners, dtype=np.int64)][None, :])
+    gap = np.minimum(gap, length - gap).min(axis=1, initial=np.inf)
+    near = gap <= _CORNER_SHARE * length
+    for k in (-1, 0, 1):
         near[(np.asarray(corners, dtype=np.int64) + k) % n] = True
     values = pressure[~near] if (~near).any() else pressure
     lo, hi = min(float(values.min()), 0.0), max(float(values.max()), 0.0)
@@ -199,7 +210,7 @@ def _figure_boundary(fields: dict):
     axes[0].set_ylabel(r"gap $\phi_h$")
     axes[1].plot(s, _closed(fields["pressure"]), ".-", ms=3, lw=1, color="tab:purple")
     axes[1].axhline(0.0, color="0.3", lw=0.6)
-    axes[1].set_ylim(_pressure_range(fields["pressure"], polygon_corners(nodes, CORNER_ANGLE)))
+    axes[1].set_ylim(_pressure_range(fields["pressure"], s, polygon_corners(nodes, CORNER_ANGLE)))
     axes[1].set_ylabel(r"$\rho\, \partial u_h / \partial n$" "\n(pressure on $\\Gamma_s$)")
     flux = fields["dn_ue"]
     if str(fields["flux_space"]) == "p0":

@@ -243,7 +243,13 @@ class RunOutputs:
             self._jobs["data"].result()  # its error, if any
             names.append("fields.npz")
             if levels:
-                names += write_levels(out, levels, adaptive=adaptive, plot=self.plots)
+                names += write_levels(
+                    out,
+                    levels,
+                    adaptive=adaptive,
+                    plot=self.plots,
+                    mesh=(self._fields["x"], self._fields["triangles"]),
+                )
             self.seconds += time.perf_counter() - tic
             stages = {**timings, "outputs": self.seconds}
             if total is not None:
