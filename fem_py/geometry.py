@@ -97,7 +97,6 @@ __all__ = [
     "DomainSize",
     "build_domain",
     "domain_size",
-    "mesh_size_estimate",
     "domain_from_file",
     "domain_from_mesh",
     "domain_from_prepared",
@@ -306,8 +305,8 @@ def domain_size(
     """The sizes of ``build_domain(comm, shape, ...)`` (same arguments) in closed form,
     without a mesh and in O(1) memory (no coarse grid either): for the structured square
     and L-shape; None where only meshing tells (gmsh meshes: see
-    :func:`mesh_size_estimate`). Raises the errors ``build_domain`` raises for the
-    arguments.
+    :func:`fem_py.mesh_size.mesh_size_estimate`). Raises the errors ``build_domain``
+    raises for the arguments.
 
     The fine nodes number ``fem_py.structured.node_count`` for n = max(2, round(c/h))
     segments per coarse edge (c the coarse size); every coarse boundary
@@ -347,70 +346,6 @@ def domain_size(
         subdomains=n_cells,
         h_min=leg,
         h_max=math.sqrt(2.0) * leg,
-    )
-
-
-#: P1 nodes of a gmsh mesh of size h per unit area, times h^2: 2 / sqrt(3), the nodes of
-#: equilateral triangles of side h (measured 1.20-1.44 on the square, L-shape, disk and
-#: ellipse at h = 0.02 .. 0.005, the excess from the boundary, counted apart below)
-GMSH_NODES_PER_AREA = 2.0 / math.sqrt(3.0)
-
-
-def mesh_size_estimate(
-    shape: str,
-    *,
-    h: float,
-    subdomain_size: float,
-    center: Sequence[float] = (0.0, 0.0),
-    width: float = 0.5,
-    vertices: Sequence[Sequence[float]] | None = None,
-    signorini: Any = (),
-    structured: bool = False,
-    allow_large: bool = False,
-    radius: float = 0.25,
-    semi_axes: Sequence[float] | None = None,
-) -> DomainSize:
-    """The sizes of a gmsh mesh of ``build_domain(comm, shape, ...)`` estimated before
-    meshing, in O(1) memory, from the area A and the perimeter G of Omega and h: dofs
-    about GMSH_NODES_PER_AREA A / h^2 + G / (2 h), boundary dofs G / h, Signorini dofs
-    the arcs' length / h, A / d^2 subdomains (a slight underestimate: to refuse a run
-    that cannot fit before its mesh exists; :func:`domain_size` is exact where it can
-    be). Raises the errors ``build_domain`` raises for the arguments."""
-    if shape in CONICS:
-        h, d, _, (a, b), arcs = conic_plan(
-            shape, h, subdomain_size, center, radius, semi_axes, signorini, allow_large
-        )
-        area = math.pi * a * b
-        gamma = math.pi * (3 * (a + b) - math.sqrt((3 * a + b) * (a + 3 * b)))  # Ramanujan
-        if arcs == "all":
-            contact = gamma
-        else:  # an arc's share of the parameter angle, a fair share of the length
-            contact = sum(((t1 - t0) % (2 * math.pi)) / (2 * math.pi) for t0, t1 in arcs) * gamma
-    else:
-        plan = _plan(
-            shape,
-            h,
-            subdomain_size,
-            center,
-            width,
-            vertices,
-            signorini,
-            structured,
-            allow_large,
-            grid=False,
-        )
-        h, d, P = plan.h, plan.d, plan.P
-        x, y = P[:, 0], P[:, 1]
-        area = 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
-        gamma = float(plan.B.len.sum())
-        contact = gamma if plan.whole else sum(arc.length for arc in plan.arcs)
-    return DomainSize(
-        dofs=int(GMSH_NODES_PER_AREA * area / h**2 + gamma / (2 * h)),
-        boundary_dofs=int(gamma / h),
-        signorini_dofs=int(contact / h),
-        subdomains=max(1, int(area / d**2)),
-        h_min=h,
-        h_max=h,
     )
 
 

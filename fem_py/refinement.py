@@ -25,8 +25,9 @@ mesh is the same as in serial up to the ordering (tests/test_mpi_adapt.py, 2 ran
 DOLFINx 0.5.2 ghosts a child once per facet it shares with another rank, so a cell with
 two such facets arrives twice as a ghost, and the vertices around it get wrong owners
 (a subdomain interior dof owned by another rank, a ghost node outside the local old
-mesh); :func:`_reghost` builds the mesh again from the owned children, each ghosted once
-on the owners of its facet neighbours (tests/test_adapt_mpi.py).
+mesh); :func:`fem_py.distribute.reghost` builds the mesh again from the owned
+children, each ghosted once on the owners of its facet neighbours
+(tests/test_adapt_mpi.py).
 """
 from __future__ import annotations
 
@@ -39,7 +40,7 @@ from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
 from fem_py.coarse import compute_coarse_structure
-from fem_py.distribute import _destinations, _ufl_triangle_mesh
+from fem_py.distribute import reghost
 from fem_py.geometry import CORNER_ANGLE
 from fem_py.locate import locate
 from fem_py.meshdata import tag_array
@@ -111,50 +112,6 @@ def max_facet_length(msh: Any) -> float:
     return msh.comm.allreduce(loc, op=MPI.MAX)
 
 
-def _reghost(msh: Any) -> Any:
-    """``msh`` (refined by DOLFINx without redistribution) created again from its owned
-    cells, each owned by the same rank and ghosted once on every other rank owning one of
-    its facet neighbours (DOLFINx's shared-facet mode; collective). In serial ``msh``."""
-    comm = msh.comm
-    if comm.size == 1:
-        return msh
-    topology = msh.topology
-    topology.create_connectivity(2, 0)
-    topology.create_connectivity(1, 2)
-    topology.create_connectivity(2, 1)
-    cells, vertices = topology.index_map(2), topology.index_map(0)
-    n_own = cells.size_local
-    c2v = topology.connectivity(2, 0).array.reshape(-1, 3)
-    node_of_vertex = np.empty(vertices.size_local + vertices.num_ghosts, dtype=np.int64)
-    node_of_vertex[c2v] = msh.geometry.dofmap.array.reshape(-1, 3)
-    x = msh.geometry.x[node_of_vertex[: vertices.size_local], :2]
-    own = c2v[:n_own]
-    glob = vertices.local_to_global(own.ravel().astype(np.int32)).reshape(-1, 3)
-    # the other ranks ghosting each owned cell: owners of the ghost cells across its facets
-    owner = np.concatenate([np.full(n_own, comm.rank), np.asarray(cells.owners)])
-    f2c = topology.connectivity(1, 2)
-    c2f = topology.connectivity(2, 1).array.reshape(-1, 3)[:n_own]
-    links = [
-        (c, int(owner[g]))
-        for c in range(n_own)
-        for f in c2f[c]
-        for g in f2c.links(f)
-        if owner[g] != comm.rank
-    ]
-    links = np.unique(np.array(links, dtype=np.int64).reshape(-1, 2), axis=0)
-
-    def partitioner(comm_, nparts, tdim, local_cells, ghost_mode):
-        return _destinations(np.full(n_own, comm.rank, dtype=np.int64), links)
-
-    return dmesh.create_mesh(
-        comm,
-        glob.astype(np.int64),
-        np.ascontiguousarray(x),
-        _ufl_triangle_mesh(),
-        partitioner=partitioner,
-    )
-
-
 def _corner_angle(domain: Any) -> float | None:
     """The ``corner_angle`` the coarse structure of ``domain`` was computed with: none for
     the grid partitions of the square and L-shape of build_domain,
@@ -176,7 +133,7 @@ def refine_domain(domain: Any, cells: np.ndarray) -> Any:
     old.topology.create_connectivity(tdim, 1)
     c2e = old.topology.connectivity(tdim, 1).array.reshape(-1, 3)
     edges = np.unique(c2e[np.asarray(cells, dtype=np.int64)].ravel()).astype(np.int32)
-    new = _reghost(dmesh.refine(old, edges, redistribute=False))
+    new = reghost(dmesh.refine(old, edges, redistribute=False))
     new.topology.create_connectivity(tdim - 1, tdim)
     new.topology.create_connectivity(tdim, 0)
 

@@ -13,7 +13,8 @@ from mpi4py import MPI
 
 from conftest import run_cli
 from coupling.app.sizing import size_of_domain
-from fem_py.geometry import build_domain, domain_size, mesh_size_estimate
+from fem_py.geometry import build_domain, domain_size
+from fem_py.mesh_size import mesh_size_estimate
 from fem_py.shapes import grid_counts, grid_partition
 
 SQUARE = """\

@@ -77,9 +77,9 @@ def planned_size(config: dict) -> Any:
 
 def estimated_size(config: dict) -> Any:
     """The ``fem_py.geometry.DomainSize`` of a generated gmsh mesh estimated before
-    meshing (``fem_py.geometry.mesh_size_estimate``: from the area and h), or None for a
+    meshing (``fem_py.mesh_size.mesh_size_estimate``: from the area and h), or None for a
     mesh file (it is the size it is)."""
-    from fem_py.geometry import mesh_size_estimate
+    from fem_py.mesh_size import mesh_size_estimate
 
     shape, kwargs = geometry_arguments(config)
     return None if shape == "mesh" else mesh_size_estimate(shape, **kwargs)
