@@ -38,7 +38,9 @@ def arc_warnings(
     arc_lengths: Sequence[float], closed: Sequence[bool], gamma_length: float
 ) -> list[str]:
     """An open Signorini arc longer than half of Gamma is often one given from the wrong
-    end (an arc runs counter-clockwise from its first point to its second)."""
+    end (an arc runs counter-clockwise from its first point to its second). ``closed``:
+    the arcs whose ends the user did not choose (the whole boundary, a side or a group
+    named), which get no warning."""
     out = []
     for i, (length, whole) in enumerate(zip(arc_lengths, closed)):
         if not whole and length > 0.5 * gamma_length:

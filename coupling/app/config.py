@@ -146,7 +146,9 @@ def _semi_axes(name: str, value: list) -> list[float]:
 
 
 def _check_signorini(value: Any) -> str | list:
-    """``"all"``, or a list whose items are side names or arcs [[x0, y0], [x1, y1]]."""
+    """``"all"``, or a list whose items are side names or arcs [[x0, y0], [x1, y1]]; an
+    integer names a physical group of a mesh file without a name by its number (gmsh's
+    ``Physical Curve(5)``) and is taken as the text "5"."""
     name = "geometry.signorini"
     if value == "all":
         return value
@@ -159,13 +161,16 @@ def _check_signorini(value: Any) -> str | list:
     for i, arc in enumerate(value):
         if isinstance(arc, str):
             arcs.append(arc)
+        elif isinstance(arc, int) and not isinstance(arc, bool):
+            arcs.append(str(arc))
         elif isinstance(arc, list) and len(arc) == 2:
             arcs.append(
                 (tuple(_point(f"{name}[{i}][0]", arc[0])), tuple(_point(f"{name}[{i}][1]", arc[1])))
             )
         else:
             raise ConfigError(
-                f"{name}[{i}] must be a side name or an arc " f"[[x0, y0], [x1, y1]], got {arc!r}"
+                f"{name}[{i}] must be a side name, a physical group number or an arc "
+                f"[[x0, y0], [x1, y1]], got {arc!r}"
             )
     return arcs
 
@@ -387,4 +392,6 @@ def geometry_error(err: ValueError) -> ValueError:
     key = "allow_large" if word == "diam(Omega)" else word
     if key not in DEFAULTS["geometry"]:
         return err
+    if message.startswith(f"{key}: "):  # "mesh: ..." names its key once, not twice
+        message = message[len(key) + 2 :]
     return ConfigError(f"geometry.{key}: {message}")

@@ -159,7 +159,7 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
         if np.any(cols < 0) or np.any(
             (sk_pos[np.maximum(cols, 0)] < 0) & (int_pos[np.maximum(cols, 0)] < 0)
         ):
-            raise ValueError(
+            raise RuntimeError(  # an invariant of the distributed mesh, not a user's input
                 "a subdomain interior dof couples to a dof owned by another rank: "
                 "the mesh is not partitioned by subdomains (use fem_py.mesh.build_domain)"
             )
@@ -200,7 +200,7 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
                 p_vals.append(weight[present])
             own = mine[group]
             if np.any(inner[own] < 0):
-                raise ValueError(
+                raise RuntimeError(
                     "a coarse edge is not local to the rank owning its subdomain; "
                     "the mesh is not partitioned by subdomains"
                 )

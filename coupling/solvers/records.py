@@ -78,6 +78,9 @@ class RunResult:
     tau: float
     history: list[IterationRecord] = field(default_factory=list)
     energy_increases: int = 0
+    #: the relative B-norm the stopping rule tested when it stopped the run, when that is
+    #: not the last record's ``step_norm`` (ssn stopping at the PGPM step from xi_k)
+    stop_measure: float | None = None
 
 
 class History(list):

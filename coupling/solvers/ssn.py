@@ -360,7 +360,11 @@ def semismooth_newton(
         active_changed = not np.array_equal(new_active, active)
         if norm2 is not None and not active_changed and tau * residual <= tol * np.sqrt(norm2):
             # the PGPM step from xi_k (B-norm tau r) meets the PGPM rule: no further step
-            loop.stop("||PGPM step at xi_k||_B <= {tol:g} ||xi_k||_B, active set settled", k - 1)
+            loop.stop(
+                "||PGPM step at xi_k||_B <= {tol:g} ||xi_k||_B, active set settled",
+                k - 1,
+                measure=tau * residual / np.sqrt(norm2),
+            )
             continue
         active = new_active
         residual0 = residual if residual0 is None else residual0

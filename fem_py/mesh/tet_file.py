@@ -10,6 +10,7 @@ with the ``[geometry]`` key at fault.
 """
 from __future__ import annotations
 
+import re
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -48,6 +49,39 @@ class SolidFile:
     source: str = "the mesh"
 
 
+#: the section markers of an MSH file, each opened section closed by $End<name>
+_SECTION = re.compile(rb"^\$(End)?(\w+)\s*$", re.M)
+
+
+def _unreadable(path: Path, reason: str) -> str:
+    """The one-line message for a file gmsh cannot read: a file cut short (a section
+    opened and never closed: a copy or a download that stopped) or corrupt (gmsh's
+    reason names the line) is said to be so; anything else is not an MSH file."""
+    name = str(path)
+    head = path.read_bytes()[:64]
+    if not head.lstrip().startswith(b"$MeshFormat"):
+        return (
+            f"mesh: {name!r} is not a gmsh mesh file ({reason}); save the mesh from gmsh "
+            "in MSH 2.2 or 4.1 format"
+        )
+    data = path.read_bytes()
+    open_section, size = None, len(data)
+    for m in _SECTION.finditer(data):
+        open_section = None if m.group(1) else (m.group(2).decode(), m.start())
+    if open_section is not None:
+        section, start = open_section
+        line = data.count(b"\n", 0, start) + 1
+        return (
+            f"mesh: {name!r} is cut short: its ${section} section (from line {line}) ends "
+            f"at byte {size} without $End{section} ({reason}); copy or save the whole "
+            "file again"
+        )
+    return (
+        f"mesh: {name!r} is corrupt ({reason}); save the mesh from gmsh again in MSH 2.2 "
+        "or 4.1 format"
+    )
+
+
 @contextmanager
 def opened_msh(path: str | Path) -> Iterator[Any]:
     """``with opened_msh(path) as gmsh:`` a gmsh session with the mesh file ``path`` open
@@ -68,10 +102,7 @@ def opened_msh(path: str | Path) -> Iterator[Any]:
         try:
             gmsh.open(name)
         except Exception as err:  # noqa: BLE001 - gmsh raises a bare Exception
-            raise ValueError(
-                f"mesh: {name!r} is not a gmsh mesh file ({str(err).splitlines()[0]}); save "
-                "the mesh from gmsh in MSH 2.2 or 4.1 format"
-            ) from None
+            raise ValueError(_unreadable(path, str(err).splitlines()[0])) from None
         yield gmsh
     finally:
         gmsh.finalize()
