@@ -115,7 +115,7 @@ def test_readme_dolfinx_mesh_example_runs(tmp_path, nprocs):
     from conftest import ROOT, run_mpi
 
     readme = (ROOT / "docs" / "guide" / "meshes.md").read_text()
-    section = readme[readme.index("### A DOLFINx mesh with facet tags") :]
+    section = readme[readme.index("## A DOLFINx mesh with facet tags") :]
     (code,) = re.findall(r"```python\n(.*?)```", section, re.S)[:1]
     script = tmp_path / "example.py"
     script.write_text(code)

@@ -295,7 +295,7 @@ def _solve_config(
         # the length of each entry of geometry.signorini, a closed "all" whole (as in
         # summary.json); only an arc given by two points has ends the user may have swapped
         arc_lengths = facts["signorini_lengths"]
-        entries = config["geometry"]["signorini"]
+        entries = config.geometry.signorini
         chosen_ends = [] if entries == "all" else [not isinstance(e, str) for e in entries]
         gamma = float(problem.boundary.panel_lengths.sum())
         for line in material_warnings(problem.material) + arc_warnings(
@@ -347,8 +347,8 @@ def _info(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
             or memory_estimate(
                 size,
                 comm.size,
-                plots=config["output"]["plots"],
-                boundary_operator=config["solver"]["boundary_operator"],
+                plots=config.output.plots,
+                boundary_operator=config.solver.boundary_operator,
             )
             <= memory_available()
         ):  # a mesh that cannot fit is not built to be counted
