@@ -25,21 +25,24 @@ method = "pgpm"
 """
 
 
+def _signalled(command: list[str], prefix: str, signum: int) -> subprocess.Popen:
+    """Start ``command`` and send it ``signum`` once it prints a line starting with
+    ``prefix`` (its stderr kept for the caller)."""
+    proc = subprocess.Popen(
+        command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT
+    )
+    for line in proc.stdout:
+        if line.startswith(prefix):
+            proc.send_signal(signum)
+            break
+    return proc
+
+
 def _killed_run(tmp_path: Path, out: Path) -> None:
     """Start a long run into ``out`` and SIGKILL it once it solves."""
     config = tmp_path / "long.toml"
     config.write_text(CONFIG.format(h=1 / 512, d=1 / 128))
-    proc = subprocess.Popen(
-        [FEMBEM, "solve", str(config), "--out", str(out)],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.DEVNULL,
-        text=True,
-        cwd=ROOT,
-    )
-    for line in proc.stdout:
-        if line.startswith("  it "):
-            proc.send_signal(signal.SIGKILL)
-            break
+    proc = _signalled([FEMBEM, "solve", str(config), "--out", str(out)], "  it ", signal.SIGKILL)
     proc.wait(timeout=60)
     assert proc.returncode == -signal.SIGKILL
 
@@ -87,17 +90,9 @@ def test_a_run_stuck_in_native_code_ends_on_a_signal(tmp_path, signum):
     config.write_text(CONFIG.format(h=1 / 16, d=1 / 4))
     out = tmp_path / "out"
     script = str(ROOT / "tests" / "mpi" / "stuck_in_native_code.py")
-    proc = subprocess.Popen(
-        [sys.executable, script, "solve", str(config), "--out", str(out)],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        cwd=ROOT,
+    proc = _signalled(
+        [sys.executable, script, "solve", str(config), "--out", str(out)], "stuck", signum
     )
-    for line in proc.stdout:
-        if line.startswith("stuck"):
-            proc.send_signal(signum)
-            break
     # before issue 29 it never ended; the helper ends it WATCHDOG_GRACE_SECONDS after
     _, stderr = proc.communicate(timeout=60)
     assert proc.returncode in (-signum, 128 + signum), stderr  # by the signal, as a shell sees

@@ -27,7 +27,7 @@ from fem_py.mesh.tet_checks import (
     file_dimension,
 )
 
-__all__ = ["SolidFile", "check_solid", "msh_dimension", "opened_msh", "read_tet_msh"]
+__all__ = ["SolidFile", "check_solid", "msh_dimension", "opened_msh", "read_tet_msh", "used_nodes"]
 
 #: gmsh element types: 4 the 4-node tetrahedron, 2 the 3-node triangle.
 _TETRAHEDRON, _TRIANGLE = 4, 2
@@ -80,6 +80,19 @@ def _unreadable(path: Path, reason: str) -> str:
         f"mesh: {name!r} is corrupt ({reason}); save the mesh from gmsh again in MSH 2.2 "
         "or 4.1 format"
     )
+
+
+def used_nodes(
+    n_nodes: int, cells: np.ndarray, groups: dict[str, np.ndarray]
+) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+    """Keep the nodes the cells use (gmsh also stores the geometry's points): (the kept
+    node indices, the cells and the boundary groups' elements renumbered, elements with a
+    node not kept dropped)."""
+    used = np.unique(cells)
+    remap = np.full(n_nodes, -1, dtype=np.int64)
+    remap[used] = np.arange(len(used))
+    groups = {k: remap[v] for k, v in groups.items()}
+    return used, remap[cells], {k: v[(v >= 0).all(axis=1)] for k, v in groups.items()}
 
 
 @contextmanager
@@ -160,13 +173,8 @@ def read_tet_msh(path: str | Path) -> SolidFile:
                 found = [gmsh.model.mesh.getElementsByType(_TETRAHEDRON, e)[0] for e in entities]
                 found = np.concatenate(found) if found else np.zeros(0, cell_tags.dtype)
                 volumes[key] = np.flatnonzero(np.isin(cell_tags, found))
-    # keep the nodes the tetrahedra use (gmsh also stores the geometry's points)
-    used = np.unique(cells)
-    remap = np.full(len(tags), -1, dtype=np.int64)
-    remap[used] = np.arange(len(used))
-    surfaces = {k: remap[v] for k, v in surfaces.items()}
-    surfaces = {k: v[(v >= 0).all(axis=1)] for k, v in surfaces.items()}
-    return SolidFile(x[used].copy(), remap[cells], surfaces, volumes, name)
+    used, cells, surfaces = used_nodes(len(tags), cells, surfaces)
+    return SolidFile(x[used].copy(), cells, surfaces, volumes, name)
 
 
 def check_solid(solid: SolidFile, signorini: Any = ()) -> tuple[BodyFacts, tuple | None]:
