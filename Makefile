@@ -1,7 +1,7 @@
 # One-command set-up, tests, demo and benchmarks (Debian 12, run as root).
 #   make demo   installs what is missing, builds, runs the main demo
 #   make test   installs what is missing, builds, lints, runs the C++ and Python tests
-#   make lint   black --check and flake8 (settings: pyproject.toml, .flake8)
+#   make lint   black --check and flake8 (settings: pyproject.toml, .flake8), clang-format (.clang-format)
 #   make docs   installs the documentation's packages, builds the site (docs/_build/html)
 SHELL := /bin/bash
 .ONESHELL:
@@ -14,10 +14,12 @@ DEBS    := python3-dolfinx python3-petsc4py python3-mpi4py python3-gmsh \
            python3-pybind11 pybind11-dev libeigen3-dev libgtest-dev cmake g++ make \
            python3-venv python3-setuptools python3-wheel python3-pip python3-tqdm \
            python3-slepc4py python3-threadpoolctl openmpi-bin libopenblas-dev \
-           black flake8
+           black flake8 clang-format
 # the documentation site (make docs) and its test (tests/test_docs.py: headless Chromium)
 DOCS_DEBS := python3-sphinx python3-myst-parser furo libjs-mathjax chromium python3-pil
 CXX_BUILD := build/cpp
+CXX_FILES := $(wildcard bem_cpp/src/*.cpp bem_cpp/include/bem/*.hpp bem_cpp/tests/*.cpp bem_cpp/tests/*.hpp) \
+             bem_cpp/bindings.cpp
 SOURCES := $(wildcard bem_cpp/src/*.cpp bem_cpp/include/bem/*.hpp) bem_cpp/bindings.cpp setup.py pyproject.toml
 
 .PHONY: setup debs debs-docs venv build lint test test-cpp test-py demo bench study docs clean
@@ -56,10 +58,11 @@ build: debs $(VENV)/.built
 # test-py includes tests/test_docs.py, which builds the site (as make docs) and opens it
 test: setup debs-docs lint test-cpp test-py
 
-# formatter and linter from Debian (black 23, flake8 5); the tree must pass both
+# formatters and linter from Debian (black 23, flake8 5, clang-format 14); the tree must pass all
 lint: debs venv
 	$(PY) -m black --check --quiet .
 	$(PY) -m flake8 .
+	clang-format --dry-run --Werror $(CXX_FILES)
 
 test-cpp:
 	cmake -S bem_cpp -B $(CXX_BUILD) -DCMAKE_BUILD_TYPE=Release > /dev/null

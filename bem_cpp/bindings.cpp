@@ -14,6 +14,9 @@
 #include "bem/potentials.hpp"
 #include "bem/steklov_operator.hpp"
 #include "bem/steklov_poincare.hpp"
+#include "bem/surface_operators.hpp"
+#include "bem/surface_potentials.hpp"
+#include "bem/surface_steklov.hpp"
 #include "bem/version.hpp"
 
 namespace py = pybind11;
@@ -22,6 +25,8 @@ using bem::Space;
 using bem::Vector;
 using NodesRef = const Eigen::Ref<const Points>&;
 using VectorRef = const Eigen::Ref<const Vector>&;
+using bem::TrianglesRef;
+using bem::VerticesRef;
 using Release = py::call_guard<py::gil_scoped_release>;
 using Collective = std::function<Eigen::MatrixXd(const Eigen::MatrixXd&, const std::vector<bem::Index>&)>;
 
@@ -43,9 +48,8 @@ PYBIND11_MODULE(_bem, m) {
       .def_readonly("nbytes_preconditioner", &bem::SteklovInfo::nbytes_preconditioner);
   py::class_<bem::SteklovPoincareOperator>(m, "SteklovPoincareOperator")
       .def(py::init([](NodesRef nodes, Space flux, bem::Index leaf_size, double eta, double tol,
-                       double preconditioner_tol, double solver_tol, int max_iterations,
-                       int product_threads, int rank, int size, Collective allgather,
-                       Collective allreduce) {
+                       double preconditioner_tol, double solver_tol, int max_iterations, int product_threads, int rank,
+                       int size, Collective allgather, Collective allreduce) {
              // allgather None: serial; otherwise the collectives of the ranks (mpi4py,
              // called back with the GIL held by pybind11's function wrapper)
              std::shared_ptr<const bem::Communicator> comm;
@@ -54,13 +58,14 @@ PYBIND11_MODULE(_bem, m) {
                    bem::Communicator{rank, size, std::move(allgather), std::move(allreduce)});
              return std::make_unique<bem::SteklovPoincareOperator>(
                  nodes, flux,
-                 bem::SteklovOptions{{leaf_size, eta, tol, false, product_threads, comm}, preconditioner_tol,
-                                     solver_tol, max_iterations});
+                 bem::SteklovOptions{{leaf_size, eta, tol, false, product_threads, comm},
+                                     preconditioner_tol,
+                                     solver_tol,
+                                     max_iterations});
            }),
            py::arg("nodes"), py::arg("flux"), py::arg("leaf_size"), py::arg("eta"), py::arg("tol"),
-           py::arg("preconditioner_tol"), py::arg("solver_tol"), py::arg("max_iterations"),
-           py::arg("product_threads"), py::arg("rank"), py::arg("size"), py::arg("allgather"),
-           py::arg("allreduce"), Release())
+           py::arg("preconditioner_tol"), py::arg("solver_tol"), py::arg("max_iterations"), py::arg("product_threads"),
+           py::arg("rank"), py::arg("size"), py::arg("allgather"), py::arg("allreduce"), Release())
       .def("apply", &bem::SteklovPoincareOperator::apply, py::arg("x"), Release())
       .def("flux", &bem::SteklovPoincareOperator::flux, py::arg("x"), Release())
       .def_property_readonly("size", &bem::SteklovPoincareOperator::size)
@@ -69,8 +74,7 @@ PYBIND11_MODULE(_bem, m) {
       .def_property_readonly("last_iterations", &bem::SteklovPoincareOperator::last_iterations);
 
   py::class_<bem::BoundaryOperators>(m, "BoundaryOperators")
-      .def(py::init([](NodesRef nodes, Space space, bem::Index leaf_size, double eta, double tol,
-                       int product_threads) {
+      .def(py::init([](NodesRef nodes, Space space, bem::Index leaf_size, double eta, double tol, int product_threads) {
              return std::make_unique<bem::BoundaryOperators>(
                  nodes, space, bem::HMatrixOptions{leaf_size, eta, tol, false, product_threads});
            }),
@@ -82,24 +86,21 @@ PYBIND11_MODULE(_bem, m) {
       .def_property_readonly("nbytes", &bem::BoundaryOperators::nbytes);
 
   m.def("version", &bem::version);
-  m.def("single_layer", py::overload_cast<NodesRef, Space>(&bem::single_layer), py::arg("nodes"),
-        py::arg("space"), Release());
-  m.def("double_layer", py::overload_cast<NodesRef, Space>(&bem::double_layer), py::arg("nodes"),
-        py::arg("space"), Release());
+  m.def("single_layer", py::overload_cast<NodesRef, Space>(&bem::single_layer), py::arg("nodes"), py::arg("space"),
+        Release());
+  m.def("double_layer", py::overload_cast<NodesRef, Space>(&bem::double_layer), py::arg("nodes"), py::arg("space"),
+        Release());
   m.def("hypersingular", py::overload_cast<NodesRef>(&bem::hypersingular), py::arg("nodes"), Release());
-  m.def("mass", py::overload_cast<NodesRef, Space>(&bem::mass), py::arg("nodes"), py::arg("space"),
-        Release());
-  m.def("steklov_poincare", py::overload_cast<NodesRef, Space>(&bem::steklov_poincare),
-        py::arg("nodes"), py::arg("flux"), Release());
-  m.def("steklov_poincare_timed", &bem::steklov_poincare_timed, py::arg("nodes"), py::arg("flux"),
-        Release());
-  m.def("exterior_flux", py::overload_cast<NodesRef, VectorRef, double, Space>(&bem::exterior_flux),
-        py::arg("nodes"), py::arg("dirichlet"), py::arg("a"), py::arg("flux"), Release());
+  m.def("mass", py::overload_cast<NodesRef, Space>(&bem::mass), py::arg("nodes"), py::arg("space"), Release());
+  m.def("steklov_poincare", py::overload_cast<NodesRef, Space>(&bem::steklov_poincare), py::arg("nodes"),
+        py::arg("flux"), Release());
+  m.def("steklov_poincare_timed", &bem::steklov_poincare_timed, py::arg("nodes"), py::arg("flux"), Release());
+  m.def("exterior_flux", py::overload_cast<NodesRef, VectorRef, double, Space>(&bem::exterior_flux), py::arg("nodes"),
+        py::arg("dirichlet"), py::arg("a"), py::arg("flux"), Release());
   m.def("exterior_potential",
-        py::overload_cast<NodesRef, VectorRef, VectorRef, NodesRef, double, Space>(
-            &bem::exterior_potential),
-        py::arg("nodes"), py::arg("dirichlet"), py::arg("flux_coefficients"), py::arg("points"),
-        py::arg("a"), py::arg("flux"), Release());
+        py::overload_cast<NodesRef, VectorRef, VectorRef, NodesRef, double, Space>(&bem::exterior_potential),
+        py::arg("nodes"), py::arg("dirichlet"), py::arg("flux_coefficients"), py::arg("points"), py::arg("a"),
+        py::arg("flux"), Release());
   m.def(
       "exterior_potential_hmatrix",
       [](NodesRef nodes, VectorRef dirichlet, VectorRef flux_coefficients, NodesRef points, double a, Space flux,
@@ -108,6 +109,51 @@ PYBIND11_MODULE(_bem, m) {
                                                bem::HMatrixOptions{leaf_size, eta, tol, false, product_threads});
       },
       py::arg("nodes"), py::arg("dirichlet"), py::arg("flux_coefficients"), py::arg("points"), py::arg("a"),
-      py::arg("flux"), py::arg("leaf_size"), py::arg("eta"), py::arg("tol"), py::arg("product_threads"),
-      Release());
+      py::arg("flux"), py::arg("leaf_size"), py::arg("eta"), py::arg("tol"), py::arg("product_threads"), Release());
+
+  // Surfaces in 3D: the same names, told apart by their arguments (vertices, triangles, ...).
+  m.def("single_layer", py::overload_cast<VerticesRef, TrianglesRef, Space>(&bem::single_layer), py::arg("vertices"),
+        py::arg("triangles"), py::arg("space"), Release());
+  m.def("double_layer", py::overload_cast<VerticesRef, TrianglesRef, Space>(&bem::double_layer), py::arg("vertices"),
+        py::arg("triangles"), py::arg("space"), Release());
+  m.def("hypersingular", py::overload_cast<VerticesRef, TrianglesRef>(&bem::hypersingular), py::arg("vertices"),
+        py::arg("triangles"), Release());
+  m.def(
+      "surface_operators",
+      [](VerticesRef vertices, TrianglesRef triangles, Space space) {
+        // V_h and K_h (rows in `space`) and W_h in one pass over the triangle pairs
+        bem::SurfaceMatrices A = bem::assemble(bem::Surface(vertices, triangles), {space, space, true});
+        return py::make_tuple(std::move(A.single_layer), std::move(A.double_layer), std::move(A.hypersingular));
+      },
+      py::arg("vertices"), py::arg("triangles"), py::arg("space"));
+  m.def("mass", py::overload_cast<VerticesRef, TrianglesRef, Space>(&bem::mass), py::arg("vertices"),
+        py::arg("triangles"), py::arg("space"), Release());
+  m.def("exterior_potential",
+        py::overload_cast<VerticesRef, TrianglesRef, VectorRef, VectorRef, const Eigen::Ref<const bem::Vertices>&,
+                          double, Space>(&bem::exterior_potential),
+        py::arg("vertices"), py::arg("triangles"), py::arg("dirichlet"), py::arg("flux_coefficients"),
+        py::arg("points"), py::arg("a"), py::arg("flux"), Release());
+  py::class_<bem::SurfaceSteklovOperator>(m, "SurfaceSteklovOperator")
+      .def(py::init([](VerticesRef vertices, TrianglesRef triangles, bem::Index leaf_size, double eta, double tol,
+                       double solver_tol, int max_iterations, int product_threads, int rank, int size,
+                       Collective allgather, Collective allreduce) {
+             std::shared_ptr<const bem::Communicator> comm;
+             if (allgather)
+               comm = std::make_shared<const bem::Communicator>(
+                   bem::Communicator{rank, size, std::move(allgather), std::move(allreduce)});
+             return std::make_unique<bem::SurfaceSteklovOperator>(
+                 vertices, triangles,
+                 bem::SteklovOptions{
+                     {leaf_size, eta, tol, false, product_threads, comm}, tol, solver_tol, max_iterations});
+           }),
+           py::arg("vertices"), py::arg("triangles"), py::arg("leaf_size"), py::arg("eta"), py::arg("tol"),
+           py::arg("solver_tol"), py::arg("max_iterations"), py::arg("product_threads"), py::arg("rank"),
+           py::arg("size"), py::arg("allgather"), py::arg("allreduce"), Release())
+      .def("apply", &bem::SurfaceSteklovOperator::apply, py::arg("x"), Release())
+      .def("flux", &bem::SurfaceSteklovOperator::flux, py::arg("x"), Release())
+      .def("hypersingular", &bem::SurfaceSteklovOperator::hypersingular, py::arg("x"), Release())
+      .def_property_readonly("size", &bem::SurfaceSteklovOperator::size)
+      .def_property_readonly("nbytes", &bem::SurfaceSteklovOperator::nbytes)
+      .def_property_readonly("info", &bem::SurfaceSteklovOperator::info)
+      .def_property_readonly("last_iterations", &bem::SurfaceSteklovOperator::last_iterations);
 }

@@ -17,14 +17,25 @@ core), memory held (``nbytes``), time of one product (best of
 (n <= --error-max) and set-up and memory as fractions of the dense S_h measured in the
 same run (n <= --dense-max). The issue-20 targets are printed with met / NOT MET.
 
+A third table is 3D (issue 30, docs/method.md section 11; docs/design/bem3d.md): dense V_h,
+K_h, W_h (P1) on the cube with 2,028 triangles, then the H-matrix S_h on icospheres of
+--surface-levels (10 4^level + 2 vertices), each size in a fresh process so that its peak
+resident memory is its own: set-up wall time, peak memory, one product, CG iterations,
+and the log-log slope of the set-up between the two largest sizes.
+
 Run: .venv/bin/python bench/bem_assembly.py [--sizes 512 1024 2048 4096] [--repeat 2]
      [--hmatrix-sizes 1000 2000 4000 8000 16000 32000 64000] [--shapes circle l-shape]
      [--dense-max 8000] [--error-max 4000] [--skip-dense-table]
+     [--surface-levels 3 4 5 6] [--surface-only]
 """
 from __future__ import annotations
 
 import argparse
+import json
 import os
+import resource
+import subprocess
+import sys
 import time
 
 import numpy as np
@@ -189,7 +200,13 @@ def main() -> None:
     parser.add_argument("--dense-max", type=int, default=8000, help="largest n with a dense S_h")
     parser.add_argument("--error-max", type=int, default=4000, help="largest n with the error")
     parser.add_argument("--skip-dense-table", action="store_true")
+    parser.add_argument("--surface-levels", type=int, nargs="+", default=[3, 4, 5, 6])
+    parser.add_argument("--surface-only", action="store_true", help="only the 3D table")
+    parser.add_argument("--surface-one", type=int, help=argparse.SUPPRESS)  # child process
     args = parser.parse_args()
+    if args.surface_one is not None:
+        print(json.dumps(surface_run(args.surface_one)))
+        return
     if min(args.sizes + args.hmatrix_sizes) < 3 or args.repeat < 1 or args.hmatrix_repeat < 1:
         parser.exit(2, "bem_assembly.py: sizes must be >= 3 and repeats >= 1\n")
 
@@ -199,11 +216,13 @@ def main() -> None:
         f"bem_cpp {bem_cpp.version()}, {os.cpu_count()} cores, OMP_NUM_THREADS {threads},"
         f" load average {load:.2f}"
     )
-    if not args.skip_dense_table:
-        dense_table(args)
-    for shape in args.shapes:
-        rows = hmatrix_table(shape, args.hmatrix_sizes, args)
-        print_targets(shape, rows)
+    if not args.surface_only:
+        if not args.skip_dense_table:
+            dense_table(args)
+        for shape in args.shapes:
+            rows = hmatrix_table(shape, args.hmatrix_sizes, args)
+            print_targets(shape, rows)
+    surface_table(args.surface_levels)
     print(f"load average at the end {os.getloadavg()[0]:.2f}")
 
 
@@ -250,6 +269,85 @@ def dense_table(args: argparse.Namespace) -> None:
         f"\noperators alone, n = {n}: "
         + ", ".join(f"{k} {best_of(args.repeat, f)[0]:.3f} s" for k, f in parts.items())
     )
+
+
+# issue 30 targets (3D)
+TARGET_DENSE_2000 = 2.0  # s, dense V, K, W on 2,000 triangles
+TARGET_SURFACE = {
+    10_000: (15.0, 400e6, None),
+    40_000: (90.0, 2e9, 1.5),
+}  # setup s, bytes, product s
+TARGET_SURFACE_SLOPE = 1.3
+
+
+def surface_run(level: int) -> dict:
+    """One H-matrix S_h on the icosphere of ``level`` (run in a child process)."""
+    from bem_cpp.surfaces import icosphere
+
+    X, T = icosphere(level, 0.8)
+    t0 = time.perf_counter()
+    op = bem_cpp.steklov_poincare(X, triangles=T, compression="hmatrix", tol=TOL)
+    setup = time.perf_counter() - t0
+    x = np.sin(3 * X[:, 0]) + X[:, 2]
+    product, _ = best_of(2, lambda: op @ x)
+    info = op.info
+    return {
+        "n": len(X),
+        "setup": setup,
+        "peak": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024,
+        "nbytes": op.nbytes,
+        "product": product,
+        "iterations": op.last_iterations,
+        "max_rank": info.max_rank,
+    }
+
+
+def surface_table(levels: list[int]) -> None:
+    from bem_cpp.surfaces import cube
+
+    X, T = cube(13)
+    t, _ = best_of(
+        1,
+        lambda: (
+            bem_cpp.single_layer(X, triangles=T),
+            bem_cpp.double_layer(X, triangles=T),
+            bem_cpp.hypersingular(X, triangles=T),
+        ),
+    )
+    print(f"\n3D: dense V_h, K_h, W_h (P1) on the cube, {len(T)} triangles: {t:.2f} s", end=" ")
+    print(f"(target {TARGET_DENSE_2000} s at 2,000: {verdict(t <= TARGET_DENSE_2000)})")
+    header = (
+        f"{'n':>7} {'set-up [s]':>10} {'peak [MB]':>10} {'held [MB]':>10} {'S x [s]':>8}"
+        f" {'CG its':>6} {'max rank':>8}"
+    )
+    print(f"\n3D: H-matrix S_h on the icosphere |x| = 0.8, P1, tol {TOL:g}")
+    print(header)
+    print("-" * len(header))
+    rows = []
+    for level in levels:
+        out = subprocess.run(
+            [sys.executable, __file__, "--surface-one", str(level)],
+            check=True,
+            capture_output=True,
+            text=True,
+        )
+        r = json.loads(out.stdout.strip().splitlines()[-1])
+        rows.append(r)
+        print(
+            f"{r['n']:>7} {r['setup']:>10.2f} {r['peak'] / 1e6:>10.0f} {r['nbytes'] / 1e6:>10.0f}"
+            f" {r['product']:>8.3f} {r['iterations']:>6} {r['max_rank']:>8}"
+        )
+    for n, (setup, peak, product) in TARGET_SURFACE.items():
+        near = [r for r in rows if 0.8 * n <= r["n"] <= 1.2 * n]
+        for r in near:
+            ok = r["setup"] <= setup and r["peak"] <= peak
+            ok = ok and (product is None or r["product"] <= product)
+            print(f"target at {n} dofs (set-up, peak memory, product): {verdict(ok)}")
+    if len(rows) >= 2:
+        a, b = rows[-2], rows[-1]
+        slope = np.log(b["setup"] / a["setup"]) / np.log(b["n"] / a["n"])
+        ok = slope <= TARGET_SURFACE_SLOPE
+        print(f"set-up log-log slope between the two largest: {slope:.2f} ({verdict(ok)})")
 
 
 if __name__ == "__main__":

@@ -72,10 +72,10 @@ def test_auto_switches_at_the_crossover(monkeypatch):
     assert not np.array_equal(direct, hmatrix)  # the compressed path does differ in round-off
     # the auto rule: m n >= DOFS m + POINTS n; with POINTS = 0 it switches at DOFS = n
     n = len(X)
-    monkeypatch.setattr(bem_cpp, "HMATRIX_POTENTIAL_CROSSOVER_POINTS", 0)
-    monkeypatch.setattr(bem_cpp, "HMATRIX_POTENTIAL_CROSSOVER_DOFS", n + 1)
+    monkeypatch.setattr(bem_cpp.defaults, "HMATRIX_POTENTIAL_CROSSOVER_POINTS", 0)
+    monkeypatch.setattr(bem_cpp.defaults, "HMATRIX_POTENTIAL_CROSSOVER_DOFS", n + 1)
     assert np.array_equal(bem_cpp.exterior_potential(X, v, psi, Z, a=A, compression="auto"), direct)
-    monkeypatch.setattr(bem_cpp, "HMATRIX_POTENTIAL_CROSSOVER_DOFS", n)
+    monkeypatch.setattr(bem_cpp.defaults, "HMATRIX_POTENTIAL_CROSSOVER_DOFS", n)
     auto = bem_cpp.exterior_potential(X, v, psi, Z, a=A, compression="auto")
     assert np.array_equal(auto, hmatrix)
 

@@ -82,7 +82,7 @@ Index next_unused(const std::vector<char>& used, Index from) {
   return -1;
 }
 
-constexpr int kSamples = 1;      // sampled rows and columns confirming the stop
+constexpr int kSamples = 1;       // sampled rows and columns confirming the stop
 constexpr int kZeroRowTries = 3;  // consecutive zero rows before the samples decide
 
 }  // namespace
@@ -90,8 +90,8 @@ constexpr int kZeroRowTries = 3;  // consecutive zero rows before the samples de
 LowRank aca(Index m, Index n, const Slice& row, const Slice& column, double tol, Index max_rank) {
   max_rank = std::min({max_rank, m, n});
   Cross x(m, n, row, column);
-  std::uint64_t seed = 0x9E3779B97F4A7C15ULL ^ (static_cast<std::uint64_t>(m) * 1315423911ULL +
-                                                 static_cast<std::uint64_t>(n));
+  std::uint64_t seed =
+      0x9E3779B97F4A7C15ULL ^ (static_cast<std::uint64_t>(m) * 1315423911ULL + static_cast<std::uint64_t>(n));
   auto random_index = [&seed](Index size) {
     seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
     return static_cast<Index>((seed >> 33) % static_cast<std::uint64_t>(size));

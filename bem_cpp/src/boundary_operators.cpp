@@ -6,16 +6,14 @@ namespace bem {
 
 std::shared_ptr<const HMatrix> layer_hmatrix(const Polygon& polygon, Kernel kernel, Space rows,
                                              std::shared_ptr<const ClusterTree> row_tree,
-                                             std::shared_ptr<const ClusterTree> col_tree,
-                                             const HMatrixOptions& o) {
+                                             std::shared_ptr<const ClusterTree> col_tree, const HMatrixOptions& o) {
   const OperatorEntries entries(polygon, kernel, rows, kernel == Kernel::SingleLayer ? rows : Space::P1);
   HMatrixOptions options = o;
   options.symmetric = kernel == Kernel::SingleLayer;  // V_h = V_h^T: half the blocks
   return std::make_shared<const HMatrix>(std::move(row_tree), std::move(col_tree), entries, options);
 }
 
-BoundaryOperators::BoundaryOperators(const Eigen::Ref<const Points>& nodes, Space space,
-                                     const HMatrixOptions& o)
+BoundaryOperators::BoundaryOperators(const Eigen::Ref<const Points>& nodes, Space space, const HMatrixOptions& o)
     : polygon_(nodes) {
   auto tree1 = std::make_shared<const ClusterTree>(ClusterTree::for_space(polygon_, Space::P1, o.leaf_size));
   auto tree = space == Space::P1

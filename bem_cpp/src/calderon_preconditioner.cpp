@@ -26,8 +26,7 @@ Eigen::MatrixXd maue(const HMatrix& V0, const Eigen::VectorXd& h, const Eigen::M
 
 }  // namespace
 
-CalderonPreconditioner::CalderonPreconditioner(const Polygon& polygon, Space flux,
-                                               std::shared_ptr<const HMatrix> V0,
+CalderonPreconditioner::CalderonPreconditioner(const Polygon& polygon, Space flux, std::shared_ptr<const HMatrix> V0,
                                                const HMatrixOptions& refined)
     : flux_(flux), n_(polygon.size()) {
   const Index n = n_;
@@ -97,8 +96,7 @@ Eigen::MatrixXd CalderonPreconditioner::hypersingular(const Eigen::MatrixXd& Y) 
     }
     const Eigen::MatrixXd Wr = maue(*V0_, h_, Yr);
     W.resize(n, Y.cols());
-    for (Index i = 0; i < n; ++i)
-      W.row(i) = Wr.row(2 * i + 1) + 0.5 * (Wr.row(2 * i) + Wr.row((2 * i + 2) % (2 * n)));
+    for (Index i = 0; i < n; ++i) W.row(i) = Wr.row(2 * i + 1) + 0.5 * (Wr.row(2 * i) + Wr.row((2 * i + 2) % (2 * n)));
   }
   W += c_ * (c_.transpose() * Y);
   return W;

@@ -7,11 +7,15 @@
 
 namespace bem {
 
-void Box::add(Vec2 p) {
+void Box::add(Vec2 p) { add(Vec3{p.x, p.y, 0.0}); }
+
+void Box::add(Vec3 p) {
   x0 = std::min(x0, p.x);
   x1 = std::max(x1, p.x);
   y0 = std::min(y0, p.y);
   y1 = std::max(y1, p.y);
+  z0 = std::min(z0, p.z);
+  z1 = std::max(z1, p.z);
 }
 
 void Box::add(const Box& b) {
@@ -19,14 +23,18 @@ void Box::add(const Box& b) {
   x1 = std::max(x1, b.x1);
   y0 = std::min(y0, b.y0);
   y1 = std::max(y1, b.y1);
+  z0 = std::min(z0, b.z0);
+  z1 = std::max(z1, b.z1);
 }
 
-double Box::diameter() const { return std::hypot(x1 - x0, y1 - y0); }
+// hypot(hypot(dx, dy), dz): exactly the planar value when dz = 0 (a 2D box)
+double Box::diameter() const { return std::hypot(std::hypot(x1 - x0, y1 - y0), z1 - z0); }
 
 double Box::distance(const Box& b) const {
   const double dx = std::max({0.0, b.x0 - x1, x0 - b.x1});
   const double dy = std::max({0.0, b.y0 - y1, y0 - b.y1});
-  return std::hypot(dx, dy);
+  const double dz = std::max({0.0, b.z0 - z1, z0 - b.z1});
+  return std::hypot(std::hypot(dx, dy), dz);
 }
 
 bool admissible(const Box& t, const Box& s, double eta) {
@@ -34,18 +42,19 @@ bool admissible(const Box& t, const Box& s, double eta) {
   return d > 0.0 && std::min(t.diameter(), s.diameter()) <= eta * d;
 }
 
-ClusterTree::ClusterTree(const Points& points, const std::vector<Box>& supports, Index leaf_size) {
+ClusterTree::ClusterTree(const Eigen::Ref<const Matrix>& points, const std::vector<Box>& supports, Index leaf_size) {
   const Index n = points.rows();
-  if (n < 1 || static_cast<Index>(supports.size()) != n || leaf_size < 1)
-    throw std::invalid_argument("ClusterTree: need n >= 1 points, one support each, leaf_size >= 1");
+  if (n < 1 || static_cast<Index>(supports.size()) != n || leaf_size < 1 || (points.cols() != 2 && points.cols() != 3))
+    throw std::invalid_argument(
+        "ClusterTree: need n >= 1 points in 2 or 3 dimensions, one support each, leaf_size >= 1");
   permutation_.resize(static_cast<std::size_t>(n));
   std::iota(permutation_.begin(), permutation_.end(), Index{0});
   clusters_.reserve(static_cast<std::size_t>(4 * (n / leaf_size + 1)));
   build(0, n, points, supports, leaf_size);
 }
 
-int ClusterTree::build(Index begin, Index end, const Points& points,
-                       const std::vector<Box>& supports, Index leaf_size) {
+int ClusterTree::build(Index begin, Index end, const Eigen::Ref<const Matrix>& points, const std::vector<Box>& supports,
+                       Index leaf_size) {
   const int id = static_cast<int>(clusters_.size());
   clusters_.emplace_back();
   Cluster c;
@@ -55,20 +64,23 @@ int ClusterTree::build(Index begin, Index end, const Points& points,
   for (Index k = begin; k < end; ++k) {
     const Index i = permutation_[static_cast<std::size_t>(k)];
     c.box.add(supports[static_cast<std::size_t>(i)]);
-    point_box.add(Vec2{points(i, 0), points(i, 1)});
+    point_box.add(Vec3{points(i, 0), points(i, 1), points.cols() == 3 ? points(i, 2) : 0.0});
   }
   if (end - begin > leaf_size) {
-    // Bisect the box of the points along its longer side; fall back to the median if
-    // all points fall on one side (cannot happen for distinct points, kept for safety).
-    const bool split_x = point_box.x1 - point_box.x0 >= point_box.y1 - point_box.y0;
-    const int axis = split_x ? 0 : 1;
-    const double mid = split_x ? 0.5 * (point_box.x0 + point_box.x1) : 0.5 * (point_box.y0 + point_box.y1);
+    // Bisect the box of the points along its longest side (the first of equal ones); fall
+    // back to the median if all points fall on one side (cannot happen for distinct
+    // points, kept for safety).
+    const double lo[3] = {point_box.x0, point_box.y0, point_box.z0};
+    const double hi[3] = {point_box.x1, point_box.y1, point_box.z1};
+    int axis = 0;
+    for (int a = 1; a < points.cols(); ++a)
+      if (hi[a] - lo[a] > hi[axis] - lo[axis]) axis = a;
+    const double mid = 0.5 * (lo[axis] + hi[axis]);
     auto first = permutation_.begin() + begin, last = permutation_.begin() + end;
     auto cut = std::stable_partition(first, last, [&](Index i) { return points(i, axis) < mid; });
     if (cut == first || cut == last) {
       cut = first + (end - begin) / 2;
-      std::nth_element(first, cut, last,
-                       [&](Index a, Index b) { return points(a, axis) < points(b, axis); });
+      std::nth_element(first, cut, last, [&](Index a, Index b) { return points(a, axis) < points(b, axis); });
     }
     const Index split = begin + (cut - first);
     c.children[0] = build(begin, split, points, supports, leaf_size);
@@ -123,7 +135,7 @@ std::vector<Index> ClusterTree::partition(int parts, const std::vector<double>& 
   if (parts < 1) throw std::invalid_argument("ClusterTree::partition: need parts >= 1");
   if (static_cast<Index>(cost.size()) != size())
     throw std::invalid_argument("ClusterTree::partition: need one cost per dof");
-  std::vector<Index> ends{0};  // leaf boundaries, increasing, from 0 to n
+  std::vector<Index> ends{0};      // leaf boundaries, increasing, from 0 to n
   std::vector<double> below{0.0};  // cumulative cost at each
   for (int c : leaves()) {
     const Cluster& cl = cluster(c);

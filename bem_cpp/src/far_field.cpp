@@ -42,8 +42,8 @@ void PanelArrays::assign(const Polygon& polygon, const Index* panels, std::size_
   }
 }
 
-__attribute__((target_clones("avx2", "default"))) void far_field_points(
-    const Panel& pi, const PanelArrays& panels, Index j0, Index j1, int* points) {
+__attribute__((target_clones("avx2", "default"))) void far_field_points(const Panel& pi, const PanelArrays& panels,
+                                                                        Index j0, Index j1, int* points) {
   // Same test as the scalar far_field_points: the thresholds decrease with p, so the
   // number of failed ones is p - 1 (kMaxFarPoints failed: near field, 0).
   const auto& y = gauss_thresholds();
@@ -73,9 +73,9 @@ namespace {
 /// on the way out: small zero-fill and copy loops would otherwise become rep stos/movs
 /// instructions, whose start-up cost exceeds the arithmetic here.
 template <bool WithV, bool WithK, bool WithKji = false>
-inline __attribute__((always_inline)) void far_batch(const Panel& pi, const PanelArrays& panels,
-                                                     const Index* js, int m, int p, double v_scale,
-                                                     double k_scale, const PairBlockColumns& out) {
+inline __attribute__((always_inline)) void far_batch(const Panel& pi, const PanelArrays& panels, const Index* js, int m,
+                                                     int p, double v_scale, double k_scale,
+                                                     const PairBlockColumns& out) {
   constexpr int B = kFarBatch;
   const GaussRule& g = gauss_legendre(p);
   // Panel j data, contiguous for the vector loops.
@@ -220,28 +220,27 @@ inline __attribute__((always_inline)) void far_batch(const Panel& pi, const Pane
   }
 }
 
-#define BEM_FAR_BATCH_CLONE(name, with_v, with_k)                                                 \
-  __attribute__((target_clones("avx2", "default"))) void name(                                   \
-      const Panel& pi, const PanelArrays& panels, const Index* js, int m, int p, double vs,       \
-      double ks, const PairBlockColumns& out) {                                                   \
-    far_batch<with_v, with_k>(pi, panels, js, m, p, vs, ks, out);                                 \
+#define BEM_FAR_BATCH_CLONE(name, with_v, with_k)                                                                  \
+  __attribute__((target_clones("avx2", "default"))) void name(const Panel& pi, const PanelArrays& panels,          \
+                                                              const Index* js, int m, int p, double vs, double ks, \
+                                                              const PairBlockColumns& out) {                       \
+    far_batch<with_v, with_k>(pi, panels, js, m, p, vs, ks, out);                                                  \
   }
 BEM_FAR_BATCH_CLONE(far_batch_v, true, false)
 BEM_FAR_BATCH_CLONE(far_batch_vk, true, true)
 BEM_FAR_BATCH_CLONE(far_batch_k, false, true)
 #undef BEM_FAR_BATCH_CLONE
 
-__attribute__((target_clones("avx2", "default"))) void far_batch_kji(
-    const Panel& pi, const PanelArrays& panels, const Index* js, int m, int p, double ks,
-    const PairBlockColumns& out) {
+__attribute__((target_clones("avx2", "default"))) void far_batch_kji(const Panel& pi, const PanelArrays& panels,
+                                                                     const Index* js, int m, int p, double ks,
+                                                                     const PairBlockColumns& out) {
   far_batch<false, false, true>(pi, panels, js, m, p, 1.0, ks, out);
 }
 
 }  // namespace
 
-void far_blocks_batch(const Panel& pi, const PanelArrays& panels, const Index* js, int m, int p,
-                      bool with_v, bool with_k, const PairBlockColumns& out, double v_scale,
-                      double k_scale) {
+void far_blocks_batch(const Panel& pi, const PanelArrays& panels, const Index* js, int m, int p, bool with_v,
+                      bool with_k, const PairBlockColumns& out, double v_scale, double k_scale) {
   if (m < 1 || m > kFarBatch || p < 1 || p > kMaxFarPoints || !(with_v || with_k))
     throw std::invalid_argument("far_blocks_batch: batch size, points or kernels out of range");
   if (with_v && with_k)
@@ -259,8 +258,8 @@ void far_kji_batch(const Panel& pi, const PanelArrays& panels, const Index* js, 
   far_batch_kji(pi, panels, js, m, p, k_scale, out);
 }
 
-__attribute__((target_clones("avx2", "default"))) void point_far_field_points(
-    Vec2 z, const PanelArrays& panels, int* points) {
+__attribute__((target_clones("avx2", "default"))) void point_far_field_points(Vec2 z, const PanelArrays& panels,
+                                                                              int* points) {
   // Same test as point_panel_moments: separation = |z - m_j| - h_j/2 >= y_p h_j/2.
   const auto& y = gauss_thresholds();
   const double* mx = panels.mx.data();
@@ -280,9 +279,10 @@ __attribute__((target_clones("avx2", "default"))) void point_far_field_points(
   }
 }
 
-__attribute__((target_clones("avx2", "default"))) double far_point_sum(
-    Vec2 z, const PanelArrays& panels, const Index* js, int m, int p, const double* l0,
-    const double* l1, const double* d0, const double* d1) {
+__attribute__((target_clones("avx2", "default"))) double far_point_sum(Vec2 z, const PanelArrays& panels,
+                                                                       const Index* js, int m, int p, const double* l0,
+                                                                       const double* l1, const double* d0,
+                                                                       const double* d1) {
   constexpr int B = kFarBatch;
   const GaussRule& g = gauss_legendre(p);
   double ox[B], oy[B], tx[B], ty[B], hj[B], dn[B], cl0[B], cl1[B], cd0[B], cd1[B];

@@ -29,8 +29,7 @@ bool within_box(Vec2 a, Vec2 b, Vec2 c) {
 bool segments_intersect(const Panel& p, const Panel& q) {
   const double d1 = orient(q.a, q.b, p.a), d2 = orient(q.a, q.b, p.b);
   const double d3 = orient(p.a, p.b, q.a), d4 = orient(p.a, p.b, q.b);
-  if (((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) && ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0)))
-    return true;
+  if (((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) && ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0))) return true;
   return (d1 == 0 && within_box(q.a, q.b, p.a)) || (d2 == 0 && within_box(q.a, q.b, p.b)) ||
          (d3 == 0 && within_box(p.a, p.b, q.a)) || (d4 == 0 && within_box(p.a, p.b, q.b));
 }
@@ -115,15 +114,13 @@ Polygon::Polygon(const Eigen::Ref<const Points>& nodes) {
       const Panel& q = panel(j);
       if (std::max(q.a.y, q.b.y) < p_ylo || std::min(q.a.y, q.b.y) > p_yhi) continue;
       if (segments_intersect(p, q))
-        fail("the polygon is self-intersecting (panels " + std::to_string(std::min(i, j)) +
-             " and " + std::to_string(std::max(i, j)) +
-             " intersect); give the nodes of a simple polygon");
+        fail("the polygon is self-intersecting (panels " + std::to_string(std::min(i, j)) + " and " +
+             std::to_string(std::max(i, j)) + " intersect); give the nodes of a simple polygon");
     }
   }
 
   if (!(area_ > 0))
-    fail("the nodes are ordered clockwise (signed area " + fmt(area_) +
-         "); reverse them to counter-clockwise order");
+    fail("the nodes are ordered clockwise (signed area " + fmt(area_) + "); reverse them to counter-clockwise order");
 }
 
 Vector Polygon::lengths() const {

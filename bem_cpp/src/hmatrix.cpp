@@ -14,9 +14,8 @@ namespace {
 
 /// The leaves of the block tree under (t, s). upper: only (t, s) on or above the block
 /// diagonal (symmetric storage). [lo, hi): only row clusters meeting these rows.
-void collect(const ClusterTree& rows, const ClusterTree& cols, int t, int s, double eta,
-             bool upper, Index lo, Index hi, std::vector<HMatrix::Block>& out,
-             bool split_to_leaves = false) {
+void collect(const ClusterTree& rows, const ClusterTree& cols, int t, int s, double eta, bool upper, Index lo, Index hi,
+             std::vector<HMatrix::Block>& out, bool split_to_leaves = false) {
   const Cluster& ct = rows.cluster(t);
   const Cluster& cs = cols.cluster(s);
   if (ct.end <= lo || ct.begin >= hi) return;
@@ -75,23 +74,20 @@ void check_rows(Index got, Index expected, const char* what) {
 
 HMatrix::HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const ClusterTree> cols,
                  const EntrySource& entries, const HMatrixOptions& options)
-    : rows_(std::move(rows)), cols_(std::move(cols)), product_threads_(options.product_threads),
-      comm_(options.comm) {
+    : rows_(std::move(rows)), cols_(std::move(cols)), product_threads_(options.product_threads), comm_(options.comm) {
   row_end_ = rows_->size();
   if (comm_) {
-    if (comm_->size < 1 || comm_->rank < 0 || comm_->rank >= comm_->size || !comm_->allgather ||
-        !comm_->allreduce)
+    if (comm_->size < 1 || comm_->rank < 0 || comm_->rank >= comm_->size || !comm_->allgather || !comm_->allreduce)
       throw std::invalid_argument("HMatrix: the communicator needs 0 <= rank < size and both collectives");
-    // Rows balanced by the bytes each will hold: a dense block k doubles per row, a
-    // low-rank one about r (1 + k / m) with r = log10(1 / tol), the order of the ranks
-    // of the admissible blocks (measured 8-20 at tol 1e-10; only the balance depends on it).
+    // Rows balanced by the bytes each will hold, ranks modelled as log10(1 / tol)
+    // (docs/design/hmatrix.md, "Under MPI").
     std::vector<Block> all;
     collect(*rows_, *cols_, 0, 0, options.eta, options.symmetric, 0, rows_->size(), all);
     const double r = std::max(1.0, -std::log10(options.tol));
     std::vector<double> cost(static_cast<std::size_t>(rows_->size()), 0.0);
     for (const Block& b : all) {
-      const double per_row = b.low_rank ? r * (1.0 + static_cast<double>(b.k) / static_cast<double>(b.m))
-                                        : static_cast<double>(b.k);
+      const double per_row =
+          b.low_rank ? r * (1.0 + static_cast<double>(b.k) / static_cast<double>(b.m)) : static_cast<double>(b.k);
       for (Index i = b.r0; i < b.r0 + b.m; ++i) cost[static_cast<std::size_t>(i)] += per_row;
     }
     const std::vector<Index> bounds = rows_->partition(comm_->size, cost);
@@ -106,8 +102,12 @@ HMatrix::HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const 
 
 HMatrix::HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const ClusterTree> cols,
                  const EntrySource& entries, const HMatrixOptions& options, Index row_begin, Index row_end)
-    : rows_(std::move(rows)), cols_(std::move(cols)), restricted_(true), row_begin_(row_begin),
-      row_end_(row_end), product_threads_(options.product_threads) {
+    : rows_(std::move(rows)),
+      cols_(std::move(cols)),
+      restricted_(true),
+      row_begin_(row_begin),
+      row_end_(row_end),
+      product_threads_(options.product_threads) {
   if (options.comm) throw std::invalid_argument("HMatrix: a row range or a communicator, not both");
   if (row_begin < 0 || row_begin > row_end || row_end > rows_->size())
     throw std::invalid_argument("HMatrix: need 0 <= row_begin <= row_end <= rows");
@@ -120,8 +120,7 @@ void HMatrix::build(const EntrySource& entries, const HMatrixOptions& options) {
   if (options.symmetric && rows_ != cols_)
     throw std::invalid_argument("HMatrix: a symmetric matrix needs one cluster tree for rows and columns");
   symmetric_ = options.symmetric;
-  collect(*rows_, *cols_, 0, 0, options.eta, symmetric_, row_begin_, row_end_, blocks_,
-          options.split_to_leaves);
+  collect(*rows_, *cols_, 0, 0, options.eta, symmetric_, row_begin_, row_end_, blocks_, options.split_to_leaves);
   const Index* rp = rows_->permutation().data();
   const Index* cp = cols_->permutation().data();
   // Largest blocks first, so that the dynamic schedule ends with small ones.
@@ -166,8 +165,7 @@ void HMatrix::build(const EntrySource& entries, const HMatrixOptions& options) {
   }
 }
 
-void HMatrix::accumulate(const Eigen::MatrixXd& Xp, Index in0, Index out0, bool transpose,
-                         Eigen::MatrixXd& Yp) const {
+void HMatrix::accumulate(const Eigen::MatrixXd& Xp, Index in0, Index out0, bool transpose, Eigen::MatrixXd& Yp) const {
   const Index nrhs = Xp.cols();
   const int threads = product_threads_ > 0 ? product_threads_ : omp_get_max_threads();
   std::vector<Eigen::MatrixXd> partial(static_cast<std::size_t>(threads));
@@ -256,8 +254,7 @@ std::size_t HMatrix::nbytes() const {
   std::size_t entries = 0;
   for (const Block& b : blocks_)
     entries += static_cast<std::size_t>(b.dense.size() + b.factors.U.size() + b.factors.V.size());
-  return entries * sizeof(double) +
-         (rows_->permutation().size() + cols_->permutation().size()) * sizeof(Index) +
+  return entries * sizeof(double) + (rows_->permutation().size() + cols_->permutation().size()) * sizeof(Index) +
          blocks_.size() * sizeof(Block);
 }
 

@@ -160,20 +160,34 @@ void far_blocks_fixed(const Panel& pi, const Panel& pj, PairBlocks& out) {
 template <bool WithK>
 void far_blocks_dispatch(const Panel& pi, const Panel& pj, int p, PairBlocks& out) {
   switch (p) {
-    case 1: return far_blocks_fixed<1, WithK>(pi, pj, out);
-    case 2: return far_blocks_fixed<2, WithK>(pi, pj, out);
-    case 3: return far_blocks_fixed<3, WithK>(pi, pj, out);
-    case 4: return far_blocks_fixed<4, WithK>(pi, pj, out);
-    case 5: return far_blocks_fixed<5, WithK>(pi, pj, out);
-    case 6: return far_blocks_fixed<6, WithK>(pi, pj, out);
-    case 7: return far_blocks_fixed<7, WithK>(pi, pj, out);
-    case 8: return far_blocks_fixed<8, WithK>(pi, pj, out);
-    case 10: return far_blocks_fixed<10, WithK>(pi, pj, out);
-    case 12: return far_blocks_fixed<12, WithK>(pi, pj, out);
-    case 16: return far_blocks_fixed<16, WithK>(pi, pj, out);
-    case 20: return far_blocks_fixed<20, WithK>(pi, pj, out);
-    case 24: return far_blocks_fixed<24, WithK>(pi, pj, out);
-    default: throw std::invalid_argument("far_blocks: unsupported number of Gauss points");
+    case 1:
+      return far_blocks_fixed<1, WithK>(pi, pj, out);
+    case 2:
+      return far_blocks_fixed<2, WithK>(pi, pj, out);
+    case 3:
+      return far_blocks_fixed<3, WithK>(pi, pj, out);
+    case 4:
+      return far_blocks_fixed<4, WithK>(pi, pj, out);
+    case 5:
+      return far_blocks_fixed<5, WithK>(pi, pj, out);
+    case 6:
+      return far_blocks_fixed<6, WithK>(pi, pj, out);
+    case 7:
+      return far_blocks_fixed<7, WithK>(pi, pj, out);
+    case 8:
+      return far_blocks_fixed<8, WithK>(pi, pj, out);
+    case 10:
+      return far_blocks_fixed<10, WithK>(pi, pj, out);
+    case 12:
+      return far_blocks_fixed<12, WithK>(pi, pj, out);
+    case 16:
+      return far_blocks_fixed<16, WithK>(pi, pj, out);
+    case 20:
+      return far_blocks_fixed<20, WithK>(pi, pj, out);
+    case 24:
+      return far_blocks_fixed<24, WithK>(pi, pj, out);
+    default:
+      throw std::invalid_argument("far_blocks: unsupported number of Gauss points");
   }
 }
 
@@ -256,8 +270,7 @@ Panel sub_panel(const Panel& p, double s0, double s1) {
 /// out += blocks of a sub-pair mapped to the full panels: on the part [s0, s1] of a
 /// panel of length h, phi_k = sum_l R[k][l] psi_l with psi the shapes of the part and
 /// R[k][l] = phi_k(endpoint l) (ri for panel i, rj for panel j).
-void add_restricted(const PairBlocks& sub, const double (&ri)[2][2], const double (&rj)[2][2],
-                    PairBlocks& out) {
+void add_restricted(const PairBlocks& sub, const double (&ri)[2][2], const double (&rj)[2][2], PairBlocks& out) {
   for (int a = 0; a < 2; ++a)
     for (int b = 0; b < 2; ++b)
       for (int l = 0; l < 2; ++l)
@@ -345,10 +358,8 @@ void adjacent_equal_blocks(const Panel& pi, const Panel& pj, PairRelation relati
   for (int k = 0; k < 2; ++k)
     for (int m = 0; m < 2; ++m) {
       const int q = k + m + 1;
-      I[k][m] = std::pow(r, m + 1) * power_log_integral(q, a) / (m + 1) +
-                std::pow(a, q + 1) / (q + 1) * s1log[m] +
-                std::pow(rp, k + 1) * power_log_integral(q, b) / (k + 1) +
-                std::pow(b, q + 1) / (q + 1) * s2log[k];
+      I[k][m] = std::pow(r, m + 1) * power_log_integral(q, a) / (m + 1) + std::pow(a, q + 1) / (q + 1) * s1log[m] +
+                std::pow(rp, k + 1) * power_log_integral(q, b) / (k + 1) + std::pow(b, q + 1) / (q + 1) * s2log[k];
       // (x - y).n_j = s (e1.n_j): the kernel is homogeneous of degree -1, the Duffy
       // Jacobian removes the singularity and leaves angle moments.
       KIJ[k][m] = std::pow(a, q) / q * sj * s1ang[m] - std::pow(b, q) / q * sj * s2ang[k + 1];
@@ -409,8 +420,7 @@ void far_blocks(const Panel& pi, const Panel& pj, int p, bool with_k, PairBlocks
     far_blocks_dispatch<false>(pi, pj, p, out);
 }
 
-void pair_blocks(const Panel& pi, const Panel& pj, PairRelation relation, bool with_k,
-                 PairBlocks& out) {
+void pair_blocks(const Panel& pi, const Panel& pj, PairRelation relation, bool with_k, PairBlocks& out) {
   switch (relation) {
     case PairRelation::Coincident:
       return coincident_blocks(pi, out);

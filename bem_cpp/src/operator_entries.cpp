@@ -31,8 +31,7 @@ PairRelation relation(Index p, Index q, Index n) {
   return PairRelation::Separated;
 }
 
-std::vector<Index> sorted_panels(Space space, const Index* dofs, Index m, Index n,
-                                 std::vector<Index> panels) {
+std::vector<Index> sorted_panels(Space space, const Index* dofs, Index m, Index n, std::vector<Index> panels) {
   panels.clear();
   if (m == 1) {  // one dof (a row or column of ACA): two panels, or one for P0
     const Terms t = terms(space, dofs[0], n);
@@ -86,8 +85,7 @@ void OperatorEntries::dofs_into(Space space, const Index* dofs, Index m, DofSet&
   d.arrays.assign(polygon_, d.panels.data(), d.panels.size());
 }
 
-void OperatorEntries::block(const Index* I, Index m, const Index* J, Index k, double* out,
-                            Index ld) const {
+void OperatorEntries::block(const Index* I, Index m, const Index* J, Index k, double* out, Index ld) const {
   block(dofs(rows_, I, m), dofs(cols_, J, k), out, ld);
 }
 

@@ -273,12 +273,8 @@ void add_mass(const Polygon& polygon, Space space, double scale, Matrix& K) {
   }
 }
 
-Matrix single_layer(const Eigen::Ref<const Points>& nodes, Space space) {
-  return single_layer(Polygon(nodes), space);
-}
-Matrix double_layer(const Eigen::Ref<const Points>& nodes, Space space) {
-  return double_layer(Polygon(nodes), space);
-}
+Matrix single_layer(const Eigen::Ref<const Points>& nodes, Space space) { return single_layer(Polygon(nodes), space); }
+Matrix double_layer(const Eigen::Ref<const Points>& nodes, Space space) { return double_layer(Polygon(nodes), space); }
 Matrix hypersingular(const Eigen::Ref<const Points>& nodes) { return hypersingular(Polygon(nodes)); }
 Matrix mass(const Eigen::Ref<const Points>& nodes, Space space) { return mass(Polygon(nodes), space); }
 

@@ -38,9 +38,10 @@ class PairMoments {
   std::vector<double> ox_, oy_, tx_, ty_, h_, dn_;
 };
 
-__attribute__((target_clones("avx2", "default"))) void far_moments(
-    const double* ox, const double* oy, const double* tx, const double* ty, const double* h,
-    const double* dn, std::size_t count, int p, bool double_layer, double* m0, double* m1) {
+__attribute__((target_clones("avx2", "default"))) void far_moments(const double* ox, const double* oy, const double* tx,
+                                                                   const double* ty, const double* h, const double* dn,
+                                                                   std::size_t count, int p, bool double_layer,
+                                                                   double* m0, double* m1) {
   const GaussRule& g = gauss_legendre(p);
 #pragma omp simd
   for (std::size_t k = 0; k < count; ++k) m0[k] = m1[k] = 0.0;
@@ -71,8 +72,7 @@ void PairMoments::evaluate(const Polygon& polygon, bool double_layer, std::vecto
   constexpr std::size_t kFar = 32;
   const std::size_t count = z_.size();
   out.resize(count);
-  for (auto* v : {&ox_, &oy_, &tx_, &ty_, &h_, &dn_})
-    v->resize(static_cast<std::size_t>(kMaxFarPoints + 1) * kFar);
+  for (auto* v : {&ox_, &oy_, &tx_, &ty_, &h_, &dn_}) v->resize(static_cast<std::size_t>(kMaxFarPoints + 1) * kFar);
   order_.resize(static_cast<std::size_t>(kMaxFarPoints + 1) * kFar);
   std::size_t queued[kMaxFarPoints + 1] = {};
   double m0[kFar], m1[kFar];
@@ -118,10 +118,9 @@ void PairMoments::evaluate(const Polygon& polygon, bool double_layer, std::vecto
 /// panel of J) go to per-block scratch (a block is built by one thread).
 class PotentialBlock : public EntryBlock {
  public:
-  PotentialBlock(const Polygon& polygon, const Points& points, PotentialKernel kernel, Space cols,
-                 const Index* I, Index m, const Index* J, Index k)
-      : polygon_(polygon), points_(points), double_layer_(kernel == PotentialKernel::DoubleLayer),
-        I_(I), m_(m), k_(k) {
+  PotentialBlock(const Polygon& polygon, const Points& points, PotentialKernel kernel, Space cols, const Index* I,
+                 Index m, const Index* J, Index k)
+      : polygon_(polygon), points_(points), double_layer_(kernel == PotentialKernel::DoubleLayer), I_(I), m_(m), k_(k) {
     const Index n = polygon.size();
     terms_.resize(static_cast<std::size_t>(2 * k));
     shape_.resize(static_cast<std::size_t>(2 * k));
@@ -202,8 +201,7 @@ class PotentialBlock : public EntryBlock {
 
 }  // namespace
 
-PotentialEntries::PotentialEntries(const Polygon& polygon, const Points& points, PotentialKernel kernel,
-                                   Space cols)
+PotentialEntries::PotentialEntries(const Polygon& polygon, const Points& points, PotentialKernel kernel, Space cols)
     : polygon_(polygon), points_(points), kernel_(kernel), cols_(cols) {
   if (kernel == PotentialKernel::DoubleLayer && cols != Space::P1)
     throw std::invalid_argument("PotentialEntries: the double-layer potential acts on the P1 trace");
@@ -230,8 +228,9 @@ PotentialOperator::PotentialOperator(const Polygon& polygon, const Eigen::Ref<co
   options.split_to_leaves = true;
   auto rows = std::make_shared<const ClusterTree>(point_cluster_tree(points_, options.leaf_size));
   auto p1 = std::make_shared<const ClusterTree>(ClusterTree::for_space(polygon, Space::P1, options.leaf_size));
-  auto cols = flux == Space::P1 ? p1 : std::make_shared<const ClusterTree>(
-                                           ClusterTree::for_space(polygon, Space::P0, options.leaf_size));
+  auto cols = flux == Space::P1
+                  ? p1
+                  : std::make_shared<const ClusterTree>(ClusterTree::for_space(polygon, Space::P0, options.leaf_size));
   double_layer_ = std::make_unique<HMatrix>(
       rows, p1, PotentialEntries(polygon, points_, PotentialKernel::DoubleLayer, Space::P1), options);
   single_layer_ = std::make_unique<HMatrix>(

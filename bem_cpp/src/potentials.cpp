@@ -28,7 +28,9 @@ namespace {
 class Locator {
  public:
   Locator(const Polygon& polygon, double tol)
-      : polygon_(polygon), tree_(ClusterTree::for_space(polygon, Space::P0, 16)), tol_(tol),
+      : polygon_(polygon),
+        tree_(ClusterTree::for_space(polygon, Space::P0, 16)),
+        tol_(tol),
         margin_(1e-12 * polygon.bounding_diameter()) {}
   bool not_exterior(Vec2 z) const { return near(0, z) || crossings(0, z) % 2 == 1; }
 
@@ -69,8 +71,7 @@ void check_exterior(const Polygon& polygon, const Eigen::Ref<const Points>& poin
   const Locator locator(polygon, kOnBoundaryTolerance * polygon.bounding_diameter());
   std::vector<char> bad(static_cast<std::size_t>(m), 0);
 #pragma omp parallel for schedule(static)
-  for (Index k = 0; k < m; ++k)
-    bad[static_cast<std::size_t>(k)] = locator.not_exterior({points(k, 0), points(k, 1)});
+  for (Index k = 0; k < m; ++k) bad[static_cast<std::size_t>(k)] = locator.not_exterior({points(k, 0), points(k, 1)});
   Index n_bad = 0, first = -1;
   for (Index k = 0; k < m; ++k)
     if (bad[static_cast<std::size_t>(k)]) {
@@ -79,9 +80,8 @@ void check_exterior(const Polygon& polygon, const Eigen::Ref<const Points>& poin
     }
   if (n_bad > 0) {
     std::ostringstream s;
-    s << "points: " << n_bad << " of the " << m << " points lie inside or on Gamma (first: point "
-      << first << " at (" << points(first, 0) << ", " << points(first, 1)
-      << ")); the representation formula holds only in the exterior";
+    s << "points: " << n_bad << " of the " << m << " points lie inside or on Gamma (first: point " << first << " at ("
+      << points(first, 0) << ", " << points(first, 1) << ")); the representation formula holds only in the exterior";
     throw std::invalid_argument(s.str());
   }
 }
@@ -95,8 +95,8 @@ void check_potential_data(Index n, const Eigen::Ref<const Vector>& dirichlet,
 }
 
 Vector exterior_potential(const Polygon& polygon, const Eigen::Ref<const Vector>& dirichlet,
-                          const Eigen::Ref<const Vector>& flux_coefficients,
-                          const Eigen::Ref<const Points>& points, double a, Space flux) {
+                          const Eigen::Ref<const Vector>& flux_coefficients, const Eigen::Ref<const Points>& points,
+                          double a, Space flux) {
   const Index n = polygon.size(), m = points.rows();
   check_potential_data(n, dirichlet, flux_coefficients, a);
   if (!points.allFinite()) throw std::invalid_argument("points: non-finite coordinates");
@@ -152,8 +152,8 @@ Vector exterior_potential(const Polygon& polygon, const Eigen::Ref<const Vector>
 }
 
 Vector exterior_potential(const Eigen::Ref<const Points>& nodes, const Eigen::Ref<const Vector>& dirichlet,
-                          const Eigen::Ref<const Vector>& flux_coefficients,
-                          const Eigen::Ref<const Points>& points, double a, Space flux) {
+                          const Eigen::Ref<const Vector>& flux_coefficients, const Eigen::Ref<const Points>& points,
+                          double a, Space flux) {
   return exterior_potential(Polygon(nodes), dirichlet, flux_coefficients, points, a, flux);
 }
 

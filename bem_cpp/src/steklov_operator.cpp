@@ -66,8 +66,8 @@ Eigen::MatrixXd SteklovPoincareOperator::flux(const Eigen::Ref<const Eigen::Matr
 
 Eigen::MatrixXd SteklovPoincareOperator::apply(const Eigen::Ref<const Eigen::MatrixXd>& X) const {
   if (X.rows() != size())
-    throw std::invalid_argument("SteklovPoincareOperator: X has " + std::to_string(X.rows()) +
-                                " rows, expected " + std::to_string(size()));
+    throw std::invalid_argument("SteklovPoincareOperator: X has " + std::to_string(X.rows()) + " rows, expected " +
+                                std::to_string(size()));
   const Index n = size();
   // W X = D^T V0 D X, (D X)_i = (X_{i+1} - X_i)/h_i on panel i.
   Eigen::MatrixXd DX(n, X.cols());

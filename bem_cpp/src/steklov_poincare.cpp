@@ -52,12 +52,10 @@ Matrix steklov_poincare(const Polygon& polygon, Space flux, StageTimes* times) {
   return std::move(S);
 }
 
-Vector exterior_flux(const Polygon& polygon, const Eigen::Ref<const Vector>& dirichlet, double a,
-                     Space flux) {
+Vector exterior_flux(const Polygon& polygon, const Eigen::Ref<const Vector>& dirichlet, double a, Space flux) {
   if (dirichlet.size() != polygon.size())
     throw std::invalid_argument("dirichlet: expected " + std::to_string(polygon.size()) +
-                                " nodal values (one per node), got " +
-                                std::to_string(dirichlet.size()));
+                                " nodal values (one per node), got " + std::to_string(dirichlet.size()));
   if (!dirichlet.allFinite() || !std::isfinite(a))
     throw std::invalid_argument("dirichlet: values and a must be finite");
   OperatorRequest request;
@@ -82,8 +80,8 @@ std::pair<Matrix, StageTimes> steklov_poincare_timed(const Eigen::Ref<const Poin
   return {std::move(S), times};
 }
 
-Vector exterior_flux(const Eigen::Ref<const Points>& nodes, const Eigen::Ref<const Vector>& dirichlet,
-                     double a, Space flux) {
+Vector exterior_flux(const Eigen::Ref<const Points>& nodes, const Eigen::Ref<const Vector>& dirichlet, double a,
+                     Space flux) {
   return exterior_flux(Polygon(nodes), dirichlet, a, flux);
 }
 

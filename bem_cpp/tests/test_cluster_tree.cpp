@@ -48,3 +48,32 @@ TEST(ClusterTree, Admissibility) {
   EXPECT_FALSE(admissible(a, b, 0.5));    // sqrt 2 > 1
   EXPECT_FALSE(admissible(a, c, 100.0));  // touching
 }
+
+TEST(ClusterTree, SplitsThreeDimensionalPointsAlongTheLongestSide) {
+  // points on a segment along z: a 2D tree would see them all at one (x, y)
+  const Index n = 64;
+  Matrix X(n, 3);
+  std::vector<Box> supports(static_cast<std::size_t>(n));
+  for (Index i = 0; i < n; ++i) {
+    X.row(i) << 0.01 * static_cast<double>(i % 2), 0.0, static_cast<double>(i);
+    supports[static_cast<std::size_t>(i)].add(Vec3{X(i, 0), X(i, 1), X(i, 2)});
+  }
+  const ClusterTree tree(X, supports, 8);
+  const Cluster& root = tree.cluster(0);
+  EXPECT_DOUBLE_EQ(root.box.diameter(), std::hypot(0.01, 63.0));
+  const Cluster& low = tree.cluster(root.children[0]);
+  const Cluster& high = tree.cluster(root.children[1]);
+  EXPECT_EQ(low.size(), 32);
+  EXPECT_LT(low.box.z1, high.box.z0);  // cut across z
+  EXPECT_DOUBLE_EQ(low.box.distance(high.box), high.box.z0 - low.box.z1);
+  for (int l : tree.leaves()) EXPECT_LE(tree.cluster(l).size(), 8);
+}
+
+TEST(ClusterTree, PlanarBoxesAreFlat) {
+  Box a;
+  a.add(Vec2{0, 0});
+  a.add(Vec2{3, 4});
+  EXPECT_EQ(a.z0, 0.0);
+  EXPECT_EQ(a.z1, 0.0);
+  EXPECT_EQ(a.diameter(), 5.0);
+}

@@ -130,7 +130,8 @@ TEST(HMatrix, RowRestrictedBlocksCoverTheRowsAndGiveTheirProducts) {
               EXPECT_GE(blk.r0, b[r]);
               EXPECT_LE(blk.r0 + blk.m, b[r + 1]);
               cover.block(blk.r0, blk.c0, blk.m, blk.k).array() += 1;
-              if (symmetric && blk.row_cluster != blk.col_cluster) cover.block(blk.c0, blk.r0, blk.k, blk.m).array() += 1;
+              if (symmetric && blk.row_cluster != blk.col_cluster)
+                cover.block(blk.c0, blk.r0, blk.k, blk.m).array() += 1;
             }
             if (!symmetric) {  // exactly the local rows
               EXPECT_EQ(cover.middleRows(b[r], b[r + 1] - b[r]).minCoeff(), 1);

@@ -113,7 +113,7 @@ TEST(SegmentMoments, AgainstGradedQuadrature) {
 }
 
 TEST(PairBlocks, CoincidentClosedForm) {
-  // int int log|s - t| over [0, h]^2 = h^2 (log h - 3/2) (METHOD.md section 9 without
+  // int int log|s - t| over [0, h]^2 = h^2 (log h - 3/2) (docs/method.md section 9 without
   // the factor -1/(2 pi)); the P1 moments add up to it.
   for (double h : {1.0, 0.01, 0.37}) {
     PairBlocks B;
@@ -142,8 +142,8 @@ TEST(PairBlocks, AdjacentClosedForms) {
 TEST(PairBlocks, SymmetryUnderExchange) {
   // v(i, j) = v(j, i)^T and kij(i, j) = kji(j, i), with different outer/inner roles.
   const Panel p = make_panel({0.0, 0.0}, {0.3, 0.05});
-  for (const Panel& q : {make_panel({0.5, 0.2}, {0.35, 0.4}), make_panel({0.3, 0.05}, {0.1, 0.4}),
-                         make_panel({2.0, 1.0}, {1.9, 1.3})}) {
+  for (const Panel& q :
+       {make_panel({0.5, 0.2}, {0.35, 0.4}), make_panel({0.3, 0.05}, {0.1, 0.4}), make_panel({2.0, 1.0}, {1.9, 1.3})}) {
     const PairRelation r = (q.a.x == p.b.x && q.a.y == p.b.y) ? PairRelation::EndToStart : PairRelation::Separated;
     const PairRelation rs = r == PairRelation::EndToStart ? PairRelation::StartToEnd : PairRelation::Separated;
     PairBlocks B, C;

@@ -63,7 +63,8 @@ TEST(PotentialOperator, BlocksCoverEveryPointDofPairOnce) {
       for (const HMatrix::Block& b : H->blocks()) {
         count.block(b.r0, b.c0, b.m, b.k).array() += 1;
         const bool leaves = H->row_tree().cluster(b.row_cluster).leaf() && H->col_tree().cluster(b.col_cluster).leaf();
-        const bool adm = admissible(H->row_tree().cluster(b.row_cluster).box, H->col_tree().cluster(b.col_cluster).box, 2.0);
+        const bool adm =
+            admissible(H->row_tree().cluster(b.row_cluster).box, H->col_tree().cluster(b.col_cluster).box, 2.0);
         EXPECT_TRUE(adm || leaves);  // dense blocks only between two leaves
         low_rank += b.low_rank;
       }

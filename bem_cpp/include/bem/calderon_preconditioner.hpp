@@ -3,8 +3,8 @@
 // (docs/design/hmatrix.md): V W = 1/4 - K^2 on a closed curve, so with a stable pairing
 // G between the flux space and a trace space T and the hypersingular matrix W_T on T,
 //   C = G^{-T} (W_T + c c^T) G^{-1},   c_i = int_Gamma t_i ds  (c c^T fixes the kernel of W),
-// has cond(C V_h) bounded independently of h (measured 1.84 on the circle, 2.4-2.5 on a
-// square, n = 256 ... 2048).
+// has cond(C V_h) bounded independently of h (measured: docs/design/hmatrix.md,
+// "Parameters and why").
 //   flux P1: T = P1 on the same mesh, G = M (P1 Gram), W_T = D^T V0 D with the P0
 //            H-matrix V0 that S_h needs anyway;
 //   flux P0: T = the dual hats (centred at the panel midpoints, value 1/2 at the nodes,

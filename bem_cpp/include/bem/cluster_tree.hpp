@@ -1,21 +1,25 @@
 #pragma once
 // Cluster tree on the degrees of freedom of a boundary element space (docs/design/hmatrix.md):
 // geometric bisection of the bounding box of the dof points (nodes for P1, panel
-// midpoints for P0) along its longer side, until a cluster holds at most `leaf_size`
-// dofs. Each cluster is a contiguous range of the permuted order and carries the
+// midpoints for P0) along its longest side, until a cluster holds at most `leaf_size`
+// dofs. The same tree serves 2D and 3D geometry: the points are (n, d) with d = 2 or 3,
+// and boxes live in R^3 (a 2D box is flat, z0 = z1 = 0, so its diameter and distances
+// are those of the plane). Each cluster is a contiguous range of the permuted order and carries the
 // bounding box of the supports of its basis functions (the panels the dofs live on), so
 // that the admissibility condition below is a statement about the integration domains.
 #include <vector>
 
 #include "bem/geometry.hpp"
 #include "bem/operators.hpp"
+#include "bem/vec3.hpp"
 
 namespace bem {
 
-/// Axis-parallel box [x0, x1] x [y0, y1].
+/// Axis-parallel box [x0, x1] x [y0, y1] x [z0, z1] (2D: z0 = z1 = 0).
 struct Box {
-  double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
-  void add(Vec2 p);
+  double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300, z0 = 1e300, z1 = -1e300;
+  void add(Vec2 p);  ///< the point (p.x, p.y, 0)
+  void add(Vec3 p);
   void add(const Box& b);
   double diameter() const;
   /// Euclidean distance between the boxes (0 if they overlap or touch).
@@ -35,8 +39,9 @@ struct Cluster {
 
 class ClusterTree {
  public:
-  /// points: (n, 2) representative point of each dof; supports[i]: box of its support.
-  ClusterTree(const Points& points, const std::vector<Box>& supports, Index leaf_size);
+  /// points: (n, d) representative point of each dof, d = 2 or 3; supports[i]: box of its
+  /// support.
+  ClusterTree(const Eigen::Ref<const Matrix>& points, const std::vector<Box>& supports, Index leaf_size);
   /// The tree of the P1 (nodes) or P0 (panels) space of a polygon.
   static ClusterTree for_space(const Polygon& polygon, Space space, Index leaf_size);
 
@@ -56,7 +61,7 @@ class ClusterTree {
   std::vector<Index> partition(int parts, const std::vector<double>& cost) const;
 
  private:
-  int build(Index begin, Index end, const Points& points, const std::vector<Box>& supports,
+  int build(Index begin, Index end, const Eigen::Ref<const Matrix>& points, const std::vector<Box>& supports,
             Index leaf_size);
   std::vector<Cluster> clusters_;
   std::vector<Index> permutation_;

@@ -21,8 +21,7 @@ struct Communicator {
   /// addition, and IEEE addition is commutative); on more the order of the additions may
   /// differ between ranks, so MPI_Reduce_scatter forms each entry on one rank (the rows
   /// `counts`) and MPI_Allgatherv copies it.
-  std::function<Eigen::MatrixXd(const Eigen::MatrixXd& partial, const std::vector<Index>& counts)>
-      allreduce;
+  std::function<Eigen::MatrixXd(const Eigen::MatrixXd& partial, const std::vector<Index>& counts)> allreduce;
 };
 
 }  // namespace bem

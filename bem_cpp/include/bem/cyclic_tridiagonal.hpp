@@ -22,7 +22,7 @@ class CyclicTridiagonal {
   std::size_t nbytes() const { return static_cast<std::size_t>(5 * diag_.size()) * sizeof(double); }
 
  private:
-  void thomas(double* x) const;  ///< in place, the matrix without corners (modified diagonal)
+  void thomas(double* x) const;           ///< in place, the matrix without corners (modified diagonal)
   Eigen::VectorXd lower_, diag_, upper_;  ///< diag_: the factored (Thomas) pivots
   Eigen::VectorXd z_;                     ///< the Sherman-Morrison vector
   double beta_ = 0, gamma_ = 0, denominator_ = 1;

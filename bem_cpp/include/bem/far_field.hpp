@@ -35,9 +35,8 @@ struct PairBlockColumns {
 /// number of points p <= kMaxFarPoints, vectorised over k (src/far_field.cpp): v if
 /// with_v, kij if with_k (kij alone needs no logarithm), stored times v_scale and
 /// k_scale to out.v/kij[.][.][js[k]].
-void far_blocks_batch(const Panel& pi, const PanelArrays& panels, const Index* js, int m, int p,
-                      bool with_v, bool with_k, const PairBlockColumns& out, double v_scale = 1.0,
-                      double k_scale = 1.0);
+void far_blocks_batch(const Panel& pi, const PanelArrays& panels, const Index* js, int m, int p, bool with_v,
+                      bool with_k, const PairBlockColumns& out, double v_scale = 1.0, double k_scale = 1.0);
 
 /// kji of far_blocks for the pairs (pi, panel js[k]) (double-layer kernel with the normal
 /// of pi, test panel js[k], trial pi), stored times k_scale to out.kij[b][a][js[k]] with b
@@ -53,7 +52,7 @@ void point_far_field_points(Vec2 z, const PanelArrays& panels, int* points);
 /// z (Gauss rule with p points, all p equal), weighted per panel:
 ///   sum_k l0[j] int log|z-y| phi_0 + l1[j] int log|z-y| phi_1
 ///       + d0[j] int (z-y).n/|z-y|^2 phi_0 + d1[j] int (z-y).n/|z-y|^2 phi_1.
-double far_point_sum(Vec2 z, const PanelArrays& panels, const Index* js, int m, int p,
-                     const double* l0, const double* l1, const double* d0, const double* d1);
+double far_point_sum(Vec2 z, const PanelArrays& panels, const Index* js, int m, int p, const double* l0,
+                     const double* l1, const double* d0, const double* d1);
 
 }  // namespace bem

@@ -76,12 +76,12 @@ class HMatrix {
     LowRank factors;        ///< if low_rank
   };
 
-  HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const ClusterTree> cols,
-          const EntrySource& entries, const HMatrixOptions& options);
+  HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const ClusterTree> cols, const EntrySource& entries,
+          const HMatrixOptions& options);
   /// The rows [row_begin, row_end) of the permuted row order only (no communicator:
   /// apply_local and apply_partial; apply() needs all rows).
-  HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const ClusterTree> cols,
-          const EntrySource& entries, const HMatrixOptions& options, Index row_begin, Index row_end);
+  HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const ClusterTree> cols, const EntrySource& entries,
+          const HMatrixOptions& options, Index row_begin, Index row_end);
 
   Index rows() const { return rows_->size(); }
   Index cols() const { return cols_->size(); }

@@ -1,6 +1,6 @@
 #pragma once
 // Integrals of the logarithmic kernel and of the double-layer kernel over straight
-// panels (METHOD.md sections 2 and 9), and the quadrature rules they use.
+// panels (docs/method.md sections 2 and 9), and the quadrature rules they use.
 //
 // Kernels (without the factor-2 scaling, which operators.cpp applies):
 //   log kernel          l(x, y) = log|x - y|                      (V = -(1/pi) int l)
@@ -85,8 +85,7 @@ enum class PairRelation {
 
 /// Blocks of a panel pair, choosing the method from the relation and the distance.
 /// With with_k = false only v is computed (kij, kji are left unset).
-void pair_blocks(const Panel& pi, const Panel& pj, PairRelation relation, bool with_k,
-                 PairBlocks& out);
+void pair_blocks(const Panel& pi, const Panel& pj, PairRelation relation, bool with_k, PairBlocks& out);
 
 // The individual methods, exposed for the tests.
 void coincident_blocks(const Panel& p, PairBlocks& out);
@@ -102,8 +101,7 @@ const std::array<double, kMaxGaussPoints + 1>& gauss_thresholds();
 /// Number of points of the tensor Gauss rule for a separated pair, from a lower bound
 /// of the panel distance (midpoint distance minus half lengths) and the larger length;
 /// 0 if the pair is too close for kMaxFarPoints points (near field). y = gauss_thresholds().
-inline int far_field_points(const Panel& pi, const Panel& pj,
-                            const std::array<double, kMaxGaussPoints + 1>& y) {
+inline int far_field_points(const Panel& pi, const Panel& pj, const std::array<double, kMaxGaussPoints + 1>& y) {
   const Vec2 d = pi.m - pj.m;
   const double d2 = dot(d, d), half_sum = 0.5 * (pi.h + pj.h);
   const double half_h = 0.5 * (pi.h > pj.h ? pi.h : pj.h);
@@ -114,9 +112,7 @@ inline int far_field_points(const Panel& pi, const Panel& pj,
   }
   return 0;
 }
-inline int far_field_points(const Panel& pi, const Panel& pj) {
-  return far_field_points(pi, pj, gauss_thresholds());
-}
+inline int far_field_points(const Panel& pi, const Panel& pj) { return far_field_points(pi, pj, gauss_thresholds()); }
 
 /// Integrals of one panel seen from a point z off the panel, trial shape b = 0, 1:
 ///   log[b] = int_p log|z - y| phi_b(y) ds_y,   dl[b] = int_p (z - y).n/|z - y|^2 phi_b(y) ds_y.

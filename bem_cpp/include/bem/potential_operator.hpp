@@ -1,5 +1,5 @@
 #pragma once
-// The potentials of the representation formula (potentials.hpp, METHOD.md section 2) as
+// The potentials of the representation formula (potentials.hpp, docs/method.md section 2) as
 // rectangular H-matrices from m target points to the boundary dofs
 // (docs/design/hmatrix.md, "Potentials"):
 //   u_e(z_i) = a + sum_j D(i, j) (v_j - a) + sum_j S(i, j) psi_j,
@@ -47,8 +47,7 @@ class PotentialOperator {
  public:
   /// Throws std::invalid_argument as exterior_potential does for points inside Omega or on
   /// Gamma. options.split_to_leaves is set (the point tree is usually the deeper one).
-  PotentialOperator(const Polygon& polygon, const Eigen::Ref<const Points>& points, Space flux,
-                    HMatrixOptions options);
+  PotentialOperator(const Polygon& polygon, const Eigen::Ref<const Points>& points, Space flux, HMatrixOptions options);
   /// u_e at the points (dirichlet, flux_coefficients of length n).
   Vector evaluate(const Eigen::Ref<const Vector>& dirichlet, const Eigen::Ref<const Vector>& flux_coefficients,
                   double a) const;

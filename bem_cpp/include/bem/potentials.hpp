@@ -1,5 +1,5 @@
 #pragma once
-// Representation formula for the exterior solution (METHOD.md section 2):
+// Representation formula for the exterior solution (docs/method.md section 2):
 //   u_e(z) = 1/2 ( K(v - a) - V psi )(z) + a,   z in Omega_e,
 // evaluated with the analytic panel integrals near Gamma and Gauss-Legendre far from it.
 #include "bem/geometry.hpp"
@@ -24,11 +24,11 @@ void check_potential_data(Index n, const Eigen::Ref<const Vector>& dirichlet,
 /// std::invalid_argument if a point is inside Omega or within kOnBoundaryTolerance *
 /// diameter of Gamma.
 Vector exterior_potential(const Polygon& polygon, const Eigen::Ref<const Vector>& dirichlet,
-                          const Eigen::Ref<const Vector>& flux_coefficients,
-                          const Eigen::Ref<const Points>& points, double a, Space flux);
+                          const Eigen::Ref<const Vector>& flux_coefficients, const Eigen::Ref<const Points>& points,
+                          double a, Space flux);
 
 Vector exterior_potential(const Eigen::Ref<const Points>& nodes, const Eigen::Ref<const Vector>& dirichlet,
-                          const Eigen::Ref<const Vector>& flux_coefficients,
-                          const Eigen::Ref<const Points>& points, double a, Space flux);
+                          const Eigen::Ref<const Vector>& flux_coefficients, const Eigen::Ref<const Points>& points,
+                          double a, Space flux);
 
 }  // namespace bem

@@ -1,6 +1,6 @@
 #pragma once
 // The discrete Steklov-Poincare operator as an operator that is applied, never formed
-// (METHOD.md section 4, docs/design/hmatrix.md):
+// (docs/method.md section 4, docs/design/hmatrix.md):
 //   S x = 1/2 ( W x + (K - M)^T V^{-1} (K - M) x ),   W x = D^T V0 D x (Maue),
 // with V (flux space), V0 (P0, for W) and K (rows in the flux space, columns P1)
 // H-matrices, M and D sparse, and V^{-1} by SingleLayerSolver (PCG).
@@ -21,14 +21,14 @@ namespace bem {
 struct SteklovOptions {
   HMatrixOptions hmatrix;
   double preconditioner_tol;  ///< flux P0: tolerance of the refined-mesh V0 of the preconditioner
-  double solver_tol;   ///< relative residual of the V solves
-  int max_iterations;  ///< of each V solve
+  double solver_tol;          ///< relative residual of the V solves
+  int max_iterations;         ///< of each V solve
 };
 
 /// What the set-up built.
 struct SteklovInfo {
   double setup_seconds = 0;
-  Index max_rank = 0;          ///< largest rank of a low-rank block (V, V0, K)
+  Index max_rank = 0;  ///< largest rank of a low-rank block (V, V0, K)
   std::size_t nbytes_v = 0, nbytes_v0 = 0, nbytes_k = 0, nbytes_preconditioner = 0;
 };
 

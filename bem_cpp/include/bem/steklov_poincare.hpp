@@ -1,6 +1,6 @@
 #pragma once
 // Discrete Steklov-Poincare operator and exterior Dirichlet-to-Neumann solve
-// (METHOD.md sections 2 and 4, factor-2 convention):
+// (docs/method.md sections 2 and 4, factor-2 convention):
 //   S_h = 1/2 ( W_h + (K_h - M_h)^T V_h^{-1} (K_h - M_h) ),
 //   V_h psi_h = (K_h - M_h)(v - a).
 #include <utility>
@@ -30,13 +30,12 @@ Matrix steklov_poincare(const Polygon& polygon, Space flux, StageTimes* times = 
 /// Coefficients of psi_h in the flux space: V_h psi_h = (K_h - M_h)(v - a), v the
 /// nodal values of the P1 Dirichlet trace. psi_h approximates du_e/dn (n pointing
 /// into the exterior).
-Vector exterior_flux(const Polygon& polygon, const Eigen::Ref<const Vector>& dirichlet, double a,
-                     Space flux);
+Vector exterior_flux(const Polygon& polygon, const Eigen::Ref<const Vector>& dirichlet, double a, Space flux);
 
 // On raw nodes (validated), for the bindings.
 Matrix steklov_poincare(const Eigen::Ref<const Points>& nodes, Space flux);
 std::pair<Matrix, StageTimes> steklov_poincare_timed(const Eigen::Ref<const Points>& nodes, Space flux);
-Vector exterior_flux(const Eigen::Ref<const Points>& nodes, const Eigen::Ref<const Vector>& dirichlet,
-                     double a, Space flux);
+Vector exterior_flux(const Eigen::Ref<const Points>& nodes, const Eigen::Ref<const Vector>& dirichlet, double a,
+                     Space flux);
 
 }  // namespace bem

@@ -1,0 +1,116 @@
+"""Input checks of bem_cpp: each returns the validated array or value, or raises a
+one-line ``ValueError`` naming the argument and what is wrong with it."""
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+import bem_cpp._bem as _bem
+
+SPACES = {"p0": _bem.Space.P0, "p1": _bem.Space.P1}
+
+
+def space(value: str, name: str) -> _bem.Space:
+    try:
+        return SPACES[value]
+    except (KeyError, TypeError):
+        raise ValueError(f"{name} must be 'p0' or 'p1', got {value!r}") from None
+
+
+def points(value: ArrayLike, name: str, rows: str = "m") -> NDArray[np.float64]:
+    try:
+        arr = np.ascontiguousarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a real ({rows}, 2) array") from None
+    if arr.ndim != 2 or arr.shape[1] != 2:
+        raise ValueError(f"{name} must have shape ({rows}, 2), got {arr.shape}")
+    return arr
+
+
+def nodes(value: ArrayLike) -> NDArray[np.float64]:
+    arr = np.asarray(value)
+    if arr.ndim == 2 and arr.shape[1] == 3:
+        raise ValueError(
+            f"nodes of shape {arr.shape} are the vertices of a surface: pass triangles=(m, 3) too"
+        )
+    return points(value, "nodes", "n")
+
+
+def surface(
+    vertices: ArrayLike, triangles: ArrayLike
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """The (n, 3) float64 vertices and (m, 3) int64 triangles of a surface, as the compiled
+    code reads them (its Surface checks closedness, orientation and the rest)."""
+    try:
+        X = np.ascontiguousarray(vertices, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError("vertices must be a real (n, 3) array") from None
+    if X.ndim != 2 or X.shape[1] != 3:
+        raise ValueError(f"vertices must have shape (n, 3), got {X.shape}")
+    T = np.asarray(triangles)
+    if T.ndim != 2 or T.shape[1] != 3:
+        raise ValueError(f"triangles must have shape (m, 3), got {T.shape}")
+    if T.size and not np.issubdtype(T.dtype, np.integer):
+        raise ValueError(f"triangles must hold integer vertex indices, got dtype {T.dtype}")
+    return X, np.ascontiguousarray(T, dtype=np.int64)
+
+
+def boundary(
+    value: ArrayLike, triangles: ArrayLike | None
+) -> tuple[NDArray[np.float64]] | tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """The arguments of the compiled functions for Gamma: ``(nodes,)`` of a polygon (2D,
+    ``triangles`` None) or ``(vertices, triangles)`` of a surface (3D)."""
+    return (nodes(value),) if triangles is None else surface(value, triangles)
+
+
+def dofs(geometry: tuple, space: _bem.Space) -> int:
+    """Number of dofs of ``space`` on the checked ``geometry`` (:func:`boundary`): the nodes
+    (2D), the vertices (3D, P1) or the triangles (3D, P0)."""
+    if len(geometry) == 2 and space == _bem.Space.P0:
+        return geometry[1].shape[0]
+    return geometry[0].shape[0]
+
+
+def vector(value: ArrayLike, n: int, name: str) -> NDArray[np.float64]:
+    try:
+        arr = np.ascontiguousarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a real array of shape ({n},)") from None
+    if arr.shape != (n,):
+        raise ValueError(f"{name} must have shape ({n},) (one value per node), got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} contains non-finite values")
+    return arr
+
+
+def tolerance(value: float) -> float:
+    """The relative accuracy ``tol`` of H-matrix blocks: a real number in (0, 1)."""
+    tol = scalar(value, "tol")
+    if not 0 < tol < 1:
+        raise ValueError(f"tol must lie in (0, 1), got {tol!r}")
+    return tol
+
+
+def scalar(value: float, name: str) -> float:
+    try:
+        a = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a real number, got {value!r}") from None
+    if not np.isfinite(a):
+        raise ValueError(f"{name} must be finite, got {a}")
+    return a
+
+
+def columnwise(
+    apply: Callable[[NDArray[np.float64]], NDArray[np.float64]], x: ArrayLike, n: int
+) -> NDArray[np.float64]:
+    """``apply`` (of an (n, k) block) to x of shape (n,) or (n, k)."""
+    arr = np.asarray(x, dtype=np.float64)
+    if arr.ndim not in (1, 2) or arr.shape[0] != n:
+        raise ValueError(f"x must have shape ({n},) or ({n}, k), got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError("x contains non-finite values")
+    y = apply(np.asfortranarray(arr.reshape(n, 1) if arr.ndim == 1 else arr))
+    return y[:, 0] if arr.ndim == 1 else y

@@ -1,0 +1,25 @@
+"""Every default of bem_cpp in one place: the H-matrix parameters of the compressed
+operators and potentials (docs/design/hmatrix.md gives the measurements behind each)."""
+
+# Leaf size and admissibility parameter eta (docs/design/hmatrix.md, "Parameters and why").
+HMATRIX_LEAF_SIZE = 48
+HMATRIX_ETA = 2.0
+# OpenMP threads of a product (0: all): one, for a shared machine (docs/design/hmatrix.md).
+HMATRIX_PRODUCT_THREADS = 1
+# V solves: relative residual solver_tol = HMATRIX_SOLVER_TOL_FACTOR * tol.
+HMATRIX_SOLVER_TOL_FACTOR = 1e-3
+HMATRIX_MAX_ITERATIONS = 1000
+# flux "p0": accuracy of the refined-mesh V0 inside the Calderon preconditioner.
+HMATRIX_PRECONDITIONER_TOL = 1e-4
+# exterior_potential(compression="auto"): the H-matrix when m n >= DOFS m + POINTS n
+# (the measured break-even of m points and n dofs, docs/design/hmatrix.md, "Potentials").
+HMATRIX_POTENTIAL_CROSSOVER_DOFS = 1300
+HMATRIX_POTENTIAL_CROSSOVER_POINTS = 1000
+# Surfaces (3D): leaf size and eta of the 3D cluster trees, and the size from which
+# compression="auto" takes the H-matrix S_h (docs/design/bem3d.md).
+HMATRIX_SURFACE_LEAF_SIZE = 48
+HMATRIX_SURFACE_ETA = 1.5
+HMATRIX_SURFACE_AUTO_DOFS = 2000
+COMPRESSIONS = ("none", "hmatrix")
+SURFACE_COMPRESSIONS = ("none", "hmatrix", "auto")
+POTENTIAL_COMPRESSIONS = ("none", "hmatrix", "auto")

@@ -1,0 +1,33 @@
+#pragma once
+// Entries of the surface operators (surface_operators.hpp) for the H-matrix
+// (hmatrix.hpp): rows, columns or whole blocks of V_h (P0 or P1) and K_h (rows P0 or P1,
+// columns P1), each entry summed over the triangle pairs of the two basis supports, and
+// the cluster tree of a surface space (the 2D tree of cluster_tree.hpp on 3D points).
+#include <memory>
+
+#include "bem/cluster_tree.hpp"
+#include "bem/hmatrix.hpp"
+#include "bem/surface_operators.hpp"
+
+namespace bem {
+
+enum class SurfaceKernel { SingleLayer, DoubleLayer };
+
+class SurfaceEntries : public EntrySource {
+ public:
+  /// rows/cols: the spaces of the test and trial functions (DoubleLayer: cols P1).
+  SurfaceEntries(const Surface& surface, SurfaceKernel kernel, Space rows, Space cols);
+  std::unique_ptr<EntryBlock> block(const Index* I, Index m, const Index* J, Index k) const override;
+
+ private:
+  const Surface& surface_;
+  PairIntegrator integrator_;
+  SurfaceKernel kernel_;
+  Space rows_, cols_;
+};
+
+/// Dof points (P1: vertices, P0: centroids) and supports (the triangles the basis
+/// function lives on) of `space`, bisected down to `leaf_size`.
+ClusterTree surface_cluster_tree(const Surface& surface, Space space, Index leaf_size);
+
+}  // namespace bem

@@ -1,0 +1,79 @@
+#pragma once
+// Dense Galerkin matrices of the Laplace boundary integral operators on a closed
+// triangulated surface (docs/method.md section 11, factor-2 convention, G = 1/(4 pi |x - y|)):
+//   V_h[i, j] = <V psi_j, psi_i> = 2 int int G(x, y) psi_j(y) psi_i(x)
+//   K_h[i, j] = <K v_j, psi_i>   = 2 int int dG/dn_y(x, y) v_j(y) psi_i(x)     (K' = K^T)
+//   W_h[i, j] = <V curl v_j, curl v_i>   (Nedelec's identity; curl v = n x grad v)
+//   M_h[i, j] = <v_j, psi_i>
+// v_j: P1 hat of vertex j; psi_i: P1 hat of vertex i ("p1") or indicator of triangle i
+// ("p0"). Pairs sharing a vertex, an edge or the triangle: Sauter-Schwab rules
+// (surface_quadrature.hpp); other pairs: collapsed Gauss rules raised for near pairs.
+#include <optional>
+
+#include "bem/operators.hpp"
+#include "bem/surface.hpp"
+#include "bem/surface_quadrature.hpp"
+
+namespace bem {
+
+/// Gauss points per direction of the singular (Sauter-Schwab) rules, by the number of
+/// shared vertices (1: vertex, 2: edge, 3: identical): pair errors about 2e-5 and 3e-6
+/// relative (K and V, perpendicular edge-adjacent pair; docs/design/bem3d.md).
+constexpr int kSingularGaussPoints[4] = {0, 5, 6, 6};
+
+/// Number of dofs of `space` on the surface (P1: vertices, P0: triangles).
+Index dofs(const Surface& surface, Space space);
+
+/// Local integrals of a triangle pair (tau: test, sigma: trial). Basis index 0..2: the
+/// barycentric coordinate of the vertex (P1); 3: the constant 1 (P0).
+struct PairIntegrals {
+  double V[4][4];  ///< 2 int int G phi_a(x) phi_b(y)
+  double K[4][3];  ///< 2 int int dG/dn_y phi_a(x) lambda_b(y)
+};
+
+/// Integrates every triangle pair with the rule its adjacency and distance call for.
+class PairIntegrator {
+ public:
+  explicit PairIntegrator(const Surface& surface);
+  /// `double_layer`: also K (otherwise out.K is left unset).
+  void integrate(Index tau, Index sigma, bool double_layer, PairIntegrals& out) const;
+  /// The rule (triangle_rule's p) of a disjoint pair, from the distance of the balls about
+  /// the centroids over the larger diameter, q: p = 5 below q = 0.5, 4 below 1.5, 3 beyond
+  /// (docs/design/bem3d.md).
+  static int regular_points(const Triangle& a, const Triangle& b);
+
+ private:
+  const Surface& surface_;
+  const PairRule* singular_[4];  ///< by the number of shared vertices (1..3)
+  PairRule regular_[6];          ///< tensor products of triangle_rule(p), p = 0..5
+};
+
+/// The surface curl n x grad(lambda_a) of the barycentric coordinate a on triangle t.
+Vec3 surface_curl(const Triangle& t, int a);
+
+struct SurfaceRequest {
+  std::optional<Space> single_layer;  ///< V_h in this space
+  std::optional<Space> double_layer;  ///< K_h, rows in this space, columns P1
+  bool hypersingular = false;         ///< W_h (P1)
+};
+
+struct SurfaceMatrices {
+  Matrix single_layer, double_layer, hypersingular;  ///< empty if not requested
+};
+
+/// One OpenMP-parallel pass over the test triangles (coloured so that no two threads
+/// share a vertex row) and all trial triangles.
+SurfaceMatrices assemble(const Surface& surface, const SurfaceRequest& request);
+
+/// Rows `space`, columns P1 (P1: the Gram matrix, element matrix A/12 (1 + delta_ab)).
+Matrix mass(const Surface& surface, Space space);
+
+// The same on raw arrays, validated by the Surface constructor (used by the bindings).
+using VerticesRef = const Eigen::Ref<const Vertices>&;
+using TrianglesRef = const Eigen::Ref<const Triangles>&;
+Matrix single_layer(VerticesRef vertices, TrianglesRef triangles, Space space);
+Matrix double_layer(VerticesRef vertices, TrianglesRef triangles, Space space);
+Matrix hypersingular(VerticesRef vertices, TrianglesRef triangles);
+Matrix mass(VerticesRef vertices, TrianglesRef triangles, Space space);
+
+}  // namespace bem

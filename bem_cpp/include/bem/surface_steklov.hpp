@@ -1,0 +1,56 @@
+#pragma once
+// The discrete Steklov-Poincare operator of a closed surface, applied and never formed
+// (docs/method.md section 11, docs/design/bem3d.md):
+//   S x = 1/2 ( W x + (K - M)^T V^{-1} (K - M) x ),   W x = sum_c C_c^T V0 C_c x (Nedelec),
+// V (P1 flux), V0 (P0) and K (P1 x P1) H-matrices on the 3D cluster trees, M the sparse
+// P1 Gram matrix, C_c (m x n, sparse) the component c of the surface curls of the hats,
+// and V^{-1} by SingleLayerSolver (PCG) with the operator preconditioner
+//   C = M^{-1} (W + alpha c c^T) M^{-1},  c = M 1,  alpha = 1 / (2 rho |Gamma|),
+// rho = (|Gamma| / 4 pi)^(1/2) (on a sphere the constant mode then has C V = 1 like the
+// others, 4 l (l+1) / (2l+1)^2), whose iteration counts stay bounded as h -> 0.
+// Distributed (options.hmatrix.comm): as the 2D operator (steklov_operator.hpp), every
+// H-matrix holds the rows of its rank and every product returns the whole vector on
+// every rank; M and C_c stay replicated.
+#include <Eigen/Sparse>
+#include <atomic>
+#include <memory>
+
+#include "bem/hmatrix.hpp"
+#include "bem/single_layer_solver.hpp"
+#include "bem/steklov_operator.hpp"
+#include "bem/surface_entries.hpp"
+
+namespace bem {
+
+class SurfaceSteklovOperator {
+ public:
+  /// options.preconditioner_tol is not used (the preconditioner reuses V0).
+  SurfaceSteklovOperator(VerticesRef vertices, TrianglesRef triangles, const SteklovOptions& options);
+
+  Index size() const { return surface_.vertices(); }
+  /// Y = S_h X for X (n, k).
+  Eigen::MatrixXd apply(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
+  /// Psi = V_h^{-1} (K_h - M_h) X (the exterior Neumann data of the traces X, a = 0).
+  Eigen::MatrixXd flux(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
+  /// W_h X by Nedelec's identity (for tests).
+  Eigen::MatrixXd hypersingular(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
+  std::size_t nbytes() const;
+  const SteklovInfo& info() const { return info_; }
+  int last_iterations() const { return last_iterations_.load(); }
+
+ private:
+  Eigen::MatrixXd precondition(const Eigen::MatrixXd& R) const;
+  Surface surface_;
+  SteklovOptions options_;
+  std::shared_ptr<const HMatrix> V_, V0_, K_;
+  Eigen::SparseMatrix<double> M_;
+  Eigen::SparseMatrix<double> curl_[3];
+  Eigen::SimplicialLLT<Eigen::SparseMatrix<double>> mass_factor_;
+  Eigen::VectorXd c_;
+  double alpha_ = 1.0;
+  std::unique_ptr<SingleLayerSolver> solver_;
+  SteklovInfo info_;
+  mutable std::atomic<int> last_iterations_{0};
+};
+
+}  // namespace bem

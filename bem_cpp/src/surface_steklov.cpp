@@ -1,0 +1,103 @@
+#include "bem/surface_steklov.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace bem {
+
+SurfaceSteklovOperator::SurfaceSteklovOperator(VerticesRef vertices, TrianglesRef triangles,
+                                               const SteklovOptions& options)
+    : surface_(vertices, triangles), options_(options) {
+  if (!(options.solver_tol > 0) || options.max_iterations < 1)
+    throw std::invalid_argument("SurfaceSteklovOperator: need solver_tol > 0, max_iterations >= 1");
+  const auto t0 = std::chrono::steady_clock::now();
+  HMatrixOptions o = options.hmatrix;
+  auto tree0 = std::make_shared<const ClusterTree>(surface_cluster_tree(surface_, Space::P0, o.leaf_size));
+  auto tree1 = std::make_shared<const ClusterTree>(surface_cluster_tree(surface_, Space::P1, o.leaf_size));
+  o.symmetric = true;
+  V0_ = std::make_shared<const HMatrix>(tree0, tree0,
+                                        SurfaceEntries(surface_, SurfaceKernel::SingleLayer, Space::P0, Space::P0), o);
+  V_ = std::make_shared<const HMatrix>(tree1, tree1,
+                                       SurfaceEntries(surface_, SurfaceKernel::SingleLayer, Space::P1, Space::P1), o);
+  o.symmetric = false;
+  K_ = std::make_shared<const HMatrix>(tree1, tree1,
+                                       SurfaceEntries(surface_, SurfaceKernel::DoubleLayer, Space::P1, Space::P1), o);
+  const Index n = surface_.vertices(), m = surface_.size();
+  std::vector<Eigen::Triplet<double>> mass, curls[3];
+  double area = 0.0;
+  for (Index t = 0; t < m; ++t) {
+    const Triangle& T = surface_.triangle(t);
+    area += T.area;
+    for (int a = 0; a < 3; ++a) {
+      const Vec3 c = surface_curl(T, a);
+      curls[0].emplace_back(t, T.v[a], c.x);
+      curls[1].emplace_back(t, T.v[a], c.y);
+      curls[2].emplace_back(t, T.v[a], c.z);
+      for (int b = 0; b < 3; ++b) mass.emplace_back(T.v[a], T.v[b], T.area / 12.0 * (a == b ? 2.0 : 1.0));
+    }
+  }
+  M_.resize(n, n);
+  M_.setFromTriplets(mass.begin(), mass.end());
+  for (int c = 0; c < 3; ++c) {
+    curl_[c].resize(m, n);
+    curl_[c].setFromTriplets(curls[c].begin(), curls[c].end());
+  }
+  mass_factor_.compute(M_);
+  if (mass_factor_.info() != Eigen::Success)
+    throw std::runtime_error("SurfaceSteklovOperator: the P1 Gram matrix is not positive definite");
+  c_ = M_ * Eigen::VectorXd::Ones(n);
+  alpha_ = 1.0 / (2.0 * std::sqrt(area / (4.0 * M_PI)) * area);
+  solver_ = std::make_unique<SingleLayerSolver>(V_, [this](const Eigen::MatrixXd& R) { return precondition(R); });
+  info_.setup_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  info_.max_rank = std::max({V_->max_rank(), V0_->max_rank(), K_->max_rank()});
+  info_.nbytes_v = V_->nbytes();
+  info_.nbytes_v0 = V0_->nbytes();
+  info_.nbytes_k = K_->nbytes();
+  info_.nbytes_preconditioner =
+      static_cast<std::size_t>(M_.nonZeros() + 3 * curl_[0].nonZeros()) * (sizeof(double) + sizeof(int)) +
+      static_cast<std::size_t>(mass_factor_.matrixL().nestedExpression().nonZeros()) * (sizeof(double) + sizeof(int));
+}
+
+Eigen::MatrixXd SurfaceSteklovOperator::hypersingular(const Eigen::Ref<const Eigen::MatrixXd>& X) const {
+  // the three curl components as one block of 3k columns through V0
+  const Index k = X.cols(), m = surface_.size();
+  Eigen::MatrixXd C(m, 3 * k);
+  for (int c = 0; c < 3; ++c) C.middleCols(c * k, k) = curl_[c] * X;
+  const Eigen::MatrixXd Z = V0_->apply(C);
+  Eigen::MatrixXd Y = Eigen::MatrixXd::Zero(X.rows(), k);
+  for (int c = 0; c < 3; ++c) Y += curl_[c].transpose() * Z.middleCols(c * k, k);
+  return Y;
+}
+
+Eigen::MatrixXd SurfaceSteklovOperator::precondition(const Eigen::MatrixXd& R) const {
+  const Eigen::MatrixXd Y = mass_factor_.solve(R);
+  Eigen::MatrixXd Z = hypersingular(Y);
+  Z += alpha_ * c_ * (c_.transpose() * Y);
+  return mass_factor_.solve(Z);
+}
+
+Eigen::MatrixXd SurfaceSteklovOperator::flux(const Eigen::Ref<const Eigen::MatrixXd>& X) const {
+  if (X.rows() != size())
+    throw std::invalid_argument("SurfaceSteklovOperator: X has " + std::to_string(X.rows()) + " rows, expected " +
+                                std::to_string(size()));
+  const Eigen::MatrixXd A = K_->apply(X) - M_ * X;
+  Eigen::MatrixXd Psi;
+  last_iterations_ = solver_->solve(A, Psi, options_.solver_tol, options_.max_iterations);
+  return Psi;
+}
+
+Eigen::MatrixXd SurfaceSteklovOperator::apply(const Eigen::Ref<const Eigen::MatrixXd>& X) const {
+  const Eigen::MatrixXd Psi = flux(X);
+  Eigen::MatrixXd Y = hypersingular(X);
+  Y += K_->apply(Psi, true) - M_ * Psi;  // M symmetric
+  return 0.5 * Y;
+}
+
+std::size_t SurfaceSteklovOperator::nbytes() const {
+  return info_.nbytes_v + info_.nbytes_v0 + info_.nbytes_k + info_.nbytes_preconditioner;
+}
+
+}  // namespace bem

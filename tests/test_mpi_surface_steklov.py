@@ -1,0 +1,23 @@
+"""The 3D H-matrix S_h distributed by rows over 2 ranks (the 2D HMatrix code, comm=...)
+against the serial operator (tests/mpi/surface_steklov_check.py)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from conftest import ROOT, run_mpi
+
+SCRIPT = str(ROOT / "tests" / "mpi" / "surface_steklov_check.py")
+
+
+@pytest.mark.mpi
+def test_distributed_surface_operator_equals_the_serial_one(tmp_path):
+    out = tmp_path / "s.npz"
+    run_mpi(2, SCRIPT, str(out), "3")
+    d = np.load(out)
+    # the same blocks cut to the ranks' rows: products differ by the order of the sums
+    assert np.linalg.norm(d["y"] - d["y_serial"]) <= 1e-12 * np.linalg.norm(d["y_serial"])
+    distributed, serial = d["iterations"]
+    assert distributed == serial > 0
+    assert d["same_everywhere"]
+    assert np.all(d["bytes_per_rank"] < d["serial_bytes"])
