@@ -33,7 +33,8 @@ def nodes(value: ArrayLike) -> NDArray[np.float64]:
     arr = np.asarray(value)
     if arr.ndim == 2 and arr.shape[1] == 3:
         raise ValueError(
-            f"nodes of shape {arr.shape} are the vertices of a surface: pass triangles=(m, 3) too"
+            f"nodes must have shape (n, 2), got {arr.shape} (the vertices of a surface need"
+            " triangles=(m, 3) too)"
         )
     return points(value, "nodes", "n")
 

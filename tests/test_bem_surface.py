@@ -52,7 +52,7 @@ def test_bad_surfaces_are_refused_in_one_line(change, message):
 
 def test_vertices_without_triangles_are_named():
     X, _ = icosphere(1)
-    with pytest.raises(ValueError, match="pass triangles="):
+    with pytest.raises(ValueError, match="vertices of a surface need triangles="):
         bem_cpp.single_layer(X)
 
 
