@@ -208,26 +208,16 @@ def steklov_poincare(
         raise ValueError('comm needs compression="hmatrix"')
     if compression == "hmatrix":
         tol = checks.tolerance(tol)
-        allgather, allreduce = mpi_collectives(comm) if comm is not None else (None, None)
-        op = SteklovPoincareOperator(
-            _bem.SteklovPoincareOperator(
-                *args,
-                leaf_size=defaults.HMATRIX_LEAF_SIZE,
-                eta=defaults.HMATRIX_ETA,
-                tol=tol,
-                preconditioner_tol=defaults.HMATRIX_PRECONDITIONER_TOL,
-                solver_tol=defaults.HMATRIX_SOLVER_TOL_FACTOR * tol,
-                max_iterations=defaults.HMATRIX_MAX_ITERATIONS,
-                product_threads=defaults.HMATRIX_PRODUCT_THREADS,
-                rank=0 if comm is None else comm.rank,
-                size=1 if comm is None else comm.size,
-                allgather=allgather,
-                allreduce=allreduce,
-            )
+        return _compressed_operator(
+            _bem.SteklovPoincareOperator,
+            args,
+            comm,
+            timings,
+            tol=tol,
+            leaf_size=defaults.HMATRIX_LEAF_SIZE,
+            eta=defaults.HMATRIX_ETA,
+            preconditioner_tol=defaults.HMATRIX_PRECONDITIONER_TOL,
         )
-        if timings is not None:
-            timings.update(setup=op.info.setup_seconds)
-        return op
     if timings is None:
         return _bem.steklov_poincare(*args)
     S, t = _bem.steklov_poincare_timed(*args)
@@ -264,12 +254,27 @@ def _surface_steklov_poincare(
     if flux != "p1":
         raise ValueError('compression="hmatrix" on a surface needs flux="p1"')
     tol = checks.tolerance(tol)
+    return _compressed_operator(
+        _bem.SurfaceSteklovOperator,
+        geometry,
+        comm,
+        timings,
+        tol=tol,
+        leaf_size=defaults.HMATRIX_SURFACE_LEAF_SIZE,
+        eta=defaults.HMATRIX_SURFACE_ETA,
+    )
+
+
+def _compressed_operator(
+    kind: Any, args: tuple, comm: Any, timings: dict[str, float] | None, *, tol: float, **params
+) -> SteklovPoincareOperator:
+    """The H-matrix S_h of the compiled class ``kind`` on the geometry ``args``, with the
+    solver defaults of ``bem_cpp.defaults``, distributed by rows over ``comm`` (or serial);
+    its set-up time into ``timings``."""
     allgather, allreduce = mpi_collectives(comm) if comm is not None else (None, None)
     op = SteklovPoincareOperator(
-        _bem.SurfaceSteklovOperator(
-            *geometry,
-            leaf_size=defaults.HMATRIX_SURFACE_LEAF_SIZE,
-            eta=defaults.HMATRIX_SURFACE_ETA,
+        kind(
+            *args,
             tol=tol,
             solver_tol=defaults.HMATRIX_SOLVER_TOL_FACTOR * tol,
             max_iterations=defaults.HMATRIX_MAX_ITERATIONS,
@@ -278,6 +283,7 @@ def _surface_steklov_poincare(
             size=1 if comm is None else comm.size,
             allgather=allgather,
             allreduce=allreduce,
+            **params,
         )
     )
     if timings is not None:
