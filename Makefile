@@ -2,6 +2,7 @@
 #   make demo   installs what is missing, builds, runs the main demo
 #   make test   installs what is missing, builds, lints, runs the C++ and Python tests
 #   make lint   black --check and flake8 (settings: pyproject.toml, .flake8), clang-format (.clang-format)
+#   make docs   installs the documentation's packages, builds the site (docs/_build/html)
 SHELL := /bin/bash
 .ONESHELL:
 .SHELLFLAGS := -euo pipefail -c
@@ -14,23 +15,33 @@ DEBS    := python3-dolfinx python3-petsc4py python3-mpi4py python3-gmsh \
            python3-venv python3-setuptools python3-wheel python3-pip python3-tqdm \
            python3-slepc4py python3-threadpoolctl openmpi-bin libopenblas-dev \
            black flake8 clang-format
+# the documentation site (make docs) and its test (tests/test_docs.py: headless Chromium)
+DOCS_DEBS := python3-sphinx python3-myst-parser furo libjs-mathjax chromium python3-pil
 CXX_BUILD := build/cpp
 CXX_FILES := $(wildcard bem_cpp/src/*.cpp bem_cpp/include/bem/*.hpp bem_cpp/tests/*.cpp bem_cpp/tests/*.hpp) \
              bem_cpp/bindings.cpp
 SOURCES := $(wildcard bem_cpp/src/*.cpp bem_cpp/include/bem/*.hpp) bem_cpp/bindings.cpp setup.py pyproject.toml
 
-.PHONY: setup debs venv build lint test test-cpp test-py demo bench study clean
+.PHONY: setup debs debs-docs venv build lint test test-cpp test-py demo bench study docs clean
 
 setup: debs build
 
-debs:
-	missing=$$(for p in $(DEBS); do dpkg-query -W -f='$${Status}\n' $$p 2>/dev/null | grep -q "install ok installed" || echo $$p; done)
+# install the packages of $(1) that are missing
+define install_debs
+	missing=$$(for p in $(1); do dpkg-query -W -f='$${Status}\n' $$p 2>/dev/null | grep -q "install ok installed" || echo $$p; done)
 	if [ -n "$$missing" ]; then
 	  echo "installing Debian packages:" $$missing
 	  export DEBIAN_FRONTEND=noninteractive
 	  apt-get update -q
 	  apt-get install -y -q --no-install-recommends $$missing
 	fi
+endef
+
+debs:
+	$(call install_debs,$(DEBS))
+
+debs-docs:
+	$(call install_debs,$(DOCS_DEBS))
 
 $(PY):
 	/usr/bin/python3 -m venv --system-site-packages $(VENV)
@@ -44,7 +55,8 @@ $(VENV)/.built: $(PY) $(SOURCES)
 
 build: debs $(VENV)/.built
 
-test: setup lint test-cpp test-py
+# test-py includes tests/test_docs.py, which builds the site (as make docs) and opens it
+test: setup debs-docs lint test-cpp test-py
 
 # formatters and linter from Debian (black 23, flake8 5, clang-format 14); the tree must pass all
 lint: debs venv
@@ -75,5 +87,10 @@ bench: setup
 study: setup
 	$(PY) -m study
 
+# warnings are errors (-W, nitpicky); the demos run at small sizes (docs/_ext/fembem_docs)
+docs: build debs-docs
+	$(PY) -m sphinx -b html -W --keep-going -n -q docs docs/_build/html
+	echo "open docs/_build/html/index.html"
+
 clean:
-	rm -rf build $(VENV) *.egg-info bem_cpp/*.so
+	rm -rf build $(VENV) *.egg-info bem_cpp/*.so docs/_build docs/api docs/demos

@@ -1,11 +1,11 @@
 """Galerkin BEM for the Laplace operator on a closed polygon (2D) or a closed triangulated
-surface (3D: pass ``triangles=``, METHOD.md section 11, docs/design/bem3d.md).
+surface (3D: pass ``triangles=``, docs/method.md section 11, docs/design/bem3d.md).
 
-Operators follow the factor-2 convention of METHOD.md section 2 with
+Operators follow the factor-2 convention of docs/method.md section 2 with
 G(x, y) = -(1/2 pi) log|x - y|::
 
     V psi(x) = 2 int G(x, y) psi(y) ds_y,     K v(x) = 2 int d/dn_y G(x, y) v(y) ds_y,
-    W v      = -d/dn (K v)   (Galerkin form via Maue's identity, METHOD.md section 9).
+    W v      = -d/dn (K v)   (Galerkin form via Maue's identity, docs/method.md section 9).
 
 Geometry: ``nodes`` is an (n, 2) float64 array of the boundary nodes of Omega in
 counter-clockwise order, the first node not repeated at the end; panel j runs from

@@ -33,9 +33,22 @@ def nodes(value: ArrayLike) -> NDArray[np.float64]:
     arr = np.asarray(value)
     if arr.ndim == 2 and arr.shape[1] == 3:
         raise ValueError(
-            f"nodes of shape {arr.shape} are the vertices of a surface: pass triangles=(m, 3) too"
+            f"nodes must have shape (n, 2), got {arr.shape} (the vertices of a surface need"
+            " triangles=(m, 3) too)"
         )
     return points(value, "nodes", "n")
+
+
+def points3(value: ArrayLike, name: str, rows: str) -> NDArray[np.float64]:
+    """``value`` as a C-contiguous (rows, 3) float64 array of points in R^3; else a one-line
+    ``ValueError`` naming ``name`` (finiteness is the caller's check)."""
+    try:
+        X = np.ascontiguousarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a real ({rows}, 3) array") from None
+    if X.ndim != 2 or X.shape[1] != 3:
+        raise ValueError(f"{name} must have shape ({rows}, 3), got {X.shape}")
+    return X
 
 
 def surface(
@@ -43,12 +56,7 @@ def surface(
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     """The (n, 3) float64 vertices and (m, 3) int64 triangles of a surface, as the compiled
     code reads them (its Surface checks closedness, orientation and the rest)."""
-    try:
-        X = np.ascontiguousarray(vertices, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError("vertices must be a real (n, 3) array") from None
-    if X.ndim != 2 or X.shape[1] != 3:
-        raise ValueError(f"vertices must have shape (n, 3), got {X.shape}")
+    X = points3(vertices, "vertices", "n")
     T = np.asarray(triangles)
     if T.ndim != 2 or T.shape[1] != 3:
         raise ValueError(f"triangles must have shape (m, 3), got {T.shape}")

@@ -1,6 +1,6 @@
 """Operators held as H-matrices and applied, never formed: V_h and K_h
 (:class:`BoundaryOperators`) and the Steklov-Poincare operator S_h
-(:class:`SteklovPoincareOperator`, or the dense S_h; METHOD.md section 2,
+(:class:`SteklovPoincareOperator`, or the dense S_h; docs/method.md section 2,
 docs/design/hmatrix.md)."""
 from __future__ import annotations
 
@@ -143,7 +143,7 @@ def steklov_poincare(
     comm: Any = None,
     triangles: ArrayLike | None = None,
 ) -> NDArray[np.float64] | SteklovPoincareOperator:
-    r"""Discrete Steklov-Poincare operator S_h of the exterior (METHOD.md (2.x), section 4).
+    r"""Discrete Steklov-Poincare operator S_h of the exterior (docs/method.md (2.x), section 4).
 
     .. math:: S_h = \tfrac12\left(W_h + (K_h - M_h)^T V_h^{-1}(K_h - M_h)\right),
 
@@ -179,7 +179,7 @@ def steklov_poincare(
         every rank (docs/design/hmatrix.md, "Under MPI").
     triangles : (m, 3) array_like of int, optional
         3D: the triangles of the closed surface whose vertices are ``nodes`` (n, 3)
-        (METHOD.md section 11). ``compression`` may then also be ``"auto"`` (the H-matrix
+        (docs/method.md section 11). ``compression`` may then also be ``"auto"`` (the H-matrix
         from ``HMATRIX_SURFACE_AUTO_DOFS`` vertices on); ``"hmatrix"`` needs the P1 flux
         and preconditions the V solves by M^{-1} (W + c c^T) M^{-1} (docs/design/bem3d.md);
         dense, V_h is factorised by Cholesky (scipy) and S_h symmetrised explicitly.
@@ -208,26 +208,16 @@ def steklov_poincare(
         raise ValueError('comm needs compression="hmatrix"')
     if compression == "hmatrix":
         tol = checks.tolerance(tol)
-        allgather, allreduce = mpi_collectives(comm) if comm is not None else (None, None)
-        op = SteklovPoincareOperator(
-            _bem.SteklovPoincareOperator(
-                *args,
-                leaf_size=defaults.HMATRIX_LEAF_SIZE,
-                eta=defaults.HMATRIX_ETA,
-                tol=tol,
-                preconditioner_tol=defaults.HMATRIX_PRECONDITIONER_TOL,
-                solver_tol=defaults.HMATRIX_SOLVER_TOL_FACTOR * tol,
-                max_iterations=defaults.HMATRIX_MAX_ITERATIONS,
-                product_threads=defaults.HMATRIX_PRODUCT_THREADS,
-                rank=0 if comm is None else comm.rank,
-                size=1 if comm is None else comm.size,
-                allgather=allgather,
-                allreduce=allreduce,
-            )
+        return _compressed_operator(
+            _bem.SteklovPoincareOperator,
+            args,
+            comm,
+            timings,
+            tol=tol,
+            leaf_size=defaults.HMATRIX_LEAF_SIZE,
+            eta=defaults.HMATRIX_ETA,
+            preconditioner_tol=defaults.HMATRIX_PRECONDITIONER_TOL,
         )
-        if timings is not None:
-            timings.update(setup=op.info.setup_seconds)
-        return op
     if timings is None:
         return _bem.steklov_poincare(*args)
     S, t = _bem.steklov_poincare_timed(*args)
@@ -264,12 +254,27 @@ def _surface_steklov_poincare(
     if flux != "p1":
         raise ValueError('compression="hmatrix" on a surface needs flux="p1"')
     tol = checks.tolerance(tol)
+    return _compressed_operator(
+        _bem.SurfaceSteklovOperator,
+        geometry,
+        comm,
+        timings,
+        tol=tol,
+        leaf_size=defaults.HMATRIX_SURFACE_LEAF_SIZE,
+        eta=defaults.HMATRIX_SURFACE_ETA,
+    )
+
+
+def _compressed_operator(
+    kind: Any, args: tuple, comm: Any, timings: dict[str, float] | None, *, tol: float, **params
+) -> SteklovPoincareOperator:
+    """The H-matrix S_h of the compiled class ``kind`` on the geometry ``args``, with the
+    solver defaults of ``bem_cpp.defaults``, distributed by rows over ``comm`` (or serial);
+    its set-up time into ``timings``."""
     allgather, allreduce = mpi_collectives(comm) if comm is not None else (None, None)
     op = SteklovPoincareOperator(
-        _bem.SurfaceSteklovOperator(
-            *geometry,
-            leaf_size=defaults.HMATRIX_SURFACE_LEAF_SIZE,
-            eta=defaults.HMATRIX_SURFACE_ETA,
+        kind(
+            *args,
             tol=tol,
             solver_tol=defaults.HMATRIX_SOLVER_TOL_FACTOR * tol,
             max_iterations=defaults.HMATRIX_MAX_ITERATIONS,
@@ -278,6 +283,7 @@ def _surface_steklov_poincare(
             size=1 if comm is None else comm.size,
             allgather=allgather,
             allreduce=allreduce,
+            **params,
         )
     )
     if timings is not None:

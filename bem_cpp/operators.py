@@ -1,5 +1,5 @@
 """Dense Galerkin matrices of the boundary integral operators (V_h, K_h, W_h, M_h) and the
-exterior Neumann data from a Dirichlet trace (METHOD.md sections 2 and 11).
+exterior Neumann data from a Dirichlet trace (docs/method.md sections 2 and 11).
 
 Every function takes the boundary of a 2D domain, ``nodes`` (n, 2) of a polygon, or of a
 3D domain, ``nodes`` (n, 3) the vertices of a closed triangulated surface with
@@ -23,7 +23,7 @@ from bem_cpp import checks
 def single_layer(
     nodes: ArrayLike, space: str = "p1", *, triangles: ArrayLike | None = None
 ) -> NDArray[np.float64]:
-    r"""Galerkin matrix of the single-layer operator V (METHOD.md section 2).
+    r"""Galerkin matrix of the single-layer operator V (docs/method.md section 2).
 
     .. math:: V_h[i, j] = \langle V\psi_j, \psi_i\rangle
               = -\frac{1}{\pi}\int_\Gamma\int_\Gamma \log|x-y|\,\psi_j(y)\psi_i(x)\,ds_y\,ds_x
@@ -56,7 +56,7 @@ def single_layer(
 def double_layer(
     nodes: ArrayLike, space: str = "p1", *, triangles: ArrayLike | None = None
 ) -> NDArray[np.float64]:
-    r"""Galerkin matrix of the double-layer operator K (METHOD.md section 2).
+    r"""Galerkin matrix of the double-layer operator K (docs/method.md section 2).
 
     .. math:: K_h[i, j] = \langle K v_j, \psi_i\rangle
               = \frac{1}{\pi}\int_\Gamma\psi_i(x)\int_\Gamma
@@ -88,7 +88,7 @@ def double_layer(
 
 
 def hypersingular(nodes: ArrayLike, *, triangles: ArrayLike | None = None) -> NDArray[np.float64]:
-    r"""Galerkin matrix of the hypersingular operator W on P1 (METHOD.md sections 2, 9).
+    r"""Galerkin matrix of the hypersingular operator W on P1 (docs/method.md sections 2, 9).
 
     Maue's identity on a closed curve, :math:`\langle W u, v\rangle = \langle V u', v'\rangle`
     (u' the arc-length derivative), gives
@@ -110,7 +110,7 @@ def hypersingular(nodes: ArrayLike, *, triangles: ArrayLike | None = None) -> ND
     (n, n) ndarray
         Symmetric positive semi-definite, W_h 1 = 0. On the circle of radius R:
         W cos(m theta) = (m/R) cos(m theta). 3D: by Nedelec's identity
-        <W u, v> = <V curl u, curl v> (METHOD.md section 11); on the sphere
+        <W u, v> = <V curl u, curl v> (docs/method.md section 11); on the sphere
         W Y_l = 2 l (l+1) / ((2l+1) R) Y_l.
 
     Raises
@@ -124,7 +124,8 @@ def hypersingular(nodes: ArrayLike, *, triangles: ArrayLike | None = None) -> ND
 def mass(
     nodes: ArrayLike, space: str = "p1", *, triangles: ArrayLike | None = None
 ) -> NDArray[np.float64]:
-    r"""Boundary mass matrix :math:`M_h[i, j] = \int_\Gamma v_j \psi_i\,ds` (METHOD.md section 4).
+    r"""Boundary mass matrix :math:`M_h[i, j] = \int_\Gamma v_j \psi_i\,ds`
+    (docs/method.md section 4).
 
     Parameters
     ----------
@@ -157,7 +158,7 @@ def exterior_flux(
     *,
     triangles: ArrayLike | None = None,
 ) -> NDArray[np.float64]:
-    r"""Neumann data of the exterior problem from its Dirichlet trace (METHOD.md section 2).
+    r"""Neumann data of the exterior problem from its Dirichlet trace (docs/method.md section 2).
 
     Solves the Galerkin system
 
@@ -166,7 +167,7 @@ def exterior_flux(
     for the coefficients of :math:`\psi_h \approx \partial u_e/\partial n` (n pointing
     into the exterior), where u_e is harmonic in Omega_e, u_e = v on Gamma and
     :math:`u_e(x) = a + b\log|x| + o(1)` at infinity with
-    :math:`b = \frac{1}{2\pi}\int_\Gamma \psi\,ds` (METHOD.md section 1, note on (1.3)).
+    :math:`b = \frac{1}{2\pi}\int_\Gamma \psi\,ds` (docs/method.md section 1, note on (1.3)).
 
     Parameters
     ----------

@@ -1,5 +1,5 @@
 """The exterior solution at points of Omega_e by the representation formula
-(METHOD.md section 2), by direct panel sums or rectangular H-matrices."""
+(docs/method.md section 2), by direct panel sums or rectangular H-matrices."""
 from __future__ import annotations
 
 import numpy as np
@@ -21,7 +21,8 @@ def exterior_potential(
     *,
     triangles: ArrayLike | None = None,
 ) -> NDArray[np.float64]:
-    r"""Exterior solution at points of Omega_e by the representation formula (METHOD.md section 2).
+    r"""Exterior solution at points of Omega_e by the representation formula
+    (docs/method.md section 2).
 
     .. math:: u_e(z) = \tfrac12\left(K(v - a) - V\psi\right)(z) + a, \qquad z \in \Omega_e,
 
@@ -129,12 +130,7 @@ def _surface_potential(
     space = checks.space(flux, "flux")
     v = checks.vector(dirichlet, geometry[0].shape[0], "dirichlet")
     psi = checks.vector(flux_coefficients, checks.dofs(geometry, space), "flux_coefficients")
-    try:
-        Z = np.ascontiguousarray(points, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError("points must be a real (k, 3) array") from None
-    if Z.ndim != 2 or Z.shape[1] != 3:
-        raise ValueError(f"points must have shape (k, 3), got {Z.shape}")
+    Z = checks.points3(points, "points", "k")
     if not np.all(np.isfinite(Z)):
         raise ValueError("points contains non-finite values")
     return _bem.exterior_potential(*geometry, v, psi, Z, checks.scalar(a, "a"), space)

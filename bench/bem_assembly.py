@@ -1,5 +1,5 @@
 """Benchmark of the discrete Steklov-Poincare operator S_h (P1 flux) on the circle of
-radius 0.4 (METHOD.md section 4).
+radius 0.4 (docs/method.md section 4).
 
 For each n the table gives the wall time of ``bem_cpp.steklov_poincare`` (best of
 --repeat runs), its stages (assembly of V_h, K_h, W_h in one pass over the panel pairs;
@@ -17,7 +17,7 @@ core), memory held (``nbytes``), time of one product (best of
 (n <= --error-max) and set-up and memory as fractions of the dense S_h measured in the
 same run (n <= --dense-max). The issue-20 targets are printed with met / NOT MET.
 
-A third table is 3D (issue 30, METHOD.md section 11; docs/design/bem3d.md): dense V_h,
+A third table is 3D (issue 30, docs/method.md section 11; docs/design/bem3d.md): dense V_h,
 K_h, W_h (P1) on the cube with 2,028 triangles, then the H-matrix S_h on icospheres of
 --surface-levels (10 4^level + 2 vertices), each size in a fresh process so that its peak
 resident memory is its own: set-up wall time, peak memory, one product, CG iterations,

@@ -103,7 +103,7 @@ def steklov_poincare(
 ) -> Any:
     """S_h of the boundary ``nodes`` (replicated, (n, 2)) for ``[solver] boundary_operator
     = choice`` (collective); in 3D ``nodes`` (n, 3) are the vertices of the surface
-    ``triangles`` (m, 3) (METHOD.md section 11, the same S_h formula).
+    ``triangles`` (m, 3) (docs/method.md section 11, the same S_h formula).
 
     Dense: the matrix (serial) or :class:`RowBlocks` (computed on rank 0 with every core,
     held by rows). H-matrix: ``bem_cpp.SteklovPoincareOperator`` to the relative accuracy

@@ -1,4 +1,4 @@
-"""The coupled functional J_h of METHOD.md section 4, (2.4)-(2.5).
+"""The coupled functional J_h of docs/method.md section 4, (2.4)-(2.5).
 
     J_h(u, phi) = G(u) + 1/2 z^T S_h z - b_f^T u - (m_t + s_0)^T z,   z = T u + E phi
     grad_u J    = A(u) + T^T (S_h z - m_t - s_0) - b_f
@@ -20,7 +20,7 @@ __all__ = ["CoupledFunctional"]
 
 
 class CoupledFunctional:
-    """J_h(u, phi), its gradient and its Hessian action (METHOD.md (2.4)-(2.5)).
+    """J_h(u, phi), its gradient and its Hessian action (docs/method.md (2.4)-(2.5)).
 
     Parameters
     ----------

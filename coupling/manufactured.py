@@ -1,4 +1,4 @@
-"""Manufactured solutions with a known contact set (METHOD.md section 8).
+"""Manufactured solutions with a known contact set (docs/method.md section 8).
 
 Recipe: pick a smooth u in Omega and u_e = a + b log|x - x0| + c.(x - x0)/|x - x0|^2.
 On each Signorini arc (a straight side with arc coordinate xi in [-L/2, L/2] measured

@@ -91,7 +91,7 @@ DATA_VARIABLES: dict[str, tuple[str, ...]] = {
     "t0": ("x", "y", "nx", "ny"),
     "exact": ("x", "y"),
 }
-#: The same for a body in R^3: z and nz too (METHOD.md section 11).
+#: The same for a body in R^3: z and nz too (docs/method.md section 11).
 DATA_VARIABLES_3D: dict[str, tuple[str, ...]] = {
     "f": ("x", "y", "z"),
     "u0": ("x", "y", "z", "nx", "ny", "nz"),
@@ -153,12 +153,8 @@ GRADING_SPLIT_FACTOR = 2.0
 SLOPE_MIN_DOFS = 1000
 
 
-def _default(section: str, key: str) -> Any:
-    return field(default=DEFAULTS[section][key])
-
-
 def _solver_default(key: str) -> Any:
-    return _default("solver", key)
+    return field(default=DEFAULTS["solver"][key])
 
 
 @dataclass(frozen=True)
@@ -214,38 +210,52 @@ def solver_options(section: dict[str, Any]) -> SolverOptions:
     return SolverOptions(**{k: v for k, v in section.items() if k in names})
 
 
-@dataclass(frozen=True)
+def _section(name: str) -> Any:
+    """A frozen dataclass of the ``[name]`` section: its annotated fields take their
+    defaults from :data:`DEFAULTS` (every key of the section, in its order)."""
+
+    def make(cls: type) -> type:
+        if list(cls.__annotations__) != list(DEFAULTS[name]):
+            raise TypeError(f"{cls.__name__} must declare the keys of [{name}] in order")
+        for key in cls.__annotations__:
+            setattr(cls, key, field(default=DEFAULTS[name][key]))
+        return dataclass(frozen=True)(cls)
+
+    return make
+
+
+@_section("material")
 class MaterialOptions:
     """The ``[material]`` section: the built-in material ``rho`` (``linear``,
     ``carstensen``, ``power`` or an expression in t) and the power law's ``p`` and
     ``eps`` (``fem_py.forms.make_material``)."""
 
-    rho: str = _default("material", "rho")
-    p: float = _default("material", "p")
-    eps: float = _default("material", "eps")
+    rho: str
+    p: float
+    eps: float
 
 
-@dataclass(frozen=True)
+@_section("data")
 class DataOptions:
     """The ``[data]`` section: the expressions f, u0, t0 (:data:`DATA_VARIABLES`), the
     constant ``a`` of the exterior solution and the exact interior solution ``exact``
     ("" when none is known)."""
 
-    f: str = _default("data", "f")
-    u0: str = _default("data", "u0")
-    t0: str = _default("data", "t0")
-    a: float = _default("data", "a")
-    exact: str = _default("data", "exact")
+    f: str
+    u0: str
+    t0: str
+    a: float
+    exact: str
 
 
-@dataclass(frozen=True)
+@_section("adapt")
 class AdaptOptions:
     """The ``[adapt]`` section: ``steps`` refinements (0: no adaptivity), Doerfler's
     ``theta`` in (0, 1], and ``max_dofs``: no level beyond this many dofs is solved."""
 
-    steps: int = _default("adapt", "steps")
-    theta: float = _default("adapt", "theta")
-    max_dofs: int = _default("adapt", "max_dofs")
+    steps: int
+    theta: float
+    max_dofs: int
 
     def __post_init__(self) -> None:
         if not 0.0 < self.theta <= 1.0:
@@ -256,15 +266,15 @@ class AdaptOptions:
             )
 
 
-@dataclass(frozen=True)
+@_section("output")
 class OutputOptions:
     """The ``[output]`` section: the folder ``dir``, and whether to write solution.xdmf,
     the figures and the estimator's indicators (``coupling.io.outputs.RunOutputs``)."""
 
-    dir: str = _default("output", "dir")
-    xdmf: bool = _default("output", "xdmf")
-    plots: bool = _default("output", "plots")
-    indicators: bool = _default("output", "indicators")
+    dir: str
+    xdmf: bool
+    plots: bool
+    indicators: bool
 
 
 @dataclass(frozen=True)

@@ -1,6 +1,6 @@
 """The discrete problem (2.3), assembled once: interior forms, boundary map, S_h, loads, J_h.
 
-The pipeline, in the order of METHOD.md: interior forms (fem_py) -> boundary map ->
+The pipeline, in the order of docs/method.md: interior forms (fem_py) -> boundary map ->
 S_h (bem_cpp) -> J_h (:mod:`coupling.functional`). A :class:`SignoriniProblem` holds what
 is assembled and is not changed after construction; preconditioners
 (:mod:`coupling.preconditioners`) and solves (:func:`coupling.solvers.solve`) read it.
@@ -42,7 +42,7 @@ class SignoriniProblem:
     domain
         ``fem_py.mesh.Domain``: mesh, tags, coarse partition, Signorini arcs; or a
         ``fem_py.mesh.SolidDomain`` (3D: the boundary map is the ``SurfaceMap``, S_h the
-        3D operator of bem_cpp on its triangles, METHOD.md section 11).
+        3D operator of bem_cpp on its triangles, docs/method.md section 11).
     material
         ``fem_py.forms.materials.Material`` (rho).
     f, u0, t0
@@ -147,7 +147,7 @@ class SignoriniProblem:
 
     def exterior_flux(self, ue: np.ndarray) -> np.ndarray:
         """Coefficients of psi_h ~ du_e/dn from the trace ``ue`` (boundary order,
-        replicated): V_h psi_h = (K_h - M_h)(ue - a) (METHOD.md section 2), by the dense
+        replicated): V_h psi_h = (K_h - M_h)(ue - a) (docs/method.md section 2), by the dense
         Cholesky solve on rank 0 or by the H-matrix operator's CG solve (collective)."""
         if self.boundary_operator == "hmatrix":
             return self.S.flux(np.asarray(ue, dtype=float) - self.a)
@@ -162,9 +162,9 @@ class SignoriniProblem:
 
     def exterior(self, solution: Any, points: np.ndarray) -> np.ndarray:
         """u_e at exterior points (m, 2) ((m, 3) in 3D) by the representation formula
-        (METHOD.md section 2), by direct panel sums or, above the measured crossover (``bem_cpp``'s
-        ``HMATRIX_POTENTIAL_CROSSOVER_*``), by the rectangular H-matrices of the potentials
-        (``compression="auto"``, tol ``coupling.options.HMATRIX_TOL``)."""
+        (docs/method.md section 2), by direct panel sums or, above the measured crossover
+        (``bem_cpp``'s ``HMATRIX_POTENTIAL_CROSSOVER_*``), by the rectangular H-matrices of the
+        potentials (``compression="auto"``, tol ``coupling.options.HMATRIX_TOL``)."""
         return bem_cpp.exterior_potential(
             self.boundary.nodes,
             solution.ue,

@@ -15,23 +15,44 @@ from typing import Any, Callable
 
 from mpi4py import MPI
 
-__all__ = ["demo_parser", "rank0_print", "solve_row", "write_results", "write_solve_outputs"]
+__all__ = [
+    "CELLS_HELP",
+    "OUTPUTS_HELP",
+    "demo_parser",
+    "start_demo",
+    "outcome",
+    "rank0_print",
+    "solve_row",
+    "write_results",
+    "write_solve_outputs",
+]
+
+#: ``--out`` of the demos that write the outputs of a solve (:func:`write_solve_outputs`)
+OUTPUTS_HELP = "folder for the plots, fields and results.json"
+
+
+#: ``--cells`` of a demo on the square of width 0.5 (the default)
+CELLS_HELP = "cells per side of the square (h = 0.5/cells)"
 
 
 def demo_parser(
-    name: str,
-    description: str,
-    *,
-    cells: int,
-    cells_help: str,
-    out_help: str = "folder for results.json",
+    name: str, description: str, *, cells: int, cells_help: str = CELLS_HELP, out_help: str = ""
 ) -> argparse.ArgumentParser:
     """The parser of ``--cells`` (default ``cells``) and ``--out`` (default out/``name``);
-    a demo adds its own arguments before calling ``parse_args()``."""
+    a demo adds its own arguments, then calls :func:`start_demo`."""
     parser = argparse.ArgumentParser(description=description)
-    parser.add_argument("--cells", type=int, default=cells, help=cells_help)
+    help_cells = f"{cells_help}; default {cells}"
+    parser.add_argument("--cells", type=int, default=cells, help=help_cells)
+    out_help = out_help or "folder for results.json"
     parser.add_argument("--out", type=Path, default=Path("out") / name, help=out_help)
     return parser
+
+
+def start_demo(
+    parser: argparse.ArgumentParser, comm: MPI.Comm
+) -> tuple[argparse.Namespace, Callable[..., None]]:
+    """Parse the command line: (the arguments, ``print`` on rank 0 of ``comm``)."""
+    return parser.parse_args(), rank0_print(comm)
 
 
 def rank0_print(comm: MPI.Comm) -> Callable[..., None]:
@@ -42,6 +63,12 @@ def rank0_print(comm: MPI.Comm) -> Callable[..., None]:
             print(*items, flush=True)
 
     return say
+
+
+def outcome(result, method: str) -> str:
+    """ "converged after N iterations of METHOD" (or "NOT converged ...") for ``result``."""
+    state = "converged" if result.converged else "NOT converged"
+    return f"{state} after {result.iterations} iterations of {method}"
 
 
 def solve_row(cells: int, result, **columns: Any) -> dict[str, Any]:

@@ -4,7 +4,7 @@
 # Omega is the square [-1/4, 1/4]^2 without its upper-right quarter; its re-entrant
 # corner (0, 0) has the interior angle 3 pi/2, where the harmonic function
 # u = r^(2/3) sin(2 theta/3) (theta measured from the side x = 0, y > 0) has an
-# unbounded gradient (METHOD.md section 10). With the linear material, f = 0 and the
+# unbounded gradient (docs/method.md section 10). With the linear material, f = 0 and the
 # transmission data u0, t0 manufactured from u and an exterior field u_e, the discrete
 # solution converges like N^(-1/3) in the energy norm on uniform meshes (N dofs).
 #
@@ -22,7 +22,7 @@
 import numpy as np
 from mpi4py import MPI
 
-from common import demo_parser, rank0_print, write_results
+from common import demo_parser, start_demo, write_results
 from coupling.adapt import AdaptOptions, adapt
 from coupling.manufactured import (
     ManufacturedSolution,
@@ -39,13 +39,12 @@ parser = demo_parser(
     "demo_adaptive_lshape",
     "Adaptive refinement at the re-entrant corner of an L-shape.",
     cells=8,
-    cells_help="cells per side of the bounding square of the first mesh (default 8)",
+    cells_help="cells per side of the bounding square of the first mesh",
 )
 parser.add_argument("--steps", type=int, default=12, help="adaptive refinements (default 12)")
 parser.add_argument("--max-dofs", type=int, default=40000, help="largest level (default 40000)")
-args = parser.parse_args()
 comm = MPI.COMM_WORLD
-say = rank0_print(comm)
+args, say = start_demo(parser, comm)
 
 # %% [markdown]
 # ## The singular solution

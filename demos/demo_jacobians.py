@@ -17,7 +17,7 @@
 #    remainder must fall like eps^2);
 # 4. solves the contact problem once with each Jacobian and compares the iterates.
 #    The Jacobian enters the solver through the step size tau = 1/C0,
-#    C0 = lambda_max(B^-1 D^2 J_h(xi_0)) (METHOD.md section 5), so equal matrices
+#    C0 = lambda_max(B^-1 D^2 J_h(xi_0)) (docs/method.md section 5), so equal matrices
 #    must give the same iterates up to round-off.
 #
 # Run: `python demos/demo_jacobians.py [--cells N] [--repeat R] [--out DIR]` (results.json
@@ -31,22 +31,16 @@ from dolfinx import fem
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from common import demo_parser, rank0_print, write_results
+from common import demo_parser, start_demo, write_results
 from coupling.manufactured import manufactured_problem, square_contact
 from coupling.options import SolverOptions
 from coupling.solvers import solve
 from fem_py.forms import check_jacobian, make_material, numpy_function
 
-parser = demo_parser(
-    "demo_jacobians",
-    "UFL-derived against handwritten Jacobians.",
-    cells=256,
-    cells_help="cells per side of the square (h = 0.5/cells; default 256)",
-)
+parser = demo_parser("demo_jacobians", "UFL-derived against handwritten Jacobians.", cells=256)
 parser.add_argument("--repeat", type=int, default=10, help="timed assemblies of each matrix")
-args = parser.parse_args()
 comm = MPI.COMM_WORLD
-say = rank0_print(comm)
+args, say = start_demo(parser, comm)
 
 # %% [markdown]
 # ## Assembly at a nonlinear state

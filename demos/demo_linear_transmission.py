@@ -1,7 +1,7 @@
 # %% [markdown]
 # # The linear transmission problem with a known solution
 #
-# The simplest case of the coupled problem (METHOD.md section 1): rho = 1 (the
+# The simplest case of the coupled problem (docs/method.md section 1): rho = 1 (the
 # Laplace equation inside), no Signorini part (Gamma_t = Gamma), so (1.1)-(1.4) read
 #
 #     -Laplace u = f  in Omega,   Laplace u_e = 0 outside,   u_e = a + b log|x| + o(1),
@@ -11,7 +11,7 @@
 # :class:`coupling.manufactured.ManufacturedSolution` with no Signorini arc), solve on
 # three meshes and print the errors: the energy error |u - u_h|_1 falls like h, the
 # nodal errors of u_h and the error of u_e (evaluated outside by the representation
-# formula of METHOD.md section 2) like h^2.
+# formula of docs/method.md section 2) like h^2.
 #
 # Without contact J_h is a quadratic functional: PGPM would be a preconditioned
 # Richardson iteration for the FEM-BEM system (K + T^T S_h T) u = b, and the default
@@ -25,7 +25,7 @@
 import numpy as np
 from mpi4py import MPI
 
-from common import demo_parser, rank0_print, solve_row, write_results
+from common import demo_parser, solve_row, start_demo, write_results
 from coupling.manufactured import (
     ManufacturedSolution,
     exterior_field,
@@ -36,14 +36,11 @@ from coupling.options import SolverOptions
 from coupling.solvers import solve
 from fem_py.forms import make_material
 
-args = demo_parser(
-    "demo_linear_transmission",
-    "Linear transmission problem, known solution.",
-    cells=128,
-    cells_help="cells per side of the finest mesh; the others have N/2, N/4",
-).parse_args()
+description = "Linear transmission problem, known solution."
+cells_help = "cells per side of the finest mesh; the others have N/2, N/4"
+parser = demo_parser("demo_linear_transmission", description, cells=128, cells_help=cells_help)
 comm = MPI.COMM_WORLD
-say = rank0_print(comm)
+args, say = start_demo(parser, comm)
 
 # %% [markdown]
 # ## The exact solution

@@ -20,27 +20,29 @@
 # %%
 from mpi4py import MPI
 
-from common import demo_parser, rank0_print, write_results, write_solve_outputs
+from common import (
+    OUTPUTS_HELP,
+    demo_parser,
+    outcome,
+    start_demo,
+    write_results,
+    write_solve_outputs,
+)
 from coupling.manufactured import lshape_contact, manufactured_problem, solution_errors
 from coupling.options import SolverOptions
 from coupling.solvers import solve
 from fem_py.forms import make_material
 
-args = demo_parser(
-    "demo_lshape",
-    "L-shaped domain with two Signorini arcs.",
-    cells=128,
-    cells_help="cells per side of the bounding square (h = 0.5/cells; default 128)",
-    out_help="folder for the plots, fields and results.json",
-).parse_args()
+description = "L-shaped domain with two Signorini arcs."
+parser = demo_parser("demo_lshape", description, cells=128, out_help=OUTPUTS_HELP)
 comm = MPI.COMM_WORLD
-say = rank0_print(comm)
+args, say = start_demo(parser, comm)
 
 # %% [markdown]
 # ## Solve
 #
 # The arc end points are corners of the coarse partition (subdomains of size d = 4h),
-# as the substructuring preconditioner requires (METHOD.md section 6); the L-shape's
+# as the substructuring preconditioner requires (docs/method.md section 6); the L-shape's
 # corners and the arcs' ends lie on the coarse grid for any `cells` divisible by 8.
 
 # %%
@@ -54,9 +56,7 @@ result = solve(problem, options)
 errors = solution_errors(problem, solution, result)
 say(
     f"\nh = {0.5 / args.cells:.4g}, {problem.V.dofmap.index_map.size_global} dofs, "
-    f"{problem.n_signorini} Signorini nodes: "
-    f"{'converged' if result.converged else 'NOT converged'} after {result.iterations} "
-    f"iterations of {options.method}"
+    f"{problem.n_signorini} Signorini nodes: {outcome(result, options.method)}"
 )
 say(
     f"|u - u_h|_1 = {errors['energy']:.3e}   max |u - u_h| = {errors['nodal_u']:.3e}   "

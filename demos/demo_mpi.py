@@ -23,21 +23,16 @@ import time
 import numpy as np
 from mpi4py import MPI
 
-from common import demo_parser, rank0_print, write_results
+from common import demo_parser, start_demo, write_results
 from coupling.io.outputs import gather_p1
 from coupling.manufactured import manufactured_problem, solution_errors, square_contact
 from coupling.options import SolverOptions
 from coupling.solvers import solve
 from fem_py.forms import make_material
 
-args = demo_parser(
-    "demo_mpi",
-    "The contact problem on several MPI ranks.",
-    cells=128,
-    cells_help="cells per side of the square (h = 0.5/cells; default 128)",
-).parse_args()
+parser = demo_parser("demo_mpi", "The contact problem on several MPI ranks.", cells=128)
 world = MPI.COMM_WORLD
-say = rank0_print(world)
+args, say = start_demo(parser, world)
 
 
 def solve_on(comm: MPI.Comm):

@@ -7,7 +7,7 @@
 # rest) - and then does what `geometry.mesh = "disk.msh"` with `signorini = ["contact"]`
 # does in a configuration: rank 0 reads the file, the mesh is split automatically into
 # connected subdomains of size d (``fem_py.partition``) and distributed by whole
-# subdomains, and the group ends become coarse vertices (METHOD.md section 6).
+# subdomains, and the group ends become coarse vertices (docs/method.md section 6).
 #
 # The data are those of the manufactured solution
 # :func:`coupling.manufactured.disk_contact` (Carstensen material), in contact on the
@@ -24,7 +24,7 @@ import gmsh
 import numpy as np
 from mpi4py import MPI
 
-from common import demo_parser, rank0_print, write_results
+from common import demo_parser, outcome, start_demo, write_results
 from coupling.manufactured import disk_contact, solution_errors
 from coupling.options import SolverOptions
 from coupling.problem import SignoriniProblem
@@ -32,15 +32,13 @@ from coupling.solvers import solve
 from fem_py.forms import make_material
 from fem_py.mesh import GeometrySpec, build_domain
 
-args = demo_parser(
-    "demo_own_mesh",
-    "A disk read from a gmsh .msh file with named physical groups.",
-    cells=64,
-    cells_help="h = 0.5/cells (default 64)",
-    out_help="folder for the .msh file, the figure and results.json",
-).parse_args()
+description = "A disk read from a gmsh .msh file with named physical groups."
+out_help = "folder for the .msh file, the figure and results.json"
+parser = demo_parser(
+    "demo_own_mesh", description, cells=64, cells_help="h = 0.5/cells", out_help=out_help
+)
 comm = MPI.COMM_WORLD
-say = rank0_print(comm)
+args, say = start_demo(parser, comm)
 h = 0.5 / args.cells
 args.out.mkdir(parents=True, exist_ok=True)
 msh_file = args.out / "disk.msh"
@@ -88,8 +86,7 @@ errors = solution_errors(problem, solution, result)
 say(
     f"{msh_file}: {problem.V.dofmap.index_map.size_global} dofs, "
     f"{domain.coarse.n_subdomains} subdomains, {problem.n_signorini} Signorini nodes; "
-    f"{'converged' if result.converged else 'NOT converged'} after {result.iterations} "
-    f"iterations of {options.method}"
+    f"{outcome(result, options.method)}"
 )
 say(
     f"|u - u_h|_1 = {errors['energy']:.3e}   max |u - u_h| = {errors['nodal_u']:.3e}   "

@@ -1,7 +1,7 @@
 # %% [markdown]
 # # Nonlinear Signorini contact on a square (the main demo)
 #
-# This demo solves the coupled problem of METHOD.md section 1: a nonlinear equation
+# This demo solves the coupled problem of docs/method.md section 1: a nonlinear equation
 # in the square Omega = [-1/4, 1/4]^2, the Laplace equation in the unbounded exterior,
 # transmission conditions on Gamma and a unilateral (Signorini) contact condition on
 # the bottom side Gamma_s:
@@ -13,7 +13,7 @@
 #     (u_e + u0 - u) rho du/dn = 0                       on Gamma_s        (1.5)
 #
 # with the material of Carstensen, rho(t) = 2 + 1/(1 + t). The data come from a
-# manufactured solution (METHOD.md section 8, :mod:`coupling.manufactured`) whose gap
+# manufactured solution (docs/method.md section 8, :mod:`coupling.manufactured`) whose gap
 # u_e + u0 - u vanishes exactly on the left half of Gamma_s: the contact set is known,
 # so the demo can print the errors of u_h, of the gap phi_h, of u_e and of the
 # computed contact set.
@@ -36,27 +36,31 @@ import time
 import numpy as np
 from mpi4py import MPI
 
-from common import demo_parser, rank0_print, solve_row, write_results, write_solve_outputs
+from common import (
+    OUTPUTS_HELP,
+    demo_parser,
+    solve_row,
+    start_demo,
+    write_results,
+    write_solve_outputs,
+)
 from coupling.manufactured import manufactured_problem, solution_errors, square_contact
 from coupling.options import SolverOptions
 from coupling.solvers import solve
 from fem_py.forms import make_material
 
-args = demo_parser(
-    "demo_signorini_square",
-    "Nonlinear Signorini contact on a square (manufactured solution with a known contact set).",
-    cells=128,
-    cells_help="cells per side of the finest mesh (h = 0.5/cells; default 128)",
-    out_help="folder for the plots, fields and results.json",
-).parse_args()
+description = (
+    "Nonlinear Signorini contact on a square (manufactured solution with a known contact set)."
+)
+parser = demo_parser("demo_signorini_square", description, cells=128, out_help=OUTPUTS_HELP)
 comm = MPI.COMM_WORLD
-say = rank0_print(comm)
+args, say = start_demo(parser, comm)
 
 # %% [markdown]
 # ## The material and the exact solution
 #
 # `make_material` derives the energy density g(t) = int_0^t s rho(s) ds and rho'
-# symbolically and checks the structure condition of METHOD.md section 1 on
+# symbolically and checks the structure condition of docs/method.md section 1 on
 # t in [0, 1e3]; alpha and beta are the measured bounds of d(t rho(t))/dt.
 
 # %%
@@ -76,7 +80,7 @@ say(
 # %% [markdown]
 # ## Two mesh sizes at fixed d/h = 4
 #
-# The energy error |u - u_h|_1 is O(h) (METHOD.md section 7, item 5) and the iteration
+# The energy error |u - u_h|_1 is O(h) (docs/method.md section 7, item 5) and the iteration
 # count does not grow at fixed d/h (Theorem 4.1). `solution_errors` also counts the
 # Signorini nodes whose contact state differs from the exact one away from the two
 # points where the exact contact set switches.

@@ -7,10 +7,17 @@ __all__ = [
     "segment_lengths",
     "arc_length",
     "closest_on_polygon",
+    "inside_polygon",
     "coarsened_polygon",
     "polygon_corners",
     "diameter",
+    "CORNER_ANGLE",
 ]
+
+#: A bend of Gamma by more than this (radians) is a corner: it makes a coarse vertex of a
+#: mesh from a file or of a curved shape (``fem_py.partition.coarse``: corners stay coarse vertices,
+#: a smooth curve does not fill with them), and a corner in the figures.
+CORNER_ANGLE = np.pi / 6
 
 
 def segment_lengths(points: np.ndarray) -> np.ndarray:
@@ -24,13 +31,38 @@ def arc_length(points: np.ndarray) -> np.ndarray:
     return np.concatenate([np.zeros(seg.shape[:-1] + (1,)), np.cumsum(seg, axis=-1)], axis=-1)
 
 
-def polygon_corners(nodes: np.ndarray) -> np.ndarray:
+def polygon_corners(nodes: np.ndarray, min_angle: float = 0.0) -> np.ndarray:
     """Indices of the nodes (k, 2) of a closed polygon where it turns (its corners; the
-    other nodes lie on straight sides)."""
+    other nodes lie on straight sides); with ``min_angle`` > 0 only where it turns by
+    more than that (radians: the corners of a curve drawn by a fine polygon)."""
     t = np.diff(np.concatenate([nodes, nodes[:1]]), axis=0)
     t /= np.linalg.norm(t, axis=1)[:, None]
     t_in = np.roll(t, 1, axis=0)
-    return np.flatnonzero(np.abs(t_in[:, 0] * t[:, 1] - t_in[:, 1] * t[:, 0]) > 1e-8)
+    cross = t_in[:, 0] * t[:, 1] - t_in[:, 1] * t[:, 0]
+    if min_angle <= 0.0:
+        return np.flatnonzero(np.abs(cross) > 1e-8)
+    dot = np.einsum("kd,kd->k", t_in, t)
+    return np.flatnonzero(np.abs(np.arctan2(cross, dot)) > min_angle)
+
+
+def inside_polygon(points: np.ndarray, vertices: np.ndarray, *, block: int = 1 << 20) -> np.ndarray:
+    """Whether each point (m, 2) lies inside the closed polygon through ``vertices``
+    (k, 2): an odd number of its sides crosses the horizontal ray to the right of the
+    point (exact in floating point up to the crossing abscissa; points on a side may
+    fall either way). Work in blocks of about ``block`` point-side pairs."""
+    points = np.asarray(points, dtype=float).reshape(-1, 2)
+    a = np.asarray(vertices, dtype=float)
+    b = np.roll(a, -1, axis=0)
+    m = len(points)
+    out = np.empty(m, dtype=bool)
+    step = max(1, block // max(len(a), 1))
+    for lo in range(0, m, step):
+        x, y = points[lo : lo + step, :1], points[lo : lo + step, 1:]
+        spans = (a[:, 1] > y) != (b[:, 1] > y)  # (b, k): the side spans the ray's height
+        with np.errstate(divide="ignore", invalid="ignore"):
+            cross = a[:, 0] + (y - a[:, 1]) * (b[:, 0] - a[:, 0]) / (b[:, 1] - a[:, 1])
+        out[lo : lo + step] = np.count_nonzero(spans & (cross > x), axis=1) % 2 == 1
+    return out
 
 
 def closest_on_polygon(

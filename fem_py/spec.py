@@ -17,7 +17,7 @@ __all__ = ["GeometrySpec", "DIMENSIONS", "SOLID_SHAPES", "PLANAR_ONLY"]
 
 #: The dimensions of Omega that ``fem_py.mesh.build_domain`` builds.
 DIMENSIONS = (2, 3)
-#: The shapes of a body in R^3 (METHOD.md section 11); every other shape is planar.
+#: The shapes of a body in R^3 (docs/method.md section 11); every other shape is planar.
 SOLID_SHAPES = ("box", "ball")
 #: The fields that mean nothing for a body in R^3 (no polygon, no ellipse, no coarse
 #: partition into subdomains, no diameter condition on V), with what to do instead.
@@ -33,7 +33,7 @@ PLANAR_ONLY = {
 
 @dataclass(frozen=True)
 class GeometrySpec:
-    """Omega, its mesh and its coarse partition into subdomains (METHOD.md sections 1, 6).
+    """Omega, its mesh and its coarse partition into subdomains (docs/method.md sections 1, 6).
 
     Attributes
     ----------
@@ -60,7 +60,7 @@ class GeometrySpec:
         groups. () for none (``fem_py.mesh.polygon``). In 3D: face names of the box or
         the ball, names of physical surface groups of a mesh file, or ``"all"``.
     allow_large
-        Allow diam(Omega) >= 1 (then V is not guaranteed elliptic, METHOD.md section 2).
+        Allow diam(Omega) >= 1 (then V is not guaranteed elliptic, docs/method.md section 2).
     mesh
         A gmsh mesh file (MSH 2.2 or 4.1, linear triangles or linear tetrahedra) instead
         of a generated shape.

@@ -1,4 +1,4 @@
-"""The facet tags of a domain's boundary: Gamma_t and the Signorini arcs (METHOD.md
+"""The facet tags of a domain's boundary: Gamma_t and the Signorini arcs (docs/method.md
 section 1). Every exterior facet of a ``fem_py.mesh.Domain`` carries one of them."""
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Reproducibility study of the claims of METHOD.md section 7 (``make study``).
+"""Reproducibility study of the claims of docs/method.md section 7 (``make study``).
 
 Six parts, each a module with the same interface (:class:`study.base.Part`:
 ``run`` returns tables, lists of dicts, one dict a row; ``summarize``, ``plot`` and
@@ -12,12 +12,12 @@ Six parts, each a module with the same interface (:class:`study.base.Part`:
 ``spectrum``    extreme eigenvalues of B^{-1} A (A of (4.2)) and of B^{-1} D^2 J_h(xi_h)
                 by Lanczos in the B inner product (claim 7.2, Theorem 4.1); the rate
                 of Theorem 3.1 predicted from them; cond(M_s) (claim 7.3, (4.6)); the
-                reference values of METHOD.md section 6 recomputed.
+                reference values of docs/method.md section 6 recomputed.
 ``projection``  the inexact projection (3.20) with its certified stopping rule (3.6):
                 inner iterations per step and outer counts for several rho_in and caps,
                 against the exact projection and against (3.20) stopped by (3.6) with
                 the true optimum (what (3.6) itself demands).
-``errors``      discretisation errors on the manufactured solutions of METHOD.md
+``errors``      discretisation errors on the manufactured solutions of docs/method.md
                 section 8 and their observed orders (claim 7.5), linear and carstensen
                 material, square and L-shape, P1 flux (and P0 flux for comparison).
 ``variants``    the edge forms ``paper`` and ``sqrt-laplacian`` (iterations and kappa);

@@ -100,7 +100,7 @@ def setup_case(
     method: str = "pgpm",
     **options: Any,
 ) -> Case:
-    """The manufactured problem (METHOD.md section 8) on ``cells`` cells per side with
+    """The manufactured problem (docs/method.md section 8) on ``cells`` cells per side with
     subdomains of d = ``d_over_h`` h, solved with ``options`` (SolverOptions fields).
 
     The study is about the paper's claims, so its problems solve with ``pgpm`` (the

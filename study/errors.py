@@ -1,4 +1,4 @@
-"""Part 4, ``errors``: discretisation errors on the manufactured solutions of METHOD.md
+"""Part 4, ``errors``: discretisation errors on the manufactured solutions of docs/method.md
 section 8 and their observed orders (claim 7.5), linear and carstensen material, square
 and L-shape, P1 flux (and P0 flux for comparison)."""
 from __future__ import annotations
@@ -31,7 +31,7 @@ ERROR_CASES = (
 
 
 def run(comm: Any, sizes: Sizes, *, tol: float = 1e-10) -> list[Table]:
-    """Errors against the manufactured solutions (METHOD.md section 8, claim 7.5) with
+    """Errors against the manufactured solutions (docs/method.md section 8, claim 7.5) with
     observed orders log(e_coarse/e_fine)/log(h_coarse/h_fine); tol 1e-10 so that the
     algebraic error stays far below the discretisation error."""
     rows = []

@@ -145,7 +145,7 @@ def run(comm: Any, sizes: Sizes, methods: Sequence[dict] = METHODS) -> list[Tabl
             "iterations",
             "Iterations to the tolerance",
             "Square of width 0.5, Signorini arc = bottom side, material `carstensen`, "
-            "manufactured data (METHOD.md section 8), xi_0 = 0, stopping rule "
+            "manufactured data (docs/method.md section 8), xi_0 = 0, stopping rule "
             "||xi_k+1 - y_k||_B <= tol ||xi_k+1||_B (y_k = xi_k except for apgpm). "
             "`method`: `pgpm` is the paper's Algorithm 3.1; `apgpm` (Nesterov's "
             "constant momentum in the B metric from the Lanczos estimate of lambda_min, "
@@ -324,7 +324,7 @@ def summary_markdown(summary: dict[str, Any]) -> str:
 PART = Part(
     "iterations",
     "Part 1: PGPM iterations against h and d/h",
-    "Claims 7.1 and 7.4 of METHOD.md: with the substructuring preconditioner the count "
+    "Claims 7.1 and 7.4 of docs/method.md: with the substructuring preconditioner the count "
     "is bounded as h -> 0 at fixed d/h and grows at most like (1 + ln(d/h))^2 at fixed "
     "d (Theorems 3.1 and 4.1); with B = identity it grows like h^-2 (Remark 2.1).",
     run,

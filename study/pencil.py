@@ -20,7 +20,7 @@ DENSE_MAX = 1200
 
 
 class PencilOperators:
-    """The pencil (H, B) on xi = (u, phi_F), W = [T E_F] (METHOD.md section 4):
+    """The pencil (H, B) on xi = (u, phi_F), W = [T E_F] (docs/method.md section 4):
 
         H = K + W^T S_h W,     B = diag(B_Omega, omega M_s restricted to F),
 

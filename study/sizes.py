@@ -7,7 +7,7 @@ __all__ = ["Sizes", "FULL", "QUICK", "WIDTH", "REFERENCE_KAPPA"]
 
 WIDTH = 0.5  # width of the manufactured square and L-shape (coupling.manufactured)
 
-#: kappa of (A, B) measured on the structured reference implementation of METHOD.md
+#: kappa of (A, B) measured on the structured reference implementation of docs/method.md
 #: section 6 (square of width 0.5, P0 flux, omega = 1), keyed by (cells, d/h). These
 #: are the published inputs the ``spectrum`` part recomputes, not measurements of ours.
 REFERENCE_KAPPA = {
@@ -36,7 +36,7 @@ class Sizes:
     spectrum_cells: tuple[int, ...]  # eigenvalues at fixed d/h = 4
     spectrum_d_cells: tuple[int, ...]  # eigenvalues at fixed d
     cond_cells: tuple[int, ...]  # cond(M_s), both series
-    reference: tuple[tuple[int, int], ...]  # (cells, d/h) of the METHOD.md reference kappa
+    reference: tuple[tuple[int, int], ...]  # (cells, d/h) of the docs/method.md reference kappa
     projection_cells: tuple[int, ...]  # the exact projection runs at all of them
     projection_configs: tuple[tuple[float, int, int], ...]  # inexact: (rho_in, cap, up to cells)
     oracle_rho: tuple[tuple[float, int], ...]  # (3.20) stopped by (3.6) with the true q*:

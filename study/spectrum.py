@@ -1,7 +1,7 @@
 """Part 2, ``spectrum``: extreme eigenvalues of B^{-1} A (A of (4.2)) and of
 B^{-1} D^2 J_h(xi_h) by Lanczos in the B inner product (claim 7.2, Theorem 4.1); the
 rate of Theorem 3.1 predicted from them; cond(M_s) (claim 7.3, (4.6)); the reference
-values of METHOD.md section 6 recomputed."""
+values of docs/method.md section 6 recomputed."""
 from __future__ import annotations
 
 import time
@@ -182,7 +182,7 @@ def run(comm: Any, sizes: Sizes) -> list[Table]:
         )
         log(
             f"[spectrum] reference cells {cells}, d/h {r}: kappa {hi / lo:.2f} "
-            f"(METHOD.md: {ref})"
+            f"(docs/method.md: {ref})"
         )
         case.release()
 
@@ -256,9 +256,9 @@ def run(comm: Any, sizes: Sizes) -> list[Table]:
         ),
         Table(
             "reference",
-            "kappa of (A, B) against the reference values of METHOD.md section 6",
+            "kappa of (A, B) against the reference values of docs/method.md section 6",
             "As the reference implementation: P0 flux, omega = 1, edge form `paper`, "
-            "square of width 0.5; `kappa_reference` is the value quoted in METHOD.md "
+            "square of width 0.5; `kappa_reference` is the value quoted in docs/method.md "
             "section 6 (input, not measured here).",
             reference,
             [
@@ -453,7 +453,7 @@ def summary_markdown(summary: dict[str, Any]) -> str:
     if "reference" in summary:
         lines += [
             "",
-            "Largest relative difference to the METHOD.md reference kappa: "
+            "Largest relative difference to the docs/method.md reference kappa: "
             f"{summary['reference']['max_abs_rel_difference']:.2e}.",
         ]
     return "\n".join(lines)

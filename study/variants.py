@@ -264,7 +264,7 @@ def summary_markdown(summary: dict[str, Any]) -> str:
 PART = Part(
     "variants",
     "Part 5: edge forms and Jacobians",
-    "The two edge forms A^0_gamma of METHOD.md section 6 and the two Jacobians of "
+    "The two edge forms A^0_gamma of docs/method.md section 6 and the two Jacobians of "
     "fem_py/forms/interior.py.",
     run,
     summarize,

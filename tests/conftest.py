@@ -11,6 +11,14 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 #: [material] and [data] of the tests' load case: carstensen, f = 1 + x, t0 = -1, u0 = 0.1
+#: materials the form and material tests run through: (rho, its parameters)
+TEST_MATERIALS = [
+    ("linear", {}),
+    ("carstensen", {}),
+    ("power", {"p": 1.5, "eps": 0.1}),
+    ("power", {"p": 3.0, "eps": 0.5}),
+    ("1 + t^2/(1 + t^2)", {}),
+]
 LOAD_CASE = '[material]\nrho = "carstensen"\n[data]\nf = "1 + x"\nt0 = "-1"\nu0 = "0.1"\n'
 
 

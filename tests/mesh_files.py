@@ -102,3 +102,56 @@ def bad_msh(path: Path, kind: str) -> Path:
     finally:
         gmsh.finalize()
     return Path(path)
+
+
+def notched_msh(path: Path, h: float) -> Path:
+    """The OpenCASCADE body of issue 29: the rectangle [-0.3, 0.3] x [-0.2, 0.2] minus the
+    disk of radius 0.12 about (0, 0.2); curve groups "bottom" (y = -0.2), "notch" (the
+    circular arc) and "free" (the rest), surface group "omega"."""
+    gmsh = _session()
+    try:
+        occ = gmsh.model.occ
+        body, _ = occ.cut(
+            [(2, occ.addRectangle(-0.3, -0.2, 0, 0.6, 0.4))],
+            [(2, occ.addDisk(0, 0.2, 0, 0.12, 0.12))],
+        )
+        occ.synchronize()
+        groups: dict[str, list[int]] = {"bottom": [], "notch": [], "free": []}
+        for _, tag in gmsh.model.getBoundary(body, oriented=False):
+            x0, y0, _, x1, y1, _ = gmsh.model.getBoundingBox(1, abs(tag))
+            if y1 < -0.19:
+                groups["bottom"].append(abs(tag))
+            elif y0 > 0.05 and abs(x0) < 0.13 and abs(x1) < 0.13:
+                groups["notch"].append(abs(tag))
+            else:
+                groups["free"].append(abs(tag))
+        for k, (name, tags) in enumerate(groups.items()):
+            _name(gmsh, 1, tags, k + 1, name)
+        _name(gmsh, 2, [t for _, t in body], 4, "omega")
+        gmsh.option.setNumber("Mesh.MeshSizeMax", h)
+        gmsh.model.mesh.generate(2)
+        gmsh.write(str(path))
+    finally:
+        gmsh.finalize()
+    return Path(path)
+
+
+def t1_msh(path: Path, lc: float = 0.02) -> Path:
+    """gmsh's tutorial t1.geo: the rectangle [0, 0.1] x [0, 0.3] with the unnamed curve
+    group 5 (bottom, right and left sides: ``Physical Curve(5) = {1, 2, 4}``) and the
+    surface group "My surface"."""
+    gmsh = _session()
+    try:
+        geo = gmsh.model.geo
+        p = [geo.addPoint(x, y, 0, lc) for x, y in [(0, 0), (0.1, 0), (0.1, 0.3), (0, 0.3)]]
+        lines = [geo.addLine(p[0], p[1]), geo.addLine(p[2], p[1]), geo.addLine(p[2], p[3])]
+        lines.append(geo.addLine(p[3], p[0]))
+        s = geo.addPlaneSurface([geo.addCurveLoop([4, 1, -2, 3])])
+        geo.synchronize()
+        gmsh.model.addPhysicalGroup(1, [1, 2, 4], 5)
+        _name(gmsh, 2, [s], 6, "My surface")
+        gmsh.model.mesh.generate(2)
+        gmsh.write(str(path))
+    finally:
+        gmsh.finalize()
+    return Path(path)

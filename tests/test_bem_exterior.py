@@ -1,8 +1,8 @@
-"""Exterior Dirichlet-to-Neumann map and representation formula (METHOD.md section 2).
+"""Exterior Dirichlet-to-Neumann map and representation formula (docs/method.md section 2).
 
 Manufactured exterior solution, harmonic outside x0 (inside Omega):
     u_e(x) = a + b log|x - x0| + c.(x - x0)/|x - x0|^2,
-which behaves like a + b log|x| + o(1) at infinity (METHOD.md section 1, note on (1.3)).
+which behaves like a + b log|x| + o(1) at infinity (docs/method.md section 1, note on (1.3)).
 The polygon itself is the geometry, so v = u_e at the nodes is exact data up to P1
 interpolation.
 

@@ -1,4 +1,4 @@
-"""V_h, K_h, W_h and M_h against the circle values of METHOD.md section 2 and exact
+"""V_h, K_h, W_h and M_h against the circle values of docs/method.md section 2 and exact
 identities on polygons.
 
 Circle |x| = R (factor-2 convention): V cos(m t) = (R/m) cos(m t), V 1 = -2 R log R;
@@ -36,6 +36,12 @@ def interpolation_bound(h: float) -> float:
     return (6 * h / R) ** 2
 
 
+def circle_levels():
+    """(nodes, node angles) of the regular n-gon of the circle, n in LEVELS."""
+    for n in LEVELS:
+        yield circle(n), 2 * np.pi * np.arange(n) / n
+
+
 def v_exact(m: int) -> float:
     return -2 * R * np.log(R) if m == 0 else R / m
 
@@ -43,15 +49,13 @@ def v_exact(m: int) -> float:
 @pytest.mark.parametrize("space", ["p1", "p0"])
 def test_single_layer_circle_values_converge(space):
     errors, h = [], []
-    for n in LEVELS:
-        X = circle(n)
-        theta = 2 * np.pi * np.arange(n) / n
+    for X, theta in circle_levels():
         V = bem_cpp.single_layer(X, space)
         if space == "p1":
             gram, at = bem_cpp.mass(X, "p1"), theta  # hats: nodal values
         else:
             gram = np.diag(bem_cpp.mass(X, "p0").sum(axis=1))  # P0 Gram matrix diag(h)
-            at = theta + np.pi / n  # panel indicators: values at the midpoints
+            at = theta + np.pi / len(X)  # panel indicators: values at the midpoints
         err = 0.0
         for m, f in MODES:
             q = f(m * at)
@@ -142,7 +146,7 @@ def test_mass_matrices():
 
 
 def test_hypersingular_is_maue():
-    """W_h = D^T V0_h D with D the arc-length derivative of the hats (METHOD.md section 9)."""
+    """W_h = D^T V0_h D with D the arc-length derivative of the hats (docs/method.md section 9)."""
     X = square(24)
     n = len(X)
     h = np.linalg.norm(np.roll(X, -1, axis=0) - X, axis=1)

@@ -1,6 +1,6 @@
 """Test polygons for the bem_cpp tests (imported by the other test_bem_* modules), and
 checks that they are what the tests assume: simple, counter-clockwise, diameter < 1
-(so the logarithmic capacity is below 1 and V is elliptic, METHOD.md section 2)."""
+(so the logarithmic capacity is below 1 and V is elliptic, docs/method.md section 2)."""
 from __future__ import annotations
 
 import numpy as np

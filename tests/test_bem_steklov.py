@@ -1,5 +1,5 @@
 """Discrete Steklov-Poincare operator S_h = 1/2 (W_h + (K_h - M_h)^T V_h^{-1} (K_h - M_h))
-(METHOD.md (2.x), section 4).
+(docs/method.md (2.x), section 4).
 
 Circle |x| = R: S cos(m t) = (m/R) cos(m t), S 1 = -1/(R log R). Rayleigh quotients of
 the interpolated modes converge at O(h^2) (geometry and interpolation; measured 2.55
@@ -11,7 +11,13 @@ import numpy as np
 import pytest
 
 import bem_cpp
-from test_bem_operators import LEVELS, MODES, interpolation_bound, mesh_size, observed_order
+from test_bem_operators import (
+    MODES,
+    circle_levels,
+    interpolation_bound,
+    mesh_size,
+    observed_order,
+)
 from test_bem_polygons import R_CIRCLE as R
 from test_bem_polygons import circle, l_shape, square
 
@@ -23,9 +29,7 @@ def s_exact(m: int) -> float:
 @pytest.mark.parametrize("flux", ["p1", "p0"])
 def test_circle_values_converge(flux):
     errors, h = [], []
-    for n in LEVELS:
-        X = circle(n)
-        theta = 2 * np.pi * np.arange(n) / n
+    for X, theta in circle_levels():
         S, M = bem_cpp.steklov_poincare(X, flux), bem_cpp.mass(X, "p1")
         err = max(
             abs(f(m * theta) @ S @ f(m * theta) / (f(m * theta) @ M @ f(m * theta)) - s_exact(m))

@@ -1,4 +1,4 @@
-"""The structured box and the gmsh ball of fem_py.mesh (METHOD.md section 11): the
+"""The structured box and the gmsh ball of fem_py.mesh (docs/method.md section 11): the
 closed-form counts equal the meshed ones, the faces are tagged by name, bad sizes are
 refused in one line."""
 from __future__ import annotations

@@ -17,6 +17,7 @@ measured at h = 1/16, 1/32, 1/64 they fall like h^2 (u_e at exterior points: max
 """
 from __future__ import annotations
 
+import importlib.util
 import json
 import math
 import re
@@ -379,14 +380,29 @@ def test_mpirun_errors_print_once_and_do_not_hang(tmp_path):
     assert len(errors) == 1 and "geometry.signorini" in errors[0], proc.stderr
 
 
-# ------------------------------------------------------------------------ README
-def test_readme_documents_every_configuration_key_with_its_default():
-    """Each key has a row | `section.key` | `default` | ... whose default, read as TOML,
-    equals the value in coupling.options.DEFAULTS (the single source of the defaults)."""
-    readme = (ROOT / "README.md").read_text()
+# ------------------------------------------------------------------------ docs
+def _docs_reference():
+    """docs/_ext/fembem_docs/reference.py (plain Python: no Sphinx needed to import it)."""
+    path = ROOT / "docs" / "_ext" / "fembem_docs" / "reference.py"
+    spec = importlib.util.spec_from_file_location("fembem_docs_reference", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_configuration_reference_documents_every_key_with_its_default():
+    """The generated configuration reference of the docs has a row | `section.key` |
+    `default` | ... for each key, whose default, read as TOML, equals the value in
+    coupling.options.DEFAULTS (the single source of the defaults), and a meaning."""
+    reference = _docs_reference()
+    page = "\n".join(reference.config_markdown(section) for section in DEFAULTS)
     rows = {
-        m.group(1): tomllib.loads(f"v = {m.group(2)}")["v"]
-        for m in re.finditer(r"^\| `([a-z_0-9]+\.[a-z_0-9]+)` \| `([^`]*)` \|", readme, re.M)
+        m.group(1): (tomllib.loads(f"v = {m.group(2)}")["v"], m.group(3))
+        for m in re.finditer(
+            r"^\| `([a-z_0-9]+\.[a-z_0-9]+)` \| `([^`]*)` \|.*\| ((?:[^|\\]|\\.)*) \|$",
+            page,
+            re.M,
+        )
     }
     expected = {
         f"{section}.{key}": value
@@ -395,4 +411,6 @@ def test_readme_documents_every_configuration_key_with_its_default():
     }
     assert rows.keys() == expected.keys()
     for key, value in expected.items():
-        assert rows[key] == value and type(rows[key]) is type(value), key
+        default, meaning = rows[key]
+        assert default == value and type(default) is type(value), key
+        assert meaning.strip(), key

@@ -1,4 +1,4 @@
-"""The coarse matrix C of the substructuring preconditioner (METHOD.md section 6):
+"""The coarse matrix C of the substructuring preconditioner (docs/method.md section 6):
 ``coarse_space = "graph"`` (the paper's coarse graph Laplacian) and ``"galerkin"``
 (Pi^T S Pi + d * boundary term, by probing with a distance-2 colouring), and the
 ``"auto"`` choice by how the subdomains were made (issue 17).

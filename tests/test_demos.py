@@ -1,4 +1,4 @@
-"""The demos, run at a small size, and the README's Python example.
+"""The demos, run at a small size, and the Python example of the docs (docs/guide/python.md).
 
 Each demo writes the numbers it prints to results.json in its --out folder; the tests
 assert them: errors below bounds from measured convergence orders, rates, iteration
@@ -127,11 +127,10 @@ def test_mpi_demo_matches_the_serial_solve(tmp_path):
     assert results["u_rel_diff"] <= 1e-6 and results["phi_rel_diff"] <= 1e-6
 
 
-def test_readme_python_example_runs(tmp_path):
-    readme = (ROOT / "README.md").read_text()
-    api = readme[readme.index("## Python API") :]  # the API example (other sections have theirs)
-    blocks = re.findall(r"```python\n(.*?)```", api, re.S)
-    assert blocks, "the README has no python example"
+def test_docs_python_example_runs(tmp_path):
+    page = (ROOT / "docs" / "guide" / "python.md").read_text()
+    blocks = re.findall(r"```python\n(.*?)```", page, re.S)
+    assert blocks, "docs/guide/python.md has no python example"
     proc = subprocess.run(
         [sys.executable, "-c", blocks[0]], capture_output=True, text=True, timeout=300, cwd=tmp_path
     )

@@ -1,7 +1,7 @@
 """`fembem evaluate` and coupling.io.evaluation: u_h inside, both traces on Gamma, u_e
 outside, from the fields of a finished run.
 
-Accuracy against the manufactured square (METHOD.md section 8): at random points inside,
+Accuracy against the manufactured square (docs/method.md section 8): at random points inside,
 u_h interpolated in its triangle converges like h^2 (P1; measured orders 2.15 and 1.72
 over 16 -> 32 -> 64 cells, the second lowered by where the points fall), so the test
 asks for 1.6; u_e by the representation formula converges like h^2 (measured 1.99,

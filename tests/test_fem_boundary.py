@@ -1,5 +1,5 @@
 """fem_py.boundary: the counter-clockwise boundary order, T, E, boundary data and the
-distributed gather/scatter (METHOD.md section 4)."""
+distributed gather/scatter (docs/method.md section 4)."""
 from __future__ import annotations
 
 import numpy as np

@@ -1,4 +1,4 @@
-"""fem_py.forms: energy, residual and the two Jacobians (METHOD.md 2.1, 4.1), loads and
+"""fem_py.forms: energy, residual and the two Jacobians (docs/method.md 2.1, 4.1), loads and
 the stiffness matrix, against exact values and finite differences."""
 from __future__ import annotations
 
@@ -9,6 +9,7 @@ from dolfinx import fem
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from conftest import TEST_MATERIALS
 from fem_py.dofs import p1_space
 from fem_py.forms import (
     InteriorForms,
@@ -20,13 +21,7 @@ from fem_py.forms import (
 from fem_py.mesh import GeometrySpec, build_domain
 
 COMM = MPI.COMM_WORLD
-MATERIALS = [
-    ("linear", {}),
-    ("carstensen", {}),
-    ("power", {"p": 1.5, "eps": 0.1}),
-    ("power", {"p": 3.0, "eps": 0.5}),
-    ("1 + t^2/(1 + t^2)", {}),
-]
+MATERIALS = TEST_MATERIALS
 AREA = 0.25  # square of width 0.5
 
 

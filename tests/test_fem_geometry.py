@@ -1,4 +1,4 @@
-"""fem_py.mesh: mesh and coarse-partition invariants (METHOD.md section 6) for the
+"""fem_py.mesh: mesh and coarse-partition invariants (docs/method.md section 6) for the
 square, the L-shape and a polygon, structured and unstructured, and the error cases."""
 from __future__ import annotations
 

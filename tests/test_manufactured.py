@@ -1,5 +1,5 @@
 """Discretisation errors on manufactured solutions with a known contact set
-(METHOD.md sections 7.5 and 8), carstensen material, three refinements at d/h = 4.
+(docs/method.md sections 7.5 and 8), carstensen material, three refinements at d/h = 4.
 
 Expected orders (P1 inside, P1 flux on Gamma): energy-norm error O(h); nodal errors
 O(h^2) where the solution is smooth. Measured (h = 1/16, 1/32, 1/64):

@@ -1,4 +1,4 @@
-"""The PGPM solver against exact answers (METHOD.md sections 4, 5, 7, 8).
+"""The PGPM solver against exact answers (docs/method.md sections 4, 5, 7, 8).
 
 Tolerances: the stopping rule ||xi_k+1 - xi_k||_B <= tol ||xi_k+1||_B (APGPM: xi_k replaced
 by the extrapolated point y_k, with the same bound) bounds the error of the iterate by

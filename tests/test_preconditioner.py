@@ -1,4 +1,4 @@
-"""Tests of the substructuring preconditioner against the definitions of METHOD.md section 6.
+"""Tests of the substructuring preconditioner against the definitions of docs/method.md section 6.
 
 The reference matrices here are assembled independently, by loops that read the
 formulas literally: B_Omega from the change of basis {interior hats} U {harmonic
@@ -111,9 +111,9 @@ def reference_omega(prob, kind: str) -> np.ndarray:
 
 
 def reference_signorini(arcs, d: float, kind: str, uniform_formula: bool = False) -> np.ndarray:
-    """Dense M_s from its definition (METHOD.md section 6, "Signorini block").
+    """Dense M_s from its definition (docs/method.md section 6, "Signorini block").
 
-    With ``uniform_formula`` the coarse part is METHOD.md's formula in vertex indices,
+    With ``uniform_formula`` the coarse part is docs/method.md's formula in vertex indices,
     sum_{i<j} (.)^2/(j-i)^2 + sum_i (1/i + 1/(n_s-i)) (.)^2, valid for equal coarse edges.
     """
     n_s = sum(len(arc.unknowns) for arc in arcs)
@@ -340,7 +340,7 @@ def test_signorini_block_matches_definition(n, ratio, layout, lines, kind):
 
 
 def test_signorini_coarse_form_is_methods_formula_on_equal_edges():
-    """Arc-length weights reduce to METHOD.md's 1/(j-i)^2 and 1/i + 1/(n_s-i) for equal
+    """Arc-length weights reduce to docs/method.md's 1/(j-i)^2 and 1/i + 1/(n_s-i) for equal
     coarse edges."""
     prob = structured_square(24, 4, signorini="bottom-right")
     pc = substructuring(prob)

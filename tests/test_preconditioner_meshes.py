@@ -211,7 +211,7 @@ def structured_square(
 def substructuring(
     prob: StructuredSquare, *, edge_form: str = "paper", signorini_weight: float = 1.0
 ) -> SubstructuringPreconditioner:
-    """B of METHOD.md section 6 for ``prob``: the paper's edge form (5.1) and B_s
+    """B of docs/method.md section 6 for ``prob``: the paper's edge form (5.1) and B_s
     unweighted (omega = 1), the definitions the references below read, unless told."""
     return SubstructuringPreconditioner(
         prob.stiffness,

@@ -1,9 +1,9 @@
-"""Spectral claims of METHOD.md section 6 (Theorems 4.1 and 4.2) on the structured square.
+"""Spectral claims of docs/method.md section 6 (Theorems 4.1 and 4.2) on the structured square.
 
 kappa = lambda_max / lambda_min of the pencil (A, B), with A the linear form (4.2),
 A((u, phi), (w, psi)) = (grad u, grad w) + <S_h (u|Gamma + phi), w|Gamma + psi>,
 and B = B_Omega + omega B_s. S_h comes from ``bem_cpp`` (P0 flux, as the reference
-measurements of METHOD.md section 6); the square has width 0.5 and one Signorini arc
+measurements of docs/method.md section 6); the square has width 0.5 and one Signorini arc
 along its bottom side, as in that reference.
 """
 from __future__ import annotations
@@ -107,7 +107,7 @@ def test_kappa_grows_at_most_like_log_squared_at_fixed_d():
 
 @needs_bem
 def test_signorini_weight_quarter_reduces_kappa():
-    """omega = 1/4 on B_s roughly halves kappa (METHOD.md section 6)."""
+    """omega = 1/4 on B_s roughly halves kappa (docs/method.md section 6)."""
     lo1, hi1 = extreme_eigenvalues(32, 4)
     lo4, hi4 = extreme_eigenvalues(32, 4, signorini_weight=0.25)
     assert 0.4 < (hi4 / lo4) / (hi1 / lo1) < 0.6

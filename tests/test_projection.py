@@ -1,4 +1,4 @@
-"""P_s: the M_s-orthogonal projection onto {phi >= 0} (METHOD.md (3.19), (3.20), (3.6))."""
+"""P_s: the M_s-orthogonal projection onto {phi >= 0} (docs/method.md (3.19), (3.20), (3.6))."""
 import numpy as np
 import pytest
 import scipy.optimize

@@ -1,6 +1,6 @@
 """Quantities derived from a solution: the flux sigma_h = rho du_h/dn on Gamma (the
 contact pressure on Gamma_s), the complementarity of (1.5) and b of (1.3), against the
-manufactured solutions (METHOD.md section 8) whose flux and b are known exactly.
+manufactured solutions (docs/method.md section 8) whose flux and b are known exactly.
 
 Tolerances: sigma_h is the lumped discrete Neumann trace; away from the corners of
 Gamma (where the normal jumps and no point value exists) its nodal error was measured

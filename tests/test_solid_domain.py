@@ -1,4 +1,4 @@
-"""The 3D geometry of a run (METHOD.md section 11): GeometrySpec's box, ball and
+"""The 3D geometry of a run (docs/method.md section 11): GeometrySpec's box, ball and
 tetrahedral files, their dimension, build_domain's SolidDomain with the Signorini tags,
 the closed-form sizes of the box, and the planar keys refused in one line."""
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Data in x, y, z and nx, ny, nz on a body in R^3 (METHOD.md section 11): the interior
+"""Data in x, y, z and nx, ny, nz on a body in R^3 (docs/method.md section 11): the interior
 and boundary loads against integrals known in closed form, the boundary values at the
 nodes, the configuration's check of the expressions, and ``fembem check-jacobian`` on
 the box (Taylor slope 2)."""

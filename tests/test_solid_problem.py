@@ -1,4 +1,4 @@
-"""The coupled problem on a body in R^3 (METHOD.md section 11), linear case: the
+"""The coupled problem on a body in R^3 (docs/method.md section 11), linear case: the
 manufactured solution u = 0.2 + x - 2y + z + x^2 + y z in the box [-1/4, 1/4]^3 (linear
 material, f = -div grad u = -2) coupled to the decaying harmonic
 

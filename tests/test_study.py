@@ -4,7 +4,7 @@ The quick study runs once for the module (about a minute on 2 cores). The checks
 on the figures' meaning, not on fixed numbers: iteration counts positive and below
 their cap, bounded at fixed d/h, growing without a preconditioner; eigenvalues
 positive and finite; orders of convergence between 0.5 and 3; the reference kappa of
-METHOD.md section 6 recomputed; the two Jacobians giving the same iterates.
+docs/method.md section 6 recomputed; the two Jacobians giving the same iterates.
 """
 from __future__ import annotations
 
@@ -90,7 +90,7 @@ def test_spectra_are_positive_and_match_the_reference(out):
         if r["dense_check"] is not None:  # Lanczos against a dense eigensolver
             assert r["dense_check"] < 1e-6, r
     for r in table(out, "reference"):
-        # METHOD.md quotes kappa to 3 significant digits
+        # docs/method.md quotes kappa to 3 significant digits
         assert abs(r["rel_difference"]) < 2e-3, r
     cond = [r for r in table(out, "cond_ms") if r["series"].startswith("d/h")]
     assert all(a["cond"] < b["cond"] for a, b in zip(cond, cond[1:]))  # grows as h -> 0

@@ -1,4 +1,4 @@
-"""The 3D boundary map fem_py.boundary.surface.SurfaceMap (METHOD.md sections 4, 11):
+"""The 3D boundary map fem_py.boundary.surface.SurfaceMap (docs/method.md sections 4, 11):
 the surface of the box and of the ball, oriented out of Omega, checked against exact
 areas, volumes and normals; the Signorini nodes; T, E, gather and scatter_add; the
 refusal of surfaces that are not one closed oriented surface; and the same arrays on 1,

@@ -113,7 +113,7 @@ TEST(SegmentMoments, AgainstGradedQuadrature) {
 }
 
 TEST(PairBlocks, CoincidentClosedForm) {
-  // int int log|s - t| over [0, h]^2 = h^2 (log h - 3/2) (METHOD.md section 9 without
+  // int int log|s - t| over [0, h]^2 = h^2 (log h - 3/2) (docs/method.md section 9 without
   // the factor -1/(2 pi)); the P1 moments add up to it.
   for (double h : {1.0, 0.01, 0.37}) {
     PairBlocks B;

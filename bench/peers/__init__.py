@@ -37,6 +37,7 @@ Run times and the measurements behind the tolerances: docs/design/baselines.md.
 The modules: :mod:`~bench.peers.cli` (the command line), :mod:`~bench.peers.runner`
 (one worker process per size), :mod:`~bench.peers.worker` (the solves of one size),
 :mod:`~bench.peers.solvers` (the solver table, sizes and tolerances),
-:mod:`~bench.peers.targets` and :mod:`~bench.peers.report` (the verdicts and the
-report), :mod:`~bench.peers.baselines` (the PETSc peers themselves).
+:mod:`~bench.peers.targets` (the verdicts), :mod:`~bench.peers.tables` (the table of
+runs and the figure), :mod:`~bench.peers.report` (``results.md``),
+:mod:`~bench.peers.baselines` (the PETSc peers themselves).
 """

@@ -8,9 +8,10 @@ import time
 from pathlib import Path
 
 from bench import peers
-from bench.peers.report import plot, print_table, report
+from bench.peers.report import print_table, report
 from bench.peers.runner import BENCH, run
 from bench.peers.solvers import BY_NAME, FULL_SIZES, QUICK_SIZES
+from bench.peers.tables import plot
 from bench.peers.targets import targets
 from bench.peers.worker import worker
 

@@ -14,7 +14,7 @@ discrete contact pressure on Gamma_s,
                                      + |(phi_h, lambda_h)_E|                 contact
 
 R_h = (K - I)(v_h - a) - V psi_h is the residual of the first-kind (second) boundary
-integral equation of METHOD.md section 2, evaluated by Galerkin matrices of bem_cpp on
+integral equation of docs/method.md section 2, evaluated by Galerkin matrices of bem_cpp on
 the boundary with every panel bisected (on the coarse boundary it is zero by
 construction of psi_h) and L2-projected there. Per cell, per term:
 :class:`Estimate`. Interior terms by UFL with a DG0 test function (any material of

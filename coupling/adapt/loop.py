@@ -1,4 +1,4 @@
-"""The adaptive loop solve -> estimate -> mark -> refine (METHOD.md section 10).
+"""The adaptive loop solve -> estimate -> mark -> refine (docs/method.md section 10).
 
 Each level is a new :class:`coupling.problem.SignoriniProblem` on the refined
 :class:`fem_py.mesh.Domain` (built by the caller's ``problem_builder``), solved by

@@ -14,7 +14,7 @@ CONDITION_MAX = 1e3
 
 
 def material_warnings(material: Any) -> list[str]:
-    """A small alpha or a large beta/alpha (METHOD.md section 1): the constants of the
+    """A small alpha or a large beta/alpha (docs/method.md section 1): the constants of the
     structure condition alpha (t - s) <= t rho(t) - s rho(s) <= beta (t - s) bound the
     condition of the interior energy, so the iteration counts grow with beta/alpha."""
     alpha, beta = material.alpha, material.beta
@@ -38,7 +38,9 @@ def arc_warnings(
     arc_lengths: Sequence[float], closed: Sequence[bool], gamma_length: float
 ) -> list[str]:
     """An open Signorini arc longer than half of Gamma is often one given from the wrong
-    end (an arc runs counter-clockwise from its first point to its second)."""
+    end (an arc runs counter-clockwise from its first point to its second). ``closed``:
+    the arcs whose ends the user did not choose (the whole boundary, a side or a group
+    named), which get no warning."""
     out = []
     for i, (length, whole) in enumerate(zip(arc_lengths, closed)):
         if not whole and length > 0.5 * gamma_length:

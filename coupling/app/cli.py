@@ -1,16 +1,23 @@
 """Command line ``fembem``: ``solve``, ``evaluate``, ``exterior`` and ``check-jacobian``
 (README.md).
 
-Exit codes: 0 success, 1 a check failed (check-jacobian), 2 bad input (one line on
-stderr naming the configuration key or file and the fix; a traceback only with
---debug), 3 the solver did not converge (outputs are still written), 130 and 143
-interrupted by SIGINT (Ctrl-C) and SIGTERM (one line on stderr; the output folder is
-left as it was).
+Exit codes: 0 success, 1 a check failed (check-jacobian) or an internal error (a bug:
+one line, the traceback with --debug), 2 bad input (one line on stderr naming the
+configuration key or file and the fix; a traceback only with --debug), 3 the solver did
+not converge (outputs are still written), 130 and 143 interrupted by SIGINT (Ctrl-C) and
+SIGTERM (one line on stderr; the output folder is left as it was); under mpirun an
+interrupt ends with mpirun's own exit code, 1, and the line "interrupted".
 
 Under mpirun every rank runs the same command on MPI.COMM_WORLD. The inputs are
 validated identically on every rank before the first collective call, errors raised
 inside collective steps are broadcast by them (fem_py.parallel, coupling.io), and
 only rank 0 prints, so a bad input ends every rank with exit code 2 and one message.
+An exception raised on some ranks only (a bug, or a resource failing on one rank) would
+leave the others waiting in a collective call: a failing rank waits a moment for every
+rank to fail alike, and otherwise prints its one line (naming the rank) and leaves at
+once without MPI's finalisation, which makes mpirun end every other rank
+(:func:`coupling.app.ending.end_with_error`). An unexpected exception (not bad input) is
+one line and exit code 1, its traceback with --debug.
 """
 from __future__ import annotations
 
@@ -22,14 +29,20 @@ import os
 import signal
 import sys
 import time
+import traceback
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-EXIT_OK, EXIT_CHECK_FAILED, EXIT_BAD_INPUT, EXIT_NOT_CONVERGED = 0, 1, 2, 3
-#: 128 + the signal number, as a shell reports a process ended by that signal
-EXIT_INTERRUPTED = {signal.SIGINT: 130, signal.SIGTERM: 143}
+from coupling.app.ending import (
+    EXIT_CHECK_FAILED,
+    EXIT_INTERRUPTED,
+    EXIT_NOT_CONVERGED,
+    EXIT_OK,
+    end_with_error,
+    error_line,
+)
 
 
 class Interrupted(BaseException):
@@ -49,7 +62,18 @@ class InterruptHandler:
     before, rank 0 does."""
 
     def __init__(self) -> None:
-        self.staging: Path | None = None
+        self._staging: Path | None = None
+        self.watchdog: Any = None  # coupling.app.watchdog.SignalWatchdog, when running
+
+    @property
+    def staging(self) -> Path | None:
+        return self._staging
+
+    @staging.setter
+    def staging(self, path: Path) -> None:
+        self._staging = path
+        if self.watchdog is not None:
+            self.watchdog.staging(path)
 
     def __call__(self, signum: int, frame: object) -> None:
         for s in EXIT_INTERRUPTED:  # a second signal must not interrupt the clean-up
@@ -61,13 +85,25 @@ class InterruptHandler:
         else:
             report = _rank() == 0
         if report:
-            name = signal.Signals(signum).name
-            print(
-                f"fembem: interrupted by {name}; no output of this run was kept",
-                file=sys.stderr,
-                flush=True,
-            )
+            print(f"fembem: {interrupt_line(signum)}", file=sys.stderr, flush=True)
+        if self.watchdog is not None:
+            self.watchdog.reported()  # also when another rank reports: once is enough
         raise Interrupted(signum)
+
+
+def _world_size() -> int:
+    """The number of MPI ranks, without starting MPI if it is not started yet."""
+    if "mpi4py.MPI" in sys.modules:
+        return sys.modules["mpi4py.MPI"].COMM_WORLD.size
+    return int(os.environ.get("OMPI_COMM_WORLD_SIZE", os.environ.get("PMI_SIZE", "1")))
+
+
+def interrupt_line(signum: int) -> str:
+    """The line that reports an interrupt: the signal by name in a serial run; under
+    mpirun only "interrupted", since mpirun turns the user's Ctrl-C into a SIGTERM to
+    every rank (and itself exits with code 1)."""
+    how = "interrupted" if _world_size() > 1 else f"interrupted by {signal.Signals(signum).name}"
+    return f"{how}; no output of this run was kept"
 
 
 def _rank() -> int:
@@ -152,7 +188,9 @@ def build_parser() -> argparse.ArgumentParser:
         "Evaluate the solution at the points of a CSV file (two columns x, y; an optional "
         "header line) from the fields.npz of RESULT_DIR: each row x,y,where,u,ue with "
         "where = inside (u = u_h), boundary (u_h and the trace u_e) or outside (u_e by the "
-        "representation formula); a value that does not apply is empty.",
+        "representation formula); a value that does not apply is empty. A point closer to "
+        "Gamma than 1e-11 times the diameter of its bounding box is on Gamma (boundary); "
+        "x,y are echoed as given.",
         "write the table here",
     )
 
@@ -233,13 +271,16 @@ def _solve_config(
     """``fembem solve`` of the validated ``config`` (the figure process ``worker`` started)."""
     plots, kind = config.output.plots, config.solver.boundary_operator
     from coupling.app.advice import arc_warnings, material_warnings
-    from coupling.app.from_config import domain_from_config, planned_size, problem_on_domain
+    from coupling.app.from_config import (
+        domain_from_config,
+        estimated_size,
+        planned_size,
+        problem_on_domain,
+    )
     from coupling.app.progress import ProgressMonitor
     from coupling.app.run import run_solver
     from coupling.app.sizing import check_memory, size_of_domain
-    from coupling.preconditioners import problem_arcs
     from fem_py.mesh import mesh_facts
-    from fem_py.polyline import arc_length
     from coupling.io.atomic import staged_output_dir
     from coupling.io.outputs import RunOutputs
     from coupling.timing import process_seconds
@@ -249,8 +290,10 @@ def _solve_config(
     monitor = None if args.quiet else ProgressMonitor(comm)
     size = _with_geometry_key(planned_size, config)
     _refuse_solid(comm, config)
-    if size is not None:  # closed form: refuse before anything is built
-        check_memory(size, comm.size, plots=plots, boundary_operator=kind)
+    # refuse before anything is built: closed form, else estimated from the area and h
+    rough = size if size is not None else _with_geometry_key(estimated_size, config)
+    if rough is not None:
+        check_memory(rough, comm.size, plots=plots, boundary_operator=kind)
     with staged_output_dir(comm, out, force=args.force) as staging, RunOutputs(
         comm, staging, config.output, tol=config.solver.tol, worker=worker
     ) as outputs:
@@ -265,14 +308,17 @@ def _solve_config(
             check_memory(size_of_domain(domain), comm.size, plots=plots, boundary_operator=kind)
         problem, options, timings = problem_on_domain(domain, config)
         timings = {"mesh": mesh_time, **timings}
-        arcs = problem_arcs(problem)
-        arc_lengths = [float(arc_length(arc.coords)[-1]) for arc in arcs]
+        facts = mesh_facts(domain)  # collective
+        # the length of each entry of geometry.signorini, a closed "all" whole (as in
+        # summary.json); only an arc given by two points has ends the user may have swapped
+        arc_lengths = facts["signorini_lengths"]
+        entries = config.geometry.signorini
+        chosen_ends = [] if entries == "all" else [not isinstance(e, str) for e in entries]
         gamma = float(problem.boundary.panel_lengths.sum())
         for line in material_warnings(problem.material) + arc_warnings(
-            arc_lengths, [arc.closed for arc in arcs], gamma
+            arc_lengths, [not ends for ends in chosen_ends], gamma
         ):
             _say(f"warning: {line}")
-        facts = mesh_facts(domain)  # collective
         if monitor is not None:
             monitor.problem(problem, options, arc_lengths, facts)
         run = run_solver(comm, config, domain, problem, timings, monitor, after_solve=outputs.start)
@@ -303,7 +349,7 @@ def _solve_config(
 def _info(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
     from mpi4py import MPI
 
-    from coupling.app.from_config import domain_from_config, planned_size
+    from coupling.app.from_config import domain_from_config, estimated_size, planned_size
     from coupling.app.sizing import memory_available, memory_estimate, size_of_domain
 
     comm = MPI.COMM_WORLD
@@ -311,8 +357,20 @@ def _info(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
     size = _with_geometry_key(planned_size, config)
     how = "closed form"
     if size is None:
-        size = size_of_domain(_with_geometry_key(domain_from_config, comm, config))
-        how = "from the mesh"
+        size = _with_geometry_key(estimated_size, config)
+        how = "estimated from the area and h: the mesh would not fit in memory"
+        if (
+            size is None
+            or memory_estimate(
+                size,
+                comm.size,
+                plots=config.output.plots,
+                boundary_operator=config.solver.boundary_operator,
+            )
+            <= memory_available()
+        ):  # a mesh that cannot fit is not built to be counted
+            size = size_of_domain(_with_geometry_key(domain_from_config, comm, config))
+            how = "from the mesh"
     report = {
         **dataclasses.asdict(size),
         "memory_estimate_bytes": memory_estimate(
@@ -334,8 +392,9 @@ def _info(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
     return EXIT_OK
 
 
-def _read_points(path: Path) -> np.ndarray:
-    """The (m, 2) points of a CSV file of x,y rows (an optional header line)."""
+def _read_points(path: Path) -> tuple[np.ndarray, list[str]]:
+    """The (m, 2) points of a CSV file of x,y rows (an optional header line), and each
+    row's "x,y" as written there (echoed in the output as given)."""
     if not path.is_file():
         raise FileNotFoundError(
             f"--points: file {str(path)!r} not found; give a CSV file of " "x,y rows"
@@ -349,7 +408,7 @@ def _read_points(path: Path) -> np.ndarray:
         raise ValueError(f"--points {path}: every row must be two numbers x,y") from None
     if points.ndim != 2 or points.shape[1] != 2 or not np.isfinite(points).all():
         raise ValueError(f"--points {path}: every row must be two finite numbers x,y")
-    return points
+    return points, [",".join(v.strip() for v in ln.split(",")) for ln in lines]
 
 
 def _exterior(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
@@ -357,12 +416,12 @@ def _exterior(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
     from coupling.io.outputs import load_fields
 
     fields = load_fields(Path(args.result_dir))
-    points = _read_points(Path(args.points))
+    points, given = _read_points(Path(args.points))
     try:
         ue = exterior_from_fields(fields, points)
     except ValueError as err:  # a point inside Omega or on Gamma
         raise ValueError(f"--points {args.points}: {err}") from None
-    table = "x,y,ue\n" + "".join(f"{x:.17g},{y:.17g},{v:.17g}\n" for (x, y), v in zip(points, ue))
+    table = "x,y,ue\n" + "".join(f"{xy},{v:.17g}\n" for xy, v in zip(given, ue))
     _write_table(table, args.out)
     return EXIT_OK
 
@@ -383,15 +442,15 @@ def _evaluate(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
     from coupling.io.outputs import load_fields
 
     fields = load_fields(Path(args.result_dir))
-    points = _read_points(Path(args.points))
+    points, given = _read_points(Path(args.points))
     values = evaluate(fields, points)
 
     def number(v: float) -> str:
         return "" if np.isnan(v) else f"{v:.17g}"
 
-    rows = zip(points, values["where"], values["u"], values["ue"])
+    rows = zip(given, values["where"], values["u"], values["ue"])
     table = "x,y,where,u,ue\n" + "".join(
-        f"{x:.17g},{y:.17g},{w},{number(u)},{number(ue)}\n" for (x, y), w, u, ue in rows
+        f"{xy},{w},{number(u)},{number(ue)}\n" for xy, w, u, ue in rows
     )
     _write_table(table, args.out)
     return EXIT_OK
@@ -419,6 +478,8 @@ def _check_jacobian(args: argparse.Namespace, interrupts: InterruptHandler) -> i
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the exit code. SIGINT and SIGTERM end it with one
     line and exit code 130 or 143 wherever they arrive."""
+    from coupling.app.watchdog import SignalWatchdog
+
     interrupts = InterruptHandler()
     previous = {s: signal.signal(s, interrupts) for s in EXIT_INTERRUPTED}
     import petsc4py
@@ -426,10 +487,14 @@ def main(argv: list[str] | None = None) -> int:
     # signals stay Python's (PETSc's handlers would print a crash report instead)
     petsc4py.init([sys.argv[0], "-no_signal_handler"])
     try:
-        return _main(sys.argv[1:] if argv is None else list(argv), interrupts)
+        # a helper process ends the run if a signal finds it stuck in native code
+        with SignalWatchdog({s: interrupt_line(s) for s in EXIT_INTERRUPTED}, _rank()) as dog:
+            interrupts.watchdog = dog
+            return _main(sys.argv[1:] if argv is None else list(argv), interrupts)
     except Interrupted as err:  # reported by the handler
         return EXIT_INTERRUPTED[err.signum]
     finally:
+        interrupts.watchdog = None
         for s, handler in previous.items():
             signal.signal(s, handler)
 
@@ -452,24 +517,18 @@ def _main(argv: list[str], interrupts: InterruptHandler) -> int:
 
     from fem_py.parallel import threads_per_rank
 
+    comm = MPI.COMM_WORLD
+    errors = comm.Dup() if comm.size > 1 else None  # only failing ranks meet on it
     try:
-        with threadpool_limits(threads_per_rank(MPI.COMM_WORLD)):  # no oversubscription
+        with threadpool_limits(threads_per_rank(comm)):  # no oversubscription
             return handler(args, interrupts)
-    except (ValueError, OSError) as err:  # bad input: configuration, files, folders
+    except Exception as err:  # noqa: BLE001 - every exception ends every rank, one line
+        code, message = error_line(err)
         if args.debug:
-            raise
-        message = str(err).splitlines()[0] if str(err) else type(err).__name__
-        _say(f"error: {message}")
-        return EXIT_BAD_INPUT
-    except MemoryError as err:
-        if args.debug:
-            raise
-        detail = f" ({str(err).splitlines()[0]})" if str(err) else ""
-        _say(
-            f"error: out of memory{detail}; use a coarser mesh (geometry.h, "
-            "geometry.subdomain_size) or a machine with more memory"
-        )
-        return EXIT_BAD_INPUT
+            if errors is None:
+                raise
+            traceback.print_exc()
+        return end_with_error(errors, code, message)
 
 
 if __name__ == "__main__":

@@ -155,7 +155,9 @@ def _semi_axes(name: str, value: list) -> list[float]:
 
 
 def _check_signorini(value: Any) -> str | list:
-    """``"all"``, or a list whose items are side names or arcs [[x0, y0], [x1, y1]]."""
+    """``"all"``, or a list whose items are side names or arcs [[x0, y0], [x1, y1]]; an
+    integer names a physical group of a mesh file without a name by its number (gmsh's
+    ``Physical Curve(5)``) and is taken as the text "5"."""
     name = "geometry.signorini"
     if value == "all":
         return value
@@ -168,13 +170,16 @@ def _check_signorini(value: Any) -> str | list:
     for i, arc in enumerate(value):
         if isinstance(arc, str):
             arcs.append(arc)
+        elif isinstance(arc, int) and not isinstance(arc, bool):
+            arcs.append(str(arc))
         elif isinstance(arc, list) and len(arc) == 2:
             arcs.append(
                 (tuple(_point(f"{name}[{i}][0]", arc[0])), tuple(_point(f"{name}[{i}][1]", arc[1])))
             )
         else:
             raise ConfigError(
-                f"{name}[{i}] must be a side name or an arc " f"[[x0, y0], [x1, y1]], got {arc!r}"
+                f"{name}[{i}] must be a side name, a physical group number or an arc "
+                f"[[x0, y0], [x1, y1]], got {arc!r}"
             )
     return arcs
 
@@ -374,7 +379,7 @@ def check_data_and_material(config: RunConfig) -> None:
 
     Cheap (no mesh, no MPI; a mesh file is opened for its dimension): run it before the
     mesh is built so that a misspelt function or a material violating the structure
-    condition of METHOD.md section 1 fails at once. The expressions are evaluated
+    condition of docs/method.md section 1 fails at once. The expressions are evaluated
     symbolically with UFL on an abstract triangle (tetrahedron in 3D) domain, the code
     path of ``fem_py.forms``, so constant sub-expressions that cannot be evaluated
     (``1/0``, ``log(-1)``) are caught too.
@@ -432,4 +437,6 @@ def geometry_error(err: ValueError) -> ValueError:
     key = "allow_large" if word == "diam(Omega)" else word
     if key not in DEFAULTS["geometry"]:
         return err
+    if message.startswith(f"{key}: "):  # "mesh: ..." names its key once, not twice
+        message = message[len(key) + 2 :]
     return ConfigError(f"geometry.{key}: {message}")

@@ -16,6 +16,7 @@ from coupling.problem import SignoriniProblem
 __all__ = [
     "domain_from_config",
     "planned_size",
+    "estimated_size",
     "coarser_configs",
     "material_from_config",
     "problem_on_domain",
@@ -42,6 +43,17 @@ def planned_size(config: RunConfig) -> Any:
             "file (relative to the configuration file's folder)"
         )
     return domain_size(config.geometry)
+
+
+def estimated_size(config: RunConfig) -> Any:
+    """The ``fem_py.mesh.DomainSize`` of a generated gmsh mesh estimated before meshing
+    (``fem_py.mesh.size_estimate.mesh_size_estimate``: from the area and h), or None for a
+    mesh file (it is the size it is) and for a body in 3D (not estimated yet)."""
+    from fem_py.mesh.size_estimate import mesh_size_estimate
+
+    if config.geometry.mesh or config.geometry.dim == 3:
+        return None
+    return mesh_size_estimate(config.geometry)
 
 
 def coarser_configs(

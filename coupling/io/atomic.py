@@ -4,11 +4,17 @@ files renamed into place once complete.
 A run writes into a hidden sibling of its output folder (:func:`staged_output_dir`)
 and swaps it into place when every file is written, so the folder holds either a
 complete run or what it held before; an interrupted or failed run leaves nothing.
+A run that is killed (SIGKILL, the kernel's out-of-memory killer, a power cut) cannot
+clean up: its staging folder holds a lock file that the run keeps locked (``flock``)
+while it lives, the kernel drops the lock when the process dies, and the next run into
+the same place removes every staging folder whose lock it can take
+(:func:`remove_stale_staging`).
 """
 from __future__ import annotations
 
 import contextlib
 import ctypes
+import fcntl
 import os
 import shutil
 import tempfile
@@ -19,7 +25,16 @@ from mpi4py import MPI
 
 from fem_py.parallel import broadcast_from_root, run_on_root
 
-__all__ = ["atomic_write", "prepare_output_dir", "staged_output_dir", "claim"]
+__all__ = [
+    "atomic_write",
+    "prepare_output_dir",
+    "staged_output_dir",
+    "claim",
+    "remove_stale_staging",
+]
+
+#: the lock file of a live run inside its staging folder
+_LOCK = ".lock"
 
 
 def _check_output_dir(out: Path, force: bool) -> None:
@@ -97,6 +112,40 @@ def claim(staging: Path) -> bool:
         return False
 
 
+def _staging_glob(out: Path) -> str:
+    return f".{out.name}.partial-*"
+
+
+def remove_stale_staging(out: Path) -> list[Path]:
+    """Remove the staging folders of ``out`` left by dead runs: those whose lock file is
+    not locked by a live process (a folder without one, being created or being moved
+    into place, is kept). Returns the folders removed."""
+    removed = []
+    for folder in sorted(Path(out).parent.glob(_staging_glob(Path(out)))):
+        try:
+            fd = os.open(folder / _LOCK, os.O_RDWR)
+        except OSError:
+            continue
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:  # a live run holds it
+            continue
+        finally:
+            os.close(fd)  # releases the lock if we took it
+        shutil.rmtree(folder, ignore_errors=True)
+        removed.append(folder)
+    return removed
+
+
+def _locked_staging(out: Path) -> tuple[str, int]:
+    """A new staging folder of ``out`` and the descriptor of its lock file, locked for
+    as long as this process lives or until it is closed."""
+    path = tempfile.mkdtemp(dir=out.parent, prefix=f".{out.name}.partial-")
+    fd = os.open(Path(path) / _LOCK, os.O_CREAT | os.O_RDWR, 0o600)
+    fcntl.flock(fd, fcntl.LOCK_EX)
+    return path, fd
+
+
 @contextlib.contextmanager
 def staged_output_dir(comm: MPI.Comm, out: Path, *, force: bool) -> Iterator[Path]:
     """A hidden sibling folder of ``out`` to write a run into (collective).
@@ -107,30 +156,46 @@ def staged_output_dir(comm: MPI.Comm, out: Path, *, force: bool) -> Iterator[Pat
     which needs no collective call. Yields the staging folder on every rank.
     """
     out = Path(out)
+    lock: list[int] = []  # rank 0: the descriptor of the staging folder's lock file
 
     def create() -> str:
         _check_output_dir(out, force)
         _mkdir(out.parent, out)
-        path = tempfile.mkdtemp(dir=out.parent, prefix=f".{out.name}.partial-")
+        remove_stale_staging(out)
+        path, fd = _locked_staging(out)
+        lock.append(fd)
         umask = os.umask(0)
         os.umask(umask)
         os.chmod(path, 0o777 & ~umask)  # mkdtemp makes it private; a folder of results is not
         return path
 
     staging = Path(broadcast_from_root(comm, create))
+
+    def unlock() -> None:
+        for fd in lock:
+            os.close(fd)
+
     try:
         yield staging
     except BaseException:
         # every rank removes it: after an interrupt a rank may be stuck in a collective
         # call with a peer that has gone, and mpirun then kills it
         shutil.rmtree(staging, ignore_errors=True)
+        unlock()
         raise
+
+    def move() -> None:
+        (staging / _LOCK).unlink()  # not part of the run's files; the lock stays held
+        _move_into_place(staging, out)
+
     try:
-        run_on_root(comm, lambda: _move_into_place(staging, out))
+        run_on_root(comm, move)
     except BaseException:
         if comm.rank == 0:
             shutil.rmtree(staging, ignore_errors=True)
         raise
+    finally:
+        unlock()
 
 
 def atomic_write(path: Path, write: Callable[[Path], object]) -> None:

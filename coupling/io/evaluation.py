@@ -3,10 +3,11 @@
 Each point is located against the mesh of fields.npz (P1 triangles,
 :func:`fem_py.mesh.location.locate`) and against Gamma:
 
-- ``inside`` Omega: u = u_h (linear interpolation in its triangle); u_e does not apply;
-- on Gamma (closer than 1e-11 times the diameter of Gamma's bounding box): u = u_h and
-  u_e = the trace u + phi - u0, both linear along the panel;
-- ``outside``: u_e by the representation formula (METHOD.md section 2); u does not
+- on Gamma (closer than ``ON_GAMMA`` = 1e-11 times the diameter of Gamma's bounding
+  box): u = u_h and u_e = the trace u + phi - u0, both linear along the panel;
+- ``inside`` Omega (inside the polygon of Gamma's nodes, which bounds the mesh, and not
+  on Gamma): u = u_h (linear interpolation in its triangle); u_e does not apply;
+- ``outside``: u_e by the representation formula (docs/method.md section 2); u does not
   apply.
 
 Values that do not apply are NaN (empty in the CSV).
@@ -18,7 +19,7 @@ import numpy as np
 import bem_cpp
 from coupling.options import HMATRIX_TOL
 from fem_py.mesh import interpolate_p1
-from fem_py.polyline import closest_on_polygon
+from fem_py.polyline import closest_on_polygon, inside_polygon
 
 __all__ = ["evaluate", "exterior_from_fields", "ON_GAMMA"]
 
@@ -28,7 +29,7 @@ ON_GAMMA = 1e-11
 
 
 def exterior_from_fields(fields: dict, points: np.ndarray) -> np.ndarray:
-    """u_e at exterior ``points`` (m, 2) by the representation formula (METHOD.md section
+    """u_e at exterior ``points`` (m, 2) by the representation formula (docs/method.md section
     2) from the boundary arrays of a run's fields (``boundary_x``, ``ue``, ``dn_ue``,
     ``a``, ``flux_space``), compressed above bem_cpp's measured crossover (tol
     :data:`coupling.options.HMATRIX_TOL`); bem_cpp's ValueError for a point inside Omega
@@ -55,11 +56,13 @@ def evaluate(fields: dict, points: np.ndarray) -> dict[str, np.ndarray]:
     diameter = float(np.linalg.norm(nodes.max(axis=0) - nodes.min(axis=0)))
     dist, seg, t = closest_on_polygon(points, nodes)
     on = dist <= ON_GAMMA * diameter
-    u_h = interpolate_p1(fields["x"], fields["triangles"], fields["u"], points)
-    inside = ~np.isnan(u_h) & ~on
+    # inside by Gamma itself: the mesh's point location snaps points to nodes within
+    # 2^-30 of its extent, which would take a point just outside for one inside
+    inside = inside_polygon(points, nodes) & ~on
     outside = ~inside & ~on
+    u_h = interpolate_p1(fields["x"], fields["triangles"], fields["u"], points[inside])
     u, ue = np.full(len(points), np.nan), np.full(len(points), np.nan)
-    u[inside] = u_h[inside]
+    u[inside] = u_h
     nxt = (seg[on] + 1) % len(nodes)
     for out, key in ((u, "boundary_u"), (ue, "ue")):
         out[on] = (1.0 - t[on]) * fields[key][seg[on]] + t[on] * fields[key][nxt]

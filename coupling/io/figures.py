@@ -1,12 +1,13 @@
 """The PNG figures of a solved problem, drawn with matplotlib (Agg) from plain arrays.
 
-- ``u.png``: u_h over Omega; Gamma_s drawn thick, red where in contact, blue where open.
+- ``u.png``: u_h over Omega; Gamma_s drawn thick, red where in contact, white (black
+  edged) where open.
 - ``boundary.png``: the gap phi_h, the flux rho du_h/dn (the contact pressure on
   Gamma_s), the exterior flux du_e/dn and the contact set
   against the arc length s along Gamma (counter-clockwise from ``boundary_x[0]``),
   with Gamma_s shaded and the corners of Omega marked.
 - ``whole_plane.png``: u_h in Omega and u_e outside (representation formula,
-  METHOD.md section 2) in one colour scale; they differ across Gamma by u0 - phi.
+  docs/method.md section 2) in one colour scale; they differ across Gamma by u0 - phi.
 - ``history.png``: the relative B-norm step and the relative energy excess of each
   iteration against the tolerance, and the size of the contact set.
 
@@ -26,9 +27,11 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib import patheffects  # noqa: E402
 from matplotlib.collections import LineCollection  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.path import Path as PolygonPath  # noqa: E402
-from matplotlib.transforms import Bbox  # noqa: E402
+from matplotlib.transforms import Bbox, ScaledTranslation  # noqa: E402
 from matplotlib.tri import Triangulation  # noqa: E402
 
 from coupling.io.figure_data import (  # noqa: E402
@@ -39,7 +42,7 @@ from coupling.io.figure_data import (  # noqa: E402
     plane_square,
     rasterise,
 )
-from fem_py.polyline import arc_length, polygon_corners  # noqa: E402
+from fem_py.polyline import CORNER_ANGLE, arc_length, polygon_corners  # noqa: E402
 
 __all__ = ["render", "true_runs", "warm_up"]
 
@@ -57,6 +60,16 @@ _PNG = {"compress_level": 1}
 
 _CONTACT = dict(ls="none", marker="o", ms=3.5, color="tab:red")
 _OPEN = dict(ls="none", marker="o", ms=3.5, mfc="white", mec="tab:blue", mew=1.0)
+#: the open part of Gamma_s over u_h: white on a black edge, seen on every colour of the
+#: colormap (blue would vanish in viridis' blues)
+_OPEN_LINE = "white"
+#: inches between the bottom of the axes and the legend under them (tick labels and the
+#: x label take about 0.4)
+_LEGEND_DROP = 0.5
+#: the share of |Gamma| on either side of a corner whose pressure is left out of the
+#: pressure axis' range: the flux is singular at corners, and its P1 spikes (a few
+#: nodes wide on a locally refined mesh) would flatten the rest
+_CORNER_SHARE = 0.03
 
 
 def _closed(a: np.ndarray) -> np.ndarray:
@@ -89,8 +102,8 @@ def true_runs(mask: np.ndarray) -> list[tuple[int, int]]:
 
 def _draw_boundary(ax, fields: dict) -> None:
     """Gamma (thin black) and Gamma_s (thick): red where in contact (phi_h = 0 at both
-    ends of a panel), blue where the gap is open; the Signorini nodes as dots when
-    there are few enough to tell apart."""
+    ends of a panel), white on a black edge where the gap is open; the Signorini nodes
+    as dots when there are few enough to tell apart."""
     nodes = fields["boundary_x"]
     closed = _closed(nodes)
     ax.plot(closed[:, 0], closed[:, 1], "k-", lw=0.8, zorder=4)
@@ -100,20 +113,59 @@ def _draw_boundary(ax, fields: dict) -> None:
     shut = fields["phi"] == 0.0
     contact = panels & shut & np.roll(shut, -1)
     segments = np.stack([nodes, np.roll(nodes, -1, axis=0)], axis=1)
+    edged = [patheffects.Stroke(linewidth=4.6, foreground="k"), patheffects.Normal()]
+    handles = []
     for mask, color, label in (
         (contact, "tab:red", r"$\Gamma_s$ in contact ($\phi_h = 0$)"),
-        (panels & ~contact, "tab:blue", r"$\Gamma_s$ open ($\phi_h > 0$)"),
+        (panels & ~contact, _OPEN_LINE, r"$\Gamma_s$ open ($\phi_h > 0$)"),
     ):
+        effects = edged if color == _OPEN_LINE else None
         ax.add_collection(
             LineCollection(
-                segments[mask], colors=color, linewidths=3.0, capstyle="butt", label=label, zorder=5
+                segments[mask],
+                colors=color,
+                linewidths=3.0,
+                capstyle="butt",
+                label=label,
+                zorder=5,
+                path_effects=effects,
             )
         )
+        handles.append(Line2D([], [], color=color, lw=3.0, label=label, path_effects=effects))
     sig, active = fields["signorini"], fields["active"]
     if sig.sum() <= 64:
         ax.plot(*nodes[sig & active].T, zorder=6, **_CONTACT)
         ax.plot(*nodes[sig & ~active].T, zorder=6, **_OPEN)
-    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2, fontsize=8, frameon=False)
+    # below the tick labels and the x label, whatever the height of the axes (Omega's shape)
+    below = ax.transAxes + ScaledTranslation(0.0, -_LEGEND_DROP, ax.figure.dpi_scale_trans)
+    ax.legend(
+        handles=handles,
+        loc="upper center",
+        bbox_to_anchor=(0.5, 0.0),
+        bbox_transform=below,
+        ncol=2,
+        fontsize=8,
+        frameon=False,
+    )
+
+
+def _pressure_range(
+    pressure: np.ndarray, s: np.ndarray, corners: np.ndarray
+) -> tuple[float, float]:
+    """y-limits of the pressure axis: the range of the pressure at the nodes (arc length
+    ``s``, the closing node last) farther than ``_CORNER_SHARE`` |Gamma| from every
+    corner and not next to one, with 0 and a 5 % margin; the spikes at corners run off
+    the axis instead of flattening the rest."""
+    n, length = len(pressure), s[-1]
+    gap = np.abs(s[:n, None] - s[np.asarray(corners, dtype=np.int64)][None, :])
+    gap = np.minimum(gap, length - gap).min(axis=1, initial=np.inf)
+    near = gap <= _CORNER_SHARE * length
+    for k in (-1, 0, 1):
+        near[(np.asarray(corners, dtype=np.int64) + k) % n] = True
+    values = pressure[~near] if (~near).any() else pressure
+    lo, hi = min(float(values.min()), 0.0), max(float(values.max()), 0.0)
+    pad = 0.05 * (hi - lo) if hi > lo else 1.0
+    return lo - pad, hi + pad
 
 
 def _image(ax, image: np.ma.MaskedArray, grid: PixelGrid, **kwargs):
@@ -151,13 +203,14 @@ def _figure_boundary(fields: dict):
             ax.axvspan(
                 *span, color="tab:orange", alpha=0.15, lw=0, label=r"$\Gamma_s$" if k == 0 else None
             )
-        for c in polygon_corners(nodes):
+        for c in polygon_corners(nodes, CORNER_ANGLE):  # not every node of a curve
             ax.axvline(s[c], color="0.6", lw=0.6, ls=":")
         ax.grid(alpha=0.3, lw=0.5)
     axes[0].plot(s, _closed(fields["phi"]), ".-", ms=3, lw=1)
     axes[0].set_ylabel(r"gap $\phi_h$")
     axes[1].plot(s, _closed(fields["pressure"]), ".-", ms=3, lw=1, color="tab:purple")
     axes[1].axhline(0.0, color="0.3", lw=0.6)
+    axes[1].set_ylim(_pressure_range(fields["pressure"], s, polygon_corners(nodes, CORNER_ANGLE)))
     axes[1].set_ylabel(r"$\rho\, \partial u_h / \partial n$" "\n(pressure on $\\Gamma_s$)")
     flux = fields["dn_ue"]
     if str(fields["flux_space"]) == "p0":
@@ -260,6 +313,15 @@ def _figure_history(history: dict, tol: float):
         (energy[keep] - best) / max(abs(best), 1e-300),
         label=r"$(J_h(\xi_k) - J^*) \,/\, |J^*|$,  $J^*$: lowest $J_h$ reached",
     )
+    stop = history.get("stop", np.zeros(0))
+    if len(stop) and len(it):  # the stopping rule tested the PGPM step from the last iterate
+        ax.semilogy(
+            it[-1:],
+            stop,
+            "v",
+            color="k",
+            label=r"stopping test: $\Vert$PGPM step at $\xi_k\Vert_B \,/\, \Vert\xi_k\Vert_B$",
+        )
     ax.axhline(tol, color="0.4", ls="--", lw=0.8, label=f"tol = {tol:g}")
     ax.set_ylabel("relative size")
     ax.grid(alpha=0.3, lw=0.5, which="both")

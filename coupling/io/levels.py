@@ -21,7 +21,7 @@ from coupling.options import SLOPE_MIN_DOFS
 __all__ = ["LEVEL_FILES", "write_levels", "fitted_slope", "slope_levels"]
 
 #: The files this module writes (nested: levels.csv; adaptive: adapt.csv, adapt.png).
-LEVEL_FILES = ("levels.csv", "adapt.csv", "adapt.png")
+LEVEL_FILES = ("levels.csv", "adapt.csv", "adapt.png", "mesh.png")
 
 _COLUMNS = (
     "level",
@@ -80,7 +80,7 @@ def _plot(path: Path, levels: list[dict]) -> None:
         values = [level[key] for level in levels]
         ax.loglog(dofs, values, style, label=f"{label} (slope {fitted_slope(dofs, values):.2f})")
     ax.set_xlabel("dofs N")
-    ax.set_ylabel("estimator, error")
+    ax.set_ylabel(", ".join(key for key, _, _ in series))  # what is drawn
     ax.grid(alpha=0.3, which="both", lw=0.5)
     ax.legend(title=f"slopes fitted over {where}", fontsize=9, title_fontsize=8)
     ax.set_title(f"Adaptive refinement ({len(levels)} levels)")
@@ -89,10 +89,39 @@ def _plot(path: Path, levels: list[dict]) -> None:
     plt.close(fig)
 
 
-def write_levels(out: Path, levels: list[dict], *, adaptive: bool, plot: bool) -> list[str]:
+def _plot_mesh(path: Path, x: np.ndarray, triangles: np.ndarray) -> None:
+    """The final mesh of an adaptive run: every edge once, thin, rasterised."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import LineCollection
+
+    edges = np.sort(triangles[:, [[0, 1], [1, 2], [2, 0]]].reshape(-1, 2), axis=1)
+    edges = np.unique(edges, axis=0)
+    fig, ax = plt.subplots(figsize=(6, 6))
+    lw = float(np.clip(40.0 / np.sqrt(len(triangles)), 0.05, 0.8))
+    ax.add_collection(LineCollection(x[edges][:, :, :2], colors="k", linewidths=lw))
+    ax.autoscale()
+    ax.set(aspect="equal", xlabel="$x$", ylabel="$y$")
+    ax.set_title(f"Adapted mesh ({len(triangles)} cells, {len(x)} nodes)")
+    fig.tight_layout()
+    atomic_write(path, lambda p: fig.savefig(p, dpi=150, format="png"))
+    plt.close(fig)
+
+
+def write_levels(
+    out: Path,
+    levels: list[dict],
+    *,
+    adaptive: bool,
+    plot: bool,
+    mesh: tuple[np.ndarray, np.ndarray] | None = None,
+) -> list[str]:
     """Write the levels' table (one row per level; the columns every level has):
-    adapt.csv and, with ``plot``, adapt.png for an adaptive run, levels.csv for a nested
-    one. Returns the names written (rank 0 only)."""
+    adapt.csv and, with ``plot``, adapt.png and mesh.png (``mesh``: the final mesh's
+    node coordinates and triangles) for an adaptive run, levels.csv for a nested one.
+    Returns the names written (rank 0 only)."""
     columns = [c for c in _COLUMNS if all(c in level for level in levels)]
     table = io.StringIO()
     writer = csv.writer(table, lineterminator="\n")
@@ -104,4 +133,7 @@ def write_levels(out: Path, levels: list[dict], *, adaptive: bool, plot: bool) -
     if adaptive and plot:
         _plot(Path(out) / "adapt.png", levels)
         written.append("adapt.png")
+        if mesh is not None:
+            _plot_mesh(Path(out) / "mesh.png", *mesh)
+            written.append("mesh.png")
     return written

@@ -179,7 +179,9 @@ class RunOutputs:
                 self._jobs["data"] = self._pool.submit(_write_fields, self.out, self._fields)
             if self.plots:
                 samples = self._pool.submit(exterior_samples, on_gamma)
-                inputs = figure_inputs(self._fields, result.history, tol=self.tol)
+                inputs = figure_inputs(
+                    self._fields, result.history, tol=self.tol, stop_measure=result.stop_measure
+                )
                 self._jobs["inputs"] = self._pool.submit(_with_samples, inputs, samples)
                 if self.worker is not None:
                     self._jobs["pngs"] = self._pool.submit(
@@ -241,7 +243,13 @@ class RunOutputs:
             self._jobs["data"].result()  # its error, if any
             names.append("fields.npz")
             if levels:
-                names += write_levels(out, levels, adaptive=adaptive, plot=self.plots)
+                names += write_levels(
+                    out,
+                    levels,
+                    adaptive=adaptive,
+                    plot=self.plots,
+                    mesh=(self._fields["x"], self._fields["triangles"]),
+                )
             self.seconds += time.perf_counter() - tic
             stages = {**timings, "outputs": self.seconds}
             if total is not None:

@@ -52,7 +52,7 @@ class ExteriorSamples(NamedTuple):
 
 
 def exterior_samples(fields: dict, resolution: int = 121) -> ExteriorSamples:
-    """u_e (the representation formula, METHOD.md section 2) on the ``resolution`` x
+    """u_e (the representation formula, docs/method.md section 2) on the ``resolution`` x
     ``resolution`` grid of whole_plane.png, at its points outside Omega farther than
     h/20 from Gamma, from the boundary arrays of ``fields`` (``boundary_x``, ``ue``,
     ``dn_ue``, ``a``, ``flux_space``). bem_cpp releases the GIL while it evaluates, so
@@ -76,14 +76,21 @@ def exterior_samples(fields: dict, resolution: int = 121) -> ExteriorSamples:
 
 
 def figure_inputs(
-    fields: dict, history: Sequence, *, tol: float, exterior: ExteriorSamples | None = None
+    fields: dict,
+    history: Sequence,
+    *,
+    tol: float,
+    exterior: ExteriorSamples | None = None,
+    stop_measure: float | None = None,
 ) -> FigureInputs:
     """What the figures are drawn from: u_h of ``fields`` (``x``, ``triangles``, ``u``)
     rasterised on a grid of :data:`coupling.io.figure_data.RASTER_PIXELS` pixels along
     the longer side, the boundary arrays, the samples of u_e (``exterior``) and the
     iteration records of ``history`` (``iteration``, ``energy``, ``step_norm``,
-    ``contact``) as arrays. Without ``exterior`` there are no samples yet (to be set
-    with ``_replace``)."""
+    ``contact``) as arrays, with ``stop_measure`` (the quantity the stopping rule tested
+    last, when not the last ``step_norm``: ``coupling.solvers.records.RunResult``) as
+    ``stop``. Without ``exterior`` there are no samples yet (to be set with
+    ``_replace``)."""
     if exterior is None:
         exterior = ExteriorSamples(np.zeros((0, 2)), np.zeros(0))
     x, u = fields["x"], fields["u"]
@@ -98,7 +105,8 @@ def figure_inputs(
         history={
             key: np.array([getattr(r, key) for r in history], dtype=float)
             for key in ("iteration", "energy", "step_norm", "contact")
-        },
+        }
+        | {"stop": np.array([] if stop_measure is None else [stop_measure], dtype=float)},
         tol=float(tol),
     )
 

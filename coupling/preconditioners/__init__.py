@@ -1,4 +1,4 @@
-"""The block preconditioners B = B_Omega + B_s of the iterations (METHOD.md sections 5-6).
+"""The block preconditioners B = B_Omega + B_s of the iterations (docs/method.md sections 5-6).
 
 - :mod:`~coupling.preconditioners.base`: the interface, and B = identity;
 - :mod:`~coupling.preconditioners.edge_forms`: the discrete H^{1/2}_00 edge forms (5.1);
@@ -64,7 +64,7 @@ def coarse_space(domain: Any, choice: str) -> str:
 def build_preconditioner(
     problem: Any, options: SolverOptions, *, matrix: PETSc.Mat | None = None
 ) -> Preconditioner:
-    """B of ``options.preconditioner`` for ``problem`` (METHOD.md sections 5-6), factored
+    """B of ``options.preconditioner`` for ``problem`` (docs/method.md sections 5-6), factored
     once (collective). The caller owns it: call ``destroy()`` on every rank when done.
 
     Under MPI the substructuring preconditioner is distributed by subdomains
@@ -85,7 +85,7 @@ def build_preconditioner(
     domain = problem.domain
     if kind == "substructuring" and domain.dim == 3:
         raise ValueError(
-            "preconditioner: substructuring is the planar preconditioner (METHOD.md section "
+            "preconditioner: substructuring is the planar preconditioner (docs/method.md section "
             '6); for a 3D body set [solver] preconditioner = "exact" (small problems)'
         )
     substructuring = kind == "substructuring"

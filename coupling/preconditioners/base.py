@@ -1,5 +1,5 @@
 """The interface of the block preconditioner B = B_Omega + B_s of the iterations
-(METHOD.md (3.18)-(3.22)), and B = identity (Remark 2.1).
+(docs/method.md (3.18)-(3.22)), and B = identity (Remark 2.1).
 """
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The substructuring preconditioner of METHOD.md section 6, distributed by subdomains.
+"""The substructuring preconditioner of docs/method.md section 6, distributed by subdomains.
 
 With the mesh partitioned so that every subdomain lies whole on one rank
 (``fem_py.mesh.distribute.subdomain_owners``), B_Omega^{-1} g needs no gathering:
@@ -95,7 +95,7 @@ class _GhostExchange:
 
 
 class DistributedSubstructuringPreconditioner(SignoriniBlock):
-    """B = B_Omega + omega B_s of METHOD.md section 6 on a subdomain-aligned partition.
+    """B = B_Omega + omega B_s of docs/method.md section 6 on a subdomain-aligned partition.
 
     Parameters
     ----------
@@ -159,7 +159,7 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
         if np.any(cols < 0) or np.any(
             (sk_pos[np.maximum(cols, 0)] < 0) & (int_pos[np.maximum(cols, 0)] < 0)
         ):
-            raise ValueError(
+            raise RuntimeError(  # an invariant of the distributed mesh, not a user's input
                 "a subdomain interior dof couples to a dof owned by another rank: "
                 "the mesh is not partitioned by subdomains (use fem_py.mesh.build_domain)"
             )
@@ -200,7 +200,7 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
                 p_vals.append(weight[present])
             own = mine[group]
             if np.any(inner[own] < 0):
-                raise ValueError(
+                raise RuntimeError(
                     "a coarse edge is not local to the rank owning its subdomain; "
                     "the mesh is not partitioned by subdomains"
                 )
@@ -279,7 +279,7 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
         return u
 
     def matvec_omega(self, u: np.ndarray) -> np.ndarray:
-        """B_Omega u on the owned entries (METHOD.md section 6, B_Sk = Q^T A^0 Q + R^T C R)."""
+        """B_Omega u on the owned entries (docs/method.md section 6, B_Sk = Q^T A^0 Q + R^T C R)."""
         u = self._owned(u, "u")
         u_sk = self._exchange.forward(u)[self._sk]
         u_i = u[self._int]

@@ -1,4 +1,4 @@
-"""Discrete H^{1/2}_00 forms on the edges of the coarse partition (METHOD.md section 6).
+"""Discrete H^{1/2}_00 forms on the edges of the coarse partition (docs/method.md section 6).
 
 An edge gamma of the coarse partition carries the fine nodes x_0 = a, x_1, ..., x_n = b
 (both end points included, in order along the edge). A function phi in V_h(gamma)
@@ -6,7 +6,8 @@ that vanishes at a and b is given by its m = n - 1 interior values, and the edge
 A^0_gamma is an m x m symmetric positive definite matrix, spectrally equivalent to
 the H^{1/2}_00(gamma) norm uniformly in h:
 
-``"paper"`` (METHOD.md (5.1), the paper's formula)
+``"paper"`` (docs/method.md (5.1), the paper's formula)::
+
     |phi|^2 = sum_{i<j} h_i h_j (phi_i - phi_j)^2 / |x_i - x_j|^2
               + sum_i h_i phi_i^2 (1/|x_i - a| + 1/|x_i - b|),
     h_i = (|x_i - x_{i-1}| + |x_{i+1} - x_i|) / 2.
@@ -73,7 +74,7 @@ def _pairwise_form(weights: np.ndarray, diagonal: np.ndarray) -> np.ndarray:
 
 
 def paper_edge_form(points: np.ndarray) -> np.ndarray:
-    """A^0_gamma of METHOD.md (5.1) for one edge or a batch of edges.
+    """A^0_gamma of docs/method.md (5.1) for one edge or a batch of edges.
 
     Parameters
     ----------
@@ -103,7 +104,7 @@ def paper_edge_form(points: np.ndarray) -> np.ndarray:
 
 
 def closed_paper_form(s: np.ndarray, length: float, mass: float) -> np.ndarray:
-    """The paper's form on a closed curve (our extension, METHOD.md section 6).
+    """The paper's form on a closed curve (our extension, docs/method.md section 6).
 
     Parameters
     ----------
@@ -173,7 +174,7 @@ def edge_form(points: np.ndarray, kind: str = "paper") -> tuple[np.ndarray, np.n
     Parameters
     ----------
     points : (n+1, dim) or (batch, n+1, dim), edge nodes from a to b, ends included (n >= 2).
-    kind : "paper" (METHOD.md (5.1)) or "sqrt-laplacian" (our extension).
+    kind : "paper" (docs/method.md (5.1)) or "sqrt-laplacian" (our extension).
 
     Returns
     -------

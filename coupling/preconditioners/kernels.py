@@ -1,4 +1,4 @@
-"""Building blocks shared by the substructuring preconditioners (METHOD.md section 6):
+"""Building blocks shared by the substructuring preconditioners (docs/method.md section 6):
 factors computed once, the block-diagonal edge forms, the two-level form
 B = (I - P R)^T A0 (I - P R) + R^T C R, the coarse matrix C and the arc-length
 interpolation Pi along coarse edges.
@@ -184,7 +184,7 @@ class TwoLevelForm:
     B^{-1} = A0^{-1} + P C^{-1} P^T.
 
     This is the skeleton part B_Sk of B_Omega and the Signorini matrix M_s alike
-    (METHOD.md section 6): in the basis {edge-interior hats} U {P e_c} the form is
+    (docs/method.md section 6): in the basis {edge-interior hats} U {P e_c} the form is
     block diagonal, diag(A0, C), so B^{-1} needs only the edge inverses and C^{-1}.
 
     Parameters
@@ -245,7 +245,7 @@ class TwoLevelForm:
 
 
 def coarse_matrix(coarse: Any, subdomain_size: float) -> sp.csc_matrix:
-    """C of METHOD.md section 6: the coarse graph Laplacian + d * sum over the coarse
+    """C of docs/method.md section 6: the coarse graph Laplacian + d * sum over the coarse
     vertices on Gamma, sum_{(v_i, v_j)} (u_i - u_j)^2 + d sum_{v on Gamma} u(v)^2."""
     ends = np.asarray(coarse.edge_vertices, dtype=np.int64)
     on_boundary = np.asarray(coarse.vertex_on_boundary, dtype=float)
@@ -320,7 +320,7 @@ def probing_colours(pattern: sp.csr_matrix) -> np.ndarray:
 def galerkin_coarse_matrix(
     coarse: Any, subdomain_size: float, schur_of: Callable[[np.ndarray], np.ndarray]
 ) -> sp.csc_matrix:
-    """C = Pi^T S Pi + sum_{v on Gamma} d_v u(v)^2: the coarse term of METHOD.md section 6
+    """C = Pi^T S Pi + sum_{v on Gamma} d_v u(v)^2: the coarse term of docs/method.md section 6
     with the coarse graph Laplacian replaced by the exact energy of the coarse functions,
     and d_v = min(d, the length of Gamma the coarse hat of v covers)
     (:func:`hat_support_on_gamma`): d as in the paper wherever the coarse vertices on

@@ -1,4 +1,4 @@
-"""The Signorini block omega B_s of B (METHOD.md section 6, "Signorini block"): its arcs
+"""The Signorini block omega B_s of B (docs/method.md section 6, "Signorini block"): its arcs
 and its matrix M_s, with M_s^{-1} = (A^0_s)^{-1} + P_s C_s^{-1} P_s^T.
 
 On each Signorini arc the same two-level structure as on the skeleton, one level up:
@@ -37,7 +37,7 @@ class SignoriniArc:
         included. For a closed arc (the whole boundary): the m nodes once, not repeated.
     coarse_vertex_mask : (m+1,) bool array
         Which of those nodes are coarse vertices; the two end points of an open arc
-        always are (METHOD.md section 6 requires the arc ends to be coarse vertices).
+        always are (docs/method.md section 6 requires the arc ends to be coarse vertices).
     unknowns : int array
         For each node carrying a phi unknown, its index in the phi vector (length n_s):
         the m-1 interior nodes of an open arc, all m nodes of a closed arc, in order.
@@ -85,7 +85,7 @@ class SignoriniArc:
 
 
 def signorini_form(arcs: Sequence[SignoriniArc], subdomain_size: float, kind: str) -> TwoLevelForm:
-    """M_s of METHOD.md section 6 ("Signorini block") as a two-level form on the phi unknowns.
+    """M_s of docs/method.md section 6 ("Signorini block") as a two-level form on the phi unknowns.
 
     On each arc: edge forms A^0_gamma on the coarse edges of the arc (phi_e), and the
     formula (5.1) one level up on the coarse vertices (arc-length positions, so uneven
@@ -150,7 +150,7 @@ def _concat(parts: list[np.ndarray], dtype: type) -> np.ndarray:
 
 
 class SignoriniBlock:
-    """omega B_s of METHOD.md section 6 ("Signorini block"): the Signorini half of B.
+    """omega B_s of docs/method.md section 6 ("Signorini block"): the Signorini half of B.
 
     Small (one unknown per Signorini node) and replicated on every rank; shared by the
     serial and the distributed substructuring preconditioners.
@@ -177,7 +177,7 @@ class SignoriniBlock:
         return self._signorini.solve(check_length(g, self.n_signorini, "g")) / self.signorini_weight
 
     def matvec_signorini(self, phi: np.ndarray) -> np.ndarray:
-        """omega M_s phi, the matrix of omega B_s (METHOD.md section 6)."""
+        """omega M_s phi, the matrix of omega B_s (docs/method.md section 6)."""
         return self.signorini_weight * self._signorini.matvec(
             check_length(phi, self.n_signorini, "phi")
         )

@@ -1,10 +1,10 @@
-"""The substructuring preconditioner B = B_Omega + omega B_s (METHOD.md sections 5 and 6).
+"""The substructuring preconditioner B = B_Omega + omega B_s (docs/method.md sections 5 and 6).
 
 The PGPM (Algorithm 3.1, (3.21)-(3.22)) needs, for xi = (u, phi) in E_h =
 V_h(Omega) x V_h(Gamma_s), an SPD form B(xi, eta) = B_Omega(u, w) + B_s(phi, psi)
 that is spectrally equivalent to the linear form A of (4.2) and cheap to invert.
 
-B_Omega (METHOD.md section 6). Write w = w_P + w_H (w_H discrete harmonic in every
+B_Omega (docs/method.md section 6). Write w = w_P + w_H (w_H discrete harmonic in every
 subdomain, w_P = 0 on the skeleton) and, on the skeleton, w = w_e + w_v (w_v linear
 in arc length along every coarse edge with the values of w at the coarse vertices).
 Then
@@ -23,7 +23,7 @@ In the splitting of the fine nodes into I (not on the skeleton) and Sk (skeleton
 where A^0 is the block-diagonal matrix of all edge forms A^0_gamma (on the edge
 interior nodes), R picks the values at the coarse vertices, Pi interpolates them
 linearly along the coarse edges and C = coarse graph Laplacian + d * (boundary
-vertex term). B_Omega^{-1} g is the four steps of METHOD.md section 6 (local
+vertex term). B_Omega^{-1} g is the four steps of docs/method.md section 6 (local
 Dirichlet solves, skeleton residual, edge and coarse solves, discrete harmonic
 extension).
 
@@ -71,7 +71,7 @@ def skeleton_form(
     kind: str,
     coarse_of: Callable[[sp.csr_matrix], sp.spmatrix] | None = None,
 ) -> TwoLevelForm:
-    """B_Sk of METHOD.md section 6 in the numbering of ``coarse.skeleton_dofs``.
+    """B_Sk of docs/method.md section 6 in the numbering of ``coarse.skeleton_dofs``.
 
     Edge forms A^0_gamma on the interior nodes of every coarse edge; Pi = linear
     interpolation in arc length between the two end vertices; C = coarse graph
@@ -144,7 +144,7 @@ def skeleton_form(
 
 
 class SubstructuringPreconditioner(SignoriniBlock):
-    """The substructuring preconditioner B = B_Omega + omega B_s of METHOD.md section 6.
+    """The substructuring preconditioner B = B_Omega + omega B_s of docs/method.md section 6.
 
     Parameters
     ----------
@@ -164,7 +164,7 @@ class SubstructuringPreconditioner(SignoriniBlock):
         Laplacian (see ``coupling.preconditioners.edge_forms``). Used on the skeleton and on the
         coarse edges of the Signorini arcs; the coarse form of B_s is always (5.1).
     signorini_weight : float
-        omega > 0 multiplying B_s (our extension; METHOD.md section 6 reports that
+        omega > 0 multiplying B_s (our extension; docs/method.md section 6 reports that
         omega = 1/4 halves kappa).
     coarse_space : {"graph", "galerkin"}
         C: the paper's coarse graph Laplacian, or the exact energy Pi^T S Pi of the coarse
@@ -258,7 +258,7 @@ class SubstructuringPreconditioner(SignoriniBlock):
 
     # -- B_Omega --
     def apply_omega(self, g: np.ndarray) -> np.ndarray:
-        """u = B_Omega^{-1} g, the four steps of METHOD.md section 6.
+        """u = B_Omega^{-1} g, the four steps of docs/method.md section 6.
 
         1. x_I = A_II^{-1} g_I; 2. r = g_Sk - A_{Sk,I} x_I;
         3. v = (A^0)^{-1} r + Pi C^{-1} Pi^T r; 4. u_Sk = v, u_I = x_I - A_II^{-1} A_{I,Sk} v.

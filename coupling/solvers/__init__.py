@@ -2,6 +2,8 @@
 chooses one.
 
 - :mod:`~coupling.solvers.records`: the record of a step, the outcome of a run, B norms;
+- :mod:`~coupling.solvers.loop`: the context every iteration reads and the ending of its
+  steps and of the run, written once;
 - :mod:`~coupling.solvers.projection`: P_s, the M_s projection onto {phi >= 0} (3.19)-(3.20);
 - :mod:`~coupling.solvers.lanczos`: C0 and lambda_min in the B inner product (3.5);
 - :mod:`~coupling.solvers.pgpm`: Algorithm 3.1, the paper's method;

@@ -1,6 +1,6 @@
 """The accelerated projection-gradient method (APGPM, our extension of Algorithm 3.1).
 
-The PGPM step of METHOD.md (3.21)-(3.22) taken from the extrapolated point
+The PGPM step of docs/method.md (3.21)-(3.22) taken from the extrapolated point
 y_k = xi_k + beta (xi_k - xi_{k-1}), all in the B metric, with Nesterov's constant
 momentum for strongly convex functions,
 

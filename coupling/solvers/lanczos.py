@@ -1,4 +1,4 @@
-"""Spectral estimates in the B inner product (METHOD.md (3.5)): the step tau = 1/C0 of
+"""Spectral estimates in the B inner product (docs/method.md (3.5)): the step tau = 1/C0 of
 the gradient methods, and the smallest Ritz value from which APGPM sets its momentum.
 """
 from __future__ import annotations
@@ -17,7 +17,7 @@ def estimate_extremes(
     functional, preconditioner, jacobian: PETSc.Mat, n_phi: int, *, steps: int, seed: int = 0
 ) -> tuple[float, float]:
     """The smallest and the largest Ritz value of a ``steps``-step Lanczos recurrence for
-    the pencil (D^2 J_h(xi), B) (METHOD.md (3.5); D^2 G(xi) given as ``jacobian``).
+    the pencil (D^2 J_h(xi), B) (docs/method.md (3.5); D^2 G(xi) given as ``jacobian``).
 
     They bracket the spectrum from inside: the smallest Ritz value is an upper bound of
     lambda_min(B^{-1} D^2 J_h(xi)), the largest a lower bound of lambda_max (C0). The

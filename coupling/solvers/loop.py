@@ -2,7 +2,7 @@
 of an outer step (record it, test the stopping rule, stop) and of the run (release the
 work objects, build the result), written once.
 
-The stopping rules all compare a relative B-norm step with ``tol`` (METHOD.md (3.18):
+The stopping rules all compare a relative B-norm step with ``tol`` (docs/method.md (3.18):
 ||xi||_B^2 = u^T B_Omega u + phi^T M_s phi); what the step is differs by method.
 """
 from __future__ import annotations
@@ -103,6 +103,9 @@ class Loop:
         self.increases = increases
         self.converged = False
         self.reason = f"reached max_iterations = {context.max_iterations}"
+        #: the relative B-norm the stopping rule tested when :meth:`stop` ended the run
+        #: by a rule other than the last record's ``step_norm``
+        self.stop_measure: float | None = None
 
     def steps(self) -> Iterator[int]:
         """The step numbers k, until the stopping rule holds or the cap is reached."""
@@ -133,9 +136,10 @@ class Loop:
             self.stop(self.rule, k)
         return relative
 
-    def stop(self, rule: str, iterations: int) -> None:
-        """End the run as converged after ``iterations`` steps by ``rule``."""
-        self.converged, self.iterations = True, iterations
+    def stop(self, rule: str, iterations: int, measure: float | None = None) -> None:
+        """End the run as converged after ``iterations`` steps by ``rule``, which tested
+        ``measure`` (None: the last record's ``step_norm``)."""
+        self.converged, self.iterations, self.stop_measure = True, iterations, measure
         self.reason = rule.format(tol=self.tol)
 
     def result(self, phi: np.ndarray, energy: float, tau: float, release=()) -> RunResult:
@@ -143,4 +147,6 @@ class Loop:
         for obj in release:
             obj.destroy()
         outcome = (self.converged, self.reason, self.iterations, energy, tau)
-        return RunResult(phi, *outcome, list(self.history), self.increases)
+        return RunResult(
+            phi, *outcome, list(self.history), self.increases, stop_measure=self.stop_measure
+        )

@@ -1,4 +1,4 @@
-"""The preconditioned projection-gradient method, Algorithm 3.1 of METHOD.md section 5.
+"""The preconditioned projection-gradient method, Algorithm 3.1 of docs/method.md section 5.
 
 With the block preconditioner B = B_Omega + B_s ((3.18)-(3.22)):
 

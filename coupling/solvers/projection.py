@@ -1,9 +1,11 @@
-"""The B_s-orthogonal projection onto K = {phi >= 0}: METHOD.md (3.19), (3.20) and (3.6).
+"""The B_s-orthogonal projection onto K = {phi >= 0}: docs/method.md (3.19), (3.20) and (3.6).
 
     P_s(phi~) = argmin_{psi >= 0} (psi - phi~)^T M_s (psi - phi~)
 
-``inexact`` is the paper's projected iteration (3.20),
+``inexact`` is the paper's projected iteration (3.20)::
+
     phi^{i+1} = max(0, phi^i - theta M_s (phi^i - phi~)),   phi^0 = phi_k,
+
 with theta = 1 / lambda_max(M_s) (inside (0, 2/lambda_max)), stopped as soon as the
 accuracy condition (3.6) is certified, or at a cap. With q(psi) = ||psi - phi~||^2_{M_s}
 (3.6) reads q(phi^i) <= rho_in q(phi_k) + (1 - rho_in) q*, q* = q(P phi~) unknown. Weak

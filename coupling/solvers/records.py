@@ -1,5 +1,5 @@
 """What every iteration shares: the record of one step, the outcome of a run, and the
-B inner product of the stopping rule (METHOD.md (3.18): B = B_Omega + B_s).
+B inner product of the stopping rule (docs/method.md (3.18): B = B_Omega + B_s).
 
     ||xi||_B^2 = u^T B_Omega u + phi^T M_s phi,
 
@@ -78,6 +78,9 @@ class RunResult:
     tau: float
     history: list[IterationRecord] = field(default_factory=list)
     energy_increases: int = 0
+    #: the relative B-norm the stopping rule tested when it stopped the run, when that is
+    #: not the last record's ``step_norm`` (ssn stopping at the PGPM step from xi_k)
+    stop_measure: float | None = None
 
 
 class History(list):

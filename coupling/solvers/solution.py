@@ -57,7 +57,7 @@ class Solution:
     boundary_u, ue, flux
         u_h on Gamma, u_e = u + phi - u0 on Gamma (boundary order), and the
         coefficients of the exterior normal derivative psi_h (flux space).
-    converged, reason, iterations, energy, history, energy_increases
+    converged, reason, iterations, energy, history, energy_increases, stop_measure
         The outcome of the iteration (:class:`coupling.solvers.records.RunResult`).
     tau, C0
         The step length at the end and the estimate C0 = 1/tau_0 it started from.
@@ -85,6 +85,7 @@ class Solution:
     energy_increases: int
     timings: dict[str, float]
     residual_scale: float | None = None
+    stop_measure: float | None = None
 
 
 def build_projection(preconditioner: Preconditioner, options: SolverOptions) -> SignoriniProjection:

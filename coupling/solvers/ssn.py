@@ -1,6 +1,6 @@
 """Semismooth Newton (primal-dual active set) for the discrete problem (2.3): our extension.
 
-Optimality system of min J_h(u, phi) over phi >= 0 (METHOD.md sections 4-5), written
+Optimality system of min J_h(u, phi) over phi >= 0 (docs/method.md sections 4-5), written
 with the natural residual of one PGPM step in the metric M_s of B_s ((3.19), (3.22)):
 
     grad_u J = 0,   phi = P_s(phi - tau M_s^{-1} grad_phi J)
@@ -57,6 +57,8 @@ from coupling.solvers.records import RunResult, b_norm2, global_dot, set_owned
 
 __all__ = [
     "NewtonSettings",
+    "Hessian",
+    "Trial",
     "semismooth_newton",
     "newton_direction",
     "line_search",
@@ -358,7 +360,11 @@ def semismooth_newton(
         active_changed = not np.array_equal(new_active, active)
         if norm2 is not None and not active_changed and tau * residual <= tol * np.sqrt(norm2):
             # the PGPM step from xi_k (B-norm tau r) meets the PGPM rule: no further step
-            loop.stop("||PGPM step at xi_k||_B <= {tol:g} ||xi_k||_B, active set settled", k - 1)
+            loop.stop(
+                "||PGPM step at xi_k||_B <= {tol:g} ||xi_k||_B, active set settled",
+                k - 1,
+                measure=tau * residual / np.sqrt(norm2),
+            )
             continue
         active = new_active
         residual0 = residual if residual0 is None else residual0

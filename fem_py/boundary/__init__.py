@@ -1,4 +1,4 @@
-"""The boundary map of METHOD.md section 4: the boundary nodes in counter-clockwise order
+"""The boundary map of docs/method.md section 4: the boundary nodes in counter-clockwise order
 (``order``: the walk of the exterior facets on rank 0) and the trace T, the extension E
 and the boundary data on them (``map``); in 3D the oriented surface triangulation
 (``surface``); the map of a domain of either dimension (``of_domain``)."""

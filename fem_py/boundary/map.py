@@ -1,4 +1,4 @@
-"""The boundary map of METHOD.md section 4: ordered boundary nodes, T and E.
+"""The boundary map of docs/method.md section 4: ordered boundary nodes, T and E.
 
 Gamma_h is the closed polygon of the boundary nodes of the fine mesh. ``BoundaryMap``
 lists them counter-clockwise (Omega on the left), which is the order of every boundary
@@ -7,7 +7,7 @@ vector of the coupling (``V_h(Gamma)``: continuous P1 on that polygon), and defi
     T : R^N -> R^{N_Gamma},   (T u)_i = u(node_i)          (trace, picks boundary dofs)
     E : R^{N_s} -> R^{N_Gamma}, (E phi)_{signorini[j]} = phi_j (extension by zero)
 
-so that z = T u + E phi (METHOD.md section 4). The phi unknowns are the nodes interior
+so that z = T u + E phi (docs/method.md section 4). The phi unknowns are the nodes interior
 to the Signorini arcs: a node is one when both boundary panels at it carry the same
 Signorini tag 100 + k. Arc end points (where the tag changes) are excluded, so phi
 vanishes there; with Gamma_s = Gamma (one closed arc, tag 100 everywhere) every node is
@@ -44,7 +44,7 @@ __all__ = ["BoundaryMap"]
 
 
 class BoundaryMap(BoundaryVectors):
-    """Boundary nodes in counter-clockwise order and the maps T, E (METHOD.md section 4).
+    """Boundary nodes in counter-clockwise order and the maps T, E (docs/method.md section 4).
 
     ``BoundaryMap(V, domain)`` (collective) with ``V = fem_py.dofs.p1_space(mesh)`` and
     a :class:`fem_py.mesh.Domain` (the walk starts at its first polygon vertex), or

@@ -1,6 +1,6 @@
 """The boundary map of a domain, by its dimension: the 2D ``BoundaryMap`` of a planar
 :class:`fem_py.mesh.Domain`, the 3D ``SurfaceMap`` of a :class:`fem_py.mesh.SolidDomain`
-(METHOD.md sections 4 and 11); both give T, E, ``gather`` and ``scatter_add``."""
+(docs/method.md sections 4 and 11); both give T, E, ``gather`` and ``scatter_add``."""
 from __future__ import annotations
 
 from typing import Any

@@ -1,4 +1,4 @@
-"""The ordered boundary nodes of METHOD.md section 4: the walk of the gathered exterior
+"""The ordered boundary nodes of docs/method.md section 4: the walk of the gathered exterior
 facets (oriented with Omega on the left) into the counter-clockwise cycle of boundary
 nodes, and the arrays of ``fem_py.boundary.map.BoundaryMap`` derived from it (run on
 rank 0)."""

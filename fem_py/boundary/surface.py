@@ -1,4 +1,4 @@
-"""The boundary map in 3D (METHOD.md sections 4 and 11): the surface triangulation of
+"""The boundary map in 3D (docs/method.md sections 4 and 11): the surface triangulation of
 Gamma oriented out of Omega, T and E.
 
 Gamma_h is the closed triangulated surface of the exterior facets of the tetrahedral

@@ -1,5 +1,5 @@
 """T, E and the exchange of boundary values with distributed PETSc vectors, for any
-boundary map that lists its nodes by global P1 dof (METHOD.md section 4).
+boundary map that lists its nodes by global P1 dof (docs/method.md section 4).
 
 A boundary map holds, identically on every rank, ``dofs`` (n_gamma,): the global P1 dof of
 each boundary node in the map's order, ``signorini`` (n_s,): the positions of the phi

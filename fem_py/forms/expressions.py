@@ -157,21 +157,15 @@ class Expression:
         return seg if seg is not None else type(node).__name__
 
     def _check(self, node: ast.AST) -> None:
-        if isinstance(node, ast.BinOp):
-            if type(node.op) not in _BINOPS:
+        if isinstance(node, (ast.BinOp, ast.UnaryOp)):
+            binary = isinstance(node, ast.BinOp)
+            if type(node.op) not in (_BINOPS if binary else _UNARY):
                 raise ValueError(
                     f"operator in '{self._segment(node)}' is not allowed in expression "
-                    f"{self.text!r}; use + - * / ** only"
+                    f"{self.text!r}; use {'+ - * / ** only' if binary else 'unary + or - only'}"
                 )
-            self._check(node.left)
-            self._check(node.right)
-        elif isinstance(node, ast.UnaryOp):
-            if type(node.op) not in _UNARY:
-                raise ValueError(
-                    f"operator in '{self._segment(node)}' is not allowed in expression "
-                    f"{self.text!r}; use unary + or - only"
-                )
-            self._check(node.operand)
+            for operand in (node.left, node.right) if binary else (node.operand,):
+                self._check(operand)
         elif isinstance(node, ast.Constant):
             if isinstance(node.value, bool) or not isinstance(node.value, (int, float)):
                 raise ValueError(

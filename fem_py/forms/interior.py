@@ -1,4 +1,4 @@
-"""Interior energy G, residual DG and Jacobians D^2 G (METHOD.md sections 3, 4, 6).
+"""Interior energy G, residual DG and Jacobians D^2 G (docs/method.md sections 3, 4, 6).
 
 With V_h the continuous P1 space and u in V_h,
 
@@ -10,7 +10,7 @@ With V_h the continuous P1 space and u in V_h,
 
 The residual is ``ufl.derivative`` of the energy. The Jacobian is either
 ``ufl.derivative`` of the residual (``"ufl"``) or the hand-written tangent rho^ of
-METHOD.md section 6 (``"handwritten"``); see :mod:`fem_py.forms.materials` for how both stay
+docs/method.md section 6 (``"handwritten"``); see :mod:`fem_py.forms.materials` for how both stay
 finite at grad u = 0.
 
 The P1 space is ``fem_py.dofs.p1.p1_space``, the only place it is created, so that every
@@ -61,7 +61,7 @@ COORDINATES = {2: ("x", "y"), 3: ("x", "y", "z")}
 
 def spatial_variables(mesh: Any, *, boundary: bool = False) -> dict[str, Any]:
     """UFL values of the expression variables: x, y (z in 3D) and on the boundary nx, ny
-    (nz), the outward unit normal (METHOD.md section 11 for 3D)."""
+    (nz), the outward unit normal (docs/method.md section 11 for 3D)."""
     X = ufl.SpatialCoordinate(mesh)
     names = COORDINATES[X.ufl_shape[0]]
     out = {name: X[k] for k, name in enumerate(names)}
@@ -292,7 +292,7 @@ def assemble_linear_form(
 def assemble_boundary_load(
     V: fem.FunctionSpace, t0: Any, *, jit_params: dict | None = None
 ) -> PETSc.Vec:
-    """m_t,j = int_Gamma t0 v_j ds over the whole boundary (METHOD.md section 4).
+    """m_t,j = int_Gamma t0 v_j ds over the whole boundary (docs/method.md section 4).
 
     ``t0`` is text in x, y, nx, ny (z, nz in 3D; the outward unit normal
     ``ufl.FacetNormal``), a number

@@ -1,10 +1,10 @@
-"""Consistency check of the two Jacobians of the interior energy (METHOD.md 4.1).
+"""Consistency check of the two Jacobians of the interior energy (docs/method.md 4.1).
 
 For several smooth random states u (random combinations of sin/cos modes, interpolated
 into V_h) this compares
 
 - the UFL Jacobian (``ufl.derivative`` of the residual) with the hand-written tangent
-  rho^(grad u) of METHOD.md section 6: relative Frobenius norm
+  rho^(grad u) of docs/method.md section 6: relative Frobenius norm
   ||A_ufl - A_hand||_F / ||A_ufl||_F;
 - a Taylor test of the residual F(u) = DG(u, .) in a smooth random direction du:
   r1(eps) = ||F(u + eps du) - F(u)||              ~ eps^1

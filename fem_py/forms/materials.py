@@ -1,23 +1,24 @@
-"""Nonlinear materials rho of METHOD.md section 1 and their energy densities (2.1).
+"""Nonlinear materials rho of docs/method.md section 1 and their energy densities (2.1).
 
 A material is the coefficient rho in ``-div(rho(|grad u|) grad u) = f`` (1.1). From rho
 we need
 
 - ``g(t) = int_0^t s rho(s) ds``           the energy density of G(w) = int g(|grad w|) (2.1),
-- ``rho'(t)``                               for the tangent rho^(x) of METHOD.md section 6 (4.1),
+- ``rho'(t)``                     for the tangent rho^(x) (docs/method.md section 6, (4.1)),
 - ``rho^(x) = rho(|x|) I + rho'(|x|) x x^T / |x|``, ``rho^(0) = rho(0) I``.
 
 Every material is held as sympy expressions in the symbol t, translated to UFL or numpy
 on demand. Built-ins (``make_material``):
 
-=============  ==================================  ==========================================
-name           rho(t)                              g(t)
-=============  ==================================  ==========================================
-linear         1                                   t^2/2
-carstensen     2 + 1/(1+t)                         t^2 + t - ln(1+t)
-power          (eps^2+t^2)^((p-2)/2), p>1, eps>0   ((eps^2+t^2)^(p/2) - eps^p)/p
-expression     any string in t (fem_py.forms.expressions) sympy: int_0^t s rho(s) ds (closed form)
-=============  ==================================  ==========================================
+==============  ====================================  ==========================================
+name            rho(t)                                g(t)
+==============  ====================================  ==========================================
+linear          1                                     t^2/2
+carstensen      2 + 1/(1+t)                           t^2 + t - ln(1+t)
+power           (eps^2+t^2)^((p-2)/2), p>1, eps>0     ((eps^2+t^2)^(p/2) - eps^p)/p
+expression      any string in t, parsed by            sympy: int_0^t s rho(s) ds (closed form)
+                fem_py.forms.expressions
+==============  ====================================  ==========================================
 
 Safety at grad u = 0 (what is done, and why). The energy is written as a function of
 s = |grad u|^2, ``G2(s) = g(sqrt(s))``, so that linear and power materials involve no
@@ -34,7 +35,7 @@ rho(0) I). FFCx emits the conditional as a C ternary that selects one branch, so
 NaN of the unused branch never propagates (tests/test_fem_forms.py assembles both
 Jacobians at grad u = 0 and checks every entry is finite).
 
-Structural condition (METHOD.md section 1), checked numerically on
+Structural condition (docs/method.md section 1), checked numerically on
 t in [0, 1e3] (1001 uniform points on [0, 1] and 601 log-spaced on [1, 1e3]):
 rho finite and > 0 (the condition with s = 0 gives rho(t) >= alpha > 0; a material
 with rho(0) = 0 would have a singular tangent at grad u = 0), and t rho(t) strictly
@@ -77,7 +78,7 @@ def _is_ufl(x: Any) -> bool:
 
 @dataclass(frozen=True)
 class Material:
-    """A material rho with its energy density g and derivative rho' (METHOD.md 1, 2.1, 4.1).
+    """A material rho with its energy density g and derivative rho' (docs/method.md 1, 2.1, 4.1).
 
     Attributes
     ----------
@@ -175,15 +176,15 @@ def _check_structure(name: str, rho_np: Callable[[np.ndarray], np.ndarray]) -> t
     if (r <= 0).any():
         i = int(np.argmax(r <= 0))
         raise ValueError(
-            f"material {name!r}: rho({t[i]:.6g}) = {r[i]:.6g} <= 0; METHOD.md section 1 implies "
-            "rho(t) >= alpha > 0, make rho positive"
+            f"material {name!r}: rho({t[i]:.6g}) = {r[i]:.6g} <= 0; docs/method.md section 1 "
+            "implies rho(t) >= alpha > 0, make rho positive"
         )
     q = np.diff(t * r) / np.diff(t)
     if not (q > 0).all():
         i = int(np.argmax(q <= 0))
         raise ValueError(
             f"material {name!r}: t*rho(t) is not strictly increasing near t = {t[i]:.6g}; "
-            "METHOD.md section 1 needs alpha (t-s) <= t rho(t) - s rho(s)"
+            "docs/method.md section 1 needs alpha (t-s) <= t rho(t) - s rho(s)"
         )
     return float(q.min()), float(q.max())
 
@@ -252,7 +253,7 @@ def make_material(
     Raises
     ------
     ValueError
-        Missing or invalid p/eps, a bad expression, a rho violating METHOD.md section 1
+        Missing or invalid p/eps, a bad expression, a rho violating docs/method.md section 1
         (rho < 0 or t rho(t) not strictly increasing on [0, 1e3]) or a rho whose energy
         has no closed form.
     """

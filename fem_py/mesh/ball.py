@@ -1,4 +1,4 @@
-"""The ball of ``[geometry] shape = "ball"`` (METHOD.md section 11), meshed by gmsh.
+"""The ball of ``[geometry] shape = "ball"`` (docs/method.md section 11), meshed by gmsh.
 
 The ball |x - c| <= r is the union of its lower and upper halves (two OpenCASCADE
 half-balls fragmented along the plane z = c_z, so the mesh is conforming across it). Its

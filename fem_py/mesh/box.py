@@ -1,4 +1,4 @@
-"""The structured box of ``[geometry] shape = "box"`` (METHOD.md section 11).
+"""The structured box of ``[geometry] shape = "box"`` (docs/method.md section 11).
 
 The cube [c - w/2, c + w/2]^3 is cut into n = round(w / h) cubes per side, each split
 into six tetrahedra (``dolfinx.mesh.create_box`` with ``CellType.tetrahedron``), so

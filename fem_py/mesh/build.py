@@ -62,7 +62,7 @@ def spec_dimension(spec: GeometrySpec, comm: Any = None) -> int:
 
 def build_domain(comm: Any, spec: GeometrySpec) -> Domain | SolidDomain:
     """Mesh Omega with a coarse partition into subdomains of size about
-    ``spec.subdomain_size`` (METHOD.md sections 1, 4 and 6).
+    ``spec.subdomain_size`` (docs/method.md sections 1, 4 and 6).
 
     Parameters
     ----------

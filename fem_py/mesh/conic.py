@@ -228,7 +228,7 @@ def conic_plan(spec: GeometrySpec) -> tuple:
         what = "the radius" if shape == "disk" else "semi_axes"
         raise ValueError(
             f"diam(Omega) = {diam:.4g} >= 1: the single-layer operator may not be "
-            f"elliptic (METHOD.md section 2); shrink {what}, or opt out with "
+            f"elliptic (docs/method.md section 2); shrink {what}, or opt out with "
             "allow_large (geometry.allow_large = true) at your own risk"
         )
     return h, d, (cx, cy), axes, conic_arcs(spec.signorini, (cx, cy), axes)

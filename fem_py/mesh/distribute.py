@@ -1,4 +1,4 @@
-"""Distribute a triangle mesh over the ranks by whole subdomains (METHOD.md section 6).
+"""Distribute a triangle mesh over the ranks by whole subdomains (docs/method.md section 6).
 
 Every rank gets whole subdomains (:func:`subdomain_owners`, passed to
 ``dolfinx.mesh.create_mesh`` as its partitioner), so the local Dirichlet problems of
@@ -25,7 +25,7 @@ from dolfinx import mesh as dmesh
 from fem_py.mesh.structured import StructuredRefinement
 from fem_py.parallel import broadcast_from_root, gather_to_root
 
-__all__ = ["distribute_mesh", "distribute_structured", "subdomain_owners"]
+__all__ = ["distribute_mesh", "distribute_structured", "subdomain_owners", "reghost"]
 
 #: (mesh, cell tags "subdomains" (dim 2), facet tags "boundary" (dim 1)).
 TaggedMesh = tuple[Any, Any, Any]
@@ -39,7 +39,7 @@ def subdomain_owners(
     Recursive coordinate bisection of the subdomain centroids, weighted by the cell
     count: a group of subdomains for ``k`` ranks is cut across its longer extent at
     the weighted position k//2 : k - k//2. The partition is deterministic (the same
-    for every run), and the local Dirichlet problems of METHOD.md section 6 become
+    for every run), and the local Dirichlet problems of docs/method.md section 6 become
     rank-local.
 
     Parameters
@@ -284,3 +284,51 @@ def distribute_structured(
     ft = dmesh.meshtags(msh, 1, facets, tags[facets])
     ct.name, ft.name = "subdomains", "boundary"
     return msh, ct, ft
+
+
+def reghost(msh: Any) -> Any:
+    """``msh`` (refined by DOLFINx without redistribution) created again from its owned
+    cells, each owned by the same rank and ghosted once on every other rank owning one of
+    its facet neighbours (DOLFINx's shared-facet mode; collective). In serial ``msh``.
+
+    DOLFINx 0.5.2's ``refine(..., redistribute=False)`` ghosts a cell once per facet it
+    shares with another rank, so a cell with two such facets arrives twice, and the
+    vertices around it get wrong owners (``fem_py.refinement``)."""
+    comm = msh.comm
+    if comm.size == 1:
+        return msh
+    topology = msh.topology
+    topology.create_connectivity(2, 0)
+    topology.create_connectivity(1, 2)
+    topology.create_connectivity(2, 1)
+    cells, vertices = topology.index_map(2), topology.index_map(0)
+    n_own = cells.size_local
+    c2v = topology.connectivity(2, 0).array.reshape(-1, 3)
+    node_of_vertex = np.empty(vertices.size_local + vertices.num_ghosts, dtype=np.int64)
+    node_of_vertex[c2v] = msh.geometry.dofmap.array.reshape(-1, 3)
+    x = msh.geometry.x[node_of_vertex[: vertices.size_local], :2]
+    own = c2v[:n_own]
+    glob = vertices.local_to_global(own.ravel().astype(np.int32)).reshape(-1, 3)
+    # the other ranks ghosting each owned cell: owners of the ghost cells across its facets
+    owner = np.concatenate([np.full(n_own, comm.rank), np.asarray(cells.owners)])
+    f2c = topology.connectivity(1, 2)
+    c2f = topology.connectivity(2, 1).array.reshape(-1, 3)[:n_own]
+    links = [
+        (c, int(owner[g]))
+        for c in range(n_own)
+        for f in c2f[c]
+        for g in f2c.links(f)
+        if owner[g] != comm.rank
+    ]
+    links = np.unique(np.array(links, dtype=np.int64).reshape(-1, 2), axis=0)
+
+    def partitioner(comm_, nparts, tdim, local_cells, ghost_mode):
+        return _destinations(np.full(n_own, comm.rank, dtype=np.int64), links)
+
+    return dmesh.create_mesh(
+        comm,
+        glob.astype(np.int64),
+        np.ascontiguousarray(x),
+        _ufl_triangle_mesh(),
+        partitioner=partitioner,
+    )

@@ -1,5 +1,5 @@
 """The :class:`Domain`: a distributed mesh of Omega with its coarse subdomain partition
-(METHOD.md sections 1, 4 and 6), and the domains of a user's mesh.
+(docs/method.md sections 1, 4 and 6), and the domains of a user's mesh.
 
 Tags
 ----
@@ -27,7 +27,7 @@ from fem_py.mesh.distribute import distribute_mesh
 from fem_py.mesh.own_mesh import gather_mesh, prepare_mesh, read_msh
 from fem_py.parallel import broadcast_from_root, run_on_root
 from fem_py.partition.coarse import CoarseStructure, compute_coarse_structure
-from fem_py.polyline import diameter
+from fem_py.polyline import CORNER_ANGLE, diameter
 from fem_py.spec import GeometrySpec
 
 __all__ = [
@@ -115,12 +115,6 @@ class DomainSize:
     subdomains: int
     h_min: float
     h_max: float
-
-
-#: A bend of Gamma by more than this (radians) makes a coarse vertex of a mesh from a
-#: file or of a curved shape (``fem_py.partition.coarse``: corners stay coarse vertices, a smooth
-#: curve does not fill with them).
-CORNER_ANGLE = math.pi / 6
 
 
 def is_positive_number(val: Any) -> bool:

@@ -1,4 +1,4 @@
-"""gmsh meshing, on one rank (METHOD.md section 6): the coarse triangles of a polygon and
+"""gmsh meshing, on one rank (docs/method.md section 6): the coarse triangles of a polygon and
 the unstructured fine mesh of a coarse partition.
 
 :func:`mesh_with_gmsh` runs one gmsh session (it initialises and finalises gmsh

@@ -1,5 +1,5 @@
 """The grading of the subdomains of a locally refined mesh, and the split of the graded
-ones (METHOD.md section 6; docs/design/adapt.md, "Subdomains on graded meshes").
+ones (docs/method.md section 6; docs/design/adapt.md, "Subdomains on graded meshes").
 
 Local refinement keeps the coarse partition (``fem_py.mesh.refinement``), so a subdomain at a
 singularity gets ever smaller cells inside while its size H stays: the ratio H/h of the

@@ -23,7 +23,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from fem_py.mesh.shapes import Arc
-from fem_py.mesh.tet_file import opened_msh
+from fem_py.mesh.tet_file import opened_msh, used_nodes
 from fem_py.parallel import gather_to_root
 from fem_py.partition.cells import cell_adjacency, partition_cells
 from fem_py.polyline import diameter
@@ -135,13 +135,8 @@ def mesh_of_model(name: str) -> MeshFile:
                 elems.append(np.asarray(etags))
             found = np.concatenate(elems) if elems else np.zeros(0, tri_tags.dtype)
             surfaces[key] = np.flatnonzero(np.isin(tri_tags, found))
-    # keep the nodes the triangles use (gmsh also stores the geometry's points)
-    used = np.unique(cells)
-    remap = np.full(len(tags), -1, dtype=np.int64)
-    remap[used] = np.arange(len(used))
-    curves = {k: remap[v] for k, v in curves.items()}
-    curves = {k: v[(v >= 0).all(axis=1)] for k, v in curves.items()}
-    return MeshFile(xyz[used, :2].copy(), remap[cells], curves, surfaces, name)
+    used, cells, curves = used_nodes(len(tags), cells, curves)
+    return MeshFile(xyz[used, :2].copy(), cells, curves, surfaces, name)
 
 
 def _orient(x: np.ndarray, cells: np.ndarray) -> np.ndarray:
@@ -313,7 +308,7 @@ def prepare_mesh(
     if diam >= 1.0 and not allow_large:
         raise ValueError(
             f"diam(Omega) = {diam:.4g} >= 1 for {source}: the single-layer operator may not "
-            "be elliptic (METHOD.md section 2); scale the mesh down, or opt out with "
+            "be elliptic (docs/method.md section 2); scale the mesh down, or opt out with "
             "allow_large (geometry.allow_large = true) at your own risk"
         )
     tags, whole = _group_arcs(mesh, loop, signorini)

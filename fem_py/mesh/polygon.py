@@ -1,4 +1,4 @@
-"""The polygonal Omegas: the square, the L-shape and a given polygon (METHOD.md sections
+"""The polygonal Omegas: the square, the L-shape and a given polygon (docs/method.md sections
 1, 4 and 6), meshed with a coarse subdomain partition.
 
 :func:`polygon_domain` makes a coarse partition of Omega into L subdomains of size about
@@ -29,7 +29,7 @@ A sequence of arcs, each one of
 
 Arc end points become coarse vertices (inserted into the coarse mesh when needed; with
 ``structured=True`` on the square or L-shape they must already be coarse grid vertices),
-so every coarse boundary edge lies in Gamma_t or in one arc (METHOD.md section 6).
+so every coarse boundary edge lies in Gamma_t or in one arc (docs/method.md section 6).
 
 Modules
 -------
@@ -79,6 +79,9 @@ from fem_py.mesh.shapes import (
     check_polygon,
     checked_center,
     edge_tag,
+    grid_cells_per_side,
+    grid_counts,
+    grid_outline,
     grid_partition,
     insert_boundary_points,
     parse_arcs,
@@ -87,7 +90,6 @@ from fem_py.mesh.structured import node_count, refine
 from fem_py.parallel import broadcast_from_root, run_on_root
 from fem_py.polyline import coarsened_polygon, diameter, segment_lengths
 from fem_py.spec import GeometrySpec
-from fem_py.tags import SIGNORINI_TAG0
 
 __all__ = ["polygon_domain", "polygon_size"]
 
@@ -155,19 +157,25 @@ class _Plan:
     csize: float | None = None
 
 
-def _plan(spec: GeometrySpec) -> _Plan:
+def _plan(spec: GeometrySpec, grid: bool = True) -> _Plan:
     """Validate ``spec`` and lay out its coarse grid (identically on every rank, before any
-    collective call)."""
+    collective call); ``grid=False``: the same checks without the coarse cells of the
+    square and L-shape (O(1) memory, for sizes)."""
     h, d, P, (cx, cy) = _validate(spec)
     shape, signorini, structured = spec.shape, spec.signorini, spec.structured
     cV = ccells = csize = None
     if shape != "polygon":
-        P, cV, ccells, csize = grid_partition(shape, (cx, cy), float(spec.width), d)
+        nc = grid_cells_per_side(shape, float(spec.width), d)
+        csize = float(spec.width) / nc
+        if grid:
+            P, cV, ccells, csize = grid_partition(shape, (cx, cy), float(spec.width), d)
+        else:
+            P = grid_outline(shape, (cx, cy), float(spec.width), nc)
     diam = diameter(P)
     if diam >= 1.0 and not spec.allow_large:
         raise ValueError(
             f"diam(Omega) = {diam:.4g} >= 1: the single-layer operator may not be "
-            "elliptic (METHOD.md section 2); shrink the domain, or opt out with "
+            "elliptic (docs/method.md section 2); shrink the domain, or opt out with "
             "allow_large (geometry.allow_large = true) at your own risk"
         )
     B = BoundaryCurve(P)
@@ -179,23 +187,26 @@ def _plan(spec: GeometrySpec) -> _Plan:
         arcs, whole = parse_arcs(signorini, shape, B)
     if shape != "polygon":
         if structured:
-            for q in ends:
-                if np.linalg.norm(cV - q, axis=1).min() > B.tol:
+            corner = np.array([cx - float(spec.width) / 2, cy - float(spec.width) / 2])
+            for q in ends:  # the nearest grid point, in closed form
+                off = (q - corner) / csize
+                if np.linalg.norm((off - np.round(off)) * csize) > B.tol:
                     raise ValueError(
                         f"signorini: arc end ({q[0]:g}, {q[1]:g}) is not a coarse "
                         "grid vertex, which structured=True requires; move it to a "
                         f"multiple of the coarse size {csize:g} or use "
                         "structured=False"
                     )
-        else:
+        elif grid:
             cV, ccells = insert_boundary_points(cV, ccells, ends, B.tol)
     return _Plan(h, d, P, B, arcs, whole, ends, cV, ccells, csize)
 
 
 def polygon_size(spec: GeometrySpec) -> DomainSize | None:
-    """The sizes of ``polygon_domain(comm, spec)`` in closed form, without a mesh: for the
-    structured square and L-shape; None where only meshing tells (gmsh meshes). Raises the
-    errors ``polygon_domain`` raises for ``spec``.
+    """The sizes of ``polygon_domain(comm, spec)`` in closed form, without a mesh and in
+    O(1) memory (no coarse grid either): for the structured square and L-shape; None where
+    only meshing tells (gmsh meshes: see :func:`fem_py.mesh.size_estimate.mesh_size_estimate`).
+    Raises the errors ``polygon_domain`` raises for ``spec``.
 
     The fine nodes number ``fem_py.mesh.structured.node_count`` for n = max(2, round(c/h))
     segments per coarse edge (c the coarse size); every coarse boundary
@@ -203,30 +214,24 @@ def polygon_size(spec: GeometrySpec) -> DomainSize | None:
     nodes, a closed one (``"all"``) every boundary node. The facets of the right
     triangles are c/n (legs) and sqrt(2) c/n (diagonals), c the coarse size.
     """
-    plan = _plan(spec)
+    plan = _plan(spec, grid=False)
     if spec.shape == "polygon" or not spec.structured:
         return None
     n = max(2, int(round(plan.csize / plan.h)))
-    cV, cells = plan.cV, np.asarray(plan.ccells, dtype=np.int64)
-    # the sides a -> b of every coarse cell, cell by cell; a boundary edge is on one cell
-    a, b = cells.ravel(), np.roll(cells, -1, axis=1).ravel()
-    key = np.minimum(a, b) * len(cV) + np.maximum(a, b)
-    _, inverse, count = np.unique(key, return_inverse=True, return_counts=True)
-    once = count[inverse] == 1
-    boundary = list(zip(a[once].tolist(), b[once].tolist()))
-    tags = [edge_tag(cV, p, q, plan.B, plan.arcs) for p, q in boundary]
-    n_gamma = n * len(boundary)
+    n_vertices, n_edges, n_cells, n_boundary = grid_counts(
+        spec.shape, round(float(spec.width) / plan.csize)
+    )
+    n_gamma = n * n_boundary
     if plan.whole:
         n_s = n_gamma
-    else:
-        per_arc = [tags.count(SIGNORINI_TAG0 + k) for k in range(len(plan.arcs))]
-        n_s = sum(n * k - 1 for k in per_arc if k)
+    else:  # arc ends are coarse vertices: an arc covers length / csize coarse edges
+        n_s = sum(n * int(round(arc.length / plan.csize)) - 1 for arc in plan.arcs)
     leg = plan.csize / n
     return DomainSize(
-        dofs=node_count(len(cV), len(count), len(cells), cells.shape[1], n),
+        dofs=node_count(n_vertices, n_edges, n_cells, 4, n),
         boundary_dofs=n_gamma,
         signorini_dofs=n_s,
-        subdomains=len(cells),
+        subdomains=n_cells,
         h_min=leg,
         h_max=math.sqrt(2.0) * leg,
     )

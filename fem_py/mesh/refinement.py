@@ -22,6 +22,12 @@ nodes, the average of the two end values at a midpoint.
 Under MPI, ``redistribute=False`` keeps each child on the rank of its parent, which the
 rank-local point location below needs, and keeps whole subdomains per rank; the refined
 mesh is the same as in serial up to the ordering (tests/test_mpi_adapt.py, 2 ranks).
+DOLFINx 0.5.2 ghosts a child once per facet it shares with another rank, so a cell with
+two such facets arrives twice as a ghost, and the vertices around it get wrong owners
+(a subdomain interior dof owned by another rank, a ghost node outside the local old
+mesh); :func:`fem_py.mesh.distribute.reghost` builds the mesh again from the owned
+children, each ghosted once on the owners of its facet neighbours
+(tests/test_adapt_mpi.py).
 """
 from __future__ import annotations
 
@@ -33,9 +39,11 @@ from dolfinx import cpp, fem, geometry
 from dolfinx import mesh as dmesh
 
 from fem_py.dofs.p1 import tag_array
-from fem_py.mesh.domain import CORNER_ANGLE, max_facet_length
+from fem_py.mesh.distribute import reghost
+from fem_py.mesh.domain import max_facet_length
 from fem_py.mesh.location import locate
 from fem_py.partition.coarse import compute_coarse_structure
+from fem_py.polyline import CORNER_ANGLE
 
 __all__ = [
     "refine_domain",
@@ -115,7 +123,7 @@ def refine_domain(domain: Any, cells: np.ndarray) -> Any:
     old.topology.create_connectivity(tdim, 1)
     c2e = old.topology.connectivity(tdim, 1).array.reshape(-1, 3)
     edges = np.unique(c2e[np.asarray(cells, dtype=np.int64)].ravel()).astype(np.int32)
-    new = dmesh.refine(old, edges, redistribute=False)
+    new = reghost(dmesh.refine(old, edges, redistribute=False))
     new.topology.create_connectivity(tdim - 1, tdim)
     new.topology.create_connectivity(tdim, 0)
 

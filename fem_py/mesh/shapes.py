@@ -1,4 +1,4 @@
-"""The shapes of Omega and the description of its boundary (METHOD.md sections 1, 4, 6).
+"""The shapes of Omega and the description of its boundary (docs/method.md sections 1, 4, 6).
 
 Omega is a polygon: the square, the L-shape (the square minus its upper-right
 quarter) or a given simple counter-clockwise polygon (:func:`check_polygon`). Its
@@ -33,6 +33,9 @@ __all__ = [
     "check_polygon",
     "checked_center",
     "edge_tag",
+    "grid_cells_per_side",
+    "grid_counts",
+    "grid_outline",
     "grid_partition",
     "insert_boundary_points",
     "parse_arcs",
@@ -366,10 +369,7 @@ def grid_partition(
     """
     cx, cy = float(center[0]), float(center[1])
     x0, x1, y0, y1 = cx - width / 2, cx + width / 2, cy - width / 2, cy + width / 2
-    if shape == "square":
-        nc = max(1, int(round(width / d)))
-    else:
-        nc = max(2, 2 * int(round(width / (2 * d))))
+    nc = grid_cells_per_side(shape, width, d)
     xs, ys = np.linspace(x0, x1, nc + 1), np.linspace(y0, y1, nc + 1)
     half = nc // 2
     keep = np.ones((nc, nc), dtype=bool)  # keep[j, i]: coarse square i (x), j (y)
@@ -387,12 +387,37 @@ def grid_partition(
     vid[grid_point] = np.arange(len(grid_point))
     verts = np.stack([xs[grid_point % (nc + 1)], ys[grid_point // (nc + 1)]], 1)
     cells = vid[corner].reshape(-1, 4).tolist()
-    if shape == "square":
-        P = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
-    else:
-        xm, ym = xs[half], ys[half]
-        P = np.array([[x0, y0], [x1, y0], [x1, ym], [xm, ym], [xm, y1], [x0, y1]])
+    P = grid_outline(shape, center, width, nc)
     return P, np.array(verts, dtype=float), cells, width / nc
+
+
+def grid_cells_per_side(shape: str, width: float, d: float) -> int:
+    """n_c of :func:`grid_partition`: round(width / d) coarse squares per side, at least
+    1 (for the L-shape an even number, at least 2)."""
+    if shape == "square":
+        return max(1, int(round(width / d)))
+    return max(2, 2 * int(round(width / (2 * d))))
+
+
+def grid_outline(shape: str, center: Sequence[float], width: float, nc: int) -> np.ndarray:
+    """The polygon P of :func:`grid_partition` (the square, or the L-shape whose notch
+    corner is the grid point nc / 2, nc / 2), without the grid."""
+    cx, cy = float(center[0]), float(center[1])
+    x0, x1, y0, y1 = cx - width / 2, cx + width / 2, cy - width / 2, cy + width / 2
+    if shape == "square":
+        return np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
+    xm, ym = np.linspace(x0, x1, nc + 1)[nc // 2], np.linspace(y0, y1, nc + 1)[nc // 2]
+    return np.array([[x0, y0], [x1, y0], [x1, ym], [xm, ym], [xm, y1], [x0, y1]])
+
+
+def grid_counts(shape: str, nc: int) -> tuple[int, int, int, int]:
+    """(vertices, edges, cells, boundary edges) of :func:`grid_partition` with ``nc``
+    squares per side, in closed form (O(1) memory): the square has (nc + 1)^2 vertices,
+    2 nc (nc + 1) edges, nc^2 cells; the L-shape loses the h^2 squares, h^2 vertices
+    and 2 h^2 edges of the open upper-right quarter (h = nc / 2); both have 4 nc
+    boundary edges."""
+    cut = (nc // 2) ** 2 if shape == "lshape" else 0
+    return (nc + 1) ** 2 - cut, 2 * nc * (nc + 1) - 2 * cut, nc * nc - cut, 4 * nc
 
 
 def insert_boundary_points(

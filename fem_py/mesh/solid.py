@@ -1,10 +1,10 @@
-"""The 3D :class:`SolidDomain` of a :class:`fem_py.spec.GeometrySpec` (METHOD.md section 11):
+"""The 3D :class:`SolidDomain` of a :class:`fem_py.spec.GeometrySpec` (docs/method.md section 11):
 a distributed tetrahedral mesh of Omega with its named facet tags and the facet tags of
 the Signorini patches, built from the structured box (``fem_py.mesh.box``), the gmsh
 ball (``fem_py.mesh.ball``) or a gmsh file of linear tetrahedra (``fem_py.mesh.tet_file``,
 checked on rank 0 and distributed by ``fem_py.mesh.tet_distribute``).
 
-A body in R^3 has no coarse partition (the 2D substructuring of METHOD.md section 6 is
+A body in R^3 has no coarse partition (the 2D substructuring of docs/method.md section 6 is
 not used there), so a ``SolidDomain`` has no ``coarse``, ``arcs`` or ``vertices``: the
 boundary map is ``fem_py.boundary.surface.SurfaceMap(V, facet_tags, signorini)``.
 """

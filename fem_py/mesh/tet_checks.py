@@ -1,4 +1,4 @@
-"""Checks that a tetrahedral mesh can be Omega of the exterior problem in 3D (METHOD.md
+"""Checks that a tetrahedral mesh can be Omega of the exterior problem in 3D (docs/method.md
 section 11), as pure functions on arrays.
 
 The exterior problem needs one body whose exterior is connected: the cells must be one

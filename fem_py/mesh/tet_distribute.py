@@ -1,5 +1,5 @@
 """A checked 3D mesh (``fem_py.mesh.tet_file.SolidFile``, on rank 0) as a distributed
-DOLFINx mesh with facet tags named after its physical surface groups (METHOD.md
+DOLFINx mesh with facet tags named after its physical surface groups (docs/method.md
 section 11): the ``geometry.mesh`` counterpart of ``box_mesh`` and ``ball_mesh``.
 
 Surface group k (in the order given, by default the file's) gets the facet tag k + 1,

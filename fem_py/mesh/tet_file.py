@@ -1,5 +1,5 @@
 """Users' own 3D meshes: a gmsh .msh file (MSH 2.2 or 4.1) of linear tetrahedra with
-named physical groups, read and checked on one rank (METHOD.md section 11).
+named physical groups, read and checked on one rank (docs/method.md section 11).
 
 :func:`read_tet_msh` reads the tetrahedra, the physical surface groups (as boundary
 triangles, for the Signorini patches) and the physical volume groups; a group without
@@ -10,6 +10,7 @@ with the ``[geometry]`` key at fault.
 """
 from __future__ import annotations
 
+import re
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -26,7 +27,7 @@ from fem_py.mesh.tet_checks import (
     file_dimension,
 )
 
-__all__ = ["SolidFile", "check_solid", "msh_dimension", "opened_msh", "read_tet_msh"]
+__all__ = ["SolidFile", "check_solid", "msh_dimension", "opened_msh", "read_tet_msh", "used_nodes"]
 
 #: gmsh element types: 4 the 4-node tetrahedron, 2 the 3-node triangle.
 _TETRAHEDRON, _TRIANGLE = 4, 2
@@ -46,6 +47,52 @@ class SolidFile:
     surfaces: dict[str, np.ndarray] = field(default_factory=dict)
     volumes: dict[str, np.ndarray] = field(default_factory=dict)
     source: str = "the mesh"
+
+
+#: the section markers of an MSH file, each opened section closed by $End<name>
+_SECTION = re.compile(rb"^\$(End)?(\w+)\s*$", re.M)
+
+
+def _unreadable(path: Path, reason: str) -> str:
+    """The one-line message for a file gmsh cannot read: a file cut short (a section
+    opened and never closed: a copy or a download that stopped) or corrupt (gmsh's
+    reason names the line) is said to be so; anything else is not an MSH file."""
+    name = str(path)
+    head = path.read_bytes()[:64]
+    if not head.lstrip().startswith(b"$MeshFormat"):
+        return (
+            f"mesh: {name!r} is not a gmsh mesh file ({reason}); save the mesh from gmsh "
+            "in MSH 2.2 or 4.1 format"
+        )
+    data = path.read_bytes()
+    open_section, size = None, len(data)
+    for m in _SECTION.finditer(data):
+        open_section = None if m.group(1) else (m.group(2).decode(), m.start())
+    if open_section is not None:
+        section, start = open_section
+        line = data.count(b"\n", 0, start) + 1
+        return (
+            f"mesh: {name!r} is cut short: its ${section} section (from line {line}) ends "
+            f"at byte {size} without $End{section} ({reason}); copy or save the whole "
+            "file again"
+        )
+    return (
+        f"mesh: {name!r} is corrupt ({reason}); save the mesh from gmsh again in MSH 2.2 "
+        "or 4.1 format"
+    )
+
+
+def used_nodes(
+    n_nodes: int, cells: np.ndarray, groups: dict[str, np.ndarray]
+) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+    """Keep the nodes the cells use (gmsh also stores the geometry's points): (the kept
+    node indices, the cells and the boundary groups' elements renumbered, elements with a
+    node not kept dropped)."""
+    used = np.unique(cells)
+    remap = np.full(n_nodes, -1, dtype=np.int64)
+    remap[used] = np.arange(len(used))
+    groups = {k: remap[v] for k, v in groups.items()}
+    return used, remap[cells], {k: v[(v >= 0).all(axis=1)] for k, v in groups.items()}
 
 
 @contextmanager
@@ -68,10 +115,7 @@ def opened_msh(path: str | Path) -> Iterator[Any]:
         try:
             gmsh.open(name)
         except Exception as err:  # noqa: BLE001 - gmsh raises a bare Exception
-            raise ValueError(
-                f"mesh: {name!r} is not a gmsh mesh file ({str(err).splitlines()[0]}); save "
-                "the mesh from gmsh in MSH 2.2 or 4.1 format"
-            ) from None
+            raise ValueError(_unreadable(path, str(err).splitlines()[0])) from None
         yield gmsh
     finally:
         gmsh.finalize()
@@ -129,13 +173,8 @@ def read_tet_msh(path: str | Path) -> SolidFile:
                 found = [gmsh.model.mesh.getElementsByType(_TETRAHEDRON, e)[0] for e in entities]
                 found = np.concatenate(found) if found else np.zeros(0, cell_tags.dtype)
                 volumes[key] = np.flatnonzero(np.isin(cell_tags, found))
-    # keep the nodes the tetrahedra use (gmsh also stores the geometry's points)
-    used = np.unique(cells)
-    remap = np.full(len(tags), -1, dtype=np.int64)
-    remap[used] = np.arange(len(used))
-    surfaces = {k: remap[v] for k, v in surfaces.items()}
-    surfaces = {k: v[(v >= 0).all(axis=1)] for k, v in surfaces.items()}
-    return SolidFile(x[used].copy(), remap[cells], surfaces, volumes, name)
+    used, cells, surfaces = used_nodes(len(tags), cells, surfaces)
+    return SolidFile(x[used].copy(), cells, surfaces, volumes, name)
 
 
 def check_solid(solid: SolidFile, signorini: Any = ()) -> tuple[BodyFacts, tuple | None]:

@@ -1,5 +1,5 @@
 """Automatic partition of a triangle mesh into compact, connected subdomains of size d
-(METHOD.md section 6), pure numpy/scipy, on one rank.
+(docs/method.md section 6), pure numpy/scipy, on one rank.
 
 :func:`partition_cells` seeds one subdomain per point of a hexagonal lattice (one point
 per area d^2) that lies in Omega (near a cell centroid), runs a few Lloyd (k-means)

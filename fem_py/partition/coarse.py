@@ -1,4 +1,4 @@
-"""The coarse partition of Omega as the fine mesh sees it (METHOD.md section 6).
+"""The coarse partition of Omega as the fine mesh sees it (docs/method.md section 6).
 
 ``compute_coarse_structure`` recovers, from the distributed DOLFINx mesh and its
 subdomain cell tags, the skeleton (subdomain boundaries, Gamma included), the coarse

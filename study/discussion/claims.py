@@ -1,4 +1,4 @@
-"""The claims table and the departures from the paper: one line per claim of METHOD.md
+"""The claims table and the departures from the paper: one line per claim of docs/method.md
 section 7 with the criterion that decides it, and the places where the measurements
 and the paper part ways, each with its number."""
 from __future__ import annotations
@@ -23,8 +23,8 @@ def pgpm_series(it: dict) -> dict:
 
 
 def claims_table(summaries: Summaries) -> list[str]:
-    """One line per claim of METHOD.md section 7, with the criterion that decides it."""
-    lines = ["| claim (METHOD.md 7) | measured | criterion | verdict |", "|---|---|---|---|"]
+    """One line per claim of docs/method.md section 7, with the criterion that decides it."""
+    lines = ["| claim (docs/method.md 7) | measured | criterion | verdict |", "|---|---|---|---|"]
     it, spec, err = (summaries.get(k) for k in ("iterations", "spectrum", "errors"))
     if it:
         fixed = [

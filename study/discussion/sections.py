@@ -31,7 +31,7 @@ def discuss_methods(it: dict) -> list[str]:
     if not other:
         return []
     out = [
-        "The accelerated and Newton-type variants (our extensions, METHOD.md section 6, "
+        "The accelerated and Newton-type variants (our extensions, docs/method.md section 6, "
         "'consequence for speed') on the same problems, with the same B:",
         "",
     ]
@@ -249,7 +249,7 @@ def discuss_spectrum(spec: dict) -> list[str]:
     if "reference" in spec:
         ref = spec["reference"]
         out += [
-            f"The reference values of METHOD.md section 6 (P0 flux, omega = 1) are "
+            f"The reference values of docs/method.md section 6 (P0 flux, omega = 1) are "
             f"recomputed through the project's own pipeline to within "
             f"{100 * ref['max_abs_rel_difference']:.2f} % ({join(ref['kappa'], '{:.1f}')} "
             f"against {join(ref['kappa_reference'], '{:.1f}')}, table `reference`); the "

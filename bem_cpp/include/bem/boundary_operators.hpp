@@ -1,6 +1,6 @@
 #pragma once
 // The single- and double-layer Galerkin matrices V_h and K_h as H-matrices, applied and
-// never formed (METHOD.md section 2; docs/design/hmatrix.md): residuals of the boundary
+// never formed (docs/method.md section 2; docs/design/hmatrix.md): residuals of the boundary
 // integral equation on long boundaries, e.g. the a posteriori estimator's BIE term on the
 // bisected boundary, in O(n log n) memory instead of two dense n x n matrices.
 #include <memory>

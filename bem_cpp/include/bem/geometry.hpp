@@ -1,5 +1,5 @@
 #pragma once
-// Closed polygon Gamma (METHOD.md sections 2 and 9): panels, outward normals,
+// Closed polygon Gamma (docs/method.md sections 2 and 9): panels, outward normals,
 // validation of the input nodes, and location of points relative to Gamma.
 #include <Eigen/Dense>
 #include <cmath>

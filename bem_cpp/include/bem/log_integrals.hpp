@@ -1,6 +1,6 @@
 #pragma once
 // Integrals of the logarithmic kernel and of the double-layer kernel over straight
-// panels (METHOD.md sections 2 and 9), and the quadrature rules they use.
+// panels (docs/method.md sections 2 and 9), and the quadrature rules they use.
 //
 // Kernels (without the factor-2 scaling, which operators.cpp applies):
 //   log kernel          l(x, y) = log|x - y|                      (V = -(1/pi) int l)

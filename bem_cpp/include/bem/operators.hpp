@@ -1,9 +1,9 @@
 #pragma once
-// Dense Galerkin matrices of the boundary integral operators of METHOD.md section 2
+// Dense Galerkin matrices of the boundary integral operators of docs/method.md section 2
 // (factor-2 convention) on a closed polygon:
 //   V_h[i, j] = <V psi_j, psi_i>   = -(1/pi) int int log|x - y| psi_j(y) psi_i(x)
 //   K_h[i, j] = <K v_j, psi_i>     =  (1/pi) int int (x - y).n_y/|x - y|^2 v_j(y) psi_i(x)
-//   W_h       = D^T V0_h D          (Maue's identity, METHOD.md section 9)
+//   W_h       = D^T V0_h D          (Maue's identity, docs/method.md section 9)
 //   M_h[i, j] = <v_j, psi_i>
 // v_j: continuous piecewise linear hat of node j (P1 trace); psi_i: flux basis, the P1
 // hat of node i ("p1") or the indicator of panel i ("p0"); D: arc-length derivative of

@@ -1,5 +1,5 @@
 #pragma once
-// The potentials of the representation formula (potentials.hpp, METHOD.md section 2) as
+// The potentials of the representation formula (potentials.hpp, docs/method.md section 2) as
 // rectangular H-matrices from m target points to the boundary dofs
 // (docs/design/hmatrix.md, "Potentials"):
 //   u_e(z_i) = a + sum_j D(i, j) (v_j - a) + sum_j S(i, j) psi_j,

@@ -1,5 +1,5 @@
 #pragma once
-// Representation formula for the exterior solution (METHOD.md section 2):
+// Representation formula for the exterior solution (docs/method.md section 2):
 //   u_e(z) = 1/2 ( K(v - a) - V psi )(z) + a,   z in Omega_e,
 // evaluated with the analytic panel integrals near Gamma and Gauss-Legendre far from it.
 #include "bem/geometry.hpp"

@@ -2,7 +2,7 @@
 // Solves V_h X = B with V_h held as an H-matrix (hmatrix.hpp) by preconditioned
 // conjugate gradients, the columns of B as independent systems sharing the products
 // (V_h is symmetric positive definite when the logarithmic capacity of Gamma is below 1,
-// e.g. diam(Omega) < 1; METHOD.md section 2). The preconditioner is an argument
+// e.g. diam(Omega) < 1; docs/method.md section 2). The preconditioner is an argument
 // (calderon_preconditioner.hpp gives iteration counts bounded in n).
 #include <functional>
 #include <memory>

@@ -1,6 +1,6 @@
 #pragma once
 // The discrete Steklov-Poincare operator as an operator that is applied, never formed
-// (METHOD.md section 4, docs/design/hmatrix.md):
+// (docs/method.md section 4, docs/design/hmatrix.md):
 //   S x = 1/2 ( W x + (K - M)^T V^{-1} (K - M) x ),   W x = D^T V0 D x (Maue),
 // with V (flux space), V0 (P0, for W) and K (rows in the flux space, columns P1)
 // H-matrices, M and D sparse, and V^{-1} by SingleLayerSolver (PCG).

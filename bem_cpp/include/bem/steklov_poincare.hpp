@@ -1,6 +1,6 @@
 #pragma once
 // Discrete Steklov-Poincare operator and exterior Dirichlet-to-Neumann solve
-// (METHOD.md sections 2 and 4, factor-2 convention):
+// (docs/method.md sections 2 and 4, factor-2 convention):
 //   S_h = 1/2 ( W_h + (K_h - M_h)^T V_h^{-1} (K_h - M_h) ),
 //   V_h psi_h = (K_h - M_h)(v - a).
 #include <utility>

@@ -1,5 +1,5 @@
 #pragma once
-// Closed triangulated surface Gamma in R^3 (METHOD.md section 11): flat triangles with
+// Closed triangulated surface Gamma in R^3 (docs/method.md section 11): flat triangles with
 // normals out of Omega, validation of the input arrays, and the vertex-sharing relation
 // of triangle pairs that selects the singular quadrature (surface_quadrature.hpp).
 #include <Eigen/Dense>

@@ -1,6 +1,6 @@
 #pragma once
 // Dense Galerkin matrices of the Laplace boundary integral operators on a closed
-// triangulated surface (METHOD.md section 11, factor-2 convention, G = 1/(4 pi |x - y|)):
+// triangulated surface (docs/method.md section 11, factor-2 convention, G = 1/(4 pi |x - y|)):
 //   V_h[i, j] = <V psi_j, psi_i> = 2 int int G(x, y) psi_j(y) psi_i(x)
 //   K_h[i, j] = <K v_j, psi_i>   = 2 int int dG/dn_y(x, y) v_j(y) psi_i(x)     (K' = K^T)
 //   W_h[i, j] = <V curl v_j, curl v_i>   (Nedelec's identity; curl v = n x grad v)

@@ -1,5 +1,5 @@
 #pragma once
-// The exterior solution at points of Omega_e by the representation formula (METHOD.md
+// The exterior solution at points of Omega_e by the representation formula (docs/method.md
 // section 11): u_e(z) = 1/2 (K (v - a) - V psi)(z) + a with the potentials
 //   K w(z) = 2 int dG/dn_y(z, y) w(y) ds_y,   V psi(z) = 2 int G(z, y) psi(y) ds_y,
 // G = 1/(4 pi |z - y|). Near-panel integration: a triangle is split into four (recursively)

@@ -1,5 +1,5 @@
 #pragma once
-// Quadrature over pairs of flat triangles (METHOD.md section 11, docs/design/bem3d.md).
+// Quadrature over pairs of flat triangles (docs/method.md section 11, docs/design/bem3d.md).
 // Points are in the reference triangle {(s, t): s, t >= 0, s + t <= 1}, mapped to a
 // triangle with vertices (q0, q1, q2) as q0 + s (q1 - q0) + t (q2 - q0); the weights of
 // a pair rule sum to 1/4 (the product of the two reference areas), those of a triangle

@@ -1,6 +1,6 @@
 #pragma once
 // The discrete Steklov-Poincare operator of a closed surface, applied and never formed
-// (METHOD.md section 11, docs/design/bem3d.md):
+// (docs/method.md section 11, docs/design/bem3d.md):
 //   S x = 1/2 ( W x + (K - M)^T V^{-1} (K - M) x ),   W x = sum_c C_c^T V0 C_c x (Nedelec),
 // V (P1 flux), V0 (P0) and K (P1 x P1) H-matrices on the 3D cluster trees, M the sparse
 // P1 Gram matrix, C_c (m x n, sparse) the component c of the surface curls of the hats,

@@ -1,6 +1,6 @@
 """PETSc baselines for the project's solvers on the same discrete problem (2.3) (serial).
 
-The discrete problem (METHOD.md section 4) is: minimise J_h(x) over x = (u, phi) in
+The discrete problem (docs/method.md section 4) is: minimise J_h(x) over x = (u, phi) in
 R^N x R^{n_s} with phi >= 0. Its optimality system is the variational inequality
 
     F(x) = (grad_u J_h, grad_phi J_h) = 0 on the free unknowns (u, and phi > 0),
@@ -9,7 +9,7 @@ R^N x R^{n_s} with phi >= 0. Its optimality system is the variational inequality
 and its Jacobian is the Hessian of J_h,
 
     H(x) = [[D^2G(u) + T^T S_h T,  T^T S_h E],
-            [E^T S_h T,            E^T S_h E]]       (METHOD.md (4.1), section 4),
+            [E^T S_h T,            E^T S_h E]]       (docs/method.md (4.1), section 4),
 
 the sparse P1 matrix D^2G plus a dense block on the boundary and Signorini unknowns
 (z = T u + E phi = P x, so the dense part is P^T S_h P).
@@ -21,7 +21,7 @@ PETSc Vec with u first (the P1 dof order) and phi after it:
 * :func:`~bench.peers.baselines.snes.solve_snes_vi` - SNES ``vinewtonrsls`` (reduced-space
   active-set Newton with a backtracking line search) with one of :data:`LINEAR_SOLVERS`
   on the reduced Newton system, among them CG preconditioned by the project's
-  substructuring preconditioner B (METHOD.md section 6) restricted to the inactive set,
+  substructuring preconditioner B (docs/method.md section 6) restricted to the inactive set,
   through a PCSHELL;
 * :func:`~bench.peers.baselines.sequenced.solve_snes_vi_sequenced` - the same with grid
   sequencing: solved on the coarser meshes of a hierarchy first, each solution

@@ -1,4 +1,4 @@
-"""J_h on x = (u, phi) in one sequential PETSc Vec, and its Hessian H(x) (METHOD.md
+"""J_h on x = (u, phi) in one sequential PETSc Vec, and its Hessian H(x) (docs/method.md
 (4.1)) as one SeqAIJ matrix: the sparse P1 matrix D^2G plus the dense block
 P^T S_h P on the boundary and Signorini unknowns (z = T u + E phi = P x)."""
 from __future__ import annotations
@@ -86,17 +86,9 @@ class Evaluator:
         """Run ``solve()`` (the SNES or TAO ``solver`` on ``x``) within the budget; the
         result at ``x``, with the further ``fields`` of :class:`PeerResult`."""
         converged, reason, seconds = self.budget.run(solve, solver.getConvergedReason, describe)
+        outcome = dict(converged=converged, reason=reason, iterations=solver.getIterationNumber())
         u, phi = self.split(x)
-        return PeerResult(
-            u=u,
-            phi=phi,
-            converged=converged,
-            reason=reason,
-            iterations=solver.getIterationNumber(),
-            solve=seconds,
-            evaluations=self.evaluations,
-            **fields,
-        )
+        return PeerResult(u, phi, **outcome, solve=seconds, evaluations=self.evaluations, **fields)
 
     def destroy(self) -> None:
         self.grad_u.destroy()
