@@ -19,13 +19,15 @@ def space(value: str, name: str) -> _bem.Space:
         raise ValueError(f"{name} must be 'p0' or 'p1', got {value!r}") from None
 
 
-def points(value: ArrayLike, name: str, rows: str = "m") -> NDArray[np.float64]:
+def points(value: ArrayLike, name: str, rows: str = "m", dim: int = 2) -> NDArray[np.float64]:
+    """``value`` as a C-contiguous (rows, dim) float64 array of points; else a one-line
+    ``ValueError`` naming ``name`` (finiteness is the caller's check)."""
     try:
         arr = np.ascontiguousarray(value, dtype=np.float64)
     except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a real ({rows}, 2) array") from None
-    if arr.ndim != 2 or arr.shape[1] != 2:
-        raise ValueError(f"{name} must have shape ({rows}, 2), got {arr.shape}")
+        raise ValueError(f"{name} must be a real ({rows}, {dim}) array") from None
+    if arr.ndim != 2 or arr.shape[1] != dim:
+        raise ValueError(f"{name} must have shape ({rows}, {dim}), got {arr.shape}")
     return arr
 
 
@@ -39,24 +41,12 @@ def nodes(value: ArrayLike) -> NDArray[np.float64]:
     return points(value, "nodes", "n")
 
 
-def points3(value: ArrayLike, name: str, rows: str) -> NDArray[np.float64]:
-    """``value`` as a C-contiguous (rows, 3) float64 array of points in R^3; else a one-line
-    ``ValueError`` naming ``name`` (finiteness is the caller's check)."""
-    try:
-        X = np.ascontiguousarray(value, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a real ({rows}, 3) array") from None
-    if X.ndim != 2 or X.shape[1] != 3:
-        raise ValueError(f"{name} must have shape ({rows}, 3), got {X.shape}")
-    return X
-
-
 def surface(
     vertices: ArrayLike, triangles: ArrayLike
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     """The (n, 3) float64 vertices and (m, 3) int64 triangles of a surface, as the compiled
     code reads them (its Surface checks closedness, orientation and the rest)."""
-    X = points3(vertices, "vertices", "n")
+    X = points(vertices, "vertices", "n", dim=3)
     T = np.asarray(triangles)
     if T.ndim != 2 or T.shape[1] != 3:
         raise ValueError(f"triangles must have shape (m, 3), got {T.shape}")

@@ -130,7 +130,7 @@ def _surface_potential(
     space = checks.space(flux, "flux")
     v = checks.vector(dirichlet, geometry[0].shape[0], "dirichlet")
     psi = checks.vector(flux_coefficients, checks.dofs(geometry, space), "flux_coefficients")
-    Z = checks.points3(points, "points", "k")
+    Z = checks.points(points, "points", "k", dim=3)
     if not np.all(np.isfinite(Z)):
         raise ValueError("points contains non-finite values")
     return _bem.exterior_potential(*geometry, v, psi, Z, checks.scalar(a, "a"), space)

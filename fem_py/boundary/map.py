@@ -26,8 +26,7 @@ positive shoelace area, and broadcasts. The map is identical on every rank.
 """
 from __future__ import annotations
 
-import inspect
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 from dolfinx import fem
@@ -35,7 +34,6 @@ from dolfinx import fem
 from fem_py.boundary.order import closed_polygon, walk_boundary
 from fem_py.boundary.vectors import BoundaryVectors
 from fem_py.dofs.p1 import exterior_facets, facet_data, gather_facet_data, p1_topology, tag_array
-from fem_py.forms.expressions import Expression
 from fem_py.parallel import broadcast_from_root
 from fem_py.polyline import segment_lengths
 from fem_py.tags import GAMMA_T_TAG
@@ -123,36 +121,3 @@ class BoundaryMap(BoundaryVectors):
     def on_gamma_t(self) -> np.ndarray:
         """Panel mask of Gamma_t (tag 1)."""
         return self.panel_tags == GAMMA_T_TAG
-
-    # ------------------------------------------------------------ data
-    def interpolate_boundary(self, expr: str | Callable | float) -> np.ndarray:
-        """Nodal values (boundary order) of boundary data such as u0.
-
-        ``expr`` is text in x, y, nx, ny (fem_py.forms.expressions), a number, or a callable
-        ``f(x, y)`` or ``f(x, y, nx, ny)`` on arrays. (nx, ny) is the node normal of the
-        module docstring.
-        """
-        x, y = self.nodes[:, 0], self.nodes[:, 1]
-        nx, ny = self.node_normals[:, 0], self.node_normals[:, 1]
-        if isinstance(expr, str):
-            out = Expression(expr, ("x", "y", "nx", "ny")).evaluate(
-                {"x": x, "y": y, "nx": nx, "ny": ny}, "numpy"
-            )
-        elif callable(expr):
-            try:
-                nargs = len(inspect.signature(expr).parameters)
-            except (TypeError, ValueError):
-                nargs = 4
-            out = expr(x, y) if nargs == 2 else expr(x, y, nx, ny)
-        elif isinstance(expr, (int, float, np.floating, np.integer)) and not isinstance(expr, bool):
-            out = float(expr)
-        else:
-            raise ValueError(
-                f"boundary data must be text, a number or a callable, got {type(expr).__name__}"
-            )
-        out = np.broadcast_to(np.asarray(out, dtype=float), (self.n_gamma,)).copy()
-        if not np.all(np.isfinite(out)):
-            raise ValueError(
-                "boundary data is not finite at some boundary node; check the expression"
-            )
-        return out

@@ -29,8 +29,7 @@ coordinates, orders and checks them, and broadcasts; every rank holds the same a
 """
 from __future__ import annotations
 
-import inspect
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -39,7 +38,6 @@ from dolfinx import mesh as dmesh
 from scipy.sparse.csgraph import connected_components
 
 from fem_py.boundary.vectors import BoundaryVectors
-from fem_py.forms.expressions import Expression
 from fem_py.parallel import broadcast_from_root, gather_to_root
 
 __all__ = ["SurfaceMap", "surface_arrays"]
@@ -118,35 +116,6 @@ class SurfaceMap(BoundaryVectors):
     @property
     def n_triangles(self) -> int:
         return len(self.triangles)
-
-    def interpolate_boundary(self, expr: Callable | float) -> np.ndarray:
-        """Nodal values (in the map's order) of boundary data such as u0.
-
-        ``expr`` is text in x, y, z, nx, ny, nz (``fem_py.forms.expressions``), a number or
-        a callable on arrays, ``f(x, y, z)`` or ``f(x, y, z, nx, ny, nz)`` with
-        (nx, ny, nz) the node normals.
-        """
-        if isinstance(expr, str):
-            names = ("x", "y", "z", "nx", "ny", "nz")
-            values = (*self.nodes.T, *self.node_normals.T)
-            out = Expression(expr, names).evaluate(dict(zip(names, values)), "numpy")
-        elif callable(expr):
-            try:
-                nargs = len(inspect.signature(expr).parameters)
-            except (TypeError, ValueError):
-                nargs = 6
-            args = (*self.nodes.T, *self.node_normals.T)
-            out = expr(*args[: 3 if nargs == 3 else 6])
-        elif isinstance(expr, (int, float, np.floating, np.integer)) and not isinstance(expr, bool):
-            out = float(expr)
-        else:
-            raise ValueError(
-                f"boundary data must be text, a number or a callable, got {type(expr).__name__}"
-            )
-        out = np.broadcast_to(np.asarray(out, dtype=float), (self.n_gamma,)).copy()
-        if not np.all(np.isfinite(out)):
-            raise ValueError("boundary data is not finite at some boundary node; check it")
-        return out
 
 
 def _signorini_tags(signorini: Any) -> tuple[int, ...] | None:

@@ -14,20 +14,60 @@ has the same methods with the same meaning).
 """
 from __future__ import annotations
 
+import inspect
+from typing import Callable
+
 import numpy as np
 import scipy.sparse as sp
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from fem_py.forms.expressions import Expression
+
 __all__ = ["BoundaryVectors"]
 
 
 class BoundaryVectors:
-    """T, E, ``gather`` and ``scatter_add`` from ``dofs``, ``signorini`` and ``n_dofs``."""
+    """T, E, ``gather`` and ``scatter_add`` from ``dofs``, ``signorini`` and ``n_dofs``;
+    boundary data at the nodes from ``nodes`` and ``node_normals`` (n_gamma, d)."""
 
     dofs: np.ndarray
     signorini: np.ndarray
     n_dofs: int
+    nodes: np.ndarray
+    node_normals: np.ndarray
+
+    def interpolate_boundary(self, expr: str | Callable | float) -> np.ndarray:
+        """Nodal values (in the map's order) of boundary data such as u0.
+
+        ``expr`` is text in the coordinates and the normal's components (x, y, nx, ny; in
+        3D x, y, z, nx, ny, nz; ``fem_py.forms.expressions``), a number, or a callable on
+        arrays of the coordinates alone (``f(x, y)``, ``f(x, y, z)``) or of the coordinates
+        and the node normal (``f(x, y, nx, ny)``, ``f(x, y, z, nx, ny, nz)``).
+        """
+        dim = self.nodes.shape[1]
+        names = ("x", "y", "z")[:dim] + ("nx", "ny", "nz")[:dim]
+        values = (*self.nodes.T, *self.node_normals.T)
+        if isinstance(expr, str):
+            out = Expression(expr, names).evaluate(dict(zip(names, values)), "numpy")
+        elif callable(expr):
+            try:
+                nargs = len(inspect.signature(expr).parameters)
+            except (TypeError, ValueError):
+                nargs = 2 * dim
+            out = expr(*values[: dim if nargs == dim else 2 * dim])
+        elif isinstance(expr, (int, float, np.floating, np.integer)) and not isinstance(expr, bool):
+            out = float(expr)
+        else:
+            raise ValueError(
+                f"boundary data must be text, a number or a callable, got {type(expr).__name__}"
+            )
+        out = np.broadcast_to(np.asarray(out, dtype=float), (self.n_gamma,)).copy()
+        if not np.all(np.isfinite(out)):
+            raise ValueError(
+                "boundary data is not finite at some boundary node; check the expression"
+            )
+        return out
 
     @property
     def n_gamma(self) -> int:
