@@ -42,6 +42,7 @@ import numpy as np
 import scipy.linalg
 
 import bem_cpp
+from bem_cpp.polygons import circle, l_shape
 
 
 TOL = 1e-10
@@ -53,26 +54,6 @@ TARGET_SETUP_64000 = 10.0  # s
 TARGET_ERROR = 10 * TOL
 # product time O(n log n): fitted exponent of t against n log n over n >= 4,000
 PRODUCT_EXPONENT_MAX = 1.2
-
-
-def circle(n: int, radius: float = 0.4) -> np.ndarray:
-    theta = 2 * np.pi * np.arange(n) / n
-    return np.c_[radius * np.cos(theta), radius * np.sin(theta)]
-
-
-def l_shape(n: int, side: float = 0.6) -> np.ndarray:
-    """The square of `side` without its upper right quarter, about n/8 panels per half
-    side (as tests/test_bem_polygons.l_shape)."""
-    s = side / 2
-    corners = np.array([[-s, -s], [s, -s], [s, 0.0], [0.0, 0.0], [0.0, s], [-s, s]])
-    sides = np.roll(corners, -1, axis=0) - corners
-    lengths = np.linalg.norm(sides, axis=1)
-    h = lengths.sum() / n
-    nodes = []
-    for a, side_vector, length in zip(corners, sides, lengths):
-        k = max(1, int(round(length / h)))
-        nodes.append(a + np.outer(np.arange(k) / k, side_vector))
-    return np.concatenate(nodes)
 
 
 SHAPES = {"circle": circle, "l-shape": l_shape}

@@ -26,7 +26,13 @@ RESEARCH = ("study", "bench")
 
 LAYERS = [
     # bem_cpp inside, one module per layer: the compiled core, then checks, operators, ...
-    ("bem_cpp._bem", "bem_cpp.collectives", "bem_cpp.defaults", "bem_cpp.surfaces"),
+    (
+        "bem_cpp._bem",
+        "bem_cpp.collectives",
+        "bem_cpp.defaults",
+        "bem_cpp.surfaces",
+        "bem_cpp.polygons",
+    ),
     ("bem_cpp.checks",),
     ("bem_cpp.operators",),
     ("bem_cpp.compressed",),
