@@ -1,6 +1,7 @@
 """Shared test helpers: running scripts under mpirun, the project root."""
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import subprocess
@@ -66,3 +67,10 @@ def run_cli(
     return subprocess.run(
         [*cmd, *args], capture_output=True, text=True, timeout=timeout, cwd=cwd or ROOT
     )
+
+
+def json_report(command: str, config: Path) -> dict:
+    """``fembem COMMAND CONFIG --json`` run to success (exit 0), its JSON report."""
+    proc = run_cli(command, str(config), "--json")
+    assert proc.returncode == 0, proc.stderr
+    return json.loads(proc.stdout)

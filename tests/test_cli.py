@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import ROOT, run_cli, run_mpi
+from conftest import ROOT, json_report, run_cli, run_mpi
 from coupling.options import DEFAULTS
 
 H = 1 / 32
@@ -332,9 +332,7 @@ def test_check_jacobian_passes_for_carstensen_with_json_report(tmp_path):
 
     path = tmp_path / "c.toml"
     path.write_text('[geometry]\nh = 0.0625\n[material]\nrho = "carstensen"\n')
-    proc = run_cli("check-jacobian", str(path), "--json")
-    assert proc.returncode == 0, proc.stderr
-    report = json.loads(proc.stdout)
+    report = json_report("check-jacobian", path)
     assert report["passed"] is True and report["material"] == "carstensen"
     assert report["matrix_rel_diff"] <= MATRIX_TOL
     assert all(abs(s - 2) <= SLOPE_TOL for s in report["slope2"])

@@ -3,12 +3,11 @@ tetrahedral files, their dimension, build_domain's SolidDomain with the Signorin
 the closed-form sizes of the box, and the planar keys refused in one line."""
 from __future__ import annotations
 
-import json
 
 import pytest
 from mpi4py import MPI
 
-from conftest import run_cli
+from conftest import json_report, run_cli
 from coupling.app.config import ConfigError, parse_config
 from fem_py.boundary import SurfaceMap, boundary_map
 from fem_py.dofs import p1_space
@@ -95,9 +94,7 @@ def test_config_takes_3d_shapes_and_refuses_planar_keys():
 def test_cli_info_of_a_box_and_solve_refused(tmp_path):
     config = tmp_path / "box.toml"
     config.write_text('[geometry]\nshape = "box"\nwidth = 0.5\nh = 0.125\nsignorini = ["top"]\n')
-    proc = run_cli("info", str(config), "--json")
-    assert proc.returncode == 0, proc.stderr
-    report = json.loads(proc.stdout)
+    report = json_report("info", config)
     assert (report["dofs"], report["boundary_dofs"], report["signorini_dofs"]) == (125, 98, 9)
     out = tmp_path / "out"
     proc = run_cli("solve", str(config), "--out", str(out), "--quiet")

@@ -4,13 +4,12 @@ nodes, the configuration's check of the expressions, and ``fembem check-jacobian
 the box (Taylor slope 2)."""
 from __future__ import annotations
 
-import json
 
 import numpy as np
 import pytest
 from mpi4py import MPI
 
-from conftest import run_cli
+from conftest import json_report
 from coupling.app.config import ConfigError, check_data_and_material, parse_config
 from fem_py.boundary import boundary_map
 from fem_py.dofs import p1_space
@@ -61,9 +60,7 @@ def test_check_jacobian_on_the_box(tmp_path, rho):
         f'[geometry]\nshape = "box"\nwidth = 0.5\nh = 0.125\n[material]\nrho = "{rho}"\n'
         + ("p = 3.0\n" if rho == "power" else "")
     )
-    proc = run_cli("check-jacobian", str(config), "--json")
-    assert proc.returncode == 0, proc.stderr
-    report = json.loads(proc.stdout)
+    report = json_report("check-jacobian", config)
     assert report["passed"] and report["n_dofs"] == 125
     assert report["matrix_rel_diff"] <= report["tolerances"]["matrix"]
     assert all(abs(s - 2.0) <= report["tolerances"]["slope"] for s in report["slope2"])
