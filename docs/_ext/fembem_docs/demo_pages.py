@@ -69,7 +69,10 @@ def _run(root: Path, demo: Path, runs: Path) -> Path:
     env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MPLBACKEND="Agg")
     proc = subprocess.run(cmd, capture_output=True, text=True, cwd=root, env=env, timeout=TIMEOUT)
     if proc.returncode != 0:
-        raise RuntimeError(f"{demo.name} {' '.join(args)} failed:\n{proc.stderr[-3000:]}")
+        raise RuntimeError(
+            f"{demo.name} {' '.join(args)} failed with exit code {proc.returncode}:\n"
+            f"stdout: {proc.stdout[-2000:]}\nstderr: {proc.stderr[-3000:]}"
+        )
     (folder / "stdout.txt").write_text(proc.stdout)
     (folder / "key").write_text(key)
     return folder
