@@ -30,8 +30,8 @@ extensions = [
 
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
 root_doc = "index"
-# dev/: notes for the project's own sessions, not for users; study/quick: a --quick run
-exclude_patterns = ["_build", "dev", "study/quick"]
+# study/quick: the output of a --quick run of the study, not a page of the site
+exclude_patterns = ["_build", "study/quick"]
 
 myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist"]
 myst_heading_anchors = 3
