@@ -1,8 +1,9 @@
-"""Command line ``fembem``: ``solve``, ``evaluate``, ``exterior`` and ``check-jacobian``
-(README.md).
+"""Command line ``fembem``: ``solve``, ``info``, ``evaluate``, ``exterior`` and
+``check-jacobian`` (docs/guide/cli.md).
 
-Exit codes: 0 success, 1 a check failed (check-jacobian) or an internal error (a bug:
-one line, the traceback with --debug), 2 bad input (one line on stderr naming the
+Exit codes (:mod:`coupling.app.ending`, docs/guide/exit-codes.md): 0 success, 1 a check
+failed (check-jacobian) or an internal error (a bug: one line, the traceback with
+--debug), 2 bad input (one line on stderr naming the
 configuration key or file and the fix; a traceback only with --debug), 3 the solver did
 not converge (outputs are still written), 130 and 143 interrupted by SIGINT (Ctrl-C) and
 SIGTERM (one line on stderr; the output folder is left as it was); under mpirun an

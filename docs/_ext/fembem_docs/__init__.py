@@ -7,7 +7,8 @@
   the build.
 - ``{fembem-cli}``: the command-line reference, from the argparse parser of
   ``coupling.app.cli``.
-- ``{fembem-exit-codes}``: the exit codes, from the ``EXIT_*`` constants of the CLI.
+- ``{fembem-exit-codes}``: the exit codes, from the ``EXIT_*`` constants of
+  ``coupling.app.ending``.
 - ``{fembem-errors}``: the one-line errors of bad configurations, produced at build time
   by the validation code.
 - docs/api/*.rst: one page per module of fem_py, bem_cpp and coupling, found by walking

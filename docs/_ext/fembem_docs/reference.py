@@ -5,7 +5,8 @@ the tests can check them: tests/test_cli.py).
   ``CHOICES``, ``DATA_VARIABLES`` and the validation code, with the descriptions of
   docs/guide/keys.toml.
 - :func:`cli_markdown`: the subcommands and options of ``coupling.app.cli.build_parser``.
-- :func:`exit_codes_markdown`: the ``EXIT_*`` constants of the CLI with their meaning.
+- :func:`exit_codes_markdown`: the ``EXIT_*`` constants of ``coupling.app.ending`` with
+  their meaning.
 - :func:`errors_markdown`: bad configurations and the one-line error each one gets.
 """
 from __future__ import annotations
@@ -147,13 +148,14 @@ def cli_commands() -> list[str]:
 
 
 def exit_codes_markdown(meanings: Path = EXIT_CODES) -> str:
-    """The exit codes of ``fembem``: the values of the CLI's ``EXIT_*`` constants."""
-    from coupling.app import cli
+    """The exit codes of ``fembem``: the values of the ``EXIT_*`` constants of
+    ``coupling.app.ending`` (where the CLI takes them from)."""
+    from coupling.app import ending
 
     text = tomllib.loads(meanings.read_text())
     codes: list[tuple[str, int]] = []
-    for name in sorted(n for n in vars(cli) if n.startswith("EXIT_")):
-        value = getattr(cli, name)
+    for name in sorted(n for n in vars(ending) if n.startswith("EXIT_")):
+        value = getattr(ending, name)
         if isinstance(value, dict):  # signal -> code
             codes += [(f"{name}[{sig.name}]", code) for sig, code in value.items()]
         else:
@@ -162,7 +164,7 @@ def exit_codes_markdown(meanings: Path = EXIT_CODES) -> str:
     extra = [n for n in text if n not in dict(codes)]
     if missing or extra:
         raise ValueError(
-            f"{meanings}: describe every EXIT_* code of coupling.app.cli "
+            f"{meanings}: describe every EXIT_* code of coupling.app.ending "
             f"(missing: {', '.join(missing) or 'none'}; no such code: {', '.join(extra) or 'none'})"
         )
     out = ["| code | constant | meaning |", "|---|---|---|"]
