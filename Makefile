@@ -55,8 +55,9 @@ $(VENV)/.built: $(PY) $(SOURCES)
 
 build: debs $(VENV)/.built
 
-# test-py includes tests/test_docs.py, which builds the site (as make docs) and opens it
-test: setup debs-docs lint test-cpp test-py
+# the site is built (its demo runs included) before pytest, in a process of its own;
+# tests/test_docs.py then checks it (rebuilding only what changed)
+test: setup debs-docs lint test-cpp docs test-py
 
 # formatters and linter from Debian (black 23, flake8 5, clang-format 14); the tree must pass all
 lint: debs venv
