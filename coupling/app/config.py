@@ -202,6 +202,8 @@ def parse_config(raw: dict[str, Any], folder: str | Path | None = None) -> RunCo
     mesh = config["geometry"]["mesh"]
     if mesh and folder is not None and not Path(mesh).is_absolute():
         config["geometry"]["mesh"] = str(Path(folder) / mesh)
+    # after the folder is applied: a mesh file is opened for its dimension
+    _check_dimension_keys(config["geometry"], raw.get("geometry", {}))
     try:
         return _typed(config)
     except ValueError as err:  # a combination RunConfig (or GeometrySpec) refuses
@@ -255,7 +257,6 @@ def _checked(raw: dict[str, Any]) -> dict[str, dict[str, Any]]:
         solver["nested"] = False  # the default (true) applies to plain solves only
     geometry = config["geometry"]
     _check_mesh_keys(geometry, raw.get("geometry", {}))
-    _check_dimension_keys(geometry, raw.get("geometry", {}))
     if geometry["shape"] == "polygon" and len(geometry["vertices"]) < 3:
         raise ConfigError(
             "geometry.vertices must list at least 3 points [x, y] in "
