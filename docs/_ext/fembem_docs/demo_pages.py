@@ -66,7 +66,10 @@ def _run(root: Path, demo: Path, runs: Path) -> Path:
         if mpirun is None:
             raise RuntimeError("mpirun not found: `make setup` installs openmpi-bin")
         cmd = [mpirun, "--allow-run-as-root", "--oversubscribe", "-n", str(nprocs), *cmd]
-    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MPLBACKEND="Agg")
+    # without the variables of an MPI job this process may be part of (a parent that
+    # started MPI leaves them to its children, and mpirun then fails)
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("OMPI_", "PMIX_", "OPAL_"))}
+    env.update(OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MPLBACKEND="Agg")
     proc = subprocess.run(cmd, capture_output=True, text=True, cwd=root, env=env, timeout=TIMEOUT)
     if proc.returncode != 0:
         raise RuntimeError(
