@@ -27,15 +27,16 @@ Index dofs(const Surface& surface, Space space);
 /// Local integrals of a triangle pair (tau: test, sigma: trial). Basis index 0..2: the
 /// barycentric coordinate of the vertex (P1); 3: the constant 1 (P0).
 struct PairIntegrals {
-  double V[4][4];  ///< 2 int int G phi_a(x) phi_b(y)
-  double K[4][3];  ///< 2 int int dG/dn_y phi_a(x) lambda_b(y)
+  double V[4][4];   ///< 2 int int G phi_a(x) phi_b(y)
+  double K[4][3];   ///< 2 int int dG/dn_y phi_a(x) lambda_b(y)
+  double Kt[4][3];  ///< the same for the pair (sigma, tau): test sigma, trial tau
 };
 
 /// Integrates every triangle pair with the rule its adjacency and distance call for.
 class PairIntegrator {
  public:
   explicit PairIntegrator(const Surface& surface);
-  /// `double_layer`: also K (otherwise out.K is left unset).
+  /// `double_layer`: also K and Kt (otherwise they are left unset).
   void integrate(Index tau, Index sigma, bool double_layer, PairIntegrals& out) const;
   /// The rule (triangle_rule's p) of a disjoint pair, from the distance of the balls about
   /// the centroids over the larger diameter, q: p = 5 below q = 0.5, 4 below 1.5, 3 beyond
@@ -44,8 +45,8 @@ class PairIntegrator {
 
  private:
   const Surface& surface_;
-  const PairRule* singular_[4];  ///< by the number of shared vertices (1..3)
-  PairRule regular_[6];          ///< tensor products of triangle_rule(p), p = 0..5
+  const PairRule* singular_[4];     ///< by the number of shared vertices (1..3)
+  const TriangleRule* regular_[6];  ///< triangle_rule(p), p = 3..5, of the regular pairs
 };
 
 /// The surface curl n x grad(lambda_a) of the barycentric coordinate a on triangle t.
@@ -61,8 +62,8 @@ struct SurfaceMatrices {
   Matrix single_layer, double_layer, hypersingular;  ///< empty if not requested
 };
 
-/// One OpenMP-parallel pass over the test triangles (coloured so that no two threads
-/// share a vertex row) and all trial triangles.
+/// One OpenMP-parallel pass over the unordered triangle pairs (each integrated once for
+/// both orders; the first triangles coloured so that no two threads share a vertex row).
 SurfaceMatrices assemble(const Surface& surface, const SurfaceRequest& request);
 
 /// Rows `space`, columns P1 (P1: the Gram matrix, element matrix A/12 (1 + delta_ab)).
