@@ -14,15 +14,15 @@ namespace {
 
 /// The leaves of the block tree under (t, s). upper: only (t, s) on or above the block
 /// diagonal (symmetric storage). [lo, hi): only row clusters meeting these rows.
-void collect(const ClusterTree& rows, const ClusterTree& cols, int t, int s, double eta, bool upper, Index lo, Index hi,
-             std::vector<HMatrix::Block>& out, bool split_to_leaves = false) {
+void collect(const ClusterTree& rows, const ClusterTree& cols, int t, int s, double eta, double min_distance,
+             bool upper, Index lo, Index hi, std::vector<HMatrix::Block>& out, bool split_to_leaves = false) {
   const Cluster& ct = rows.cluster(t);
   const Cluster& cs = cols.cluster(s);
   if (ct.end <= lo || ct.begin >= hi) return;
   // Symmetric: cluster ranges are nested or disjoint, so t starting after s (disjoint)
   // puts the whole subtree of (t, s) below the block diagonal.
   if (upper && ct.begin > cs.begin && ct.begin >= cs.end) return;
-  const bool adm = admissible(ct.box, cs.box, eta);
+  const bool adm = admissible(ct.box, cs.box, eta) && ct.box.distance(cs.box) >= min_distance;
   if (adm || (split_to_leaves ? ct.leaf() && cs.leaf() : ct.leaf() || cs.leaf())) {
     HMatrix::Block b;
     b.row_cluster = t;
@@ -40,7 +40,7 @@ void collect(const ClusterTree& rows, const ClusterTree& cols, int t, int s, dou
   const int ss[2] = {cs.leaf() ? s : cs.children[0], cs.leaf() ? -1 : cs.children[1]};
   for (int a : ts)
     for (int c : ss)
-      if (a >= 0 && c >= 0) collect(rows, cols, a, c, eta, upper, lo, hi, out, split_to_leaves);
+      if (a >= 0 && c >= 0) collect(rows, cols, a, c, eta, min_distance, upper, lo, hi, out, split_to_leaves);
 }
 
 std::vector<Index> counts(const std::vector<Index>& bounds) {
@@ -82,7 +82,7 @@ HMatrix::HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const 
     // Rows balanced by the bytes each will hold, ranks modelled as log10(1 / tol)
     // (docs/design/hmatrix.md, "Under MPI").
     std::vector<Block> all;
-    collect(*rows_, *cols_, 0, 0, options.eta, options.symmetric, 0, rows_->size(), all);
+    collect(*rows_, *cols_, 0, 0, options.eta, options.min_distance, options.symmetric, 0, rows_->size(), all);
     const double r = std::max(1.0, -std::log10(options.tol));
     std::vector<double> cost(static_cast<std::size_t>(rows_->size()), 0.0);
     for (const Block& b : all) {
@@ -120,7 +120,8 @@ void HMatrix::build(const EntrySource& entries, const HMatrixOptions& options) {
   if (options.symmetric && rows_ != cols_)
     throw std::invalid_argument("HMatrix: a symmetric matrix needs one cluster tree for rows and columns");
   symmetric_ = options.symmetric;
-  collect(*rows_, *cols_, 0, 0, options.eta, symmetric_, row_begin_, row_end_, blocks_, options.split_to_leaves);
+  collect(*rows_, *cols_, 0, 0, options.eta, options.min_distance, symmetric_, row_begin_, row_end_, blocks_,
+          options.split_to_leaves);
   const Index* rp = rows_->permutation().data();
   const Index* cp = cols_->permutation().data();
   // Largest blocks first, so that the dynamic schedule ends with small ones.
@@ -143,7 +144,7 @@ void HMatrix::build(const EntrySource& entries, const HMatrixOptions& options) {
     } else {
       const Slice row = [&e](Index i, double* out) { e->row(i, out); };
       const Slice column = [&e](Index j, double* out) { e->column(j, out); };
-      b.factors = aca(m, k, row, column, options.tol, std::min(m, k));
+      if (!e->low_rank(options.tol, b.factors)) b.factors = aca(m, k, row, column, options.tol, std::min(m, k));
       recompress(b.factors, options.tol);
       if (b.factors.rank() * (m + k) >= m * k) {  // dense is smaller
         b.dense = b.factors.U * b.factors.V.transpose();

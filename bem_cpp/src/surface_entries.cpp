@@ -1,12 +1,15 @@
 #include "bem/surface_entries.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 #include <vector>
 
 namespace bem {
 
 namespace {
+
+constexpr double kInvTwoPi = 0.5 / M_PI;  // 2 G(r) = 1 / (2 pi r), the factor-2 convention
 
 /// A triangle of a block's row or column supports, with the dofs it carries there: the
 /// local basis index (0..2 barycentric, 3 constant) and the position in the block.
@@ -44,6 +47,42 @@ std::vector<Part> parts(const Surface& s, Space space, const Index* dofs, Index 
   return out;
 }
 
+/// The far rule's points of the triangles of `parts`, with weights (the rule's weight times
+/// twice the area: the physical measure) and normals, and the basis values Q that take a
+/// function of the points to the block's dofs: dof value = sum_p Q(p, dof) f(p).
+struct FarPoints {
+  std::vector<Vec3> x, n;
+  std::vector<double> w;
+  struct Entry {
+    Index point, position;
+    double value;
+  };
+  std::vector<Entry> Q;
+
+  FarPoints(const Surface& s, const std::vector<Part>& parts) {
+    const TriangleRule& r = triangle_rule(kFarGaussPoints);
+    for (const Part& part : parts) {
+      const Triangle& T = s.triangle(part.triangle);
+      for (int q = 0; q < r.size(); ++q) {
+        const std::size_t k = static_cast<std::size_t>(q);
+        const double lambda[4] = {1.0 - r.s[k] - r.t[k], r.s[k], r.t[k], 1.0};
+        const Index p = static_cast<Index>(x.size());
+        x.push_back(T.p[0] + r.s[k] * (T.p[1] - T.p[0]) + r.t[k] * (T.p[2] - T.p[0]));
+        n.push_back(T.n);
+        w.push_back(2.0 * T.area * r.w[k]);
+        for (int a = 0; a < part.count; ++a) Q.push_back({p, part.position[a], lambda[part.basis[a]]});
+      }
+    }
+  }
+  Index size() const { return static_cast<Index>(x.size()); }
+  /// Q^T F: the rows of F (one per point) summed into the block's dofs.
+  Eigen::MatrixXd project(const Eigen::MatrixXd& F, Index dofs) const {
+    Eigen::MatrixXd out = Eigen::MatrixXd::Zero(dofs, F.cols());
+    for (const Entry& e : Q) out.row(e.position) += e.value * F.row(e.point);
+    return out;
+  }
+};
+
 class SurfaceBlock : public EntryBlock {
  public:
   SurfaceBlock(const Surface& s, const PairIntegrator& integrator, SurfaceKernel kernel, Space rows, Space cols,
@@ -78,7 +117,57 @@ class SurfaceBlock : public EntryBlock {
       for (const Part& c : col_parts_) add(r, c, out, 1, m_);
   }
 
+  /// Far blocks: every triangle pair is evaluated by the far rule (the block's entries are
+  /// Q_r^T A Q_c with A the kernel at the far-rule points, weights included), so ACA runs on
+  /// A, one kernel evaluation per entry, and the factors are projected to the dofs.
+  bool low_rank(double tol, LowRank& out) const override {
+    if (!far_pairs_only()) return false;
+    const FarPoints r(s_, row_parts_), c(s_, col_parts_);
+    const bool dl = kernel_ == SurfaceKernel::DoubleLayer;
+    auto entry = [&](Index p, Index q) {
+      const Vec3 d = r.x[static_cast<std::size_t>(p)] - c.x[static_cast<std::size_t>(q)];
+      const double r2 = dot(d, d);
+      const double g = r.w[static_cast<std::size_t>(p)] * c.w[static_cast<std::size_t>(q)] * kInvTwoPi / std::sqrt(r2);
+      return dl ? g * dot(d, c.n[static_cast<std::size_t>(q)]) / r2 : g;
+    };
+    const Slice row = [&](Index p, double* o) {
+      for (Index q = 0; q < c.size(); ++q) o[q] = entry(p, q);
+    };
+    const Slice column = [&](Index q, double* o) {
+      for (Index p = 0; p < r.size(); ++p) o[p] = entry(p, q);
+    };
+    // the projection sums about 10 point rows into a dof row: a tenth of the tolerance
+    const LowRank points = aca(r.size(), c.size(), row, column, 0.1 * tol, std::min(r.size(), c.size()));
+    out.U = r.project(points.U, m_);
+    out.V = c.project(points.V, k_);
+    return true;
+  }
+
  private:
+  /// Whether every triangle pair of the block is far (PairIntegrator::regular_points):
+  /// from the boxes of the two sides when they are apart by 2 (1 + kFarSeparation) times
+  /// the largest triangle radius (centroids at least the boxes' distance apart), pair by
+  /// pair otherwise.
+  bool far_pairs_only() const {
+    Box br, bc;
+    double radius = 0.0;
+    for (const Part& p : row_parts_) {
+      const Triangle& T = s_.triangle(p.triangle);
+      for (const Vec3& v : T.p) br.add(v);
+      radius = std::max(radius, T.radius);
+    }
+    for (const Part& p : col_parts_) {
+      const Triangle& T = s_.triangle(p.triangle);
+      for (const Vec3& v : T.p) bc.add(v);
+      radius = std::max(radius, T.radius);
+    }
+    if (br.distance(bc) >= 2.0 * (1.0 + kFarSeparation) * radius) return true;
+    for (const Part& p : row_parts_)
+      for (const Part& q : col_parts_)
+        if (PairIntegrator::regular_points(s_.triangle(p.triangle), s_.triangle(q.triangle)) != kFarGaussPoints)
+          return false;
+    return true;
+  }
   /// out[row_stride * row position + col_stride * column position] += the pair's entries.
   void add(const Part& r, const Part& c, double* out, Index row_stride, Index col_stride) const {
     PairIntegrals L;
@@ -109,6 +198,12 @@ SurfaceEntries::SurfaceEntries(const Surface& surface, SurfaceKernel kernel, Spa
 
 std::unique_ptr<EntryBlock> SurfaceEntries::block(const Index* I, Index m, const Index* J, Index k) const {
   return std::make_unique<SurfaceBlock>(surface_, integrator_, kernel_, rows_, cols_, I, m, J, k);
+}
+
+double far_distance(const Surface& s) {
+  double radius = 0.0;
+  for (const Triangle& T : s.triangles()) radius = std::max(radius, T.radius);
+  return 2.0 * (1.0 + kFarSeparation) * radius;
 }
 
 ClusterTree surface_cluster_tree(const Surface& s, Space space, Index leaf_size) {

@@ -139,7 +139,7 @@ int PairIntegrator::regular_points(const Triangle& a, const Triangle& b) {
   // one rule for every pair from q = 1.5 on: the entries of an admissible block are then a
   // smooth function of the positions (a rule switching inside a block would add a jump at
   // the rule's error, which ACA could not compress below it; docs/design/bem3d.md)
-  if (q >= 1.5) return 3;
+  if (q >= kFarSeparation) return kFarGaussPoints;
   if (q >= 0.5) return 4;
   return 5;
 }

@@ -15,6 +15,7 @@ SurfaceSteklovOperator::SurfaceSteklovOperator(VerticesRef vertices, TrianglesRe
     throw std::invalid_argument("SurfaceSteklovOperator: need solver_tol > 0, max_iterations >= 1");
   const auto t0 = std::chrono::steady_clock::now();
   HMatrixOptions o = options.hmatrix;
+  o.min_distance = far_distance(surface_);
   auto tree0 = std::make_shared<const ClusterTree>(surface_cluster_tree(surface_, Space::P0, o.leaf_size));
   auto tree1 = std::make_shared<const ClusterTree>(surface_cluster_tree(surface_, Space::P1, o.leaf_size));
   o.symmetric = true;

@@ -48,6 +48,10 @@ struct HMatrixOptions {
   /// rectangular matrix whose row tree is much deeper than the column tree, e.g. m >> n
   /// target points of a potential; dense blocks only between two leaves).
   bool split_to_leaves = false;
+  /// Admissible blocks also keep their clusters' boxes at least this far apart (the
+  /// surface operators: every triangle pair of an admissible block is then a far pair,
+  /// surface_entries.hpp).
+  double min_distance = 0.0;
 };
 
 /// Entries of one block A(I, J) (original dof order), by rows, columns or all at once.
@@ -57,6 +61,9 @@ class EntryBlock {
   virtual void row(Index i, double* out) const = 0;     ///< out[c] = A(I[i], J[c])
   virtual void column(Index j, double* out) const = 0;  ///< out[r] = A(I[r], J[j])
   virtual void all(double* out) const = 0;              ///< out[r + c m] = A(I[r], J[c])
+  /// An admissible block's factors A(I, J) ~ U V^T to the relative accuracy tol by a
+  /// cheaper route than ACA on row() and column() (false: none, the HMatrix runs that ACA).
+  virtual bool low_rank(double /*tol*/, LowRank& /*out*/) const { return false; }
 };
 
 /// Source of the entries of a matrix; block() may prepare per-block data. Thread-safe.

@@ -21,6 +21,13 @@ namespace bem {
 /// relative (K and V, perpendicular edge-adjacent pair; docs/design/bem3d.md).
 constexpr int kSingularGaussPoints[4] = {0, 5, 6, 6};
 
+/// The rule of the far pairs, separation q >= kFarSeparation (PairIntegrator::regular_points):
+/// triangle_rule(kFarGaussPoints) on both triangles. The admissible H-matrix blocks hold
+/// far pairs only, so their entries are this rule's sums over the point kernel
+/// (surface_entries.hpp).
+constexpr int kFarGaussPoints = 3;
+constexpr double kFarSeparation = 1.5;
+
 /// Number of dofs of `space` on the surface (P1: vertices, P0: triangles).
 Index dofs(const Surface& surface, Space space);
 
