@@ -41,6 +41,7 @@ PYBIND11_MODULE(_bem, m) {
 
   py::class_<bem::SteklovInfo>(m, "SteklovInfo")
       .def_readonly("setup_seconds", &bem::SteklovInfo::setup_seconds)
+      .def_readonly("near_field_seconds", &bem::SteklovInfo::near_field_seconds)
       .def_readonly("max_rank", &bem::SteklovInfo::max_rank)
       .def_readonly("nbytes_v", &bem::SteklovInfo::nbytes_v)
       .def_readonly("nbytes_v0", &bem::SteklovInfo::nbytes_v0)

@@ -121,4 +121,23 @@ Adjacency adjacency(const Triangle& s, const Triangle& t) {
   return r;
 }
 
+std::vector<std::vector<Index>> vertex_colouring(const Surface& s) {
+  const Index m = s.size();
+  std::vector<int> colour(static_cast<std::size_t>(m), -1);
+  std::vector<std::vector<Index>> out;
+  for (Index t = 0; t < m; ++t) {
+    std::vector<char> taken(out.size() + 1, 0);
+    for (Index v : s.triangle(t).v)
+      for (Index u : s.star(v)) {
+        const int c = colour[static_cast<std::size_t>(u)];
+        if (c >= 0) taken[static_cast<std::size_t>(c)] = 1;
+      }
+    const int c = static_cast<int>(std::find(taken.begin(), taken.end(), 0) - taken.begin());
+    if (c == static_cast<int>(out.size())) out.emplace_back();
+    colour[static_cast<std::size_t>(t)] = c;
+    out[static_cast<std::size_t>(c)].push_back(t);
+  }
+  return out;
+}
+
 }  // namespace bem

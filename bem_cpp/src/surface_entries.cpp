@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <unordered_map>
 #include <vector>
 
 namespace bem {
@@ -85,8 +86,8 @@ struct FarPoints {
 
 class SurfaceBlock : public EntryBlock {
  public:
-  SurfaceBlock(const Surface& s, const PairIntegrator& integrator, SurfaceKernel kernel, Space rows, Space cols,
-               const Index* I, Index m, const Index* J, Index k)
+  SurfaceBlock(const Surface& s, const PairIntegrator& integrator, const SurfaceNearField* near, SurfaceKernel kernel,
+               Space rows, Space cols, const Index* I, Index m, const Index* J, Index k)
       : s_(s),
         integrator_(integrator),
         kernel_(kernel),
@@ -97,24 +98,35 @@ class SurfaceBlock : public EntryBlock {
         m_(m),
         k_(k),
         row_parts_(parts(s, rows, I, m)),
-        col_parts_(parts(s, cols, J, k)) {}
+        col_parts_(parts(s, cols, J, k)) {
+    if (near == nullptr) return;
+    const bool dl = kernel == SurfaceKernel::DoubleLayer;
+    near_rows_ = dl ? &near->double_layer() : &near->single_layer(rows);
+    near_cols_ = dl ? &near->double_layer_transpose() : near_rows_;
+    for (Index p = 0; p < m; ++p) row_position_[I[p]] = p;
+    for (Index q = 0; q < k; ++q) col_position_[J[q]] = q;
+  }
 
   void row(Index i, double* out) const override {
     std::fill(out, out + k_, 0.0);
     const std::vector<Part> own = parts(s_, rows_, I_ + i, 1);
     for (const Part& r : own)
       for (const Part& c : col_parts_) add(r, c, out, 0, 1);
+    if (near_rows_) add_near(*near_rows_, I_[i], col_position_, out, 1);
   }
   void column(Index j, double* out) const override {
     std::fill(out, out + m_, 0.0);
     const std::vector<Part> own = parts(s_, cols_, J_ + j, 1);
     for (const Part& r : row_parts_)
       for (const Part& c : own) add(r, c, out, 1, 0);
+    if (near_cols_) add_near(*near_cols_, J_[j], row_position_, out, 1);
   }
   void all(double* out) const override {
     std::fill(out, out + m_ * k_, 0.0);
     for (const Part& r : row_parts_)
       for (const Part& c : col_parts_) add(r, c, out, 1, m_);
+    if (near_rows_)
+      for (Index p = 0; p < m_; ++p) add_near(*near_rows_, I_[p], col_position_, out + p, m_);
   }
 
   /// Far blocks: every triangle pair is evaluated by the far rule (the block's entries are
@@ -168,8 +180,10 @@ class SurfaceBlock : public EntryBlock {
           return false;
     return true;
   }
-  /// out[row_stride * row position + col_stride * column position] += the pair's entries.
+  /// out[row_stride * row position + col_stride * column position] += the pair's entries
+  /// (far pairs only when the near field holds the others).
   void add(const Part& r, const Part& c, double* out, Index row_stride, Index col_stride) const {
+    if (near_rows_ && !PairIntegrator::far(s_.triangle(r.triangle), s_.triangle(c.triangle))) return;
     PairIntegrals L;
     const bool dl = kernel_ == SurfaceKernel::DoubleLayer;
     integrator_.integrate(r.triangle, c.triangle, dl, L);
@@ -179,6 +193,14 @@ class SurfaceBlock : public EntryBlock {
         out[row_stride * r.position[a] + col_stride * c.position[b]] += v;
       }
   }
+  /// out[stride * position[j]] += A(i, j) for the entries of row i of A in the block.
+  static void add_near(const RowSparse& A, Index i, const std::unordered_map<Index, Index>& position, double* out,
+                       Index stride) {
+    for (RowSparse::InnerIterator it(A, i); it; ++it) {
+      const auto p = position.find(it.col());
+      if (p != position.end()) out[stride * p->second] += it.value();
+    }
+  }
   const Surface& s_;
   const PairIntegrator& integrator_;
   SurfaceKernel kernel_;
@@ -186,18 +208,23 @@ class SurfaceBlock : public EntryBlock {
   const Index *I_, *J_;
   Index m_, k_;
   std::vector<Part> row_parts_, col_parts_;
+  const RowSparse* near_rows_ = nullptr;  ///< near part by rows, and by columns
+  const RowSparse* near_cols_ = nullptr;
+  std::unordered_map<Index, Index> row_position_, col_position_;  ///< dof -> position in the block
 };
 
 }  // namespace
 
-SurfaceEntries::SurfaceEntries(const Surface& surface, SurfaceKernel kernel, Space rows, Space cols)
-    : surface_(surface), integrator_(surface), kernel_(kernel), rows_(rows), cols_(cols) {
+SurfaceEntries::SurfaceEntries(const Surface& surface, SurfaceKernel kernel, Space rows, Space cols,
+                               std::shared_ptr<const SurfaceNearField> near)
+    : surface_(surface), integrator_(surface), kernel_(kernel), rows_(rows), cols_(cols), near_(std::move(near)) {
   if (kernel == SurfaceKernel::DoubleLayer && cols != Space::P1)
     throw std::invalid_argument("SurfaceEntries: the double layer acts on the P1 trace");
+  if (near_ && rows != cols) throw std::invalid_argument("SurfaceEntries: the near field is P0 x P0 or P1 x P1");
 }
 
 std::unique_ptr<EntryBlock> SurfaceEntries::block(const Index* I, Index m, const Index* J, Index k) const {
-  return std::make_unique<SurfaceBlock>(surface_, integrator_, kernel_, rows_, cols_, I, m, J, k);
+  return std::make_unique<SurfaceBlock>(surface_, integrator_, near_.get(), kernel_, rows_, cols_, I, m, J, k);
 }
 
 double far_distance(const Surface& s) {

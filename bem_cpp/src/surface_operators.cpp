@@ -135,7 +135,7 @@ PairIntegrator::PairIntegrator(const Surface& surface) : surface_(surface) {
 int PairIntegrator::regular_points(const Triangle& a, const Triangle& b) {
   // distance of the circumscribing balls about the centroids, over the larger diameter
   const double h = 2.0 * std::max(a.radius, b.radius);
-  const double q = (norm(a.c - b.c) - a.radius - b.radius) / h;
+  const double q = (norm(a.c - b.c) - (a.radius + b.radius)) / h;  // symmetric in a, b to the last bit
   // one rule for every pair from q = 1.5 on: the entries of an admissible block are then a
   // smooth function of the positions (a rule switching inside a block would add a jump at
   // the rule's error, which ACA could not compress below it; docs/design/bem3d.md)
@@ -181,30 +181,6 @@ Vec3 surface_curl(const Triangle& t, int a) {
   return (0.5 / t.area) * e;
 }
 
-namespace {
-
-/// Greedy colouring of the triangles: no two triangles of one colour share a vertex.
-std::vector<std::vector<Index>> colours(const Surface& s) {
-  const Index m = s.size();
-  std::vector<int> colour(static_cast<std::size_t>(m), -1);
-  std::vector<std::vector<Index>> out;
-  for (Index t = 0; t < m; ++t) {
-    std::vector<char> taken(out.size() + 1, 0);
-    for (Index v : s.triangle(t).v)
-      for (Index u : s.star(v)) {
-        const int c = colour[static_cast<std::size_t>(u)];
-        if (c >= 0) taken[static_cast<std::size_t>(c)] = 1;
-      }
-    const int c = static_cast<int>(std::find(taken.begin(), taken.end(), 0) - taken.begin());
-    if (c == static_cast<int>(out.size())) out.emplace_back();
-    colour[static_cast<std::size_t>(t)] = c;
-    out[static_cast<std::size_t>(c)].push_back(t);
-  }
-  return out;
-}
-
-}  // namespace
-
 SurfaceMatrices assemble(const Surface& surface, const SurfaceRequest& request) {
   // Each unordered pair {tau, sigma} is integrated once (tau <= sigma) and gives the entries
   // of both orders: V and W are accumulated as their upper parts H (pairs tau < sigma whole,
@@ -223,7 +199,7 @@ SurfaceMatrices assemble(const Surface& surface, const SurfaceRequest& request) 
   }
   if (w) W = Matrix::Zero(n, n);
   const PairIntegrator integrator(surface);
-  for (const std::vector<Index>& colour : colours(surface)) {
+  for (const std::vector<Index>& colour : vertex_colouring(surface)) {
     const long count = static_cast<long>(colour.size());
 #pragma omp parallel for schedule(dynamic, 1)
     for (long q = 0; q < count; ++q) {

@@ -18,14 +18,18 @@ SurfaceSteklovOperator::SurfaceSteklovOperator(VerticesRef vertices, TrianglesRe
   o.min_distance = far_distance(surface_);
   auto tree0 = std::make_shared<const ClusterTree>(surface_cluster_tree(surface_, Space::P0, o.leaf_size));
   auto tree1 = std::make_shared<const ClusterTree>(surface_cluster_tree(surface_, Space::P1, o.leaf_size));
+  // the near pairs integrated once for the three matrices
+  const auto near = std::make_shared<const SurfaceNearField>(surface_);
+  const auto t1 = std::chrono::steady_clock::now();
+  info_.near_field_seconds = std::chrono::duration<double>(t1 - t0).count();
   o.symmetric = true;
-  V0_ = std::make_shared<const HMatrix>(tree0, tree0,
-                                        SurfaceEntries(surface_, SurfaceKernel::SingleLayer, Space::P0, Space::P0), o);
-  V_ = std::make_shared<const HMatrix>(tree1, tree1,
-                                       SurfaceEntries(surface_, SurfaceKernel::SingleLayer, Space::P1, Space::P1), o);
+  V0_ = std::make_shared<const HMatrix>(
+      tree0, tree0, SurfaceEntries(surface_, SurfaceKernel::SingleLayer, Space::P0, Space::P0, near), o);
+  V_ = std::make_shared<const HMatrix>(
+      tree1, tree1, SurfaceEntries(surface_, SurfaceKernel::SingleLayer, Space::P1, Space::P1, near), o);
   o.symmetric = false;
-  K_ = std::make_shared<const HMatrix>(tree1, tree1,
-                                       SurfaceEntries(surface_, SurfaceKernel::DoubleLayer, Space::P1, Space::P1), o);
+  K_ = std::make_shared<const HMatrix>(
+      tree1, tree1, SurfaceEntries(surface_, SurfaceKernel::DoubleLayer, Space::P1, Space::P1, near), o);
   const Index n = surface_.vertices(), m = surface_.size();
   std::vector<Eigen::Triplet<double>> mass, curls[3];
   double area = 0.0;

@@ -20,36 +20,46 @@ std::vector<Index> every_other(Index n, Index start) {
 }  // namespace
 
 TEST(SurfaceEntries, RowsColumnsAndBlocksAreThoseOfTheDenseMatrices) {
-  const test::Mesh mesh = test::icosphere(1, 0.6);
-  const Surface s(mesh.vertices, mesh.triangles);
-  for (Space rows : {Space::P0, Space::P1})
-    for (SurfaceKernel kernel : {SurfaceKernel::SingleLayer, SurfaceKernel::DoubleLayer}) {
-      SurfaceRequest request;
-      const Space cols = kernel == SurfaceKernel::DoubleLayer ? Space::P1 : rows;
-      if (kernel == SurfaceKernel::SingleLayer) request.single_layer = rows;
-      if (kernel == SurfaceKernel::DoubleLayer) request.double_layer = rows;
-      const SurfaceMatrices dense = assemble(s, request);
-      const Matrix& A = kernel == SurfaceKernel::SingleLayer ? dense.single_layer : dense.double_layer;
-      const std::vector<Index> I = every_other(A.rows(), 1), J = every_other(A.cols(), 0);
-      const Index m = static_cast<Index>(I.size()), k = static_cast<Index>(J.size());
-      const SurfaceEntries entries(s, kernel, rows, cols);
-      const auto block = entries.block(I.data(), m, J.data(), k);
-      Eigen::MatrixXd all(m, k);
-      block->all(all.data());
-      Eigen::VectorXd row(k), column(m);
-      const double scale = A.cwiseAbs().maxCoeff();
-      for (Index i = 0; i < m; ++i) {
-        block->row(i, row.data());
-        for (Index j = 0; j < k; ++j) {
-          EXPECT_NEAR(all(i, j), A(I[i], J[j]), 1e-14 * scale);
-          EXPECT_NEAR(row(j), A(I[i], J[j]), 1e-14 * scale);
+  // with and without the near field (the near pairs integrated once, surface_near_field.hpp);
+  // on the cube many pairs sit exactly at the far separation: far(a, b) must equal far(b, a)
+  const test::Mesh meshes[2] = {test::icosphere(2, 0.6), test::cube(6, 1.0)};
+  for (const test::Mesh& mesh : meshes) {
+    const Surface s(mesh.vertices, mesh.triangles);
+    const auto near = std::make_shared<const SurfaceNearField>(s);
+    for (bool with_near : {false, true})
+      for (Space rows : {Space::P0, Space::P1})
+        for (SurfaceKernel kernel : {SurfaceKernel::SingleLayer, SurfaceKernel::DoubleLayer}) {
+          SurfaceRequest request;
+          const Space cols = kernel == SurfaceKernel::DoubleLayer ? Space::P1 : rows;
+          if (with_near && rows != cols) continue;  // the near field holds P0 x P0 and P1 x P1
+          if (kernel == SurfaceKernel::SingleLayer) request.single_layer = rows;
+          if (kernel == SurfaceKernel::DoubleLayer) request.double_layer = rows;
+          const SurfaceMatrices dense = assemble(s, request);
+          const Matrix& A = kernel == SurfaceKernel::SingleLayer ? dense.single_layer : dense.double_layer;
+          const std::vector<Index> I = every_other(A.rows(), 0), J = every_other(A.cols(), 0);
+          const Index m = static_cast<Index>(I.size()), k = static_cast<Index>(J.size());
+          const SurfaceEntries entries(s, kernel, rows, cols, with_near ? near : nullptr);
+          const auto block = entries.block(I.data(), m, J.data(), k);
+          SCOPED_TRACE(with_near ? "near" : "plain");
+          SCOPED_TRACE(rows == Space::P0 ? "P0" : "P1");
+          SCOPED_TRACE(kernel == SurfaceKernel::SingleLayer ? "SL" : "DL");
+          Eigen::MatrixXd all(m, k);
+          block->all(all.data());
+          Eigen::VectorXd row(k), column(m);
+          const double scale = A.cwiseAbs().maxCoeff();
+          for (Index i = 0; i < m; ++i) {
+            block->row(i, row.data());
+            for (Index j = 0; j < k; ++j) {
+              EXPECT_NEAR(all(i, j), A(I[i], J[j]), 1e-14 * scale) << I[i] << " " << J[j];
+              EXPECT_NEAR(row(j), A(I[i], J[j]), 1e-14 * scale);
+            }
+          }
+          for (Index j = 0; j < k; ++j) {
+            block->column(j, column.data());
+            for (Index i = 0; i < m; ++i) EXPECT_NEAR(column(i), A(I[i], J[j]), 1e-14 * scale);
+          }
         }
-      }
-      for (Index j = 0; j < k; ++j) {
-        block->column(j, column.data());
-        for (Index i = 0; i < m; ++i) EXPECT_NEAR(column(i), A(I[i], J[j]), 1e-14 * scale);
-      }
-    }
+  }
 }
 
 TEST(SurfaceEntries, HMatrixProductsAgreeWithTheDenseOnes) {

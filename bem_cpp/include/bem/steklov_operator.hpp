@@ -28,7 +28,8 @@ struct SteklovOptions {
 /// What the set-up built.
 struct SteklovInfo {
   double setup_seconds = 0;
-  Index max_rank = 0;  ///< largest rank of a low-rank block (V, V0, K)
+  double near_field_seconds = 0;  ///< of set-up: the near pairs of the surface operators (3D)
+  Index max_rank = 0;             ///< largest rank of a low-rank block (V, V0, K)
   std::size_t nbytes_v = 0, nbytes_v0 = 0, nbytes_k = 0, nbytes_preconditioner = 0;
 };
 

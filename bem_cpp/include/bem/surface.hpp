@@ -66,4 +66,8 @@ struct Adjacency {
 };
 Adjacency adjacency(const Triangle& s, const Triangle& t);
 
+/// Greedy colouring of the triangles: no two triangles of one colour share a vertex (the
+/// threads of an assembly over the triangles of one colour write different vertex rows).
+std::vector<std::vector<Index>> vertex_colouring(const Surface& surface);
+
 }  // namespace bem

@@ -7,6 +7,7 @@
 
 #include "bem/cluster_tree.hpp"
 #include "bem/hmatrix.hpp"
+#include "bem/surface_near_field.hpp"
 #include "bem/surface_operators.hpp"
 
 namespace bem {
@@ -16,7 +17,10 @@ enum class SurfaceKernel { SingleLayer, DoubleLayer };
 class SurfaceEntries : public EntrySource {
  public:
   /// rows/cols: the spaces of the test and trial functions (DoubleLayer: cols P1).
-  SurfaceEntries(const Surface& surface, SurfaceKernel kernel, Space rows, Space cols);
+  /// `near`: the near pairs' part of the entries (surface_near_field.hpp), so that blocks
+  /// integrate only their far pairs (rows and cols P0 x P0 or P1 x P1); null: every pair.
+  SurfaceEntries(const Surface& surface, SurfaceKernel kernel, Space rows, Space cols,
+                 std::shared_ptr<const SurfaceNearField> near = nullptr);
   std::unique_ptr<EntryBlock> block(const Index* I, Index m, const Index* J, Index k) const override;
 
  private:
@@ -24,6 +28,7 @@ class SurfaceEntries : public EntrySource {
   PairIntegrator integrator_;
   SurfaceKernel kernel_;
   Space rows_, cols_;
+  std::shared_ptr<const SurfaceNearField> near_;
 };
 
 /// The distance of two sets of triangles beyond which every pair of them is a far pair

@@ -49,6 +49,8 @@ class PairIntegrator {
   /// the centroids over the larger diameter, q: p = 5 below q = 0.5, 4 below 1.5, 3 beyond
   /// (docs/design/bem3d.md).
   static int regular_points(const Triangle& a, const Triangle& b);
+  /// Whether the pair is a far pair (integrated by the far rule): disjoint, q >= kFarSeparation.
+  static bool far(const Triangle& a, const Triangle& b) { return regular_points(a, b) == kFarGaussPoints; }
 
  private:
   const Surface& surface_;

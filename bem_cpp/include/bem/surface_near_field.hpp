@@ -1,0 +1,30 @@
+#pragma once
+// The near part of the surface operators (surface_operators.hpp): the sums over the near
+// triangle pairs (PairIntegrator::far false: shared vertices, or separation q below
+// kFarSeparation) of V_h (P0 and P1) and K_h (P1 x P1), as sparse matrices. Each
+// unordered near pair is integrated once for all three, so that the H-matrices of V_h
+// (P0, P1) and K_h (surface_entries.hpp) evaluate only far pairs themselves.
+#include <Eigen/Sparse>
+#include <vector>
+
+#include "bem/surface_operators.hpp"
+
+namespace bem {
+
+using RowSparse = Eigen::SparseMatrix<double, Eigen::RowMajor, Index>;
+
+class SurfaceNearField {
+ public:
+  explicit SurfaceNearField(const Surface& surface);
+  /// The near part of V_h in `space` (symmetric).
+  const RowSparse& single_layer(Space space) const { return space == Space::P0 ? v0_ : v1_; }
+  /// The near part of K_h (rows and columns P1), and its transpose (for columns).
+  const RowSparse& double_layer() const { return k_; }
+  const RowSparse& double_layer_transpose() const { return kt_; }
+  std::size_t nbytes() const;
+
+ private:
+  RowSparse v0_, v1_, k_, kt_;
+};
+
+}  // namespace bem
