@@ -121,6 +121,9 @@ Adjacency adjacency(const Triangle& s, const Triangle& t) {
   return r;
 }
 
+namespace {
+
+/// Greedy colouring of the triangles: no two triangles of one colour share a vertex.
 std::vector<std::vector<Index>> vertex_colouring(const Surface& s) {
   const Index m = s.size();
   std::vector<int> colour(static_cast<std::size_t>(m), -1);
@@ -138,6 +141,16 @@ std::vector<std::vector<Index>> vertex_colouring(const Surface& s) {
     out[static_cast<std::size_t>(c)].push_back(t);
   }
   return out;
+}
+
+}  // namespace
+
+void for_each_triangle_by_colour(const Surface& s, const std::function<void(Index)>& f) {
+  for (const std::vector<Index>& colour : vertex_colouring(s)) {
+    const long count = static_cast<long>(colour.size());
+#pragma omp parallel for schedule(dynamic, 1)
+    for (long q = 0; q < count; ++q) f(colour[static_cast<std::size_t>(q)]);
+  }
 }
 
 }  // namespace bem

@@ -156,10 +156,9 @@ class SurfaceBlock : public EntryBlock {
   }
 
  private:
-  /// Whether every triangle pair of the block is far (PairIntegrator::regular_points):
-  /// from the boxes of the two sides when they are apart by 2 (1 + kFarSeparation) times
-  /// the largest triangle radius (centroids at least the boxes' distance apart), pair by
-  /// pair otherwise.
+  /// Whether every triangle pair of the block is far (PairIntegrator::far): from the boxes
+  /// of the two sides when they are far_distance of their largest triangle apart (centroids
+  /// at least the boxes' distance apart), pair by pair otherwise.
   bool far_pairs_only() const {
     Box br, bc;
     double radius = 0.0;
@@ -173,11 +172,10 @@ class SurfaceBlock : public EntryBlock {
       for (const Vec3& v : T.p) bc.add(v);
       radius = std::max(radius, T.radius);
     }
-    if (br.distance(bc) >= 2.0 * (1.0 + kFarSeparation) * radius) return true;
+    if (br.distance(bc) >= far_distance(radius)) return true;
     for (const Part& p : row_parts_)
       for (const Part& q : col_parts_)
-        if (PairIntegrator::regular_points(s_.triangle(p.triangle), s_.triangle(q.triangle)) != kFarGaussPoints)
-          return false;
+        if (!PairIntegrator::far(s_.triangle(p.triangle), s_.triangle(q.triangle))) return false;
     return true;
   }
   /// out[row_stride * row position + col_stride * column position] += the pair's entries
@@ -225,12 +223,6 @@ SurfaceEntries::SurfaceEntries(const Surface& surface, SurfaceKernel kernel, Spa
 
 std::unique_ptr<EntryBlock> SurfaceEntries::block(const Index* I, Index m, const Index* J, Index k) const {
   return std::make_unique<SurfaceBlock>(surface_, integrator_, near_.get(), kernel_, rows_, cols_, I, m, J, k);
-}
-
-double far_distance(const Surface& s) {
-  double radius = 0.0;
-  for (const Triangle& T : s.triangles()) radius = std::max(radius, T.radius);
-  return 2.0 * (1.0 + kFarSeparation) * radius;
 }
 
 ClusterTree surface_cluster_tree(const Surface& s, Space space, Index leaf_size) {

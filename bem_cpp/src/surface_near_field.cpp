@@ -13,17 +13,13 @@ namespace bem {
 namespace {
 
 /// For each triangle, the triangles sigma >= tau of its near pairs (sorted), found in a
-/// grid of cells as wide as the largest near distance: centroids closer than
-/// ra + rb + 2 kFarSeparation max(ra, rb) <= 2 (1 + kFarSeparation) r_max.
+/// grid of cells as wide as the largest near distance (far_distance): centroids closer than
+/// ra + rb + 2 kFarSeparation max(ra, rb).
 std::vector<std::vector<Index>> near_pairs(const Surface& s) {
   const Index m = s.size();
-  double radius = 0.0;
   Box box;
-  for (const Triangle& T : s.triangles()) {
-    radius = std::max(radius, T.radius);
-    box.add(T.c);
-  }
-  const double cell = 2.0 * (1.0 + kFarSeparation) * radius;
+  for (const Triangle& T : s.triangles()) box.add(T.c);
+  const double cell = far_distance(s);
   auto key = [&](const Vec3& c) {
     return std::array<long, 3>{static_cast<long>(std::floor((c.x - box.x0) / cell)),
                                static_cast<long>(std::floor((c.y - box.y0) / cell)),
@@ -109,41 +105,28 @@ SurfaceNearField::SurfaceNearField(const Surface& s) {
   });
   std::vector<double> h0(p0.col.size(), 0.0), h1(p1.col.size(), 0.0), k1(p1.col.size(), 0.0), kt1(p1.col.size(), 0.0);
   const PairIntegrator integrator(s);
-  for (const std::vector<Index>& colour : vertex_colouring(s)) {
-    const long count = static_cast<long>(colour.size());
-#pragma omp parallel for schedule(dynamic, 4)
-    for (long q = 0; q < count; ++q) {
-      const Index tau = colour[static_cast<std::size_t>(q)];
-      const Triangle& a = s.triangle(tau);
-      PairIntegrals L;
-      for (Index sigma : near[static_cast<std::size_t>(tau)]) {
-        integrator.integrate(tau, sigma, true, L);
-        const Triangle& b = s.triangle(sigma);
-        const double half = sigma == tau ? 0.5 : 1.0;
-        h0[static_cast<std::size_t>(p0.position(tau, sigma))] += half * L.V[3][3];
-        for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j) {
-            const std::size_t k = static_cast<std::size_t>(p1.position(a.v[i], b.v[j]));
-            h1[k] += half * L.V[i][j];
-            k1[k] += L.K[i][j];
-            if (sigma != tau) kt1[k] += L.Kt[j][i];
-          }
-      }
+  for_each_triangle_by_colour(s, [&](Index tau) {
+    const Triangle& a = s.triangle(tau);
+    PairIntegrals L;
+    for (Index sigma : near[static_cast<std::size_t>(tau)]) {
+      integrator.integrate(tau, sigma, true, L);
+      const Triangle& b = s.triangle(sigma);
+      const double half = sigma == tau ? 0.5 : 1.0;
+      h0[static_cast<std::size_t>(p0.position(tau, sigma))] += half * L.V[3][3];
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+          const std::size_t k = static_cast<std::size_t>(p1.position(a.v[i], b.v[j]));
+          h1[k] += half * L.V[i][j];
+          k1[k] += L.K[i][j];
+          if (sigma != tau) kt1[k] += L.Kt[j][i];
+        }
     }
-  }
+  });
   const RowSparse H0 = p0.matrix(m, m, h0), H1 = p1.matrix(n, n, h1);
   v0_ = RowSparse(H0 + RowSparse(H0.transpose()));
   v1_ = RowSparse(H1 + RowSparse(H1.transpose()));
   k_ = RowSparse(p1.matrix(n, n, k1) + RowSparse(p1.matrix(n, n, kt1).transpose()));
   kt_ = RowSparse(k_.transpose());
-}
-
-std::size_t SurfaceNearField::nbytes() const {
-  std::size_t out = 0;
-  for (const RowSparse* A : {&v0_, &v1_, &k_, &kt_})
-    out += static_cast<std::size_t>(A->nonZeros()) * (sizeof(double) + sizeof(Index)) +
-           static_cast<std::size_t>(A->outerSize() + 1) * sizeof(Index);
-  return out;
 }
 
 }  // namespace bem

@@ -175,6 +175,12 @@ void PairIntegrator::integrate(Index tau, Index sigma, bool double_layer, PairIn
       }
 }
 
+double far_distance(const Surface& s) {
+  double radius = 0.0;
+  for (const Triangle& T : s.triangles()) radius = std::max(radius, T.radius);
+  return far_distance(radius);
+}
+
 Vec3 surface_curl(const Triangle& t, int a) {
   // n x grad(lambda_a) = (p_{a+1} - p_{a+2}) / (2 A)
   const Vec3 e = t.p[static_cast<std::size_t>((a + 1) % 3)] - t.p[static_cast<std::size_t>((a + 2) % 3)];
@@ -199,48 +205,43 @@ SurfaceMatrices assemble(const Surface& surface, const SurfaceRequest& request) 
   }
   if (w) W = Matrix::Zero(n, n);
   const PairIntegrator integrator(surface);
-  for (const std::vector<Index>& colour : vertex_colouring(surface)) {
-    const long count = static_cast<long>(colour.size());
-#pragma omp parallel for schedule(dynamic, 1)
-    for (long q = 0; q < count; ++q) {
-      const Index tau = colour[static_cast<std::size_t>(q)];
-      const Triangle& a = surface.triangle(tau);
-      Vec3 curl_a[3];
-      for (int i = 0; i < 3; ++i) curl_a[i] = surface_curl(a, i);
-      PairIntegrals L;
-      for (Index sigma = tau; sigma < m; ++sigma) {
-        integrator.integrate(tau, sigma, k, L);
-        const Triangle& b = surface.triangle(sigma);
-        const double half = sigma == tau ? 0.5 : 1.0;
-        if (vs) {
-          if (*vs == Space::P0) {
-            V(tau, sigma) += half * L.V[3][3];
-          } else {
-            for (int i = 0; i < 3; ++i)
-              for (int j = 0; j < 3; ++j) V(a.v[i], b.v[j]) += half * L.V[i][j];
-          }
+  for_each_triangle_by_colour(surface, [&](Index tau) {
+    const Triangle& a = surface.triangle(tau);
+    Vec3 curl_a[3];
+    for (int i = 0; i < 3; ++i) curl_a[i] = surface_curl(a, i);
+    PairIntegrals L;
+    for (Index sigma = tau; sigma < m; ++sigma) {
+      integrator.integrate(tau, sigma, k, L);
+      const Triangle& b = surface.triangle(sigma);
+      const double half = sigma == tau ? 0.5 : 1.0;
+      if (vs) {
+        if (*vs == Space::P0) {
+          V(tau, sigma) += half * L.V[3][3];
+        } else {
+          for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) V(a.v[i], b.v[j]) += half * L.V[i][j];
         }
-        if (k) {
-          if (*ks == Space::P0) {
-            for (int j = 0; j < 3; ++j) K(tau, b.v[j]) += L.K[3][j];
-            if (sigma != tau)
-              for (int i = 0; i < 3; ++i) Kt(a.v[i], sigma) += L.Kt[3][i];
-          } else {
-            for (int i = 0; i < 3; ++i)
-              for (int j = 0; j < 3; ++j) {
-                K(a.v[i], b.v[j]) += L.K[i][j];
-                if (sigma != tau) Kt(a.v[i], b.v[j]) += L.Kt[j][i];
-              }
-          }
-        }
-        if (w)
-          for (int j = 0; j < 3; ++j) {
-            const Vec3 cb = surface_curl(b, j);
-            for (int i = 0; i < 3; ++i) W(a.v[i], b.v[j]) += half * L.V[3][3] * dot(curl_a[i], cb);
-          }
       }
+      if (k) {
+        if (*ks == Space::P0) {
+          for (int j = 0; j < 3; ++j) K(tau, b.v[j]) += L.K[3][j];
+          if (sigma != tau)
+            for (int i = 0; i < 3; ++i) Kt(a.v[i], sigma) += L.Kt[3][i];
+        } else {
+          for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) {
+              K(a.v[i], b.v[j]) += L.K[i][j];
+              if (sigma != tau) Kt(a.v[i], b.v[j]) += L.Kt[j][i];
+            }
+        }
+      }
+      if (w)
+        for (int j = 0; j < 3; ++j) {
+          const Vec3 cb = surface_curl(b, j);
+          for (int i = 0; i < 3; ++i) W(a.v[i], b.v[j]) += half * L.V[3][3] * dot(curl_a[i], cb);
+        }
     }
-  }
+  });
   SurfaceMatrices out;
   if (vs) out.single_layer = V + V.transpose();
   if (k) out.double_layer = K + Kt.transpose();

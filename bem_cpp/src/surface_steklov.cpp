@@ -19,9 +19,9 @@ SurfaceSteklovOperator::SurfaceSteklovOperator(VerticesRef vertices, TrianglesRe
   auto tree0 = std::make_shared<const ClusterTree>(surface_cluster_tree(surface_, Space::P0, o.leaf_size));
   auto tree1 = std::make_shared<const ClusterTree>(surface_cluster_tree(surface_, Space::P1, o.leaf_size));
   // the near pairs integrated once for the three matrices
-  const auto near = std::make_shared<const SurfaceNearField>(surface_);
   const auto t1 = std::chrono::steady_clock::now();
-  info_.near_field_seconds = std::chrono::duration<double>(t1 - t0).count();
+  const auto near = std::make_shared<const SurfaceNearField>(surface_);
+  info_.near_field_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
   o.symmetric = true;
   V0_ = std::make_shared<const HMatrix>(
       tree0, tree0, SurfaceEntries(surface_, SurfaceKernel::SingleLayer, Space::P0, Space::P0, near), o);

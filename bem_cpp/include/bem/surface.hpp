@@ -4,6 +4,7 @@
 // of triangle pairs that selects the singular quadrature (surface_quadrature.hpp).
 #include <Eigen/Dense>
 #include <array>
+#include <functional>
 #include <vector>
 
 #include "bem/geometry.hpp"
@@ -66,8 +67,9 @@ struct Adjacency {
 };
 Adjacency adjacency(const Triangle& s, const Triangle& t);
 
-/// Greedy colouring of the triangles: no two triangles of one colour share a vertex (the
-/// threads of an assembly over the triangles of one colour write different vertex rows).
-std::vector<std::vector<Index>> vertex_colouring(const Surface& surface);
+/// Calls f(t) for every triangle t, OpenMP-parallel over one colour of a greedy vertex
+/// colouring at a time: no two concurrent calls get triangles that share a vertex, so each
+/// may write the rows of its own vertices (the assemblies over triangle pairs).
+void for_each_triangle_by_colour(const Surface& surface, const std::function<void(Index)>& f);
 
 }  // namespace bem

@@ -31,11 +31,6 @@ class SurfaceEntries : public EntrySource {
   std::shared_ptr<const SurfaceNearField> near_;
 };
 
-/// The distance of two sets of triangles beyond which every pair of them is a far pair
-/// (kFarSeparation): 2 (1 + kFarSeparation) times the largest triangle radius, the
-/// HMatrixOptions::min_distance of the surface operators.
-double far_distance(const Surface& surface);
-
 /// Dof points (P1: vertices, P0: centroids) and supports (the triangles the basis
 /// function lives on) of `space`, bisected down to `leaf_size`.
 ClusterTree surface_cluster_tree(const Surface& surface, Space space, Index leaf_size);

@@ -21,7 +21,6 @@ class SurfaceNearField {
   /// The near part of K_h (rows and columns P1), and its transpose (for columns).
   const RowSparse& double_layer() const { return k_; }
   const RowSparse& double_layer_transpose() const { return kt_; }
-  std::size_t nbytes() const;
 
  private:
   RowSparse v0_, v1_, k_, kt_;

@@ -28,6 +28,13 @@ constexpr int kSingularGaussPoints[4] = {0, 5, 6, 6};
 constexpr int kFarGaussPoints = 3;
 constexpr double kFarSeparation = 1.5;
 
+/// The distance between two triangles' centroids (or two sets of them) from which every
+/// pair of triangles of radius <= `radius` is a far pair: 2 (1 + kFarSeparation) radius.
+constexpr double far_distance(double radius) { return 2.0 * (1.0 + kFarSeparation) * radius; }
+/// far_distance of the surface's largest triangle (the HMatrixOptions::min_distance of the
+/// surface operators, the cells of the near-pair search).
+double far_distance(const Surface& surface);
+
 /// Number of dofs of `space` on the surface (P1: vertices, P0: triangles).
 Index dofs(const Surface& surface, Space space);
 
