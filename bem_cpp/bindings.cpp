@@ -119,6 +119,9 @@ PYBIND11_MODULE(_bem, m) {
         py::arg("triangles"), py::arg("space"), Release());
   m.def("hypersingular", py::overload_cast<VerticesRef, TrianglesRef>(&bem::hypersingular), py::arg("vertices"),
         py::arg("triangles"), Release());
+  m.def("hypersingular_block",
+        py::overload_cast<VerticesRef, TrianglesRef, const std::vector<bem::Index>&>(&bem::hypersingular_block),
+        py::arg("vertices"), py::arg("triangles"), py::arg("block"), Release());
   m.def(
       "surface_operators",
       [](VerticesRef vertices, TrianglesRef triangles, Space space) {

@@ -87,7 +87,9 @@ def double_layer(
     return _bem.double_layer(*checks.boundary(nodes, triangles), checks.space(space, "space"))
 
 
-def hypersingular(nodes: ArrayLike, *, triangles: ArrayLike | None = None) -> NDArray[np.float64]:
+def hypersingular(
+    nodes: ArrayLike, *, triangles: ArrayLike | None = None, block: ArrayLike | None = None
+) -> NDArray[np.float64]:
     r"""Galerkin matrix of the hypersingular operator W on P1 (docs/method.md sections 2, 9).
 
     Maue's identity on a closed curve, :math:`\langle W u, v\rangle = \langle V u', v'\rangle`
@@ -104,10 +106,15 @@ def hypersingular(nodes: ArrayLike, *, triangles: ArrayLike | None = None) -> ND
         Boundary nodes, counter-clockwise, first node not repeated.
     triangles : (m, 3) array_like of int, optional
         3D: the triangles of the surface whose vertices are ``nodes`` (n, 3).
+    block : (k,) array_like of int, optional
+        Distinct node indices: only W_h[block, block] = E^T W_h E is returned (E the
+        injection of the hats of ``block``). In 3D it is integrated over the triangles
+        that touch those nodes alone, at a cost set by their number, not the surface's
+        (for the nodes inside a surface patch, the H~^{1/2} metric of the patch).
 
     Returns
     -------
-    (n, n) ndarray
+    (n, n) ndarray, or (k, k) with ``block``
         Symmetric positive semi-definite, W_h 1 = 0. On the circle of radius R:
         W cos(m theta) = (m/R) cos(m theta). 3D: by Nedelec's identity
         <W u, v> = <V curl u, curl v> (docs/method.md section 11); on the sphere
@@ -118,7 +125,13 @@ def hypersingular(nodes: ArrayLike, *, triangles: ArrayLike | None = None) -> ND
     ValueError
         Invalid polygon (see the module docstring) or space.
     """
-    return _bem.hypersingular(*checks.boundary(nodes, triangles))
+    geometry = checks.boundary(nodes, triangles)
+    if block is None:
+        return _bem.hypersingular(*geometry)
+    rows = checks.indices(block, geometry[0].shape[0], "block")
+    if triangles is None:
+        return np.ascontiguousarray(_bem.hypersingular(*geometry)[np.ix_(rows, rows)])
+    return _bem.hypersingular_block(*geometry, rows)
 
 
 def mass(

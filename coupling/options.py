@@ -73,7 +73,7 @@ CHOICES: dict[tuple[str, str], tuple[str, ...]] = {
     ("geometry", "shape"): ("square", "lshape", "polygon", "disk", "ellipse", "box", "ball"),
     ("geometry", "subdomains"): ("auto", "physical"),
     ("solver", "method"): ("pgpm", "apgpm", "ssn"),
-    ("solver", "preconditioner"): ("substructuring", "identity", "exact"),
+    ("solver", "preconditioner"): ("substructuring", "amg", "identity", "exact"),
     ("solver", "projection"): ("inexact", "exact"),
     ("solver", "edge_form"): ("paper", "sqrt-laplacian"),
     ("solver", "coarse_space"): ("auto", "graph", "galerkin"),
@@ -123,6 +123,12 @@ OVERSOLVE_SAFEGUARD = 0.1
 #: 1/16 of the fine one (docs/design/nested.md, "Coarser levels at 4h").
 NESTED_COARSENING = 4
 NESTED_MIN_DOFS = 1000
+#: The inner CG + GAMG solve of B_Omega of the ``amg`` preconditioner: relative tolerance
+#: and cap. Tight, since the iterations use B_Omega u and B_Omega^{-1} g as inverses of
+#: each other; its error enters the iterates at this level, far below the solver tol
+#: (docs/design/three_dimensions.md, "The amg preconditioner").
+AMG_RTOL = 1e-12
+AMG_MAX_ITERATIONS = 500
 LANCZOS_STEPS = 20  # Lanczos steps of the step estimate C0 (and of lambda_min for apgpm)
 #: Lanczos steps of ssn's C0, only the scale of its PGPM steps, prediction and stopping
 #: rule; the largest Ritz value converges first (docs/design/solvers.md, "ssn's start").

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace bem {
@@ -264,6 +266,53 @@ Matrix mass(const Surface& surface, Space space) {
   return M;
 }
 
+Matrix hypersingular_block(const Surface& surface, const std::vector<Index>& vertices) {
+  // As `assemble` for W alone, over the pairs of triangles that touch a chosen vertex: the
+  // upper part (tau <= sigma, tau = sigma halved) completed as H + H^T.
+  const Index n = surface.vertices(), k = static_cast<Index>(vertices.size());
+  std::vector<Index> local(static_cast<std::size_t>(n), -1);
+  for (Index i = 0; i < k; ++i) {
+    const Index v = vertices[static_cast<std::size_t>(i)];
+    if (v < 0 || v >= n) throw std::invalid_argument("vertices: index " + std::to_string(v) + " out of range");
+    if (local[static_cast<std::size_t>(v)] >= 0)
+      throw std::invalid_argument("vertices: index " + std::to_string(v) + " repeated");
+    local[static_cast<std::size_t>(v)] = i;
+  }
+  auto chosen = [&](Index v) { return local[static_cast<std::size_t>(v)]; };
+  std::vector<Index> touching;  // ascending
+  for (Index t = 0; t < surface.size(); ++t) {
+    const Triangle& T = surface.triangle(t);
+    if (chosen(T.v[0]) >= 0 || chosen(T.v[1]) >= 0 || chosen(T.v[2]) >= 0) touching.push_back(t);
+  }
+  std::vector<char> touches(static_cast<std::size_t>(surface.size()), 0);
+  for (Index t : touching) touches[static_cast<std::size_t>(t)] = 1;
+  Matrix W = Matrix::Zero(k, k);
+  const PairIntegrator integrator(surface);
+  for_each_triangle_by_colour(surface, [&](Index tau) {
+    if (!touches[static_cast<std::size_t>(tau)]) return;
+    const Triangle& a = surface.triangle(tau);
+    Vec3 curl_a[3];
+    for (int i = 0; i < 3; ++i) curl_a[i] = surface_curl(a, i);
+    PairIntegrals L;
+    for (auto it = std::lower_bound(touching.begin(), touching.end(), tau); it != touching.end(); ++it) {
+      const Index sigma = *it;
+      integrator.integrate(tau, sigma, false, L);
+      const Triangle& b = surface.triangle(sigma);
+      const double half = sigma == tau ? 0.5 : 1.0;
+      for (int j = 0; j < 3; ++j) {
+        const Index cj = chosen(b.v[j]);
+        if (cj < 0) continue;
+        const Vec3 cb = surface_curl(b, j);
+        for (int i = 0; i < 3; ++i) {
+          const Index ci = chosen(a.v[i]);
+          if (ci >= 0) W(ci, cj) += half * L.V[3][3] * dot(curl_a[i], cb);
+        }
+      }
+    }
+  });
+  return W + W.transpose();
+}
+
 Matrix single_layer(VerticesRef vertices, TrianglesRef triangles, Space space) {
   SurfaceRequest r;
   r.single_layer = space;
@@ -280,6 +329,10 @@ Matrix hypersingular(VerticesRef vertices, TrianglesRef triangles) {
   SurfaceRequest r;
   r.hypersingular = true;
   return assemble(Surface(vertices, triangles), r).hypersingular;
+}
+
+Matrix hypersingular_block(VerticesRef vertices, TrianglesRef triangles, const std::vector<Index>& block) {
+  return hypersingular_block(Surface(vertices, triangles), block);
 }
 
 Matrix mass(VerticesRef vertices, TrianglesRef triangles, Space space) {

@@ -74,3 +74,24 @@ TEST(SurfaceOperators, IdentitiesOnPolyhedra) {
     }
   }
 }
+
+TEST(SurfaceOperators, HypersingularBlockIsTheRestrictionOfW) {
+  // E^T W_h E from the triangles touching the block only: the same sums as the whole W_h
+  for (const test::Mesh& mesh : {test::cube(3, 1.0 / 3), test::fichera(4, 0.25)}) {
+    const Surface s(mesh.vertices, mesh.triangles);
+    const Matrix W = assemble(s, {std::nullopt, std::nullopt, true}).hypersingular;
+    std::vector<Index> block;  // the vertices below the centre plane, in descending order
+    for (Index v = s.vertices() - 1; v >= 0; --v)
+      if (mesh.vertices(v, 2) < mesh.vertices.col(2).mean()) block.push_back(v);
+    ASSERT_GT(block.size(), 2u);
+    const Matrix Wb = hypersingular_block(s, block);
+    for (std::size_t i = 0; i < block.size(); ++i)
+      for (std::size_t j = 0; j < block.size(); ++j)
+        EXPECT_NEAR(Wb(static_cast<Index>(i), static_cast<Index>(j)), W(block[i], block[j]),
+                    1e-14 * W.cwiseAbs().maxCoeff());
+  }
+  const test::Mesh mesh = test::cube(2, 1.0);
+  const Surface s(mesh.vertices, mesh.triangles);
+  EXPECT_THROW(hypersingular_block(s, {0, 0}), std::invalid_argument);
+  EXPECT_THROW(hypersingular_block(s, {s.vertices()}), std::invalid_argument);
+}

@@ -7,7 +7,8 @@
 - :mod:`~coupling.preconditioners.substructuring`: the serial substructuring B;
 - :mod:`~coupling.preconditioners.distributed`: the same B, distributed by subdomains;
 - :mod:`~coupling.preconditioners.root`: any serial B set up on rank 0 under MPI;
-- :mod:`~coupling.preconditioners.exact`: the diagonal blocks of (4.2), the reference.
+- :mod:`~coupling.preconditioners.exact`: the diagonal blocks of (4.2), the reference;
+- :mod:`~coupling.preconditioners.multigrid`: algebraic multigrid and E^T W_h E (3D, section 11).
 
 :func:`build_preconditioner` chooses and builds one for an assembled problem.
 """
@@ -16,13 +17,18 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 from coupling.distributed import dense_matrix, gather_matrix, gather_rows
-from coupling.options import SolverOptions
+from coupling.options import AMG_MAX_ITERATIONS, AMG_RTOL, SolverOptions
 from coupling.preconditioners.base import IdentityPreconditioner, Preconditioner
 from coupling.preconditioners.distributed import (
     DistributedSubstructuringPreconditioner,
     subdomain_ranks,
 )
 from coupling.preconditioners.exact import ExactPreconditioner
+from coupling.preconditioners.multigrid import (
+    MultigridPreconditioner,
+    constant_mode_weight,
+    signorini_hypersingular,
+)
 from coupling.preconditioners.root import RootPreconditioner
 from coupling.preconditioners.signorini import SignoriniArc, signorini_arcs
 from coupling.preconditioners.substructuring import SubstructuringPreconditioner
@@ -38,6 +44,7 @@ __all__ = [
     "DistributedSubstructuringPreconditioner",
     "RootPreconditioner",
     "ExactPreconditioner",
+    "MultigridPreconditioner",
     "SignoriniArc",
     "build_preconditioner",
     "coarse_space",
@@ -82,11 +89,19 @@ def build_preconditioner(
     n_owned = V.dofmap.index_map.size_local
     if kind == "identity":
         return IdentityPreconditioner(n_owned, problem.n_signorini)
+    if kind == "amg":  # distributed as it is: no gathering
+        return MultigridPreconditioner(
+            V,
+            constant_mode_weight(V, problem.S),
+            signorini_hypersingular(comm, problem.boundary),
+            rtol=AMG_RTOL,
+            max_iterations=AMG_MAX_ITERATIONS,
+        )
     domain = problem.domain
     if kind == "substructuring" and domain.dim == 3:
         raise ValueError(
             "preconditioner: substructuring is the planar preconditioner (docs/method.md section "
-            '6); for a 3D body set [solver] preconditioner = "exact" (small problems)'
+            '6); for a 3D body set [solver] preconditioner = "amg" (or "exact", small problems)'
         )
     substructuring = kind == "substructuring"
     coarse = coarse_space(domain, options.coarse_space) if substructuring else None

@@ -1,5 +1,5 @@
 """The box pressed onto its bottom face, tilted (u0 = x: 3 of the 9 phi unknowns at n = 4
-leave contact), solved by ssn with the exact preconditioner on any number of ranks;
+leave contact), solved by ssn with the preconditioner argv[3] on any number of ranks;
 rank 0 writes the iterations, phi and u at the nodes sorted by their coordinates
 (independent of the partition) to argv[1]."""
 import sys
@@ -19,7 +19,7 @@ domain = build_domain(comm, GeometrySpec("box", width=0.5, h=0.5 / n, signorini=
 problem = SignoriniProblem(
     domain, make_material("carstensen"), f="1", t0="-1", u0="x", boundary_operator="dense"
 )
-solution = solve(problem, SolverOptions(preconditioner="exact", nested=False))
+solution = solve(problem, SolverOptions(preconditioner=sys.argv[3], nested=False))
 owned = problem.V.dofmap.index_map.size_local
 x = problem.V.tabulate_dof_coordinates()[:owned]
 parts = comm.gather((x, solution.u.x.array[:owned].copy()), root=0)

@@ -85,12 +85,20 @@ SurfaceMatrices assemble(const Surface& surface, const SurfaceRequest& request);
 /// Rows `space`, columns P1 (P1: the Gram matrix, element matrix A/12 (1 + delta_ab)).
 Matrix mass(const Surface& surface, Space space);
 
+/// W_h restricted to the P1 hats of `vertices` (k distinct vertex indices): the k x k matrix
+/// W_h[vertices, vertices] = E^T W_h E, integrated over the triangles that touch those
+/// vertices only (for the nodes inside a surface patch: the patch's triangles), so its cost
+/// grows with the patch, not the surface. The H~^{1/2} metric of the Signorini block of
+/// the 3D preconditioner (docs/method.md section 11).
+Matrix hypersingular_block(const Surface& surface, const std::vector<Index>& vertices);
+
 // The same on raw arrays, validated by the Surface constructor (used by the bindings).
 using VerticesRef = const Eigen::Ref<const Vertices>&;
 using TrianglesRef = const Eigen::Ref<const Triangles>&;
 Matrix single_layer(VerticesRef vertices, TrianglesRef triangles, Space space);
 Matrix double_layer(VerticesRef vertices, TrianglesRef triangles, Space space);
 Matrix hypersingular(VerticesRef vertices, TrianglesRef triangles);
+Matrix hypersingular_block(VerticesRef vertices, TrianglesRef triangles, const std::vector<Index>& block);
 Matrix mass(VerticesRef vertices, TrianglesRef triangles, Space space);
 
 }  // namespace bem

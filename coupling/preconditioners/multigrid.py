@@ -1,0 +1,149 @@
+"""The ``amg`` preconditioner of a body in R^3 (docs/method.md section 11, "Preconditioning").
+
+    B_Omega = K + c T^T M_Gamma T,      c = <S_h 1, 1> / |Gamma|,
+    M_s     = E^T W_h E,
+
+with K the P1 Laplace stiffness matrix, M_Gamma the P1 mass matrix of Gamma and W_h the
+Galerkin hypersingular operator. Both blocks are spectrally equivalent, uniformly in h, to
+the diagonal blocks of the Hessian D^2 J_h:
+
+- u block: A + T^T S_h T is equivalent to the H^1(Omega) norm (the interior energy plus
+  <S_h z, z>, which in 3D is positive on constants), and so is K + c M_Gamma (the trace
+  theorem); c is S_h's value on the constant, |Gamma|^{-1} <S_h 1, 1> (1/R on a sphere of
+  radius R), so that both agree on the mode K does not see.
+- phi block: E^T S_h E >= 1/2 E^T W_h E (S_h = 1/2 (W_h + (K_h - M_h)^T V_h^{-1} (K_h - M_h)),
+  the second term positive semi-definite), and both are equivalent to the H~^{1/2}(Gamma_s)
+  norm, on which W is elliptic (phi vanishes on the boundary curves of Gamma_s). On the
+  sphere W Y_l / S Y_l = 2l / (2l + 1): the two agree on the oscillating modes.
+
+B_Omega^{-1} is applied by conjugate gradients preconditioned by one algebraic multigrid
+V-cycle (PETSc GAMG), to the relative tolerance ``rtol`` (the iterations read B_Omega u
+and B_Omega^{-1} g as inverses of each other, so the inner solve is tight, not one cycle);
+its cost per application grows like N, its count stays bounded as h -> 0. M_s is dense
+(n_s x n_s, the projection (3.19) and the Newton steps read it), integrated over the
+triangles of Gamma_s alone (``bem_cpp.hypersingular(..., block=)``) on rank 0 with every
+core, broadcast, and factored on every rank.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import scipy.linalg
+import ufl
+from dolfinx import fem
+from mpi4py import MPI
+from petsc4py import PETSc
+
+import bem_cpp
+from fem_py.forms.interior import compile_form
+from fem_py.parallel import array_from_root
+
+__all__ = ["MultigridPreconditioner", "constant_mode_weight", "signorini_hypersingular"]
+
+
+def constant_mode_weight(V: fem.FunctionSpace, S: Any) -> float:
+    """c = <S_h 1, 1> / |Gamma| (collective)."""
+    one = np.ones(S.shape[0])
+    area_form = fem.form(fem.Constant(V.mesh, PETSc.ScalarType(1.0)) * ufl.ds(domain=V.mesh))
+    area = V.mesh.comm.allreduce(fem.assemble_scalar(area_form), op=MPI.SUM)
+    return float(one @ (S @ one)) / float(area)
+
+
+def signorini_hypersingular(comm: MPI.Comm, boundary: Any) -> np.ndarray:
+    """M_s = E^T W_h E (n_s x n_s) on every rank: computed on rank 0 (collective)."""
+    if boundary.signorini.size == 0:
+        return np.zeros((0, 0))
+    return array_from_root(
+        comm,
+        lambda: bem_cpp.hypersingular(
+            boundary.nodes,
+            triangles=getattr(boundary, "triangles", None),  # None: a polygon (2D)
+            block=boundary.signorini,
+        ),
+        all_cores=True,
+    )
+
+
+class MultigridPreconditioner:
+    """B = diag(K + c T^T M_Gamma T, E^T W_h E) (module docstring), same interface as the
+    others (:class:`coupling.preconditioners.base.Preconditioner`), on distributed owned
+    arrays.
+
+    Parameters
+    ----------
+    V
+        The P1 space of the tetrahedral mesh (its owned dofs are the entries of u).
+    weight
+        c of the boundary mass term.
+    signorini_metric
+        M_s, (n_s, n_s), the same on every rank.
+    rtol, max_iterations
+        Of the inner CG + GAMG solve of B_Omega (a solve that stops short raises on every
+        rank: B would not be the fixed operator the iterations need).
+    """
+
+    def __init__(
+        self,
+        V: fem.FunctionSpace,
+        weight: float,
+        signorini_metric: np.ndarray,
+        *,
+        rtol: float,
+        max_iterations: int,
+    ):
+        comm = V.mesh.comm
+        w, v = ufl.TrialFunction(V), ufl.TestFunction(V)
+        c = fem.Constant(V.mesh, PETSc.ScalarType(weight))
+        form = compile_form(ufl.inner(ufl.grad(w), ufl.grad(v)) * ufl.dx + c * w * v * ufl.ds)
+        self._matrix = fem.petsc.assemble_matrix(form)
+        self._matrix.assemble()
+        self._ksp = PETSc.KSP().create(comm)
+        self._ksp.setOperators(self._matrix)
+        self._ksp.setType(PETSc.KSP.Type.CG)
+        self._ksp.getPC().setType(PETSc.PC.Type.GAMG)
+        self._ksp.setTolerances(rtol=rtol, atol=0.0, max_it=max_iterations)
+        self._ksp.setInitialGuessNonzero(False)
+        self._ksp.setUp()
+        self._x, self._b = self._matrix.createVecs()
+        self.iterations: list[int] = []  # inner CG iterations per application
+        self.n_omega = V.dofmap.index_map.size_local
+        self.signorini_metric = np.ascontiguousarray(signorini_metric)
+        self.n_signorini = self.signorini_metric.shape[0]
+        if self.n_signorini:
+            self._signorini_factor = scipy.linalg.cho_factor(self.signorini_metric)
+            n = self.n_signorini
+            self.lambda_max_signorini = float(
+                scipy.linalg.eigvalsh(self.signorini_metric, subset_by_index=[n - 1, n - 1])[0]
+            )
+        else:
+            self.lambda_max_signorini = 1.0
+
+    def apply_omega(self, g: np.ndarray) -> np.ndarray:
+        self._b.array[:] = g
+        self._ksp.solve(self._b, self._x)
+        reason = self._ksp.getConvergedReason()
+        if reason < 0:  # the same reason on every rank: raised everywhere
+            raise RuntimeError(
+                f"the amg preconditioner's inner CG + GAMG solve failed (PETSc reason {reason} "
+                f"after {self._ksp.getIterationNumber()} iterations)"
+            )
+        self.iterations.append(self._ksp.getIterationNumber())
+        return self._x.array.copy()
+
+    def matvec_omega(self, u: np.ndarray) -> np.ndarray:
+        self._x.array[:] = u
+        self._matrix.mult(self._x, self._b)
+        return self._b.array.copy()
+
+    def apply_signorini(self, g: np.ndarray) -> np.ndarray:
+        if not self.n_signorini:
+            return np.zeros(0)
+        return scipy.linalg.cho_solve(self._signorini_factor, g)
+
+    def matvec_signorini(self, phi: np.ndarray) -> np.ndarray:
+        return self.signorini_metric @ phi
+
+    def destroy(self) -> None:
+        for obj in (self._ksp, self._matrix, self._x, self._b):
+            obj.destroy()
