@@ -75,7 +75,9 @@ def indices(value: ArrayLike, n: int, name: str) -> NDArray[np.int64]:
     """(k,) distinct integer indices in [0, n), as int64."""
     idx = np.asarray(value)
     if idx.ndim != 1 or (idx.size and not np.issubdtype(idx.dtype, np.integer)):
-        raise ValueError(f"{name} must be a 1D array of integer indices, got {idx.dtype} {idx.shape}")
+        raise ValueError(
+            f"{name} must be a 1D array of integer indices, got {idx.dtype} {idx.shape}"
+        )
     if idx.size and (idx.min() < 0 or idx.max() >= n):
         raise ValueError(f"{name}: indices must lie in [0, {n}), got {idx.min()}..{idx.max()}")
     if np.unique(idx).size != idx.size:
