@@ -21,6 +21,11 @@ Cases: the square [-1/4, 1/4]^2 with the bottom side as Signorini arc; the L-sha
 0 <= x <= 1/4, as arcs; the disk and the ellipse with their lower quarter; the L-shape's
 corner singularity without contact and with the bottom side in contact
 (:func:`lshape_corner_contact`, the case on which adaptivity gains, docs/design/adapt.md).
+
+In 3D (docs/method.md section 11) the same recipe with u_e = a + c/|x - x0| + d.(x - x0)/
+|x - x0|^3 and a Signorini face instead of an arc: :func:`box_contact` (the bottom face of
+the box, contact for x < 0) and :func:`ball_contact` (the lower half of the sphere, contact
+for x < 0); the gap vanishes on the face's boundary curve.
 """
 from __future__ import annotations
 
@@ -40,6 +45,8 @@ __all__ = [
     "ellipse_contact",
     "lshape_corner",
     "lshape_corner_contact",
+    "box_contact",
+    "ball_contact",
     "MANUFACTURED",
     "manufactured_problem",
     "energy_error",
@@ -58,6 +65,27 @@ def exterior_field(x0: tuple[float, float]) -> str:
         f"{_A} + {_B}*0.5*log({rx}**2 + {ry}**2)"
         f" + ({_C[0]}*{rx} + ({_C[1]})*{ry})/({rx}**2 + {ry}**2)"
     )
+
+
+def exterior_field_3d(x0: tuple[float, float, float]) -> str:
+    """u_e = a + c/|x - x0| + d.(x - x0)/|x - x0|^3 (x0 inside Omega), harmonic outside."""
+    r = [f"(x - ({x0[0]}))", f"(y - ({x0[1]}))", f"(z - ({x0[2]}))"]
+    r2 = " + ".join(f"{v}**2" for v in r)
+    dot = " + ".join(f"({d})*{v}" for d, v in zip(_D3, r))
+    return f"{_A} + {_C3}/sqrt({r2}) + ({dot})/({r2})**1.5"
+
+
+_C3, _D3 = 0.02, (0.01, -0.01, 0.015)
+
+
+@dataclass(frozen=True)
+class Face:
+    """A Signorini face of a body (3D): its facet group name, where it lies (the boundary
+    nodes at which the expression ``where`` vanishes) and its gap formula."""
+
+    name: str
+    where: str  # in x, y, z: zero exactly on the face (among boundary points)
+    gap: str  # g* in x, y, z
 
 
 @dataclass(frozen=True)
@@ -92,22 +120,40 @@ class ManufacturedSolution:
     u: str
     ue: str
     a: float = _A
-    radius: float = 0.0  # the disk's (its arcs run along the circle)
+    radius: float = 0.0  # the disk's (its arcs run along the circle) and the ball's
     semi_axes: tuple[float, float] = (0.0, 0.0)  # the ellipse's (its arcs run along it)
+    faces: tuple[Face, ...] = ()  # 3D: the Signorini faces (instead of arcs)
 
     @property
-    def signorini(self) -> list[tuple[tuple[float, float], tuple[float, float]]]:
+    def dim(self) -> int:
+        return 3 if self.shape in ("box", "ball") else 2
+
+    @property
+    def variables(self) -> tuple[str, ...]:
+        return ("x", "y", "z")[: self.dim]
+
+    @property
+    def signorini(self) -> list:
+        """``geometry.signorini``: the arcs' end points (2D), the faces' names (3D)."""
+        if self.dim == 3:
+            return [face.name for face in self.faces]
         return [(arc.start, arc.end) for arc in self.arcs]
 
-    def exact_u(self) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
-        return numpy_function(self.u, ("x", "y"))
+    def exact_u(self) -> Callable[..., np.ndarray]:
+        return numpy_function(self.u, self.variables)
 
-    def exact_ue(self) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
-        return numpy_function(self.ue, ("x", "y"))
+    def exact_ue(self) -> Callable[..., np.ndarray]:
+        return numpy_function(self.ue, self.variables)
 
     def exact_gap(self, points: np.ndarray) -> np.ndarray:
-        """g* at boundary points (m, 2): the arc's formula on its arc, 0 elsewhere."""
+        """g* at boundary points (m, dim): the arc's (face's) formula on it, 0 elsewhere."""
         gap = np.zeros(len(points))
+        if self.dim == 3:
+            for face in self.faces:
+                where = numpy_function(face.where, self.variables)(*points.T)
+                on = np.abs(np.broadcast_to(where, (len(points),))) < 1e-12
+                gap[on] = numpy_function(face.gap, self.variables)(*points[on].T)
+            return gap
         for arc, on in zip(self.arcs, self._on_arcs(points)):
             gap[on] = numpy_function(arc.gap, ("x", "y"))(*points[on].T)
         return gap
@@ -145,21 +191,24 @@ class ManufacturedSolution:
 
     def u0(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """u0 = u - u_e + g* at boundary points (numpy)."""
-        points = np.column_stack([x, y])
-        return self.exact_u()(x, y) - self.exact_ue()(x, y) + self.exact_gap(points)
+        return self._u0_at(x, y)
+
+    def _u0_at(self, *coords: np.ndarray) -> np.ndarray:
+        points = np.column_stack(coords)
+        return self.exact_u()(*coords) - self.exact_ue()(*coords) + self.exact_gap(points)
 
     def data(self, mesh: Any, material) -> dict[str, Any]:
         """UFL f and t0 on ``mesh`` and the callable u0, for :class:`SignoriniProblem`."""
         X = ufl.SpatialCoordinate(mesh)
         n = ufl.FacetNormal(mesh)
-        variables = {"x": X[0], "y": X[1]}
+        variables = dict(zip(self.variables, X))
         u = parse_expression(self.u, variables)
         ue = parse_expression(self.ue, variables)
         flux = material.flux(ufl.grad(u))
         return {
             "f": -ufl.div(flux),
             "t0": ufl.dot(flux - ufl.grad(ue), n),
-            "u0": self.u0,
+            "u0": self.u0 if self.dim == 2 else lambda x, y, z: self._u0_at(x, y, z),
             "a": self.a,
         }
 
@@ -271,6 +320,49 @@ def lshape_corner_contact() -> ManufacturedSolution:
     return ManufacturedSolution("lshape", 0.5, (0.0, 0.0), (arc,), u, exterior_field((-0.1, -0.1)))
 
 
+def box_contact() -> ManufacturedSolution:
+    """The box [-1/4, 1/4]^3 with its bottom face z = -1/4 as Signorini face: gap
+    G max(0, x)^3 (1/4 - x)(1/4 - y)(y + 1/4) (zero on the face's four edges), flux
+    du/dn = -du/dz = -K max(0, -x)^3 (contact for x < 0). The smooth part has du/dz = 0
+    on z = -1/4 and |du/dx| >= 0.09 in Omega."""
+    smooth = "0.2 + 3*x + 0.5*y + 0.2*cos(pi*(z + 0.25))*sin(pi*x)*cos(pi*y) + 0.3*(x + 0.1)**2"
+    u = f"{smooth} + {_flux_term('z + 0.25', 'x')}"
+    face = Face("bottom", "z + 0.25", f"{_G}*max(0, x)**3*(0.25 - x)*(0.25 - y)*(y + 0.25)")
+    return ManufacturedSolution(
+        "box", 0.5, (0.0, 0.0, 0.0), (), u, exterior_field_3d((0.03, -0.02, 0.01)), faces=(face,)
+    )
+
+
+def ball_contact(radius: float = 0.25) -> ManufacturedSolution:
+    """The ball of radius R about 0 with its lower half (``bottom``, z <= 0) as Signorini
+    face: gap G max(0, x)^2 max(0, -z) (zero on the equator), flux du/dn = -K max(0, -x)^2
+    on the sphere (contact for x < 0). As in :func:`disk_contact`, the smooth part is
+    P(m x, m y, m z) with m = (3R^2 - r^2)/(2R^2) (zero radial derivative on the sphere)
+    and the flux term K (R^2 - r^2)/(2R) max(0, -x)^2 (u in W^{2, inf}: O(h) energy
+    error). On the faceted sphere the data use the facets' normals, so the flux condition
+    holds up to the facets' deviation from the sphere. Squares, not the cubes of the other
+    cases: gap and multiplier grow like x^2 from the switch line, so the contact state is
+    decided one mesh size from it on the meshes the tests afford (with cubes, contact
+    nodes up to |x| = 0.13 = 4h were open at h = R/8, measured)."""
+    R = float(radius)
+    r2 = "(x**2 + y**2 + z**2)"
+    m = f"((3*{R}**2 - {r2})/(2*{R}**2))"
+    X, Y, Z = f"({m}*x)", f"({m}*y)", f"({m}*z)"
+    smooth = f"0.2 + 3*{X} + 0.5*{Y} + 0.2*cos(pi*{Z})*sin(pi*{X}) + 0.3*({X} + 0.1)**2"
+    u = f"{smooth} + {_K}*(({R}**2 - {r2})/(2*{R}))*max(0, -x)**2"
+    face = Face("bottom", "max(0, z)", f"{_G}*max(0, x)**2*max(0, -z)")
+    return ManufacturedSolution(
+        "ball",
+        2 * R,
+        (0.0, 0.0, 0.0),
+        (),
+        u,
+        exterior_field_3d((0.03, -0.02, 0.01)),
+        radius=R,
+        faces=(face,),
+    )
+
+
 MANUFACTURED = {
     "square": square_contact,
     "lshape": lshape_contact,
@@ -290,21 +382,30 @@ def manufactured_problem(
     **discretisation,
 ):
     """The :class:`coupling.problem.SignoriniProblem` of ``solution`` on a mesh with
-    ``cells`` cells per side of the bounding square (h = width / cells) and subdomains
-    of d = d_over_h * h; ``discretisation``: ``flux_space``, ``jacobian`` of the problem."""
+    ``cells`` cells per side of the bounding square (cube) (h = width / cells) and, in 2D,
+    subdomains of d = d_over_h * h; ``discretisation``: ``flux_space``, ``jacobian``,
+    ``boundary_operator`` of the problem."""
     from coupling.problem import SignoriniProblem
     from fem_py.mesh import GeometrySpec, build_domain
 
     h = solution.width / cells
-    curved = {"disk": {"radius": solution.radius}, "ellipse": {"semi_axes": solution.semi_axes}}
+    curved = {
+        "disk": {"radius": solution.radius},
+        "ellipse": {"semi_axes": solution.semi_axes},
+        "ball": {"radius": solution.radius},
+    }
+    sizes = curved.get(solution.shape, {"width": solution.width})
+    if solution.dim == 2:  # subdomains, and polygons structured or not: planar keys
+        sizes["subdomain_size"] = d_over_h * h
+        if solution.shape not in curved:
+            sizes["structured"] = structured
     domain = build_domain(
         comm,
         GeometrySpec(
             solution.shape,
             h=h,
-            subdomain_size=d_over_h * h,
             center=solution.center,
-            **curved.get(solution.shape, {"width": solution.width, "structured": structured}),
+            **sizes,
             signorini=solution.signorini,
         ),
     )
@@ -325,9 +426,24 @@ def energy_error(problem, u_h, exact: str) -> float:
 
     mesh = problem.domain.mesh
     X = ufl.SpatialCoordinate(mesh)
-    e = u_h - parse_expression(exact, {"x": X[0], "y": X[1]})
+    e = u_h - parse_expression(exact, dict(zip(("x", "y", "z"), X)))
     local = fem.assemble_scalar(compile_form(ufl.inner(ufl.grad(e), ufl.grad(e)) * ufl.dx))
     return float(np.sqrt(mesh.comm.allreduce(local, op=MPI.SUM)))
+
+
+def _nearest(points: np.ndarray, p: np.ndarray) -> float:
+    """The distance from ``p`` to the nearest of ``points`` (inf when there is none)."""
+    return float(np.min(np.linalg.norm(points - p, axis=1), initial=np.inf))
+
+
+def _directions(dim: int) -> np.ndarray:
+    """Unit vectors: 8 at equal angles (2D); the 6 axes and the 8 diagonals (3D)."""
+    if dim == 2:
+        theta = np.linspace(0, 2 * np.pi, 9)[:-1]
+        return np.column_stack([np.cos(theta), np.sin(theta)])
+    axes = np.vstack([np.eye(3), -np.eye(3)])
+    corners = np.array([[i, j, k] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)])
+    return np.vstack([axes, corners / np.sqrt(3.0)])
 
 
 def solution_errors(
@@ -337,14 +453,17 @@ def solution_errors(
 
     Returns the H^1 seminorm ("energy") error |u_h - u|_1, the largest nodal error of
     u_h, of the gap phi_h and of u_e on Gamma, the largest error of u_e at
-    ``exterior_points`` (default: 8 points on the circle of radius 0.6), and the
-    number of Signorini nodes whose contact state differs from the exact one away from
-    the switch points of the exact contact set.
+    ``exterior_points`` (default: 8 points on the circle of radius 0.6; 3D: 14 points on
+    the sphere of radius 0.6), and the number of Signorini nodes whose contact state
+    differs from the exact one away from the switch points of the exact contact set.
 
     Near a switch point both the exact gap (G xi^3 (L/2 - xi) with G L/2 >= 12.5) and the
     exact multiplier (rho K xi^3 with rho K >= 40) vanish like |xi|^3, so within
     |xi| < (e / 12.5)^(1/3), e the measured largest gap error, the contact state is not
-    decided by the discretisation; nodes there (or within one mesh size) are ignored.
+    decided by the discretisation; nodes there (or within one mesh size) are ignored. In
+    3D the switch points are the contact nodes within 1.5 h of an open node, and an open
+    node whose exact gap is at most e (next to the face's boundary curve, where the gap
+    vanishes) is not decided either.
     """
     from mpi4py import MPI
 
@@ -352,27 +471,33 @@ def solution_errors(
     energy = energy_error(problem, result.u, solution.u)
     index_map = problem.V.dofmap.index_map
     x = problem.V.tabulate_dof_coordinates()[: index_map.size_local]
-    nodal = np.abs(result.u.x.array[: index_map.size_local] - solution.exact_u()(x[:, 0], x[:, 1]))
+    dim = solution.dim
+    exact_u = solution.exact_u()(*x[:, :dim].T)
+    nodal = np.abs(result.u.x.array[: index_map.size_local] - exact_u)
     nodal = mesh.comm.allreduce(float(nodal.max(initial=0.0)), op=MPI.MAX)
     b = problem.boundary
     s_nodes = b.nodes[b.signorini]
     gap = solution.exact_gap(s_nodes)
     ue = solution.exact_ue()(*b.nodes.T)
     if exterior_points is None:
-        theta = np.linspace(0, 2 * np.pi, 9)[:-1]
-        exterior_points = 0.6 * np.column_stack([np.cos(theta), np.sin(theta)])
+        exterior_points = 0.6 * _directions(dim)
     ue_points = problem.exterior(result, exterior_points)
     # switch points of the exact contact set: where the contact state changes along an arc
     exact_contact = gap <= 0.0
     gap_error = float(np.abs(result.phi - gap).max(initial=0.0))
-    radius = max(1.01 * problem.domain.h, (gap_error / (_G * 0.125)) ** (1 / 3))
+    h = problem.domain.h
+    radius = max(1.01 * h, (gap_error / (_G * 0.125)) ** (1 / 3))
     wrong = np.flatnonzero(exact_contact != result.contact)
-    same_arc = np.diff(b.arc_of_signorini) == 0
-    switches = s_nodes[np.flatnonzero((np.diff(exact_contact.astype(int)) != 0) & same_arc)]
-    far = [
-        np.min(np.linalg.norm(switches - s_nodes[i], axis=1), initial=np.inf) > radius
-        for i in wrong
-    ]
+    if dim == 2:
+        same_arc = np.diff(b.arc_of_signorini) == 0
+        switches = s_nodes[np.flatnonzero((np.diff(exact_contact.astype(int)) != 0) & same_arc)]
+    else:
+        wrong = wrong[~((gap[wrong] > 0.0) & (gap[wrong] <= gap_error))]
+        opened = s_nodes[~exact_contact]
+        switches = np.array(
+            [p for p in s_nodes[exact_contact] if _nearest(opened, p) <= 1.5 * h]
+        ).reshape(-1, dim)
+    far = [_nearest(switches, s_nodes[i]) > radius for i in wrong]
     return {
         "energy": energy,
         "nodal_u": nodal,

@@ -18,7 +18,9 @@ def boundary_flux(problem: Any, solution: Any) -> np.ndarray:
     function v_i of a boundary node i, (rho grad u_h, grad v_i) - (f, v_i) =
     <sigma, v_i>_Gamma, with the boundary mass lumped, so
 
-        sigma_i = (A(u_h) - b_f)_i / m_i,   m_i = (|x_i - x_{i-1}| + |x_{i+1} - x_i|) / 2.
+        sigma_i = (A(u_h) - b_f)_i / m_i,   m_i = (|x_i - x_{i-1}| + |x_{i+1} - x_i|) / 2
+
+    (3D: m_i a third of the area of the triangles at node i).
 
     At the discrete solution grad_u J_h = 0 makes A(u_h) - b_f = -T^T (S_h z - m_t - s_0),
     so on Gamma_s sigma_i = -lambda_i / m_i with lambda = grad_phi J_h >= 0 the discrete
@@ -31,9 +33,7 @@ def boundary_flux(problem: Any, solution: Any) -> np.ndarray:
     residual.axpy(-1.0, problem.functional.load)
     r = problem.boundary.gather(residual)
     residual.destroy()
-    lengths = problem.boundary.panel_lengths  # panel i = [node i, node i + 1]
-    mass = 0.5 * (lengths + np.roll(lengths, 1))
-    return r / mass
+    return r / problem.boundary.lumped_mass
 
 
 def complementarity(phi: np.ndarray, sigma_s: np.ndarray) -> float:

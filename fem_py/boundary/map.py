@@ -118,6 +118,13 @@ class BoundaryMap(BoundaryVectors):
     def panel_lengths(self) -> np.ndarray:
         return segment_lengths(closed_polygon(self.nodes))
 
+    @property
+    def lumped_mass(self) -> np.ndarray:
+        """The row sums of the P1 mass matrix of Gamma_h: half the length of the two
+        panels at each node."""
+        lengths = self.panel_lengths  # panel i = [node i, node i + 1]
+        return 0.5 * (lengths + np.roll(lengths, 1))
+
     def on_gamma_t(self) -> np.ndarray:
         """Panel mask of Gamma_t (tag 1)."""
         return self.panel_tags == GAMMA_T_TAG

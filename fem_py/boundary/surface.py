@@ -114,6 +114,13 @@ class SurfaceMap(BoundaryVectors):
             setattr(self, key, value)
 
     @property
+    def lumped_mass(self) -> np.ndarray:
+        """The row sums of the P1 mass matrix of Gamma_h: a third of the area of the
+        triangles at each node."""
+        weights = np.repeat(self.triangle_areas / 3.0, 3)
+        return np.bincount(self.triangles.ravel(), weights=weights, minlength=self.n_gamma)
+
+    @property
     def n_triangles(self) -> int:
         return len(self.triangles)
 
