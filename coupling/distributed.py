@@ -18,7 +18,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 import bem_cpp
-from coupling.options import CHOICES, HMATRIX_CROSSOVER, HMATRIX_TOL
+from coupling.options import CHOICES, HMATRIX_CROSSOVER, HMATRIX_CROSSOVER_3D, HMATRIX_TOL
 from fem_py.parallel import gather_to_root, run_on_root
 
 __all__ = [
@@ -86,15 +86,17 @@ class RowBlocks:
         return out
 
 
-def boundary_operator_kind(choice: str, n: int) -> str:
+def boundary_operator_kind(choice: str, n: int, dim: int = 2) -> str:
     """``"dense"`` or ``"hmatrix"``: the S_h of ``[solver] boundary_operator = choice`` for
-    n boundary dofs (``"auto"``: the H-matrix from :data:`coupling.options.HMATRIX_CROSSOVER`
-    boundary dofs on)."""
+    n boundary dofs of a ``dim``-dimensional body (``"auto"``: the H-matrix from
+    :data:`coupling.options.HMATRIX_CROSSOVER` boundary dofs on, in 3D from
+    :data:`coupling.options.HMATRIX_CROSSOVER_3D`)."""
     allowed = CHOICES["solver", "boundary_operator"]
     if choice not in allowed:
         raise ValueError(f"boundary_operator must be one of {allowed}, got {choice!r}")
     if choice == "auto":
-        return "hmatrix" if n >= HMATRIX_CROSSOVER else "dense"
+        crossover = HMATRIX_CROSSOVER_3D if dim == 3 else HMATRIX_CROSSOVER
+        return "hmatrix" if n >= crossover else "dense"
     return choice
 
 
@@ -117,7 +119,7 @@ def steklov_poincare(
     """
     nodes = np.asarray(nodes, dtype=float)
     surface = {} if triangles is None else {"triangles": np.asarray(triangles)}
-    if boundary_operator_kind(choice, nodes.shape[0]) == "hmatrix":
+    if boundary_operator_kind(choice, *nodes.shape) == "hmatrix":
         return bem_cpp.steklov_poincare(
             nodes,
             flux=flux,

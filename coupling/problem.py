@@ -108,7 +108,7 @@ class SignoriniProblem:
 
         tic = time.perf_counter()
         nodes = self.boundary.nodes
-        self.boundary_operator = boundary_operator_kind(boundary_operator, nodes.shape[0])
+        self.boundary_operator = boundary_operator_kind(boundary_operator, *nodes.shape)
         self.S = steklov_poincare(
             self.comm, nodes, flux_space, self.boundary_operator, **self._surface
         )

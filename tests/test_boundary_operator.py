@@ -11,7 +11,7 @@ from conftest import ROOT, run_mpi
 from coupling.app.config import ConfigError, parse_config
 from coupling.distributed import boundary_operator_kind, dense_matrix
 from coupling.manufactured import MANUFACTURED, manufactured_problem
-from coupling.options import HMATRIX_CROSSOVER, SolverOptions
+from coupling.options import HMATRIX_CROSSOVER, HMATRIX_CROSSOVER_3D, SolverOptions
 from coupling.preconditioners import build_preconditioner
 from coupling.solvers import solve
 from fem_py.forms import make_material
@@ -131,6 +131,9 @@ def test_hmatrix_solve_is_the_same_on_two_ranks(tmp_path, solutions):
 def test_auto_chooses_by_the_crossover():
     assert boundary_operator_kind("auto", HMATRIX_CROSSOVER) == "hmatrix"
     assert boundary_operator_kind("auto", HMATRIX_CROSSOVER - 1) == "dense"
+    # a surface in R^3 has its own crossover
+    assert boundary_operator_kind("auto", HMATRIX_CROSSOVER_3D, 3) == "hmatrix"
+    assert boundary_operator_kind("auto", HMATRIX_CROSSOVER_3D - 1, 3) == "dense"
     for kind in ("dense", "hmatrix"):
         assert boundary_operator_kind(kind, 10) == boundary_operator_kind(kind, 10**6) == kind
     with pytest.raises(ValueError, match="boundary_operator must be one of"):

@@ -180,3 +180,24 @@ def test_memory_estimate_counts_the_hmatrix_operator_per_boundary_dof():
     )
     # auto: the H-matrix at this boundary size (coupling.options.HMATRIX_CROSSOVER)
     assert memory_estimate(size, 2, boundary_operator="auto") == held
+
+
+def test_memory_estimate_of_a_body_uses_the_3d_constants():
+    from coupling.app.sizing import (
+        BOUNDARY_BYTES_3D,
+        DOF_BYTES_3D,
+        HMATRIX_BOUNDARY_BYTES_3D,
+        PROCESS_BYTES,
+        memory_estimate,
+    )
+    from fem_py.mesh.solid import box_size
+
+    size = box_size(24, 0.5, ["bottom"])  # closed form: 15,625 dofs, 3,458 on Gamma
+    assert size.dim == 3 and (size.dofs, size.boundary_dofs) == (15_625, 3_458)
+    base = PROCESS_BYTES + DOF_BYTES_3D * size.dofs
+    dense = memory_estimate(size, 1, plots=False, boundary_operator="dense")
+    held = memory_estimate(size, 1, plots=False, boundary_operator="hmatrix")
+    assert dense == pytest.approx(base + BOUNDARY_BYTES_3D * 3_458**2, rel=1e-12)
+    assert held == pytest.approx(base + HMATRIX_BOUNDARY_BYTES_3D * 3_458, rel=1e-12)
+    # auto: the H-matrix from coupling.options.HMATRIX_CROSSOVER_3D = 3000 boundary dofs
+    assert memory_estimate(size, 1, plots=False) == held

@@ -10,7 +10,7 @@ cubes per side, as the linear case of test_solid_problem.py); u_e at 14 exterior
 nodes for h = R/2, R/4, R/8), so its orders are taken against N^(-1/3): energy 0.96, 1.14;
 nodal u_h 1.86 at the finest pair; u_e exterior 2.3; the trace of u_e 1.41 there (the
 faceted sphere's O(h^2) distance to the sphere, on which u_e's data are set, is still
-pre-asymptotic at 1,032 boundary nodes; 1.6 at R/16, docs/design). The contact state
+pre-asymptotic at 1,032 boundary nodes; 2.35 from R/8 to R/16, docs/design). The contact state
 is exact away from the switch line x = 0 and complementarity holds at every Signorini
 node to the solver's tolerance (the pressure sigma_i = -lambda_i / m_i of the discrete
 multiplier lambda = grad_phi J_h, coupling.io.quantities)."""

@@ -13,6 +13,14 @@ H-matrix S_h (``[solver] boundary_operator``) the boundary term is
 HMATRIX_BOUNDARY_BYTES * n instead, for all ranks together: under MPI each rank holds the
 blocks of its own rows of S_h (0.50-0.54 of the serial bytes per rank on 2 ranks) and the
 estimator's V, K live on rank 0 alone.
+
+A body in R^3 has its own constants (``DomainSize.dim``): tetrahedra carry more
+matrix entries per dof (DOF_BYTES_3D), the dense boundary matrices are eight n x n
+arrays (V_h, K_h, W_h, S_h and the P0 single layer of Nedelec's identity on the 2n
+triangles, four), and the H-matrix S_h holds about 75 KB per boundary dof at tol 1e-10
+(its ranks grow like |log tol|^3 in 3D). Fitted to library runs of the box (ssn with amg,
+2,197 .. 15,625 dofs; docs/design/three_dimensions.md, "Memory"): 0.98 .. 1.39 times the
+measured peaks.
 """
 from __future__ import annotations
 
@@ -29,6 +37,9 @@ __all__ = [
     "DOF_BYTES",
     "BOUNDARY_BYTES",
     "HMATRIX_BOUNDARY_BYTES",
+    "DOF_BYTES_3D",
+    "BOUNDARY_BYTES_3D",
+    "HMATRIX_BOUNDARY_BYTES_3D",
     "memory_estimate",
     "memory_available",
     "check_memory",
@@ -43,6 +54,9 @@ BOUNDARY_BYTES = 5 * 8.0
 HMATRIX_BOUNDARY_BYTES = 8e3
 PLOT_PROCESS_BYTES = 40e6
 PLOT_DOF_BYTES = 0.02e3
+DOF_BYTES_3D = 3e3
+BOUNDARY_BYTES_3D = 8 * 8.0
+HMATRIX_BOUNDARY_BYTES_3D = 75e3
 
 
 def memory_estimate(
@@ -50,13 +64,14 @@ def memory_estimate(
 ) -> int:
     """Bytes of peak resident memory of a solve of ``size`` on ``ranks`` ranks (all ranks
     together), with or without the plots, for ``[solver] boundary_operator``."""
+    solid = size.dim == 3
     per_rank = PROCESS_BYTES + (PLOT_PROCESS_BYTES if plots else 0.0)
-    per_dof = DOF_BYTES + (PLOT_DOF_BYTES if plots else 0.0)
+    per_dof = (DOF_BYTES_3D if solid else DOF_BYTES) + (PLOT_DOF_BYTES if plots else 0.0)
     n = float(size.boundary_dofs)
-    if boundary_operator_kind(boundary_operator, size.boundary_dofs) == "hmatrix":
-        boundary = HMATRIX_BOUNDARY_BYTES * n
+    if boundary_operator_kind(boundary_operator, size.boundary_dofs, size.dim) == "hmatrix":
+        boundary = (HMATRIX_BOUNDARY_BYTES_3D if solid else HMATRIX_BOUNDARY_BYTES) * n
     else:
-        boundary = BOUNDARY_BYTES * n**2
+        boundary = (BOUNDARY_BYTES_3D if solid else BOUNDARY_BYTES) * n**2
     return int(ranks * per_rank + per_dof * size.dofs + boundary)
 
 
@@ -111,4 +126,5 @@ def size_of_domain(domain: Any) -> DomainSize:
         subdomains=0 if solid else domain.coarse.n_subdomains,
         h_min=domain.h_min if solid else shortest_facet(domain),
         h_max=domain.h_max,
+        dim=domain.dim,
     )

@@ -107,6 +107,8 @@ class DomainSize:
         Coarse cells L.
     h_min, h_max
         The shortest and the longest fine facet.
+    dim
+        2 (a planar domain) or 3 (a body).
     """
 
     dofs: int
@@ -115,6 +117,7 @@ class DomainSize:
     subdomains: int
     h_min: float
     h_max: float
+    dim: int = 2
 
 
 def is_positive_number(val: Any) -> bool:

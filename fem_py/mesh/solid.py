@@ -170,6 +170,7 @@ def box_size(n: int, width: float, faces: Any) -> DomainSize:
         subdomains=0,
         h_min=width / n,
         h_max=math.sqrt(3.0) * width / n,
+        dim=3,
     )
 
 
