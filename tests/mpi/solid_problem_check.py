@@ -1,7 +1,8 @@
-"""The box pressed onto its bottom face, tilted (u0 = x: 3 of the 9 phi unknowns at n = 4
-leave contact), solved by ssn with the preconditioner argv[3] on any number of ranks;
-rank 0 writes the iterations, phi and u at the nodes sorted by their coordinates
-(independent of the partition) to argv[1]."""
+"""A body pressed onto its bottom face, solved by ssn with the preconditioner argv[3] on
+any number of ranks; rank 0 writes the iterations, phi and u at the nodes sorted by their
+coordinates (independent of the partition) to argv[1]. argv[2]: "box" (the box, 4 cubes
+per side, tilted: u0 = x, so 3 of the 9 phi unknowns leave contact) or "ball" (the gmsh
+ball of radius 1/4 with h = 1/8, u0 = x)."""
 import sys
 
 import numpy as np
@@ -14,8 +15,9 @@ from fem_py.forms import make_material
 from fem_py.mesh import GeometrySpec, build_domain
 
 comm = MPI.COMM_WORLD
-n = int(sys.argv[2])
-domain = build_domain(comm, GeometrySpec("box", width=0.5, h=0.5 / n, signorini=["bottom"]))
+shape = sys.argv[2]
+sizes = {"box": {"width": 0.5, "h": 0.125}, "ball": {"radius": 0.25, "h": 0.125}}[shape]
+domain = build_domain(comm, GeometrySpec(shape, signorini=["bottom"], **sizes))
 problem = SignoriniProblem(
     domain, make_material("carstensen"), f="1", t0="-1", u0="x", boundary_operator="dense"
 )
