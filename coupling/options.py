@@ -49,7 +49,7 @@ DEFAULTS: dict[str, dict[str, Any]] = {
     "data": {"f": "0", "u0": "0", "t0": "0", "a": 0.0, "exact": ""},
     "solver": {
         "method": "ssn",
-        "preconditioner": "substructuring",
+        "preconditioner": "auto",
         "tol": 1e-8,
         "max_iterations": 2000,
         "step": "auto",
@@ -73,7 +73,7 @@ CHOICES: dict[tuple[str, str], tuple[str, ...]] = {
     ("geometry", "shape"): ("square", "lshape", "polygon", "disk", "ellipse", "box", "ball"),
     ("geometry", "subdomains"): ("auto", "physical"),
     ("solver", "method"): ("pgpm", "apgpm", "ssn"),
-    ("solver", "preconditioner"): ("substructuring", "amg", "identity", "exact"),
+    ("solver", "preconditioner"): ("auto", "substructuring", "amg", "identity", "exact"),
     ("solver", "projection"): ("inexact", "exact"),
     ("solver", "edge_form"): ("paper", "sqrt-laplacian"),
     ("solver", "coarse_space"): ("auto", "graph", "galerkin"),
@@ -123,6 +123,9 @@ OVERSOLVE_SAFEGUARD = 0.1
 #: 1/16 of the fine one (docs/design/nested.md, "Coarser levels at 4h").
 NESTED_COARSENING = 4
 NESTED_MIN_DOFS = 1000
+#: ``preconditioner = "auto"``: the paper's substructuring B for a planar domain, amg
+#: (multigrid and E^T W_h E, docs/method.md section 11) for a body in R^3.
+AUTO_PRECONDITIONER = {2: "substructuring", 3: "amg"}
 #: The inner CG + GAMG solve of B_Omega of the ``amg`` preconditioner: relative tolerance
 #: and cap. Tight, since the iterations use B_Omega u and B_Omega^{-1} g as inverses of
 #: each other; its error enters the iterates at this level, far below the solver tol

@@ -77,8 +77,7 @@ def contact_pressure(problem: Any, u: Any) -> np.ndarray:
     residual.axpy(-1.0, problem.functional.load)
     r = problem.boundary.gather(residual)
     residual.destroy()
-    lengths = problem.boundary.panel_lengths
-    return r / (0.5 * (lengths + np.roll(lengths, 1)))
+    return r / problem.boundary.lumped_mass
 
 
 def _bisected(nodes: np.ndarray) -> np.ndarray:

@@ -236,22 +236,6 @@ def _with_geometry_key(build, *args):
         raise named from None
 
 
-def _refuse_solid(comm: Any, config: Any) -> None:
-    """A 3D body is meshed (``fembem info``, ``fembem check-jacobian``) and solved by the
-    library (``coupling.problem.SignoriniProblem``), but ``fembem solve`` does not write
-    its outputs yet (one-line ValueError)."""
-    from fem_py.mesh import spec_dimension
-
-    g = config.geometry
-    if _with_geometry_key(spec_dimension, g, comm) != 3:
-        return
-    what = f"mesh: {g.mesh!r} is a 3D mesh of" if g.mesh else f"shape: {g.shape!r} is"
-    raise ValueError(
-        f"geometry.{what} a body in R^3: fembem info and check-jacobian take it, but fembem "
-        "solve does not write 3D outputs yet; use a planar geometry"
-    )
-
-
 def _solve(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
     from mpi4py import MPI
 
@@ -290,7 +274,6 @@ def _solve_config(
     # the run is written beside ``out`` and moved into place once complete
     monitor = None if args.quiet else ProgressMonitor(comm)
     size = _with_geometry_key(planned_size, config)
-    _refuse_solid(comm, config)
     # refuse before anything is built: closed form, else estimated from the area and h
     rough = size if size is not None else _with_geometry_key(estimated_size, config)
     if rough is not None:
@@ -312,10 +295,10 @@ def _solve_config(
         facts = mesh_facts(domain)  # collective
         # the length of each entry of geometry.signorini, a closed "all" whole (as in
         # summary.json); only an arc given by two points has ends the user may have swapped
-        arc_lengths = facts["signorini_lengths"]
+        arc_lengths = facts.get("signorini_lengths", [])  # none in 3D (faces, not arcs)
         entries = config.geometry.signorini
         chosen_ends = [] if entries == "all" else [not isinstance(e, str) for e in entries]
-        gamma = float(problem.boundary.panel_lengths.sum())
+        gamma = float(problem.boundary.lumped_mass.sum())
         for line in material_warnings(problem.material) + arc_warnings(
             arc_lengths, [not ends for ends in chosen_ends], gamma
         ):
@@ -412,11 +395,24 @@ def _read_points(path: Path) -> tuple[np.ndarray, list[str]]:
     return points, [",".join(v.strip() for v in ln.split(",")) for ln in lines]
 
 
-def _exterior(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
-    from coupling.io.evaluation import exterior_from_fields
+def _planar_fields(args: argparse.Namespace) -> dict:
+    """fields.npz of the result folder of ``evaluate`` or ``exterior``; a 3D run is refused
+    in one line (its points would be x,y,z rows: not built yet)."""
     from coupling.io.outputs import load_fields
 
     fields = load_fields(Path(args.result_dir))
+    if fields["x"].shape[1] == 3:
+        raise ValueError(
+            f"{args.result_dir} holds a 3D run: fembem {args.command} takes planar results "
+            "only so far; read u_h and the boundary fields from its fields.npz"
+        )
+    return fields
+
+
+def _exterior(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
+    from coupling.io.evaluation import exterior_from_fields
+
+    fields = _planar_fields(args)
     points, given = _read_points(Path(args.points))
     try:
         ue = exterior_from_fields(fields, points)
@@ -440,9 +436,8 @@ def _write_table(table: str, out: str | None) -> None:
 
 def _evaluate(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
     from coupling.io.evaluation import evaluate
-    from coupling.io.outputs import load_fields
 
-    fields = load_fields(Path(args.result_dir))
+    fields = _planar_fields(args)
     points, given = _read_points(Path(args.points))
     values = evaluate(fields, points)
 

@@ -383,7 +383,8 @@ def check_data_and_material(config: RunConfig) -> None:
     condition of docs/method.md section 1 fails at once. The expressions are evaluated
     symbolically with UFL on an abstract triangle (tetrahedron in 3D) domain, the code
     path of ``fem_py.forms``, so constant sub-expressions that cannot be evaluated
-    (``1/0``, ``log(-1)``) are caught too.
+    (``1/0``, ``log(-1)``) are caught too. A body in R^3 refuses what is planar so far:
+    the substructuring preconditioner, adaptivity and the estimator's indicators.
 
     Raises
     ------
@@ -401,6 +402,8 @@ def check_data_and_material(config: RunConfig) -> None:
         dim = spec_dimension(config.geometry)
     except ValueError as err:
         raise ConfigError(str(geometry_error(err))) from None
+    if dim == 3:
+        _check_solid_options(config)
     cell = ufl.tetrahedron if dim == 3 else ufl.triangle
     domain = ufl.Mesh(ufl.VectorElement("Lagrange", cell, 1))
     values = spatial_variables(domain, boundary=True)
@@ -422,6 +425,25 @@ def check_data_and_material(config: RunConfig) -> None:
             "rho",
         )
         raise ConfigError(f"material.{key}: {err}") from None
+
+
+def _check_solid_options(config: RunConfig) -> None:
+    """The options a body in R^3 cannot take yet, each refused in one line."""
+    if config.solver.preconditioner == "substructuring":
+        raise ConfigError(
+            'solver.preconditioner = "substructuring" is the planar preconditioner (docs/method.md '
+            'section 6); for a 3D body use "auto" or "amg" (section 11)'
+        )
+    if config.adapt.steps > 0:
+        raise ConfigError(
+            "adapt.steps: adaptivity is planar so far (its residual estimator is 2D); set "
+            "adapt.steps = 0 for a 3D body"
+        )
+    if config.output.indicators:
+        raise ConfigError(
+            "output.indicators: the estimator's indicators are planar so far; set "
+            "output.indicators = false for a 3D body"
+        )
 
 
 def geometry_error(err: ValueError) -> ValueError:

@@ -72,9 +72,12 @@ def coarser_configs(
     dofs / coarsening^(2k)) and its geometry is valid (the levels stop at the first that
     is not, e.g. a Signorini arc end on the given subdomains' grid but not on the raised
     d's: the solve is then cold, never an error the fine mesh does not raise). No levels
-    for a mesh file (it has no h to coarsen)."""
+    for a mesh file (it has no h to coarsen) nor, so far, for a body in R^3 (its solve is
+    cold: docs/design/three_dimensions.md)."""
+    from fem_py.mesh import spec_dimension
+
     g = config.geometry
-    if g.mesh:
+    if g.mesh or spec_dimension(g) == 3:
         return []
     levels, k = [], 1
     while dofs / coarsening ** (2 * k) >= min_dofs:

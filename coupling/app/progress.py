@@ -42,12 +42,20 @@ class ProgressMonitor:
         :func:`fem_py.mesh.facts.mesh_facts`), the material, the Signorini arcs and the
         method about to run."""
         m = problem.material
+        partition = (
+            f"{facts['subdomains']} subdomains of mean diameter "
+            f"{facts['subdomain_diameter']:.4g}, "
+            if "subdomains" in facts
+            else ""
+        )
         self.stage(
             f"{problem.V.dofmap.index_map.size_global} dofs, {problem.boundary.n_gamma} on "
-            f"Gamma, {problem.n_signorini} Signorini unknowns, {facts['subdomains']} "
-            f"subdomains of mean diameter {facts['subdomain_diameter']:.4g}, h from "
+            f"Gamma, {problem.n_signorini} Signorini unknowns, {partition}h from "
             f"{facts['h_min']:.4g} to {facts['h_max']:.4g}"
         )
+        if facts.get("signorini_areas"):
+            areas = ", ".join(f"{s:.4g}" for s in facts["signorini_areas"])
+            self.stage(f"Signorini faces of area {areas}")
         self.stage(f"material {m.name}: alpha = {m.alpha:.4g}, beta = {m.beta:.4g}")
         if len(arc_lengths):
             lengths = ", ".join(f"{s:.4g}" for s in arc_lengths)

@@ -41,7 +41,7 @@ from coupling.io.plots import (
     figure_inputs,
     write_pngs,
 )
-from coupling.io.quantities import boundary_flux, complementarity, log_coefficient
+from coupling.io.quantities import boundary_flux, complementarity, far_field_coefficient
 from coupling.options import OutputOptions, RunConfig
 from fem_py.dofs import gather_cells, gather_p1
 from fem_py.mesh import mesh_facts
@@ -64,7 +64,9 @@ DATA_FILES = ("summary.json", "fields.npz", "solution.xdmf", "solution.h5")
 
 def summary(problem, result, timings: Mapping[str, float], pressure: np.ndarray) -> dict:
     """The contents of summary.json (without ``config`` and ``files``); ``pressure`` is
-    :func:`coupling.io.quantities.boundary_flux` (boundary order)."""
+    :func:`coupling.io.quantities.boundary_flux` (boundary order). The far field's leading
+    coefficient is ``b`` (of log|x|) in 2D, ``c`` (of 1/|x|) in 3D."""
+    far_name, far_value = far_field_coefficient(problem, result)
     return {
         "converged": bool(result.converged),
         "reason": result.reason,
@@ -78,7 +80,7 @@ def summary(problem, result, timings: Mapping[str, float], pressure: np.ndarray)
         "C0_estimate": float(result.C0),
         "energy_increases": int(result.energy_increases),
         "complementarity": complementarity(result.phi, pressure[problem.boundary.signorini]),
-        "b": log_coefficient(problem, result),
+        far_name: far_value,
         "mpi_ranks": int(problem.comm.size),
         "timings": {k: float(v) for k, v in timings.items()},
         "history": [dataclasses.asdict(r) for r in result.history],
@@ -100,7 +102,9 @@ def boundary_fields(problem, result, pressure: np.ndarray) -> dict[str, np.ndarr
     phi[boundary.signorini] = result.phi
     active[boundary.signorini] = result.contact
     signorini[boundary.signorini] = True
+    surface = getattr(boundary, "triangles", None)  # 3D: Gamma_h's triangles
     return dict(
+        **({} if surface is None else {"boundary_triangles": surface}),
         boundary_x=boundary.nodes,
         boundary_u=result.boundary_u,
         phi=phi,
@@ -165,16 +169,25 @@ class RunOutputs:
         """Gather the run's result and start the background work (collective)."""
         tic = time.perf_counter()
         self._problem, self._result = problem, result
+        solid = problem.domain.dim == 3
+        if solid and self.plots:  # drawn by the planar figures only, so far
+            self.plots = False
+            if self.comm.rank == 0:
+                print(
+                    "fembem: note: the figures of a 3D body are not drawn yet; "
+                    "solution.xdmf and fields.npz hold the results",
+                    file=sys.stderr,
+                )
         gathered = gather_p1(result.u)
         self._pressure = boundary_flux(problem, result)
         if self.comm.rank == 0:
-            x, u, triangles = gathered
+            x, u, cells = gathered
             on_gamma = dict(
                 boundary_fields(problem, result, self._pressure),
                 a=np.array(problem.a),
                 flux_space=np.array(problem.flux_space),
             )
-            self._fields = dict(x=x, u=u, triangles=triangles, **on_gamma)
+            self._fields = dict(x=x, u=u, **{"cells" if solid else "triangles": cells}, **on_gamma)
             if not self.indicators:
                 self._jobs["data"] = self._pool.submit(_write_fields, self.out, self._fields)
             if self.plots:
@@ -349,9 +362,12 @@ def _write_xdmf(comm: MPI.Comm, out: Path, problem, result) -> None:
         tmp.mkdir(exist_ok=True)
     comm.barrier()
     with io.XDMFFile(comm, str(tmp / "solution.xdmf"), "w") as xdmf:
-        xdmf.write_mesh(problem.domain.mesh)
-        problem.domain.cell_tags.name = "subdomains"
-        xdmf.write_meshtags(problem.domain.cell_tags)
+        domain = problem.domain
+        xdmf.write_mesh(domain.mesh)
+        # the subdomains of a planar domain; the named faces (facet tags) of a body
+        tags = domain.facet_tags if domain.dim == 3 else domain.cell_tags
+        tags.name = "faces" if domain.dim == 3 else "subdomains"
+        xdmf.write_meshtags(tags)
         xdmf.write_function(result.u)
     comm.barrier()
     if comm.rank == 0:

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["boundary_flux", "complementarity", "log_coefficient"]
+__all__ = ["boundary_flux", "complementarity", "log_coefficient", "far_field_coefficient"]
 
 
 def boundary_flux(problem: Any, solution: Any) -> np.ndarray:
@@ -45,13 +45,25 @@ def complementarity(phi: np.ndarray, sigma_s: np.ndarray) -> float:
         return 0.0
     p_scale = float(np.abs(phi).max()) or 1.0
     s_scale = float(np.abs(sigma_s).max()) or 1.0
-    return float(
-        max(
-            np.max(-phi, initial=0.0) / p_scale,
-            np.max(sigma_s, initial=0.0) / s_scale,
-            np.max(np.abs(phi * sigma_s)) / (p_scale * s_scale),
-        )
+    worst = max(
+        np.max(-phi, initial=0.0) / p_scale,
+        np.max(sigma_s, initial=0.0) / s_scale,
+        np.max(np.abs(phi * sigma_s)) / (p_scale * s_scale),
     )
+    return float(worst) + 0.0  # (+ 0.0: no -0.0 in summary.json)
+
+
+def far_field_coefficient(problem: Any, solution: Any) -> tuple[str, float]:
+    """The leading term of u_e - a at infinity: ``("b", b)`` of b log|x| in 2D
+    (:func:`log_coefficient`), ``("c", c)`` of c / |x| in 3D, c = -(1/(4 pi)) int_Gamma
+    du_e/dn ds (the flux through a large sphere is -4 pi c; docs/method.md section 11), the
+    flux coefficients integrated exactly in their space (P1: the lumped mass, P0: areas)."""
+    boundary = problem.boundary
+    if problem.domain.dim == 2:
+        return "b", log_coefficient(problem, solution)
+    flux = np.asarray(solution.flux, dtype=float)
+    weights = boundary.triangle_areas if problem.flux_space == "p0" else boundary.lumped_mass
+    return "c", float(-(flux @ weights) / (4.0 * np.pi))
 
 
 def log_coefficient(problem: Any, solution: Any) -> float:

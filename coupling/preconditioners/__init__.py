@@ -17,7 +17,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 from coupling.distributed import dense_matrix, gather_matrix, gather_rows
-from coupling.options import AMG_MAX_ITERATIONS, AMG_RTOL, SolverOptions
+from coupling.options import AMG_MAX_ITERATIONS, AMG_RTOL, AUTO_PRECONDITIONER, SolverOptions
 from coupling.preconditioners.base import IdentityPreconditioner, Preconditioner
 from coupling.preconditioners.distributed import (
     DistributedSubstructuringPreconditioner,
@@ -47,6 +47,7 @@ __all__ = [
     "MultigridPreconditioner",
     "SignoriniArc",
     "build_preconditioner",
+    "preconditioner_kind",
     "coarse_space",
     "problem_arcs",
 ]
@@ -68,6 +69,13 @@ def coarse_space(domain: Any, choice: str) -> str:
     return "galerkin" if domain.partition == "cells" else "graph"
 
 
+def preconditioner_kind(choice: str, dim: int) -> str:
+    """The preconditioner of ``[solver] preconditioner = choice`` for a ``dim``-dimensional
+    domain: ``"auto"`` is :data:`coupling.options.AUTO_PRECONDITIONER` (substructuring in
+    2D, amg in 3D), any other choice itself."""
+    return AUTO_PRECONDITIONER[dim] if choice == "auto" else choice
+
+
 def build_preconditioner(
     problem: Any, options: SolverOptions, *, matrix: PETSc.Mat | None = None
 ) -> Preconditioner:
@@ -85,7 +93,8 @@ def build_preconditioner(
     caller that needs a P1 matrix afterwards (the solvers' Jacobian) saves creating one.
     B keeps no reference to it.
     """
-    kind, comm, V = options.preconditioner, problem.comm, problem.V
+    kind = preconditioner_kind(options.preconditioner, problem.domain.dim)
+    comm, V = problem.comm, problem.V
     n_owned = V.dofmap.index_map.size_local
     if kind == "identity":
         return IdentityPreconditioner(n_owned, problem.n_signorini)

@@ -57,11 +57,13 @@ def gather_by_input(
 
 
 def _owned_triangles(V: Any, cell_nodes: np.ndarray | None = None) -> np.ndarray:
-    """The owned cells of the P1 space ``V`` as node triples in the input numbering
-    (a view of ``cell_nodes``, :func:`_cell_nodes`, computed when not given)."""
-    n_cells = V.mesh.topology.index_map(V.mesh.topology.dim).size_local
+    """The owned cells of the P1 space ``V`` as node triples (quadruples: tetrahedra) in
+    the input numbering (a view of ``cell_nodes``, :func:`_cell_nodes`, computed when not
+    given)."""
+    tdim = V.mesh.topology.dim
+    n_cells = V.mesh.topology.index_map(tdim).size_local
     cell_nodes = _cell_nodes(V) if cell_nodes is None else cell_nodes
-    return cell_nodes.reshape(-1, 3)[:n_cells]
+    return cell_nodes.reshape(-1, tdim + 1)[:n_cells]
 
 
 def _joined(parts: list[np.ndarray]) -> np.ndarray:
@@ -77,8 +79,12 @@ def _cell_order(triangles: np.ndarray) -> np.ndarray:
     cell's position as its value), then each row's few cells sorted by b N + c
     (``sort_indices``): linear in the cells plus the nodes, where a general sort of 2e6
     triples costs several times more (docs/design/speed.md, "Outputs"). Falls back to
-    ``np.lexsort`` when b N + c would overflow int64 or two cells share their nodes.
+    ``np.lexsort`` when b N + c would overflow int64 or two cells share their nodes, and
+    for tetrahedra (by their sorted node numbers, lexicographically).
     """
+    if np.shape(triangles)[1] != 3:
+        ordered = np.sort(np.asarray(triangles, dtype=np.int64), axis=1)
+        return np.lexsort(ordered.T[::-1])
     t0, t1, t2 = np.asarray(triangles, dtype=np.int64).T
     a = np.minimum(np.minimum(t0, t1), t2)
     c = np.maximum(np.maximum(t0, t1), t2)
@@ -103,6 +109,7 @@ def gather_p1(u) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
 
     Returns (x (N, 2), values (N,), triangles (n_cells, 3)) on rank 0, None elsewhere;
     the triangles (counter-clockwise as in the mesh) are sorted by their node numbers.
+    On a tetrahedral mesh: x (N, 3) and the tetrahedra (n_cells, 4).
     """
     V = u.function_space
     comm = V.mesh.comm
@@ -111,7 +118,8 @@ def gather_p1(u) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     cell_nodes = _cell_nodes(V)
     numbers = _input_indices(V, cell_nodes)[:n_owned]
     # the dof coordinates, not geometry.x: the two differ in the last bit
-    x = gather_by_input(comm, numbers, V.tabulate_dof_coordinates()[:n_owned, :2], n_global)
+    gdim = V.mesh.topology.dim
+    x = gather_by_input(comm, numbers, V.tabulate_dof_coordinates()[:n_owned, :gdim], n_global)
     values = gather_by_input(comm, numbers, u.x.array[:n_owned].real, n_global)
     parts = gather_to_root(comm, _owned_triangles(V, cell_nodes))
     if comm.rank != 0:

@@ -1,12 +1,15 @@
 """The sizes a user checks before trusting a mesh (issue 17): the number of subdomains,
 the shortest and longest fine facet, the mean subdomain diameter and the length of each
-Signorini arc, from a distributed :class:`fem_py.mesh.Domain` (collective)."""
+Signorini arc, from a distributed :class:`fem_py.mesh.Domain` (collective); for a body in
+R^3 (:class:`fem_py.mesh.SolidDomain`) the shortest and longest edge and the area of
+each Signorini face."""
 from __future__ import annotations
 
 from typing import Any
 
 import numpy as np
 from dolfinx import cpp
+from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
 from fem_py.partition.ragged import as_ragged
@@ -63,11 +66,43 @@ def _summed(comm: Any, values: np.ndarray) -> np.ndarray:
     return out
 
 
+def solid_facts(domain: Any) -> dict:
+    """``h_min``, ``h_max`` (shortest and longest edge) and ``signorini_areas`` (the area
+    of each Signorini face or group, in the order of ``domain.signorini``; the whole
+    surface for ``"all"``) of a :class:`fem_py.mesh.SolidDomain` (collective)."""
+    msh, comm = domain.mesh, domain.mesh.comm
+    tags = domain.facet_tags
+    n_owned = msh.topology.index_map(2).size_local  # each triangle counted once
+    owned = tags.indices < n_owned
+    chosen = domain.signorini
+    if chosen == "all":
+        msh.topology.create_connectivity(2, 3)
+        boundary = dmesh.exterior_facet_indices(msh.topology)
+        groups = [boundary[boundary < n_owned]]
+    else:
+        groups = [tags.indices[owned & (tags.values == tag)] for tag in chosen]
+    areas = np.zeros(len(groups))
+    for k, facets in enumerate(groups):
+        if len(facets):
+            corners = cpp.mesh.entities_to_geometry(msh._mesh, 2, facets.astype(np.int32), False)
+            p = msh.geometry.x[corners]
+            areas[k] = (
+                0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1).sum()
+            )
+    return {
+        "h_min": float(domain.h_min),
+        "h_max": float(domain.h_max),
+        "signorini_areas": [float(v) for v in _summed(comm, areas)],
+    }
+
+
 def mesh_facts(domain: Any) -> dict:
     """``subdomains``, ``h_min``, ``h_max`` (shortest and longest fine facet),
     ``subdomain_diameter`` (the mean over the subdomains, :func:`subdomain_diameters`)
     and ``signorini_lengths`` (the length of arc k, tagged 100 + k), the same on every
-    rank (collective)."""
+    rank (collective); :func:`solid_facts` for a body in R^3."""
+    if domain.dim == 3:
+        return solid_facts(domain)
     msh, comm = domain.mesh, domain.mesh.comm
     x = msh.geometry.x[:, :2]
     facets, values = domain.facet_tags.indices, domain.facet_tags.values

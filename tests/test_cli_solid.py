@@ -1,0 +1,123 @@
+"""``fembem solve`` of a body in R^3 (docs/design/three_dimensions.md): summary.json and
+fields.npz (x (N, 3), cells (M, 4), the surface fields on Gamma's triangles), the same
+on 1 and 2 ranks, and bad 3D input refused in one line (exit 2, nothing written)."""
+from __future__ import annotations
+
+import json
+import re
+
+import numpy as np
+import pytest
+
+from conftest import run_cli, run_mpi
+from solid_files import solid_msh
+
+BOX = """[geometry]
+shape = "box"
+center = [0.0, 0.0, 0.0]
+width = 0.5
+h = 0.125
+signorini = ["bottom"]
+
+[material]
+rho = "carstensen"
+
+[data]
+f = "1"
+t0 = "-1"
+u0 = "0.02*x"
+exact = "0.02*x"
+"""
+
+
+def _solve(tmp_path, name, text, ranks=1):
+    config = tmp_path / f"{name}.toml"
+    config.write_text(text)
+    out = tmp_path / name
+    args = ("solve", str(config), "--out", str(out), "--quiet")
+    if ranks == 1:
+        proc = run_cli(*args)
+    else:
+        proc = run_mpi(ranks, "-m", "coupling.app.cli", *args, check=False)
+    return proc, out
+
+
+def _load(out):
+    with np.load(out / "fields.npz") as data:
+        return json.loads((out / "summary.json").read_text()), {k: data[k] for k in data.files}
+
+
+@pytest.mark.mpi
+def test_box_solve_writes_3d_fields_the_same_on_two_ranks(tmp_path):
+    proc, out = _solve(tmp_path, "one", BOX)
+    assert proc.returncode == 0, proc.stderr
+    summary, f = _load(out)
+    assert summary["converged"] and summary["iterations"] <= 15
+    assert (summary["dofs"], summary["boundary_dofs"], summary["signorini_dofs"]) == (125, 98, 9)
+    assert summary["contact_nodes"] == int(f["active"].sum()) == 9  # pressed flat
+    assert summary["complementarity"] <= 1e-6 and np.isfinite(summary["error"])
+    assert summary["config"]["solver"]["preconditioner"] == "auto"  # amg for a body
+    assert summary["signorini_areas"] == pytest.approx([0.25])
+    assert set(summary["files"]) == {"summary.json", "fields.npz", "solution.xdmf", "solution.h5"}
+    assert f["x"].shape == (125, 3) and f["cells"].shape == (6 * 4**3, 4)
+    n = 98
+    assert f["boundary_x"].shape == (n, 3) and f["boundary_triangles"].shape == (12 * 4**2, 3)
+    for key in ("boundary_u", "phi", "ue", "pressure", "dn_ue", "active", "signorini"):
+        assert f[key].shape == (n,), key
+    # the fields agree with each other: u_e = u + phi - u0 on Gamma, phi >= 0 on Gamma_s
+    # and 0 elsewhere, contact only on Gamma_s, the boundary nodes among the mesh nodes
+    u0 = 0.02 * f["boundary_x"][:, 0]
+    assert np.abs(f["ue"] - (f["boundary_u"] + f["phi"] - u0)).max() <= 1e-12
+    assert np.all(f["phi"][f["signorini"]] >= 0) and np.all(f["phi"][~f["signorini"]] == 0)
+    assert not np.any(f["active"] & ~f["signorini"])
+    assert np.all(np.isin(f["boundary_x"][:, 2], f["x"][:, 2]))
+    # evaluate and exterior take planar results only so far: one line
+    points = tmp_path / "points.csv"
+    points.write_text("0.1,0.1,0.1\n")
+    for command in ("evaluate", "exterior"):
+        proc = run_cli(command, str(out), "--points", str(points))
+        lines = proc.stderr.strip().splitlines()
+        assert proc.returncode == 2 and len(lines) == 1 and "holds a 3D run" in lines[0]
+    # two ranks: the same run
+    proc, out2 = _solve(tmp_path, "two", BOX, ranks=2)
+    assert proc.returncode == 0, proc.stderr
+    summary2, f2 = _load(out2)
+    assert summary2["iterations"] == summary["iterations"] and summary2["mpi_ranks"] == 2
+    assert np.array_equal(f2["cells"], f["cells"]) and np.array_equal(f2["active"], f["active"])
+    for key in ("x", "u", "phi", "ue"):
+        assert np.abs(f2[key] - f[key]).max() <= 1e-10 * np.abs(f[key]).max(), key
+
+
+@pytest.mark.parametrize(
+    "kind, order, signorini, message",
+    [
+        ("box", 2, '["bottom"]', "Tetrahedron 10"),
+        ("surface", 1, '["bottom"]', "surface mesh only"),
+        ("cavity", 1, '["bottom"]', "1 cavity"),
+        ("two", 1, '["bottom"]', "2 separate bodies"),
+        ("box", 1, '["contact"]', "no physical surface group 'contact'"),
+        ("box", 1, '["omega"]', "'omega' .* is a volume, not a surface"),
+    ],
+)
+def test_bad_3d_files_are_one_line(tmp_path, kind, order, signorini, message):
+    path = solid_msh(tmp_path / f"{kind}.msh", kind, h=0.5, order=order)
+    text = f'[geometry]\nmesh = "{path}"\nsignorini = {signorini}\n'
+    proc, out = _solve(tmp_path, "bad", text)
+    lines = proc.stderr.strip().splitlines()
+    assert proc.returncode == 2 and not out.exists(), proc.stderr
+    assert len(lines) == 1 and re.search(message, lines[0]), lines
+
+
+@pytest.mark.parametrize(
+    "extra, message",
+    [
+        ('[solver]\npreconditioner = "substructuring"\n', "solver.preconditioner"),
+        ("[adapt]\nsteps = 2\n", "adapt.steps: adaptivity is planar"),
+        ("[output]\nindicators = true\n", "output.indicators"),
+    ],
+)
+def test_planar_options_of_a_body_are_one_line(tmp_path, extra, message):
+    proc, out = _solve(tmp_path, "bad", BOX + extra)
+    lines = proc.stderr.strip().splitlines()
+    assert proc.returncode == 2 and not out.exists(), proc.stderr
+    assert len(lines) == 1 and message in lines[0], lines
