@@ -121,3 +121,12 @@ def test_planar_options_of_a_body_are_one_line(tmp_path, extra, message):
     lines = proc.stderr.strip().splitlines()
     assert proc.returncode == 2 and not out.exists(), proc.stderr
     assert len(lines) == 1 and message in lines[0], lines
+
+
+def test_a_body_that_cannot_fit_is_refused_before_it_is_built(tmp_path):
+    # 400 cubes per side: 6.4e7 dofs, 9.6e5 on Gamma; the 3D estimate (coupling.app.sizing)
+    # is about 267 GB, refused from the closed-form sizes before any mesh
+    proc, out = _solve(tmp_path, "huge", BOX.replace("h = 0.125", "h = 0.00125"))
+    lines = proc.stderr.strip().splitlines()
+    assert proc.returncode == 2 and not out.exists(), proc.stderr
+    assert len(lines) == 1 and "6.45e+07 dofs, 9.6e+05 on Gamma" in lines[0], lines
