@@ -6,8 +6,9 @@ from __future__ import annotations
 from typing import Protocol
 
 import numpy as np
+import scipy.linalg
 
-__all__ = ["Preconditioner", "IdentityPreconditioner", "check_length"]
+__all__ = ["Preconditioner", "IdentityPreconditioner", "DenseSignoriniBlock", "check_length"]
 
 
 class Preconditioner(Protocol):
@@ -77,6 +78,29 @@ class IdentityPreconditioner:
 
     def destroy(self) -> None:
         pass
+
+
+class DenseSignoriniBlock:
+    """A Signorini block B_s given by its dense SPD matrix M_s (n_s x n_s), Cholesky-factored:
+    ``apply_signorini`` (M_s^{-1}), ``matvec_signorini``, ``lambda_max_signorini`` and
+    ``signorini_metric`` of the interface, for preconditioners to inherit."""
+
+    def __init__(self, metric: np.ndarray):
+        self.signorini_metric = np.ascontiguousarray(metric, dtype=float)
+        self.n_signorini = n = self.signorini_metric.shape[0]
+        self.lambda_max_signorini = 1.0
+        if n:
+            self._signorini_factor = scipy.linalg.cho_factor(self.signorini_metric)
+            top = scipy.linalg.eigvalsh(self.signorini_metric, subset_by_index=[n - 1, n - 1])
+            self.lambda_max_signorini = float(top[0])
+
+    def apply_signorini(self, g: np.ndarray) -> np.ndarray:
+        if not self.n_signorini:
+            return np.zeros(0)
+        return scipy.linalg.cho_solve(self._signorini_factor, g)
+
+    def matvec_signorini(self, phi: np.ndarray) -> np.ndarray:
+        return self.signorini_metric @ phi
 
 
 def check_length(v: np.ndarray, n: int, name: str) -> np.ndarray:

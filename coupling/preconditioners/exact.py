@@ -13,14 +13,15 @@ a dense n_gamma x n_gamma block: for small problems only.
 from __future__ import annotations
 
 import numpy as np
-import scipy.linalg
 import scipy.sparse as sp
 import scipy.sparse.linalg
+
+from coupling.preconditioners.base import DenseSignoriniBlock
 
 __all__ = ["ExactPreconditioner"]
 
 
-class ExactPreconditioner:
+class ExactPreconditioner(DenseSignoriniBlock):
     """B = diag(K + T^T S T, E^T S E), factored (same interface as the others).
 
     Parameters
@@ -50,31 +51,14 @@ class ExactPreconditioner:
         )
         self._omega = (sp.csr_matrix(stiffness) + boundary_block).tocsc()
         self._omega_factor = scipy.sparse.linalg.splu(self._omega)
-        self.signorini_metric = np.ascontiguousarray(steklov_poincare[np.ix_(signorini, signorini)])
-        self.n_omega, self.n_signorini = n, len(signorini)
-        if self.n_signorini:
-            self._signorini_factor = scipy.linalg.cho_factor(self.signorini_metric)
-            self.lambda_max_signorini = float(
-                scipy.linalg.eigvalsh(
-                    self.signorini_metric, subset_by_index=[self.n_signorini - 1] * 2
-                )[0]
-            )
-        else:
-            self.lambda_max_signorini = 1.0
+        self.n_omega = n
+        super().__init__(steklov_poincare[np.ix_(signorini, signorini)])
 
     def apply_omega(self, g: np.ndarray) -> np.ndarray:
         return self._omega_factor.solve(np.asarray(g, dtype=float))
 
     def matvec_omega(self, u: np.ndarray) -> np.ndarray:
         return self._omega @ u
-
-    def apply_signorini(self, g: np.ndarray) -> np.ndarray:
-        if not self.n_signorini:
-            return np.zeros(0)
-        return scipy.linalg.cho_solve(self._signorini_factor, g)
-
-    def matvec_signorini(self, phi: np.ndarray) -> np.ndarray:
-        return self.signorini_metric @ phi
 
     def destroy(self) -> None:
         pass

@@ -29,13 +29,13 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-import scipy.linalg
 import ufl
 from dolfinx import fem
 from mpi4py import MPI
 from petsc4py import PETSc
 
 import bem_cpp
+from coupling.preconditioners.base import DenseSignoriniBlock
 from fem_py.forms.interior import compile_form
 from fem_py.parallel import array_from_root
 
@@ -65,7 +65,7 @@ def signorini_hypersingular(comm: MPI.Comm, boundary: Any) -> np.ndarray:
     )
 
 
-class MultigridPreconditioner:
+class MultigridPreconditioner(DenseSignoriniBlock):
     """B = diag(K + c T^T M_Gamma T, E^T W_h E) (module docstring), same interface as the
     others (:class:`coupling.preconditioners.base.Preconditioner`), on distributed owned
     arrays.
@@ -108,16 +108,7 @@ class MultigridPreconditioner:
         self._x, self._b = self._matrix.createVecs()
         self.iterations: list[int] = []  # inner CG iterations per application
         self.n_omega = V.dofmap.index_map.size_local
-        self.signorini_metric = np.ascontiguousarray(signorini_metric)
-        self.n_signorini = self.signorini_metric.shape[0]
-        if self.n_signorini:
-            self._signorini_factor = scipy.linalg.cho_factor(self.signorini_metric)
-            n = self.n_signorini
-            self.lambda_max_signorini = float(
-                scipy.linalg.eigvalsh(self.signorini_metric, subset_by_index=[n - 1, n - 1])[0]
-            )
-        else:
-            self.lambda_max_signorini = 1.0
+        super().__init__(signorini_metric)
 
     def apply_omega(self, g: np.ndarray) -> np.ndarray:
         self._b.array[:] = g
@@ -135,14 +126,6 @@ class MultigridPreconditioner:
         self._x.array[:] = u
         self._matrix.mult(self._x, self._b)
         return self._b.array.copy()
-
-    def apply_signorini(self, g: np.ndarray) -> np.ndarray:
-        if not self.n_signorini:
-            return np.zeros(0)
-        return scipy.linalg.cho_solve(self._signorini_factor, g)
-
-    def matvec_signorini(self, phi: np.ndarray) -> np.ndarray:
-        return self.signorini_metric @ phi
 
     def destroy(self) -> None:
         for obj in (self._ksp, self._matrix, self._x, self._b):
