@@ -376,12 +376,14 @@ def _info(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
     return EXIT_OK
 
 
-def _read_points(path: Path) -> tuple[np.ndarray, list[str]]:
-    """The (m, 2) points of a CSV file of x,y rows (an optional header line), and each
-    row's "x,y" as written there (echoed in the output as given)."""
+def _read_points(path: Path, dim: int = 2) -> tuple[np.ndarray, list[str]]:
+    """The (m, dim) points of a CSV file of x,y rows (x,y,z for a body in R^3; an optional
+    header line), and each row as written there (echoed in the output as given)."""
+    names = "x,y,z"[: 2 * dim - 1]
+    count = {2: "two", 3: "three"}[dim]
     if not path.is_file():
         raise FileNotFoundError(
-            f"--points: file {str(path)!r} not found; give a CSV file of " "x,y rows"
+            f"--points: file {str(path)!r} not found; give a CSV file of {names} rows"
         )
     lines = [ln for ln in path.read_text().splitlines() if ln.strip()]
     if lines and not lines[0].lstrip()[0] in "+-.0123456789":
@@ -389,36 +391,32 @@ def _read_points(path: Path) -> tuple[np.ndarray, list[str]]:
     try:
         points = np.array([[float(v) for v in ln.split(",")] for ln in lines], dtype=float)
     except ValueError:
-        raise ValueError(f"--points {path}: every row must be two numbers x,y") from None
-    if points.ndim != 2 or points.shape[1] != 2 or not np.isfinite(points).all():
-        raise ValueError(f"--points {path}: every row must be two finite numbers x,y")
+        raise ValueError(f"--points {path}: every row must be {count} numbers {names}") from None
+    if points.ndim != 2 or points.shape[1] != dim or not np.isfinite(points).all():
+        raise ValueError(f"--points {path}: every row must be {count} finite numbers {names}")
     return points, [",".join(v.strip() for v in ln.split(",")) for ln in lines]
 
 
-def _planar_fields(args: argparse.Namespace) -> dict:
-    """fields.npz of the result folder of ``evaluate`` or ``exterior``; a 3D run is refused
-    in one line (its points would be x,y,z rows: not built yet)."""
+def _result_points(args: argparse.Namespace) -> tuple[dict, np.ndarray, list[str], str]:
+    """fields.npz of the result folder of ``evaluate`` or ``exterior``, the points of
+    ``--points`` in its dimension, each row as given, and the CSV header of the points."""
     from coupling.io.outputs import load_fields
 
     fields = load_fields(Path(args.result_dir))
-    if fields["x"].shape[1] == 3:
-        raise ValueError(
-            f"{args.result_dir} holds a 3D run: fembem {args.command} takes planar results "
-            "only so far; read u_h and the boundary fields from its fields.npz"
-        )
-    return fields
+    dim = fields["x"].shape[1]
+    points, given = _read_points(Path(args.points), dim)
+    return fields, points, given, "x,y,z"[: 2 * dim - 1]
 
 
 def _exterior(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
     from coupling.io.evaluation import exterior_from_fields
 
-    fields = _planar_fields(args)
-    points, given = _read_points(Path(args.points))
+    fields, points, given, header = _result_points(args)
     try:
         ue = exterior_from_fields(fields, points)
     except ValueError as err:  # a point inside Omega or on Gamma
         raise ValueError(f"--points {args.points}: {err}") from None
-    table = "x,y,ue\n" + "".join(f"{xy},{v:.17g}\n" for xy, v in zip(given, ue))
+    table = f"{header},ue\n" + "".join(f"{xy},{v:.17g}\n" for xy, v in zip(given, ue))
     _write_table(table, args.out)
     return EXIT_OK
 
@@ -437,15 +435,14 @@ def _write_table(table: str, out: str | None) -> None:
 def _evaluate(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
     from coupling.io.evaluation import evaluate
 
-    fields = _planar_fields(args)
-    points, given = _read_points(Path(args.points))
+    fields, points, given, header = _result_points(args)
     values = evaluate(fields, points)
 
     def number(v: float) -> str:
         return "" if np.isnan(v) else f"{v:.17g}"
 
     rows = zip(given, values["where"], values["u"], values["ue"])
-    table = "x,y,where,u,ue\n" + "".join(
+    table = f"{header},where,u,ue\n" + "".join(
         f"{xy},{w},{number(u)},{number(ue)}\n" for xy, w, u, ue in rows
     )
     _write_table(table, args.out)

@@ -11,6 +11,12 @@ Each point is located against the mesh of fields.npz (P1 triangles,
   apply.
 
 Values that do not apply are NaN (empty in the CSV).
+
+A body in R^3 (fields with ``x`` (N, 3), ``cells`` and ``boundary_triangles``): points
+are x, y, z; on Gamma means within ``ON_GAMMA`` times the diameter of the plane of one of
+Gamma's triangles, over it (values linear on the triangle); inside means in one of the
+tetrahedra (:mod:`fem_py.mesh.location3d`); outside is the rest, where the representation
+formula on Gamma's triangles gives u_e (docs/method.md section 11).
 """
 from __future__ import annotations
 
@@ -19,6 +25,7 @@ import numpy as np
 import bem_cpp
 from coupling.options import HMATRIX_TOL
 from fem_py.mesh import interpolate_p1
+from fem_py.mesh.location3d import interpolate_p1_tetrahedra, on_surface
 from fem_py.polyline import closest_on_polygon, inside_polygon
 
 __all__ = ["evaluate", "exterior_from_fields", "ON_GAMMA"]
@@ -31,9 +38,11 @@ ON_GAMMA = 1e-11
 def exterior_from_fields(fields: dict, points: np.ndarray) -> np.ndarray:
     """u_e at exterior ``points`` (m, 2) by the representation formula (docs/method.md section
     2) from the boundary arrays of a run's fields (``boundary_x``, ``ue``, ``dn_ue``,
-    ``a``, ``flux_space``), compressed above bem_cpp's measured crossover (tol
-    :data:`coupling.options.HMATRIX_TOL`); bem_cpp's ValueError for a point inside Omega
-    or on Gamma. bem_cpp releases the GIL while it evaluates."""
+    ``a``, ``flux_space``; in 3D (m, 3) points and ``boundary_triangles``), compressed
+    above bem_cpp's measured crossover (tol :data:`coupling.options.HMATRIX_TOL`);
+    bem_cpp's ValueError for a point inside Omega or on Gamma. bem_cpp releases the GIL
+    while it evaluates."""
+    surface = fields.get("boundary_triangles")
     return bem_cpp.exterior_potential(
         fields["boundary_x"],
         fields["ue"],
@@ -43,14 +52,18 @@ def exterior_from_fields(fields: dict, points: np.ndarray) -> np.ndarray:
         flux=str(fields["flux_space"]),
         compression="auto",
         tol=HMATRIX_TOL,
+        **({} if surface is None else {"triangles": surface}),
     )
 
 
 def evaluate(fields: dict, points: np.ndarray) -> dict[str, np.ndarray]:
-    """``where`` ("inside", "boundary" or "outside"), ``u`` and ``ue`` at ``points`` (m, 2).
+    """``where`` ("inside", "boundary" or "outside"), ``u`` and ``ue`` at ``points`` (m, 2)
+    ((m, 3) for a body in R^3).
 
     ``fields`` is the content of fields.npz (:func:`coupling.io.outputs.load_fields`).
     """
+    if fields["x"].shape[1] == 3:
+        return _evaluate_in_body(fields, points)
     points = np.asarray(points, dtype=float).reshape(-1, 2)
     nodes = fields["boundary_x"]
     diameter = float(np.linalg.norm(nodes.max(axis=0) - nodes.min(axis=0)))
@@ -66,6 +79,27 @@ def evaluate(fields: dict, points: np.ndarray) -> dict[str, np.ndarray]:
     nxt = (seg[on] + 1) % len(nodes)
     for out, key in ((u, "boundary_u"), (ue, "ue")):
         out[on] = (1.0 - t[on]) * fields[key][seg[on]] + t[on] * fields[key][nxt]
+    if outside.any():
+        ue[outside] = exterior_from_fields(fields, points[outside])
+    where = np.where(inside, "inside", np.where(on, "boundary", "outside"))
+    return {"where": where, "u": u, "ue": ue}
+
+
+def _evaluate_in_body(fields: dict, points: np.ndarray) -> dict[str, np.ndarray]:
+    """:func:`evaluate` for the fields of a body in R^3 (module docstring)."""
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    nodes, surface = fields["boundary_x"], fields["boundary_triangles"]
+    diameter = float(np.linalg.norm(nodes.max(axis=0) - nodes.min(axis=0)))
+    triangle, bary = on_surface(nodes, surface, points, ON_GAMMA * diameter)
+    on = triangle >= 0
+    u = interpolate_p1_tetrahedra(fields["x"], fields["cells"], fields["u"], points)
+    inside = np.isfinite(u) & ~on
+    outside = ~inside & ~on
+    u[outside] = np.nan
+    ue = np.full(len(points), np.nan)
+    corners = surface[triangle[on]]
+    for out, key in ((u, "boundary_u"), (ue, "ue")):
+        out[on] = np.einsum("ij,ij->i", bary[on], fields[key][corners])
     if outside.any():
         ue[outside] = exterior_from_fields(fields, points[outside])
     where = np.where(inside, "inside", np.where(on, "boundary", "outside"))

@@ -1,0 +1,98 @@
+"""Point location for a body in R^3: the tetrahedron that holds each point (and the P1
+interpolation there), and the points that lie on a triangulated surface (with their
+barycentric coordinates there). Candidates come from a k-d tree of the cells' centroids:
+a point inside a cell is within the cell's largest centroid-to-vertex distance of its
+centroid, so every cell that may hold it is among those within the mesh's largest such
+distance."""
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+__all__ = ["locate_in_tetrahedra", "interpolate_p1_tetrahedra", "on_surface"]
+
+
+def _candidates(corners: np.ndarray, points: np.ndarray) -> list[list[int]]:
+    """For each point, the cells (``corners`` (T, k, 3)) whose centroid lies within the
+    largest centroid-to-vertex distance of the mesh (with a 1e-9 relative margin)."""
+    centroids = corners.mean(axis=1)
+    reach = float(np.linalg.norm(corners - centroids[:, None], axis=2).max())
+    return cKDTree(centroids).query_ball_point(points, reach * (1 + 1e-9) + 1e-300)
+
+
+def locate_in_tetrahedra(
+    x: np.ndarray, tetrahedra: np.ndarray, points: np.ndarray, *, tol: float = 1e-12
+) -> tuple[np.ndarray, np.ndarray]:
+    """(cell (m,), barycentric coordinates (m, 4)) of each point in the mesh (x (N, 3),
+    tetrahedra (T, 4)); cell -1 where no tetrahedron holds the point (within ``tol`` in
+    barycentric coordinates)."""
+    x, tets = np.asarray(x, dtype=float), np.asarray(tetrahedra, dtype=np.int64)
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    cell = np.full(len(points), -1, dtype=np.int64)
+    bary = np.zeros((len(points), 4))
+    if len(points) == 0 or len(tets) == 0:
+        return cell, bary
+    corners = x[tets]  # (T, 4, 3)
+    inverses = np.linalg.inv(np.transpose(corners[:, 1:] - corners[:, :1], (0, 2, 1)))
+    for i, near in enumerate(_candidates(corners, points)):
+        if not near:
+            continue
+        near = np.asarray(near)
+        lam = np.einsum("tij,tj->ti", inverses[near], points[i] - corners[near, 0])
+        lam = np.column_stack([1.0 - lam.sum(axis=1), lam])
+        best = int(np.argmax(lam.min(axis=1)))
+        if lam[best].min() >= -tol:
+            cell[i], bary[i] = near[best], lam[best]
+    return cell, bary
+
+
+def interpolate_p1_tetrahedra(
+    x: np.ndarray, tetrahedra: np.ndarray, values: np.ndarray, points: np.ndarray
+) -> np.ndarray:
+    """The P1 function of nodal ``values`` at ``points`` (m, 3); NaN outside the mesh."""
+    cell, bary = locate_in_tetrahedra(x, tetrahedra, points)
+    out = np.full(len(cell), np.nan)
+    found = cell >= 0
+    tets = np.asarray(tetrahedra, dtype=np.int64)[cell[found]]
+    out[found] = np.einsum("ij,ij->i", bary[found], np.asarray(values, dtype=float)[tets])
+    return out
+
+
+def on_surface(
+    nodes: np.ndarray, triangles: np.ndarray, points: np.ndarray, distance: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """(triangle (m,), barycentric coordinates (m, 3)) of the points (m, 3) closer than
+    ``distance`` to the surface (``nodes`` (n, 3), ``triangles`` (t, 3)), at the foot of
+    the perpendicular on the triangle, and triangle -1 for the others. ``distance`` is
+    meant to be tiny (points given on the surface up to round-off)."""
+    nodes, tris = np.asarray(nodes, dtype=float), np.asarray(triangles, dtype=np.int64)
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    which = np.full(len(points), -1, dtype=np.int64)
+    bary = np.zeros((len(points), 3))
+    if len(points) == 0:
+        return which, bary
+    corners = nodes[tris]  # (t, 3, 3)
+    e1, e2 = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
+    normal = np.cross(e1, e2)
+    normal /= np.linalg.norm(normal, axis=1)[:, None]
+    # the in-plane coordinates (l1, l2) of a point: the Gram system of e1, e2
+    g11, g12, g22 = (e1 * e1).sum(1), (e1 * e2).sum(1), (e2 * e2).sum(1)
+    det = g11 * g22 - g12 * g12
+    slack = 1e-9  # barycentric: a point on an edge belongs to both triangles
+    for i, near in enumerate(_candidates(corners, points)):
+        if not near:
+            continue
+        near = np.asarray(near)
+        v = points[i] - corners[near, 0]
+        height = np.abs((v * normal[near]).sum(axis=1))
+        b1, b2 = (v * e1[near]).sum(axis=1), (v * e2[near]).sum(axis=1)
+        l1 = (g22[near] * b1 - g12[near] * b2) / det[near]
+        l2 = (g11[near] * b2 - g12[near] * b1) / det[near]
+        lam = np.column_stack([1.0 - l1 - l2, l1, l2])
+        hit = (height <= distance) & (lam.min(axis=1) >= -slack)
+        if hit.any():
+            k = int(np.flatnonzero(hit)[np.argmin(height[hit])])
+            which[i] = near[k]
+            clipped = np.clip(lam[k], 0.0, None)
+            bary[i] = clipped / clipped.sum()
+    return which, bary

@@ -1,0 +1,72 @@
+"""Point location in a tetrahedral mesh and on its surface (fem_py.mesh.location3d)
+against exact answers: the unit cube cut into six tetrahedra per sub-cube (the Kuhn
+split), P1 interpolation exact for linear functions, points outside found nowhere, and
+points on the cube's faces found on a surface triangle with barycentric coordinates that
+reproduce them."""
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+
+from fem_py.mesh.location3d import interpolate_p1_tetrahedra, locate_in_tetrahedra, on_surface
+
+
+def _cube(n: int):
+    g = np.linspace(0.0, 1.0, n + 1)
+    x = np.array(list(itertools.product(g, g, g)))
+    index = lambda i, j, k: (i * (n + 1) + j) * (n + 1) + k  # noqa: E731
+    tets = []
+    for i, j, k in itertools.product(range(n), repeat=3):
+        for order in itertools.permutations(range(3)):  # the Kuhn split: six tetrahedra
+            corner, path = np.array([i, j, k]), [index(i, j, k)]
+            for axis in order:
+                corner = corner.copy()
+                corner[axis] += 1
+                path.append(index(*corner))
+            tets.append(path)
+    return x, np.array(tets)
+
+
+def _faces(x, tets):
+    """The boundary triangles (faces of one tetrahedron only)."""
+    faces = np.sort(
+        np.concatenate(
+            [tets[:, [0, 1, 2]], tets[:, [0, 1, 3]], tets[:, [0, 2, 3]], tets[:, [1, 2, 3]]]
+        ),
+        axis=1,
+    )
+    unique, count = np.unique(faces, axis=0, return_counts=True)
+    return unique[count == 1]
+
+
+def test_points_inside_are_located_and_linear_functions_reproduced():
+    x, tets = _cube(3)
+    rng = np.random.default_rng(0)
+    points = rng.uniform(0.0, 1.0, (500, 3))
+    cell, bary = locate_in_tetrahedra(x, tets, points)
+    assert np.all(cell >= 0) and np.all(bary >= -1e-12)
+    assert np.abs(np.einsum("ij,ijk->ik", bary, x[tets[cell]]) - points).max() <= 1e-14
+    values = 1.0 + 2.0 * x[:, 0] - x[:, 1] + 0.5 * x[:, 2]
+    exact = 1.0 + 2.0 * points[:, 0] - points[:, 1] + 0.5 * points[:, 2]
+    assert np.abs(interpolate_p1_tetrahedra(x, tets, values, points) - exact).max() <= 1e-13
+    # the nodes themselves, and points outside the cube
+    assert np.all(locate_in_tetrahedra(x, tets, x)[0] >= 0)
+    outside = np.array([[1.01, 0.5, 0.5], [-0.2, 0.1, 0.1], [0.5, 0.5, 2.0]])
+    assert np.all(locate_in_tetrahedra(x, tets, outside)[0] == -1)
+    assert np.all(np.isnan(interpolate_p1_tetrahedra(x, tets, values, outside)))
+
+
+def test_points_on_the_surface_are_found_on_a_triangle():
+    x, tets = _cube(3)
+    surface = _faces(x, tets)
+    assert len(surface) == 6 * 2 * 3**2
+    rng = np.random.default_rng(1)
+    points = rng.uniform(0.0, 1.0, (300, 3))
+    points[:, 0] = np.repeat([0.0, 1.0], 150)  # on the faces x = 0 and x = 1
+    triangle, bary = on_surface(x, surface, points, 1e-12)
+    assert np.all(triangle >= 0)
+    assert np.abs(np.einsum("ij,ijk->ik", bary, x[surface[triangle]]) - points).max() <= 1e-14
+    # inside, or off the surface by more than the distance: not on it
+    off = np.array([[0.5, 0.5, 0.5], [1.0 + 1e-9, 0.5, 0.5], [0.3, 0.3, 1e-6]])
+    assert np.all(on_surface(x, surface, off, 1e-12)[0] == -1)
