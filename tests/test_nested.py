@@ -161,3 +161,34 @@ def test_coarser_levels_stop_where_their_geometry_is_invalid(subdomains_on_arc, 
     assert len(coarser) == levels
     for level in coarser:
         assert level.geometry.subdomain_size == 2 * level.geometry.h == 8 * h
+
+
+def test_nested_solve_of_a_body():
+    # the box (docs/design/three_dimensions.md, "Nested"): 16 cubes per side started from
+    # the solution on 8; the coarse u by P1 interpolation in the tetrahedra, the gap on the
+    # coarse surface triangles (the fine nodes lie on the flat faces)
+    from coupling.manufactured import box_contact
+
+    build = lambda cells: manufactured_problem(  # noqa: E731
+        MPI.COMM_WORLD, box_contact(), MATERIAL, cells=cells
+    )
+    fine = build(16)
+    options = SolverOptions()
+    cold = solve(fine, options)
+    nested, levels = solve_nested(fine, [lambda: build(8)], options)
+    assert nested.converged and [lv.dofs for lv in levels] == [729, 4913]
+    scale = np.abs(cold.u.x.array).max()
+    assert np.abs(nested.u.x.array - cold.u.x.array).max() <= 1e-8 * scale
+    assert np.abs(nested.phi - cold.phi).max() <= 1e-8 * scale
+    assert np.array_equal(nested.contact, cold.contact)
+    assert nested.iterations < cold.iterations
+    # the configuration's levels: h doubles (NESTED_COARSENING_3D) while a level keeps
+    # NESTED_MIN_DOFS = 1000 dofs; a box whose width is no multiple of the coarse h stops
+    config = parse_config(
+        {"geometry": {"shape": "box", "width": 0.5, "h": 0.5 / 48, "signorini": ["bottom"]}}
+    )
+    levels = [c.geometry.h for c in coarser_configs(config, 49**3)]
+    assert levels == pytest.approx([0.5 / 12, 0.5 / 24], rel=1e-14)
+    config = parse_config({"geometry": {"shape": "box", "width": 0.5, "h": 0.5 / 30}})
+    levels = [c.geometry.h for c in coarser_configs(config, 31**3)]  # 7.5 cubes: stop
+    assert levels == pytest.approx([0.5 / 15], rel=1e-14)

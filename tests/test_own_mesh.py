@@ -272,7 +272,8 @@ def bad_files(tmp_path_factory):
         # issue 29 item 11: the key once ("geometry.mesh: file", not "geometry.mesh: mesh:")
         ("missing", {}, r"geometry.mesh: file .*nope.msh' not found"),
         ("text", {}, r"geometry.mesh: '.*text.msh' is not a gmsh mesh file"),
-        ("3d", {}, r"3d.msh' is a 3D mesh"),
+        # a 3D mesh file is a body (tests/test_cli_solid.py); a planar key is refused with it
+        ("3d", {"subdomain_size": 0.1}, r"geometry.subdomain_size: .*for a 3D body"),
         ("quads", {}, r"Quadrilateral 4 elements; fembem needs linear 3-node triangles"),
         ("order2", {}, r"Triangle 6 elements"),
         ("hole", {}, r"Omega has a hole .* one simply connected Omega"),

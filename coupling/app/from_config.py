@@ -10,7 +10,13 @@ from typing import Any
 
 from mpi4py import MPI
 
-from coupling.options import NESTED_COARSENING, NESTED_MIN_DOFS, RunConfig, SolverOptions
+from coupling.options import (
+    NESTED_COARSENING,
+    NESTED_COARSENING_3D,
+    NESTED_MIN_DOFS,
+    RunConfig,
+    SolverOptions,
+)
 from coupling.problem import SignoriniProblem
 
 __all__ = [
@@ -60,31 +66,38 @@ def coarser_configs(
     config: RunConfig,
     dofs: int,
     *,
-    coarsening: int = NESTED_COARSENING,
+    coarsening: int | None = None,
     min_dofs: int = NESTED_MIN_DOFS,
     keep_subdomains: bool = False,
 ) -> list[RunConfig]:
     """The configurations of the coarser levels of a nested solve of a configuration whose
-    mesh has ``dofs`` dofs, coarsest first: h multiplied by ``coarsening`` per level, the
-    subdomain size d kept while a coarse edge keeps at least two segments and raised to
-    2 h there (d_k = max(d, 2 h_k); with ``keep_subdomains`` the levels stop there
-    instead), while the level has at least ``min_dofs`` dofs (estimated as
-    dofs / coarsening^(2k)) and its geometry is valid (the levels stop at the first that
-    is not, e.g. a Signorini arc end on the given subdomains' grid but not on the raised
-    d's: the solve is then cold, never an error the fine mesh does not raise). No levels
-    for a mesh file (it has no h to coarsen) nor, so far, for a body in R^3 (its solve is
-    cold: docs/design/three_dimensions.md)."""
+    mesh has ``dofs`` dofs, coarsest first: h multiplied by ``coarsening`` per level
+    (default :data:`coupling.options.NESTED_COARSENING`, ``NESTED_COARSENING_3D`` for a
+    body), the subdomain size d kept while a coarse edge keeps at least two segments and
+    raised to 2 h there (d_k = max(d, 2 h_k); with ``keep_subdomains`` the levels stop
+    there instead; a body has no subdomains), while the level has at least ``min_dofs``
+    dofs (estimated as dofs / coarsening^(dim k)) and its geometry is valid (the levels
+    stop at the first that is not, e.g. a Signorini arc end on the given subdomains' grid
+    but not on the raised d's, or a box whose width is no multiple of the coarser h: the
+    solve is then cold, never an error the fine mesh does not raise). No levels for a
+    mesh file (it has no h to coarsen)."""
     from fem_py.mesh import spec_dimension
 
     g = config.geometry
-    if g.mesh or spec_dimension(g) == 3:
+    if g.mesh:
         return []
+    dim = spec_dimension(g)
+    if coarsening is None:
+        coarsening = NESTED_COARSENING_3D if dim == 3 else NESTED_COARSENING
     levels, k = [], 1
-    while dofs / coarsening ** (2 * k) >= min_dofs:
+    while dofs / coarsening ** (dim * k) >= min_dofs:
         h = g.h * coarsening**k
         if keep_subdomains and 2 * h > g.subdomain_size:
             break
-        geometry = dataclasses.replace(g, h=h, subdomain_size=max(g.subdomain_size, 2 * h))
+        if dim == 3:
+            geometry = dataclasses.replace(g, h=h)
+        else:
+            geometry = dataclasses.replace(g, h=h, subdomain_size=max(g.subdomain_size, 2 * h))
         level = dataclasses.replace(config, geometry=geometry)
         try:
             planned_size(level)  # the checks of build_domain, without a mesh

@@ -25,6 +25,7 @@ from coupling.solvers.records import Monitor
 from coupling.solvers.solution import Solution, solve
 from fem_py.dofs import gather_p1
 from fem_py.mesh import interpolate_p1
+from fem_py.mesh.location3d import interpolate_p1_tetrahedra, on_surface
 from fem_py.polyline import closest_on_polygon
 
 __all__ = ["LevelRecord", "prolong", "solve_nested"]
@@ -48,23 +49,47 @@ def prolong(coarse: Any, coarse_solution: Solution, fine: Any) -> tuple[np.ndarr
     (collective: every rank evaluates the gathered coarse field at its own nodes)."""
     comm = fine.comm
     gathered = gather_p1(coarse_solution.u)
-    x, values, triangles = comm.bcast(gathered, root=0) if comm.size > 1 else gathered
+    x, values, cells = comm.bcast(gathered, root=0) if comm.size > 1 else gathered
     n_owned = fine.V.dofmap.index_map.size_local
-    points = fine.V.tabulate_dof_coordinates()[:n_owned, :2]
-    # an n-fold uniform refinement has n^2 times the cells: its nodes are matched by sorting
-    fine_cells = fine.V.mesh.topology.index_map(2).size_global
-    divisions = max(1, round(np.sqrt(fine_cells / len(triangles))))
-    u = interpolate_p1(x, triangles, values, points, divisions=divisions)
-    lost = np.isnan(u)  # on the coarse boundary up to round-off: the nearest coarse node
-    if lost.any():
+    dim = x.shape[1]
+    points = fine.V.tabulate_dof_coordinates()[:n_owned, :dim]
+    if dim == 3:
+        u = interpolate_p1_tetrahedra(x, cells, values, points)
+    else:
+        # an n-fold uniform refinement has n^2 times the cells: its nodes are matched by
+        # sorting
+        fine_cells = fine.V.mesh.topology.index_map(2).size_global
+        divisions = max(1, round(np.sqrt(fine_cells / len(cells))))
+        u = interpolate_p1(x, cells, values, points, divisions=divisions)
+    lost = np.isnan(u)  # on the coarse boundary up to round-off (or outside a coarse
+    if lost.any():  # curved surface): the nearest coarse node
         u[lost] = values[cKDTree(x).query(points[lost])[1]]
     b_coarse, b_fine = coarse.boundary, fine.boundary
     gap = np.zeros(b_coarse.n_gamma)
     gap[b_coarse.signorini] = coarse_solution.phi
-    _, seg, t = closest_on_polygon(b_fine.nodes[b_fine.signorini], b_coarse.nodes)
-    nxt = (seg + 1) % b_coarse.n_gamma
-    phi = np.maximum((1.0 - t) * gap[seg] + t * gap[nxt], 0.0)
-    return u, phi
+    targets = b_fine.nodes[b_fine.signorini]
+    if dim == 3:
+        phi = _surface_gap(b_coarse, gap, targets)
+    else:
+        _, seg, t = closest_on_polygon(targets, b_coarse.nodes)
+        nxt = (seg + 1) % b_coarse.n_gamma
+        phi = (1.0 - t) * gap[seg] + t * gap[nxt]
+    return u, np.maximum(phi, 0.0)
+
+
+def _surface_gap(coarse_boundary: Any, gap: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """The coarse gap (P1 on the coarse surface) at fine boundary ``points``: linear on the
+    coarse triangle under a point (flat faces: the fine nodes lie on them), else (a curved
+    surface, the fine nodes off the coarse facets) the value of the nearest coarse node."""
+    nodes, triangles = coarse_boundary.nodes, coarse_boundary.triangles
+    diameter = float(np.linalg.norm(nodes.max(axis=0) - nodes.min(axis=0)))
+    triangle, bary = on_surface(nodes, triangles, points, 1e-10 * diameter)
+    found = triangle >= 0
+    out = np.empty(len(points))
+    out[found] = np.einsum("ij,ij->i", bary[found], gap[triangles[triangle[found]]])
+    if (~found).any():
+        out[~found] = gap[cKDTree(nodes).query(points[~found])[1]]
+    return out
 
 
 def solve_nested(
