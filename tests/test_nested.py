@@ -177,11 +177,13 @@ def test_nested_solve_of_a_body():
     cold = solve(fine, options)
     nested, levels = solve_nested(fine, [lambda: build(8)], options)
     assert nested.converged and [lv.dofs for lv in levels] == [729, 4913]
+    # both meet the stopping rule at tol = 1e-8: within C0/c0 (8.8 here) times tol
+    # (measured 1.0e-8 relative)
     scale = np.abs(cold.u.x.array).max()
-    assert np.abs(nested.u.x.array - cold.u.x.array).max() <= 1e-8 * scale
-    assert np.abs(nested.phi - cold.phi).max() <= 1e-8 * scale
+    assert np.abs(nested.u.x.array - cold.u.x.array).max() <= 1e-7 * scale
+    assert np.abs(nested.phi - cold.phi).max() <= 1e-7 * scale
     assert np.array_equal(nested.contact, cold.contact)
-    assert nested.iterations < cold.iterations
+    assert nested.iterations < cold.iterations  # measured 3 against 10
     # the configuration's levels: h doubles (NESTED_COARSENING_3D) while a level keeps
     # NESTED_MIN_DOFS = 1000 dofs; a box whose width is no multiple of the coarse h stops
     config = parse_config(
