@@ -155,3 +155,13 @@ def test_a_body_that_cannot_fit_is_refused_before_it_is_built(tmp_path):
     lines = proc.stderr.strip().splitlines()
     assert proc.returncode == 2 and not out.exists(), proc.stderr
     assert len(lines) == 1 and "6.45e+07 dofs, 9.6e+05 on Gamma" in lines[0], lines
+
+
+def test_nested_solve_of_a_box_writes_its_levels(tmp_path):
+    # 20 cubes per side (9,261 dofs) from 10 (1,331): NESTED_COARSENING_3D = 2
+    proc, out = _solve(tmp_path, "nested", BOX.replace("h = 0.125", "h = 0.025"))
+    assert proc.returncode == 0, proc.stderr
+    summary, _ = _load(out)
+    assert [level["dofs"] for level in summary["levels"]] == [11**3, 21**3]
+    assert summary["converged"] and "levels.csv" in summary["files"]
+    assert summary["iterations"] <= 5  # from the prolonged coarse solution

@@ -182,6 +182,7 @@ class RunOutputs:
         self._pressure = boundary_flux(problem, result)
         if self.comm.rank == 0:
             x, u, cells = gathered
+            self._mesh = (x, cells)  # triangles, or tetrahedra for a body
             on_gamma = dict(
                 boundary_fields(problem, result, self._pressure),
                 a=np.array(problem.a),
@@ -261,7 +262,7 @@ class RunOutputs:
                     levels,
                     adaptive=adaptive,
                     plot=self.plots,
-                    mesh=(self._fields["x"], self._fields["triangles"]),
+                    mesh=self._mesh,
                 )
             self.seconds += time.perf_counter() - tic
             stages = {**timings, "outputs": self.seconds}
