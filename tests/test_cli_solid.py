@@ -71,6 +71,10 @@ def test_box_solve_writes_3d_fields_the_same_on_two_ranks(tmp_path):
     assert np.all(f["phi"][f["signorini"]] >= 0) and np.all(f["phi"][~f["signorini"]] == 0)
     assert not np.any(f["active"] & ~f["signorini"])
     assert np.all(np.isin(f["boundary_x"][:, 2], f["x"][:, 2]))
+    # solution.xdmf: u_h, the named faces and the boundary fields, for ParaView
+    xdmf = (out / "solution.xdmf").read_text()
+    for name in ("u", "faces", "gap", "ue", "pressure", "contact"):
+        assert f'Attribute Name="{name}"' in xdmf, name
     # fembem evaluate at x,y,z points: a node inside (u_h there), a boundary node (both
     # traces), points outside (u_e by the representation formula)
     inside = int(np.flatnonzero(np.all(np.abs(f["x"]) < 0.2, axis=1))[0])

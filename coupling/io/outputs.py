@@ -243,7 +243,7 @@ class RunOutputs:
         facts = mesh_facts(problem.domain) if facts is None else facts  # collective
         written = []
         if self.xdmf:
-            _write_xdmf(self.comm, out, problem, result)
+            _write_xdmf(self.comm, out, problem, result, self._pressure)
             written += ["solution.xdmf", "solution.h5"]
 
         def write_gathered() -> list[str]:  # rank 0
@@ -353,10 +353,16 @@ def write_outputs(
         return run.finish(**finish)
 
 
-def _write_xdmf(comm: MPI.Comm, out: Path, problem, result) -> None:
+#: The boundary fields of solution.xdmf (name -> key of :func:`boundary_fields`): P1
+#: functions on the mesh, their values on Gamma, 0 inside.
+XDMF_BOUNDARY_FIELDS = {"gap": "phi", "ue": "ue", "pressure": "pressure", "contact": "active"}
+
+
+def _write_xdmf(comm: MPI.Comm, out: Path, problem, result, pressure: np.ndarray) -> None:
     """solution.xdmf/.h5 written in a temporary subfolder, then moved (the .xdmf names
-    its .h5 relatively, so both keep their final names)."""
-    from dolfinx import io
+    its .h5 relatively, so both keep their final names): u_h, the subdomain tags (the
+    named faces of a body) and the boundary fields :data:`XDMF_BOUNDARY_FIELDS`."""
+    from dolfinx import fem, io
 
     tmp = out / ".xdmf-tmp"
     if comm.rank == 0:
@@ -370,6 +376,12 @@ def _write_xdmf(comm: MPI.Comm, out: Path, problem, result) -> None:
         tags.name = "faces" if domain.dim == 3 else "subdomains"
         xdmf.write_meshtags(tags)
         xdmf.write_function(result.u)
+        on_gamma = boundary_fields(problem, result, pressure)
+        for name, key in XDMF_BOUNDARY_FIELDS.items():
+            field = fem.Function(problem.V, name=name)
+            field.x.array[:] = 0.0
+            problem.boundary.scatter_add(on_gamma[key].astype(float), field.vector)
+            xdmf.write_function(field)
     comm.barrier()
     if comm.rank == 0:
         for name in ("solution.h5", "solution.xdmf"):
