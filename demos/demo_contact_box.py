@@ -115,8 +115,10 @@ for key, values in rates.items():
 #
 # summary.json, fields.npz (x (N, 3), the tetrahedra `cells`, and on Gamma
 # `boundary_triangles`, the gap, u_e, the pressure and the contact set) and
-# solution.xdmf (u_h and the named faces: open it in ParaView). The PNG figures of a
-# body are not drawn yet.
+# solution.xdmf (u_h, the named faces and the boundary fields: open it in ParaView), and
+# the figures: signorini.png (the gap with the contact set outlined and the pressure on
+# the bottom face), surface.png (u_h on Gamma from two sides), slice.png (u_h inside and
+# u_e outside on the plane z = 0) and history.png.
 
 # %%
 out = args.out

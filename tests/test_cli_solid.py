@@ -58,7 +58,9 @@ def test_box_solve_writes_3d_fields_the_same_on_two_ranks(tmp_path):
     assert summary["complementarity"] <= 1e-6 and np.isfinite(summary["error"])
     assert summary["config"]["solver"]["preconditioner"] == "auto"  # amg for a body
     assert summary["signorini_areas"] == pytest.approx([0.25])
-    assert set(summary["files"]) == {"summary.json", "fields.npz", "solution.xdmf", "solution.h5"}
+    pngs = {"signorini.png", "surface.png", "slice.png", "history.png"}
+    data = {"summary.json", "fields.npz", "solution.xdmf", "solution.h5"}
+    assert set(summary["files"]) == data | pngs
     assert f["x"].shape == (125, 3) and f["cells"].shape == (6 * 4**3, 4)
     n = 98
     assert f["boundary_x"].shape == (n, 3) and f["boundary_triangles"].shape == (12 * 4**2, 3)

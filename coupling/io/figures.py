@@ -44,7 +44,7 @@ from coupling.io.figure_data import (  # noqa: E402
 )
 from fem_py.polyline import CORNER_ANGLE, arc_length, polygon_corners  # noqa: E402
 
-__all__ = ["render", "true_runs", "warm_up"]
+__all__ = ["render", "figure_history", "true_runs", "warm_up"]
 
 #: The figures laid out by fig.tight_layout() when they are built: saved as they are
 #: (bbox_inches="tight" would draw them once more to find their extent); the others
@@ -298,7 +298,7 @@ def _figure_whole_plane(inputs: FigureInputs):
     return fig
 
 
-def _figure_history(history: dict, tol: float):
+def figure_history(history: dict, tol: float):
     it, energy = history["iteration"], history["energy"]
     step, contact = history["step_norm"], history["contact"]
     fig, axes = plt.subplots(
@@ -345,15 +345,20 @@ def _tight_extent(fig) -> Bbox:
 
 def render(inputs: FigureInputs) -> dict[str, bytes]:
     """The PNG files of :data:`PLOT_FILES` drawn from ``inputs``, as {name: bytes} in
-    that order (no history.png without history)."""
+    that order (no history.png without history); those of
+    :func:`coupling.io.body_figures.render_body` for the inputs of a body in R^3."""
+    from coupling.io.body_figure_data import BodyFigureInputs
+
+    if isinstance(inputs, BodyFigureInputs):
+        from coupling.io.body_figures import render_body
+
+        return render_body(inputs)
     figures = {
         "u.png": lambda: _figure_u(inputs.boundary, inputs.image, inputs.grid),
         "boundary.png": lambda: _figure_boundary(inputs.boundary),
         "whole_plane.png": lambda: _figure_whole_plane(inputs),
         "history.png": lambda: (
-            _figure_history(inputs.history, inputs.tol)
-            if len(inputs.history["iteration"])
-            else None
+            figure_history(inputs.history, inputs.tol) if len(inputs.history["iteration"]) else None
         ),
     }
     pngs = {}

@@ -35,10 +35,12 @@ from coupling.io.atomic import atomic_write
 from coupling.io.levels import LEVEL_FILES, write_levels
 from coupling.io.figure_data import FigureInputs
 from coupling.io.figure_worker import FigureWorker, FigureWorkerError
+from coupling.io.body_figure_data import BODY_PLOT_FILES, body_figure_inputs
 from coupling.io.plots import (
     PLOT_FILES,
     exterior_samples,
     figure_inputs,
+    history_arrays,
     write_pngs,
 )
 from coupling.io.quantities import boundary_flux, complementarity, far_field_coefficient
@@ -170,14 +172,6 @@ class RunOutputs:
         tic = time.perf_counter()
         self._problem, self._result = problem, result
         solid = problem.domain.dim == 3
-        if solid and self.plots:  # drawn by the planar figures only, so far
-            self.plots = False
-            if self.comm.rank == 0:
-                print(
-                    "fembem: note: the figures of a 3D body are not drawn yet; "
-                    "solution.xdmf and fields.npz hold the results",
-                    file=sys.stderr,
-                )
         gathered = gather_p1(result.u)
         self._pressure = boundary_flux(problem, result)
         if self.comm.rank == 0:
@@ -191,7 +185,12 @@ class RunOutputs:
             self._fields = dict(x=x, u=u, **{"cells" if solid else "triangles": cells}, **on_gamma)
             if not self.indicators:
                 self._jobs["data"] = self._pool.submit(_write_fields, self.out, self._fields)
-            if self.plots:
+            if self.plots and solid:  # the section's u_e and u_h in a thread
+                history = history_arrays(result.history, result.stop_measure)
+                self._jobs["inputs"] = self._pool.submit(
+                    body_figure_inputs, self._fields, history, tol=self.tol
+                )
+            elif self.plots:
                 samples = self._pool.submit(exterior_samples, on_gamma)
                 inputs = figure_inputs(
                     self._fields, result.history, tol=self.tol, stop_measure=result.stop_measure
@@ -284,7 +283,7 @@ class RunOutputs:
                 lambda p: p.write_text(json.dumps(record, indent=2, default=str)),
             )
             names.append("summary.json")
-            for name in set(DATA_FILES + PLOT_FILES + LEVEL_FILES) - set(names):
+            for name in set(DATA_FILES + PLOT_FILES + BODY_PLOT_FILES + LEVEL_FILES) - set(names):
                 (out / name).unlink(missing_ok=True)
             return names
 

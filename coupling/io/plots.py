@@ -27,6 +27,7 @@ __all__ = [
     "ExteriorSamples",
     "exterior_samples",
     "figure_inputs",
+    "history_arrays",
     "write_pngs",
     "write_plots",
 ]
@@ -102,13 +103,18 @@ def figure_inputs(
         boundary={k: fields[k] for k in _BOUNDARY_FIELDS},
         exterior_points=exterior.points,
         exterior_ue=exterior.ue,
-        history={
-            key: np.array([getattr(r, key) for r in history], dtype=float)
-            for key in ("iteration", "energy", "step_norm", "contact")
-        }
-        | {"stop": np.array([] if stop_measure is None else [stop_measure], dtype=float)},
+        history=history_arrays(history, stop_measure),
         tol=float(tol),
     )
+
+
+def history_arrays(history: Sequence, stop_measure: float | None = None) -> dict:
+    """The iteration records of ``history`` (``iteration``, ``energy``, ``step_norm``,
+    ``contact``) as arrays, with ``stop_measure`` as ``stop`` (history.png's data)."""
+    return {
+        key: np.array([getattr(r, key) for r in history], dtype=float)
+        for key in ("iteration", "energy", "step_norm", "contact")
+    } | {"stop": np.array([] if stop_measure is None else [stop_measure], dtype=float)}
 
 
 def write_pngs(out: Path, pngs: dict[str, bytes]) -> list[str]:

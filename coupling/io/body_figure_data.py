@@ -1,0 +1,86 @@
+"""What the figures of a body in R^3 are drawn from (:mod:`coupling.io.body_figures`).
+
+:func:`body_figure_inputs` collects, from the arrays of fields.npz and the iteration
+history: the surface triangulation of Gamma with u_h, the gap, the pressure and the
+contact set at its nodes, and a section of the body by the plane z = z_c through its
+centre (the middle of its bounding box): u_h at the pixel centres inside the body
+(point location in the tetrahedra) and u_e by the representation formula outside
+(docs/method.md section 11). NumPy and bem_cpp only: no matplotlib, no MPI.
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from coupling.io.evaluation import exterior_from_fields
+from fem_py.mesh.location3d import interpolate_p1_tetrahedra
+
+__all__ = ["BODY_PLOT_FILES", "BodyFigureInputs", "body_figure_inputs", "SLICE_PIXELS"]
+
+#: The figures of a body, in the order they are written.
+BODY_PLOT_FILES = ("signorini.png", "surface.png", "slice.png", "history.png")
+#: Pixels along each side of the section's image.
+SLICE_PIXELS = 121
+
+
+class BodyFigureInputs(NamedTuple):
+    """The arrays of the figures of a body (a few MB plus Gamma's triangulation)."""
+
+    nodes: np.ndarray  # (n, 3) boundary nodes
+    triangles: np.ndarray  # (m, 3) rows of nodes
+    fields: dict  # boundary arrays (n,): u, phi, pressure, active, signorini
+    section: dict  # z, extent (x0, x1, y0, y1), u_h and u_e images (ny, nx), NaN where not
+    history: dict
+    tol: float
+
+
+def body_figure_inputs(fields: dict, history: dict, *, tol: float) -> BodyFigureInputs:
+    """The inputs of the figures of a body from ``fields`` (the arrays of fields.npz of a
+    3D run: ``x``, ``cells``, ``u``, the boundary arrays) and ``history`` (the arrays of
+    :func:`coupling.io.plots.history_arrays`)."""
+    nodes, triangles = fields["boundary_x"], fields["boundary_triangles"]
+    lo, hi = nodes.min(axis=0), nodes.max(axis=0)
+    centre, half = 0.5 * (lo + hi), 0.5 * float((hi - lo)[:2].max())
+    g = np.linspace(-2.0, 2.0, SLICE_PIXELS) * half  # the body and its surroundings
+    # shifted by a third of a pixel: no pixel centre on a face at a round coordinate
+    g = g + (g[1] - g[0]) / 3.0
+    X, Y = np.meshgrid(centre[0] + g, centre[1] + g)
+    points = np.column_stack([X.ravel(), Y.ravel(), np.full(X.size, centre[2])])
+    u = interpolate_p1_tetrahedra(fields["x"], fields["cells"], fields["u"], points)
+    # outside: u_e by the representation formula, accurate close to Gamma; should a pixel
+    # centre lie on Gamma to round-off (refused by the formula), those within a pixel of
+    # a boundary node are left out
+    outside = ~np.isfinite(u)
+    ue = np.full(len(points), np.nan)
+    if outside.any():
+        try:
+            ue[outside] = exterior_from_fields(fields, points[outside])
+        except ValueError:
+            outside[outside] = ~_close_to(nodes, points[outside], float(g[1] - g[0]))
+            ue[outside] = exterior_from_fields(fields, points[outside])
+    shape = X.shape
+    section = dict(
+        z=float(centre[2]),
+        extent=(float(X.min()), float(X.max()), float(Y.min()), float(Y.max())),
+        u=u.reshape(shape),
+        ue=ue.reshape(shape),
+    )
+    boundary = dict(
+        u=fields["boundary_u"],
+        phi=fields["phi"],
+        pressure=fields["pressure"],
+        active=fields["active"],
+        signorini=fields["signorini"],
+    )
+    return BodyFigureInputs(nodes, triangles, boundary, section, history, float(tol))
+
+
+def _close_to(nodes: np.ndarray, points: np.ndarray, distance: float) -> np.ndarray:
+    """Whether each point lies within ``distance`` of a boundary node (a pixel next to
+    Gamma on the section, with the pixel at least as large as the triangles)."""
+    from scipy.spatial import cKDTree
+
+    if not len(points):
+        return np.zeros(0, bool)
+    return cKDTree(nodes).query(points, distance_upper_bound=distance)[0] < np.inf
