@@ -100,19 +100,13 @@ def _figure_slice(inputs: BodyFigureInputs):
     both = np.concatenate([u.compressed(), ue.compressed()])
     if not len(both):
         return None
-    kwargs = dict(
-        origin="lower", extent=s["extent"], vmin=both.min(), vmax=both.max(), cmap="viridis"
-    )
+    kwargs = dict(origin="lower", vmin=both.min(), vmax=both.max(), cmap="viridis")
     fig, ax = plt.subplots(figsize=(6.4, 5.4))
-    ax.imshow(ue, **kwargs)
-    shown = ax.imshow(u, **kwargs)
-    if u.count():
+    ax.imshow(ue, extent=s["ue_extent"], interpolation="bilinear", **kwargs)
+    shown = ax.imshow(u, extent=s["u_extent"], **kwargs)
+    if u.count():  # the section of Gamma: the edge of the pixels inside
         inside = np.isfinite(s["u"]).astype(float)
-        x0, x1, y0, y1 = s["extent"]
-        X, Y = np.meshgrid(
-            np.linspace(x0, x1, inside.shape[1]), np.linspace(y0, y1, inside.shape[0])
-        )
-        ax.contour(X, Y, inside, levels=[0.5], colors="white", linewidths=1.0)
+        ax.contour(inside, levels=[0.5], colors="white", linewidths=1.0, extent=s["u_extent"])
     fig.colorbar(shown, ax=ax, label=r"$u_h$ inside, $u_e$ outside")
     ax.set(xlabel="$x$", ylabel="$y$", title=f"section z = {s['z']:.4g}")
     return fig
