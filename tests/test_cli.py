@@ -129,6 +129,7 @@ def test_solve_writes_the_documented_outputs(run):
     assert "16 subdomains of mean diameter 0.1768, h from 0.03125 to 0.04419" in proc.stdout
     assert len(summary["history"]) == summary["iterations"]
     assert summary["config"]["material"]["rho"] == "carstensen"
+    assert summary["preconditioner"] == "substructuring"  # "auto" in the plane
     for name in (
         "fields.npz",
         "solution.xdmf",

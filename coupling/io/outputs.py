@@ -275,6 +275,7 @@ class RunOutputs:
             if levels is not None:  # a nested or adaptive solve: one record per level
                 record["levels"] = levels
             if config is not None:
+                record["preconditioner"] = _preconditioner_run(config, problem.domain.dim)
                 record["config"] = config.as_dict()
             record["files"] = sorted(names + ["summary.json"])
             # last, so that a summary.json names a complete set of files
@@ -317,6 +318,15 @@ def _with_samples(inputs: FigureInputs, samples: Future) -> FigureInputs:
     """``inputs`` with the exterior samples of ``samples`` (once computed)."""
     points, ue = samples.result()
     return inputs._replace(exterior_points=points, exterior_ue=ue)
+
+
+def _preconditioner_run(config: RunConfig, dim: int) -> str:
+    """The preconditioner the run used: ``[solver] preconditioner`` with ``"auto"``
+    resolved for Omega's dimension ``dim`` (substructuring in 2D, amg in 3D;
+    :func:`coupling.preconditioners.preconditioner_kind`)."""
+    from coupling.preconditioners import preconditioner_kind
+
+    return preconditioner_kind(config.solver.preconditioner, dim)
 
 
 def _write_fields(out: Path, fields: dict) -> None:
