@@ -160,8 +160,8 @@ def build_parser() -> argparse.ArgumentParser:
         "info",
         help="the size of a run without running it",
         description="Validate CONFIG and print, without solving, the sizes of its problem: "
-        "dofs, boundary_dofs, signorini_dofs, subdomains, h_min, h_max (in closed form for "
-        "the structured square and L-shape; otherwise the mesh is built) and "
+        "dofs, boundary_dofs, signorini_dofs, subdomains, h_min, h_max, dim (in closed form "
+        "for the structured square and L-shape and the box; otherwise the mesh is built) and "
         "memory_estimate_bytes, the estimated peak memory of `fembem solve`.",
     )
     info.add_argument("config", metavar="CONFIG.toml")
@@ -179,15 +179,16 @@ def build_parser() -> argparse.ArgumentParser:
         "exterior",
         "u_e at exterior points from a finished run",
         "Evaluate the exterior solution u_e at the points of a CSV file (two columns x, y; "
-        "an optional header line) by the representation formula, from the fields.npz of "
-        "RESULT_DIR.",
-        "write x,y,ue here",
+        "three, x, y, z, for a 3D run; an optional header line) by the representation "
+        "formula, from the fields.npz of RESULT_DIR.",
+        "write x,y,ue (x,y,z,ue) here",
     )
     result_reader(
         "evaluate",
         "u_h and u_e at any points from a finished run",
-        "Evaluate the solution at the points of a CSV file (two columns x, y; an optional "
-        "header line) from the fields.npz of RESULT_DIR: each row x,y,where,u,ue with "
+        "Evaluate the solution at the points of a CSV file (two columns x, y; three for a "
+        "3D run; an optional header line) from the fields.npz of RESULT_DIR: each row "
+        "x,y(,z),where,u,ue with "
         "where = inside (u = u_h), boundary (u_h and the trace u_e) or outside (u_e by the "
         "representation formula); a value that does not apply is empty. A point closer to "
         "Gamma than 1e-11 times the diameter of its bounding box is on Gamma (boundary); "
