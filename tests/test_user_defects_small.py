@@ -45,7 +45,7 @@ def test_history_shows_the_quantity_the_stopping_rule_tested():
     no record holds (the last Newton step is above tol): history.png draws it."""
     from mpi4py import MPI
 
-    from coupling.io.figures import _figure_history
+    from coupling.io.history_figure import figure_history
     from coupling.io.plots import figure_inputs
     from coupling.manufactured import manufactured_problem, square_contact
     from coupling.options import SolverOptions
@@ -64,7 +64,7 @@ def test_history_shows_the_quantity_the_stopping_rule_tested():
     inputs = figure_inputs(
         fields, solution.history, tol=options.tol, stop_measure=solution.stop_measure
     )
-    fig = _figure_history(inputs.history, options.tol)
+    fig = figure_history(inputs.history, options.tol)
     drawn = {line.get_label(): line for line in fig.axes[0].get_lines()}
     (test,) = [line for label, line in drawn.items() if label.startswith("stopping test")]
     assert list(test.get_xdata()) == [solution.history[-1].iteration]

@@ -20,6 +20,7 @@ import numpy as np  # noqa: E402
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
 from coupling.io.body_figure_data import BODY_PLOT_FILES, BodyFigureInputs  # noqa: E402
+from coupling.io.history_figure import figure_history  # noqa: E402
 
 __all__ = ["render_body"]
 
@@ -115,8 +116,6 @@ def _figure_slice(inputs: BodyFigureInputs):
 def render_body(inputs: BodyFigureInputs) -> dict[str, bytes]:
     """The PNG files of :data:`BODY_PLOT_FILES` drawn from ``inputs``, as {name: bytes}
     (no signorini.png without Signorini nodes, no history.png without history)."""
-    from coupling.io.figures import figure_history
-
     figures = {
         "signorini.png": lambda: _figure_signorini(inputs),
         "surface.png": lambda: _figure_surface(inputs),

@@ -42,9 +42,10 @@ from coupling.io.figure_data import (  # noqa: E402
     plane_square,
     rasterise,
 )
+from coupling.io.history_figure import figure_history  # noqa: E402
 from fem_py.polyline import CORNER_ANGLE, arc_length, polygon_corners  # noqa: E402
 
-__all__ = ["render", "figure_history", "true_runs", "warm_up"]
+__all__ = ["render", "true_runs", "warm_up"]
 
 #: The figures laid out by fig.tight_layout() when they are built: saved as they are
 #: (bbox_inches="tight" would draw them once more to find their extent); the others
@@ -295,42 +296,6 @@ def _figure_whole_plane(inputs: FigureInputs):
         r"across $\Gamma$ they differ by $u_0 - \phi_h$",
         fontsize=10,
     )
-    return fig
-
-
-def figure_history(history: dict, tol: float):
-    it, energy = history["iteration"], history["energy"]
-    step, contact = history["step_norm"], history["contact"]
-    fig, axes = plt.subplots(
-        2, 1, figsize=(6.5, 5.5), sharex=True, gridspec_kw=dict(height_ratios=[3, 1.3])
-    )
-    ax = axes[0]
-    ax.semilogy(it, step, label=r"$\Vert\xi_{k+1} - \xi_k\Vert_B \,/\, \Vert\xi_{k+1}\Vert_B$")
-    best = energy.min()  # J* below: the lowest energy reached
-    keep = energy > best
-    ax.semilogy(
-        it[keep],
-        (energy[keep] - best) / max(abs(best), 1e-300),
-        label=r"$(J_h(\xi_k) - J^*) \,/\, |J^*|$,  $J^*$: lowest $J_h$ reached",
-    )
-    stop = history.get("stop", np.zeros(0))
-    if len(stop) and len(it):  # the stopping rule tested the PGPM step from the last iterate
-        ax.semilogy(
-            it[-1:],
-            stop,
-            "v",
-            color="k",
-            label=r"stopping test: $\Vert$PGPM step at $\xi_k\Vert_B \,/\, \Vert\xi_k\Vert_B$",
-        )
-    ax.axhline(tol, color="0.4", ls="--", lw=0.8, label=f"tol = {tol:g}")
-    ax.set_ylabel("relative size")
-    ax.grid(alpha=0.3, lw=0.5, which="both")
-    ax.legend(fontsize=8)
-    ax.set_title(f"Convergence ({len(it)} iterations)")
-    axes[1].step(it, contact, where="post", color="tab:red")
-    axes[1].set(xlabel="iteration $k$", ylabel="contact nodes")
-    axes[1].grid(alpha=0.3, lw=0.5)
-    fig.tight_layout()
     return fig
 
 
