@@ -84,6 +84,7 @@ bench: setup
 	$(PY) bench/strong_scaling.py --output bench/scaling.md
 	$(PY) bench/outputs.py
 	$(PY) bench/speed.py
+	$(PY) bench/solid.py
 
 study: setup
 	$(PY) -m study
