@@ -1,0 +1,25 @@
+"""bench/solid.py runs end to end at a small size (its figures are for people: no timing
+is asserted): the fembem solve of the box and the 3D Poisson pipeline, one record each."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+from conftest import ROOT
+
+
+def test_solid_bench_small_run(tmp_path):
+    out = tmp_path / "solid.json"
+    proc = subprocess.run(
+        [sys.executable, str(ROOT / "bench" / "solid.py"), "--sizes", "4", "--json", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=ROOT,
+    )
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    (row,) = json.loads(out.read_text())
+    assert row["n"] == 4 and row["run"]["dofs"] == row["poisson"]["dofs"] == 125
+    assert row["run"]["converged"] and row["peak_bytes"] > 0
+    assert "n = 4: 125 dofs" in proc.stdout and "KB per dof" in proc.stdout
