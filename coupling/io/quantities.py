@@ -8,6 +8,8 @@ from typing import Any
 
 import numpy as np
 
+from coupling.adapt.estimator import contact_pressure
+
 __all__ = ["boundary_flux", "complementarity", "log_coefficient", "far_field_coefficient"]
 
 
@@ -26,14 +28,10 @@ def boundary_flux(problem: Any, solution: Any) -> np.ndarray:
     so on Gamma_s sigma_i = -lambda_i / m_i with lambda = grad_phi J_h >= 0 the discrete
     multiplier of phi >= 0 ((2.5)): sigma <= 0 and phi sigma = 0 hold node by node, to
     the solver's tolerance. At a corner of Gamma (no normal) the value is that of the
-    lumped form, not a point value.
+    lumped form, not a point value. The same quantity as the estimator's contact pressure
+    (:func:`coupling.adapt.estimator.contact_pressure`), which computes it.
     """
-    residual = problem.functional.load.duplicate()
-    problem.forms.assemble_residual(solution.u, residual)
-    residual.axpy(-1.0, problem.functional.load)
-    r = problem.boundary.gather(residual)
-    residual.destroy()
-    return r / problem.boundary.lumped_mass
+    return contact_pressure(problem, solution.u)
 
 
 def complementarity(phi: np.ndarray, sigma_s: np.ndarray) -> float:
