@@ -17,7 +17,10 @@ bem = Pybind11Extension(
     ["bem_cpp/bindings.cpp", *sources],
     include_dirs=["bem_cpp/include", "/usr/include/eigen3"],
     cxx_std=17,
-    extra_compile_args=["-O3", "-fopenmp", "-DNDEBUG"],
+    # -march=native: the module is built on the machine that runs it (make setup), and the
+    # kernel loops of the 3D operators vectorise to its widest units (docs/design/bem3d.md);
+    # -fno-math-errno lets sqrt vectorise.
+    extra_compile_args=["-O3", "-march=native", "-fno-math-errno", "-fopenmp", "-DNDEBUG"],
     extra_link_args=["-fopenmp"],
     # Dense Cholesky, triangular solve and rank-k update of S_h (bem/linear_algebra.hpp)
     # call LAPACK/BLAS directly; on Debian these resolve to OpenBLAS (libopenblas-dev).

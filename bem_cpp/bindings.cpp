@@ -42,10 +42,13 @@ PYBIND11_MODULE(_bem, m) {
   py::class_<bem::SteklovInfo>(m, "SteklovInfo")
       .def_readonly("setup_seconds", &bem::SteklovInfo::setup_seconds)
       .def_readonly("near_field_seconds", &bem::SteklovInfo::near_field_seconds)
+      .def_readonly("single_layer_seconds", &bem::SteklovInfo::single_layer_seconds)
+      .def_readonly("double_layer_seconds", &bem::SteklovInfo::double_layer_seconds)
       .def_readonly("max_rank", &bem::SteklovInfo::max_rank)
       .def_readonly("nbytes_v", &bem::SteklovInfo::nbytes_v)
       .def_readonly("nbytes_v0", &bem::SteklovInfo::nbytes_v0)
       .def_readonly("nbytes_k", &bem::SteklovInfo::nbytes_k)
+      .def_readonly("nbytes_w", &bem::SteklovInfo::nbytes_w)
       .def_readonly("nbytes_preconditioner", &bem::SteklovInfo::nbytes_preconditioner);
   py::class_<bem::SteklovPoincareOperator>(m, "SteklovPoincareOperator")
       .def(py::init([](NodesRef nodes, Space flux, bem::Index leaf_size, double eta, double tol,

@@ -10,7 +10,7 @@ namespace bem {
 namespace {
 
 /// argmax |x[i]| over i with !used[i]; -1 if all are used.
-Index unused_argmax(const Eigen::VectorXd& x, const std::vector<char>& used) {
+Index unused_argmax(const Eigen::Ref<const Eigen::VectorXd>& x, const std::vector<char>& used) {
   Index best = -1;
   double value = -1.0;
   for (Index i = 0; i < x.size(); ++i)
@@ -21,46 +21,49 @@ Index unused_argmax(const Eigen::VectorXd& x, const std::vector<char>& used) {
   return best;
 }
 
+/// The crosses u_k v_k^T found so far, as the columns of two matrices (grown by doubling),
+/// so that the residuals and the norm update are matrix-vector products.
 class Cross {
  public:
   Cross(Index m, Index n, const Slice& row, const Slice& column)
-      : m_(m), n_(n), row_(row), column_(column), row_used_(m, 0), col_used_(n, 0) {}
+      : m_(m), n_(n), row_(row), column_(column), row_used_(m, 0), col_used_(n, 0), U_(m, 8), V_(n, 8) {}
 
   Eigen::VectorXd residual_row(Index i) const {
     Eigen::VectorXd r(n_);
     row_(i, r.data());
-    for (std::size_t k = 0; k < us_.size(); ++k) r -= us_[k](i) * vs_[k];
+    if (k_ > 0) r.noalias() -= V_.leftCols(k_) * U_.row(i).head(k_).transpose();
     return r;
   }
   Eigen::VectorXd residual_column(Index j) const {
     Eigen::VectorXd c(m_);
     column_(j, c.data());
-    for (std::size_t k = 0; k < us_.size(); ++k) c -= vs_[k](j) * us_[k];
+    if (k_ > 0) c.noalias() -= U_.leftCols(k_) * V_.row(j).head(k_).transpose();
     return c;
   }
   /// Adds u v^T and updates |U V^T|_F^2.
-  void add(Eigen::VectorXd u, Eigen::VectorXd v) {
+  void add(const Eigen::VectorXd& u, const Eigen::VectorXd& v) {
     double cross = 0.0;
-    for (std::size_t k = 0; k < us_.size(); ++k) cross += us_[k].dot(u) * vs_[k].dot(v);
+    if (k_ > 0) cross = (U_.leftCols(k_).transpose() * u).dot(V_.leftCols(k_).transpose() * v);
     norm2_ += u.squaredNorm() * v.squaredNorm() + 2.0 * cross;
-    us_.push_back(std::move(u));
-    vs_.push_back(std::move(v));
+    if (k_ == U_.cols()) {
+      U_.conservativeResize(Eigen::NoChange, 2 * k_);
+      V_.conservativeResize(Eigen::NoChange, 2 * k_);
+    }
+    U_.col(k_) = u;
+    V_.col(k_) = v;
+    ++k_;
   }
   double norm() const { return std::sqrt(std::max(norm2_, 0.0)); }
-  Index rank() const { return static_cast<Index>(us_.size()); }
-  const Eigen::VectorXd& last_u() const { return us_.back(); }
-  const Eigen::VectorXd& last_v() const { return vs_.back(); }
+  Index rank() const { return k_; }
+  auto last_u() const { return U_.col(k_ - 1); }
+  auto last_v() const { return V_.col(k_ - 1); }
   std::vector<char>& row_used() { return row_used_; }
   std::vector<char>& col_used() { return col_used_; }
 
   LowRank result() const {
     LowRank a;
-    a.U.resize(m_, rank());
-    a.V.resize(n_, rank());
-    for (Index k = 0; k < rank(); ++k) {
-      a.U.col(k) = us_[static_cast<std::size_t>(k)];
-      a.V.col(k) = vs_[static_cast<std::size_t>(k)];
-    }
+    a.U = U_.leftCols(k_);
+    a.V = V_.leftCols(k_);
     return a;
   }
 
@@ -69,7 +72,8 @@ class Cross {
   const Slice& row_;
   const Slice& column_;
   std::vector<char> row_used_, col_used_;
-  std::vector<Eigen::VectorXd> us_, vs_;
+  Eigen::MatrixXd U_, V_;
+  Index k_ = 0;
   double norm2_ = 0.0;
 };
 
@@ -109,10 +113,10 @@ LowRank aca(Index m, Index n, const Slice& row, const Slice& column, double tol,
         stop = i < 0;
       } else {
         zero_rows = 0;
-        Eigen::VectorXd v = r / r(j);
-        Eigen::VectorXd u = x.residual_column(j);
+        const Eigen::VectorXd v = r / r(j);
+        const Eigen::VectorXd u = x.residual_column(j);
         x.col_used()[static_cast<std::size_t>(j)] = 1;
-        x.add(std::move(u), std::move(v));
+        x.add(u, v);
         stop = x.last_u().norm() * x.last_v().norm() <= tol * x.norm();
         i = unused_argmax(x.last_u(), x.row_used());
         if (i < 0) stop = true;
@@ -165,7 +169,7 @@ void recompress(LowRank& a, double tol) {
   const Index ku = std::min(m, k), kv = std::min(n, k);
   const Eigen::MatrixXd ru = qu.matrixQR().topRows(ku).triangularView<Eigen::Upper>();
   const Eigen::MatrixXd rv = qv.matrixQR().topRows(kv).triangularView<Eigen::Upper>();
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd(ru * rv.transpose(), Eigen::ComputeThinU | Eigen::ComputeThinV);
+  Eigen::BDCSVD<Eigen::MatrixXd> svd(ru * rv.transpose(), Eigen::ComputeThinU | Eigen::ComputeThinV);
   const Eigen::VectorXd& s = svd.singularValues();
   const double total = s.squaredNorm();
   Index r = s.size();

@@ -74,6 +74,12 @@ void check_rows(Index got, Index expected, const char* what) {
 
 HMatrix::HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const ClusterTree> cols,
                  const EntrySource& entries, const HMatrixOptions& options)
+    : HMatrix(std::move(rows), std::move(cols), options, Unfilled{}) {
+  build(entries, options);
+}
+
+HMatrix::HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const ClusterTree> cols,
+                 const HMatrixOptions& options, Unfilled)
     : rows_(std::move(rows)), cols_(std::move(cols)), product_threads_(options.product_threads), comm_(options.comm) {
   row_end_ = rows_->size();
   if (comm_) {
@@ -97,7 +103,6 @@ HMatrix::HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const 
     col_counts_ = counts(cols_->partition(comm_->size));
     restricted_ = true;
   }
-  build(entries, options);
 }
 
 HMatrix::HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const ClusterTree> cols,
@@ -115,6 +120,17 @@ HMatrix::HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const 
 }
 
 void HMatrix::build(const EntrySource& entries, const HMatrixOptions& options) {
+  plan(options);
+  const std::vector<std::size_t> order = build_order();
+  const long count = static_cast<long>(order.size());
+#pragma omp parallel for schedule(dynamic, 1)
+  for (long q = 0; q < count; ++q) {
+    Block& b = blocks_[order[static_cast<std::size_t>(q)]];
+    fill(b, *entry_block(entries, b), 0, options);
+  }
+}
+
+void HMatrix::plan(const HMatrixOptions& options) {
   if (!(options.eta > 0) || !(options.tol > 0) || options.leaf_size < 1 || options.product_threads < 0)
     throw std::invalid_argument("HMatrix: need eta > 0, tol > 0, leaf_size >= 1, product_threads >= 0");
   if (options.symmetric && rows_ != cols_)
@@ -122,48 +138,82 @@ void HMatrix::build(const EntrySource& entries, const HMatrixOptions& options) {
   symmetric_ = options.symmetric;
   collect(*rows_, *cols_, 0, 0, options.eta, options.min_distance, symmetric_, row_begin_, row_end_, blocks_,
           options.split_to_leaves);
-  const Index* rp = rows_->permutation().data();
-  const Index* cp = cols_->permutation().data();
+}
+
+std::vector<std::size_t> HMatrix::build_order() const {
   // Largest blocks first, so that the dynamic schedule ends with small ones.
   std::vector<std::size_t> order(blocks_.size());
   for (std::size_t b = 0; b < order.size(); ++b) order[b] = b;
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
     return blocks_[a].m + blocks_[a].k > blocks_[b].m + blocks_[b].k;
   });
-  const long count = static_cast<long>(order.size());
-#pragma omp parallel for schedule(dynamic, 1)
-  for (long q = 0; q < count; ++q) {
-    Block& b = blocks_[order[static_cast<std::size_t>(q)]];
-    const Index* I = rp + b.r0;
-    const Index* J = cp + b.c0;
-    const Index m = b.m, k = b.k;
-    const std::unique_ptr<EntryBlock> e = entries.block(I, m, J, k);
-    if (!b.low_rank) {
-      b.dense.resize(m, k);
-      e->all(b.dense.data());
-    } else {
-      const Slice row = [&e](Index i, double* out) { e->row(i, out); };
-      const Slice column = [&e](Index j, double* out) { e->column(j, out); };
-      if (!e->low_rank(options.tol, b.factors)) b.factors = aca(m, k, row, column, options.tol, std::min(m, k));
-      recompress(b.factors, options.tol);
-      if (b.factors.rank() * (m + k) >= m * k) {  // dense is smaller
-        b.dense = b.factors.U * b.factors.V.transpose();
-        b.factors = LowRank{};
-        b.low_rank = false;
-      }
+  return order;
+}
+
+std::unique_ptr<EntryBlock> HMatrix::entry_block(const EntrySource& entries, const Block& b) const {
+  return entries.block(rows_->permutation().data() + b.r0, b.m, cols_->permutation().data() + b.c0, b.k);
+}
+
+void HMatrix::fill(Block& b, const EntryBlock& e, int which, const HMatrixOptions& options) const {
+  const Index m = b.m, k = b.k;
+  if (!b.low_rank) {
+    b.dense.resize(m, k);
+    if (which == 0)
+      e.all(b.dense.data());
+    else
+      e.companion_all(which, b.dense.data());
+  } else {
+    if (which == 0) {
+      const Slice row = [&e](Index i, double* out) { e.row(i, out); };
+      const Slice column = [&e](Index j, double* out) { e.column(j, out); };
+      if (!e.low_rank(options.tol, b.factors)) b.factors = aca(m, k, row, column, options.tol, std::min(m, k));
+    } else if (!e.companion_low_rank(which, options.tol, b.factors)) {
+      Eigen::MatrixXd A(m, k);
+      e.companion_all(which, A.data());
+      b.factors = LowRank{A, Eigen::MatrixXd::Identity(k, k)};
     }
-    if (restricted_) {  // cut to the local rows
-      const Index r0 = std::max(b.r0, row_begin_), r1 = std::min(b.r0 + b.m, row_end_);
-      if (r0 != b.r0 || r1 != b.r0 + b.m) {
-        if (b.low_rank)
-          b.factors.U = Eigen::MatrixXd(b.factors.U.middleRows(r0 - b.r0, r1 - r0));
-        else
-          b.dense = Eigen::MatrixXd(b.dense.middleRows(r0 - b.r0, r1 - r0));
-        b.r0 = r0;
-        b.m = r1 - r0;
-      }
+    recompress(b.factors, options.tol);
+    if (b.factors.rank() * (m + k) >= m * k) {  // dense is smaller
+      b.dense = b.factors.U * b.factors.V.transpose();
+      b.factors = LowRank{};
+      b.low_rank = false;
     }
   }
+  if (restricted_) {  // cut to the local rows
+    const Index r0 = std::max(b.r0, row_begin_), r1 = std::min(b.r0 + b.m, row_end_);
+    if (r0 != b.r0 || r1 != b.r0 + b.m) {
+      if (b.low_rank)
+        b.factors.U = Eigen::MatrixXd(b.factors.U.middleRows(r0 - b.r0, r1 - r0));
+      else
+        b.dense = Eigen::MatrixXd(b.dense.middleRows(r0 - b.r0, r1 - r0));
+      b.r0 = r0;
+      b.m = r1 - r0;
+    }
+  }
+}
+
+std::vector<std::shared_ptr<const HMatrix>> HMatrix::family(std::shared_ptr<const ClusterTree> rows,
+                                                            std::shared_ptr<const ClusterTree> cols,
+                                                            const EntrySource& entries, int count,
+                                                            const HMatrixOptions& options) {
+  if (count < 1) throw std::invalid_argument("HMatrix::family: need count >= 1");
+  std::vector<std::shared_ptr<HMatrix>> out;
+  for (int w = 0; w < count; ++w) {
+    out.push_back(std::shared_ptr<HMatrix>(new HMatrix(rows, cols, options, Unfilled{})));
+    out.back()->plan(options);
+  }
+  const HMatrix& first = *out.front();
+  const std::vector<std::size_t> order = first.build_order();
+  const long n = static_cast<long>(order.size());
+#pragma omp parallel for schedule(dynamic, 1)
+  for (long q = 0; q < n; ++q) {
+    const std::size_t b = order[static_cast<std::size_t>(q)];
+    // the block before fill() of the first matrix cuts it to the local rows
+    const std::unique_ptr<EntryBlock> e = first.entry_block(entries, first.blocks_[b]);
+    for (int w = 0; w < count; ++w)
+      out[static_cast<std::size_t>(w)]->fill(out[static_cast<std::size_t>(w)]->blocks_[b], *e, w, options);
+  }
+  return {out.begin(), out.end()};
 }
 
 void HMatrix::accumulate(const Eigen::MatrixXd& Xp, Index in0, Index out0, bool transpose, Eigen::MatrixXd& Yp) const {

@@ -1,5 +1,6 @@
 #include "bem/surface_entries.hpp"
 
+#include <Eigen/Sparse>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -48,46 +49,108 @@ std::vector<Part> parts(const Surface& s, Space space, const Index* dofs, Index 
   return out;
 }
 
-/// The far rule's points of the triangles of `parts`, with weights (the rule's weight times
-/// twice the area: the physical measure) and normals, and the basis values Q that take a
-/// function of the points to the block's dofs: dof value = sum_p Q(p, dof) f(p).
+/// The far rule's points of the triangles of `parts` (by coordinate, so that the kernel
+/// loops below vectorise), with weights (the rule's weight times twice the area: the
+/// physical measure) and normals, and the basis values Q that take a function of the
+/// points to the block's dofs: dof value = sum_p Q(p, dof) f(p).
 struct FarPoints {
-  std::vector<Vec3> x, n;
-  std::vector<double> w;
-  struct Entry {
-    Index point, position;
-    double value;
-  };
-  std::vector<Entry> Q;
+  std::vector<double> x, y, z, nx, ny, nz, w;
+  /// points x dofs: the values of the basis functions (`values`, one map), and the three
+  /// components of their surface curls (`curls`, the hypersingular operator by Nedelec's
+  /// identity W = sum_c C_c^T V0 C_c).
+  std::vector<Eigen::SparseMatrix<double>> values, curls;
 
-  FarPoints(const Surface& s, const std::vector<Part>& parts) {
+  FarPoints(const Surface& s, const std::vector<Part>& parts, Index dofs, bool with_values, bool with_curls) {
     const TriangleRule& r = triangle_rule(kFarGaussPoints);
+    std::vector<Eigen::Triplet<double>> entries[4];
     for (const Part& part : parts) {
       const Triangle& T = s.triangle(part.triangle);
       for (int q = 0; q < r.size(); ++q) {
         const std::size_t k = static_cast<std::size_t>(q);
         const double lambda[4] = {1.0 - r.s[k] - r.t[k], r.s[k], r.t[k], 1.0};
-        const Index p = static_cast<Index>(x.size());
-        x.push_back(T.p[0] + r.s[k] * (T.p[1] - T.p[0]) + r.t[k] * (T.p[2] - T.p[0]));
-        n.push_back(T.n);
+        const Index p = size();
+        const Vec3 v = T.p[0] + r.s[k] * (T.p[1] - T.p[0]) + r.t[k] * (T.p[2] - T.p[0]);
+        x.push_back(v.x);
+        y.push_back(v.y);
+        z.push_back(v.z);
+        nx.push_back(T.n.x);
+        ny.push_back(T.n.y);
+        nz.push_back(T.n.z);
         w.push_back(2.0 * T.area * r.w[k]);
-        for (int a = 0; a < part.count; ++a) Q.push_back({p, part.position[a], lambda[part.basis[a]]});
+        for (int a = 0; a < part.count; ++a) {
+          if (with_values) entries[0].emplace_back(p, part.position[a], lambda[part.basis[a]]);
+          if (!with_curls) continue;
+          const Vec3 c = surface_curl(T, part.basis[a]);
+          entries[1].emplace_back(p, part.position[a], c.x);
+          entries[2].emplace_back(p, part.position[a], c.y);
+          entries[3].emplace_back(p, part.position[a], c.z);
+        }
       }
     }
+    auto map = [&](const std::vector<Eigen::Triplet<double>>& e) {
+      Eigen::SparseMatrix<double> Q(size(), dofs);
+      Q.setFromTriplets(e.begin(), e.end());
+      return Q;
+    };
+    if (with_values) values.push_back(map(entries[0]));
+    if (with_curls)
+      for (int c = 1; c < 4; ++c) curls.push_back(map(entries[c]));
   }
-  Index size() const { return static_cast<Index>(x.size()); }
-  /// Q^T F: the rows of F (one per point) summed into the block's dofs.
-  Eigen::MatrixXd project(const Eigen::MatrixXd& F, Index dofs) const {
-    Eigen::MatrixXd out = Eigen::MatrixXd::Zero(dofs, F.cols());
-    for (const Entry& e : Q) out.row(e.position) += e.value * F.row(e.point);
-    return out;
+  /// The maps of the hypersingular operator's entries (curls) or of the others' (values).
+  const std::vector<Eigen::SparseMatrix<double>>& maps(bool hypersingular) const {
+    return hypersingular ? curls : values;
+  }
+  Index size() const { return static_cast<Index>(w.size()); }
+};
+
+/// The kernel between the far-rule points of a block's rows (r) and columns (c), weights
+/// included: 2 G (single layer) or 2 dG/dn_y (double layer, the normal of the column point).
+struct PointKernel {
+  const FarPoints& r;
+  const FarPoints& c;
+  bool double_layer;
+
+  /// out[q] = A(p, q) for every column point q.
+  void row(Index p, double* out) const {
+    const std::size_t i = static_cast<std::size_t>(p);
+    const double x = r.x[i], y = r.y[i], z = r.z[i], w = kInvTwoPi * r.w[i];
+    const Index n = c.size();
+    if (double_layer)
+      for (Index q = 0; q < n; ++q) {
+        const double dx = x - c.x[q], dy = y - c.y[q], dz = z - c.z[q];
+        const double s = 1.0 / std::sqrt(dx * dx + dy * dy + dz * dz);
+        out[q] = w * c.w[q] * (dx * c.nx[q] + dy * c.ny[q] + dz * c.nz[q]) * s * s * s;
+      }
+    else
+      for (Index q = 0; q < n; ++q) {
+        const double dx = x - c.x[q], dy = y - c.y[q], dz = z - c.z[q];
+        out[q] = w * c.w[q] / std::sqrt(dx * dx + dy * dy + dz * dz);
+      }
+  }
+  /// out[p] = A(p, q) for every row point p.
+  void column(Index q, double* out) const {
+    const std::size_t j = static_cast<std::size_t>(q);
+    const double x = c.x[j], y = c.y[j], z = c.z[j], w = kInvTwoPi * c.w[j];
+    const double nx = c.nx[j], ny = c.ny[j], nz = c.nz[j];
+    const Index m = r.size();
+    if (double_layer)
+      for (Index p = 0; p < m; ++p) {
+        const double dx = r.x[p] - x, dy = r.y[p] - y, dz = r.z[p] - z;
+        const double s = 1.0 / std::sqrt(dx * dx + dy * dy + dz * dz);
+        out[p] = w * r.w[p] * (dx * nx + dy * ny + dz * nz) * s * s * s;
+      }
+    else
+      for (Index p = 0; p < m; ++p) {
+        const double dx = r.x[p] - x, dy = r.y[p] - y, dz = r.z[p] - z;
+        out[p] = w * r.w[p] / std::sqrt(dx * dx + dy * dy + dz * dz);
+      }
   }
 };
 
 class SurfaceBlock : public EntryBlock {
  public:
   SurfaceBlock(const Surface& s, const PairIntegrator& integrator, const SurfaceNearField* near, SurfaceKernel kernel,
-               Space rows, Space cols, const Index* I, Index m, const Index* J, Index k)
+               Space rows, Space cols, const Index* I, Index m, const Index* J, Index k, bool companion)
       : s_(s),
         integrator_(integrator),
         kernel_(kernel),
@@ -98,10 +161,14 @@ class SurfaceBlock : public EntryBlock {
         m_(m),
         k_(k),
         row_parts_(parts(s, rows, I, m)),
-        col_parts_(parts(s, cols, J, k)) {
+        col_parts_(parts(s, cols, J, k)),
+        companion_(companion),
+        near_(near) {
     if (near == nullptr) return;
     const bool dl = kernel == SurfaceKernel::DoubleLayer;
-    near_rows_ = dl ? &near->double_layer() : &near->single_layer(rows);
+    near_rows_ = dl                                       ? &near->double_layer()
+                 : kernel == SurfaceKernel::Hypersingular ? &near->hypersingular()
+                                                          : &near->single_layer(rows);
     near_cols_ = dl ? &near->double_layer_transpose() : near_rows_;
     for (Index p = 0; p < m; ++p) row_position_[I[p]] = p;
     for (Index q = 0; q < k; ++q) col_position_[J[q]] = q;
@@ -121,12 +188,29 @@ class SurfaceBlock : public EntryBlock {
       for (const Part& c : own) add(r, c, out, 1, 0);
     if (near_cols_) add_near(*near_cols_, J_[j], row_position_, out, 1);
   }
+  /// With the near field apart: the far pairs as Q_r^T A Q_c, A the point kernel of the far
+  /// pairs (zero on the near ones), the near pairs from the sparse near field.
   void all(double* out) const override {
-    std::fill(out, out + m_ * k_, 0.0);
-    for (const Part& r : row_parts_)
-      for (const Part& c : col_parts_) add(r, c, out, 1, m_);
-    if (near_rows_)
-      for (Index p = 0; p < m_; ++p) add_near(*near_rows_, I_[p], col_position_, out + p, m_);
+    Eigen::Map<Eigen::MatrixXd> result(out, m_, k_);
+    if (!near_rows_) {
+      result.setZero();
+      for (const Part& r : row_parts_)
+        for (const Part& c : col_parts_) add(r, c, out, 1, m_);
+      return;
+    }
+    prepare_points();
+    const PointKernel kernel{*rp_, *cp_, kernel_ == SurfaceKernel::DoubleLayer};
+    const Index n = triangle_rule(kFarGaussPoints).size();
+    far_kernel_.resize(rp_->size(), cp_->size());
+    for (Index q = 0; q < cp_->size(); ++q) kernel.column(q, far_kernel_.col(q).data());
+    for (std::size_t b = 0; b < col_parts_.size(); ++b) {  // the near pairs are in the near field
+      const Triangle& tb = s_.triangle(col_parts_[b].triangle);
+      for (std::size_t a = 0; a < row_parts_.size(); ++a)
+        if (!PairIntegrator::far(s_.triangle(row_parts_[a].triangle), tb))
+          far_kernel_.block(static_cast<Index>(a) * n, static_cast<Index>(b) * n, n, n).setZero();
+    }
+    project(far_kernel_, kernel_ == SurfaceKernel::Hypersingular, result);
+    for (Index p = 0; p < m_; ++p) add_near(*near_rows_, I_[p], col_position_, out + p, m_);
   }
 
   /// Far blocks: every triangle pair is evaluated by the far rule (the block's entries are
@@ -134,28 +218,73 @@ class SurfaceBlock : public EntryBlock {
   /// A, one kernel evaluation per entry, and the factors are projected to the dofs.
   bool low_rank(double tol, LowRank& out) const override {
     if (!far_pairs_only()) return false;
-    const FarPoints r(s_, row_parts_), c(s_, col_parts_);
-    const bool dl = kernel_ == SurfaceKernel::DoubleLayer;
-    auto entry = [&](Index p, Index q) {
-      const Vec3 d = r.x[static_cast<std::size_t>(p)] - c.x[static_cast<std::size_t>(q)];
-      const double r2 = dot(d, d);
-      const double g = r.w[static_cast<std::size_t>(p)] * c.w[static_cast<std::size_t>(q)] * kInvTwoPi / std::sqrt(r2);
-      return dl ? g * dot(d, c.n[static_cast<std::size_t>(q)]) / r2 : g;
-    };
-    const Slice row = [&](Index p, double* o) {
-      for (Index q = 0; q < c.size(); ++q) o[q] = entry(p, q);
-    };
-    const Slice column = [&](Index q, double* o) {
-      for (Index p = 0; p < r.size(); ++p) o[p] = entry(p, q);
-    };
-    // the projection sums about 10 point rows into a dof row: a tenth of the tolerance
-    const LowRank points = aca(r.size(), c.size(), row, column, 0.1 * tol, std::min(r.size(), c.size()));
-    out.U = r.project(points.U, m_);
-    out.V = c.project(points.V, k_);
+    prepare_points();
+    const PointKernel kernel{*rp_, *cp_, kernel_ == SurfaceKernel::DoubleLayer};
+    const Slice row = [&kernel](Index p, double* o) { kernel.row(p, o); };
+    const Slice column = [&kernel](Index q, double* o) { kernel.column(q, o); };
+    // the projection sums about 10 point rows into a dof row: 0.3 tol (0.1 tol gave the same
+    // products to 10 % at 1.1x the time, docs/design/bem3d.md)
+    point_factors_ = aca(rp_->size(), cp_->size(), row, column, 0.3 * tol, std::min(rp_->size(), cp_->size()));
+    project(point_factors_, kernel_ == SurfaceKernel::Hypersingular, out);
+    return true;
+  }
+
+  /// The hypersingular companion of the single layer (SurfaceEntries with_hypersingular): the
+  /// same point kernel, projected by the curls.
+  void companion_all(int which, double* out) const override {
+    check_companion(which);
+    Eigen::Map<Eigen::MatrixXd> result(out, m_, k_);
+    if (!near_rows_) {
+      result.setZero();
+      for (const Part& r : row_parts_)
+        for (const Part& c : col_parts_) add(r, c, out, 1, m_, true);
+      return;
+    }
+    if (far_kernel_.size() == 0) throw std::logic_error("SurfaceBlock: companion_all before all");
+    project(far_kernel_, true, result);
+    for (Index p = 0; p < m_; ++p) add_near(near_->hypersingular(), I_[p], col_position_, out + p, m_);
+  }
+  bool companion_low_rank(int which, double /*tol*/, LowRank& out) const override {
+    check_companion(which);
+    if (rp_ == nullptr) return false;  // low_rank() found near pairs: compress companion_all
+    project(point_factors_, true, out);
     return true;
   }
 
  private:
+  void check_companion(int which) const {
+    if (which != 1 || !companion_)
+      throw std::logic_error("SurfaceBlock: only the single layer has a companion, the hypersingular operator");
+  }
+  /// The far-rule points of both sides, with the maps of the matrices asked for.
+  void prepare_points() const {
+    if (rp_) return;
+    const bool values = kernel_ != SurfaceKernel::Hypersingular;
+    const bool curls = kernel_ == SurfaceKernel::Hypersingular || companion_;
+    rp_ = std::make_unique<FarPoints>(s_, row_parts_, m_, values, curls);
+    cp_ = std::make_unique<FarPoints>(s_, col_parts_, k_, values, curls);
+  }
+  /// sum_d Q_r[d]^T A Q_c[d] over the maps (values, or the three curl components).
+  void project(const Eigen::MatrixXd& A, bool curls, Eigen::Map<Eigen::MatrixXd>& out) const {
+    const auto &qr = rp_->maps(curls), &qc = cp_->maps(curls);
+    out.setZero();
+    for (std::size_t d = 0; d < qr.size(); ++d) {
+      const Eigen::MatrixXd AQ = A * qc[d];
+      out += qr[d].transpose() * AQ;
+    }
+  }
+  /// The point factors projected to the dofs: the maps side by side (the three curl
+  /// components: rank 3r, recompressed by the H-matrix to its rank).
+  void project(const LowRank& points, bool curls, LowRank& out) const {
+    const auto &qr = rp_->maps(curls), &qc = cp_->maps(curls);
+    const Index rank = points.rank(), maps = static_cast<Index>(qr.size());
+    out.U.resize(m_, maps * rank);
+    out.V.resize(k_, maps * rank);
+    for (Index d = 0; d < maps; ++d) {
+      out.U.middleCols(d * rank, rank) = qr[static_cast<std::size_t>(d)].transpose() * points.U;
+      out.V.middleCols(d * rank, rank) = qc[static_cast<std::size_t>(d)].transpose() * points.V;
+    }
+  }
   /// Whether every triangle pair of the block is far (PairIntegrator::far): from the boxes
   /// of the two sides when they are far_distance of their largest triangle apart (centroids
   /// at least the boxes' distance apart), pair by pair otherwise.
@@ -180,14 +309,19 @@ class SurfaceBlock : public EntryBlock {
   }
   /// out[row_stride * row position + col_stride * column position] += the pair's entries
   /// (far pairs only when the near field holds the others).
-  void add(const Part& r, const Part& c, double* out, Index row_stride, Index col_stride) const {
+  void add(const Part& r, const Part& c, double* out, Index row_stride, Index col_stride,
+           bool companion = false) const {
     if (near_rows_ && !PairIntegrator::far(s_.triangle(r.triangle), s_.triangle(c.triangle))) return;
     PairIntegrals L;
     const bool dl = kernel_ == SurfaceKernel::DoubleLayer;
+    const bool w = companion || kernel_ == SurfaceKernel::Hypersingular;
     integrator_.integrate(r.triangle, c.triangle, dl, L);
+    const Triangle &tr = s_.triangle(r.triangle), &tc = s_.triangle(c.triangle);
     for (int a = 0; a < r.count; ++a)
       for (int b = 0; b < c.count; ++b) {
-        const double v = dl ? L.K[r.basis[a]][c.basis[b]] : L.V[r.basis[a]][c.basis[b]];
+        const double v = dl  ? L.K[r.basis[a]][c.basis[b]]
+                         : w ? L.V[3][3] * dot(surface_curl(tr, r.basis[a]), surface_curl(tc, c.basis[b]))
+                             : L.V[r.basis[a]][c.basis[b]];
         out[row_stride * r.position[a] + col_stride * c.position[b]] += v;
       }
   }
@@ -206,23 +340,40 @@ class SurfaceBlock : public EntryBlock {
   const Index *I_, *J_;
   Index m_, k_;
   std::vector<Part> row_parts_, col_parts_;
+  bool companion_ = false;  ///< the hypersingular companion (single layer only)
+  const SurfaceNearField* near_ = nullptr;
   const RowSparse* near_rows_ = nullptr;  ///< near part by rows, and by columns
   const RowSparse* near_cols_ = nullptr;
   std::unordered_map<Index, Index> row_position_, col_position_;  ///< dof -> position in the block
+  // kept from all() or low_rank() for the companion
+  mutable std::unique_ptr<FarPoints> rp_, cp_;
+  mutable Eigen::MatrixXd far_kernel_;
+  mutable LowRank point_factors_;
 };
 
 }  // namespace
 
 SurfaceEntries::SurfaceEntries(const Surface& surface, SurfaceKernel kernel, Space rows, Space cols,
-                               std::shared_ptr<const SurfaceNearField> near)
-    : surface_(surface), integrator_(surface), kernel_(kernel), rows_(rows), cols_(cols), near_(std::move(near)) {
+                               std::shared_ptr<const SurfaceNearField> near, bool with_hypersingular)
+    : surface_(surface),
+      integrator_(surface),
+      kernel_(kernel),
+      rows_(rows),
+      cols_(cols),
+      near_(std::move(near)),
+      with_hypersingular_(with_hypersingular) {
+  if (with_hypersingular && (kernel != SurfaceKernel::SingleLayer || rows != Space::P1 || cols != Space::P1))
+    throw std::invalid_argument("SurfaceEntries: the hypersingular companion is that of the P1 single layer");
   if (kernel == SurfaceKernel::DoubleLayer && cols != Space::P1)
     throw std::invalid_argument("SurfaceEntries: the double layer acts on the P1 trace");
+  if (kernel == SurfaceKernel::Hypersingular && (rows != Space::P1 || cols != Space::P1))
+    throw std::invalid_argument("SurfaceEntries: the hypersingular operator is P1 x P1");
   if (near_ && rows != cols) throw std::invalid_argument("SurfaceEntries: the near field is P0 x P0 or P1 x P1");
 }
 
 std::unique_ptr<EntryBlock> SurfaceEntries::block(const Index* I, Index m, const Index* J, Index k) const {
-  return std::make_unique<SurfaceBlock>(surface_, integrator_, near_.get(), kernel_, rows_, cols_, I, m, J, k);
+  return std::make_unique<SurfaceBlock>(surface_, integrator_, near_.get(), kernel_, rows_, cols_, I, m, J, k,
+                                        with_hypersingular_);
 }
 
 ClusterTree surface_cluster_tree(const Surface& s, Space space, Index leaf_size) {

@@ -103,7 +103,8 @@ SurfaceNearField::SurfaceNearField(const Surface& s) {
       for (Index u : near[static_cast<std::size_t>(t)])
         for (Index v : s.triangle(u).v) l.push_back(v);
   });
-  std::vector<double> h0(p0.col.size(), 0.0), h1(p1.col.size(), 0.0), k1(p1.col.size(), 0.0), kt1(p1.col.size(), 0.0);
+  std::vector<double> h0(p0.col.size(), 0.0), h1(p1.col.size(), 0.0), k1(p1.col.size(), 0.0), kt1(p1.col.size(), 0.0),
+      w1(p1.col.size(), 0.0);
   const PairIntegrator integrator(s);
   for_each_triangle_by_colour(s, [&](Index tau) {
     const Triangle& a = s.triangle(tau);
@@ -117,6 +118,7 @@ SurfaceNearField::SurfaceNearField(const Surface& s) {
         for (int j = 0; j < 3; ++j) {
           const std::size_t k = static_cast<std::size_t>(p1.position(a.v[i], b.v[j]));
           h1[k] += half * L.V[i][j];
+          w1[k] += half * L.V[3][3] * dot(surface_curl(a, i), surface_curl(b, j));
           k1[k] += L.K[i][j];
           if (sigma != tau) kt1[k] += L.Kt[j][i];
         }
@@ -125,6 +127,8 @@ SurfaceNearField::SurfaceNearField(const Surface& s) {
   const RowSparse H0 = p0.matrix(m, m, h0), H1 = p1.matrix(n, n, h1);
   v0_ = RowSparse(H0 + RowSparse(H0.transpose()));
   v1_ = RowSparse(H1 + RowSparse(H1.transpose()));
+  const RowSparse W1 = p1.matrix(n, n, w1);
+  w_ = RowSparse(W1 + RowSparse(W1.transpose()));
   k_ = RowSparse(p1.matrix(n, n, k1) + RowSparse(p1.matrix(n, n, kt1).transpose()));
   kt_ = RowSparse(k_.transpose());
 }

@@ -41,87 +41,164 @@ struct Accumulated {
   double V[4][4] = {}, Kab[4][3] = {}, Kba[4][3] = {};
 };
 
-/// Barycentric coordinates (by the triangle's own vertex numbering) of the point (s, t) of
-/// the mapped triangle m, and the constant 1 at index 3.
-inline void basis(const Mapped& m, double s, double t, double out[4]) {
-  out[m.order[0]] = 1.0 - s - t;
-  out[m.order[1]] = s;
-  out[m.order[2]] = t;
-  out[3] = 1.0;
-}
-
 inline Vec3 point(const Mapped& m, double s, double t) { return m.q0 + s * m.e1 + t * m.e2; }
 
-/// A pair rule (singular pairs): one list of point pairs.
-void accumulate_pairs(const Mapped& a, const Mapped& b, Vec3 na, Vec3 nb, const PairRule& r, bool double_layer,
-                      Accumulated& acc) {
-  for (int q = 0; q < r.size(); ++q) {
-    const std::size_t k = static_cast<std::size_t>(q);
-    const Vec3 d = point(a, r.s1[k], r.t1[k]) - point(b, r.s2[k], r.t2[k]);
-    const double r2 = dot(d, d);
-    const double g = r.w[k] * kInvTwoPi / std::sqrt(r2);
-    double la[4], lb[4];
-    basis(a, r.s1[k], r.t1[k], la);
-    basis(b, r.s2[k], r.t2[k], lb);
-    for (int i = 0; i < 4; ++i)
-      for (int j = 0; j < 4; ++j) acc.V[i][j] += g * la[i] * lb[j];
-    if (double_layer) {
-      const double kab = g * dot(d, nb) / r2, kba = -g * dot(d, na) / r2;
-      for (int i = 0; i < 4; ++i)
-        for (int j = 0; j < 3; ++j) {
-          acc.Kab[i][j] += kab * la[i] * lb[j];
-          acc.Kba[i][j] += kba * lb[i] * la[j];
-        }
-    }
-  }
+/// The basis functions of the mapped triangle m (by the triangle's own vertex numbering,
+/// index 3 the constant) as coefficients of (1, s, t).
+inline void basis_coefficients(const Mapped& m, double c[4][3]) {
+  const double rows[3][3] = {{1.0, -1.0, -1.0}, {0.0, 1.0, 0.0}, {0.0, 0.0, 1.0}};
+  for (int k = 0; k < 3; ++k)
+    for (int l = 0; l < 3; ++l) c[m.order[k]][l] = rows[k][l];
+  c[3][0] = 1.0;
+  c[3][1] = c[3][2] = 0.0;
 }
 
-/// A tensor-product rule (regular pairs): the kernel at every point pair, contracted with
-/// the basis values one triangle at a time (4 + 4 products per point pair instead of 16 + 24).
-void accumulate_tensor(const Mapped& a, const Mapped& b, Vec3 na, Vec3 nb, const TriangleRule& r, bool double_layer,
-                       Accumulated& acc) {
+/// The entries of every pair of basis functions from the moments m[alpha * 3 + beta] of the
+/// kernels against (1, s1, t1) x (1, s2, t2): entry(i of a, j of b) = sum ca[i][alpha]
+/// cb[j][beta] m[alpha][beta] (V from mv; with the double layer Kab from mk, Kba from mt).
+void add_moments(const double ca[4][3], const double cb[4][3], const double mv[9], const double mk[9],
+                 const double mt[9], bool double_layer, Accumulated& acc) {
+  auto entry = [](const double m[9], const double ci[3], const double cj[3]) {
+    double e = 0.0;
+    for (int al = 0; al < 3; ++al)
+      for (int be = 0; be < 3; ++be) e += ci[al] * cj[be] * m[al * 3 + be];
+    return e;
+  };
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) acc.V[i][j] += entry(mv, ca[i], cb[j]);
+  if (double_layer)
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 3; ++j) {
+        acc.Kab[i][j] += entry(mk, ca[i], cb[j]);
+        acc.Kba[i][j] += entry(mt, ca[j], cb[i]);  // test b (i), trial a (j)
+      }
+}
+
+/// A pair rule (singular pairs): one list of point pairs. The kernels are summed against
+/// the monomials (1, s1, t1) x (1, s2, t2) in one vectorised pass (9 moments per kernel),
+/// and the moments give the entries of every pair of basis functions.
+void accumulate_pairs(const Mapped& a, const Mapped& b, Vec3 na, Vec3 nb, const PairRule& r, bool double_layer,
+                      Accumulated& acc) {
+  const int n = r.size();
+  const double *s1 = r.s1.data(), *t1 = r.t1.data(), *s2 = r.s2.data(), *t2 = r.t2.data(), *w = r.w.data();
+  // d = x - y = (a.q0 - b.q0) + s1 a.e1 + t1 a.e2 - s2 b.e1 - t2 b.e2
+  const Vec3 d0 = a.q0 - b.q0;
+  // the moments [alpha * 3 + beta] of V (v), Kab (k) and Kba (u), as scalars for the reduction
+  double v0 = 0, v1 = 0, v2 = 0, v3 = 0, v4 = 0, v5 = 0, v6 = 0, v7 = 0, v8 = 0;
+  double k0 = 0, k1 = 0, k2 = 0, k3 = 0, k4 = 0, k5 = 0, k6 = 0, k7 = 0, k8 = 0;
+  double u0 = 0, u1 = 0, u2 = 0, u3 = 0, u4 = 0, u5 = 0, u6 = 0, u7 = 0, u8 = 0;
+#pragma omp simd reduction(+ : v0, v1, v2, v3, v4, v5, v6, v7, v8, k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2, \
+                               u3, u4, u5, u6, u7, u8)
+  for (int q = 0; q < n; ++q) {
+    const double dx = d0.x + s1[q] * a.e1.x + t1[q] * a.e2.x - s2[q] * b.e1.x - t2[q] * b.e2.x;
+    const double dy = d0.y + s1[q] * a.e1.y + t1[q] * a.e2.y - s2[q] * b.e1.y - t2[q] * b.e2.y;
+    const double dz = d0.z + s1[q] * a.e1.z + t1[q] * a.e2.z - s2[q] * b.e1.z - t2[q] * b.e2.z;
+    const double r2 = dx * dx + dy * dy + dz * dz;
+    const double g = w[q] * kInvTwoPi / std::sqrt(r2);
+    v0 += g;
+    v1 += g * s2[q];
+    v2 += g * t2[q];
+    v3 += g * s1[q];
+    v4 += g * s1[q] * s2[q];
+    v5 += g * s1[q] * t2[q];
+    v6 += g * t1[q];
+    v7 += g * t1[q] * s2[q];
+    v8 += g * t1[q] * t2[q];
+    const double kab = g * (dx * nb.x + dy * nb.y + dz * nb.z) / r2;
+    const double kba = -g * (dx * na.x + dy * na.y + dz * na.z) / r2;
+    k0 += kab;
+    k1 += kab * s2[q];
+    k2 += kab * t2[q];
+    k3 += kab * s1[q];
+    k4 += kab * s1[q] * s2[q];
+    k5 += kab * s1[q] * t2[q];
+    k6 += kab * t1[q];
+    k7 += kab * t1[q] * s2[q];
+    k8 += kab * t1[q] * t2[q];
+    u0 += kba;
+    u1 += kba * s2[q];
+    u2 += kba * t2[q];
+    u3 += kba * s1[q];
+    u4 += kba * s1[q] * s2[q];
+    u5 += kba * s1[q] * t2[q];
+    u6 += kba * t1[q];
+    u7 += kba * t1[q] * s2[q];
+    u8 += kba * t1[q] * t2[q];
+  }
+  const double mv[9] = {v0, v1, v2, v3, v4, v5, v6, v7, v8};
+  const double mk[9] = {k0, k1, k2, k3, k4, k5, k6, k7, k8};
+  const double mt[9] = {u0, u1, u2, u3, u4, u5, u6, u7, u8};
+  double ca[4][3], cb[4][3];
+  basis_coefficients(a, ca);
+  basis_coefficients(b, cb);
+  add_moments(ca, cb, mv, mk, mt, double_layer, acc);
+}
+
+/// A tensor-product rule (regular pairs): for each point x of a, the kernels summed over the
+/// points y of b against (1, s2, t2) in one vectorised pass, then against a's basis at x.
+template <bool kDoubleLayer>
+void accumulate_tensor(const Mapped& a, const Mapped& b, Vec3 na, Vec3 nb, const TriangleRule& r, Accumulated& acc) {
   const int p = r.size();
   constexpr int kMax = 25;
-  Vec3 y[kMax];
-  double lb[kMax][4], ynb[kMax], yna[kMax];
+  double yx[kMax], yy[kMax], yz[kMax], ys[kMax], yt[kMax], yw[kMax];
   for (int j = 0; j < p; ++j) {
     const std::size_t k = static_cast<std::size_t>(j);
-    y[j] = point(b, r.s[k], r.t[k]);
-    basis(b, r.s[k], r.t[k], lb[j]);
-    for (int c = 0; c < 4; ++c) lb[j][c] *= r.w[k];
-    ynb[j] = dot(y[j], nb);
-    yna[j] = dot(y[j], na);
+    const Vec3 y = point(b, r.s[k], r.t[k]);
+    yx[j] = y.x;
+    yy[j] = y.y;
+    yz[j] = y.z;
+    ys[j] = r.s[k];
+    yt[j] = r.t[k];
+    yw[j] = r.w[k] * kInvTwoPi;
   }
+  double ca[4][3], cb[4][3];
+  basis_coefficients(a, ca);
+  basis_coefficients(b, cb);
+  // moments [alpha * 3 + beta] over both triangles of V, Kab, Kba
+  double mv[9] = {}, mk[9] = {}, mt[9] = {};
   for (int i = 0; i < p; ++i) {
     const std::size_t k = static_cast<std::size_t>(i);
     const Vec3 x = point(a, r.s[k], r.t[k]);
-    const double xnb = dot(x, nb), xna = dot(x, na);
-    double la[4];
-    basis(a, r.s[k], r.t[k], la);
-    double tv[4] = {}, tk[3] = {}, tt[4] = {};
+    double g0 = 0, g1 = 0, g2 = 0, k0 = 0, k1 = 0, k2 = 0, u0 = 0, u1 = 0, u2 = 0;
+#pragma omp simd reduction(+ : g0, g1, g2, k0, k1, k2, u0, u1, u2)
     for (int j = 0; j < p; ++j) {
-      const Vec3 d = x - y[j];
-      const double r2 = dot(d, d);
-      const double g = kInvTwoPi / std::sqrt(r2);
-      for (int c = 0; c < 4; ++c) tv[c] += g * lb[j][c];
-      if (double_layer) {
-        const double gk = g / r2;
-        const double kab = gk * (xnb - ynb[j]), kba = -gk * (xna - yna[j]);
-        for (int c = 0; c < 3; ++c) tk[c] += kab * lb[j][c];
-        for (int c = 0; c < 4; ++c) tt[c] += kba * lb[j][c];
+      const double dx = x.x - yx[j], dy = x.y - yy[j], dz = x.z - yz[j];
+      const double r2 = dx * dx + dy * dy + dz * dz;
+      const double g = yw[j] / std::sqrt(r2);
+      g0 += g;
+      g1 += g * ys[j];
+      g2 += g * yt[j];
+      if constexpr (kDoubleLayer) {
+        const double kab = g * (dx * nb.x + dy * nb.y + dz * nb.z) / r2;
+        const double kba = -g * (dx * na.x + dy * na.y + dz * na.z) / r2;
+        k0 += kab;
+        k1 += kab * ys[j];
+        k2 += kab * yt[j];
+        u0 += kba;
+        u1 += kba * ys[j];
+        u2 += kba * yt[j];
       }
     }
-    const double w = r.w[k];
-    for (int c = 0; c < 4; ++c) la[c] *= w;
-    for (int i2 = 0; i2 < 4; ++i2)
-      for (int j = 0; j < 4; ++j) acc.V[i2][j] += la[i2] * tv[j];
-    if (double_layer)
-      for (int i2 = 0; i2 < 4; ++i2)
-        for (int j = 0; j < 3; ++j) {
-          acc.Kab[i2][j] += la[i2] * tk[j];
-          acc.Kba[i2][j] += tt[i2] * la[j];
+    const double w = r.w[k], xs[3] = {w, w * r.s[k], w * r.t[k]};
+    const double gv[3] = {g0, g1, g2}, kv[3] = {k0, k1, k2}, uv[3] = {u0, u1, u2};
+    for (int al = 0; al < 3; ++al)
+      for (int be = 0; be < 3; ++be) {
+        mv[al * 3 + be] += xs[al] * gv[be];
+        if constexpr (kDoubleLayer) {
+          mk[al * 3 + be] += xs[al] * kv[be];
+          mt[al * 3 + be] += xs[al] * uv[be];
         }
+      }
   }
+  add_moments(ca, cb, mv, mk, mt, kDoubleLayer, acc);
+}
+
+void accumulate_tensor(const Mapped& a, const Mapped& b, Vec3 na, Vec3 nb, const TriangleRule& r, bool double_layer,
+                       Accumulated& acc) {
+  if (double_layer)
+    accumulate_tensor<true>(a, b, na, nb, r, acc);
+  else
+    accumulate_tensor<false>(a, b, na, nb, r, acc);
 }
 
 }  // namespace

@@ -16,40 +16,36 @@ SurfaceSteklovOperator::SurfaceSteklovOperator(VerticesRef vertices, TrianglesRe
   const auto t0 = std::chrono::steady_clock::now();
   HMatrixOptions o = options.hmatrix;
   o.min_distance = far_distance(surface_);
-  auto tree0 = std::make_shared<const ClusterTree>(surface_cluster_tree(surface_, Space::P0, o.leaf_size));
   auto tree1 = std::make_shared<const ClusterTree>(surface_cluster_tree(surface_, Space::P1, o.leaf_size));
   // the near pairs integrated once for the three matrices
   const auto t1 = std::chrono::steady_clock::now();
   const auto near = std::make_shared<const SurfaceNearField>(surface_);
   info_.near_field_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
   o.symmetric = true;
-  V0_ = std::make_shared<const HMatrix>(
-      tree0, tree0, SurfaceEntries(surface_, SurfaceKernel::SingleLayer, Space::P0, Space::P0, near), o);
-  V_ = std::make_shared<const HMatrix>(
-      tree1, tree1, SurfaceEntries(surface_, SurfaceKernel::SingleLayer, Space::P1, Space::P1, near), o);
+  // V and W from one ACA of the single-layer kernel per block
+  const auto t2 = std::chrono::steady_clock::now();
+  const auto VW = HMatrix::family(
+      tree1, tree1, SurfaceEntries(surface_, SurfaceKernel::SingleLayer, Space::P1, Space::P1, near, true), 2, o);
+  V_ = VW[0];
+  W_ = VW[1];
+  const auto t3 = std::chrono::steady_clock::now();
   o.symmetric = false;
   K_ = std::make_shared<const HMatrix>(
       tree1, tree1, SurfaceEntries(surface_, SurfaceKernel::DoubleLayer, Space::P1, Space::P1, near), o);
+  const auto t4 = std::chrono::steady_clock::now();
+  info_.single_layer_seconds = std::chrono::duration<double>(t3 - t2).count();
+  info_.double_layer_seconds = std::chrono::duration<double>(t4 - t3).count();
   const Index n = surface_.vertices(), m = surface_.size();
-  std::vector<Eigen::Triplet<double>> mass, curls[3];
+  std::vector<Eigen::Triplet<double>> mass;
   double area = 0.0;
   for (Index t = 0; t < m; ++t) {
     const Triangle& T = surface_.triangle(t);
     area += T.area;
-    for (int a = 0; a < 3; ++a) {
-      const Vec3 c = surface_curl(T, a);
-      curls[0].emplace_back(t, T.v[a], c.x);
-      curls[1].emplace_back(t, T.v[a], c.y);
-      curls[2].emplace_back(t, T.v[a], c.z);
+    for (int a = 0; a < 3; ++a)
       for (int b = 0; b < 3; ++b) mass.emplace_back(T.v[a], T.v[b], T.area / 12.0 * (a == b ? 2.0 : 1.0));
-    }
   }
   M_.resize(n, n);
   M_.setFromTriplets(mass.begin(), mass.end());
-  for (int c = 0; c < 3; ++c) {
-    curl_[c].resize(m, n);
-    curl_[c].setFromTriplets(curls[c].begin(), curls[c].end());
-  }
   mass_factor_.compute(M_);
   if (mass_factor_.info() != Eigen::Success)
     throw std::runtime_error("SurfaceSteklovOperator: the P1 Gram matrix is not positive definite");
@@ -57,24 +53,17 @@ SurfaceSteklovOperator::SurfaceSteklovOperator(VerticesRef vertices, TrianglesRe
   alpha_ = 1.0 / (2.0 * std::sqrt(area / (4.0 * M_PI)) * area);
   solver_ = std::make_unique<SingleLayerSolver>(V_, [this](const Eigen::MatrixXd& R) { return precondition(R); });
   info_.setup_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  info_.max_rank = std::max({V_->max_rank(), V0_->max_rank(), K_->max_rank()});
+  info_.max_rank = std::max({V_->max_rank(), W_->max_rank(), K_->max_rank()});
   info_.nbytes_v = V_->nbytes();
-  info_.nbytes_v0 = V0_->nbytes();
+  info_.nbytes_w = W_->nbytes();
   info_.nbytes_k = K_->nbytes();
   info_.nbytes_preconditioner =
-      static_cast<std::size_t>(M_.nonZeros() + 3 * curl_[0].nonZeros()) * (sizeof(double) + sizeof(int)) +
+      static_cast<std::size_t>(M_.nonZeros()) * (sizeof(double) + sizeof(int)) +
       static_cast<std::size_t>(mass_factor_.matrixL().nestedExpression().nonZeros()) * (sizeof(double) + sizeof(int));
 }
 
 Eigen::MatrixXd SurfaceSteklovOperator::hypersingular(const Eigen::Ref<const Eigen::MatrixXd>& X) const {
-  // the three curl components as one block of 3k columns through V0
-  const Index k = X.cols(), m = surface_.size();
-  Eigen::MatrixXd C(m, 3 * k);
-  for (int c = 0; c < 3; ++c) C.middleCols(c * k, k) = curl_[c] * X;
-  const Eigen::MatrixXd Z = V0_->apply(C);
-  Eigen::MatrixXd Y = Eigen::MatrixXd::Zero(X.rows(), k);
-  for (int c = 0; c < 3; ++c) Y += curl_[c].transpose() * Z.middleCols(c * k, k);
-  return Y;
+  return W_->apply(X);
 }
 
 Eigen::MatrixXd SurfaceSteklovOperator::precondition(const Eigen::MatrixXd& R) const {
@@ -102,7 +91,7 @@ Eigen::MatrixXd SurfaceSteklovOperator::apply(const Eigen::Ref<const Eigen::Matr
 }
 
 std::size_t SurfaceSteklovOperator::nbytes() const {
-  return info_.nbytes_v + info_.nbytes_v0 + info_.nbytes_k + info_.nbytes_preconditioner;
+  return info_.nbytes_v + info_.nbytes_w + info_.nbytes_k + info_.nbytes_preconditioner;
 }
 
 }  // namespace bem

@@ -17,7 +17,8 @@ TEST(SteklovPoincareOperator, MatchesTheDenseOperator) {
       EXPECT_LT((S.apply(Y) - ref).norm(), 10 * tol * ref.norm());
       EXPECT_GT(S.last_iterations(), 0);
       const SteklovInfo& info = S.info();
-      EXPECT_EQ(S.nbytes(), info.nbytes_v + info.nbytes_v0 + info.nbytes_k + info.nbytes_preconditioner);
+      EXPECT_EQ(S.nbytes(),
+                info.nbytes_v + info.nbytes_v0 + info.nbytes_k + info.nbytes_w + info.nbytes_preconditioner);
     }
   }
 }

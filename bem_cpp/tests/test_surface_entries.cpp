@@ -28,21 +28,26 @@ TEST(SurfaceEntries, RowsColumnsAndBlocksAreThoseOfTheDenseMatrices) {
     const auto near = std::make_shared<const SurfaceNearField>(s);
     for (bool with_near : {false, true})
       for (Space rows : {Space::P0, Space::P1})
-        for (SurfaceKernel kernel : {SurfaceKernel::SingleLayer, SurfaceKernel::DoubleLayer}) {
+        for (SurfaceKernel kernel :
+             {SurfaceKernel::SingleLayer, SurfaceKernel::DoubleLayer, SurfaceKernel::Hypersingular}) {
           SurfaceRequest request;
-          const Space cols = kernel == SurfaceKernel::DoubleLayer ? Space::P1 : rows;
+          const Space cols = kernel == SurfaceKernel::SingleLayer ? rows : Space::P1;
           if (with_near && rows != cols) continue;  // the near field holds P0 x P0 and P1 x P1
+          if (kernel == SurfaceKernel::Hypersingular && rows != Space::P1) continue;
           if (kernel == SurfaceKernel::SingleLayer) request.single_layer = rows;
           if (kernel == SurfaceKernel::DoubleLayer) request.double_layer = rows;
+          request.hypersingular = kernel == SurfaceKernel::Hypersingular;
           const SurfaceMatrices dense = assemble(s, request);
-          const Matrix& A = kernel == SurfaceKernel::SingleLayer ? dense.single_layer : dense.double_layer;
+          const Matrix& A = kernel == SurfaceKernel::SingleLayer   ? dense.single_layer
+                            : kernel == SurfaceKernel::DoubleLayer ? dense.double_layer
+                                                                   : dense.hypersingular;
           const std::vector<Index> I = every_other(A.rows(), 0), J = every_other(A.cols(), 0);
           const Index m = static_cast<Index>(I.size()), k = static_cast<Index>(J.size());
           const SurfaceEntries entries(s, kernel, rows, cols, with_near ? near : nullptr);
           const auto block = entries.block(I.data(), m, J.data(), k);
           SCOPED_TRACE(with_near ? "near" : "plain");
           SCOPED_TRACE(rows == Space::P0 ? "P0" : "P1");
-          SCOPED_TRACE(kernel == SurfaceKernel::SingleLayer ? "SL" : "DL");
+          SCOPED_TRACE(kernel == SurfaceKernel::SingleLayer ? "SL" : kernel == SurfaceKernel::DoubleLayer ? "DL" : "W");
           Eigen::MatrixXd all(m, k);
           block->all(all.data());
           Eigen::VectorXd row(k), column(m);
@@ -72,14 +77,17 @@ TEST(SurfaceEntries, HMatrixProductsAgreeWithTheDenseOnes) {
     SurfaceRequest request;
     request.single_layer = Space::P1;
     request.double_layer = Space::P1;
+    request.hypersingular = true;
     const SurfaceMatrices dense = assemble(s, request);
     auto tree = std::make_shared<const ClusterTree>(surface_cluster_tree(s, Space::P1, 8));
     HMatrixOptions options{8, 1.5, 1e-10};
     const HMatrix K(tree, tree, SurfaceEntries(s, SurfaceKernel::DoubleLayer, Space::P1, Space::P1), options);
     options.symmetric = true;
     const HMatrix V(tree, tree, SurfaceEntries(s, SurfaceKernel::SingleLayer, Space::P1, Space::P1), options);
+    const HMatrix W(tree, tree, SurfaceEntries(s, SurfaceKernel::Hypersingular, Space::P1, Space::P1), options);
     const Eigen::MatrixXd X = Eigen::MatrixXd::Random(s.vertices(), 2);
-    for (const auto& [H, A] : {std::make_pair(&V, &dense.single_layer), std::make_pair(&K, &dense.double_layer)}) {
+    for (const auto& [H, A] : {std::make_pair(&V, &dense.single_layer), std::make_pair(&K, &dense.double_layer),
+                               std::make_pair(&W, &dense.hypersingular)}) {
       const Eigen::MatrixXd exact = *A * X;
       EXPECT_LE((H->apply(X) - exact).norm(), 1e-8 * exact.norm());
     }

@@ -21,6 +21,7 @@
 #include <cstddef>
 #include <functional>
 #include <memory>
+#include <stdexcept>
 #include <vector>
 
 #include "bem/aca.hpp"
@@ -64,6 +65,13 @@ class EntryBlock {
   /// An admissible block's factors A(I, J) ~ U V^T to the relative accuracy tol by a
   /// cheaper route than ACA on row() and column() (false: none, the HMatrix runs that ACA).
   virtual bool low_rank(double /*tol*/, LowRank& /*out*/) const { return false; }
+  /// The block of the matrix `which` >= 1 of a family (HMatrix::family), asked after all()
+  /// or low_rank() of the first on the same object (which may keep what they share).
+  virtual void companion_all(int /*which*/, double* /*out*/) const {
+    throw std::logic_error("EntryBlock: no companion matrices");
+  }
+  /// Its factors to tol (false: none, the HMatrix compresses companion_all by SVD).
+  virtual bool companion_low_rank(int /*which*/, double /*tol*/, LowRank& /*out*/) const { return false; }
 };
 
 /// Source of the entries of a matrix; block() may prepare per-block data. Thread-safe.
@@ -89,6 +97,14 @@ class HMatrix {
   /// apply_local and apply_partial; apply() needs all rows).
   HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const ClusterTree> cols, const EntrySource& entries,
           const HMatrixOptions& options, Index row_begin, Index row_end);
+  /// `count` matrices on the same trees and block tree built in one pass over the blocks,
+  /// each block's entries from one EntryBlock (matrix 0: all/low_rank, the others:
+  /// companion_all/companion_low_rank): matrices that share their work block by block, as
+  /// the surface V_h and W_h (one ACA of the single-layer kernel, surface_entries.hpp).
+  static std::vector<std::shared_ptr<const HMatrix>> family(std::shared_ptr<const ClusterTree> rows,
+                                                            std::shared_ptr<const ClusterTree> cols,
+                                                            const EntrySource& entries, int count,
+                                                            const HMatrixOptions& options);
 
   Index rows() const { return rows_->size(); }
   Index cols() const { return cols_->size(); }
@@ -120,7 +136,18 @@ class HMatrix {
 
  private:
   std::shared_ptr<const ClusterTree> rows_, cols_;
+  struct Unfilled {};
+  /// The rows of this rank (communicator) without any block yet.
+  HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const ClusterTree> cols,
+          const HMatrixOptions& options, Unfilled);
   void build(const EntrySource& entries, const HMatrixOptions& options);
+  /// The leaves of the block tree in the held rows (entries not yet computed).
+  void plan(const HMatrixOptions& options);
+  /// The blocks' indices, largest first (the order of the parallel build).
+  std::vector<std::size_t> build_order() const;
+  std::unique_ptr<EntryBlock> entry_block(const EntrySource& entries, const Block& b) const;
+  /// The entries of b (matrix `which` of the EntryBlock), compressed, cut to the held rows.
+  void fill(Block& b, const EntryBlock& e, int which, const HMatrixOptions& options) const;
   /// Y = the held blocks (transposed: tr) times Xp, both permuted; Xp starts at row in0 of
   /// the input if tr (else it is whole), Y at row out0 of the output if !tr (else whole).
   void accumulate(const Eigen::MatrixXd& Xp, Index in0, Index out0, bool tr, Eigen::MatrixXd& Y) const;

@@ -1,7 +1,7 @@
 #pragma once
 // The near part of the surface operators (surface_operators.hpp): the sums over the near
 // triangle pairs (PairIntegrator::far false: shared vertices, or separation q below
-// kFarSeparation) of V_h (P0 and P1) and K_h (P1 x P1), as sparse matrices. Each
+// kFarSeparation) of V_h (P0 and P1), K_h and W_h (P1 x P1), as sparse matrices. Each
 // unordered near pair is integrated once for all three, so that the H-matrices of V_h
 // (P0, P1) and K_h (surface_entries.hpp) evaluate only far pairs themselves.
 #include <Eigen/Sparse>
@@ -21,9 +21,11 @@ class SurfaceNearField {
   /// The near part of K_h (rows and columns P1), and its transpose (for columns).
   const RowSparse& double_layer() const { return k_; }
   const RowSparse& double_layer_transpose() const { return kt_; }
+  /// The near part of W_h (P1, symmetric): sum_c C_c^T (near part of V0_h) C_c.
+  const RowSparse& hypersingular() const { return w_; }
 
  private:
-  RowSparse v0_, v1_, k_, kt_;
+  RowSparse v0_, v1_, k_, kt_, w_;
 };
 
 }  // namespace bem

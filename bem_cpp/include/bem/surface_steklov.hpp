@@ -1,9 +1,11 @@
 #pragma once
 // The discrete Steklov-Poincare operator of a closed surface, applied and never formed
 // (docs/method.md section 11, docs/design/bem3d.md):
-//   S x = 1/2 ( W x + (K - M)^T V^{-1} (K - M) x ),   W x = sum_c C_c^T V0 C_c x (Nedelec),
-// V (P1 flux), V0 (P0) and K (P1 x P1) H-matrices on the 3D cluster trees, M the sparse
-// P1 Gram matrix, C_c (m x n, sparse) the component c of the surface curls of the hats,
+//   S x = 1/2 ( W x + (K - M)^T V^{-1} (K - M) x ),
+// V (P1 flux), W and K (P1 x P1) H-matrices on the 3D cluster tree of the vertices, W by
+// Nedelec's identity W = sum_c C_c^T V0 C_c (C_c: the component c of the surface curls of
+// the hats, V0 the P0 single layer) block by block from the single-layer kernel, so that
+// the P0 operator on the twice as many triangles is never held; M the sparse P1 Gram matrix,
 // and V^{-1} by SingleLayerSolver (PCG) with the operator preconditioner
 //   C = M^{-1} (W + alpha c c^T) M^{-1},  c = M 1,  alpha = 1 / (2 rho |Gamma|),
 // rho = (|Gamma| / 4 pi)^(1/2) (on a sphere the constant mode then has C V = 1 like the
@@ -24,7 +26,7 @@ namespace bem {
 
 class SurfaceSteklovOperator {
  public:
-  /// options.preconditioner_tol is not used (the preconditioner reuses V0).
+  /// options.preconditioner_tol is not used (the preconditioner reuses W).
   SurfaceSteklovOperator(VerticesRef vertices, TrianglesRef triangles, const SteklovOptions& options);
 
   Index size() const { return surface_.vertices(); }
@@ -32,7 +34,7 @@ class SurfaceSteklovOperator {
   Eigen::MatrixXd apply(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
   /// Psi = V_h^{-1} (K_h - M_h) X (the exterior Neumann data of the traces X, a = 0).
   Eigen::MatrixXd flux(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
-  /// W_h X by Nedelec's identity (for tests).
+  /// W_h X (the H-matrix of Nedelec's identity).
   Eigen::MatrixXd hypersingular(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
   std::size_t nbytes() const;
   const SteklovInfo& info() const { return info_; }
@@ -42,9 +44,8 @@ class SurfaceSteklovOperator {
   Eigen::MatrixXd precondition(const Eigen::MatrixXd& R) const;
   Surface surface_;
   SteklovOptions options_;
-  std::shared_ptr<const HMatrix> V_, V0_, K_;
+  std::shared_ptr<const HMatrix> V_, W_, K_;
   Eigen::SparseMatrix<double> M_;
-  Eigen::SparseMatrix<double> curl_[3];
   Eigen::SimplicialLLT<Eigen::SparseMatrix<double>> mass_factor_;
   Eigen::VectorXd c_;
   double alpha_ = 1.0;
