@@ -103,29 +103,45 @@ struct FarPoints {
   Index size() const { return static_cast<Index>(w.size()); }
 };
 
-/// The kernel between the far-rule points of a block's rows (r) and columns (c), weights
-/// included: 2 G (single layer) or 2 dG/dn_y (double layer, the normal of the column point).
+/// The point kernels: 2 G = 1 / (2 pi r) (single layer), 2 dG/dn_y = n_y . (x - y) / (2 pi r^3)
+/// (double layer, the normal of the column point), and 1 / (2 pi r^3), positive, from which
+/// the double layer's far blocks are composed (SurfaceBlock::low_rank).
+enum class PointKernelKind { SingleLayer, DoubleLayer, InverseCube };
+
+/// A point kernel between the far-rule points of a block's rows (r) and columns (c), weights
+/// included.
 struct PointKernel {
   const FarPoints& r;
   const FarPoints& c;
-  bool double_layer;
+  PointKernelKind kind;
 
   /// out[q] = A(p, q) for every column point q.
   void row(Index p, double* out) const {
     const std::size_t i = static_cast<std::size_t>(p);
     const double x = r.x[i], y = r.y[i], z = r.z[i], w = kInvTwoPi * r.w[i];
     const Index n = c.size();
-    if (double_layer)
-      for (Index q = 0; q < n; ++q) {
-        const double dx = x - c.x[q], dy = y - c.y[q], dz = z - c.z[q];
-        const double s = 1.0 / std::sqrt(dx * dx + dy * dy + dz * dz);
-        out[q] = w * c.w[q] * (dx * c.nx[q] + dy * c.ny[q] + dz * c.nz[q]) * s * s * s;
-      }
-    else
-      for (Index q = 0; q < n; ++q) {
-        const double dx = x - c.x[q], dy = y - c.y[q], dz = z - c.z[q];
-        out[q] = w * c.w[q] / std::sqrt(dx * dx + dy * dy + dz * dz);
-      }
+    switch (kind) {
+      case PointKernelKind::SingleLayer:
+        for (Index q = 0; q < n; ++q) {
+          const double dx = x - c.x[q], dy = y - c.y[q], dz = z - c.z[q];
+          out[q] = w * c.w[q] / std::sqrt(dx * dx + dy * dy + dz * dz);
+        }
+        break;
+      case PointKernelKind::DoubleLayer:
+        for (Index q = 0; q < n; ++q) {
+          const double dx = x - c.x[q], dy = y - c.y[q], dz = z - c.z[q];
+          const double s = 1.0 / std::sqrt(dx * dx + dy * dy + dz * dz);
+          out[q] = w * c.w[q] * (dx * c.nx[q] + dy * c.ny[q] + dz * c.nz[q]) * s * s * s;
+        }
+        break;
+      case PointKernelKind::InverseCube:
+        for (Index q = 0; q < n; ++q) {
+          const double dx = x - c.x[q], dy = y - c.y[q], dz = z - c.z[q];
+          const double s = 1.0 / std::sqrt(dx * dx + dy * dy + dz * dz);
+          out[q] = w * c.w[q] * s * s * s;
+        }
+        break;
+    }
   }
   /// out[p] = A(p, q) for every row point p.
   void column(Index q, double* out) const {
@@ -133,17 +149,28 @@ struct PointKernel {
     const double x = c.x[j], y = c.y[j], z = c.z[j], w = kInvTwoPi * c.w[j];
     const double nx = c.nx[j], ny = c.ny[j], nz = c.nz[j];
     const Index m = r.size();
-    if (double_layer)
-      for (Index p = 0; p < m; ++p) {
-        const double dx = r.x[p] - x, dy = r.y[p] - y, dz = r.z[p] - z;
-        const double s = 1.0 / std::sqrt(dx * dx + dy * dy + dz * dz);
-        out[p] = w * r.w[p] * (dx * nx + dy * ny + dz * nz) * s * s * s;
-      }
-    else
-      for (Index p = 0; p < m; ++p) {
-        const double dx = r.x[p] - x, dy = r.y[p] - y, dz = r.z[p] - z;
-        out[p] = w * r.w[p] / std::sqrt(dx * dx + dy * dy + dz * dz);
-      }
+    switch (kind) {
+      case PointKernelKind::SingleLayer:
+        for (Index p = 0; p < m; ++p) {
+          const double dx = r.x[p] - x, dy = r.y[p] - y, dz = r.z[p] - z;
+          out[p] = w * r.w[p] / std::sqrt(dx * dx + dy * dy + dz * dz);
+        }
+        break;
+      case PointKernelKind::DoubleLayer:
+        for (Index p = 0; p < m; ++p) {
+          const double dx = r.x[p] - x, dy = r.y[p] - y, dz = r.z[p] - z;
+          const double s = 1.0 / std::sqrt(dx * dx + dy * dy + dz * dz);
+          out[p] = w * r.w[p] * (dx * nx + dy * ny + dz * nz) * s * s * s;
+        }
+        break;
+      case PointKernelKind::InverseCube:
+        for (Index p = 0; p < m; ++p) {
+          const double dx = r.x[p] - x, dy = r.y[p] - y, dz = r.z[p] - z;
+          const double s = 1.0 / std::sqrt(dx * dx + dy * dy + dz * dz);
+          out[p] = w * r.w[p] * s * s * s;
+        }
+        break;
+    }
   }
 };
 
@@ -199,7 +226,9 @@ class SurfaceBlock : public EntryBlock {
       return;
     }
     prepare_points();
-    const PointKernel kernel{*rp_, *cp_, kernel_ == SurfaceKernel::DoubleLayer};
+    const PointKernel kernel{
+        *rp_, *cp_,
+        kernel_ == SurfaceKernel::DoubleLayer ? PointKernelKind::DoubleLayer : PointKernelKind::SingleLayer};
     const Index n = triangle_rule(kFarGaussPoints).size();
     far_kernel_.resize(rp_->size(), cp_->size());
     for (Index q = 0; q < cp_->size(); ++q) kernel.column(q, far_kernel_.col(q).data());
@@ -216,15 +245,27 @@ class SurfaceBlock : public EntryBlock {
   /// Far blocks: every triangle pair is evaluated by the far rule (the block's entries are
   /// Q_r^T A Q_c with A the kernel at the far-rule points, weights included), so ACA runs on
   /// A, one kernel evaluation per entry, and the factors are projected to the dofs.
+  /// The double layer's A vanishes between coplanar points (flat faces), a structure on
+  /// which ACA's partial pivoting can miss whole sub-blocks; with x' = x - o, y' = y - o
+  /// (o the block's centre) n_y . (x - y) = sum_c x'_c n_c - n_y . y', so
+  ///   A = sum_c diag(x'_c) B diag(n_c) - B diag(n . y'),   B = w_x w_y / (2 pi r^3) > 0,
+  /// and ACA runs on B. The terms are at most (|x'| + |y'|) / r, a few times A's entries,
+  /// so B is approximated to a tenth of A's tolerance.
   bool low_rank(double tol, LowRank& out) const override {
     if (!far_pairs_only()) return false;
     prepare_points();
-    const PointKernel kernel{*rp_, *cp_, kernel_ == SurfaceKernel::DoubleLayer};
+    const bool dl = kernel_ == SurfaceKernel::DoubleLayer;
+    const PointKernel kernel{*rp_, *cp_, dl ? PointKernelKind::InverseCube : PointKernelKind::SingleLayer};
     const Slice row = [&kernel](Index p, double* o) { kernel.row(p, o); };
     const Slice column = [&kernel](Index q, double* o) { kernel.column(q, o); };
     // the projection sums about 10 point rows into a dof row: 0.3 tol (0.1 tol gave the same
     // products to 10 % at 1.1x the time, docs/design/bem3d.md)
-    point_factors_ = aca(rp_->size(), cp_->size(), row, column, 0.3 * tol, std::min(rp_->size(), cp_->size()));
+    const double point_tol = (dl ? 0.03 : 0.3) * tol;
+    point_factors_ = aca(rp_->size(), cp_->size(), row, column, point_tol, std::min(rp_->size(), cp_->size()));
+    if (dl) {
+      recompress(point_factors_, point_tol);
+      point_factors_ = double_layer_factors(point_factors_);
+    }
     project(point_factors_, kernel_ == SurfaceKernel::Hypersingular, out);
     return true;
   }
@@ -252,6 +293,31 @@ class SurfaceBlock : public EntryBlock {
   }
 
  private:
+  /// The double layer's point factors from those of B (low_rank): [X'_1 U, X'_2 U, X'_3 U, U]
+  /// and [N_1 V, N_2 V, N_3 V, -(N . Y') V], X', Y' about the centre of the points.
+  LowRank double_layer_factors(const LowRank& b) const {
+    const FarPoints &r = *rp_, &c = *cp_;
+    Vec3 o{0.0, 0.0, 0.0};
+    for (Index p = 0; p < r.size(); ++p) o = o + Vec3{r.x[p], r.y[p], r.z[p]};
+    for (Index q = 0; q < c.size(); ++q) o = o + Vec3{c.x[q], c.y[q], c.z[q]};
+    o = (1.0 / static_cast<double>(r.size() + c.size())) * o;
+    const Index k = b.rank();
+    LowRank a;
+    a.U.resize(r.size(), 4 * k);
+    a.V.resize(c.size(), 4 * k);
+    for (Index p = 0; p < r.size(); ++p) {
+      const double x[3] = {r.x[p] - o.x, r.y[p] - o.y, r.z[p] - o.z};
+      for (int d = 0; d < 3; ++d) a.U.row(p).segment(d * k, k) = x[d] * b.U.row(p);
+      a.U.row(p).segment(3 * k, k) = b.U.row(p);
+    }
+    for (Index q = 0; q < c.size(); ++q) {
+      const double n[3] = {c.nx[q], c.ny[q], c.nz[q]};
+      const double ny = n[0] * (c.x[q] - o.x) + n[1] * (c.y[q] - o.y) + n[2] * (c.z[q] - o.z);
+      for (int d = 0; d < 3; ++d) a.V.row(q).segment(d * k, k) = n[d] * b.V.row(q);
+      a.V.row(q).segment(3 * k, k) = -ny * b.V.row(q);
+    }
+    return a;
+  }
   void check_companion(int which) const {
     if (which != 1 || !companion_)
       throw std::logic_error("SurfaceBlock: only the single layer has a companion, the hypersingular operator");
