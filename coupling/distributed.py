@@ -18,7 +18,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 import bem_cpp
-from coupling.options import CHOICES, HMATRIX_CROSSOVER, HMATRIX_CROSSOVER_3D, HMATRIX_TOL
+from coupling.options import CHOICES, HMATRIX_CROSSOVER, HMATRIX_CROSSOVER_3D, hmatrix_tol
 from fem_py.parallel import gather_to_root, run_on_root
 
 __all__ = [
@@ -109,8 +109,9 @@ def steklov_poincare(
 
     Dense: the matrix (serial) or :class:`RowBlocks` (computed on rank 0 with every core,
     held by rows). H-matrix: ``bem_cpp.SteklovPoincareOperator`` to the relative accuracy
-    :data:`coupling.options.HMATRIX_TOL`; under MPI distributed over ``comm``: each rank
-    holds the blocks of its own rows of V_h, V0_h and K_h (``S.nbytes`` is this rank's),
+    :func:`coupling.options.hmatrix_tol`; under MPI distributed over ``comm``: each rank
+    holds the blocks of its own rows of V_h, V0_h and K_h (3D: V_h, W_h, K_h; ``S.nbytes``
+    is this rank's),
     ``S @ z`` and ``S.flux(v)`` are collective (K x: local rows and one Allgatherv; V x,
     V0 x, K^T y: partial sums and one Allreduce, or Reduce_scatter and Allgatherv on more
     than 2 ranks) and return the same bits on every rank, and the CG of the V_h solves
@@ -124,7 +125,7 @@ def steklov_poincare(
             nodes,
             flux=flux,
             compression="hmatrix",
-            tol=HMATRIX_TOL,
+            tol=hmatrix_tol(nodes.shape[1]),
             comm=comm if comm.size > 1 else None,
             **surface,
         )

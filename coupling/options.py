@@ -31,6 +31,7 @@ __all__ = [
     "AdaptOptions",
     "OutputOptions",
     "RunConfig",
+    "hmatrix_tol",
 ]
 
 
@@ -157,6 +158,18 @@ HMATRIX_CROSSOVER_3D = 3000
 #: products agree with the dense S_h to a few times this (docs/design/hmatrix.md), far
 #: below the solver tolerances (1e-8 by default).
 HMATRIX_TOL = 1e-10
+#: The same for a surface in R^3, chosen from the discretisation error it must not spoil:
+#: on the manufactured box (coupling.manufactured.box_contact, 16 cubes per side, ssn to
+#: 1e-10) u_h moves by 7e-9 at tol 1e-6 and 1e-7 at 1e-5 from its value at 1e-10, while
+#: its nodal error is 1.1e-3 (O(h^2): still 1.6e-5 at 128 cubes per side), and the S_h set-up
+#: takes about half the time of tol 1e-10 (docs/design/three_dimensions.md, "The boundary
+#: operators' accuracy").
+HMATRIX_TOL_3D = 1e-6
+
+
+def hmatrix_tol(dim: int) -> float:
+    """The H-matrix tolerance of the boundary operators of a body in R^dim."""
+    return HMATRIX_TOL if dim == 2 else HMATRIX_TOL_3D
 #: The adaptive loop splits a subdomain (``fem_py.mesh.grading``) once its diameter over its
 #: smallest cell exceeds this many times the largest such ratio of the first mesh (d/h
 #: for a structured mesh), so that H/h in the substructuring bound (1 + log(H/h))^2

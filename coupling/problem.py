@@ -28,7 +28,7 @@ import numpy as np
 import bem_cpp
 from coupling.distributed import boundary_operator_kind, steklov_poincare
 from coupling.functional import CoupledFunctional
-from coupling.options import DEFAULTS, HMATRIX_TOL
+from coupling.options import DEFAULTS, hmatrix_tol
 from fem_py.parallel import array_from_root
 
 __all__ = ["SignoriniProblem"]
@@ -164,7 +164,7 @@ class SignoriniProblem:
         """u_e at exterior points (m, 2) ((m, 3) in 3D) by the representation formula
         (docs/method.md section 2), by direct panel sums or, above the measured crossover
         (``bem_cpp``'s ``HMATRIX_POTENTIAL_CROSSOVER_*``), by the rectangular H-matrices of the
-        potentials (``compression="auto"``, tol ``coupling.options.HMATRIX_TOL``)."""
+        potentials (``compression="auto"``, tol ``coupling.options.hmatrix_tol``)."""
         return bem_cpp.exterior_potential(
             self.boundary.nodes,
             solution.ue,
@@ -173,6 +173,6 @@ class SignoriniProblem:
             a=self.a,
             flux=self.flux_space,
             compression="auto",
-            tol=HMATRIX_TOL,
+            tol=hmatrix_tol(self.boundary.nodes.shape[1]),
             **self._surface,
         )

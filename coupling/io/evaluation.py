@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 import bem_cpp
-from coupling.options import HMATRIX_TOL
+from coupling.options import hmatrix_tol
 from fem_py.mesh import interpolate_p1
 from fem_py.mesh.location3d import interpolate_p1_tetrahedra, on_surface
 from fem_py.polyline import closest_on_polygon, inside_polygon
@@ -39,7 +39,7 @@ def exterior_from_fields(fields: dict, points: np.ndarray) -> np.ndarray:
     """u_e at exterior ``points`` (m, 2) by the representation formula (docs/method.md section
     2) from the boundary arrays of a run's fields (``boundary_x``, ``ue``, ``dn_ue``,
     ``a``, ``flux_space``; in 3D (m, 3) points and ``boundary_triangles``), compressed
-    above bem_cpp's measured crossover (tol :data:`coupling.options.HMATRIX_TOL`);
+    above bem_cpp's measured crossover (tol :func:`coupling.options.hmatrix_tol`);
     bem_cpp's ValueError for a point inside Omega or on Gamma. bem_cpp releases the GIL
     while it evaluates."""
     surface = fields.get("boundary_triangles")
@@ -51,7 +51,7 @@ def exterior_from_fields(fields: dict, points: np.ndarray) -> np.ndarray:
         a=float(fields["a"]),
         flux=str(fields["flux_space"]),
         compression="auto",
-        tol=HMATRIX_TOL,
+        tol=hmatrix_tol(np.asarray(fields["boundary_x"]).shape[1]),
         **({} if surface is None else {"triangles": surface}),
     )
 
