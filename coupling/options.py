@@ -170,6 +170,8 @@ HMATRIX_TOL_3D = 1e-6
 def hmatrix_tol(dim: int) -> float:
     """The H-matrix tolerance of the boundary operators of a body in R^dim."""
     return HMATRIX_TOL if dim == 2 else HMATRIX_TOL_3D
+
+
 #: The adaptive loop splits a subdomain (``fem_py.mesh.grading``) once its diameter over its
 #: smallest cell exceeds this many times the largest such ratio of the first mesh (d/h
 #: for a structured mesh), so that H/h in the substructuring bound (1 + log(H/h))^2
