@@ -19,14 +19,16 @@ same run (n <= --dense-max). The issue-20 targets are printed with met / NOT MET
 
 A third table is 3D (issue 30, docs/method.md section 11; docs/design/bem3d.md): dense V_h,
 K_h, W_h (P1) on the cube with 2,028 triangles, then the H-matrix S_h on icospheres of
---surface-levels (10 4^level + 2 vertices), each size in a fresh process so that its peak
-resident memory is its own: set-up wall time, peak memory, one product, CG iterations,
-and the log-log slope of the set-up between the two largest sizes.
+--surface-levels (10 4^level + 2 vertices) at each tol of --surface-tols (the first: the
+coupled solver's, ``coupling.options.HMATRIX_TOL_3D``), each size in a fresh process so that
+its peak resident memory is its own: set-up wall time and its split (near field; V_h and
+W_h from one ACA per block; K_h), peak memory, one product, CG iterations, and the log-log
+slope of the set-up between the two largest sizes.
 
 Run: .venv/bin/python bench/bem_assembly.py [--sizes 512 1024 2048 4096] [--repeat 2]
      [--hmatrix-sizes 1000 2000 4000 8000 16000 32000 64000] [--shapes circle l-shape]
      [--dense-max 8000] [--error-max 4000] [--skip-dense-table]
-     [--surface-levels 3 4 5 6] [--surface-only]
+     [--surface-levels 3 4 5 6] [--surface-tols 1e-6 1e-8] [--surface-only]
 """
 from __future__ import annotations
 
@@ -43,6 +45,7 @@ import scipy.linalg
 
 import bem_cpp
 from bem_cpp.polygons import circle, l_shape
+from coupling.options import HMATRIX_TOL_3D
 
 
 TOL = 1e-10
@@ -182,11 +185,13 @@ def main() -> None:
     parser.add_argument("--error-max", type=int, default=4000, help="largest n with the error")
     parser.add_argument("--skip-dense-table", action="store_true")
     parser.add_argument("--surface-levels", type=int, nargs="+", default=[3, 4, 5, 6])
+    parser.add_argument("--surface-tols", type=float, nargs="+", default=[HMATRIX_TOL_3D, 1e-8])
     parser.add_argument("--surface-only", action="store_true", help="only the 3D table")
     parser.add_argument("--surface-one", type=int, help=argparse.SUPPRESS)  # child process
+    parser.add_argument("--surface-tol", type=float, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.surface_one is not None:
-        print(json.dumps(surface_run(args.surface_one)))
+        print(json.dumps(surface_run(args.surface_one, args.surface_tol)))
         return
     if min(args.sizes + args.hmatrix_sizes) < 3 or args.repeat < 1 or args.hmatrix_repeat < 1:
         parser.exit(2, "bem_assembly.py: sizes must be >= 3 and repeats >= 1\n")
@@ -203,7 +208,7 @@ def main() -> None:
         for shape in args.shapes:
             rows = hmatrix_table(shape, args.hmatrix_sizes, args)
             print_targets(shape, rows)
-    surface_table(args.surface_levels)
+    surface_table(args.surface_levels, args.surface_tols)
     print(f"load average at the end {os.getloadavg()[0]:.2f}")
 
 
@@ -261,13 +266,13 @@ TARGET_SURFACE = {
 TARGET_SURFACE_SLOPE = 1.3
 
 
-def surface_run(level: int) -> dict:
+def surface_run(level: int, tol: float) -> dict:
     """One H-matrix S_h on the icosphere of ``level`` (run in a child process)."""
     from bem_cpp.surfaces import icosphere
 
     X, T = icosphere(level, 0.8)
     t0 = time.perf_counter()
-    op = bem_cpp.steklov_poincare(X, triangles=T, compression="hmatrix", tol=TOL)
+    op = bem_cpp.steklov_poincare(X, triangles=T, compression="hmatrix", tol=tol)
     setup = time.perf_counter() - t0
     x = np.sin(3 * X[:, 0]) + X[:, 2]
     product, _ = best_of(2, lambda: op @ x)
@@ -280,10 +285,13 @@ def surface_run(level: int) -> dict:
         "product": product,
         "iterations": op.last_iterations,
         "max_rank": info.max_rank,
+        "near": info.near_field_seconds,
+        "single": info.single_layer_seconds,
+        "double": info.double_layer_seconds,
     }
 
 
-def surface_table(levels: list[int]) -> None:
+def surface_table(levels: list[int], tols: list[float]) -> None:
     from bem_cpp.surfaces import cube
 
     X, T = cube(13)
@@ -297,17 +305,22 @@ def surface_table(levels: list[int]) -> None:
     )
     print(f"\n3D: dense V_h, K_h, W_h (P1) on the cube, {len(T)} triangles: {t:.2f} s", end=" ")
     print(f"(target {TARGET_DENSE_2000} s at 2,000: {verdict(t <= TARGET_DENSE_2000)})")
+    for tol in tols:
+        surface_tol_table(levels, tol)
+
+
+def surface_tol_table(levels: list[int], tol: float) -> None:
     header = (
-        f"{'n':>7} {'set-up [s]':>10} {'peak [MB]':>10} {'held [MB]':>10} {'S x [s]':>8}"
-        f" {'CG its':>6} {'max rank':>8}"
+        f"{'n':>7} {'set-up [s]':>10} {'near':>6} {'V, W':>6} {'K':>6} {'peak [MB]':>10}"
+        f" {'held [MB]':>10} {'S x [s]':>8} {'CG its':>6} {'max rank':>8}"
     )
-    print(f"\n3D: H-matrix S_h on the icosphere |x| = 0.8, P1, tol {TOL:g}")
+    print(f"\n3D: H-matrix S_h on the icosphere |x| = 0.8, P1, tol {tol:g}")
     print(header)
     print("-" * len(header))
     rows = []
     for level in levels:
         out = subprocess.run(
-            [sys.executable, __file__, "--surface-one", str(level)],
+            [sys.executable, __file__, "--surface-one", str(level), "--surface-tol", str(tol)],
             check=True,
             capture_output=True,
             text=True,
@@ -315,7 +328,8 @@ def surface_table(levels: list[int]) -> None:
         r = json.loads(out.stdout.strip().splitlines()[-1])
         rows.append(r)
         print(
-            f"{r['n']:>7} {r['setup']:>10.2f} {r['peak'] / 1e6:>10.0f} {r['nbytes'] / 1e6:>10.0f}"
+            f"{r['n']:>7} {r['setup']:>10.2f} {r['near']:>6.1f} {r['single']:>6.1f}"
+            f" {r['double']:>6.1f} {r['peak'] / 1e6:>10.0f} {r['nbytes'] / 1e6:>10.0f}"
             f" {r['product']:>8.3f} {r['iterations']:>6} {r['max_rank']:>8}"
         )
     for n, (setup, peak, product) in TARGET_SURFACE.items():

@@ -2,7 +2,9 @@
 
 #include <Eigen/Sparse>
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <set>
 #include <stdexcept>
 #include <unordered_map>
 #include <vector>
@@ -246,23 +248,34 @@ class SurfaceBlock : public EntryBlock {
   /// Q_r^T A Q_c with A the kernel at the far-rule points, weights included), so ACA runs on
   /// A, one kernel evaluation per entry, and the factors are projected to the dofs.
   /// The double layer's A vanishes between coplanar points (flat faces), a structure on
-  /// which ACA's partial pivoting can miss whole sub-blocks; with x' = x - o, y' = y - o
-  /// (o the block's centre) n_y . (x - y) = sum_c x'_c n_c - n_y . y', so
-  ///   A = sum_c diag(x'_c) B diag(n_c) - B diag(n . y'),   B = w_x w_y / (2 pi r^3) > 0,
+  /// which ACA's partial pivoting can miss whole sub-blocks (on the cube: products 2e-4 off
+  /// at any tol). In a block where a row and a column triangle share a plane, with
+  /// x' = x - o, y' = y - o (o the block's centre) n_y . (x - y) = sum_c x'_c n_c - n_y . y',
+  /// so   A = sum_c diag(x'_c) B diag(n_c) - B diag(n . y'),   B = w_x w_y / (2 pi r^3) > 0,
   /// and ACA runs on B. The terms are at most (|x'| + |y'|) / r, a few times A's entries,
   /// so B is approximated to a tenth of A's tolerance.
   bool low_rank(double tol, LowRank& out) const override {
     if (!far_pairs_only()) return false;
     prepare_points();
     const bool dl = kernel_ == SurfaceKernel::DoubleLayer;
-    const PointKernel kernel{*rp_, *cp_, dl ? PointKernelKind::InverseCube : PointKernelKind::SingleLayer};
+    const Planes planes = dl ? this->planes() : Planes::Distinct;
+    if (planes == Planes::One) {  // n_y . (x - y) = 0
+      out.U.resize(m_, 0);
+      out.V.resize(k_, 0);
+      return true;
+    }
+    const bool composed = planes == Planes::Shared;  // of B
+    const PointKernel kernel{*rp_, *cp_,
+                             composed ? PointKernelKind::InverseCube
+                             : dl     ? PointKernelKind::DoubleLayer
+                                      : PointKernelKind::SingleLayer};
     const Slice row = [&kernel](Index p, double* o) { kernel.row(p, o); };
     const Slice column = [&kernel](Index q, double* o) { kernel.column(q, o); };
     // the projection sums about 10 point rows into a dof row: 0.3 tol (0.1 tol gave the same
     // products to 10 % at 1.1x the time, docs/design/bem3d.md)
-    const double point_tol = (dl ? 0.03 : 0.3) * tol;
+    const double point_tol = (composed ? 0.03 : 0.3) * tol;
     point_factors_ = aca(rp_->size(), cp_->size(), row, column, point_tol, std::min(rp_->size(), cp_->size()));
-    if (dl) {
+    if (composed) {
       recompress(point_factors_, point_tol);
       point_factors_ = double_layer_factors(point_factors_);
     }
@@ -293,29 +306,55 @@ class SurfaceBlock : public EntryBlock {
   }
 
  private:
+  enum class Planes { Distinct, Shared, One };
+  /// Whether a triangle of the rows and one of the columns lie in one plane (Shared), or all
+  /// triangles of both in the same plane (One: the double layer's block is zero); normals
+  /// and offsets compared to 1e-8 relative (a polyhedron's faces, whose triangles' normals
+  /// differ by round-off).
+  Planes planes() const {
+    double scale = 0.0;
+    for (const Part& p : row_parts_) scale = std::max(scale, norm(s_.triangle(p.triangle).c));
+    for (const Part& p : col_parts_) scale = std::max(scale, norm(s_.triangle(p.triangle).c));
+    auto key = [&](const Part& p) {
+      const Triangle& T = s_.triangle(p.triangle);
+      auto q = [](double v) { return static_cast<long long>(std::llround(v * 1e8)); };
+      return std::array<long long, 4>{q(T.n.x), q(T.n.y), q(T.n.z), q(dot(T.n, T.c) / (scale + 1e-300))};
+    };
+    std::set<std::array<long long, 4>> rows, cols;
+    for (const Part& p : row_parts_) rows.insert(key(p));
+    for (const Part& p : col_parts_) cols.insert(key(p));
+    if (rows.size() == 1 && rows == cols) return Planes::One;
+    for (const auto& k : cols)
+      if (rows.count(k)) return Planes::Shared;
+    return Planes::Distinct;
+  }
   /// The double layer's point factors from those of B (low_rank): [X'_1 U, X'_2 U, X'_3 U, U]
   /// and [N_1 V, N_2 V, N_3 V, -(N . Y') V], X', Y' about the centre of the points.
   LowRank double_layer_factors(const LowRank& b) const {
     const FarPoints &r = *rp_, &c = *cp_;
-    Vec3 o{0.0, 0.0, 0.0};
-    for (Index p = 0; p < r.size(); ++p) o = o + Vec3{r.x[p], r.y[p], r.z[p]};
-    for (Index q = 0; q < c.size(); ++q) o = o + Vec3{c.x[q], c.y[q], c.z[q]};
-    o = (1.0 / static_cast<double>(r.size() + c.size())) * o;
+    auto mean = [](const std::vector<double>& a, const std::vector<double>& b) {
+      double sum = 0.0;
+      for (double v : a) sum += v;
+      for (double v : b) sum += v;
+      return sum / static_cast<double>(a.size() + b.size());
+    };
+    using Array = Eigen::Map<const Eigen::ArrayXd>;
+    auto coordinate = [](const std::vector<double>& v) { return Array(v.data(), static_cast<Index>(v.size())); };
+    const double o[3] = {mean(r.x, c.x), mean(r.y, c.y), mean(r.z, c.z)};
+    const Eigen::ArrayXd x[3] = {coordinate(r.x) - o[0], coordinate(r.y) - o[1], coordinate(r.z) - o[2]};
+    const Eigen::ArrayXd n[3] = {coordinate(c.nx), coordinate(c.ny), coordinate(c.nz)};
+    const Eigen::ArrayXd ny =
+        n[0] * (coordinate(c.x) - o[0]) + n[1] * (coordinate(c.y) - o[1]) + n[2] * (coordinate(c.z) - o[2]);
     const Index k = b.rank();
     LowRank a;
     a.U.resize(r.size(), 4 * k);
     a.V.resize(c.size(), 4 * k);
-    for (Index p = 0; p < r.size(); ++p) {
-      const double x[3] = {r.x[p] - o.x, r.y[p] - o.y, r.z[p] - o.z};
-      for (int d = 0; d < 3; ++d) a.U.row(p).segment(d * k, k) = x[d] * b.U.row(p);
-      a.U.row(p).segment(3 * k, k) = b.U.row(p);
+    for (int d = 0; d < 3; ++d) {
+      a.U.middleCols(d * k, k) = x[d].matrix().asDiagonal() * b.U;
+      a.V.middleCols(d * k, k) = n[d].matrix().asDiagonal() * b.V;
     }
-    for (Index q = 0; q < c.size(); ++q) {
-      const double n[3] = {c.nx[q], c.ny[q], c.nz[q]};
-      const double ny = n[0] * (c.x[q] - o.x) + n[1] * (c.y[q] - o.y) + n[2] * (c.z[q] - o.z);
-      for (int d = 0; d < 3; ++d) a.V.row(q).segment(d * k, k) = n[d] * b.V.row(q);
-      a.V.row(q).segment(3 * k, k) = -ny * b.V.row(q);
-    }
+    a.U.middleCols(3 * k, k) = b.U;
+    a.V.middleCols(3 * k, k) = -(ny.matrix().asDiagonal() * b.V);
     return a;
   }
   void check_companion(int which) const {
