@@ -45,7 +45,6 @@ import scipy.linalg
 
 import bem_cpp
 from bem_cpp.polygons import circle, l_shape
-from coupling.options import HMATRIX_TOL_3D
 
 
 TOL = 1e-10
@@ -185,7 +184,12 @@ def main() -> None:
     parser.add_argument("--error-max", type=int, default=4000, help="largest n with the error")
     parser.add_argument("--skip-dense-table", action="store_true")
     parser.add_argument("--surface-levels", type=int, nargs="+", default=[3, 4, 5, 6])
-    parser.add_argument("--surface-tols", type=float, nargs="+", default=[HMATRIX_TOL_3D, 1e-8])
+    parser.add_argument(
+        "--surface-tols",
+        type=float,
+        nargs="+",
+        help="default: the coupled solver's (coupling.options.HMATRIX_TOL_3D) and 1e-8",
+    )
     parser.add_argument("--surface-only", action="store_true", help="only the 3D table")
     parser.add_argument("--surface-one", type=int, help=argparse.SUPPRESS)  # child process
     parser.add_argument("--surface-tol", type=float, help=argparse.SUPPRESS)
@@ -208,6 +212,10 @@ def main() -> None:
         for shape in args.shapes:
             rows = hmatrix_table(shape, args.hmatrix_sizes, args)
             print_targets(shape, rows)
+    if args.surface_tols is None:  # (imported here: the child processes measure bem_cpp alone)
+        from coupling.options import HMATRIX_TOL_3D
+
+        args.surface_tols = [HMATRIX_TOL_3D, 1e-8]
     surface_table(args.surface_levels, args.surface_tols)
     print(f"load average at the end {os.getloadavg()[0]:.2f}")
 

@@ -91,13 +91,14 @@ Pattern pattern(Index rows, const std::function<void(Index, std::vector<Index>&)
 
 }  // namespace
 
-SurfaceNearField::SurfaceNearField(const Surface& s) {
+SurfaceNearField::SurfaceNearField(const Surface& s, bool with_p0) {
   // As the dense assembly (surface_operators.cpp): each unordered pair (tau <= sigma) once,
   // into the rows of tau (V0) and of tau's vertices (V1, K, and K of the pair (sigma, tau)
   // transposed), the upper parts completed as H + H^T; threads own the rows by colouring.
   const Index m = s.size(), n = s.vertices();
   const std::vector<std::vector<Index>> near = near_pairs(s);
-  const Pattern p0 = pattern(m, [&](Index t, std::vector<Index>& l) { l = near[static_cast<std::size_t>(t)]; });
+  const Pattern p0 =
+      pattern(with_p0 ? m : 0, [&](Index t, std::vector<Index>& l) { l = near[static_cast<std::size_t>(t)]; });
   const Pattern p1 = pattern(n, [&](Index i, std::vector<Index>& l) {
     for (Index t : s.star(i))
       for (Index u : near[static_cast<std::size_t>(t)])
@@ -113,7 +114,7 @@ SurfaceNearField::SurfaceNearField(const Surface& s) {
       integrator.integrate(tau, sigma, true, L);
       const Triangle& b = s.triangle(sigma);
       const double half = sigma == tau ? 0.5 : 1.0;
-      h0[static_cast<std::size_t>(p0.position(tau, sigma))] += half * L.V[3][3];
+      if (with_p0) h0[static_cast<std::size_t>(p0.position(tau, sigma))] += half * L.V[3][3];
       for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j) {
           const std::size_t k = static_cast<std::size_t>(p1.position(a.v[i], b.v[j]));
@@ -124,8 +125,11 @@ SurfaceNearField::SurfaceNearField(const Surface& s) {
         }
     }
   });
-  const RowSparse H0 = p0.matrix(m, m, h0), H1 = p1.matrix(n, n, h1);
-  v0_ = RowSparse(H0 + RowSparse(H0.transpose()));
+  const RowSparse H1 = p1.matrix(n, n, h1);
+  if (with_p0) {
+    const RowSparse H0 = p0.matrix(m, m, h0);
+    v0_ = RowSparse(H0 + RowSparse(H0.transpose()));
+  }
   v1_ = RowSparse(H1 + RowSparse(H1.transpose()));
   const RowSparse W1 = p1.matrix(n, n, w1);
   w_ = RowSparse(W1 + RowSparse(W1.transpose()));

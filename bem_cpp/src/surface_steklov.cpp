@@ -19,7 +19,7 @@ SurfaceSteklovOperator::SurfaceSteklovOperator(VerticesRef vertices, TrianglesRe
   auto tree1 = std::make_shared<const ClusterTree>(surface_cluster_tree(surface_, Space::P1, o.leaf_size));
   // the near pairs integrated once for the three matrices
   const auto t1 = std::chrono::steady_clock::now();
-  const auto near = std::make_shared<const SurfaceNearField>(surface_);
+  const auto near = std::make_shared<const SurfaceNearField>(surface_, false);
   info_.near_field_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
   o.symmetric = true;
   // V and W from one ACA of the single-layer kernel per block

@@ -15,8 +15,9 @@ using RowSparse = Eigen::SparseMatrix<double, Eigen::RowMajor, Index>;
 
 class SurfaceNearField {
  public:
-  explicit SurfaceNearField(const Surface& surface);
-  /// The near part of V_h in `space` (symmetric).
+  /// with_p0: also the P0 single layer (the P1 operators of S_h do not need it).
+  explicit SurfaceNearField(const Surface& surface, bool with_p0 = true);
+  /// The near part of V_h in `space` (symmetric; P0 empty unless with_p0).
   const RowSparse& single_layer(Space space) const { return space == Space::P0 ? v0_ : v1_; }
   /// The near part of K_h (rows and columns P1), and its transpose (for columns).
   const RowSparse& double_layer() const { return k_; }
