@@ -110,6 +110,15 @@ struct FarPoints {
 /// the double layer's far blocks are composed (SurfaceBlock::low_rank).
 enum class PointKernelKind { SingleLayer, DoubleLayer, InverseCube };
 
+/// The kernel of `kind` at d = x - y (n: the normal at y), without the weights.
+template <PointKernelKind kind>
+inline double point_kernel(double dx, double dy, double dz, double nx, double ny, double nz) {
+  const double s = 1.0 / std::sqrt(dx * dx + dy * dy + dz * dz);
+  if constexpr (kind == PointKernelKind::SingleLayer) return s;
+  if constexpr (kind == PointKernelKind::DoubleLayer) return (dx * nx + dy * ny + dz * nz) * s * s * s;
+  return s * s * s;
+}
+
 /// A point kernel between the far-rule points of a block's rows (r) and columns (c), weights
 /// included.
 struct PointKernel {
@@ -119,60 +128,42 @@ struct PointKernel {
 
   /// out[q] = A(p, q) for every column point q.
   void row(Index p, double* out) const {
-    const std::size_t i = static_cast<std::size_t>(p);
-    const double x = r.x[i], y = r.y[i], z = r.z[i], w = kInvTwoPi * r.w[i];
-    const Index n = c.size();
     switch (kind) {
       case PointKernelKind::SingleLayer:
-        for (Index q = 0; q < n; ++q) {
-          const double dx = x - c.x[q], dy = y - c.y[q], dz = z - c.z[q];
-          out[q] = w * c.w[q] / std::sqrt(dx * dx + dy * dy + dz * dz);
-        }
-        break;
+        return row<PointKernelKind::SingleLayer>(p, out);
       case PointKernelKind::DoubleLayer:
-        for (Index q = 0; q < n; ++q) {
-          const double dx = x - c.x[q], dy = y - c.y[q], dz = z - c.z[q];
-          const double s = 1.0 / std::sqrt(dx * dx + dy * dy + dz * dz);
-          out[q] = w * c.w[q] * (dx * c.nx[q] + dy * c.ny[q] + dz * c.nz[q]) * s * s * s;
-        }
-        break;
+        return row<PointKernelKind::DoubleLayer>(p, out);
       case PointKernelKind::InverseCube:
-        for (Index q = 0; q < n; ++q) {
-          const double dx = x - c.x[q], dy = y - c.y[q], dz = z - c.z[q];
-          const double s = 1.0 / std::sqrt(dx * dx + dy * dy + dz * dz);
-          out[q] = w * c.w[q] * s * s * s;
-        }
-        break;
+        return row<PointKernelKind::InverseCube>(p, out);
     }
   }
   /// out[p] = A(p, q) for every row point p.
   void column(Index q, double* out) const {
+    switch (kind) {
+      case PointKernelKind::SingleLayer:
+        return column<PointKernelKind::SingleLayer>(q, out);
+      case PointKernelKind::DoubleLayer:
+        return column<PointKernelKind::DoubleLayer>(q, out);
+      case PointKernelKind::InverseCube:
+        return column<PointKernelKind::InverseCube>(q, out);
+    }
+  }
+
+ private:
+  template <PointKernelKind kind>
+  void row(Index p, double* out) const {
+    const std::size_t i = static_cast<std::size_t>(p);
+    const double x = r.x[i], y = r.y[i], z = r.z[i], w = kInvTwoPi * r.w[i];
+    for (Index q = 0; q < c.size(); ++q)
+      out[q] = w * c.w[q] * point_kernel<kind>(x - c.x[q], y - c.y[q], z - c.z[q], c.nx[q], c.ny[q], c.nz[q]);
+  }
+  template <PointKernelKind kind>
+  void column(Index q, double* out) const {
     const std::size_t j = static_cast<std::size_t>(q);
     const double x = c.x[j], y = c.y[j], z = c.z[j], w = kInvTwoPi * c.w[j];
     const double nx = c.nx[j], ny = c.ny[j], nz = c.nz[j];
-    const Index m = r.size();
-    switch (kind) {
-      case PointKernelKind::SingleLayer:
-        for (Index p = 0; p < m; ++p) {
-          const double dx = r.x[p] - x, dy = r.y[p] - y, dz = r.z[p] - z;
-          out[p] = w * r.w[p] / std::sqrt(dx * dx + dy * dy + dz * dz);
-        }
-        break;
-      case PointKernelKind::DoubleLayer:
-        for (Index p = 0; p < m; ++p) {
-          const double dx = r.x[p] - x, dy = r.y[p] - y, dz = r.z[p] - z;
-          const double s = 1.0 / std::sqrt(dx * dx + dy * dy + dz * dz);
-          out[p] = w * r.w[p] * (dx * nx + dy * ny + dz * nz) * s * s * s;
-        }
-        break;
-      case PointKernelKind::InverseCube:
-        for (Index p = 0; p < m; ++p) {
-          const double dx = r.x[p] - x, dy = r.y[p] - y, dz = r.z[p] - z;
-          const double s = 1.0 / std::sqrt(dx * dx + dy * dy + dz * dz);
-          out[p] = w * r.w[p] * s * s * s;
-        }
-        break;
-    }
+    for (Index p = 0; p < r.size(); ++p)
+      out[p] = w * r.w[p] * point_kernel<kind>(r.x[p] - x, r.y[p] - y, r.z[p] - z, nx, ny, nz);
   }
 };
 
