@@ -6,8 +6,11 @@ compile the same files.
 """
 from pathlib import Path
 
-from pybind11.setup_helpers import Pybind11Extension, build_ext
+from pybind11.setup_helpers import ParallelCompile, Pybind11Extension, build_ext
 from setuptools import setup
+
+# the sources compile in parallel (one job per core; NPY_NUM_BUILD_JOBS overrides)
+ParallelCompile("NPY_NUM_BUILD_JOBS").install()
 
 root = Path(__file__).parent
 sources = sorted(str(p.relative_to(root)) for p in (root / "bem_cpp" / "src").glob("*.cpp"))
