@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <optional>
 #include <set>
 #include <stdexcept>
 #include <unordered_map>
@@ -218,20 +219,7 @@ class SurfaceBlock : public EntryBlock {
         for (const Part& c : col_parts_) add(r, c, out, 1, m_);
       return;
     }
-    prepare_points();
-    const PointKernel kernel{
-        *rp_, *cp_,
-        kernel_ == SurfaceKernel::DoubleLayer ? PointKernelKind::DoubleLayer : PointKernelKind::SingleLayer};
-    const Index n = triangle_rule(kFarGaussPoints).size();
-    far_kernel_.resize(rp_->size(), cp_->size());
-    for (Index q = 0; q < cp_->size(); ++q) kernel.column(q, far_kernel_.col(q).data());
-    for (std::size_t b = 0; b < col_parts_.size(); ++b) {  // the near pairs are in the near field
-      const Triangle& tb = s_.triangle(col_parts_[b].triangle);
-      for (std::size_t a = 0; a < row_parts_.size(); ++a)
-        if (!PairIntegrator::far(s_.triangle(row_parts_[a].triangle), tb))
-          far_kernel_.block(static_cast<Index>(a) * n, static_cast<Index>(b) * n, n, n).setZero();
-    }
-    project(far_kernel_, kernel_ == SurfaceKernel::Hypersingular, result);
+    project(far_kernel(), kernel_ == SurfaceKernel::Hypersingular, result);
     for (Index p = 0; p < m_; ++p) add_near(*near_rows_, I_[p], col_position_, out + p, m_);
   }
 
@@ -265,12 +253,13 @@ class SurfaceBlock : public EntryBlock {
     // the projection sums about 10 point rows into a dof row: 0.3 tol (0.1 tol gave the same
     // products to 10 % at 1.1x the time, docs/design/bem3d.md)
     const double point_tol = (composed ? 0.03 : 0.3) * tol;
-    point_factors_ = aca(rp_->size(), cp_->size(), row, column, point_tol, std::min(rp_->size(), cp_->size()));
+    LowRank factors = aca(rp_->size(), cp_->size(), row, column, point_tol, std::min(rp_->size(), cp_->size()));
     if (composed) {
-      recompress(point_factors_, point_tol);
-      point_factors_ = double_layer_factors(point_factors_);
+      recompress(factors, point_tol);
+      factors = double_layer_factors(factors);
     }
-    project(point_factors_, kernel_ == SurfaceKernel::Hypersingular, out);
+    project(factors, kernel_ == SurfaceKernel::Hypersingular, out);
+    if (companion_) point_factors_ = std::move(factors);
     return true;
   }
 
@@ -285,18 +274,36 @@ class SurfaceBlock : public EntryBlock {
         for (const Part& c : col_parts_) add(r, c, out, 1, m_, true);
       return;
     }
-    if (far_kernel_.size() == 0) throw std::logic_error("SurfaceBlock: companion_all before all");
-    project(far_kernel_, true, result);
+    project(far_kernel(), true, result);
     for (Index p = 0; p < m_; ++p) add_near(near_->hypersingular(), I_[p], col_position_, out + p, m_);
   }
   bool companion_low_rank(int which, double /*tol*/, LowRank& out) const override {
     check_companion(which);
-    if (rp_ == nullptr) return false;  // low_rank() found near pairs: compress companion_all
-    project(point_factors_, true, out);
+    if (!point_factors_) return false;  // low_rank() found near pairs: compress companion_all
+    project(*point_factors_, true, out);
     return true;
   }
 
  private:
+  /// A at the far-rule points with the near pairs' 9 x 9 parts zero (they are in the near
+  /// field), computed once for the block and its companion.
+  const Eigen::MatrixXd& far_kernel() const {
+    if (far_kernel_.size() > 0) return far_kernel_;
+    prepare_points();
+    const PointKernel kernel{
+        *rp_, *cp_,
+        kernel_ == SurfaceKernel::DoubleLayer ? PointKernelKind::DoubleLayer : PointKernelKind::SingleLayer};
+    const Index n = triangle_rule(kFarGaussPoints).size();
+    far_kernel_.resize(rp_->size(), cp_->size());
+    for (Index q = 0; q < cp_->size(); ++q) kernel.column(q, far_kernel_.col(q).data());
+    for (std::size_t b = 0; b < col_parts_.size(); ++b) {
+      const Triangle& tb = s_.triangle(col_parts_[b].triangle);
+      for (std::size_t a = 0; a < row_parts_.size(); ++a)
+        if (!PairIntegrator::far(s_.triangle(row_parts_[a].triangle), tb))
+          far_kernel_.block(static_cast<Index>(a) * n, static_cast<Index>(b) * n, n, n).setZero();
+    }
+    return far_kernel_;
+  }
   enum class Planes { Distinct, Shared, One };
   /// Whether a triangle of the rows and one of the columns lie in one plane (Shared), or all
   /// triangles of both in the same plane (One: the double layer's block is zero); normals
@@ -441,10 +448,10 @@ class SurfaceBlock : public EntryBlock {
   const RowSparse* near_rows_ = nullptr;  ///< near part by rows, and by columns
   const RowSparse* near_cols_ = nullptr;
   std::unordered_map<Index, Index> row_position_, col_position_;  ///< dof -> position in the block
-  // kept from all() or low_rank() for the companion
+  // computed once per block, shared with the companion
   mutable std::unique_ptr<FarPoints> rp_, cp_;
   mutable Eigen::MatrixXd far_kernel_;
-  mutable LowRank point_factors_;
+  mutable std::optional<LowRank> point_factors_;  ///< the ACA factors on the points (companion only)
 };
 
 }  // namespace

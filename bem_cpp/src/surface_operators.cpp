@@ -77,8 +77,8 @@ void add_moments(const double ca[4][3], const double cb[4][3], const double mv[9
 /// A pair rule (singular pairs): one list of point pairs. The kernels are summed against
 /// the monomials (1, s1, t1) x (1, s2, t2) in one vectorised pass (9 moments per kernel),
 /// and the moments give the entries of every pair of basis functions.
-void accumulate_pairs(const Mapped& a, const Mapped& b, Vec3 na, Vec3 nb, const PairRule& r, bool double_layer,
-                      Accumulated& acc) {
+template <bool kDoubleLayer>
+void accumulate_pairs(const Mapped& a, const Mapped& b, Vec3 na, Vec3 nb, const PairRule& r, Accumulated& acc) {
   const int n = r.size();
   const double *s1 = r.s1.data(), *t1 = r.t1.data(), *s2 = r.s2.data(), *t2 = r.t2.data(), *w = r.w.data();
   // d = x - y = (a.q0 - b.q0) + s1 a.e1 + t1 a.e2 - s2 b.e1 - t2 b.e2
@@ -104,26 +104,28 @@ void accumulate_pairs(const Mapped& a, const Mapped& b, Vec3 na, Vec3 nb, const 
     v6 += g * t1[q];
     v7 += g * t1[q] * s2[q];
     v8 += g * t1[q] * t2[q];
-    const double kab = g * (dx * nb.x + dy * nb.y + dz * nb.z) / r2;
-    const double kba = -g * (dx * na.x + dy * na.y + dz * na.z) / r2;
-    k0 += kab;
-    k1 += kab * s2[q];
-    k2 += kab * t2[q];
-    k3 += kab * s1[q];
-    k4 += kab * s1[q] * s2[q];
-    k5 += kab * s1[q] * t2[q];
-    k6 += kab * t1[q];
-    k7 += kab * t1[q] * s2[q];
-    k8 += kab * t1[q] * t2[q];
-    u0 += kba;
-    u1 += kba * s2[q];
-    u2 += kba * t2[q];
-    u3 += kba * s1[q];
-    u4 += kba * s1[q] * s2[q];
-    u5 += kba * s1[q] * t2[q];
-    u6 += kba * t1[q];
-    u7 += kba * t1[q] * s2[q];
-    u8 += kba * t1[q] * t2[q];
+    if constexpr (kDoubleLayer) {
+      const double kab = g * (dx * nb.x + dy * nb.y + dz * nb.z) / r2;
+      const double kba = -g * (dx * na.x + dy * na.y + dz * na.z) / r2;
+      k0 += kab;
+      k1 += kab * s2[q];
+      k2 += kab * t2[q];
+      k3 += kab * s1[q];
+      k4 += kab * s1[q] * s2[q];
+      k5 += kab * s1[q] * t2[q];
+      k6 += kab * t1[q];
+      k7 += kab * t1[q] * s2[q];
+      k8 += kab * t1[q] * t2[q];
+      u0 += kba;
+      u1 += kba * s2[q];
+      u2 += kba * t2[q];
+      u3 += kba * s1[q];
+      u4 += kba * s1[q] * s2[q];
+      u5 += kba * s1[q] * t2[q];
+      u6 += kba * t1[q];
+      u7 += kba * t1[q] * s2[q];
+      u8 += kba * t1[q] * t2[q];
+    }
   }
   const double mv[9] = {v0, v1, v2, v3, v4, v5, v6, v7, v8};
   const double mk[9] = {k0, k1, k2, k3, k4, k5, k6, k7, k8};
@@ -131,7 +133,7 @@ void accumulate_pairs(const Mapped& a, const Mapped& b, Vec3 na, Vec3 nb, const 
   double ca[4][3], cb[4][3];
   basis_coefficients(a, ca);
   basis_coefficients(b, cb);
-  add_moments(ca, cb, mv, mk, mt, double_layer, acc);
+  add_moments(ca, cb, mv, mk, mt, kDoubleLayer, acc);
 }
 
 /// A tensor-product rule (regular pairs): for each point x of a, the kernels summed over the
@@ -240,7 +242,10 @@ void PairIntegrator::integrate(Index tau, Index sigma, bool double_layer, PairIn
   const Mapped ma = mapped(a, oa), mb = mapped(b, ob);
   Accumulated acc;
   if (adj.shared > 0)
-    accumulate_pairs(ma, mb, a.n, b.n, *singular_[adj.shared], double_layer, acc);
+    if (double_layer)
+      accumulate_pairs<true>(ma, mb, a.n, b.n, *singular_[adj.shared], acc);
+    else
+      accumulate_pairs<false>(ma, mb, a.n, b.n, *singular_[adj.shared], acc);
   else
     accumulate_tensor(ma, mb, a.n, b.n, *regular_[regular_points(a, b)], double_layer, acc);
   const double jac = 4.0 * a.area * b.area;

@@ -31,7 +31,7 @@ struct SteklovInfo {
   double near_field_seconds = 0;    ///< of set-up: the near pairs of the surface operators (3D)
   double single_layer_seconds = 0;  ///< of set-up: the H-matrices of V_h and W_h (3D)
   double double_layer_seconds = 0;  ///< of set-up: the H-matrix of K_h (3D)
-  Index max_rank = 0;               ///< largest rank of a low-rank block (V, V0, K)
+  Index max_rank = 0;               ///< largest rank of a low-rank block (V, V0 or W, K)
   /// bytes of V_h, V0_h (2D: the Calderon preconditioner's P0 single layer), K_h, W_h (3D),
   /// and of the sparse preconditioner parts
   std::size_t nbytes_v = 0, nbytes_v0 = 0, nbytes_k = 0, nbytes_w = 0, nbytes_preconditioner = 0;
