@@ -136,18 +136,21 @@ def run_solve(config: Path, out: Path, nested: bool) -> dict:
     }
 
 
-def run_poisson(cells: int) -> dict:
-    """The Poisson pipeline in its own process: wall time and its inner timings."""
+def run_poisson(cells: int, dim: int = 2) -> dict:
+    """The Poisson pipeline (:func:`poisson_pipeline`) in its own process: wall time and its
+    inner timings."""
     cmd = [sys.executable, str(Path(__file__).resolve()), "--poisson", str(cells)]
+    cmd += ["--poisson-dim", str(dim)]
     tic = time.perf_counter()
     proc = subprocess.run(cmd, capture_output=True, text=True, env=_env(), check=True)
     wall = time.perf_counter() - tic
     return {"wall": wall, **json.loads(proc.stdout.strip().splitlines()[-1])}
 
 
-def poisson_pipeline(cells: int) -> dict:
-    """-Laplace w = 1 in the square, w = 0 on its boundary: mesh (create_rectangle),
-    P1 assembly (stiffness and load), CG + GAMG to rtol 1e-8; the seconds of each part."""
+def poisson_pipeline(cells: int, dim: int = 2) -> dict:
+    """-Laplace w = 1 in the square [-1/4, 1/4]^2 (dim 3: the box [-1/4, 1/4]^3, six
+    tetrahedra per cube), w = 0 on its boundary: mesh (create_rectangle, create_box), P1
+    assembly (stiffness and load), CG + GAMG to rtol 1e-8; the seconds of each part."""
     tic = time.perf_counter()
     import dolfinx.fem.petsc  # noqa: F401 - fem.petsc
     import numpy as np
@@ -160,18 +163,20 @@ def poisson_pipeline(cells: int) -> dict:
     comm = MPI.COMM_WORLD
     times = {"imports": imports}
     tic = time.perf_counter()
-    domain = mesh.create_rectangle(
-        comm, [np.array([-0.25, -0.25]), np.array([0.25, 0.25])], [cells, cells]
-    )
+    corners = [np.full(dim, -0.25), np.full(dim, 0.25)]
+    if dim == 2:
+        domain = mesh.create_rectangle(comm, corners, [cells, cells])
+    else:
+        domain = mesh.create_box(comm, corners, [cells] * 3, mesh.CellType.tetrahedron)
     times["mesh"] = time.perf_counter() - tic
     tic = time.perf_counter()
     V = fem.FunctionSpace(domain, ("Lagrange", 1))
     w, v = ufl.TrialFunction(V), ufl.TestFunction(V)
     a = fem.form(ufl.inner(ufl.grad(w), ufl.grad(v)) * ufl.dx)
     L = fem.form(fem.Constant(domain, PETSc.ScalarType(1.0)) * v * ufl.dx)
-    domain.topology.create_connectivity(1, 2)
+    domain.topology.create_connectivity(dim - 1, dim)
     facets = mesh.exterior_facet_indices(domain.topology)
-    bc = fem.dirichletbc(PETSc.ScalarType(0.0), fem.locate_dofs_topological(V, 1, facets), V)
+    bc = fem.dirichletbc(PETSc.ScalarType(0.0), fem.locate_dofs_topological(V, dim - 1, facets), V)
     times["forms"] = time.perf_counter() - tic
     tic = time.perf_counter()
     A = fem.petsc.assemble_matrix(a, bcs=[bc])
@@ -347,9 +352,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", help="folder of the runs' outputs (default: a temporary one)")
     parser.add_argument("--json", metavar="FILE", help="write the raw records to FILE")
     parser.add_argument("--poisson", type=int, help=argparse.SUPPRESS)
+    parser.add_argument("--poisson-dim", type=int, default=2, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.poisson:
-        print(json.dumps(poisson_pipeline(args.poisson)))
+        print(json.dumps(poisson_pipeline(args.poisson, args.poisson_dim)))
         return 0
     try:
         sizes = [int(s) for s in args.sizes.split(",")]
