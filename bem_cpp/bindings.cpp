@@ -15,6 +15,7 @@
 #include "bem/steklov_operator.hpp"
 #include "bem/steklov_poincare.hpp"
 #include "bem/surface_operators.hpp"
+#include "bem/surface_potential_operator.hpp"
 #include "bem/surface_potentials.hpp"
 #include "bem/surface_steklov.hpp"
 #include "bem/version.hpp"
@@ -140,6 +141,17 @@ PYBIND11_MODULE(_bem, m) {
                           double, Space>(&bem::exterior_potential),
         py::arg("vertices"), py::arg("triangles"), py::arg("dirichlet"), py::arg("flux_coefficients"),
         py::arg("points"), py::arg("a"), py::arg("flux"), Release());
+  m.def(
+      "exterior_potential_hmatrix",
+      [](VerticesRef vertices, TrianglesRef triangles, VectorRef dirichlet, VectorRef flux_coefficients,
+         const Eigen::Ref<const bem::Vertices>& points, double a, Space flux, bem::Index leaf_size, double eta,
+         double tol, int product_threads) {
+        return bem::exterior_potential_hmatrix(vertices, triangles, dirichlet, flux_coefficients, points, a, flux,
+                                               bem::HMatrixOptions{leaf_size, eta, tol, false, product_threads});
+      },
+      py::arg("vertices"), py::arg("triangles"), py::arg("dirichlet"), py::arg("flux_coefficients"), py::arg("points"),
+      py::arg("a"), py::arg("flux"), py::arg("leaf_size"), py::arg("eta"), py::arg("tol"), py::arg("product_threads"),
+      Release());
   py::class_<bem::SurfaceSteklovOperator>(m, "SurfaceSteklovOperator")
       .def(py::init([](VerticesRef vertices, TrianglesRef triangles, bem::Index leaf_size, double eta, double tol,
                        double solver_tol, int max_iterations, int product_threads, int rank, int size,

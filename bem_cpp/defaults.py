@@ -20,6 +20,13 @@ HMATRIX_POTENTIAL_CROSSOVER_POINTS = 1000
 HMATRIX_SURFACE_LEAF_SIZE = 16
 HMATRIX_SURFACE_ETA = 4.0
 HMATRIX_SURFACE_AUTO_DOFS = 2000
+# exterior_potential of a surface: leaf size and eta of its H-matrices (points x dofs), and
+# compression="auto" takes them from VERTICES vertices and POINTS points on (the measured
+# break-even; docs/design/bem3d.md, "The exterior potential").
+HMATRIX_SURFACE_POTENTIAL_LEAF_SIZE = 128
+HMATRIX_SURFACE_POTENTIAL_ETA = 2.0
+HMATRIX_SURFACE_POTENTIAL_VERTICES = 2000
+HMATRIX_SURFACE_POTENTIAL_POINTS = 500
 COMPRESSIONS = ("none", "hmatrix")
 SURFACE_COMPRESSIONS = ("none", "hmatrix", "auto")
 POTENTIAL_COMPRESSIONS = ("none", "hmatrix", "auto")

@@ -64,10 +64,15 @@ def exterior_potential(
         Relative accuracy of the H-matrix blocks, in (0, 1).
     triangles : (m, 3) array_like of int, optional
         3D: the triangles of the surface whose vertices are ``nodes`` (n, 3); ``points``
-        (k, 3); G = 1/(4 pi |x - y|), direct sums over the triangles (``compression`` and
-        ``tol`` unused), each triangle split into four until z is 1.5 of its diameters
-        from every piece (docs/design/bem3d.md); points inside Omega or on Gamma are found
-        by the solid angle of Gamma (4 pi inside, 0 outside) and refused.
+        (k, 3); G = 1/(4 pi |x - y|), each triangle split into four until z is 1.5 of
+        its diameters from every piece (docs/design/bem3d.md). "none": direct sums over
+        the triangles, points inside Omega or on Gamma found by the solid angle of Gamma
+        (4 pi inside, 0 outside); "hmatrix": rectangular H-matrices of the same
+        point-triangle integrals, the solid angle from the compressed double layer of
+        the constant 1; "auto": "hmatrix" from
+        ``HMATRIX_SURFACE_POTENTIAL_VERTICES`` vertices and
+        ``HMATRIX_SURFACE_POTENTIAL_POINTS`` points on (the measured break-even,
+        docs/design/bem3d.md, "The exterior potential").
 
     Returns
     -------
@@ -82,9 +87,21 @@ def exterior_potential(
         gives a, on Gamma the jump of the double layer is undefined), so such points are
         rejected rather than flagged; the message counts them and names the first.
     """
+    if compression not in defaults.POTENTIAL_COMPRESSIONS:
+        raise ValueError(
+            f"compression must be one of {defaults.POTENTIAL_COMPRESSIONS}, got {compression!r}"
+        )
+    tol = checks.tolerance(tol)
     if triangles is not None:
         return _surface_potential(
-            checks.surface(nodes, triangles), dirichlet, flux_coefficients, points, a, flux
+            checks.surface(nodes, triangles),
+            dirichlet,
+            flux_coefficients,
+            points,
+            a,
+            flux,
+            compression,
+            tol,
         )
     X = checks.nodes(nodes)
     n = X.shape[0]
@@ -93,11 +110,6 @@ def exterior_potential(
     Z = checks.points(points, "points")
     if not np.all(np.isfinite(Z)):
         raise ValueError("points contains non-finite values")
-    if compression not in defaults.POTENTIAL_COMPRESSIONS:
-        raise ValueError(
-            f"compression must be one of {defaults.POTENTIAL_COMPRESSIONS}, got {compression!r}"
-        )
-    tol = checks.tolerance(tol)
     args = (X, v, psi, Z, checks.scalar(a, "a"), checks.space(flux, "flux"))
     if compression == "auto":
         m = Z.shape[0]
@@ -125,12 +137,29 @@ def _surface_potential(
     points: ArrayLike,
     a: float,
     flux: str,
+    compression: str,
+    tol: float,
 ) -> NDArray[np.float64]:
-    """:func:`exterior_potential` of a closed surface: direct sums over the triangles."""
+    """:func:`exterior_potential` of a closed surface (checked ``compression`` and ``tol``)."""
     space = checks.space(flux, "flux")
     v = checks.vector(dirichlet, geometry[0].shape[0], "dirichlet")
     psi = checks.vector(flux_coefficients, checks.dofs(geometry, space), "flux_coefficients")
     Z = checks.points(points, "points", "k", dim=3)
     if not np.all(np.isfinite(Z)):
         raise ValueError("points contains non-finite values")
-    return _bem.exterior_potential(*geometry, v, psi, Z, checks.scalar(a, "a"), space)
+    args = (*geometry, v, psi, Z, checks.scalar(a, "a"), space)
+    if compression == "auto":
+        large = (
+            geometry[0].shape[0] >= defaults.HMATRIX_SURFACE_POTENTIAL_VERTICES
+            and Z.shape[0] >= defaults.HMATRIX_SURFACE_POTENTIAL_POINTS
+        )
+        compression = "hmatrix" if large else "none"
+    if compression == "none" or Z.shape[0] == 0:
+        return _bem.exterior_potential(*args)
+    return _bem.exterior_potential_hmatrix(
+        *args,
+        defaults.HMATRIX_SURFACE_POTENTIAL_LEAF_SIZE,
+        defaults.HMATRIX_SURFACE_POTENTIAL_ETA,
+        tol,
+        defaults.HMATRIX_PRODUCT_THREADS,
+    )

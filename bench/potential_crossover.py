@@ -6,7 +6,13 @@ each row. The H-matrix time includes its set-up (each call builds it). The table
 the crossover of ``compression="auto"`` (``bem_cpp.HMATRIX_POTENTIAL_CROSSOVER``) are in
 docs/design/hmatrix.md, "Potentials".
 
-    .venv/bin/python bench/potential_crossover.py [--shape circle|l_shape] n:m [n:m ...]
+3D (``--shape sphere|cube``, tol ``coupling.options.hmatrix_tol(3)``): n is the number
+of vertices (the nearest icosphere level, or cube with that many), the m points a pixel
+grid on the body's mid-plane out to twice its half-width, outside it (the slice picture
+of a 3D run, coupling/io/body_figure_data.py); docs/design/bem3d.md, "The exterior
+potential".
+
+    .venv/bin/python bench/potential_crossover.py [--shape circle|l_shape|sphere|cube] n:m [n:m ...]
 """
 
 from __future__ import annotations
@@ -19,7 +25,8 @@ import numpy as np
 from matplotlib.path import Path
 
 import bem_cpp
-from coupling.options import HMATRIX_TOL
+from bem_cpp.surfaces import cube, icosphere
+from coupling.options import HMATRIX_TOL, hmatrix_tol
 
 
 def circle(n: int, radius: float = 0.4) -> np.ndarray:
@@ -51,11 +58,66 @@ def image_grid(nodes: np.ndarray, m: int) -> np.ndarray:
     return np.ascontiguousarray(G[~Path(nodes).contains_points(G, radius=-1e-9)])
 
 
+def surface(shape: str, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The icosphere (radius 0.5) or cube (side 1) with about n vertices."""
+    if shape == "sphere":
+        level = int(np.clip(np.round(np.log(max(n - 2, 10) / 10) / np.log(4)), 0, 7))
+        X, T = icosphere(level, 0.5)
+        return X, T
+    k = max(1, int(np.round(np.sqrt(max(n - 2, 6) / 6))))
+    X, T = cube(k)
+    return X, T
+
+
+def slice_grid(shape: str, m: int) -> np.ndarray:
+    """About m pixel centres of the plane z = 0 on [-1, 1]^2 (twice the body's half-width)
+    outside the body (the ball of radius 0.5 or the cube of side 1 about 0, with a margin
+    of 1e-4 relative), shifted by a third of a pixel as in the slice picture."""
+    half = 0.5
+    k = int(np.ceil(np.sqrt(m / (1 - np.pi / 16))))
+    g = np.linspace(-2.0, 2.0, k) * half
+    g = g + (g[1] - g[0]) / 3.0
+    G = np.column_stack([c.ravel() for c in np.meshgrid(g, g)] + [np.zeros(k * k)])
+    size = np.linalg.norm(G, axis=1) if shape == "sphere" else np.abs(G).max(axis=1)
+    return np.ascontiguousarray(G[size > half * 1.0001])
+
+
+def main3d(shape: str, sizes: list[str]) -> None:
+    """The 3D table (module docstring)."""
+    tol = hmatrix_tol(3)
+    print("| n | m | direct [s] | H-matrix [s] | H / direct | max error / max abs u | load |")
+    print("|---|---|---|---|---|---|---|")
+    for size in sizes:
+        n, m = (int(x) for x in size.split(":"))
+        X, T = surface(shape, n)
+        Z = slice_grid(shape, m)
+        rng = np.random.default_rng(0)
+        v, psi = rng.standard_normal(len(X)), rng.standard_normal(len(X))
+        args = (X, v, psi, Z)
+        load = os.getloadavg()[0]
+        t = time.perf_counter()
+        direct = bem_cpp.exterior_potential(*args, a=0.1, triangles=T, compression="none")
+        t_direct = time.perf_counter() - t
+        t = time.perf_counter()
+        h = bem_cpp.exterior_potential(*args, a=0.1, triangles=T, compression="hmatrix", tol=tol)
+        t_h = time.perf_counter() - t
+        err = np.abs(h - direct).max() / np.abs(direct).max()
+        print(
+            f"| {len(X):,} | {len(Z):,} | {t_direct:.3f} | {t_h:.3f} | {t_h / t_direct:.2f} "
+            f"| {err:.1e} | {load:.2f}-{os.getloadavg()[0]:.2f} |",
+            flush=True,
+        )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--shape", choices=("circle", "l_shape"), default="circle")
+    parser.add_argument(
+        "--shape", choices=("circle", "l_shape", "sphere", "cube"), default="circle"
+    )
     parser.add_argument("sizes", nargs="+", help="n:m pairs")
     args = parser.parse_args()
+    if args.shape in ("sphere", "cube"):
+        return main3d(args.shape, args.sizes)
     make = circle if args.shape == "circle" else l_shape
     print("| n | m | direct [s] | H-matrix [s] | H / direct | max error / max abs u | load |")
     print("|---|---|---|---|---|---|---|")

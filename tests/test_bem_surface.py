@@ -125,13 +125,35 @@ def test_traces_and_potential_of_a_decaying_harmonic_converge_at_order_two():
     assert np.all(np.array(close_errors) <= 10 * np.array(near_errors)), (close_errors, near_errors)
 
 
-def test_potential_refuses_points_inside_or_on_the_surface():
+@pytest.mark.parametrize("compression", ["none", "hmatrix"])
+def test_potential_refuses_points_inside_or_on_the_surface(compression):
     X, T = icosphere(1, R)
     v, _ = _harmonic(X)
+    Z = [[2.0, 0, 0], [0.1, 0, 0]]
     with pytest.raises(ValueError, match=r"point 1 \(.*inside Omega or on Gamma"):
-        bem_cpp.exterior_potential(X, v, v, [[2.0, 0, 0], [0.1, 0, 0]], triangles=T)
+        bem_cpp.exterior_potential(X, v, v, Z, triangles=T, compression=compression)
     with pytest.raises(ValueError, match="point 0"):
-        bem_cpp.exterior_potential(X, v, v, X[:1], triangles=T)
+        bem_cpp.exterior_potential(X, v, v, X[:1], triangles=T, compression=compression)
+
+
+@pytest.mark.parametrize("flux", ["p1", "p0"])
+def test_compressed_potential_agrees_with_the_direct_sums(flux):
+    """The H-matrix potential's admissible blocks take the rule of their closest pair, the
+    direct evaluation's or finer, so the two differ by tol and by the direct evaluation's
+    quadrature error (about 1e-8 relative at most, at any tol; docs/design/bem3d.md)."""
+    X, T = icosphere(4, R)
+    v, _ = _harmonic(X)
+    psi = np.cos(0.7 * np.arange(len(X) if flux == "p1" else len(T)))
+    g = np.linspace(-2.0, 2.0, 40) * R + 0.01
+    Z = np.column_stack([c.ravel() for c in np.meshgrid(g, g)] + [np.full(40 * 40, 0.1)])
+    Z = Z[np.linalg.norm(Z, axis=1) > 1.01 * R]
+    args = (X, v, psi, Z)
+    direct = bem_cpp.exterior_potential(*args, a=0.2, flux=flux, triangles=T)
+    for tol, bound in ((1e-6, 1e-6), (1e-8, 3e-8)):
+        compressed = bem_cpp.exterior_potential(
+            *args, a=0.2, flux=flux, triangles=T, compression="hmatrix", tol=tol
+        )
+        assert np.abs(compressed - direct).max() <= bound * np.abs(direct).max()
 
 
 @pytest.mark.parametrize(

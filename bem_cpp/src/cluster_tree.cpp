@@ -157,4 +157,12 @@ std::vector<Index> ClusterTree::partition(int parts, const std::vector<double>& 
   return bounds;
 }
 
+ClusterTree point_cluster_tree(const Eigen::Ref<const Matrix>& points, Index leaf_size) {
+  std::vector<Box> supports(static_cast<std::size_t>(points.rows()));
+  const bool solid = points.cols() == 3;
+  for (Index i = 0; i < points.rows(); ++i)
+    supports[static_cast<std::size_t>(i)].add(Vec3{points(i, 0), points(i, 1), solid ? points(i, 2) : 0.0});
+  return ClusterTree(points, supports, leaf_size);
+}
+
 }  // namespace bem

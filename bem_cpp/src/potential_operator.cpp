@@ -211,12 +211,6 @@ std::unique_ptr<EntryBlock> PotentialEntries::block(const Index* I, Index m, con
   return std::make_unique<PotentialBlock>(polygon_, points_, kernel_, cols_, I, m, J, k);
 }
 
-ClusterTree point_cluster_tree(const Points& points, Index leaf_size) {
-  std::vector<Box> supports(static_cast<std::size_t>(points.rows()));
-  for (Index i = 0; i < points.rows(); ++i) supports[static_cast<std::size_t>(i)].add(Vec2{points(i, 0), points(i, 1)});
-  return ClusterTree(points, supports, leaf_size);
-}
-
 PotentialOperator::PotentialOperator(const Polygon& polygon, const Eigen::Ref<const Points>& points, Space flux,
                                      HMatrixOptions options)
     : points_(points), n_(polygon.size()) {

@@ -14,14 +14,6 @@ namespace {
 constexpr double kInvTwoPi = 0.5 / M_PI;
 constexpr int kMaxDepth = 60;  // pieces of 2^-60 of the triangle: any point off Gamma
 
-/// Gauss points per direction for a point at `q` diameters from a (sub)triangle; 0: split.
-int points_for(double q) {
-  if (q >= 6.0) return 3;
-  if (q >= 3.0) return 5;
-  if (q >= 1.5) return 8;
-  return 0;
-}
-
 /// Adds the integrals over the sub-triangle with parent coordinates (s, t) of its vertices
 /// c[0..2] (the parent maps (s, t) to q0 + s e1 + t e2).
 void integrate(const Triangle& T, Vec3 z, const double cs[3], const double ct[3], int depth, PointIntegrals& out) {
@@ -31,9 +23,9 @@ void integrate(const Triangle& T, Vec3 z, const double cs[3], const double ct[3]
   const Vec3 c = (1.0 / 3.0) * (q[0] + q[1] + q[2]);
   const double diam = std::max({norm(q[1] - q[0]), norm(q[2] - q[1]), norm(q[0] - q[2])});
   const double radius = std::max({norm(q[0] - c), norm(q[1] - c), norm(q[2] - c)});
-  int p = points_for((norm(z - c) - radius) / diam);
-  if (p == 0 && depth >= kMaxDepth) p = 8;
-  if (p == 0) {  // split at the edge midpoints
+  const TriangleRule* rule = point_rule((norm(z - c) - radius) / diam);
+  if (rule == nullptr && depth >= kMaxDepth) rule = point_rule(kPointSplitDiameters);
+  if (rule == nullptr) {  // split at the edge midpoints
     const double ms[3] = {0.5 * (cs[0] + cs[1]), 0.5 * (cs[1] + cs[2]), 0.5 * (cs[2] + cs[0])};
     const double mt[3] = {0.5 * (ct[0] + ct[1]), 0.5 * (ct[1] + ct[2]), 0.5 * (ct[2] + ct[0])};
     const double s4[4][3] = {
@@ -43,7 +35,7 @@ void integrate(const Triangle& T, Vec3 z, const double cs[3], const double ct[3]
     for (int k = 0; k < 4; ++k) integrate(T, z, s4[k], t4[k], depth + 1, out);
     return;
   }
-  const TriangleRule& r = triangle_rule(p);
+  const TriangleRule& r = *rule;
   // area of the piece over the area of the reference triangle, times the parent's Jacobian
   const double jac = 2.0 * T.area * std::abs((cs[1] - cs[0]) * (ct[2] - ct[0]) - (cs[2] - cs[0]) * (ct[1] - ct[0]));
   for (int k = 0; k < r.size(); ++k) {
@@ -64,6 +56,16 @@ void integrate(const Triangle& T, Vec3 z, const double cs[3], const double ct[3]
 }
 
 }  // namespace
+
+const TriangleRule* point_rule(double q) {
+  static const TriangleRule& far = triangle_rule(3);  // triangle_rule locks its cache
+  static const TriangleRule& middle = triangle_rule(5);
+  static const TriangleRule& near = triangle_rule(8);
+  if (q >= 6.0) return &far;
+  if (q >= 3.0) return &middle;
+  if (q >= kPointSplitDiameters) return &near;
+  return nullptr;
+}
 
 PointIntegrals point_integrals(const Triangle& t, Vec3 z) {
   PointIntegrals out{};
@@ -115,14 +117,16 @@ Vector exterior_potential(VerticesRef vertices, TrianglesRef triangles, const Ei
     }
     u(k) = 0.5 * (dl - sl) + a;
   }
-  if (bad >= 0) {
-    std::ostringstream msg;
-    msg.precision(6);
-    msg << "points: point " << bad << " (" << points(bad, 0) << ", " << points(bad, 1) << ", " << points(bad, 2)
-        << ") lies inside Omega or on Gamma; the representation formula gives u_e only outside";
-    throw std::invalid_argument(msg.str());
-  }
+  if (bad >= 0) refuse_interior_point(points, bad);
   return u;
+}
+
+void refuse_interior_point(const Eigen::Ref<const Vertices>& points, Index k) {
+  std::ostringstream msg;
+  msg.precision(6);
+  msg << "points: point " << k << " (" << points(k, 0) << ", " << points(k, 1) << ", " << points(k, 2)
+      << ") lies inside Omega or on Gamma; the representation formula gives u_e only outside";
+  throw std::invalid_argument(msg.str());
 }
 
 }  // namespace bem

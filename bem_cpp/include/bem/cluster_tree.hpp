@@ -67,4 +67,8 @@ class ClusterTree {
   std::vector<Index> permutation_;
 };
 
+/// Cluster tree on target points (m, d), d = 2 or 3, each point its own support (the rows
+/// of a potential, potential_operator.hpp and surface_potential_operator.hpp).
+ClusterTree point_cluster_tree(const Eigen::Ref<const Matrix>& points, Index leaf_size);
+
 }  // namespace bem

@@ -39,9 +39,6 @@ class PotentialEntries : public EntrySource {
   Space cols_;
 };
 
-/// Cluster tree on target points (each its own box as support).
-ClusterTree point_cluster_tree(const Points& points, Index leaf_size);
-
 /// D and S on the points, built once; evaluate() is two H-matrix products.
 class PotentialOperator {
  public:

@@ -10,6 +10,15 @@
 
 namespace bem {
 
+/// Closer than this many of its diameters to a (sub)triangle (from its circumscribed ball
+/// around the centroid), a point splits it.
+constexpr double kPointSplitDiameters = 1.5;
+
+/// The collapsed Gauss rule (triangle_rule) over a whole (sub)triangle for a point at q of
+/// its diameters from it, as above: 3 points per direction from 6 diameters, 5 from 3, 8
+/// from kPointSplitDiameters; null below (split).
+const TriangleRule* point_rule(double q);
+
 /// Integrals over triangle t of 2G(z, .) lambda_b (b = 0..2), 2G(z, .) (index 3) and
 /// 2 dG/dn_y(z, .) lambda_b (b = 0..2), for z not on t.
 struct PointIntegrals {
@@ -21,6 +30,10 @@ PointIntegrals point_integrals(const Triangle& t, Vec3 z);
 /// Solid angle of triangle t seen from z, signed positive when z is on the side its normal
 /// points away from (the sum over a closed surface: 4 pi inside Omega, 0 outside).
 double solid_angle(const Triangle& t, Vec3 z);
+
+/// Throws std::invalid_argument (ValueError) naming point k of `points` as one inside Omega
+/// or on Gamma (the message of exterior_potential and of its compressed form).
+[[noreturn]] void refuse_interior_point(const Eigen::Ref<const Vertices>& points, Index k);
 
 /// u_e at the (k, 3) points; throws std::invalid_argument (ValueError) naming the first
 /// point inside Omega or on Gamma (closer than 1e-12 of the bounding-box diameter).
