@@ -22,9 +22,10 @@ __all__ = ["BODY_PLOT_FILES", "BodyFigureInputs", "body_figure_inputs", "SLICE_P
 BODY_PLOT_FILES = ("signorini.png", "surface.png", "slice.png", "history.png")
 #: Pixels along each side of the section's image of u_h.
 SLICE_PIXELS = 121
-#: u_e is evaluated at every SLICE_EXTERIOR_STRIDE-th pixel in each direction: the
-#: representation formula of a surface is a direct sum over its triangles (points times
-#: triangles), and u_e is smooth outside (measured at 35,937 dofs: 19 s for every pixel).
+#: u_e is evaluated at every SLICE_EXTERIOR_STRIDE-th pixel in each direction (u_e is
+#: smooth outside): the representation formula costs points times triangles as direct
+#: sums (measured at 35,937 dofs: 19 s for every pixel), less compressed (bem_cpp's
+#: crossover), and a quarter of the pixels a quarter of either.
 SLICE_EXTERIOR_STRIDE = 2
 
 
