@@ -111,23 +111,25 @@ def exterior_potential(
     if not np.all(np.isfinite(Z)):
         raise ValueError("points contains non-finite values")
     args = (X, v, psi, Z, checks.scalar(a, "a"), checks.space(flux, "flux"))
-    if compression == "auto":
-        m = Z.shape[0]
-        cost = (
-            defaults.HMATRIX_POTENTIAL_CROSSOVER_DOFS * m
-            + defaults.HMATRIX_POTENTIAL_CROSSOVER_POINTS * n
-        )
-        large = m * n >= cost
-        compression = "hmatrix" if large else "none"
-    if compression == "none" or Z.shape[0] == 0:
-        return _bem.exterior_potential(*args)
-    return _bem.exterior_potential_hmatrix(
-        *args,
-        defaults.HMATRIX_LEAF_SIZE,
-        defaults.HMATRIX_ETA,
-        tol,
-        defaults.HMATRIX_PRODUCT_THREADS,
+    m = Z.shape[0]
+    cost = (
+        defaults.HMATRIX_POTENTIAL_CROSSOVER_DOFS * m
+        + defaults.HMATRIX_POTENTIAL_CROSSOVER_POINTS * n
     )
+    layout = (defaults.HMATRIX_LEAF_SIZE, defaults.HMATRIX_ETA)
+    return _evaluate(args, m, compression, m * n >= cost, layout, tol)
+
+
+def _evaluate(
+    args: tuple, points: int, compression: str, large: bool, layout: tuple[int, float], tol: float
+) -> NDArray[np.float64]:
+    """The direct sums or the H-matrices (leaf size and eta ``layout``) on the checked
+    ``args`` of ``points`` points; "auto" takes the H-matrices when ``large``."""
+    if compression == "auto":
+        compression = "hmatrix" if large else "none"
+    if compression == "none" or points == 0:
+        return _bem.exterior_potential(*args)
+    return _bem.exterior_potential_hmatrix(*args, *layout, tol, defaults.HMATRIX_PRODUCT_THREADS)
 
 
 def _surface_potential(
@@ -148,18 +150,12 @@ def _surface_potential(
     if not np.all(np.isfinite(Z)):
         raise ValueError("points contains non-finite values")
     args = (*geometry, v, psi, Z, checks.scalar(a, "a"), space)
-    if compression == "auto":
-        large = (
-            geometry[0].shape[0] >= defaults.HMATRIX_SURFACE_POTENTIAL_VERTICES
-            and Z.shape[0] >= defaults.HMATRIX_SURFACE_POTENTIAL_POINTS
-        )
-        compression = "hmatrix" if large else "none"
-    if compression == "none" or Z.shape[0] == 0:
-        return _bem.exterior_potential(*args)
-    return _bem.exterior_potential_hmatrix(
-        *args,
+    large = (
+        geometry[0].shape[0] >= defaults.HMATRIX_SURFACE_POTENTIAL_VERTICES
+        and Z.shape[0] >= defaults.HMATRIX_SURFACE_POTENTIAL_POINTS
+    )
+    layout = (
         defaults.HMATRIX_SURFACE_POTENTIAL_LEAF_SIZE,
         defaults.HMATRIX_SURFACE_POTENTIAL_ETA,
-        tol,
-        defaults.HMATRIX_PRODUCT_THREADS,
     )
+    return _evaluate(args, Z.shape[0], compression, large, layout, tol)

@@ -82,31 +82,17 @@ def slice_grid(shape: str, m: int) -> np.ndarray:
     return np.ascontiguousarray(G[size > half * 1.0001])
 
 
-def main3d(shape: str, sizes: list[str]) -> None:
-    """The 3D table (module docstring)."""
-    tol = hmatrix_tol(3)
-    print("| n | m | direct [s] | H-matrix [s] | H / direct | max error / max abs u | load |")
-    print("|---|---|---|---|---|---|---|")
+def cases(shape: str, sizes: list[str]):
+    """(boundary nodes, evaluation points, the keywords of ``exterior_potential``) of every
+    n:m size."""
     for size in sizes:
         n, m = (int(x) for x in size.split(":"))
-        X, T = surface(shape, n)
-        Z = slice_grid(shape, m)
-        rng = np.random.default_rng(0)
-        v, psi = rng.standard_normal(len(X)), rng.standard_normal(len(X))
-        args = (X, v, psi, Z)
-        load = os.getloadavg()[0]
-        t = time.perf_counter()
-        direct = bem_cpp.exterior_potential(*args, a=0.1, triangles=T, compression="none")
-        t_direct = time.perf_counter() - t
-        t = time.perf_counter()
-        h = bem_cpp.exterior_potential(*args, a=0.1, triangles=T, compression="hmatrix", tol=tol)
-        t_h = time.perf_counter() - t
-        err = np.abs(h - direct).max() / np.abs(direct).max()
-        print(
-            f"| {len(X):,} | {len(Z):,} | {t_direct:.3f} | {t_h:.3f} | {t_h / t_direct:.2f} "
-            f"| {err:.1e} | {load:.2f}-{os.getloadavg()[0]:.2f} |",
-            flush=True,
-        )
+        if shape in ("sphere", "cube"):
+            X, T = surface(shape, n)
+            yield X, slice_grid(shape, m), {"triangles": T, "tol": hmatrix_tol(3)}
+        else:
+            X = circle(n) if shape == "circle" else l_shape(n)
+            yield X, image_grid(X, m), {"tol": HMATRIX_TOL}
 
 
 def main() -> None:
@@ -116,23 +102,17 @@ def main() -> None:
     )
     parser.add_argument("sizes", nargs="+", help="n:m pairs")
     args = parser.parse_args()
-    if args.shape in ("sphere", "cube"):
-        return main3d(args.shape, args.sizes)
-    make = circle if args.shape == "circle" else l_shape
     print("| n | m | direct [s] | H-matrix [s] | H / direct | max error / max abs u | load |")
     print("|---|---|---|---|---|---|---|")
-    for size in args.sizes:
-        n, m = (int(x) for x in size.split(":"))
-        X = make(n)
-        Z = image_grid(X, m)
+    for X, Z, keywords in cases(args.shape, args.sizes):
         rng = np.random.default_rng(0)
         v, psi = rng.standard_normal(len(X)), rng.standard_normal(len(X))
         load = os.getloadavg()[0]
         t = time.perf_counter()
-        direct = bem_cpp.exterior_potential(X, v, psi, Z, a=0.1, compression="none")
+        direct = bem_cpp.exterior_potential(X, v, psi, Z, a=0.1, compression="none", **keywords)
         t_direct = time.perf_counter() - t
         t = time.perf_counter()
-        h = bem_cpp.exterior_potential(X, v, psi, Z, a=0.1, compression="hmatrix", tol=HMATRIX_TOL)
+        h = bem_cpp.exterior_potential(X, v, psi, Z, a=0.1, compression="hmatrix", **keywords)
         t_h = time.perf_counter() - t
         err = np.abs(h - direct).max() / np.abs(direct).max()
         print(

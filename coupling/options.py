@@ -149,11 +149,12 @@ NATURAL_ORDERING_MAX_BLOCK = 1024
 #: dense one below, where the H-matrix is clearly the cheaper in a whole solve
 #: (docs/design/hmatrix.md, "The crossover after the set-up and product speed-ups").
 HMATRIX_CROSSOVER = 2048
-#: The same for a surface in R^3: the whole solve (set-up and ssn with amg, the box) takes
-#: as long with either S_h at about 3,500 boundary dofs (35.6 s dense, 38.3 s H-matrix),
-#: and the dense S_h's memory grows like n^2 (1.0 GB against 0.39 GB there; 0.59 against
-#: 0.30 GB at 2,402) (docs/design/three_dimensions.md, "The 3D crossover").
-HMATRIX_CROSSOVER_3D = 3000
+#: The same for a surface in R^3: the whole `fembem solve` (the box pressed onto its bottom
+#: face) takes as long with either S_h at 866 boundary dofs (4.1 s), and from there the
+#: H-matrix is faster (1,538: 7.0 against 8.1 s; 3,458: 17.5 against 33.7 s) and smaller
+#: (peak 0.21 against 0.34 GB; 0.31 against 1.0 GB) (docs/design/three_dimensions.md,
+#: "The 3D crossover").
+HMATRIX_CROSSOVER_3D = 1000
 #: Relative accuracy of the H-matrix blocks of S_h (``bem_cpp.steklov_poincare`` tol):
 #: products agree with the dense S_h to a few times this (docs/design/hmatrix.md), far
 #: below the solver tolerances (1e-8 by default).

@@ -199,5 +199,5 @@ def test_memory_estimate_of_a_body_uses_the_3d_constants():
     held = memory_estimate(size, 1, plots=False, boundary_operator="hmatrix")
     assert dense == pytest.approx(base + BOUNDARY_BYTES_3D * 3_458**2, rel=1e-12)
     assert held == pytest.approx(base + HMATRIX_BOUNDARY_BYTES_3D * 3_458, rel=1e-12)
-    # auto: the H-matrix from coupling.options.HMATRIX_CROSSOVER_3D = 3000 boundary dofs
+    # auto: the H-matrix from coupling.options.HMATRIX_CROSSOVER_3D = 1000 boundary dofs
     assert memory_estimate(size, 1, plots=False) == held
