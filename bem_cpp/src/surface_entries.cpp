@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <map>
 #include <optional>
 #include <set>
 #include <stdexcept>
@@ -107,17 +108,15 @@ struct FarPoints {
 };
 
 /// The point kernels: 2 G = 1 / (2 pi r) (single layer), 2 dG/dn_y = n_y . (x - y) / (2 pi r^3)
-/// (double layer, the normal of the column point), and 1 / (2 pi r^3), positive, from which
-/// the double layer's far blocks are composed (SurfaceBlock::low_rank).
-enum class PointKernelKind { SingleLayer, DoubleLayer, InverseCube };
+/// (double layer, the normal of the column point).
+enum class PointKernelKind { SingleLayer, DoubleLayer };
 
 /// The kernel of `kind` at d = x - y (n: the normal at y), without the weights.
 template <PointKernelKind kind>
 inline double point_kernel(double dx, double dy, double dz, double nx, double ny, double nz) {
   const double s = 1.0 / std::sqrt(dx * dx + dy * dy + dz * dz);
   if constexpr (kind == PointKernelKind::SingleLayer) return s;
-  if constexpr (kind == PointKernelKind::DoubleLayer) return (dx * nx + dy * ny + dz * nz) * s * s * s;
-  return s * s * s;
+  return (dx * nx + dy * ny + dz * nz) * s * s * s;
 }
 
 /// A point kernel between the far-rule points of a block's rows (r) and columns (c), weights
@@ -134,8 +133,6 @@ struct PointKernel {
         return row<PointKernelKind::SingleLayer>(p, out);
       case PointKernelKind::DoubleLayer:
         return row<PointKernelKind::DoubleLayer>(p, out);
-      case PointKernelKind::InverseCube:
-        return row<PointKernelKind::InverseCube>(p, out);
     }
   }
   /// out[p] = A(p, q) for every row point p.
@@ -145,8 +142,6 @@ struct PointKernel {
         return column<PointKernelKind::SingleLayer>(q, out);
       case PointKernelKind::DoubleLayer:
         return column<PointKernelKind::DoubleLayer>(q, out);
-      case PointKernelKind::InverseCube:
-        return column<PointKernelKind::InverseCube>(q, out);
     }
   }
 
@@ -228,11 +223,8 @@ class SurfaceBlock : public EntryBlock {
   /// A, one kernel evaluation per entry, and the factors are projected to the dofs.
   /// The double layer's A vanishes between coplanar points (flat faces), a structure on
   /// which ACA's partial pivoting can miss whole sub-blocks (on the cube: products 2e-4 off
-  /// at any tol). In a block where a row and a column triangle share a plane, with
-  /// x' = x - o, y' = y - o (o the block's centre) n_y . (x - y) = sum_c x'_c n_c - n_y . y',
-  /// so   A = sum_c diag(x'_c) B diag(n_c) - B diag(n . y'),   B = w_x w_y / (2 pi r^3) > 0,
-  /// and ACA runs on B. The terms are at most (|x'| + |y'|) / r, a few times A's entries,
-  /// so B is approximated to a tenth of A's tolerance.
+  /// at any tol). In a block where a row and a column triangle share a plane, ACA runs on
+  /// the sub-blocks between different planes only (split_by_plane).
   bool low_rank(double tol, LowRank& out) const override {
     if (!far_pairs_only()) return false;
     prepare_points();
@@ -243,20 +235,17 @@ class SurfaceBlock : public EntryBlock {
       out.V.resize(k_, 0);
       return true;
     }
-    const bool composed = planes == Planes::Shared;  // of B
-    const PointKernel kernel{*rp_, *cp_,
-                             composed ? PointKernelKind::InverseCube
-                             : dl     ? PointKernelKind::DoubleLayer
-                                      : PointKernelKind::SingleLayer};
-    const Slice row = [&kernel](Index p, double* o) { kernel.row(p, o); };
-    const Slice column = [&kernel](Index q, double* o) { kernel.column(q, o); };
+    const PointKernel kernel{*rp_, *cp_, dl ? PointKernelKind::DoubleLayer : PointKernelKind::SingleLayer};
     // the projection sums about 10 point rows into a dof row: 0.3 tol (0.1 tol gave the same
     // products to 10 % at 1.1x the time, docs/design/bem3d.md)
-    const double point_tol = (composed ? 0.03 : 0.3) * tol;
-    LowRank factors = aca(rp_->size(), cp_->size(), row, column, point_tol, std::min(rp_->size(), cp_->size()));
-    if (composed) {
-      recompress(factors, point_tol);
-      factors = double_layer_factors(factors);
+    const double point_tol = 0.3 * tol;
+    LowRank factors;
+    if (planes == Planes::Shared) {
+      factors = split_by_plane(kernel, point_tol);
+    } else {
+      const Slice row = [&kernel](Index p, double* o) { kernel.row(p, o); };
+      const Slice column = [&kernel](Index q, double* o) { kernel.column(q, o); };
+      factors = aca(rp_->size(), cp_->size(), row, column, point_tol, std::min(rp_->size(), cp_->size()));
     }
     project(factors, kernel_ == SurfaceKernel::Hypersingular, out);
     if (companion_) point_factors_ = std::move(factors);
@@ -305,55 +294,94 @@ class SurfaceBlock : public EntryBlock {
     return far_kernel_;
   }
   enum class Planes { Distinct, Shared, One };
+  /// The largest distance of a triangle's centroid from the origin (the offsets' scale).
+  double scale() const {
+    double scale = 0.0;
+    for (const Part& p : row_parts_) scale = std::max(scale, norm(s_.triangle(p.triangle).c));
+    for (const Part& p : col_parts_) scale = std::max(scale, norm(s_.triangle(p.triangle).c));
+    return scale;
+  }
+  /// The plane of a part's triangle: its normal and offset over `scale`, to 1e-8.
+  std::array<long long, 4> plane_key(const Part& p, double scale) const {
+    const Triangle& T = s_.triangle(p.triangle);
+    auto q = [](double v) { return static_cast<long long>(std::llround(v * 1e8)); };
+    return {q(T.n.x), q(T.n.y), q(T.n.z), q(dot(T.n, T.c) / (scale + 1e-300))};
+  }
   /// Whether a triangle of the rows and one of the columns lie in one plane (Shared), or all
   /// triangles of both in the same plane (One: the double layer's block is zero); normals
   /// and offsets compared to 1e-8 relative (a polyhedron's faces, whose triangles' normals
   /// differ by round-off).
   Planes planes() const {
-    double scale = 0.0;
-    for (const Part& p : row_parts_) scale = std::max(scale, norm(s_.triangle(p.triangle).c));
-    for (const Part& p : col_parts_) scale = std::max(scale, norm(s_.triangle(p.triangle).c));
-    auto key = [&](const Part& p) {
-      const Triangle& T = s_.triangle(p.triangle);
-      auto q = [](double v) { return static_cast<long long>(std::llround(v * 1e8)); };
-      return std::array<long long, 4>{q(T.n.x), q(T.n.y), q(T.n.z), q(dot(T.n, T.c) / (scale + 1e-300))};
-    };
+    const double scale = this->scale();
     std::set<std::array<long long, 4>> rows, cols;
-    for (const Part& p : row_parts_) rows.insert(key(p));
-    for (const Part& p : col_parts_) cols.insert(key(p));
+    for (const Part& p : row_parts_) rows.insert(plane_key(p, scale));
+    for (const Part& p : col_parts_) cols.insert(plane_key(p, scale));
     if (rows.size() == 1 && rows == cols) return Planes::One;
     for (const auto& k : cols)
       if (rows.count(k)) return Planes::Shared;
     return Planes::Distinct;
   }
-  /// The double layer's point factors from those of B (low_rank): [X'_1 U, X'_2 U, X'_3 U, U]
-  /// and [N_1 V, N_2 V, N_3 V, -(N . Y') V], X', Y' about the centre of the points.
-  LowRank double_layer_factors(const LowRank& b) const {
-    const FarPoints &r = *rp_, &c = *cp_;
-    auto mean = [](const std::vector<double>& a, const std::vector<double>& b) {
-      double sum = 0.0;
-      for (double v : a) sum += v;
-      for (double v : b) sum += v;
-      return sum / static_cast<double>(a.size() + b.size());
+  /// The double layer's point factors of a block in which a row and a column triangle share
+  /// a plane. A vanishes between the points of one plane, so ACA runs on the sub-blocks
+  /// without such zeros - the rows of each plane p of both sides against the columns off p,
+  /// and the rows on no column plane against every column - and their factors, zero outside
+  /// their rows and columns, are stacked.
+  LowRank split_by_plane(const PointKernel& kernel, double tol) const {
+    const double scale = this->scale();
+    std::map<std::array<long long, 4>, int> ids;
+    auto plane_of = [&](const std::vector<Part>& parts) {
+      std::vector<int> plane;  // per far point: its triangle's plane
+      const int n = triangle_rule(kFarGaussPoints).size();
+      for (const Part& p : parts)
+        plane.insert(plane.end(), static_cast<std::size_t>(n),
+                     ids.emplace(plane_key(p, scale), static_cast<int>(ids.size())).first->second);
+      return plane;
     };
-    using Array = Eigen::Map<const Eigen::ArrayXd>;
-    auto coordinate = [](const std::vector<double>& v) { return Array(v.data(), static_cast<Index>(v.size())); };
-    const double o[3] = {mean(r.x, c.x), mean(r.y, c.y), mean(r.z, c.z)};
-    const Eigen::ArrayXd x[3] = {coordinate(r.x) - o[0], coordinate(r.y) - o[1], coordinate(r.z) - o[2]};
-    const Eigen::ArrayXd n[3] = {coordinate(c.nx), coordinate(c.ny), coordinate(c.nz)};
-    const Eigen::ArrayXd ny =
-        n[0] * (coordinate(c.x) - o[0]) + n[1] * (coordinate(c.y) - o[1]) + n[2] * (coordinate(c.z) - o[2]);
-    const Index k = b.rank();
-    LowRank a;
-    a.U.resize(r.size(), 4 * k);
-    a.V.resize(c.size(), 4 * k);
-    for (int d = 0; d < 3; ++d) {
-      a.U.middleCols(d * k, k) = x[d].matrix().asDiagonal() * b.U;
-      a.V.middleCols(d * k, k) = n[d].matrix().asDiagonal() * b.V;
+    const std::vector<int> row_plane = plane_of(row_parts_), col_plane = plane_of(col_parts_);
+    const std::set<int> col_planes(col_plane.begin(), col_plane.end());
+    const Index m = rp_->size(), n = cp_->size();
+    std::vector<LowRank> pieces;
+    std::vector<std::vector<Index>> piece_rows, piece_cols;
+    std::vector<double> full_row(static_cast<std::size_t>(n)), full_column(static_cast<std::size_t>(m));
+    // group -1: the rows on no column plane, against every column
+    std::set<int> groups{-1};
+    for (int p : row_plane)
+      if (col_planes.count(p)) groups.insert(p);
+    for (int g : groups) {
+      std::vector<Index> R, C;
+      for (Index i = 0; i < m; ++i) {
+        const int p = row_plane[static_cast<std::size_t>(i)];
+        if (g < 0 ? col_planes.count(p) == 0 : p == g) R.push_back(i);
+      }
+      for (Index j = 0; j < n; ++j)
+        if (col_plane[static_cast<std::size_t>(j)] != g) C.push_back(j);
+      if (R.empty() || C.empty()) continue;
+      const Slice row = [&](Index i, double* o) {
+        kernel.row(R[static_cast<std::size_t>(i)], full_row.data());
+        for (std::size_t c = 0; c < C.size(); ++c) o[c] = full_row[static_cast<std::size_t>(C[c])];
+      };
+      const Slice column = [&](Index j, double* o) {
+        kernel.column(C[static_cast<std::size_t>(j)], full_column.data());
+        for (std::size_t r = 0; r < R.size(); ++r) o[r] = full_column[static_cast<std::size_t>(R[r])];
+      };
+      const Index rows = static_cast<Index>(R.size()), cols = static_cast<Index>(C.size());
+      pieces.push_back(aca(rows, cols, row, column, tol, std::min(rows, cols)));
+      piece_rows.push_back(std::move(R));
+      piece_cols.push_back(std::move(C));
     }
-    a.U.middleCols(3 * k, k) = b.U;
-    a.V.middleCols(3 * k, k) = -(ny.matrix().asDiagonal() * b.V);
-    return a;
+    Index rank = 0;
+    for (const LowRank& piece : pieces) rank += piece.rank();
+    LowRank out{Eigen::MatrixXd::Zero(m, rank), Eigen::MatrixXd::Zero(n, rank)};
+    Index at = 0;
+    for (std::size_t k = 0; k < pieces.size(); ++k) {
+      const LowRank& piece = pieces[k];
+      for (std::size_t r = 0; r < piece_rows[k].size(); ++r)
+        out.U.row(piece_rows[k][r]).segment(at, piece.rank()) = piece.U.row(static_cast<Index>(r));
+      for (std::size_t c = 0; c < piece_cols[k].size(); ++c)
+        out.V.row(piece_cols[k][c]).segment(at, piece.rank()) = piece.V.row(static_cast<Index>(c));
+      at += piece.rank();
+    }
+    return out;  // recompressed after the projection (HMatrix::fill), at the dofs' size
   }
   void check_companion(int which) const {
     if (which != 1 || !companion_)
