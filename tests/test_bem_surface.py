@@ -166,7 +166,8 @@ def test_hmatrix_steklov_poincare_agrees_with_the_dense_one(surface, compressed)
     to pay at tol 1e-10: the small sphere checks the tree, the near field and the far pairs
     of the dense blocks. On the flat faces of the cube and Fichera's corner the double
     layer's kernel vanishes between coplanar points, which ACA on that kernel missed:
-    products were 2e-4 .. 2e-3 off at any tol until its blocks were composed from 1/r^3.)"""
+    products were 2e-4 .. 2e-3 off at any tol until ACA ran on the sub-blocks between
+    different planes only.)"""
     X, T = surface
     S = bem_cpp.steklov_poincare(X, triangles=T)
     op = bem_cpp.steklov_poincare(X, triangles=T, compression="hmatrix")

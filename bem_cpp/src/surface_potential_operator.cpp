@@ -117,8 +117,8 @@ class SurfacePotentialBlock : public EntryBlock {
   /// triangle, surface_potentials.cpp): ACA of the kernel between the points and the points
   /// of the rule of the closest pair, projected onto the dofs (Q). (Unlike the Galerkin
   /// double layer between two faces of one plane, surface_entries.cpp, ACA of the double
-  /// layer's kernel needs no composition from 1/r^3 here: points in the plane of a face
-  /// zero only their own rows' part, measured with and without it in docs/design/bem3d.md.)
+  /// layer's kernel needs no split by plane here: points in the plane of a face zero only
+  /// their own rows' part, measured in docs/design/bem3d.md.)
   bool low_rank(double tol, LowRank& out) const override { return far_low_rank(double_layer_, tol, out); }
 
   bool companion_low_rank(int /*which*/, double tol, LowRank& out) const override {
