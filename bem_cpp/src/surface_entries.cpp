@@ -11,157 +11,11 @@
 #include <unordered_map>
 #include <vector>
 
+#include "bem/far_points.hpp"
+
 namespace bem {
 
 namespace {
-
-constexpr double kInvTwoPi = 0.5 / M_PI;  // 2 G(r) = 1 / (2 pi r), the factor-2 convention
-
-/// A triangle of a block's row or column supports, with the dofs it carries there: the
-/// local basis index (0..2 barycentric, 3 constant) and the position in the block.
-struct Part {
-  Index triangle;
-  int count = 0;
-  int basis[3] = {0, 0, 0};
-  Index position[3] = {0, 0, 0};
-};
-
-/// The parts of the dofs `dofs[0..k)` of `space`, one per triangle.
-std::vector<Part> parts(const Surface& s, Space space, const Index* dofs, Index k) {
-  std::vector<std::pair<Index, std::pair<int, Index>>> items;  // (triangle, (basis, position))
-  for (Index p = 0; p < k; ++p) {
-    const Index d = dofs[p];
-    if (space == Space::P0) {
-      items.push_back({d, {3, p}});
-    } else {
-      for (Index t : s.star(d)) {
-        const Triangle& T = s.triangle(t);
-        const int a = static_cast<int>(std::find(T.v.begin(), T.v.end(), d) - T.v.begin());
-        items.push_back({t, {a, p}});
-      }
-    }
-  }
-  std::sort(items.begin(), items.end());
-  std::vector<Part> out;
-  for (const auto& [t, bp] : items) {
-    if (out.empty() || out.back().triangle != t) out.push_back(Part{t, 0, {0, 0, 0}, {0, 0, 0}});
-    Part& q = out.back();
-    q.basis[q.count] = bp.first;
-    q.position[q.count] = bp.second;
-    ++q.count;
-  }
-  return out;
-}
-
-/// The far rule's points of the triangles of `parts` (by coordinate, so that the kernel
-/// loops below vectorise), with weights (the rule's weight times twice the area: the
-/// physical measure) and normals, and the basis values Q that take a function of the
-/// points to the block's dofs: dof value = sum_p Q(p, dof) f(p).
-struct FarPoints {
-  std::vector<double> x, y, z, nx, ny, nz, w;
-  /// points x dofs: the values of the basis functions (`values`, one map), and the three
-  /// components of their surface curls (`curls`, the hypersingular operator by Nedelec's
-  /// identity W = sum_c C_c^T V0 C_c).
-  std::vector<Eigen::SparseMatrix<double>> values, curls;
-
-  FarPoints(const Surface& s, const std::vector<Part>& parts, Index dofs, bool with_values, bool with_curls) {
-    const TriangleRule& r = triangle_rule(kFarGaussPoints);
-    std::vector<Eigen::Triplet<double>> entries[4];
-    for (const Part& part : parts) {
-      const Triangle& T = s.triangle(part.triangle);
-      for (int q = 0; q < r.size(); ++q) {
-        const std::size_t k = static_cast<std::size_t>(q);
-        const double lambda[4] = {1.0 - r.s[k] - r.t[k], r.s[k], r.t[k], 1.0};
-        const Index p = size();
-        const Vec3 v = T.p[0] + r.s[k] * (T.p[1] - T.p[0]) + r.t[k] * (T.p[2] - T.p[0]);
-        x.push_back(v.x);
-        y.push_back(v.y);
-        z.push_back(v.z);
-        nx.push_back(T.n.x);
-        ny.push_back(T.n.y);
-        nz.push_back(T.n.z);
-        w.push_back(2.0 * T.area * r.w[k]);
-        for (int a = 0; a < part.count; ++a) {
-          if (with_values) entries[0].emplace_back(p, part.position[a], lambda[part.basis[a]]);
-          if (!with_curls) continue;
-          const Vec3 c = surface_curl(T, part.basis[a]);
-          entries[1].emplace_back(p, part.position[a], c.x);
-          entries[2].emplace_back(p, part.position[a], c.y);
-          entries[3].emplace_back(p, part.position[a], c.z);
-        }
-      }
-    }
-    auto map = [&](const std::vector<Eigen::Triplet<double>>& e) {
-      Eigen::SparseMatrix<double> Q(size(), dofs);
-      Q.setFromTriplets(e.begin(), e.end());
-      return Q;
-    };
-    if (with_values) values.push_back(map(entries[0]));
-    if (with_curls)
-      for (int c = 1; c < 4; ++c) curls.push_back(map(entries[c]));
-  }
-  /// The maps of the hypersingular operator's entries (curls) or of the others' (values).
-  const std::vector<Eigen::SparseMatrix<double>>& maps(bool hypersingular) const {
-    return hypersingular ? curls : values;
-  }
-  Index size() const { return static_cast<Index>(w.size()); }
-};
-
-/// The point kernels: 2 G = 1 / (2 pi r) (single layer), 2 dG/dn_y = n_y . (x - y) / (2 pi r^3)
-/// (double layer, the normal of the column point).
-enum class PointKernelKind { SingleLayer, DoubleLayer };
-
-/// The kernel of `kind` at d = x - y (n: the normal at y), without the weights.
-template <PointKernelKind kind>
-inline double point_kernel(double dx, double dy, double dz, double nx, double ny, double nz) {
-  const double s = 1.0 / std::sqrt(dx * dx + dy * dy + dz * dz);
-  if constexpr (kind == PointKernelKind::SingleLayer) return s;
-  return (dx * nx + dy * ny + dz * nz) * s * s * s;
-}
-
-/// A point kernel between the far-rule points of a block's rows (r) and columns (c), weights
-/// included.
-struct PointKernel {
-  const FarPoints& r;
-  const FarPoints& c;
-  PointKernelKind kind;
-
-  /// out[q] = A(p, q) for every column point q.
-  void row(Index p, double* out) const {
-    switch (kind) {
-      case PointKernelKind::SingleLayer:
-        return row<PointKernelKind::SingleLayer>(p, out);
-      case PointKernelKind::DoubleLayer:
-        return row<PointKernelKind::DoubleLayer>(p, out);
-    }
-  }
-  /// out[p] = A(p, q) for every row point p.
-  void column(Index q, double* out) const {
-    switch (kind) {
-      case PointKernelKind::SingleLayer:
-        return column<PointKernelKind::SingleLayer>(q, out);
-      case PointKernelKind::DoubleLayer:
-        return column<PointKernelKind::DoubleLayer>(q, out);
-    }
-  }
-
- private:
-  template <PointKernelKind kind>
-  void row(Index p, double* out) const {
-    const std::size_t i = static_cast<std::size_t>(p);
-    const double x = r.x[i], y = r.y[i], z = r.z[i], w = kInvTwoPi * r.w[i];
-    for (Index q = 0; q < c.size(); ++q)
-      out[q] = w * c.w[q] * point_kernel<kind>(x - c.x[q], y - c.y[q], z - c.z[q], c.nx[q], c.ny[q], c.nz[q]);
-  }
-  template <PointKernelKind kind>
-  void column(Index q, double* out) const {
-    const std::size_t j = static_cast<std::size_t>(q);
-    const double x = c.x[j], y = c.y[j], z = c.z[j], w = kInvTwoPi * c.w[j];
-    const double nx = c.nx[j], ny = c.ny[j], nz = c.nz[j];
-    for (Index p = 0; p < r.size(); ++p)
-      out[p] = w * r.w[p] * point_kernel<kind>(r.x[p] - x, r.y[p] - y, r.z[p] - z, nx, ny, nz);
-  }
-};
 
 class SurfaceBlock : public EntryBlock {
  public:
@@ -392,8 +246,9 @@ class SurfaceBlock : public EntryBlock {
     if (rp_) return;
     const bool values = kernel_ != SurfaceKernel::Hypersingular;
     const bool curls = kernel_ == SurfaceKernel::Hypersingular || companion_;
-    rp_ = std::make_unique<FarPoints>(s_, row_parts_, m_, values, curls);
-    cp_ = std::make_unique<FarPoints>(s_, col_parts_, k_, values, curls);
+    const TriangleRule& rule = triangle_rule(kFarGaussPoints);
+    rp_ = std::make_unique<FarPoints>(s_, row_parts_, m_, values, curls, rule);
+    cp_ = std::make_unique<FarPoints>(s_, col_parts_, k_, values, curls, rule);
   }
   /// sum_d Q_r[d]^T A Q_c[d] over the maps (values, or the three curl components).
   void project(const Eigen::MatrixXd& A, bool curls, Eigen::Map<Eigen::MatrixXd>& out) const {

@@ -1,0 +1,110 @@
+#pragma once
+// Far-field blocks as point kernels (surface_entries.hpp, surface_potential_operator.hpp): a
+// block whose triangle pairs (or point-triangle pairs) all take one fixed rule has the
+// entries Q_r^T A Q_c, A the kernel between the rule's points (weights included) and Q the
+// basis functions at them, so ACA runs on A (one kernel evaluation per entry, vectorised
+// over points stored by coordinate) and its factors are projected onto the dofs.
+#include <Eigen/Sparse>
+#include <cmath>
+#include <vector>
+
+#include "bem/surface.hpp"
+#include "bem/surface_operators.hpp"
+#include "bem/surface_quadrature.hpp"
+
+namespace bem {
+
+constexpr double kInvTwoPi = 0.5 / M_PI;  // 2 G(r) = 1 / (2 pi r), the factor-2 convention
+
+/// A triangle of a block's row or column supports, with the dofs it carries there: the
+/// local basis index (0..2 barycentric, 3 constant) and the position in the block.
+struct Part {
+  Index triangle;
+  int count = 0;
+  int basis[3] = {0, 0, 0};
+  Index position[3] = {0, 0, 0};
+};
+
+/// The parts of the dofs `dofs[0..k)` of `space`, one per triangle (sorted by triangle).
+std::vector<Part> parts(const Surface& s, Space space, const Index* dofs, Index k);
+
+/// The points of `rule` on the triangles of `parts` (by coordinate, so that the kernel
+/// loops below vectorise), with weights (the rule's weight times twice the area: the
+/// physical measure) and normals, and the basis values Q that take a function of the
+/// points to the block's dofs: dof value = sum_p Q(p, dof) f(p). Or target points
+/// themselves (weight 1, no normal, no maps: the rows of a potential).
+struct FarPoints {
+  std::vector<double> x, y, z, nx, ny, nz, w;
+  /// points x dofs: the values of the basis functions (`values`, one map), and the three
+  /// components of their surface curls (`curls`, the hypersingular operator by Nedelec's
+  /// identity W = sum_c C_c^T V0 C_c).
+  std::vector<Eigen::SparseMatrix<double>> values, curls;
+
+  FarPoints(const Surface& s, const std::vector<Part>& parts, Index dofs, bool with_values, bool with_curls,
+            const TriangleRule& rule);
+  /// The rows I[0..m) of `points` (m, 3).
+  FarPoints(const Vertices& points, const Index* I, Index m);
+  /// The maps of the hypersingular operator's entries (curls) or of the others' (values).
+  const std::vector<Eigen::SparseMatrix<double>>& maps(bool hypersingular) const {
+    return hypersingular ? curls : values;
+  }
+  Index size() const { return static_cast<Index>(w.size()); }
+};
+
+/// The point kernels: 2 G = 1 / (2 pi r) (single layer), 2 dG/dn_y = n_y . (x - y) / (2 pi r^3)
+/// (double layer, the normal of the column point).
+enum class PointKernelKind { SingleLayer, DoubleLayer };
+
+/// The kernel of `kind` at d = x - y (n: the normal at y), without the weights.
+template <PointKernelKind kind>
+inline double point_kernel(double dx, double dy, double dz, double nx, double ny, double nz) {
+  const double s = 1.0 / std::sqrt(dx * dx + dy * dy + dz * dz);
+  if constexpr (kind == PointKernelKind::SingleLayer) return s;
+  return (dx * nx + dy * ny + dz * nz) * s * s * s;
+}
+
+/// A point kernel between the far-rule points of a block's rows (r) and columns (c), weights
+/// included.
+struct PointKernel {
+  const FarPoints& r;
+  const FarPoints& c;
+  PointKernelKind kind;
+
+  /// out[q] = A(p, q) for every column point q.
+  void row(Index p, double* out) const {
+    switch (kind) {
+      case PointKernelKind::SingleLayer:
+        return row<PointKernelKind::SingleLayer>(p, out);
+      case PointKernelKind::DoubleLayer:
+        return row<PointKernelKind::DoubleLayer>(p, out);
+    }
+  }
+  /// out[p] = A(p, q) for every row point p.
+  void column(Index q, double* out) const {
+    switch (kind) {
+      case PointKernelKind::SingleLayer:
+        return column<PointKernelKind::SingleLayer>(q, out);
+      case PointKernelKind::DoubleLayer:
+        return column<PointKernelKind::DoubleLayer>(q, out);
+    }
+  }
+
+ private:
+  template <PointKernelKind kind>
+  void row(Index p, double* out) const {
+    const std::size_t i = static_cast<std::size_t>(p);
+    const double x = r.x[i], y = r.y[i], z = r.z[i], w = kInvTwoPi * r.w[i];
+    for (Index q = 0; q < c.size(); ++q)
+      out[q] = w * c.w[q] * point_kernel<kind>(x - c.x[q], y - c.y[q], z - c.z[q], c.nx[q], c.ny[q], c.nz[q]);
+  }
+  template <PointKernelKind kind>
+  void column(Index q, double* out) const {
+    const std::size_t j = static_cast<std::size_t>(q);
+    const double x = c.x[j], y = c.y[j], z = c.z[j], w = kInvTwoPi * c.w[j];
+    const double nx = c.nx[j], ny = c.ny[j], nz = c.nz[j];
+    for (Index p = 0; p < r.size(); ++p)
+      out[p] = w * r.w[p] * point_kernel<kind>(r.x[p] - x, r.y[p] - y, r.z[p] - z, nx, ny, nz);
+  }
+};
+
+}  // namespace bem

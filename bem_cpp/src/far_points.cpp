@@ -1,0 +1,83 @@
+#include "bem/far_points.hpp"
+
+#include <algorithm>
+#include <utility>
+
+namespace bem {
+
+std::vector<Part> parts(const Surface& s, Space space, const Index* dofs, Index k) {
+  std::vector<std::pair<Index, std::pair<int, Index>>> items;  // (triangle, (basis, position))
+  for (Index p = 0; p < k; ++p) {
+    const Index d = dofs[p];
+    if (space == Space::P0) {
+      items.push_back({d, {3, p}});
+    } else {
+      for (Index t : s.star(d)) {
+        const Triangle& T = s.triangle(t);
+        const int a = static_cast<int>(std::find(T.v.begin(), T.v.end(), d) - T.v.begin());
+        items.push_back({t, {a, p}});
+      }
+    }
+  }
+  std::sort(items.begin(), items.end());
+  std::vector<Part> out;
+  for (const auto& [t, bp] : items) {
+    if (out.empty() || out.back().triangle != t) out.push_back(Part{t, 0, {0, 0, 0}, {0, 0, 0}});
+    Part& q = out.back();
+    q.basis[q.count] = bp.first;
+    q.position[q.count] = bp.second;
+    ++q.count;
+  }
+  return out;
+}
+
+FarPoints::FarPoints(const Surface& s, const std::vector<Part>& parts, Index dofs, bool with_values, bool with_curls,
+                     const TriangleRule& r) {
+  std::vector<Eigen::Triplet<double>> entries[4];
+  for (const Part& part : parts) {
+    const Triangle& T = s.triangle(part.triangle);
+    for (int q = 0; q < r.size(); ++q) {
+      const std::size_t k = static_cast<std::size_t>(q);
+      const double lambda[4] = {1.0 - r.s[k] - r.t[k], r.s[k], r.t[k], 1.0};
+      const Index p = size();
+      const Vec3 v = T.p[0] + r.s[k] * (T.p[1] - T.p[0]) + r.t[k] * (T.p[2] - T.p[0]);
+      x.push_back(v.x);
+      y.push_back(v.y);
+      z.push_back(v.z);
+      nx.push_back(T.n.x);
+      ny.push_back(T.n.y);
+      nz.push_back(T.n.z);
+      w.push_back(2.0 * T.area * r.w[k]);
+      for (int a = 0; a < part.count; ++a) {
+        if (with_values) entries[0].emplace_back(p, part.position[a], lambda[part.basis[a]]);
+        if (!with_curls) continue;
+        const Vec3 c = surface_curl(T, part.basis[a]);
+        entries[1].emplace_back(p, part.position[a], c.x);
+        entries[2].emplace_back(p, part.position[a], c.y);
+        entries[3].emplace_back(p, part.position[a], c.z);
+      }
+    }
+  }
+  auto map = [&](const std::vector<Eigen::Triplet<double>>& e) {
+    Eigen::SparseMatrix<double> Q(size(), dofs);
+    Q.setFromTriplets(e.begin(), e.end());
+    return Q;
+  };
+  if (with_values) values.push_back(map(entries[0]));
+  if (with_curls)
+    for (int c = 1; c < 4; ++c) curls.push_back(map(entries[c]));
+}
+
+FarPoints::FarPoints(const Vertices& points, const Index* I, Index m) {
+  for (Index r = 0; r < m; ++r) {
+    x.push_back(points(I[r], 0));
+    y.push_back(points(I[r], 1));
+    z.push_back(points(I[r], 2));
+  }
+  nx.assign(x.size(), 0.0);
+  ny.assign(x.size(), 0.0);
+  nz.assign(x.size(), 0.0);
+  w.assign(x.size(), 1.0);
+}
+
+}  // namespace bem
