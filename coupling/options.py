@@ -65,7 +65,13 @@ DEFAULTS: dict[str, dict[str, Any]] = {
         "nested": True,
         "boundary_operator": "auto",
     },
-    "output": {"dir": "fembem-out", "xdmf": True, "plots": True, "indicators": False},
+    "output": {
+        "dir": "fembem-out",
+        "xdmf": True,
+        "plots": True,
+        "estimator": False,
+        "indicators": False,
+    },
     "adapt": {"steps": 0, "theta": 0.5, "max_dofs": 200000},
 }
 
@@ -301,13 +307,21 @@ class AdaptOptions:
 
 @_section("output")
 class OutputOptions:
-    """The ``[output]`` section: the folder ``dir``, and whether to write solution.xdmf,
-    the figures and the estimator's indicators (``coupling.io.outputs.RunOutputs``)."""
+    """The ``[output]`` section: the folder ``dir``, and whether to write solution.xdmf
+    and the figures (``coupling.io.outputs.RunOutputs``), to compute the a posteriori
+    estimator of a plain or nested solve (adaptive runs always do) and to write its
+    per-cell indicators (which implies it)."""
 
     dir: str
     xdmf: bool
     plots: bool
+    estimator: bool
     indicators: bool
+
+    @property
+    def estimates(self) -> bool:
+        """Whether a plain or nested solve computes the estimator."""
+        return self.estimator or self.indicators
 
 
 @dataclass(frozen=True)

@@ -1,8 +1,9 @@
 """`fembem solve` with levels: adaptive runs (`[adapt] steps`) write one record per level
 into summary.json and adapt.csv / adapt.png (nested runs write levels.csv:
-tests/test_nested.py); every run reports the a posteriori estimator, and with
-`[data] exact` the energy error; `[output] indicators` puts eta_T per cell into
-fields.npz; bad combinations are refused with one line."""
+tests/test_nested.py); adaptive runs, and plain ones with `[output] estimator`,
+report the a posteriori estimator, and with `[data] exact` the energy error;
+`[output] indicators` puts eta_T per cell into fields.npz; bad combinations are refused
+with one line."""
 from __future__ import annotations
 
 import csv
@@ -94,16 +95,25 @@ def test_adaptive_run_with_an_exact_solution_reports_errors_and_indicators(tmp_p
     assert np.isin(corner, fields["triangles"][np.argmax(eta)]).all()
 
 
-def test_every_run_reports_the_estimator(config, tmp_path):
-    out = tmp_path / "out"
-    proc = run_cli("solve", str(config), "--out", str(out), "--quiet", "--set",
-                   "output.indicators=true")  # fmt: skip
-    assert proc.returncode == 0, proc.stderr
-    summary = json.loads((out / "summary.json").read_text())
-    assert summary["estimator"] > 0 and "levels" not in summary
-    assert not {"levels.csv", "adapt.csv", "adapt.png"} & set(summary["files"])
-    eta = np.load(out / "fields.npz")["indicators"]
-    assert np.sqrt(np.sum(eta**2)) == pytest.approx(summary["estimator"], rel=1e-12)
+def test_a_plain_run_reports_the_estimator_when_asked(config, tmp_path):
+    """Off by default (no estimator stage, nothing in summary.json); `[output] estimator`
+    reports eta, and `indicators` (which implies it) eta_T per cell, the same eta."""
+    etas = {}
+    for sets in ([], ["output.estimator=true"], ["output.indicators=true"]):
+        out = tmp_path / f"out{len(etas)}"
+        args = [a for s in sets for a in ("--set", s)]
+        proc = run_cli("solve", str(config), "--out", str(out), "--quiet", *args)
+        assert proc.returncode == 0, proc.stderr
+        summary = json.loads((out / "summary.json").read_text())
+        assert "levels" not in summary
+        assert not {"levels.csv", "adapt.csv", "adapt.png"} & set(summary["files"])
+        etas[tuple(sets)] = summary.get("estimator")
+        assert ("estimator" in summary["timings"]) == bool(sets)
+    assert etas[()] is None
+    eta = etas[("output.estimator=true",)]
+    assert eta > 0 and etas[("output.indicators=true",)] == pytest.approx(eta, rel=1e-12)
+    cells = np.load(out / "fields.npz")["indicators"]
+    assert np.sqrt(np.sum(cells**2)) == pytest.approx(eta, rel=1e-12)
 
 
 @pytest.mark.parametrize(

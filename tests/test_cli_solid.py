@@ -146,6 +146,7 @@ def test_bad_3d_files_are_one_line(tmp_path, kind, order, signorini, message):
         ('[solver]\npreconditioner = "substructuring"\n', "solver.preconditioner"),
         ("[adapt]\nsteps = 2\n", "adapt.steps: adaptivity is planar"),
         ("[output]\nindicators = true\n", "output.indicators"),
+        ("[output]\nestimator = true\n", "output.estimator: the a posteriori estimator is planar"),
     ],
 )
 def test_planar_options_of_a_body_are_one_line(tmp_path, extra, message):

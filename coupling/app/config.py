@@ -439,11 +439,12 @@ def _check_solid_options(config: RunConfig) -> None:
             "adapt.steps: adaptivity is planar so far (its residual estimator is 2D); set "
             "adapt.steps = 0 for a 3D body"
         )
-    if config.output.indicators:
-        raise ConfigError(
-            "output.indicators: the estimator's indicators are planar so far; set "
-            "output.indicators = false for a 3D body"
-        )
+    for key in ("estimator", "indicators"):
+        if getattr(config.output, key):
+            raise ConfigError(
+                f"output.{key}: the a posteriori estimator is planar so far; set "
+                f"output.{key} = false for a 3D body"
+            )
 
 
 def geometry_error(err: ValueError) -> ValueError:

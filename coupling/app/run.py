@@ -1,5 +1,6 @@
 """The solve of one configuration, plain, nested (``[solver] nested``) or adaptive
-(``[adapt] steps > 0``), the a posteriori estimator of its result and, when the
+(``[adapt] steps > 0``), the a posteriori estimator of its result (adaptive runs, or when
+``[output]`` asks) and, when the
 configuration gives the exact solution (``[data] exact``), its energy error."""
 from __future__ import annotations
 
@@ -23,7 +24,8 @@ class Run:
     timings, one record per level (nested or adaptive runs), the global estimator, the
     per-cell eta_T^2 of the owned cells of the final mesh (``indicators``, in the local
     cell order; both None for a body in R^3: the estimator is planar) and the energy
-    error |u_h - u|_1 (None without ``[data] exact``)."""
+    error |u_h - u|_1 (None without ``[data] exact``). A plain or nested solve has an
+    estimator only with ``[output] estimator`` or ``indicators``."""
 
     problem: Any
     solution: Any
@@ -50,7 +52,7 @@ def run_solver(
 ) -> Run:
     """Solve the assembled ``problem`` on ``domain`` as ``config`` asks (collective): with
     ``config.solver``, adaptively as ``config.adapt`` says or nested over coarser levels of
-    ``config.geometry``, the estimator on the data ``config.data``.
+    ``config.geometry``, the estimator (when ``config.output`` asks) on the data ``config.data``.
 
         ``timings`` are the set-up stages so far; the run adds ``solve`` (and the stages of
         :func:`coupling.solvers.solve`), ``coarse_levels`` and ``prolongation`` for a nested
@@ -124,7 +126,8 @@ def run_solver(
         after_solve(problem, solution)
     error = energy_error(problem, solution.u, exact) if exact else None
     stages = {**timings, **solution.timings}
-    if domain.dim == 3:  # the residual estimator is planar (docs/design/estimator.md)
+    # the residual estimator is planar (docs/design/estimator.md), off unless asked
+    if domain.dim == 3 or not config.output.estimates:
         return Run(problem, solution, stages, records, None, None, error)
     tic = time.perf_counter()
     est = estimate(problem, solution, f=data.f, t0=data.t0)

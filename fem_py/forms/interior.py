@@ -6,6 +6,7 @@ With V_h the continuous P1 space and u in V_h,
     A(u)_i          = DG(u, v_i) = int rho(|grad u|) grad u . grad v_i     (2.1), section 4
     D^2G(u)_{ij}    = int (rho^(grad u) grad v_j) . grad v_i               (4.1)
     b_f,i           = int f v_i dx,        m_t,j = int_Gamma t0 v_j ds      section 4
+                      (b_f by the centroid rule: VOLUME_DATA_QUADRATURE)
     A_lap,ij        = int grad v_j . grad v_i                             (4.2), section 6
 
 The residual is ``ufl.derivative`` of the energy. The Jacobian is either
@@ -47,11 +48,20 @@ JACOBIANS = ("ufl", "handwritten")
 #: and (rho^(grad u) grad w) . grad v is cellwise constant and one point integrates it
 #: exactly (UFL's estimate for the nonpolynomial rho would use several).
 P1_EXACT = {"quadrature_degree": 0}
-#: Quadrature of the data integrals int f v and int_Gamma t0 v: degree 6 integrates
-#: smooth data against P1 test functions with an error O(h^7) per cell, far below the
-#: O(h^2) discretisation error; UFL's own estimate for composite expressions (e.g. the
-#: manufactured f = -div(rho(|grad u|) grad u)) can exceed 1000 points per cell.
+#: Quadrature of the boundary data integral int_Gamma t0 v: degree 6 integrates smooth
+#: data against P1 test functions with an error O(h^7) per facet, far below the O(h^2)
+#: discretisation error; UFL's own estimate for composite expressions (e.g. the
+#: manufactured t0 = (rho(|grad u|) grad u - grad u_e) . n) can exceed 1000 points. The
+#: boundary has O(h^(1-d)) facets against O(h^-d) cells: its cost stays small.
 DATA_QUADRATURE = {"quadrature_degree": 6}
+#: Quadrature of the volume load int f v: the centroid rule (degree 1, one point per
+#: cell). It is exact for linear integrands, so on a cell of size h it errs by
+#: O(h^2 |f v|_2) relative, and b_f by O(h^2 ||f||_{2,inf} ||v||_1): a change of u_h of
+#: O(h^2) in energy, below the P1 energy error O(h) and of the order of its L2 error.
+#: The data's compiled expression runs once per cell (whatever its length, the cost of
+#: about one assembly; docs/design/speed.md, "Data expressions") and never at a vertex,
+#: where data singular at a corner (f ~ r^(-1/3) at the L-shape's) is infinite.
+VOLUME_DATA_QUADRATURE = {"quadrature_degree": 1}
 
 
 #: The coordinate names of the expressions, by the dimension of Omega; the normal's
@@ -152,7 +162,7 @@ class InteriorForms:
         }
         if f is not None:
             self._ufl["load"] = ufl.inner(as_ufl_data(f, self.mesh, what="f"), v) * ufl.dx(
-                domain=self.mesh, metadata=DATA_QUADRATURE
+                domain=self.mesh, metadata=VOLUME_DATA_QUADRATURE
             )
         self._compiled: dict[str, Any] = {}
         # the packed coefficients (the state u per cell) at the state they were packed at:
