@@ -66,7 +66,7 @@ PIECES = (
     ("coupling.io.figures", "_figure_u"),
     ("coupling.io.figures", "_figure_boundary"),
     ("coupling.io.figures", "_figure_whole_plane"),
-    ("coupling.io.figures", "_figure_history"),
+    ("coupling.io.figures", "figure_history"),
     ("bem_cpp", "exterior_potential"),
     ("coupling.io.figures", "Triangulation"),
 )

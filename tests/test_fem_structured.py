@@ -1,6 +1,8 @@
 """The structured refinement written down piece by piece (fem_py.mesh.structured): every
-piece agrees with the whole, the triangles tile the coarse cells, and the ghosts and
-boundary segments it reports agree with a brute-force facet search."""
+piece agrees with the whole, the triangles tile the coarse cells, the ghosts and
+boundary segments it reports agree with a brute-force facet search, and the coarse
+structure written down from it (fem_py.mesh.structured_coarse) is the one recovered from
+the mesh (serially here, under mpirun -n 3 in tests/mpi/structured_tags_check.py)."""
 import numpy as np
 import pytest
 
@@ -79,7 +81,7 @@ def test_segments_on_coarse_edges_and_ghosts(coarse):
     tris = ref.triangles(np.arange(len(cells)))
     x = ref.coordinates(0, ref.n_nodes)
     f, owner_tri = _facets(tris)
-    edge = ref.edge_of_segments(f[:, 0], f[:, 1])
+    edge = ref.edge_of_segments(ref.node_numbers(f[:, 0]), ref.node_numbers(f[:, 1]))
     # a facet lies on coarse edge e iff its midpoint lies on the segment between e's vertices
     mid = x[f].mean(1)
     a, b = V[ref.edges[:, 0]], V[ref.edges[:, 1]]
@@ -131,5 +133,40 @@ def test_parallel_tags_match_geometry(tmp_path):
     for rank in range(3):
         result = json.loads((tmp_path / f"tags.{rank}").read_text())
         for name, r in result.items():
-            assert r["cells_ok"] and r["facets_ok"], (rank, name, r)
+            assert r["cells_ok"] and r["facets_ok"] and not r["coarse_differs"], (rank, name, r)
             assert r["ghost_cells"] > 0, (rank, name)  # the ghost layer was exercised
+
+
+@pytest.mark.parametrize(
+    "case",
+    [
+        dict(shape="square", h=1 / 64, subdomain_size=1 / 8, signorini=["bottom"]),
+        dict(shape="square", h=1 / 40, subdomain_size=1 / 10, signorini=["all"]),
+        dict(shape="lshape", h=1 / 48, subdomain_size=1 / 12, signorini=["notch_bottom", "left"]),
+        dict(  # coarse triangles from gmsh, refined
+            shape="polygon",
+            vertices=[[0, 0], [0.5, 0], [0.6, 0.4], [0.15, 0.5]],
+            h=1 / 30,
+            subdomain_size=0.25,
+            signorini=["side0"],
+        ),
+    ],
+    ids=["square", "square-all", "lshape", "polygon"],
+)
+def test_the_generators_coarse_structure_is_the_recovered_one(case):
+    """Every field equal (the coordinates to round-off): the vertices, the edges with
+    their orientation, order, chains, arcs and subdomains, the skeleton and the interior
+    dofs with their subdomains."""
+    import runpy
+
+    from mpi4py import MPI
+
+    from conftest import ROOT
+    from fem_py.mesh import GeometrySpec, build_domain
+    from fem_py.partition import compute_coarse_structure
+
+    script = runpy.run_path(str(ROOT / "tests" / "mpi" / "structured_tags_check.py"))
+    d = build_domain(MPI.COMM_WORLD, GeometrySpec(structured=True, **case))
+    recovered = compute_coarse_structure(d.mesh, d.cell_tags, d.facet_tags)
+    assert d.coarse.n_edges > 4 and len(d.coarse.interior_dofs) > 0
+    assert script["differing_fields"](d.coarse, recovered) == []

@@ -6,13 +6,14 @@ With V_h the continuous P1 space and u in V_h,
     A(u)_i          = DG(u, v_i) = int rho(|grad u|) grad u . grad v_i     (2.1), section 4
     D^2G(u)_{ij}    = int (rho^(grad u) grad v_j) . grad v_i               (4.1)
     b_f,i           = int f v_i dx,        m_t,j = int_Gamma t0 v_j ds      section 4
-                      (b_f by the centroid rule: VOLUME_DATA_QUADRATURE)
     A_lap,ij        = int grad v_j . grad v_i                             (4.2), section 6
 
 The residual is ``ufl.derivative`` of the energy. The Jacobian is either
 ``ufl.derivative`` of the residual (``"ufl"``) or the hand-written tangent rho^ of
 docs/method.md section 6 (``"handwritten"``); see :mod:`fem_py.forms.materials` for how both stay
-finite at grad u = 0.
+finite at grad u = 0. b_f is integrated by the centroid rule
+(:data:`VOLUME_DATA_QUADRATURE`: the data's expression once per cell, whatever its
+length), m_t at degree 6 (:data:`DATA_QUADRATURE`).
 
 The P1 space is ``fem_py.dofs.p1.p1_space``, the only place it is created, so that every
 module sees the same global dof numbering.

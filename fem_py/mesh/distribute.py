@@ -17,7 +17,7 @@ preconditioner then runs on rank 0, ``coupling.distributed``).
 """
 from __future__ import annotations
 
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 from dolfinx import mesh as dmesh
@@ -210,7 +210,7 @@ def distribute_mesh(comm: Any, arrays: tuple | None) -> TaggedMesh:
 
 
 def distribute_structured(
-    comm: Any, ref: StructuredRefinement, boundary_tag: Callable[[int, int], int]
+    comm: Any, ref: StructuredRefinement, edge_tags: np.ndarray
 ) -> TaggedMesh:
     """Create the structured mesh in parallel (collective).
 
@@ -224,8 +224,8 @@ def distribute_structured(
         The communicator of the mesh.
     ref
         The refinement of the coarse cells (the same on every rank).
-    boundary_tag
-        ``boundary_tag(a, b)``: the facet tag of the coarse boundary edge a-b.
+    edge_tags
+        The facet tag of every coarse edge, -1 inside (``ref.edge_tags``).
 
     Returns
     -------
@@ -267,19 +267,16 @@ def distribute_structured(
         by_rank[_local_cells(msh) // T].astype(np.int32),
     )
     # facet tags from the input numbers of the facet nodes: the coarse edge under each facet
-    tag_of_edge = np.full(len(ref.edges), -1, dtype=np.int32)
-    for e in np.flatnonzero(ref.edge_cells[:, 1] < 0):
-        tag_of_edge[e] = boundary_tag(int(ref.edges[e, 0]), int(ref.edges[e, 1]))
     topology = msh.topology
     topology.create_connectivity(1, 0)
     topology.create_connectivity(1, 2)
     vertices = topology.index_map(0)
     node_of_vertex = np.empty(vertices.size_local + vertices.num_ghosts, dtype=np.int64)
     node_of_vertex[topology.connectivity(2, 0).array] = msh.geometry.dofmap.array
-    input_node = np.asarray(msh.geometry.input_global_indices, dtype=np.int64)
-    ends = input_node[node_of_vertex[topology.connectivity(1, 0).array]].reshape(-1, 2)
+    node = ref.node_numbers(np.asarray(msh.geometry.input_global_indices, dtype=np.int64))
+    ends = node[node_of_vertex[topology.connectivity(1, 0).array]].reshape(-1, 2)
     edge = ref.edge_of_segments(ends[:, 0], ends[:, 1])
-    tags = np.where(edge >= 0, tag_of_edge[np.maximum(edge, 0)], -1)
+    tags = np.where(edge >= 0, edge_tags[np.maximum(edge, 0)], -1)
     facets = np.flatnonzero(tags >= 0).astype(np.int32)
     ft = dmesh.meshtags(msh, 1, facets, tags[facets])
     ct.name, ft.name = "subdomains", "boundary"

@@ -223,13 +223,19 @@ def domain_from_prepared(comm: Any, prepare: Any, d: float, shape: str) -> Domai
 
 
 def tagged_domain(
-    mesh: Any, cell_tags: Any, facet_tags: Any, corner_angle: float | None = None, **fields: Any
+    mesh: Any,
+    cell_tags: Any,
+    facet_tags: Any,
+    corner_angle: float | None = None,
+    coarse: CoarseStructure | None = None,
+    **fields: Any,
 ) -> Domain:
     """The :class:`Domain` of a distributed mesh and its tags (collective): its coarse
-    structure recovered (``corner_angle``: ``compute_coarse_structure``) and its longest
-    facet measured; ``fields``: the other fields of the domain (``h`` defaults to the
-    longest facet)."""
-    coarse = compute_coarse_structure(mesh, cell_tags, facet_tags, corner_angle=corner_angle)
+    structure ``coarse``, or recovered from the mesh (``corner_angle``:
+    ``compute_coarse_structure``), and its longest facet measured; ``fields``: the other
+    fields of the domain (``h`` defaults to the longest facet)."""
+    if coarse is None:
+        coarse = compute_coarse_structure(mesh, cell_tags, facet_tags, corner_angle=corner_angle)
     h_max = max_facet_length(mesh)
     return Domain(
         mesh=mesh,

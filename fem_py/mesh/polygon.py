@@ -62,6 +62,7 @@ from typing import Any
 
 import numpy as np
 
+from fem_py.dofs import p1_space
 from fem_py.mesh.distribute import distribute_mesh, distribute_structured
 from fem_py.mesh.domain import (
     CORNER_ANGLE,
@@ -87,6 +88,7 @@ from fem_py.mesh.shapes import (
     parse_arcs,
 )
 from fem_py.mesh.structured import node_count, refine
+from fem_py.mesh.structured_coarse import structured_coarse_structure
 from fem_py.parallel import broadcast_from_root, run_on_root
 from fem_py.polyline import coarsened_polygon, diameter, segment_lengths
 from fem_py.spec import GeometrySpec
@@ -264,17 +266,21 @@ def polygon_domain(comm: Any, spec: GeometrySpec) -> Domain:
             csize = float(np.mean(np.concatenate([segment_lengths(cV[c]) for c in loops])))
         if meshed is not None:
             arrays = meshed[2]
+    coarse = None
     if structured:  # every rank writes down its own part of the refinement
         n = max(2, int(round((d if shape == "polygon" else csize) / h)))
-        msh, ct0, ft = distribute_structured(
-            comm, refine(cV, ccells, n), lambda a, b: edge_tag(cV, a, b, B, arcs)
-        )
+        ref = refine(cV, ccells, n)
+        tags = ref.edge_tags(lambda a, b: edge_tag(cV, a, b, B, arcs))
+        msh, ct0, ft = distribute_structured(comm, ref, tags)
+        # the coarse structure as the generator knows it, not recovered from the mesh
+        coarse = structured_coarse_structure(p1_space(msh), ref, tags)
     else:
         msh, ct0, ft = distribute_mesh(comm, arrays)
     return tagged_domain(
         msh,
         ct0,
         ft,
+        coarse=coarse,
         arcs=arcs,
         h=h,
         subdomain_size=d,

@@ -5,12 +5,19 @@ a square into an n x n grid of squares split along the (i,j)-(i+1,j+1) diagonal,
 triangle into n^2 similar triangles. The numbering is global and closed-form, so every
 rank can produce any part of the mesh without the rest: the triangles of its own coarse
 cells and any contiguous block of node coordinates (the layout ``dolfinx.mesh.create_mesh``
-takes as input). Nodes are numbered
+takes as input). Nodes are numbered by kind (*node numbers*)
 
 - ``[0, nv)``: the coarse vertices;
 - ``nv + e (n - 1) + k - 1``: the k-th interior node (k = 1 .. n-1) of coarse edge e, edges
   sorted by their (lower, higher) vertex pair, nodes running from the lower vertex;
-- ``offset + c m + l``: the l-th of the m interior nodes of coarse cell c.
+- ``offset + c m + l``: the l-th of the m interior nodes of coarse cell c;
+
+and the mesh gets them in blocks by coarse cell (*input numbers*, :meth:`input_numbers`):
+cell c's block holds the vertices whose lowest cell is c, then the nodes of the edges
+whose lowest cell is c, then its interior nodes. Nodes near each other in the mesh are
+then near each other in memory, which ``create_mesh`` rewards (measured at 2e6
+triangles: 3.5 s against 4.7 s for the node numbers, 3.3 s for ``create_rectangle``'s
+row-major order). Both maps are closed-form over the coarse cells, vertices and edges.
 
 The triangles of coarse cell c are rows ``c T .. (c + 1) T - 1`` in a fixed reference order
 (T = 2 n^2 for squares, n^2 for triangles).
@@ -18,6 +25,8 @@ The triangles of coarse cell c are rows ``c T .. (c + 1) T - 1`` in a fixed refe
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
+from typing import Callable
 
 import numpy as np
 
@@ -94,6 +103,33 @@ def lattice(corners: int, n: int) -> Lattice:
     )
 
 
+@dataclass(frozen=True)
+class _Blocks:
+    """The input numbering (blocks by coarse cell, module docstring) over the coarse
+    entities: block c is ``[start[c], start[c + 1])``; its owned vertices are
+    ``vertices[vertex_start[c]:vertex_start[c + 1]]`` and its owned edges
+    ``edges[edge_start[c]:edge_start[c + 1]]``, in increasing order."""
+
+    start: np.ndarray
+    vertices: np.ndarray
+    vertex_start: np.ndarray
+    edges: np.ndarray
+    edge_start: np.ndarray
+    vertex_input: np.ndarray  # (nv,) the input number of every vertex
+    edge_input: np.ndarray  # (ne,) the input number of every edge's node k = 1
+    interior_input: np.ndarray  # (nc,) the input number of every cell's interior node 0
+
+
+def _grouped(owner: np.ndarray, n_groups: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(the indices sorted by their owner, the offsets of each owner's run, the position
+    of every index within its owner's run)."""
+    order = np.argsort(owner, kind="stable")
+    start = np.concatenate([[0], np.cumsum(np.bincount(owner, minlength=n_groups))])
+    rank = np.empty(len(owner), dtype=np.int64)
+    rank[order] = np.arange(len(owner)) - start[owner[order]]
+    return order, start, rank
+
+
 @dataclass(frozen=True, eq=False)
 class StructuredRefinement:
     """The refinement of coarse cells ``cells`` of vertices ``V`` (see the module docstring).
@@ -130,6 +166,71 @@ class StructuredRefinement:
     def _offset(self) -> int:
         return len(self.V) + len(self.edges) * (self.n - 1)
 
+    @cached_property
+    def _blocks(self) -> _Blocks:
+        nc, k, n = len(self.cells), self.cells.shape[1], self.n
+        m = len(self.lattice.interior)
+        vertex_owner = np.full(len(self.V), nc, dtype=np.int64)
+        np.minimum.at(vertex_owner, self.cells.ravel(), np.repeat(np.arange(nc), k))
+        vertices, vertex_start, vertex_rank = _grouped(vertex_owner, nc)
+        edge_owner = self.edge_cells[:, 0]  # the lower of the two cells
+        edges, edge_start, edge_rank = _grouped(edge_owner, nc)
+        own_v, own_e = np.diff(vertex_start), np.diff(edge_start)
+        start = np.concatenate([[0], np.cumsum(own_v + own_e * (n - 1) + m)])
+        return _Blocks(
+            start=start,
+            vertices=vertices,
+            vertex_start=vertex_start,
+            edges=edges,
+            edge_start=edge_start,
+            vertex_input=start[vertex_owner] + vertex_rank,
+            edge_input=start[edge_owner] + own_v[edge_owner] + edge_rank * (n - 1),
+            interior_input=start[:-1] + own_v + own_e * (n - 1),
+        )
+
+    def input_numbers(self, g: np.ndarray) -> np.ndarray:
+        """The input numbers of the nodes numbered ``g`` (module docstring)."""
+        g = np.asarray(g, dtype=np.int64)
+        blocks, nv, n, offset = self._blocks, len(self.V), self.n, self._offset
+        m = max(len(self.lattice.interior), 1)
+        out = np.empty_like(g)
+        vertex, inside = g < nv, g >= offset
+        on_edge = ~vertex & ~inside
+        out[vertex] = blocks.vertex_input[g[vertex]]
+        e, k = np.divmod(g[on_edge] - nv, n - 1)
+        out[on_edge] = blocks.edge_input[e] + k
+        c, local = np.divmod(g[inside] - offset, m)
+        out[inside] = blocks.interior_input[c] + local
+        return out
+
+    def node_numbers(self, i: np.ndarray) -> np.ndarray:
+        """The node numbers of the nodes with input numbers ``i`` (inverse of
+        :meth:`input_numbers`)."""
+        i = np.asarray(i, dtype=np.int64)
+        blocks, nv, n, offset = self._blocks, len(self.V), self.n, self._offset
+        m = len(self.lattice.interior)
+        c = np.searchsorted(blocks.start, i, side="right") - 1
+        r = i - blocks.start[c]
+        own_v = blocks.vertex_start[c + 1] - blocks.vertex_start[c]
+        own_e = blocks.edge_start[c + 1] - blocks.edge_start[c]
+        out = np.empty_like(i)
+        vertex = r < own_v
+        out[vertex] = blocks.vertices[blocks.vertex_start[c[vertex]] + r[vertex]]
+        inside = r >= own_v + own_e * (n - 1)
+        out[inside] = offset + c[inside] * m + (r - own_v - own_e * (n - 1))[inside]
+        on_edge = ~vertex & ~inside
+        e, k = np.divmod((r - own_v)[on_edge], n - 1)
+        out[on_edge] = nv + blocks.edges[blocks.edge_start[c[on_edge]] + e] * (n - 1) + k
+        return out
+
+    def edge_tags(self, boundary_tag: Callable[[int, int], int]) -> np.ndarray:
+        """(ne,) int32: ``boundary_tag(a, b)`` of every coarse boundary edge a-b, -1 for the
+        interior edges."""
+        tags = np.full(len(self.edges), -1, dtype=np.int32)
+        for e in np.flatnonzero(self.edge_cells[:, 1] < 0):
+            tags[e] = boundary_tag(int(self.edges[e, 0]), int(self.edges[e, 1]))
+        return tags
+
     def edge_nodes(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """(len(a), n+1) node numbers at k/n along the coarse edges a -> b, k = 0..n."""
         a, b = np.atleast_1d(np.asarray(a, dtype=np.int64)), np.atleast_1d(
@@ -144,7 +245,8 @@ class StructuredRefinement:
         return ids
 
     def triangles(self, ids: np.ndarray) -> np.ndarray:
-        """(len(ids) T, 3) node numbers of the triangles of coarse cells ``ids``, cell by cell."""
+        """(len(ids) T, 3) input numbers of the triangles of coarse cells ``ids``, cell by
+        cell."""
         ids = np.asarray(ids, dtype=np.int64)
         lat, q = self.lattice, self.cells[ids]
         k = q.shape[1]
@@ -153,13 +255,17 @@ class StructuredRefinement:
             node[:, lat.sides[s]] = self.edge_nodes(q[:, s], q[:, (s + 1) % k])
         m = len(lat.interior)
         node[:, lat.interior] = self._offset + ids[:, None] * m + np.arange(m)
-        return node[:, lat.triangles].reshape(-1, 3)
+        return self.input_numbers(node[:, lat.triangles].reshape(-1, 3))
 
     def coordinates(self, lo: int, hi: int) -> np.ndarray:
-        """(hi - lo, 2) coordinates of the nodes lo .. hi-1."""
+        """(hi - lo, 2) coordinates of the nodes of input numbers lo .. hi-1."""
+        return self.node_coordinates(self.node_numbers(np.arange(lo, hi, dtype=np.int64)))
+
+    def node_coordinates(self, g: np.ndarray) -> np.ndarray:
+        """(len(g), 2) coordinates of the nodes numbered ``g``."""
         V, n, lat = self.V, self.n, self.lattice
         nv, offset, m = len(V), self._offset, len(lat.interior)
-        g = np.arange(lo, hi, dtype=np.int64)
+        g = np.asarray(g, dtype=np.int64)
         X = np.empty((len(g), 2))
         vert = g < nv
         X[vert] = V[g[vert]]
@@ -245,6 +351,8 @@ def refine(V: np.ndarray, cells: np.ndarray, n: int) -> StructuredRefinement:
         raise ValueError("a coarse edge is shared by more than two coarse cells")
     edge_cells[e[first], 0] = cell[first]
     edge_cells[e[~first], 1] = cell[~first]
+    if not np.all(np.isin(np.arange(nv), cells)):
+        raise ValueError("every coarse vertex must be a corner of a coarse cell")
     return StructuredRefinement(
         V=np.asarray(V, dtype=float),
         cells=cells,
