@@ -207,8 +207,8 @@ def estimate(problem: Any, solution: Any, *, f: Any = "0", t0: Any = "0") -> Est
     gap[b.signorini] = solution.phi
     phi = _boundary_function(problem, gap, "phi")
 
-    # the volume term by the load's own rule (the centroid: f is never evaluated at a
-    # vertex, and its cost is one evaluation per cell); sigma_h is cellwise constant
+    # the volume term by the load's own rule (f never evaluated at a vertex, three
+    # times per cell); sigma_h is cellwise constant
     dx = ufl.dx(metadata=VOLUME_DATA_QUADRATURE)
     # sigma_h(u_h) is constant in each cell for P1 u_h, so the jump term is constant on
     # each interior facet: one quadrature point integrates it exactly

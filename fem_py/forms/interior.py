@@ -11,9 +11,9 @@ With V_h the continuous P1 space and u in V_h,
 The residual is ``ufl.derivative`` of the energy. The Jacobian is either
 ``ufl.derivative`` of the residual (``"ufl"``) or the hand-written tangent rho^ of
 docs/method.md section 6 (``"handwritten"``); see :mod:`fem_py.forms.materials` for how both stay
-finite at grad u = 0. b_f is integrated by the centroid rule
-(:data:`VOLUME_DATA_QUADRATURE`: the data's expression once per cell, whatever its
-length), m_t at degree 6 (:data:`DATA_QUADRATURE`).
+finite at grad u = 0. b_f is integrated at degree 2 (:data:`VOLUME_DATA_QUADRATURE`:
+the data's expression at three points per triangle), m_t at degree 6
+(:data:`DATA_QUADRATURE`).
 
 The P1 space is ``fem_py.dofs.p1.p1_space``, the only place it is created, so that every
 module sees the same global dof numbering.
@@ -55,14 +55,17 @@ P1_EXACT = {"quadrature_degree": 0}
 #: manufactured t0 = (rho(|grad u|) grad u - grad u_e) . n) can exceed 1000 points. The
 #: boundary has O(h^(1-d)) facets against O(h^-d) cells: its cost stays small.
 DATA_QUADRATURE = {"quadrature_degree": 6}
-#: Quadrature of the volume load int f v: the centroid rule (degree 1, one point per
-#: cell). It is exact for linear integrands, so on a cell of size h it errs by
-#: O(h^2 |f v|_2) relative, and b_f by O(h^2 ||f||_{2,inf} ||v||_1): a change of u_h of
-#: O(h^2) in energy, below the P1 energy error O(h) and of the order of its L2 error.
-#: The data's compiled expression runs once per cell (whatever its length, the cost of
-#: about one assembly; docs/design/speed.md, "Data expressions") and never at a vertex,
-#: where data singular at a corner (f ~ r^(-1/3) at the L-shape's) is infinite.
-VOLUME_DATA_QUADRATURE = {"quadrature_degree": 1}
+#: Quadrature of the volume load int f v: degree 2 (three interior points per triangle,
+#: four per tetrahedron). Exact for quadratic integrands, it changes b_f by O(h^2) (a
+#: change of u_h of O(h^2) in energy, below the P1 energy error O(h)), and the total
+#: load int f, which the far field's log coefficient b sees, by O(h^4) (the rule is
+#: symmetric; measured 1.5e-7, 9e-9, 5.6e-10 on three L-shape meshes). The data's
+#: compiled expression runs three times per cell against twelve at degree 6: 0.33 s
+#: against 1.15 s at 2e6 triangles for an f of 1,716 characters (docs/design/speed.md,
+#: "Data expressions"), and never at a vertex, where data singular at a corner (f ~
+#: r^(-1/3) at the L-shape's) is infinite. The centroid rule (0.15 s) errs in int f by
+#: O(h^2): b off by 4e-5 on the same meshes.
+VOLUME_DATA_QUADRATURE = {"quadrature_degree": 2}
 
 
 #: The coordinate names of the expressions, by the dimension of Omega; the normal's
