@@ -250,12 +250,12 @@ class StructuredRefinement:
         ids = np.asarray(ids, dtype=np.int64)
         lat, q = self.lattice, self.cells[ids]
         k = q.shape[1]
-        node = np.empty((len(ids), lat.n_points), dtype=np.int64)
+        node = np.zeros((len(ids), lat.n_points), dtype=np.int64)  # a triangle uses fewer
         for s in range(k):
             node[:, lat.sides[s]] = self.edge_nodes(q[:, s], q[:, (s + 1) % k])
         m = len(lat.interior)
         node[:, lat.interior] = self._offset + ids[:, None] * m + np.arange(m)
-        return self.input_numbers(node[:, lat.triangles].reshape(-1, 3))
+        return self.input_numbers(node)[:, lat.triangles].reshape(-1, 3)
 
     def coordinates(self, lo: int, hi: int) -> np.ndarray:
         """(hi - lo, 2) coordinates of the nodes of input numbers lo .. hi-1."""
