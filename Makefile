@@ -3,6 +3,7 @@
 #   make test   installs what is missing, builds, lints, runs the C++ and Python tests
 #   make lint   black --check and flake8 (settings: pyproject.toml, .flake8), clang-format (.clang-format)
 #   make docs   installs the documentation's packages, builds the site (docs/_build/html)
+#   make bench  the benchmarks (bench/); make bench-large: the 1.6e7-dof solve
 SHELL := /bin/bash
 .ONESHELL:
 .SHELLFLAGS := -euo pipefail -c
@@ -22,7 +23,7 @@ CXX_FILES := $(wildcard bem_cpp/src/*.cpp bem_cpp/include/bem/*.hpp bem_cpp/test
              bem_cpp/bindings.cpp
 SOURCES := $(wildcard bem_cpp/src/*.cpp bem_cpp/include/bem/*.hpp) bem_cpp/bindings.cpp setup.py pyproject.toml
 
-.PHONY: setup debs debs-docs venv build lint test test-cpp test-py demo bench study docs clean
+.PHONY: setup debs debs-docs venv build lint test test-cpp test-py demo bench bench-large study docs clean
 
 setup: debs build
 
@@ -85,6 +86,10 @@ bench: setup
 	$(PY) bench/outputs.py
 	$(PY) bench/speed.py
 	$(PY) bench/solid.py
+
+# the 1.6e7-dof run of bench/speed.py (nested, the compact data; ~10 min, ~18 GB)
+bench-large: setup
+	$(PY) bench/speed.py --sizes 4000 --data compact --kinds nested
 
 study: setup
 	$(PY) -m study

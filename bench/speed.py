@@ -28,7 +28,12 @@ nested answer is from the cold one and the expanded data's from the compact data
 assertions: the numbers go to docs/design/speed.md.
 
     .venv/bin/python bench/speed.py [--sizes 100,250,500,1000,2000] [--repeat 1]
-                                    [--data compact,expanded] [--out DIR] [--json FILE]
+                                    [--data compact,expanded] [--kinds cold,nested]
+                                    [--out DIR] [--json FILE]
+
+The 1.6e7-dof run (issue 33: at most 1 KB per dof, within 2.5x the Poisson pipeline):
+``make bench-large``, i.e. ``bench/speed.py --sizes 4000 --data compact --kinds nested``
+(about 10 minutes and 18 GB). Every run's peak resident memory is printed, per dof.
 """
 from __future__ import annotations
 
@@ -48,8 +53,13 @@ DEFAULT_SIZES = (100, 250, 500, 1000, 2000)
 #: the converged iterate); the nested run adds its coarser levels and prolongation.
 SOLVE_STAGES = ("preconditioner", "step_estimate", "solve", "coarse_levels", "prolongation")
 TARGET_WHOLE, TARGET_SOLVE, TARGET_MESH = 2.0, 1.0, 1.1
+#: From this many dofs on (the 1.6e7 run): whole run <= 2.5x the Poisson pipeline and at
+#: most 1 KB of peak memory per dof.
+LARGE, TARGET_LARGE_WHOLE, TARGET_LARGE_KB = 1.5e7, 2.5, 1.0
 #: The data sets: one manufactured solution, its expressions written two ways.
 DATA_SETS = ("compact", "expanded")
+#: The runs of each data set: a cold solve and a nested one (the default).
+KINDS = ("cold", "nested")
 #: The outputs stage's share of the run (summary.json ``outputs`` / ``total``), and the
 #: finest level of the nested run: at most this many Newton steps and about this many
 #: preconditioned CG iterations in all (issue 18).
@@ -122,20 +132,34 @@ def _env() -> dict[str, str]:
     return dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
 
 
+def _measured(cmd: list[str]) -> tuple[int, str, str, float, int]:
+    """Run ``cmd``: (exit status, its output, its error output, the process wall in
+    seconds, its peak resident memory in bytes: ru_maxrss of this child alone, from
+    ``os.wait4``; the output goes through files, so no pipe can fill)."""
+    with tempfile.TemporaryFile("w+") as out, tempfile.TemporaryFile("w+") as err:
+        tic = time.perf_counter()
+        proc = subprocess.Popen(cmd, stdout=out, stderr=err, text=True, env=_env())
+        _, status, usage = os.wait4(proc.pid, 0)
+        wall = time.perf_counter() - tic
+        proc.returncode = os.waitstatus_to_exitcode(status)
+        out.seek(0)
+        err.seek(0)
+        return proc.returncode, out.read(), err.read(), wall, usage.ru_maxrss * 1024
+
+
 def run_solve(config: Path, out: Path, nested: bool) -> dict:
-    """One ``fembem solve`` process: its wall time and summary.json."""
+    """One ``fembem solve`` process: its wall time, peak memory and summary.json."""
     fembem = Path(sys.executable).parent / "fembem"
     cmd = [str(fembem), "solve", str(config), "--out", str(out), "--quiet", "--force"]
     cmd += ["--set", f"solver.nested={'true' if nested else 'false'}"]
-    tic = time.perf_counter()
-    proc = subprocess.run(cmd, capture_output=True, text=True, env=_env())
-    wall = time.perf_counter() - tic
-    if proc.returncode != 0:
-        return {"wall": wall, "error": proc.stderr.strip().splitlines()[-1:]}
+    status, _, err, wall, peak = _measured(cmd)
+    if status != 0:
+        return {"wall": wall, "error": err.strip().splitlines()[-1:]}
     summary = json.loads((out / "summary.json").read_text())
     timings = summary["timings"]
     return {
         "wall": wall,
+        "peak_bytes": peak,
         "dofs": summary["dofs"],
         "converged": summary["converged"],
         "iterations": summary["iterations"],
@@ -151,10 +175,10 @@ def run_poisson(cells: int, dim: int = 2) -> dict:
     inner timings."""
     cmd = [sys.executable, str(Path(__file__).resolve()), "--poisson", str(cells)]
     cmd += ["--poisson-dim", str(dim)]
-    tic = time.perf_counter()
-    proc = subprocess.run(cmd, capture_output=True, text=True, env=_env(), check=True)
-    wall = time.perf_counter() - tic
-    return {"wall": wall, **json.loads(proc.stdout.strip().splitlines()[-1])}
+    status, out, err, wall, peak = _measured(cmd)
+    if status != 0:
+        raise RuntimeError(f"the Poisson pipeline failed: {err.strip().splitlines()[-1:]}")
+    return {"wall": wall, "peak_bytes": peak, **json.loads(out.strip().splitlines()[-1])}
 
 
 def poisson_pipeline(cells: int, dim: int = 2) -> dict:
@@ -216,11 +240,17 @@ def poisson_pipeline(cells: int, dim: int = 2) -> dict:
 
 
 def measure(
-    sizes: list[int], folder: Path, log, repeat: int = 1, data_sets: tuple[str, ...] = DATA_SETS
+    sizes: list[int],
+    folder: Path,
+    log,
+    repeat: int = 1,
+    data_sets: tuple[str, ...] = DATA_SETS,
+    kinds: tuple[str, ...] = KINDS,
 ) -> list[dict]:
-    """Every size: for each data set the cold and the nested ``fembem solve``, then the
-    Poisson pipeline, ``repeat`` times in turn; each kept at its fastest run (process
-    wall; the machine is shared, and other load only ever adds time)."""
+    """Every size: for each data set the ``fembem solve`` of each of ``kinds`` (cold,
+    nested), then the Poisson pipeline, ``repeat`` times in turn; each kept at its
+    fastest run (process wall; the machine is shared, and other load only ever adds
+    time)."""
     data = {name: manufactured_data(expanded=name == "expanded") for name in data_sets}
     rows = []
     for cells in sizes:
@@ -235,7 +265,7 @@ def measure(
 
         for attempt in range(repeat):
             for name in data_sets:
-                for kind in ("cold", "nested"):
+                for kind in kinds:
                     out = folder / f"out-{cells}-{name}-{kind}-{attempt}"
                     run = run_solve(configs[name], out, kind == "nested")
                     log(f"cells = {cells}: fembem solve ({name}, {kind}) {run['wall']:.1f} s")
@@ -287,9 +317,10 @@ def table(rows: list[dict]) -> list[str]:
         "| N | run | its | wall [s] | "
         + " | ".join(stages)
         + " | solve stage | Poisson wall [s] | Poisson solve [s] | whole / Poisson "
-        "| solve stage / Poisson solve | mesh / Poisson mesh | iteration / Poisson solve |"
+        "| solve stage / Poisson solve | mesh / Poisson mesh | iteration / Poisson solve "
+        "| peak [MB] | KB per dof | Poisson KB per dof |"
     )
-    lines = [head, "|" + "---:|" * (len(stages) + 12)]
+    lines = [head, "|" + "---:|" * (len(stages) + 15)]
     for p, key, r in _runs(rows):
         if "error" in r:
             lines.append(f"| {p['dofs']} | {key} | error: {' '.join(r['error'])} |")
@@ -303,7 +334,9 @@ def table(rows: list[dict]) -> list[str]:
             f"| {r['dofs']} | {key} | {its} | {r['wall']:.1f} | {cells} "
             f"| {r['solve_stage']:.1f} | {p['wall']:.1f} | {p['solve']:.1f} "
             f"| {r['wall'] / p['wall']:.2f} | {r['solve_stage'] / p['solve']:.2f} "
-            f"| {t['mesh'] / p['mesh']:.2f} | {t['solve'] / p['solve']:.2f} |"
+            f"| {t['mesh'] / p['mesh']:.2f} | {t['solve'] / p['solve']:.2f} "
+            f"| {r['peak_bytes'] / 1e6:.0f} | {r['peak_bytes'] / r['dofs'] / 1e3:.2f} "
+            f"| {p['peak_bytes'] / p['dofs'] / 1e3:.2f} |"
         )
     return lines
 
@@ -341,6 +374,15 @@ def targets(rows: list[dict]) -> list[str]:
             continue
         whole, solve = r["wall"] / p["wall"], r["solve_stage"] / p["solve"]
         mesh = r["timings"]["mesh"] / p["mesh"]
+        if r["dofs"] >= LARGE:
+            kb = r["peak_bytes"] / r["dofs"] / 1e3
+            lines.append(
+                f"- N = {r['dofs']}, {key}: whole run / Poisson pipeline = {whole:.2f} "
+                f"(target <= {TARGET_LARGE_WHOLE}): {_verdict(whole <= TARGET_LARGE_WHOLE)}; "
+                f"peak {kb:.2f} KB per dof (target <= {TARGET_LARGE_KB}): "
+                f"{_verdict(kb <= TARGET_LARGE_KB)}"
+            )
+            continue
         share = r["timings"]["outputs"] / r["timings"]["total"]
         line = (
             f"- N = {r['dofs']}, {key}: whole run / Poisson pipeline = {whole:.2f} "
@@ -382,6 +424,11 @@ def main(argv: list[str] | None = None) -> int:
         default=",".join(DATA_SETS),
         help=f"comma-separated data sets of {DATA_SETS} (default: both)",
     )
+    parser.add_argument(
+        "--kinds",
+        default=",".join(KINDS),
+        help=f"comma-separated runs of {KINDS} (default: both)",
+    )
     parser.add_argument("--out", help="folder of the runs' outputs (default: a temporary one)")
     parser.add_argument("--json", metavar="FILE", help="write the raw records to FILE")
     parser.add_argument("--poisson", type=int, help=argparse.SUPPRESS)
@@ -396,7 +443,9 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"--sizes must be comma-separated integers, got {args.sizes!r}")
     if any(s < 8 for s in sizes):
         parser.error("--sizes: at least 8 cells per side (subdomains of 4 cells)")
-    data_sets = tuple(args.data.split(","))
+    data_sets, kinds = tuple(args.data.split(",")), tuple(args.kinds.split(","))
+    if not set(kinds) <= set(KINDS):
+        parser.error(f"--kinds: comma-separated names of {KINDS}, got {args.kinds!r}")
     if not set(data_sets) <= set(DATA_SETS):
         parser.error(f"--data: comma-separated names of {DATA_SETS}, got {args.data!r}")
 
@@ -407,7 +456,7 @@ def main(argv: list[str] | None = None) -> int:
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(args.out) if args.out else Path(tmp)
         folder.mkdir(parents=True, exist_ok=True)
-        rows = measure(sizes, folder, log, max(args.repeat, 1), data_sets)
+        rows = measure(sizes, folder, log, max(args.repeat, 1), data_sets, kinds)
     print(
         f"Started {started} at load average {load[0]:.1f} (1 min), {load[2]:.1f} (15 min); "
         f"finished {time.strftime('%Y-%m-%d %H:%M')}; {os.cpu_count()} cores\n"
