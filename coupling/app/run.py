@@ -1,7 +1,7 @@
 """The solve of one configuration, plain, nested (``[solver] nested``) or adaptive
 (``[adapt] steps > 0``), the a posteriori estimator of its result (adaptive runs, or when
-``[output]`` asks) and, when the
-configuration gives the exact solution (``[data] exact``), its energy error."""
+``[output]`` asks) and, when the configuration gives the exact solution (``[data]
+exact``), its energy error."""
 from __future__ import annotations
 
 import dataclasses
