@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import resource
 import sys
 import tempfile
 from pathlib import Path
@@ -75,8 +74,7 @@ def main(argv: list[str] | None = None) -> int:
         for n in (int(s) for s in args.sizes.split(",")):
             config = write_config(Path(tmp), n)
             run = run_solve(config, Path(tmp) / f"out-{n}", nested=True)
-            # the largest child so far: the sizes grow, so this one's
-            peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss * 1024
+            peak = run["peak_bytes"]  # of this fembem process alone
             poisson = run_poisson(n, dim=3)
             rows.append({"n": n, "run": run, "poisson": poisson, "peak_bytes": peak})
             dofs = run.get("dofs", (n + 1) ** 3)

@@ -154,7 +154,7 @@ def run_solve(config: Path, out: Path, nested: bool) -> dict:
     cmd += ["--set", f"solver.nested={'true' if nested else 'false'}"]
     status, _, err, wall, peak = _measured(cmd)
     if status != 0:
-        return {"wall": wall, "error": err.strip().splitlines()[-1:]}
+        return {"wall": wall, "peak_bytes": peak, "error": err.strip().splitlines()[-1:]}
     summary = json.loads((out / "summary.json").read_text())
     timings = summary["timings"]
     return {
@@ -443,11 +443,14 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"--sizes must be comma-separated integers, got {args.sizes!r}")
     if any(s < 8 for s in sizes):
         parser.error("--sizes: at least 8 cells per side (subdomains of 4 cells)")
-    data_sets, kinds = tuple(args.data.split(",")), tuple(args.kinds.split(","))
-    if not set(kinds) <= set(KINDS):
-        parser.error(f"--kinds: comma-separated names of {KINDS}, got {args.kinds!r}")
-    if not set(data_sets) <= set(DATA_SETS):
-        parser.error(f"--data: comma-separated names of {DATA_SETS}, got {args.data!r}")
+
+    def names(option: str, text: str, allowed: tuple[str, ...]) -> tuple[str, ...]:
+        chosen = tuple(text.split(","))
+        if not set(chosen) <= set(allowed):
+            parser.error(f"--{option}: comma-separated names of {allowed}, got {text!r}")
+        return chosen
+
+    data_sets, kinds = names("data", args.data, DATA_SETS), names("kinds", args.kinds, KINDS)
 
     def log(message: str) -> None:
         print(message, file=sys.stderr, flush=True)

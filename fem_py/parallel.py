@@ -4,7 +4,8 @@ broadcast the result or the error".
 Serial set-up steps (gmsh, the boundary walk, the coarse structure, S_h) run on rank 0
 while the other ranks wait in a polled non-blocking barrier (they sleep instead of
 spinning in MPI, so rank 0 may use every core). An exception raised on rank 0 is raised
-on every rank, so no rank is left waiting in a collective call.
+on every rank, so no rank is left waiting in a collective call. Also the gathers of
+rank-local results (to rank 0, or arrays to every rank).
 """
 from __future__ import annotations
 
@@ -20,6 +21,7 @@ __all__ = [
     "broadcast_from_root",
     "array_from_root",
     "gather_to_root",
+    "allgather_arrays",
     "threads_per_rank",
 ]
 
@@ -120,3 +122,18 @@ def array_from_root(
 def gather_to_root(comm: MPI.Comm, obj: T) -> list[T] | None:
     """``comm.gather(obj, root=0)``, without pickling a copy on one rank: [obj] there."""
     return [obj] if comm.size == 1 else comm.gather(obj, root=0)
+
+
+def allgather_arrays(comm: MPI.Comm, arrays: tuple[np.ndarray, ...]) -> tuple[np.ndarray, ...]:
+    """Each int64 array of ``arrays`` (all of one length on a rank) concatenated over the
+    ranks in rank order, on every rank (``Allgatherv``, no pickling; in serial the
+    arrays themselves)."""
+    if comm.size == 1:
+        return arrays
+    counts = np.array(comm.allgather(len(arrays[0])))
+    out = []
+    for a in arrays:
+        whole = np.empty(int(counts.sum()), dtype=np.int64)
+        comm.Allgatherv(np.ascontiguousarray(a, dtype=np.int64), (whole, counts))
+        out.append(whole)
+    return tuple(out)

@@ -266,7 +266,7 @@ def distribute_structured(
         np.arange(_n_local_cells(msh), dtype=np.int32),
         by_rank[_local_cells(msh) // T].astype(np.int32),
     )
-    # facet tags from the input numbers of the facet nodes: the coarse edge under each facet
+    # facet tags from the node numbers of the facet ends: the coarse edge under each facet
     topology = msh.topology
     topology.create_connectivity(1, 0)
     topology.create_connectivity(1, 2)

@@ -19,24 +19,12 @@ import numpy as np
 
 from fem_py.dofs.numbering import input_indices
 from fem_py.mesh.structured import StructuredRefinement
+from fem_py.parallel import allgather_arrays
 from fem_py.partition.coarse import CoarseStructure
 from fem_py.partition.ragged import Ragged
 from fem_py.tags import SIGNORINI_TAG0
 
 __all__ = ["structured_coarse_structure"]
-
-
-def _allgather(comm: Any, arrays: tuple[np.ndarray, ...]) -> tuple[np.ndarray, ...]:
-    """Each int64 array of ``arrays`` concatenated over the ranks (rank order)."""
-    if comm.size == 1:
-        return arrays
-    counts = np.array(comm.allgather(len(arrays[0])))
-    out = []
-    for a in arrays:
-        whole = np.empty(int(counts.sum()), dtype=np.int64)
-        comm.Allgatherv(np.ascontiguousarray(a, dtype=np.int64), (whole, counts))
-        out.append(whole)
-    return tuple(out)
 
 
 def structured_coarse_structure(
@@ -57,7 +45,7 @@ def structured_coarse_structure(
     comm = V.mesh.comm
     nv, n = len(ref.V), ref.n
     n_edges, n_cells = len(ref.edges), len(ref.cells)
-    n_skeleton = nv + n_edges * (n - 1)  # the input nodes on coarse vertices and edges
+    n_skeleton = nv + n_edges * (n - 1)  # the nodes on coarse vertices and edges
     interior_per_cell = len(ref.lattice.interior)
 
     # every owned dof's node, then the global dof of each skeleton node and the
@@ -68,8 +56,8 @@ def structured_coarse_structure(
     dof = index_map.local_range[0] + np.arange(n_owned, dtype=np.int64)
     on_skeleton = node < n_skeleton
     subdomain = (node[~on_skeleton] - n_skeleton) // max(interior_per_cell, 1)
-    skeleton_node, skeleton_dof = _allgather(comm, (node[on_skeleton], dof[on_skeleton]))
-    interior_dof, interior_subdomain = _allgather(comm, (dof[~on_skeleton], subdomain))
+    skeleton_node, skeleton_dof = allgather_arrays(comm, (node[on_skeleton], dof[on_skeleton]))
+    interior_dof, interior_subdomain = allgather_arrays(comm, (dof[~on_skeleton], subdomain))
     dof_of_node = np.empty(n_skeleton, dtype=np.int64)
     dof_of_node[skeleton_node] = skeleton_dof
     order = np.argsort(interior_dof)
@@ -87,7 +75,7 @@ def structured_coarse_structure(
     on_boundary = ref.edge_cells[:, 1] < 0
     a, b = ref.edges[:, 0].copy(), ref.edges[:, 1].copy()
     k = ref.cells.shape[1]
-    cell, side = np.nonzero(ref.cell_edges >= 0)
+    cell, side = (i.ravel() for i in np.indices(ref.cell_edges.shape))  # every side
     edge = ref.cell_edges[cell, side]
     along = ref.cells[cell, side]  # the side's start, counter-clockwise around its cell
     boundary_side = on_boundary[edge]
@@ -96,7 +84,7 @@ def structured_coarse_structure(
     interior = ~on_boundary
     swap = interior & (vnum[a] > vnum[b])
     a[swap], b[swap] = b[swap], a[swap]
-    chains = ref.edge_nodes(a, b)  # (n_edges, n + 1) input nodes from a to b
+    chains = ref.edge_nodes(a, b)  # (n_edges, n + 1) node numbers from a to b
     ev = np.stack([vnum[a], vnum[b]], 1)
     mid = K[chains[:, (n + 1) // 2]]
     edge_order = np.lexsort((mid[:, 0], mid[:, 1], ev.max(1), ev.min(1)))
