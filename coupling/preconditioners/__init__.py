@@ -32,6 +32,7 @@ from coupling.preconditioners.multigrid import (
 from coupling.preconditioners.root import RootPreconditioner
 from coupling.preconditioners.signorini import SignoriniArc, signorini_arcs
 from coupling.preconditioners.substructuring import SubstructuringPreconditioner
+from fem_py.memory import release_free_memory
 from fem_py.tags import GAMMA_T_TAG
 
 if TYPE_CHECKING:
@@ -130,7 +131,7 @@ def build_preconditioner(
         )
         if ranks is not None:  # whole subdomains per rank: no gathering
             try:
-                return DistributedSubstructuringPreconditioner(
+                built = DistributedSubstructuringPreconditioner(
                     comm,
                     stiffness,
                     V.dofmap.index_map,
@@ -144,6 +145,8 @@ def build_preconditioner(
                 )
             finally:
                 release()
+            release_free_memory()  # the set-up's temporaries (fem_py.memory)
+            return built
     csr = gather_matrix(stiffness)
     release()
     x = gather_rows(comm, V.tabulate_dof_coordinates()[:n_owned, :2]) if substructuring else None
@@ -164,4 +167,6 @@ def build_preconditioner(
             check_symmetry=False,  # assembled above from the symmetric form
         )
 
-    return build() if comm.size == 1 else RootPreconditioner(comm, n_owned, build)
+    built = build() if comm.size == 1 else RootPreconditioner(comm, n_owned, build)
+    release_free_memory()  # the set-up's temporaries (fem_py.memory)
+    return built

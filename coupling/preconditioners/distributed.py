@@ -171,7 +171,6 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
         self._a_is = sp.csr_matrix(
             (data[~is_int], (rows[~is_int], sk_pos[cols[~is_int]])), shape=(n_i, n_sk)
         )
-        self._a_si = self._a_is.T.tocsr()
         self._interior_factor = SparseFactor(self._a_ii, fill_reducing_ordering(self._a_ii))
 
         # the skeleton: edge forms of the edges this rank solves, Pi on all local skeleton dofs
@@ -267,7 +266,7 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
         """u = B_Omega^{-1} g on the owned entries: the four steps of the module docstring."""
         g = self._owned(g, "g")
         x_i = self._interior_factor.solve(g[self._int])
-        r = g - self._exchange.reverse_add(self._on_skeleton(self._a_si @ x_i))
+        r = g - self._exchange.reverse_add(self._on_skeleton(self._a_is.T @ x_i))
         r_sk = self._exchange.forward(r)[self._sk]
         c = self._coarse.solve(self._sum(self._interp_owned_t @ r_sk[self._sk_owned]))
         v_owned = self._exchange.reverse_add(self._on_skeleton(self._a0_inv @ r_sk))
@@ -292,7 +291,7 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
             self._interp_t @ a_sk
         )  # C R u - Pi^T A^0 Q u
         out = self._exchange.reverse_add(
-            self._on_skeleton(self._a_si @ (u_i + self._interior_factor.solve(y)) + a_sk)
+            self._on_skeleton(self._a_is.T @ (u_i + self._interior_factor.solve(y)) + a_sk)
         )
         out[self._int] = self._a_ii @ u_i + y
         out[self._vertex_owned_dof] += coarse_term[self._vertex_owned]

@@ -76,32 +76,35 @@ class SparseFactor:
     def __init__(self, matrix: sp.spmatrix, ordering: str = "nd") -> None:
         m = sp.csr_matrix(matrix, dtype=float)
         self.n = m.shape[0]
-        self._ksp = None
+        self._factor = None
         self._alive = True
         if self.n == 0:
             return
-        self._mat = PETSc.Mat().createAIJ(
+        mat = PETSc.Mat().createAIJ(
             size=m.shape,
             csr=(m.indptr.astype(PETSc.IntType), m.indices.astype(PETSc.IntType), m.data),
             comm=PETSc.COMM_SELF,
         )
-        self._mat.setOption(PETSc.Mat.Option.SPD, True)
-        self._ksp = PETSc.KSP().create(PETSc.COMM_SELF)
-        self._ksp.setOperators(self._mat)
-        self._ksp.setType("preonly")
-        pc = self._ksp.getPC()
+        mat.setOption(PETSc.Mat.Option.SPD, True)
+        ksp = PETSc.KSP().create(PETSc.COMM_SELF)
+        ksp.setOperators(mat)
+        ksp.setType("preonly")
+        pc = ksp.getPC()
         pc.setType("cholesky")
         pc.setFactorSolverType("petsc")
         pc.setFactorOrdering(ordering)
-        self._ksp.setUp()
+        ksp.setUp()
+        # only the factor is kept: PETSc's copy of the matrix goes with the KSP
         self._factor = pc.getFactorMatrix()
-        self._rhs, self._sol = self._mat.createVecs()
+        self._rhs, self._sol = mat.createVecs()
+        ksp.destroy()
+        mat.destroy()
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         """A^{-1} b for b of shape (n,) or (n, k)."""
         if not self._alive:
             raise RuntimeError("this factor has been destroyed; build a new preconditioner")
-        if self._ksp is None:  # empty matrix
+        if self._factor is None:  # empty matrix
             return np.zeros_like(b, dtype=float)
         if b.ndim == 1:  # the Vecs wrap b and the result: no copies in and out
             out, rhs = np.empty(self.n), np.ascontiguousarray(b, dtype=float)
@@ -125,10 +128,10 @@ class SparseFactor:
 
     def destroy(self) -> None:
         """Free the PETSc objects (call on every rank)."""
-        if self._ksp is not None:
-            for obj in (self._rhs, self._sol, self._ksp, self._mat):
+        if self._factor is not None:
+            for obj in (self._rhs, self._sol, self._factor):
                 obj.destroy()
-            self._ksp = None
+            self._factor = None
         self._alive = False
 
 

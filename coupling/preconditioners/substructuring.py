@@ -234,7 +234,6 @@ class SubstructuringPreconditioner(SignoriniBlock):
         a_i = a[interior]
         self._a_ii = a_i[:, interior].tocsr()
         self._a_is = a_i[:, skeleton].tocsr()
-        self._a_si = self._a_is.T.tocsr()  # A is symmetric
         self._interior_factor = SparseFactor(self._a_ii, fill_reducing_ordering(self._a_ii))
         coarse_of = None
         if coarse_space == "galerkin":
@@ -243,7 +242,9 @@ class SubstructuringPreconditioner(SignoriniBlock):
             def coarse_of(interp: sp.csr_matrix) -> sp.spmatrix:
                 def schur_of(e: np.ndarray) -> np.ndarray:  # Pi^T S Pi e
                     p = interp @ e
-                    return interp.T @ (a_ss @ p - self._a_si @ self.solve_interior(self._a_is @ p))
+                    return interp.T @ (
+                        a_ss @ p - self._a_is.T @ self.solve_interior(self._a_is @ p)
+                    )
 
                 return galerkin_coarse_matrix(coarse, self.subdomain_size, schur_of)
 
@@ -266,7 +267,7 @@ class SubstructuringPreconditioner(SignoriniBlock):
         """
         g = check_length(g, self.n_omega, "g")
         x_i = self.solve_interior(g[self._interior])
-        v = self._skeleton_form.solve(g[self._skeleton] - self._a_si @ x_i)
+        v = self._skeleton_form.solve(g[self._skeleton] - self._a_is.T @ x_i)
         u = np.empty_like(g)
         u[self._interior] = x_i - self.solve_interior(self._a_is @ v)
         u[self._skeleton] = v
@@ -280,7 +281,7 @@ class SubstructuringPreconditioner(SignoriniBlock):
         y = self._a_is @ u_s
         out = np.empty_like(u)
         out[self._interior] = self._a_ii @ u_i + y
-        out[self._skeleton] = self._a_si @ (
+        out[self._skeleton] = self._a_is.T @ (
             u_i + self.solve_interior(y)
         ) + self._skeleton_form.matvec(u_s)
         return out

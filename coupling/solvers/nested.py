@@ -27,6 +27,7 @@ from fem_py.dofs import gather_p1
 from fem_py.mesh import interpolate_p1
 from fem_py.mesh.location3d import interpolate_p1_tetrahedra, on_surface
 from fem_py.polyline import closest_on_polygon
+from fem_py.memory import release_free_memory
 
 __all__ = ["LevelRecord", "prolong", "solve_nested"]
 
@@ -120,16 +121,21 @@ def solve_nested(
         if level is problem:
             coarse_time = start - tic
         if previous is None:
-            level_options, initial = options, None
+            level_options, initial, scale = options, None, None
         else:
             level_options = dataclasses.replace(options, step=previous_solution.tau)
             initial = prolong(previous, previous_solution, level)
+            scale = previous_solution.residual_scale
+            # the coarser level is done with: its memory (and the prolongation's) goes
+            # before this level's solve, not after it
+            previous = previous_solution = None
+            release_free_memory()
         prolonged = time.perf_counter()
         solution = solve(
             level,
             level_options,
             initial=initial,
-            residual_scale=None if previous is None else previous_solution.residual_scale,
+            residual_scale=scale,
             monitor=monitor if level is problem else None,
         )
         levels.append(
