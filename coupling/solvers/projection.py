@@ -141,6 +141,8 @@ class SignoriniProjection:
             return psi
         if self._inverse is None:
             self._inverse = scipy.linalg.cho_solve(self._factor, np.eye(n))
+            if self.method == "exact":  # the factor's one use here: W replaces it
+                self._factor = None
         W = self._inverse
         y = W @ np.where(free, b, 0.0)
         if n_active == 0:

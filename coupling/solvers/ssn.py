@@ -104,10 +104,11 @@ def _pcg(
     The vectors are updated in place through one work buffer per part (x += alpha p as
     w = alpha p, x += w): the same floating-point operations as x + alpha p, without
     new arrays of 10^6 entries every iteration; p starts as a copy of z, so that no
-    in-place update can reach an array apply_b_inv returned or was given)."""
+    in-place update can reach an array apply_b_inv returned or was given). ``rhs`` is
+    overwritten: its arrays hold the residual."""
     dot = lambda a, b: global_dot(comm, a[0], b[0]) + a[1] @ b[1]  # noqa: E731
     x = (np.zeros_like(rhs[0]), np.zeros_like(rhs[1]))
-    r = (rhs[0].copy(), rhs[1].copy())
+    r = rhs
     work = (np.empty_like(rhs[0]), np.empty_like(rhs[1]))
     z = apply_b_inv(r)
     p = (z[0].copy(), z[1].copy())
@@ -221,8 +222,10 @@ def newton_direction(
     preconditioner, comm = context.preconditioner, context.comm
     g_u, g_phi = gradient
     free = ~active
+    # the factor overwrites its copy of M_s[I, I] (n_s^2 entries: 128 MB at 1.6e7 dofs)
     metric_free = preconditioner.signorini_metric[np.ix_(free, free)]
-    factor = scipy.linalg.cho_factor(metric_free) if free.any() else None
+    factor = scipy.linalg.cho_factor(metric_free, overwrite_a=True) if free.any() else None
+    del metric_free
 
     def apply_h(p):
         e_phi = np.zeros(phi.size)
@@ -239,7 +242,7 @@ def newton_direction(
     d_phi = np.zeros(phi.size)
     d_phi[active] = -phi[active]
     h_a_u, h_a_phi = hessian(np.zeros_like(g_u), d_phi)
-    rhs = (-g_u - h_a_u, -g_phi[free] - h_a_phi[free])
+    rhs = (np.subtract(-g_u, h_a_u, out=h_a_u), -g_phi[free] - h_a_phi[free])
     (d_u, d_phi_free), cg_its = _pcg(
         apply_h, apply_b_inv, rhs, comm, rtol=rtol, max_iterations=cg_max_iterations
     )
@@ -396,6 +399,8 @@ def semismooth_newton(
         u_now = u_function.vector.array_r
         norm2 = b_norm2(comm, u_now, b_u, trial.phi, preconditioner.matvec_signorini(trial.phi))
         phi, energy, g_phi = trial.phi, trial.energy, trial.g_phi
+        # this step's vectors go before the next step's CG allocates its own (the peak)
+        del d_u, u_old, d_u_taken, b_d_u, u_now
         relative = loop.end_step(
             k,
             energy,
