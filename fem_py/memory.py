@@ -29,7 +29,7 @@ def _malloc_trim():
 
 def release_free_memory() -> None:
     """Return the free pages of every heap arena to the operating system (glibc's
-    ``malloc_trim(0)``; nothing elsewhere). Rank-local; about 50 ms per GB given back."""
+    ``malloc_trim(0)``; nothing elsewhere). Rank-local; a few milliseconds."""
     trim = _malloc_trim()
     if trim is not None:
         trim(0)

@@ -25,7 +25,7 @@ from coupling.preconditioners.edge_forms import (
     paper_edge_form,
     sqrt_laplacian_edge_form,
 )
-from coupling.preconditioners.kernels import column_blocks, fill_reducing_ordering, is_symmetric
+from coupling.preconditioners.kernels import is_symmetric
 from test_preconditioner_meshes import structured_square, substructuring
 
 RTOL = 1e-12
@@ -448,29 +448,3 @@ def test_is_symmetric_leaves_a_non_canonical_matrix_as_it_was():
     assert np.array_equal(matrix.indices, indices) and np.array_equal(matrix.data, data)
     matrix.data[0] = -1.5
     assert not is_symmetric(matrix)
-
-
-def test_column_blocks_equal_the_two_column_selections():
-    """column_blocks(A[rows], first, second) is (A[rows][:, first], A[rows][:, second])
-    entry for entry, with sorted column indices (PETSc's factor reads them so)."""
-    rng = np.random.default_rng(3)
-    matrix = sp.random(40, 40, density=0.2, format="csr", random_state=rng)
-    first = np.sort(rng.choice(40, 25, replace=False))
-    second = np.setdiff1d(np.arange(40), first)
-    rows = matrix[rng.permutation(40)[:30]]
-    left, right = column_blocks(rows, first, second)
-    for block, columns in ((left, first), (right, second)):
-        expected = rows[:, columns].toarray()
-        assert block.shape == expected.shape and np.array_equal(block.toarray(), expected)
-        assert block.has_sorted_indices
-
-
-def test_ordering_from_block_labels_matches_the_components():
-    """fill_reducing_ordering with the subdomain labels of the rows decides as the
-    connected components do: natural for the small blocks of A_II, nd for one big block."""
-    blocks = sp.block_diag([sp.diags([-1, 2, -1], [-1, 0, 1], shape=(9, 9))] * 50).tocsr()
-    labels = np.repeat(np.arange(50), 9)
-    assert fill_reducing_ordering(blocks) == fill_reducing_ordering(blocks, labels) == "natural"
-    chain = sp.diags([-1, 2, -1], [-1, 0, 1], shape=(2000, 2000)).tocsr()
-    one = np.zeros(2000, dtype=np.int64)
-    assert fill_reducing_ordering(chain) == fill_reducing_ordering(chain, one) == "nd"

@@ -23,7 +23,6 @@ from fem_py.polyline import arc_length
 __all__ = [
     "SparseFactor",
     "fill_reducing_ordering",
-    "column_blocks",
     "is_symmetric",
     "DenseFactor",
     "block_diagonal_edge_forms",
@@ -54,46 +53,18 @@ def is_symmetric(matrix: sp.spmatrix, rtol: float = 1e-12) -> bool:
     return bool(abs(a - t).max() <= scale)
 
 
-def fill_reducing_ordering(matrix: sp.spmatrix, block_of_row: np.ndarray | None = None) -> str:
+def fill_reducing_ordering(matrix: sp.spmatrix) -> str:
     """The PETSc ordering for the Cholesky factor of ``matrix``: "natural" when every
     connected component of its graph (a block of a block-diagonal matrix, such as A_II:
     one block per subdomain) has at most NATURAL_ORDERING_MAX_BLOCK rows, "nd" (nested
     dissection) otherwise. Fill never crosses components, and within a small block the
     mesh's own locality-preserving numbering fills about as little as nested dissection,
-    whose ordering of the whole graph costs several times the factorisation.
-
-    ``block_of_row``: a label per row that no component crosses (the subdomain of every
-    interior dof, for A_II); its largest class bounds the largest component, and counting
-    it costs a fraction of finding the components."""
+    whose ordering of the whole graph costs several times the factorisation."""
     n = matrix.shape[0]
     if n == 0:
         return "nd"
-    if block_of_row is None:
-        _, block_of_row = connected_components(matrix, directed=False)
-    return "natural" if np.bincount(block_of_row).max() <= NATURAL_ORDERING_MAX_BLOCK else "nd"
-
-
-def column_blocks(
-    rows: sp.csr_matrix, first: np.ndarray, second: np.ndarray
-) -> tuple[sp.csr_matrix, sp.csr_matrix]:
-    """``rows[:, first]`` and ``rows[:, second]`` of a CSR matrix whose columns ``first``
-    and ``second`` split (both sorted): one pass over its entries instead of two column
-    selections."""
-    n = rows.shape[1]
-    in_first = np.zeros(n, dtype=bool)
-    in_first[first] = True
-    position = np.empty(n, dtype=rows.indices.dtype)
-    position[first] = np.arange(len(first))
-    position[second] = np.arange(len(second))
-    mask = in_first[rows.indices]
-    before = np.concatenate([[0], np.cumsum(mask)])[rows.indptr]  # entries in first so far
-
-    def part(keep: np.ndarray, indptr: np.ndarray, width: int) -> sp.csr_matrix:
-        return sp.csr_matrix(
-            (rows.data[keep], position[rows.indices[keep]], indptr), shape=(rows.shape[0], width)
-        )
-
-    return part(mask, before, len(first)), part(~mask, rows.indptr - before, len(second))
+    _, labels = connected_components(matrix, directed=False)
+    return "natural" if np.bincount(labels).max() <= NATURAL_ORDERING_MAX_BLOCK else "nd"
 
 
 class SparseFactor:

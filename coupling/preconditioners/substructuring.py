@@ -49,7 +49,6 @@ import scipy.sparse as sp
 from coupling.preconditioners.base import check_length
 from coupling.preconditioners.kernels import (
     SparseFactor,
-    column_blocks,
     fill_reducing_ordering,
     is_symmetric,
     TwoLevelForm,
@@ -223,8 +222,8 @@ class SubstructuringPreconditioner(SignoriniBlock):
                 "coarse.interior_dofs and coarse.skeleton_dofs must split the nodes 0..N-1 into "
                 "two disjoint sets"
             )
-        if np.any(np.diff(skeleton) <= 0) or np.any(np.diff(interior) <= 0):
-            raise ValueError("coarse.skeleton_dofs and coarse.interior_dofs must be sorted")
+        if np.any(np.diff(skeleton) <= 0):
+            raise ValueError("coarse.skeleton_dofs must be sorted and unique")
         if n and check_symmetry and not is_symmetric(a):
             raise ValueError(
                 "stiffness must be symmetric (the P1 Laplace matrix A); got a nonsymmetric matrix"
@@ -232,9 +231,10 @@ class SubstructuringPreconditioner(SignoriniBlock):
         self.n_omega = n
         self._interior = interior
         self._skeleton = skeleton
-        self._a_ii, self._a_is = column_blocks(a[interior], interior, skeleton)
-        ordering = fill_reducing_ordering(self._a_ii, coarse.subdomain_of_interior_dof)
-        self._interior_factor = SparseFactor(self._a_ii, ordering)
+        a_i = a[interior]
+        self._a_ii = a_i[:, interior].tocsr()
+        self._a_is = a_i[:, skeleton].tocsr()
+        self._interior_factor = SparseFactor(self._a_ii, fill_reducing_ordering(self._a_ii))
         coarse_of = None
         if coarse_space == "galerkin":
             a_ss = a[skeleton][:, skeleton].tocsr()
