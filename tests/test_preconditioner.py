@@ -9,6 +9,8 @@ errors up to eps * cond ~ 2e-13 are possible; measured <= 5e-15; RTOL = 1e-12.
 """
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 import scipy.linalg as sla
@@ -448,3 +450,25 @@ def test_is_symmetric_leaves_a_non_canonical_matrix_as_it_was():
     assert np.array_equal(matrix.indices, indices) and np.array_equal(matrix.data, data)
     matrix.data[0] = -1.5
     assert not is_symmetric(matrix)
+
+
+def test_edge_coordinates_of_the_coarse_structure_stand_for_the_node_coordinates():
+    """B built with x = None (the nodes along the coarse edges from coarse.edge_coords)
+    is B built with the node coordinates: the same edge forms and interpolation."""
+    prob = structured_square(8, 2)
+    with_x = substructuring(prob)
+    coarse = SimpleNamespace(
+        **vars(prob.coarse), edge_coords=tuple(prob.x[d] for d in prob.coarse.edge_dofs)
+    )
+    without_x = SubstructuringPreconditioner(
+        prob.stiffness,
+        coarse,
+        None,
+        prob.d,
+        prob.arcs,
+        edge_form="paper",
+        signorini_weight=1.0,
+        coarse_space="graph",
+    )
+    g = np.random.default_rng(0).standard_normal(prob.stiffness.shape[0])
+    assert np.array_equal(without_x.apply_omega(g), with_x.apply_omega(g))

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from coupling.distributed import dense_matrix, gather_matrix, gather_rows
+from coupling.distributed import dense_matrix, gather_matrix
 from coupling.options import AMG_MAX_ITERATIONS, AMG_RTOL, AUTO_PRECONDITIONER, SolverOptions
 from coupling.preconditioners.base import IdentityPreconditioner, Preconditioner
 from coupling.preconditioners.distributed import (
@@ -149,7 +149,6 @@ def build_preconditioner(
             return built
     csr = gather_matrix(stiffness)
     release()
-    x = gather_rows(comm, V.tabulate_dof_coordinates()[:n_owned, :2]) if substructuring else None
     S = dense_matrix(problem.S, "the exact preconditioner") if kind == "exact" else None
 
     def build() -> Preconditioner:
@@ -158,7 +157,7 @@ def build_preconditioner(
         return SubstructuringPreconditioner(
             csr,
             domain.coarse,
-            x,
+            None,  # the coordinates along the coarse edges: domain.coarse.edge_coords
             domain.subdomain_size,
             arcs,
             edge_form=options.edge_form,

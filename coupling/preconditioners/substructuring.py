@@ -36,8 +36,9 @@ with the numpy attributes ``vertex_coords (n_v, 2)``, ``vertex_dofs (n_v,)``,
 ``fem_py.partition.Ragged`` or any sequence of n_e arrays: the fine nodes along each
 coarse edge from end 0 to end 1, ends included),
 ``edge_on_boundary``, ``edge_arc``, ``skeleton_dofs`` (sorted), ``interior_dofs``,
-``n_subdomains``, ``subdomain_of_interior_dof``; node coordinates ``x (N, 2)``; the
-subdomain size d; the Signorini arcs as :class:`SignoriniArc`.
+``n_subdomains``, ``subdomain_of_interior_dof``; node coordinates ``x (N, 2)``, or
+None with ``coarse.edge_coords`` (the nodes along each coarse edge, as ``edge_dofs``);
+the subdomain size d; the Signorini arcs as :class:`SignoriniArc`.
 """
 from __future__ import annotations
 
@@ -65,7 +66,7 @@ __all__ = ["SubstructuringPreconditioner", "skeleton_form"]
 
 def skeleton_form(
     coarse: Any,
-    x: np.ndarray,
+    x: np.ndarray | None,
     subdomain_size: float,
     n_nodes: int,
     kind: str,
@@ -77,12 +78,15 @@ def skeleton_form(
     interpolation in arc length between the two end vertices; C = coarse graph
     Laplacian + d * sum over coarse vertices on Gamma, or ``coarse_of(Pi)`` (the
     Galerkin C of :func:`coupling.preconditioners.kernels.galerkin_coarse_matrix`).
+    The nodes along the edges are at ``x[coarse.edge_dofs]``, or with ``x`` None at
+    ``coarse.edge_coords`` (a ``fem_py.partition.CoarseStructure`` has them).
     """
     skeleton = np.asarray(coarse.skeleton_dofs, dtype=np.int64)
     vertex_dofs = np.asarray(coarse.vertex_dofs, dtype=np.int64)
     ends = np.asarray(coarse.edge_vertices, dtype=np.int64)
     on_boundary = np.asarray(coarse.vertex_on_boundary, dtype=bool)
     edge_dofs = as_ragged(coarse.edge_dofs, dtype=np.int64)
+    coords = as_ragged(coarse.edge_coords, dtype=float, item_shape=(2,)) if x is None else None
     n_v, n_e = len(vertex_dofs), len(edge_dofs)
     if ends.shape != (n_e, 2) or on_boundary.shape != (n_v,):
         raise ValueError(
@@ -122,7 +126,7 @@ def skeleton_form(
                 "every dof along a coarse edge must be a skeleton dof; check coarse.edge_dofs"
             )
         count += np.bincount(inner.ravel(), minlength=n_sk)
-        pts = x[dofs]
+        pts = x[dofs] if coords is None else coords.rows(group)
         t = edge_weights(pts)
         rows += [inner.ravel(), inner.ravel()]
         cols += [np.repeat(ends[group, 0], length - 2), np.repeat(ends[group, 1], length - 2)]
@@ -152,8 +156,9 @@ class SubstructuringPreconditioner(SignoriniBlock):
         P1 Laplace stiffness matrix A on the fine mesh (symmetric).
     coarse : object
         Coarse partition (attributes listed in the module docstring).
-    x : (N, 2) array
-        Node coordinates.
+    x : (N, 2) array or None
+        Node coordinates; None: those along the coarse edges from ``coarse.edge_coords``
+        (the only ones B needs).
     subdomain_size : float
         d, the size of the subdomains (weights the boundary-vertex term of C and the
         zero-order term of a closed Signorini arc).
@@ -206,11 +211,11 @@ class SubstructuringPreconditioner(SignoriniBlock):
         self._init_signorini(signorini_arcs, subdomain_size, edge_form, signorini_weight)
         a = sp.csr_matrix(stiffness, dtype=float)
         n = a.shape[0]
-        x = np.asarray(x, dtype=float)
-        if a.shape != (n, n) or x.ndim != 2 or x.shape[0] != n:
+        x = None if x is None else np.asarray(x, dtype=float)
+        if a.shape != (n, n) or (x is not None and (x.ndim != 2 or x.shape[0] != n)):
             raise ValueError(
                 f"stiffness must be square and x must have one row per node; got {a.shape} and "
-                f"{x.shape}"
+                f"{None if x is None else x.shape}"
             )
         interior = np.asarray(coarse.interior_dofs, dtype=np.int64)
         skeleton = np.asarray(coarse.skeleton_dofs, dtype=np.int64)
