@@ -1,12 +1,17 @@
-"""Freed memory given back to the operating system between the stages of a run.
+"""Freed memory given back to the operating system before a run's outputs.
 
 glibc's allocator keeps the memory a process frees: small blocks, and since its mmap
-threshold rises with every large block freed (up to 32 MB), most of the arrays of a mesh
-build too, stay in the heap for reuse. A run's stages free gigabytes at a time (the
-mesh's construction, a preconditioner's set-up): measured at 4e6 dofs, the resident
-memory after the structured mesh build fell from 2.58 GB to 1.21 GB on
-``malloc_trim(0)``. Reuse by later stages is partial (fragmentation), so the peak of the
-run is lower when the heap is trimmed where a stage ends (docs/design/speed.md).
+threshold rises with every large block freed (up to 32 MB), most arrays of a large run
+too, stay in the heap for reuse. When the solve ends, its preconditioner, Jacobian and
+vectors (about a gigabyte at 4e6 dofs) are such free heap, which the outputs stage reuses
+only in part: ``malloc_trim(0)`` there took the peak of a nested run at 4e6 dofs from 3.99
+to 3.86 GiB (the peak is then the solve's).
+
+Only there: trimming between the compute stages (after the mesh, a preconditioner's
+set-up, a solve) lowered that peak further, to 3.78 GiB, but made the later stages
+slower, the prolongation 3.2-4.4 s against 1.9 s and the finest preconditioner 9.0-11.3 s
+against 7.5-7.7 s in interleaved runs (memory given back is faulted in again, and loses
+its transparent huge pages): docs/design/speed.md.
 """
 from __future__ import annotations
 
@@ -29,7 +34,7 @@ def _malloc_trim():
 
 def release_free_memory() -> None:
     """Return the free pages of every heap arena to the operating system (glibc's
-    ``malloc_trim(0)``; nothing elsewhere). Rank-local; a few milliseconds."""
+    ``malloc_trim(0)``; nothing elsewhere). Rank-local; about 50 ms per GB given back."""
     trim = _malloc_trim()
     if trim is not None:
         trim(0)

@@ -47,6 +47,7 @@ from coupling.io.quantities import boundary_flux, complementarity, far_field_coe
 from coupling.options import OutputOptions, RunConfig
 from fem_py.dofs import gather_cells, gather_p1
 from fem_py.mesh import mesh_facts
+from fem_py.memory import release_free_memory
 from fem_py.parallel import broadcast_from_root
 
 __all__ = [
@@ -170,6 +171,7 @@ class RunOutputs:
     def start(self, problem, result) -> None:
         """Gather the run's result and start the background work (collective)."""
         tic = time.perf_counter()
+        release_free_memory()  # the solve's freed memory, before the outputs' (fem_py.memory)
         self._problem, self._result = problem, result
         solid = problem.domain.dim == 3
         gathered = gather_p1(result.u)

@@ -32,7 +32,6 @@ from coupling.preconditioners.multigrid import (
 from coupling.preconditioners.root import RootPreconditioner
 from coupling.preconditioners.signorini import SignoriniArc, signorini_arcs
 from coupling.preconditioners.substructuring import SubstructuringPreconditioner
-from fem_py.memory import release_free_memory
 from fem_py.tags import GAMMA_T_TAG
 
 if TYPE_CHECKING:
@@ -131,7 +130,7 @@ def build_preconditioner(
         )
         if ranks is not None:  # whole subdomains per rank: no gathering
             try:
-                built = DistributedSubstructuringPreconditioner(
+                return DistributedSubstructuringPreconditioner(
                     comm,
                     stiffness,
                     V.dofmap.index_map,
@@ -145,8 +144,6 @@ def build_preconditioner(
                 )
             finally:
                 release()
-            release_free_memory()  # the set-up's temporaries (fem_py.memory)
-            return built
     csr = gather_matrix(stiffness)
     release()
     S = dense_matrix(problem.S, "the exact preconditioner") if kind == "exact" else None
@@ -166,6 +163,4 @@ def build_preconditioner(
             check_symmetry=False,  # assembled above from the symmetric form
         )
 
-    built = build() if comm.size == 1 else RootPreconditioner(comm, n_owned, build)
-    release_free_memory()  # the set-up's temporaries (fem_py.memory)
-    return built
+    return build() if comm.size == 1 else RootPreconditioner(comm, n_owned, build)

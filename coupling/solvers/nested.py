@@ -27,7 +27,6 @@ from fem_py.dofs import gather_p1
 from fem_py.mesh import interpolate_p1
 from fem_py.mesh.location3d import interpolate_p1_tetrahedra, on_surface
 from fem_py.polyline import closest_on_polygon
-from fem_py.memory import release_free_memory
 
 __all__ = ["LevelRecord", "prolong", "solve_nested"]
 
@@ -126,10 +125,7 @@ def solve_nested(
             level_options = dataclasses.replace(options, step=previous_solution.tau)
             initial = prolong(previous, previous_solution, level)
             scale = previous_solution.residual_scale
-            # the coarser level is done with: its memory (and the prolongation's) goes
-            # before this level's solve, not after it
-            previous = previous_solution = None
-            release_free_memory()
+            previous = previous_solution = None  # the coarser level's memory goes now
         prolonged = time.perf_counter()
         solution = solve(
             level,

@@ -31,7 +31,6 @@ from coupling.solvers.pgpm import pgpm
 from coupling.solvers.projection import SignoriniProjection
 from coupling.solvers.records import IterationRecord, Monitor, RunResult, set_owned
 from coupling.solvers.ssn import NewtonSettings, semismooth_newton, zero_residual
-from fem_py.memory import release_free_memory
 
 __all__ = [
     "Solution",
@@ -280,10 +279,8 @@ def solve(
     finally:
         if owned:
             preconditioner.destroy()
-            pc = preconditioner = context = None  # B's arrays go now, not at the return
         if matrix is not None:
             matrix.destroy()
-        release_free_memory()  # B's and the Jacobian's memory (fem_py.memory)
 
     boundary = problem.boundary
     boundary_u = boundary.gather(u.vector)

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 from typing import Any, Callable
 
-from fem_py.memory import release_free_memory
 from fem_py.mesh.conic import CONICS, conic_domain, conic_plan
 from fem_py.mesh.domain import Domain, DomainSize, domain_from_file
 from fem_py.mesh.polygon import polygon_domain, polygon_size
@@ -86,9 +85,7 @@ def build_domain(comm: Any, spec: GeometrySpec) -> Domain | SolidDomain:
         gmsh failed on rank 0 (``"meshing the domain failed: <type>: <message>"``, on
         every rank).
     """
-    domain = _BUILDERS[spec_dimension(spec, comm)][0](comm, spec)
-    release_free_memory()  # the construction's arrays (fem_py.memory)
-    return domain
+    return _BUILDERS[spec_dimension(spec, comm)][0](comm, spec)
 
 
 def domain_size(spec: GeometrySpec) -> DomainSize | None:
