@@ -1,17 +1,12 @@
 """Freed memory given back to the operating system before a run's outputs.
 
-glibc's allocator keeps the memory a process frees: small blocks, and since its mmap
-threshold rises with every large block freed (up to 32 MB), most arrays of a large run
-too, stay in the heap for reuse. When the solve ends, its preconditioner, Jacobian and
-vectors (about a gigabyte at 4e6 dofs) are such free heap, which the outputs stage reuses
-only in part: ``malloc_trim(0)`` there took the peak of a nested run at 4e6 dofs from 3.99
-to 3.86 GiB (the peak is then the solve's).
-
-Only there: trimming between the compute stages (after the mesh, a preconditioner's
-set-up, a solve) lowered that peak further, to 3.78 GiB, but made the later stages
-slower, the prolongation 3.2-4.4 s against 1.9 s and the finest preconditioner 9.0-11.3 s
-against 7.5-7.7 s in interleaved runs (memory given back is faulted in again, and loses
-its transparent huge pages): docs/design/speed.md.
+glibc's allocator keeps the memory a process frees (small blocks, and, since its mmap
+threshold rises with every large block freed, most arrays of a large run too) for reuse.
+When the solve ends, its preconditioner, Jacobian and vectors are such free heap, which
+the outputs stage reuses only in part; trimming the heap there lowers a large run's
+peak. Only there: trimmed between the compute stages, the memory given back is faulted
+in again and loses its transparent huge pages, and the later stages ran measurably
+slower (docs/design/speed.md, "Issue 33, continued").
 """
 from __future__ import annotations
 
