@@ -222,9 +222,13 @@ def newton_direction(
     preconditioner, comm = context.preconditioner, context.comm
     g_u, g_phi = gradient
     free = ~active
-    # the factor overwrites its copy of M_s[I, I] (n_s^2 entries: 128 MB at 1.6e7 dofs)
+    # the factor overwrites M_s[I, I] (n_s^2 entries: 128 MB at 1.6e7 dofs) through its
+    # transpose, a Fortran-ordered view (LAPACK would copy the C-ordered array); its
+    # lower triangle is the upper triangle of M_s[I, I], the one read before
     metric_free = preconditioner.signorini_metric[np.ix_(free, free)]
-    factor = scipy.linalg.cho_factor(metric_free, overwrite_a=True) if free.any() else None
+    factor = (
+        scipy.linalg.cho_factor(metric_free.T, lower=True, overwrite_a=True) if free.any() else None
+    )
     del metric_free
 
     def apply_h(p):
