@@ -101,7 +101,7 @@ def test_a_plain_run_reports_the_estimator_when_asked(config, tmp_path):
     etas = {}
     for sets in ([], ["output.estimator=true"], ["output.indicators=true"]):
         out = tmp_path / f"out{len(etas)}"
-        args = [a for s in sets for a in ("--set", s)]
+        args = [a for s in ["output.plots=false", *sets] for a in ("--set", s)]
         proc = run_cli("solve", str(config), "--out", str(out), "--quiet", *args)
         assert proc.returncode == 0, proc.stderr
         summary = json.loads((out / "summary.json").read_text())
