@@ -11,7 +11,7 @@ SHELL := /bin/bash
 VENV    := .venv
 PY      := $(VENV)/bin/python
 DEBS    := python3-dolfinx python3-petsc4py python3-mpi4py python3-gmsh \
-           python3-scipy python3-sympy python3-matplotlib python3-pytest \
+           python3-scipy python3-sympy python3-matplotlib python3-pytest python3-pytest-xdist \
            python3-pybind11 pybind11-dev libeigen3-dev libgtest-dev cmake g++ make \
            python3-venv python3-setuptools python3-wheel python3-pip python3-tqdm \
            python3-slepc4py python3-threadpoolctl openmpi-bin libopenblas-dev \
@@ -71,8 +71,11 @@ test-cpp:
 	cmake --build $(CXX_BUILD) -j 2 > /dev/null
 	ctest --test-dir $(CXX_BUILD) --output-on-failure
 
+# one pytest worker per core (at most 4; a file's tests stay on one worker, so its module
+# fixtures are built once); one BLAS/OpenMP thread per worker, so workers do not oversubscribe
+# the cores (the runs the tests start under mpirun have one thread per rank already)
 test-py:
-	$(PY) -m pytest -q
+	OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 $(PY) -m pytest -q -n auto --maxprocesses 4 --dist loadfile
 
 demo: setup
 	$(PY) demos/demo_signorini_square.py
