@@ -171,6 +171,7 @@ PYBIND11_MODULE(_bem, m) {
       .def("apply", &bem::SurfaceSteklovOperator::apply, py::arg("x"), Release())
       .def("flux", &bem::SurfaceSteklovOperator::flux, py::arg("x"), Release())
       .def("hypersingular", &bem::SurfaceSteklovOperator::hypersingular, py::arg("x"), Release())
+      .def("hypersingular_block", &bem::SurfaceSteklovOperator::hypersingular_block, py::arg("indices"), Release())
       .def_property_readonly("size", &bem::SurfaceSteklovOperator::size)
       .def_property_readonly("nbytes", &bem::SurfaceSteklovOperator::nbytes)
       .def_property_readonly("info", &bem::SurfaceSteklovOperator::info)

@@ -128,6 +128,21 @@ class SteklovPoincareOperator(_CompiledOperator):
         """Coefficients of psi_h = V_h^{-1}(K_h - M_h) v (``exterior_flux`` with a = 0)."""
         return checks.columnwise(self._op.flux, dirichlet, self._op.size)
 
+    @property
+    def holds_hypersingular(self) -> bool:
+        """Whether W_h is held as an H-matrix on the P1 nodes (a surface's S_h), so that
+        :meth:`hypersingular_block` can read blocks of it."""
+        return hasattr(self._op, "hypersingular_block")
+
+    def hypersingular_block(self, indices: ArrayLike) -> NDArray[np.float64]:
+        """W_h[indices, indices] = E^T W_h E (k, k) read from the H-matrix of W_h (to its
+        tolerance), in O(k^2 r) work instead of integrating the block again (a surface's S_h
+        only: :attr:`holds_hypersingular`; collective when distributed, the same on every
+        rank)."""
+        if not self.holds_hypersingular:
+            raise TypeError("hypersingular_block: this S_h holds no H-matrix of W_h on P1 nodes")
+        return self._op.hypersingular_block(checks.indices(indices, self._op.size, "indices"))
+
     def __repr__(self) -> str:
         n = self._op.size
         return f"SteklovPoincareOperator(n={n}, nbytes={self.nbytes})"

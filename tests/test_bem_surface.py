@@ -188,3 +188,28 @@ def test_preconditioned_single_layer_solves_take_a_bounded_number_of_iterations(
         op @ (_zonal(X, 1) + np.sin(3 * X[:, 0]))
         iterations.append(op.last_iterations)
     assert max(iterations) <= iterations[0] + 3, iterations
+
+
+def test_hypersingular_block_read_from_the_hmatrix_equals_the_integrated_one():
+    """E^T W_h E on the interior nodes of a face of the cube (Gamma_s of a box), read from
+    the blocks of S_h's H-matrix of W_h: the integrated block to the H-matrix tolerance,
+    symmetric (symmetric storage: the diagonal blocks to round-off); bad indices and an S_h without W_h on
+    P1 nodes (a polygon's) are refused."""
+    X, T = cube(16)
+    low = X[:, 2].min()
+    edge = np.abs(X[:, :2]).max(axis=0) - 1e-9
+    face = np.flatnonzero((X[:, 2] == low) & (np.abs(X[:, :2]) < edge).all(axis=1))
+    assert len(face) == 15**2
+    op = bem_cpp.steklov_poincare(X, triangles=T, compression="hmatrix", tol=1e-10)
+    block = op.hypersingular_block(face)
+    integrated = bem_cpp.hypersingular(X, triangles=T, block=face)
+    assert np.linalg.norm(block - integrated) <= 1e-8 * np.linalg.norm(integrated)
+    assert np.abs(block - block.T).max() <= 1e-15 * np.abs(block).max()
+    with pytest.raises(ValueError, match="distinct"):
+        op.hypersingular_block([0, 0])
+    circle = np.c_[np.cos(np.linspace(0, 2 * np.pi, 64, endpoint=False)), np.zeros(64)]
+    circle[:, 1] = np.sin(np.linspace(0, 2 * np.pi, 64, endpoint=False))
+    planar = bem_cpp.steklov_poincare(circle, compression="hmatrix")
+    assert not planar.holds_hypersingular
+    with pytest.raises(TypeError, match="no H-matrix of W_h"):
+        planar.hypersingular_block([0, 1])

@@ -8,7 +8,10 @@ from __future__ import annotations
 import itertools
 
 import numpy as np
+import pytest
 
+import fem_py.mesh.location3d
+from fem_py.mesh.location import lattice_weights
 from fem_py.mesh.location3d import interpolate_p1_tetrahedra, locate_in_tetrahedra, on_surface
 
 
@@ -70,3 +73,42 @@ def test_points_on_the_surface_are_found_on_a_triangle():
     # inside, or off the surface by more than the distance: not on it
     off = np.array([[0.5, 0.5, 0.5], [1.0 + 1e-9, 0.5, 0.5], [0.3, 0.3, 1e-6]])
     assert np.all(on_surface(x, surface, off, 1e-12)[0] == -1)
+
+
+def test_nodes_of_the_refined_cube_are_matched_without_a_point_location(monkeypatch):
+    """Every node of the cube with twice the sub-cubes per side (the Kuhn split is nested)
+    is a coarse node or a coarse edge midpoint: it takes the mean of the edge's values
+    (exact for any P1 field, here a non-linear nodal field) and is found by sorting alone
+    (the point location is not called); far points are NaN, also beyond the sorting keys'
+    range; a point between the lattice points is located."""
+    x, tets = _cube(4)
+    values = np.sin(7 * x[:, 0]) + x[:, 1] ** 2 - x[:, 2] * x[:, 0]
+    fine, _ = _cube(8)
+    cell, bary = locate_in_tetrahedra(x, tets, fine)
+    expected = np.einsum("ij,ij->i", bary, values[tets[cell]])
+    located = locate_in_tetrahedra
+
+    def no_location(x, tetrahedra, points, **kwargs):
+        assert len(points) == 0, f"{len(points)} points were located"
+        return located(x, tetrahedra, points, **kwargs)
+
+    monkeypatch.setattr(fem_py.mesh.location3d, "locate_in_tetrahedra", no_location)
+    np.testing.assert_allclose(
+        interpolate_p1_tetrahedra(x, tets, values, fine), expected, atol=1e-15
+    )
+    monkeypatch.undo()
+    far = np.array([[3.0, 3.0, 0.5], [1e300, 0.0, 0.0], [-2.0, 0.5, 0.5]])
+    assert np.isnan(interpolate_p1_tetrahedra(x, tets, values, far)).all()
+    inner = np.array([[0.3, 0.41, 0.77]])
+    c, b = locate_in_tetrahedra(x, tets, inner)
+    np.testing.assert_allclose(
+        interpolate_p1_tetrahedra(x, tets, values, inner), b[0] @ values[tets[c[0]]], atol=1e-15
+    )
+
+
+@pytest.mark.parametrize("n", [1, 2, 3])
+def test_lattice_weights_of_a_tetrahedron_are_its_non_corner_points(n):
+    w = lattice_weights(n, corners=4)
+    assert w.shape == ((n + 1) * (n + 2) * (n + 3) // 6 - 4, 4)
+    np.testing.assert_allclose(w.sum(axis=1), 1.0)
+    assert (w.max(axis=1) < 1.0).all() and len(np.unique(w, axis=0)) == len(w)

@@ -21,3 +21,8 @@ def test_distributed_surface_operator_equals_the_serial_one(tmp_path):
     assert distributed == serial > 0
     assert d["same_everywhere"]
     assert np.all(d["bytes_per_rank"] < d["serial_bytes"])
+    # W_h's block from the blocks of both ranks: every entry is one rank's, so exactly the
+    # serial block; and the integrated block to the H-matrix tolerance (1e-10)
+    assert np.array_equal(d["block"], d["block_serial"]) and len(d["block"]) > 100
+    integrated = d["block_integrated"]
+    assert np.linalg.norm(d["block"] - integrated) <= 1e-8 * np.linalg.norm(integrated)

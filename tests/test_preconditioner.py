@@ -21,6 +21,7 @@ from coupling.preconditioners import (
     SignoriniArc,
     SubstructuringPreconditioner,
 )
+from coupling.preconditioners.base import DenseSignoriniBlock, largest_eigenvalue
 from coupling.preconditioners.edge_forms import (
     closed_paper_form,
     edge_form,
@@ -472,3 +473,18 @@ def test_edge_coordinates_of_the_coarse_structure_stand_for_the_node_coordinates
     )
     g = np.random.default_rng(0).standard_normal(prob.stiffness.shape[0])
     assert np.array_equal(without_x.apply_omega(g), with_x.apply_omega(g))
+
+
+@pytest.mark.parametrize("n", [50, 900])
+def test_largest_eigenvalue_of_the_signorini_metric(n):
+    """LAPACK below 400 rows, Lanczos above (dense and sparse), to the eigenvalue's
+    round-off: the largest eigenvalue of a 1D Laplacian plus a dense rank-one term."""
+    lap = sp.diags([-np.ones(n - 1), 2 * np.ones(n), -np.ones(n - 1)], [-1, 0, 1]).tocsr()
+    c = np.linspace(0.0, 1.0, n)
+    dense = lap.toarray() + np.outer(c, c) / n
+    exact = sla.eigvalsh(dense)[-1]
+    assert abs(largest_eigenvalue(dense) - exact) <= 1e-9 * exact
+    assert abs(largest_eigenvalue(lap) - sla.eigvalsh(lap.toarray())[-1]) <= 1e-9 * exact
+    block = DenseSignoriniBlock(dense)
+    assert block._lambda_max is None  # computed on first use only
+    assert abs(block.lambda_max_signorini - exact) <= 1e-9 * exact

@@ -301,6 +301,60 @@ Eigen::MatrixXd HMatrix::to_dense() const {
   return A;
 }
 
+Eigen::MatrixXd HMatrix::principal_submatrix(const std::vector<Index>& indices) const {
+  const Index m = static_cast<Index>(indices.size());
+  if (rows() != cols()) throw std::invalid_argument("HMatrix::principal_submatrix: the matrix is not square");
+  // position[permuted index] = the index's place in `indices`, or -1
+  std::vector<Index> row_position(static_cast<std::size_t>(rows()), -1), col_position(row_position);
+  std::vector<Index> inverse_rows(static_cast<std::size_t>(rows())), inverse_cols(inverse_rows);
+  const std::vector<Index>& rp = rows_->permutation();
+  const std::vector<Index>& cp = cols_->permutation();
+  for (std::size_t i = 0; i < rp.size(); ++i) inverse_rows[static_cast<std::size_t>(rp[i])] = static_cast<Index>(i);
+  for (std::size_t i = 0; i < cp.size(); ++i) inverse_cols[static_cast<std::size_t>(cp[i])] = static_cast<Index>(i);
+  for (Index a = 0; a < m; ++a) {
+    const Index i = indices[static_cast<std::size_t>(a)];
+    if (i < 0 || i >= rows()) throw std::invalid_argument("HMatrix::principal_submatrix: an index is out of range");
+    if (row_position[static_cast<std::size_t>(inverse_rows[static_cast<std::size_t>(i)])] != -1)
+      throw std::invalid_argument("HMatrix::principal_submatrix: an index appears twice");
+    row_position[static_cast<std::size_t>(inverse_rows[static_cast<std::size_t>(i)])] = a;
+    col_position[static_cast<std::size_t>(inverse_cols[static_cast<std::size_t>(i)])] = a;
+  }
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(m, m);
+  std::vector<Index> r_local, r_out, c_local, c_out;
+  for (const Block& b : blocks_) {
+    r_local.clear(), r_out.clear(), c_local.clear(), c_out.clear();
+    for (Index r = 0; r < b.m; ++r)
+      if (const Index a = row_position[static_cast<std::size_t>(b.r0 + r)]; a >= 0)
+        r_local.push_back(r), r_out.push_back(a);
+    if (r_local.empty()) continue;
+    for (Index c = 0; c < b.k; ++c)
+      if (const Index a = col_position[static_cast<std::size_t>(b.c0 + c)]; a >= 0)
+        c_local.push_back(c), c_out.push_back(a);
+    if (c_local.empty()) continue;
+    const auto rows_of = [&](const Eigen::MatrixXd& F, const std::vector<Index>& which) {
+      Eigen::MatrixXd out(static_cast<Index>(which.size()), F.cols());
+      for (std::size_t i = 0; i < which.size(); ++i) out.row(static_cast<Index>(i)) = F.row(which[i]);
+      return out;
+    };
+    Eigen::MatrixXd D(static_cast<Index>(r_local.size()), static_cast<Index>(c_local.size()));
+    if (b.low_rank) {
+      D.noalias() = rows_of(b.factors.U, r_local) * rows_of(b.factors.V, c_local).transpose();
+    } else {
+      for (std::size_t j = 0; j < c_local.size(); ++j)
+        for (std::size_t i = 0; i < r_local.size(); ++i)
+          D(static_cast<Index>(i), static_cast<Index>(j)) = b.dense(r_local[i], c_local[j]);
+    }
+    for (std::size_t j = 0; j < c_out.size(); ++j)
+      for (std::size_t i = 0; i < r_out.size(); ++i)
+        A(r_out[i], c_out[j]) = D(static_cast<Index>(i), static_cast<Index>(j));
+    if (symmetric_ && b.row_cluster != b.col_cluster)
+      for (std::size_t j = 0; j < c_out.size(); ++j)
+        for (std::size_t i = 0; i < r_out.size(); ++i)
+          A(c_out[j], r_out[i]) = D(static_cast<Index>(i), static_cast<Index>(j));
+  }
+  return A;
+}
+
 std::size_t HMatrix::nbytes() const {
   std::size_t entries = 0;
   for (const Block& b : blocks_)

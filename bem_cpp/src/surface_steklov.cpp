@@ -66,6 +66,17 @@ Eigen::MatrixXd SurfaceSteklovOperator::hypersingular(const Eigen::Ref<const Eig
   return W_->apply(X);
 }
 
+Eigen::MatrixXd SurfaceSteklovOperator::hypersingular_block(const std::vector<Index>& indices) const {
+  const Eigen::MatrixXd partial = W_->principal_submatrix(indices);
+  const std::shared_ptr<const Communicator>& comm = options_.hmatrix.comm;
+  if (!comm || comm->size == 1) return partial;
+  // every entry comes from one block of one rank: the sum is exact, in any order
+  const Index m = partial.rows();
+  std::vector<Index> counts(static_cast<std::size_t>(comm->size), m / comm->size);
+  for (Index r = 0; r < m % comm->size; ++r) ++counts[static_cast<std::size_t>(r)];
+  return comm->allreduce(partial, counts);
+}
+
 Eigen::MatrixXd SurfaceSteklovOperator::precondition(const Eigen::MatrixXd& R) const {
   const Eigen::MatrixXd Y = mass_factor_.solve(R);
   Eigen::MatrixXd Z = hypersingular(Y);

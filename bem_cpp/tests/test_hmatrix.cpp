@@ -63,3 +63,31 @@ TEST(HMatrix, SymmetricStorageHoldsHalfTheOffDiagonalBlocks) {
   const OperatorEntries e(poly, Kernel::SingleLayer, Space::P0, Space::P0);
   EXPECT_THROW(HMatrix(t0, t1, e, HMatrixOptions{16, 1.0, 1e-8, true}), std::invalid_argument);
 }
+
+TEST(HMatrix, PrincipalSubmatrixIsThatOfTheDenseMatrix) {
+  const Polygon poly(test::circle(600));
+  const Index n = poly.size();
+  auto tree = std::make_shared<const ClusterTree>(ClusterTree::for_space(poly, Space::P1, 16));
+  const OperatorEntries single(poly, Kernel::SingleLayer, Space::P1, Space::P1);
+  const OperatorEntries dbl(poly, Kernel::DoubleLayer, Space::P1, Space::P1);
+  const HMatrix sym(tree, tree, single, HMatrixOptions{16, 1.0, 1e-8, true});
+  const HMatrix general(tree, tree, dbl, HMatrixOptions{16, 1.0, 1e-8});
+  // every third node, in a scrambled order, and an arc of consecutive nodes
+  std::vector<Index> scattered, arc;
+  for (Index i = n - 2; i >= 0; i -= 3) scattered.push_back(i);
+  for (Index i = 100; i < 260; ++i) arc.push_back(i);
+  for (const HMatrix* H : {&sym, &general}) {
+    const Eigen::MatrixXd D = H->to_dense();
+    for (const auto& idx : {scattered, arc}) {
+      const Eigen::MatrixXd B = H->principal_submatrix(idx);
+      ASSERT_EQ(B.rows(), static_cast<Index>(idx.size()));
+      Eigen::MatrixXd expected(B.rows(), B.cols());
+      for (std::size_t a = 0; a < idx.size(); ++a)
+        for (std::size_t b = 0; b < idx.size(); ++b)
+          expected(static_cast<Index>(a), static_cast<Index>(b)) = D(idx[a], idx[b]);
+      EXPECT_LE((B - expected).norm(), 1e-14 * expected.norm());
+    }
+  }
+  EXPECT_THROW(sym.principal_submatrix({0, 5, 5}), std::invalid_argument);
+  EXPECT_THROW(sym.principal_submatrix({n}), std::invalid_argument);
+}

@@ -102,7 +102,7 @@ def build_preconditioner(
         return MultigridPreconditioner(
             V,
             constant_mode_weight(V, problem.S),
-            signorini_hypersingular(comm, problem.boundary),
+            signorini_hypersingular(comm, problem.boundary, problem.S),
             rtol=AMG_RTOL,
             max_iterations=AMG_MAX_ITERATIONS,
         )

@@ -7,8 +7,18 @@ from typing import Protocol
 
 import numpy as np
 import scipy.linalg
+import scipy.sparse.linalg
 
-__all__ = ["Preconditioner", "IdentityPreconditioner", "DenseSignoriniBlock", "check_length"]
+__all__ = [
+    "Preconditioner",
+    "IdentityPreconditioner",
+    "DenseSignoriniBlock",
+    "check_length",
+    "largest_eigenvalue",
+]
+
+#: Up to this size the largest eigenvalue of M_s comes from LAPACK, above it from Lanczos.
+DENSE_EIGENVALUE_SIZE = 400
 
 
 class Preconditioner(Protocol):
@@ -82,17 +92,24 @@ class IdentityPreconditioner:
 
 class DenseSignoriniBlock:
     """A Signorini block B_s given by its dense SPD matrix M_s (n_s x n_s), Cholesky-factored:
-    ``apply_signorini`` (M_s^{-1}), ``matvec_signorini``, ``lambda_max_signorini`` and
-    ``signorini_metric`` of the interface, for preconditioners to inherit."""
+    ``apply_signorini`` (M_s^{-1}), ``matvec_signorini``, ``lambda_max_signorini`` (computed
+    on first use: only the inexact projection reads it) and ``signorini_metric`` of the
+    interface, for preconditioners to inherit."""
 
     def __init__(self, metric: np.ndarray):
         self.signorini_metric = np.ascontiguousarray(metric, dtype=float)
-        self.n_signorini = n = self.signorini_metric.shape[0]
-        self.lambda_max_signorini = 1.0
-        if n:
+        self.n_signorini = self.signorini_metric.shape[0]
+        self._lambda_max: float | None = None
+        if self.n_signorini:
             self._signorini_factor = scipy.linalg.cho_factor(self.signorini_metric)
-            top = scipy.linalg.eigvalsh(self.signorini_metric, subset_by_index=[n - 1, n - 1])
-            self.lambda_max_signorini = float(top[0])
+
+    @property
+    def lambda_max_signorini(self) -> float:
+        if self._lambda_max is None:
+            self._lambda_max = (
+                largest_eigenvalue(self.signorini_metric) if self.n_signorini else 1.0
+            )
+        return self._lambda_max
 
     def apply_signorini(self, g: np.ndarray) -> np.ndarray:
         if not self.n_signorini:
@@ -101,6 +118,27 @@ class DenseSignoriniBlock:
 
     def matvec_signorini(self, phi: np.ndarray) -> np.ndarray:
         return self.signorini_metric @ phi
+
+
+def largest_eigenvalue(matrix) -> float:
+    """The largest eigenvalue of a symmetric matrix (dense or scipy sparse): LAPACK up to
+    DENSE_EIGENVALUE_SIZE rows, else Lanczos (ARPACK, relative tolerance 1e-10), started
+    from a fixed pseudo-random vector: every rank computes the same number, and the start
+    has a component along the top eigenvector (a symmetric start such as the ones vector
+    can miss it on a symmetric mesh)."""
+    n = matrix.shape[0]
+    if n <= DENSE_EIGENVALUE_SIZE:
+        dense = matrix.toarray() if hasattr(matrix, "toarray") else np.asarray(matrix)
+        return float(scipy.linalg.eigvalsh(dense, subset_by_index=[n - 1, n - 1])[0])
+    top = scipy.sparse.linalg.eigsh(
+        matrix,
+        k=1,
+        which="LA",
+        return_eigenvectors=False,
+        tol=1e-10,
+        v0=np.random.default_rng(0).standard_normal(n),
+    )
+    return float(top[0])
 
 
 def check_length(v: np.ndarray, n: int, name: str) -> np.ndarray:

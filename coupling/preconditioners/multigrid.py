@@ -20,9 +20,10 @@ B_Omega^{-1} is applied by conjugate gradients preconditioned by one algebraic m
 V-cycle (PETSc GAMG), to the relative tolerance ``rtol`` (the iterations read B_Omega u
 and B_Omega^{-1} g as inverses of each other, so the inner solve is tight, not one cycle);
 its cost per application grows like N, its count stays bounded as h -> 0. M_s is dense
-(n_s x n_s, the projection (3.19) and the Newton steps read it), integrated over the
-triangles of Gamma_s alone (``bem_cpp.hypersingular(..., block=)``) on rank 0 with every
-core, broadcast, and factored on every rank.
+(n_s x n_s, the projection (3.19) and the Newton steps read it), and factored on every
+rank; with the H-matrix S_h it is read from the H-matrix of W_h that S_h holds (to its
+tolerance), else integrated over the triangles of Gamma_s alone
+(``bem_cpp.hypersingular(..., block=)``) on rank 0 with every core and broadcast.
 """
 from __future__ import annotations
 
@@ -50,10 +51,13 @@ def constant_mode_weight(V: fem.FunctionSpace, S: Any) -> float:
     return float(one @ (S @ one)) / float(area)
 
 
-def signorini_hypersingular(comm: MPI.Comm, boundary: Any) -> np.ndarray:
-    """M_s = E^T W_h E (n_s x n_s) on every rank: computed on rank 0 (collective)."""
+def signorini_hypersingular(comm: MPI.Comm, boundary: Any, S: Any = None) -> np.ndarray:
+    """M_s = E^T W_h E (n_s x n_s) on every rank (collective): read from the H-matrix of
+    W_h that S_h holds, when it does (``S.holds_hypersingular``), else integrated on rank 0."""
     if boundary.signorini.size == 0:
         return np.zeros((0, 0))
+    if getattr(S, "holds_hypersingular", False):
+        return S.hypersingular_block(boundary.signorini)
     return array_from_root(
         comm,
         lambda: bem_cpp.hypersingular(

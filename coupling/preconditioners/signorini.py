@@ -16,9 +16,8 @@ from typing import Any, Sequence
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
-from coupling.preconditioners.base import check_length
+from coupling.preconditioners.base import check_length, largest_eigenvalue
 from coupling.preconditioners.edge_forms import EDGE_FORMS, closed_paper_form, paper_edge_form
 from coupling.preconditioners.kernels import TwoLevelForm, block_diagonal_edge_forms
 from fem_py.polyline import arc_length
@@ -193,16 +192,7 @@ class SignoriniBlock:
         "(3.20)."""
         if self._lambda_max is None:  # of M_s, computed on first use
             m = self._signorini.matrix
-            if m.shape[0] == 0:
-                self._lambda_max = 0.0
-            elif m.shape[0] <= 400:
-                self._lambda_max = float(
-                    sla.eigvalsh(m.toarray(), subset_by_index=[m.shape[0] - 1] * 2)[0]
-                )
-            else:
-                self._lambda_max = float(
-                    spla.eigsh(m, k=1, which="LA", return_eigenvectors=False, tol=1e-10)[0]
-                )
+            self._lambda_max = largest_eigenvalue(m) if m.shape[0] else 0.0
         return self.signorini_weight * self._lambda_max
 
 

@@ -27,6 +27,8 @@ import numpy as np
 import scipy.linalg
 import scipy.optimize
 
+from coupling.preconditioners.base import largest_eigenvalue
+
 __all__ = ["SignoriniProjection", "ProjectionResult"]
 
 
@@ -90,8 +92,7 @@ class SignoriniProjection:
         if self._theta is None:
             lam = self._lambda_max() if callable(self._lambda_max) else self._lambda_max
             if lam is None:
-                n = self.M.shape[0]
-                lam = scipy.linalg.eigvalsh(self.M, subset_by_index=[n - 1, n - 1])[0]
+                lam = largest_eigenvalue(self.M)
             self._theta = 1.0 / float(lam)
         return self._theta
 

@@ -3,10 +3,12 @@ interpolation there (vectorised; candidates from a uniform grid of squares, or a
 of the triangle centroids on strongly graded meshes)."""
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 from scipy.spatial import cKDTree
 
-__all__ = ["locate", "interpolate_p1", "lattice_weights"]
+__all__ = ["locate", "interpolate_p1", "lattice_weights", "at_lattice_points"]
 
 #: Point location: a grid square holding more triangles than this (a strongly graded
 #: mesh, the squares being as large as the largest triangle) switches :func:`locate` to
@@ -122,39 +124,50 @@ def _locate_nearest(
 
 
 def _grid_keys(coords: np.ndarray, origin: np.ndarray, quantum: float) -> np.ndarray:
-    """One int64 per point: its coordinates rounded to multiples of ``quantum``, -1 for
-    the points outside [0, 2^30] quanta from ``origin`` (none of the mesh's)."""
+    """One int64 per point (coordinates (m, d), d = 2 or 3): its coordinates rounded to
+    multiples of ``quantum``, -1 for the points outside [0, GRID_LEVELS[d]] quanta from
+    ``origin`` (none of the mesh's)."""
+    d = coords.shape[1]
+    levels = GRID_LEVELS[d]
     with np.errstate(over="ignore", invalid="ignore"):
         k = np.rint((coords - origin) / quantum)
-    inside = ((k >= 0) & (k <= 2.0**30)).all(axis=1)
+    inside = ((k >= 0) & (k <= levels)).all(axis=1)
     keys = np.full(len(coords), -1, dtype=np.int64)
     ki = k[inside].astype(np.int64)
-    keys[inside] = ki[:, 0] * (1 << 31) + ki[:, 1]
+    keys[inside] = ki[:, 0]
+    for axis in range(1, d):
+        keys[inside] = keys[inside] * (levels + 1) + ki[:, axis]
     return keys
 
 
-def lattice_weights(divisions: int) -> np.ndarray:
-    """(k, 3) barycentric weights (i, j, l) / n, i + j + l = n = ``divisions``, of the
-    lattice points of a triangle that are not its corners: the nodes that n-fold uniform
-    refinement adds in (and on the sides of) each triangle."""
+#: Quanta per side of the matching grid, by dimension: the keys fit in an int64.
+GRID_LEVELS = {2: 2**30, 3: 2**20}
+
+
+def lattice_weights(divisions: int, corners: int = 3) -> np.ndarray:
+    """(k, corners) barycentric weights (i, j, ...) / n, summing to 1 (n = ``divisions``),
+    of the lattice points of a triangle (``corners`` = 3) or tetrahedron (4) that are not
+    its corners: the nodes that n-fold uniform refinement adds in (and on the sides of)
+    each cell (for n = 2 the edge midpoints)."""
     n = divisions
-    w = [(i, j, n - i - j) for i in range(n + 1) for j in range(n + 1 - i)]
-    return np.array([c for c in w if max(c) < n], dtype=float).reshape(-1, 3) / n
+    w = [c for c in itertools.product(range(n + 1), repeat=corners) if sum(c) == n]
+    return np.array([c for c in w if max(c) < n], dtype=float).reshape(-1, corners) / n
 
 
-def _at_lattice_points(
-    x: np.ndarray, triangles: np.ndarray, values: np.ndarray, points: np.ndarray, divisions: int
+def at_lattice_points(
+    x: np.ndarray, cells: np.ndarray, values: np.ndarray, points: np.ndarray, divisions: int
 ) -> tuple[np.ndarray, np.ndarray]:
-    """(values, matched) at the points that coincide, up to 2^-30 of the mesh's extent,
-    with a node (the nodal value) or a lattice point (i a + j b + l c) / n of a triangle
-    abc, n = ``divisions`` (the P1 value there, the same weights of the corner values):
-    every node of an n-fold uniform refinement of the mesh, by sorting instead of a
-    point location."""
-    weights = lattice_weights(divisions)
-    coords = np.concatenate([x, np.einsum("kc,tcd->tkd", weights, x[triangles]).reshape(-1, 2)])
-    known = np.concatenate([values, (values[triangles] @ weights.T).ravel()])
+    """(values, matched) at the points that coincide, up to 1 / GRID_LEVELS of the mesh's
+    extent, with a node (the nodal value) or a lattice point of a cell (triangles or
+    tetrahedra) for ``divisions`` (the P1 value there: the same weights of the corner
+    values): every node of an n-fold uniform refinement of the mesh, by sorting instead of
+    a point location."""
+    weights = lattice_weights(divisions, cells.shape[1])
+    d = x.shape[1]
+    coords = np.concatenate([x, np.einsum("kc,tcd->tkd", weights, x[cells]).reshape(-1, d)])
+    known = np.concatenate([values, (values[cells] @ weights.T).ravel()])
     origin = x.min(axis=0)
-    quantum = max(float(np.ptp(x, axis=0).max()), 1e-300) * 2.0**-30
+    quantum = max(float(np.ptp(x, axis=0).max()), 1e-300) / GRID_LEVELS[d]
     keys = _grid_keys(coords, origin, quantum)
     order = np.argsort(keys, kind="stable")
     keys = keys[order]
@@ -185,7 +198,7 @@ def interpolate_p1(
     points = np.asarray(points, dtype=float).reshape(-1, 2)
     if len(x) == 0 or len(triangles) == 0:
         return np.full(len(points), np.nan)
-    out, matched = _at_lattice_points(x, triangles, values, points, max(int(divisions), 1))
+    out, matched = at_lattice_points(x, triangles, values, points, max(int(divisions), 1))
     rest = np.flatnonzero(~matched)
     cell, bary = locate(x, triangles, points[rest])
     found = cell >= 0

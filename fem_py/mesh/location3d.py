@@ -9,6 +9,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from fem_py.mesh.location import at_lattice_points
+
 __all__ = ["locate_in_tetrahedra", "interpolate_p1_tetrahedra", "on_surface"]
 
 
@@ -32,9 +34,13 @@ def locate_in_tetrahedra(
     bary = np.zeros((len(points), 4))
     if len(points) == 0 or len(tets) == 0:
         return cell, bary
+    # points outside the mesh's bounding box (with a margin) are in no cell
+    lo, hi = x.min(axis=0), x.max(axis=0)
+    margin = 1e-9 * float((hi - lo).max())
+    inside = np.flatnonzero(((points >= lo - margin) & (points <= hi + margin)).all(axis=1))
     corners = x[tets]  # (T, 4, 3)
     inverses = np.linalg.inv(np.transpose(corners[:, 1:] - corners[:, :1], (0, 2, 1)))
-    for i, near in enumerate(_candidates(corners, points)):
+    for i, near in zip(inside, _candidates(corners, points[inside])):
         if not near:
             continue
         near = np.asarray(near)
@@ -47,14 +53,28 @@ def locate_in_tetrahedra(
 
 
 def interpolate_p1_tetrahedra(
-    x: np.ndarray, tetrahedra: np.ndarray, values: np.ndarray, points: np.ndarray
+    x: np.ndarray,
+    tetrahedra: np.ndarray,
+    values: np.ndarray,
+    points: np.ndarray,
+    *,
+    divisions: int = 2,
 ) -> np.ndarray:
-    """The P1 function of nodal ``values`` at ``points`` (m, 3); NaN outside the mesh."""
-    cell, bary = locate_in_tetrahedra(x, tetrahedra, points)
-    out = np.full(len(cell), np.nan)
+    """The P1 function of nodal ``values`` at ``points`` (m, 3); NaN outside the mesh.
+
+    Points at nodes and at the lattice points of the ``divisions``-fold uniform refinement
+    (2: the edge midpoints, every node of a box with twice the cubes per side) are matched
+    by sorting; the others are located (:func:`locate_in_tetrahedra`)."""
+    x, tets = np.asarray(x, dtype=float), np.asarray(tetrahedra, dtype=np.int64)
+    values = np.asarray(values, dtype=float)
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    if len(x) == 0 or len(tets) == 0:
+        return np.full(len(points), np.nan)
+    out, matched = at_lattice_points(x, tets, values, points, max(int(divisions), 1))
+    rest = np.flatnonzero(~matched)
+    cell, bary = locate_in_tetrahedra(x, tets, points[rest])
     found = cell >= 0
-    tets = np.asarray(tetrahedra, dtype=np.int64)[cell[found]]
-    out[found] = np.einsum("ij,ij->i", bary[found], np.asarray(values, dtype=float)[tets])
+    out[rest[found]] = np.einsum("ij,ij->i", bary[found], values[tets[cell[found]]])
     return out
 
 

@@ -1,5 +1,6 @@
 """Under mpirun: the 3D H-matrix S_h distributed over the ranks against the serial one on
-every rank (tests/test_mpi_surface_steklov.py). Arguments: output .npz, icosphere level."""
+every rank, its products and the blocks of W_h read from it
+(tests/test_mpi_surface_steklov.py). Arguments: output .npz, icosphere level."""
 from __future__ import annotations
 
 import sys
@@ -18,13 +19,19 @@ y = distributed @ x
 iterations = distributed.last_iterations
 serial = bem_cpp.steklov_poincare(X, triangles=T, compression="hmatrix")
 y_serial = serial @ x
-same = comm.allgather(y.tobytes())
+# W_h on the nodes of the cap z > 0.4 (a patch, as Gamma_s), read from the H-matrices
+cap = np.flatnonzero(X[:, 2] > 0.4)
+block, block_serial = distributed.hypersingular_block(cap), serial.hypersingular_block(cap)
+same = comm.allgather(y.tobytes() + block.tobytes())
 bytes_per_rank = comm.allgather(distributed.nbytes)
 if comm.rank == 0:
     np.savez(
         sys.argv[1],
         y=y,
         y_serial=y_serial,
+        block=block,
+        block_serial=block_serial,
+        block_integrated=bem_cpp.hypersingular(X, triangles=T, block=cap),
         iterations=[iterations, serial.last_iterations],
         same_everywhere=all(s == same[0] for s in same),
         bytes_per_rank=bytes_per_rank,

@@ -122,6 +122,11 @@ class HMatrix {
   /// off-diagonal ones under symmetric storage; for tests): the whole matrix, or of a
   /// row-restricted one its contribution (summed over the ranks: the whole matrix).
   Eigen::MatrixXd to_dense() const;
+  /// The entries (indices[a], indices[b]) of the held blocks, (m, m) for the m original
+  /// dof indices (distinct, in [0, rows())): to_dense()'s submatrix without forming the
+  /// whole, in O(sum over the blocks of their selected entries times their rank).
+  /// Row-restricted: this rank's contribution (summed over the ranks: the whole block).
+  Eigen::MatrixXd principal_submatrix(const std::vector<Index>& indices) const;
   Index row_begin() const { return row_begin_; }
   Index row_end() const { return row_end_; }
   /// Built on a row range, with or without a communicator.

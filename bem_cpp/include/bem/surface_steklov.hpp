@@ -36,6 +36,11 @@ class SurfaceSteklovOperator {
   Eigen::MatrixXd flux(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
   /// W_h X (the H-matrix of Nedelec's identity).
   Eigen::MatrixXd hypersingular(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
+  /// The principal submatrix of W_h on the vertices `indices` (m, m), from its H-matrix
+  /// (to its tolerance): the hypersingular block of the dofs whose hats lie in a part of
+  /// the surface (e.g. Gamma_s's interior nodes), without integrating it again. The same
+  /// on every rank (collective when distributed).
+  Eigen::MatrixXd hypersingular_block(const std::vector<Index>& indices) const;
   std::size_t nbytes() const;
   const SteklovInfo& info() const { return info_; }
   int last_iterations() const { return last_iterations_.load(); }
