@@ -193,8 +193,8 @@ def test_preconditioned_single_layer_solves_take_a_bounded_number_of_iterations(
 def test_hypersingular_block_read_from_the_hmatrix_equals_the_integrated_one():
     """E^T W_h E on the interior nodes of a face of the cube (Gamma_s of a box), read from
     the blocks of S_h's H-matrix of W_h: the integrated block to the H-matrix tolerance,
-    symmetric (symmetric storage: the diagonal blocks to round-off); bad indices and an S_h without W_h on
-    P1 nodes (a polygon's) are refused."""
+    symmetric (symmetric storage; the diagonal blocks to round-off); bad indices and an
+    S_h without W_h on P1 nodes (a polygon's) are refused."""
     X, T = cube(16)
     low = X[:, 2].min()
     edge = np.abs(X[:, :2]).max(axis=0) - 1e-9
