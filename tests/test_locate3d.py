@@ -94,7 +94,7 @@ def test_nodes_of_the_refined_cube_are_matched_without_a_point_location(monkeypa
 
     monkeypatch.setattr(fem_py.mesh.location3d, "locate_in_tetrahedra", no_location)
     np.testing.assert_allclose(
-        interpolate_p1_tetrahedra(x, tets, values, fine), expected, atol=1e-15
+        interpolate_p1_tetrahedra(x, tets, values, fine, divisions=2), expected, atol=1e-15
     )
     monkeypatch.undo()
     far = np.array([[3.0, 3.0, 0.5], [1e300, 0.0, 0.0], [-2.0, 0.5, 0.5]])

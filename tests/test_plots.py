@@ -139,3 +139,17 @@ def test_the_coarsened_image_is_the_image_on_the_coarse_grid(pixels):
     assert image.count() > 0
     np.testing.assert_array_equal(image.mask, direct.mask)
     np.testing.assert_allclose(image.compressed(), direct.compressed(), rtol=0, atol=1e-12)
+
+
+def test_surface_figure_turns_the_normals_of_a_closed_surface_outward():
+    """surface.png draws the triangles facing the eye only: their normals must point out
+    of the body whatever the triangles' orientation (here the cube, both ways round)."""
+    from bem_cpp.surfaces import cube
+    from coupling.io.body_figures import _outward_normals
+
+    X, T = cube(4)
+    for tri in (T, T[:, ::-1]):
+        corners = X[tri]
+        normals = _outward_normals(corners)
+        centroids = corners.mean(axis=1)
+        assert (np.einsum("ij,ij->i", normals, centroids) > 0).all()  # the cube's centre: 0

@@ -81,10 +81,19 @@ def _figure_surface(inputs: BodyFigureInputs):
     norm = plt.Normalize(float(u.min()), float(u.max()))
     colours = plt.get_cmap("viridis")(norm(values))
     lo, hi = nodes.min(axis=0), nodes.max(axis=0)
+    corners = nodes[tri]
+    outward = _outward_normals(corners)
     fig = plt.figure(figsize=(11, 5))
     for k, (elev, azim) in enumerate(((25, -60), (-25, 120))):
         ax = fig.add_subplot(1, 2, k + 1, projection="3d")
-        ax.add_collection3d(Poly3DCollection(nodes[tri], facecolors=colours, linewidths=0))
+        # the triangles facing away from the eye are hidden behind the others (a closed
+        # surface): only those facing it are drawn (half the polygons to sort and fill)
+        e, a = np.radians(elev), np.radians(azim)
+        eye = np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])
+        front = outward @ eye > 0.0
+        ax.add_collection3d(
+            Poly3DCollection(corners[front], facecolors=colours[front], linewidths=0)
+        )
         ax.set(xlim=(lo[0], hi[0]), ylim=(lo[1], hi[1]), zlim=(lo[2], hi[2]))
         ax.set(xlabel="$x$", ylabel="$y$", zlabel="$z$")
         ax.set_box_aspect(hi - lo)
@@ -93,6 +102,15 @@ def _figure_surface(inputs: BodyFigureInputs):
     mappable = plt.cm.ScalarMappable(norm=norm, cmap="viridis")
     fig.colorbar(mappable, ax=fig.axes, shrink=0.7, label=r"$u_h$ on $\Gamma$")
     return fig
+
+
+def _outward_normals(corners: np.ndarray) -> np.ndarray:
+    """The normals (t, 3) of a closed surface's triangles ``corners`` (t, 3, 3), turned
+    outward: the orientation whose enclosed (signed) volume is positive."""
+    normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    centre = corners.reshape(-1, 3).mean(axis=0)
+    volume = np.einsum("ij,ij->", corners[:, 0] - centre, normals) / 6.0
+    return normals if volume > 0 else -normals
 
 
 def _figure_slice(inputs: BodyFigureInputs):

@@ -53,13 +53,13 @@ def prolong(coarse: Any, coarse_solution: Solution, fine: Any) -> tuple[np.ndarr
     n_owned = fine.V.dofmap.index_map.size_local
     dim = x.shape[1]
     points = fine.V.tabulate_dof_coordinates()[:n_owned, :dim]
+    # an n-fold uniform refinement has n^dim times the cells: its nodes are matched by
+    # sorting
+    fine_cells = fine.V.mesh.topology.index_map(dim).size_global
+    divisions = max(1, round((fine_cells / len(cells)) ** (1.0 / dim)))
     if dim == 3:
-        u = interpolate_p1_tetrahedra(x, cells, values, points)
+        u = interpolate_p1_tetrahedra(x, cells, values, points, divisions=divisions)
     else:
-        # an n-fold uniform refinement has n^2 times the cells: its nodes are matched by
-        # sorting
-        fine_cells = fine.V.mesh.topology.index_map(2).size_global
-        divisions = max(1, round(np.sqrt(fine_cells / len(cells))))
         u = interpolate_p1(x, cells, values, points, divisions=divisions)
     lost = np.isnan(u)  # on the coarse boundary up to round-off (or outside a coarse
     if lost.any():  # curved surface): the nearest coarse node

@@ -6,6 +6,8 @@ centroid, so every cell that may hold it is among those within the mesh's larges
 distance."""
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -34,21 +36,36 @@ def locate_in_tetrahedra(
     bary = np.zeros((len(points), 4))
     if len(points) == 0 or len(tets) == 0:
         return cell, bary
-    # points outside the mesh's bounding box (with a margin) are in no cell
+    # points outside the mesh's bounding box (with a margin) are in no cell, and only the
+    # cells that meet the bounding box of the others can hold them (a section of the body:
+    # the cells along its plane)
     lo, hi = x.min(axis=0), x.max(axis=0)
     margin = 1e-9 * float((hi - lo).max())
     inside = np.flatnonzero(((points >= lo - margin) & (points <= hi + margin)).all(axis=1))
+    if len(inside) == 0:
+        return cell, bary
+    p_lo, p_hi = points[inside].min(axis=0) - margin, points[inside].max(axis=0) + margin
     corners = x[tets]  # (T, 4, 3)
-    inverses = np.linalg.inv(np.transpose(corners[:, 1:] - corners[:, :1], (0, 2, 1)))
-    for i, near in zip(inside, _candidates(corners, points[inside])):
+    kept = np.flatnonzero(
+        ((corners.max(axis=1) >= p_lo) & (corners.min(axis=1) <= p_hi)).all(axis=1)
+    )
+    corners = corners[kept]
+    candidates = _candidates(corners, points[inside])
+    # the inverse Jacobians of the candidate cells only
+    used = np.unique(np.fromiter(itertools.chain.from_iterable(candidates), dtype=np.int64))
+    position = np.full(len(corners), -1, dtype=np.int64)
+    position[used] = np.arange(len(used))
+    edges = corners[used, 1:] - corners[used, :1]
+    inverses = np.linalg.inv(np.transpose(edges, (0, 2, 1)))
+    for i, near in zip(inside, candidates):
         if not near:
             continue
         near = np.asarray(near)
-        lam = np.einsum("tij,tj->ti", inverses[near], points[i] - corners[near, 0])
+        lam = np.einsum("tij,tj->ti", inverses[position[near]], points[i] - corners[near, 0])
         lam = np.column_stack([1.0 - lam.sum(axis=1), lam])
         best = int(np.argmax(lam.min(axis=1)))
         if lam[best].min() >= -tol:
-            cell[i], bary[i] = near[best], lam[best]
+            cell[i], bary[i] = kept[near[best]], lam[best]
     return cell, bary
 
 
@@ -58,13 +75,14 @@ def interpolate_p1_tetrahedra(
     values: np.ndarray,
     points: np.ndarray,
     *,
-    divisions: int = 2,
+    divisions: int = 1,
 ) -> np.ndarray:
     """The P1 function of nodal ``values`` at ``points`` (m, 3); NaN outside the mesh.
 
     Points at nodes and at the lattice points of the ``divisions``-fold uniform refinement
-    (2: the edge midpoints, every node of a box with twice the cubes per side) are matched
-    by sorting; the others are located (:func:`locate_in_tetrahedra`)."""
+    (2: the edge midpoints, every node of a box with twice the cubes per side: nested
+    iteration) are matched by sorting; the others are located
+    (:func:`locate_in_tetrahedra`)."""
     x, tets = np.asarray(x, dtype=float), np.asarray(tetrahedra, dtype=np.int64)
     values = np.asarray(values, dtype=float)
     points = np.asarray(points, dtype=float).reshape(-1, 3)
