@@ -130,9 +130,11 @@ OVERSOLVE_SAFEGUARD = 0.1
 #: 1/16 of the fine one (docs/design/nested.md, "Coarser levels at 4h").
 NESTED_COARSENING = 4
 NESTED_MIN_DOFS = 1000
-#: The same for a body in R^3: h doubles per level (a level then has 1/8 of the dofs and
-#: 1/4 of the boundary dofs of the next; docs/design/three_dimensions.md, "Nested").
-NESTED_COARSENING_3D = 2
+#: A body in R^3: h grows by the first factor per level (a level then has 1/64 of the dofs
+#: and 1/16 of the boundary dofs of the next, so that its S_h costs little), and by the
+#: second for the coarsest level where the first would leave fewer than NESTED_MIN_DOFS
+#: dofs or cut a box's cubes (docs/design/three_dimensions.md, "Nested").
+NESTED_COARSENING_3D = (4, 2)
 #: ``preconditioner = "auto"``: the paper's substructuring B for a planar domain, amg
 #: (multigrid and E^T W_h E, docs/method.md section 11) for a body in R^3.
 AUTO_PRECONDITIONER = {2: "substructuring", 3: "amg"}

@@ -166,7 +166,8 @@ def test_a_body_that_cannot_fit_is_refused_before_it_is_built(tmp_path):
 
 
 def test_nested_solve_of_a_box_writes_its_levels(tmp_path):
-    # 20 cubes per side (9,261 dofs) from 10 (1,331): NESTED_COARSENING_3D = 2
+    # 20 cubes per side (9,261 dofs) from 10 (1,331): 5 (216 dofs) is too few for a
+    # level at 4 h (NESTED_COARSENING_3D)
     proc, out = _solve(tmp_path, "nested", BOX.replace("h = 0.125", "h = 0.025"))
     assert proc.returncode == 0, proc.stderr
     summary, _ = _load(out)

@@ -184,13 +184,17 @@ def test_nested_solve_of_a_body():
     assert np.abs(nested.phi - cold.phi).max() <= 1e-7 * scale
     assert np.array_equal(nested.contact, cold.contact)
     assert nested.iterations < cold.iterations  # measured 3 against 10
-    # the configuration's levels: h doubles (NESTED_COARSENING_3D) while a level keeps
-    # NESTED_MIN_DOFS = 1000 dofs; a box whose width is no multiple of the coarse h stops
-    config = parse_config(
-        {"geometry": {"shape": "box", "width": 0.5, "h": 0.5 / 48, "signorini": ["bottom"]}}
-    )
-    levels = [c.geometry.h for c in coarser_configs(config, 49**3)]
-    assert levels == pytest.approx([0.5 / 12, 0.5 / 24], rel=1e-14)
-    config = parse_config({"geometry": {"shape": "box", "width": 0.5, "h": 0.5 / 30}})
-    levels = [c.geometry.h for c in coarser_configs(config, 31**3)]  # 7.5 cubes: stop
-    assert levels == pytest.approx([0.5 / 15], rel=1e-14)
+
+    # the configuration's levels (NESTED_COARSENING_3D): h times 4 per level while a level
+    # keeps NESTED_MIN_DOFS = 1000 dofs and a whole number of cubes, then once times 2
+    # where that still does
+    def levels(cubes: int) -> list[float]:
+        config = parse_config({"geometry": {"shape": "box", "width": 0.5, "h": 0.5 / cubes}})
+        return [0.5 / c.geometry.h for c in coarser_configs(config, (cubes + 1) ** 3)]
+
+    assert levels(128) == pytest.approx([16, 32], rel=1e-12)  # 8 cubes: 729 dofs
+    assert levels(64) == pytest.approx([16], rel=1e-12)  # 8 cubes: 729 dofs
+    assert levels(48) == pytest.approx([12], rel=1e-12)  # 3 or 6 cubes: too few dofs
+    assert levels(32) == pytest.approx([16], rel=1e-12)  # 8 cubes: too few
+    assert levels(30) == pytest.approx([15], rel=1e-12)  # 7.5 cubes: no level at 4h
+    assert levels(14) == []  # 7 cubes: 512 dofs

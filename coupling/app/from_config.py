@@ -72,39 +72,53 @@ def coarser_configs(
 ) -> list[RunConfig]:
     """The configurations of the coarser levels of a nested solve of a configuration whose
     mesh has ``dofs`` dofs, coarsest first: h multiplied by ``coarsening`` per level
-    (default :data:`coupling.options.NESTED_COARSENING`, ``NESTED_COARSENING_3D`` for a
-    body), the subdomain size d kept while a coarse edge keeps at least two segments and
-    raised to 2 h there (d_k = max(d, 2 h_k); with ``keep_subdomains`` the levels stop
-    there instead; a body has no subdomains), while the level has at least ``min_dofs``
-    dofs (estimated as dofs / coarsening^(dim k)) and its geometry is valid (the levels
-    stop at the first that is not, e.g. a Signorini arc end on the given subdomains' grid
-    but not on the raised d's, or a box whose width is no multiple of the coarser h: the
-    solve is then cold, never an error the fine mesh does not raise). No levels for a
-    mesh file (it has no h to coarsen)."""
+    (default :data:`coupling.options.NESTED_COARSENING`; for a body
+    ``NESTED_COARSENING_3D``: 4 per level, and 2 for the coarsest where 4 leaves too few
+    dofs or cuts a box's cubes), the subdomain size d kept while a coarse edge keeps at
+    least two segments and raised to 2 h there (d_k = max(d, 2 h_k); with
+    ``keep_subdomains`` the levels stop there instead; a body has no subdomains), while the
+    level has at least ``min_dofs`` dofs (estimated as dofs / factor^dim per level) and its
+    geometry is valid (the levels stop at the first that is not, e.g. a Signorini arc end
+    on the given subdomains' grid but not on the raised d's, or a box whose width is no
+    multiple of the coarser h: the solve is then cold, never an error the fine mesh does
+    not raise). No levels for a mesh file (it has no h to coarsen)."""
     from fem_py.mesh import spec_dimension
 
     g = config.geometry
     if g.mesh:
         return []
     dim = spec_dimension(g)
-    if coarsening is None:
-        coarsening = NESTED_COARSENING_3D if dim == 3 else NESTED_COARSENING
-    levels, k = [], 1
-    while dofs / coarsening ** (dim * k) >= min_dofs:
-        h = g.h * coarsening**k
+    if coarsening is not None:
+        factors: tuple[int, ...] = (coarsening,)
+    else:
+        factors = NESTED_COARSENING_3D if dim == 3 else (NESTED_COARSENING,)
+
+    def level(h: float) -> RunConfig | None:
         if keep_subdomains and 2 * h > g.subdomain_size:
-            break
+            return None
         if dim == 3:
             geometry = dataclasses.replace(g, h=h)
         else:
             geometry = dataclasses.replace(g, h=h, subdomain_size=max(g.subdomain_size, 2 * h))
-        level = dataclasses.replace(config, geometry=geometry)
+        candidate = dataclasses.replace(config, geometry=geometry)
         try:
-            planned_size(level)  # the checks of build_domain, without a mesh
+            planned_size(candidate)  # the checks of build_domain, without a mesh
         except ValueError:
+            return None
+        return candidate
+
+    levels, h, estimate = [], g.h, float(dofs)
+    while True:
+        for factor in factors:
+            found = level(h * factor) if estimate / factor**dim >= min_dofs else None
+            if found is not None:
+                break
+        else:
             break
-        levels.append(level)
-        k += 1
+        levels.append(found)
+        h, estimate = h * factor, estimate / factor**dim
+        if factor != factors[0]:  # the smaller step ends the hierarchy
+            break
     return levels[::-1]
 
 
