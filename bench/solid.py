@@ -41,6 +41,7 @@ STAGES = (
     "steklov_poincare",
     "loads",
     "coarse_levels",
+    "prolongation",
     "preconditioner",
     "step_estimate",
     "solve",
