@@ -1,9 +1,10 @@
 """P_s: the M_s-orthogonal projection onto {phi >= 0} (docs/method.md (3.19), (3.20), (3.6))."""
 import numpy as np
 import pytest
+import scipy.linalg
 import scipy.optimize
 
-from coupling.solvers.projection import SignoriniProjection
+from coupling.solvers.projection import SignoriniProjection, inverse_from_cholesky
 
 
 def h12_like_matrix(n: int) -> np.ndarray:
@@ -86,3 +87,16 @@ def test_feasible_target_is_a_fixed_point():
 def test_unknown_method_is_rejected():
     with pytest.raises(ValueError, match="projection must be"):
         SignoriniProjection(np.eye(2), "approximate", rho_in=0.5, max_iterations=100)
+
+
+@pytest.mark.parametrize("lower", [False, True])
+def test_inverse_from_the_cholesky_factor_is_the_symmetric_inverse(lower):
+    """M^{-1} from potri and the blockwise mirrored triangle: the inverse to round-off
+    (several blocks and a ragged last one), exactly symmetric."""
+    rng = np.random.default_rng(1)
+    n = 700
+    A = rng.standard_normal((n, n))
+    M = A @ A.T + n * np.eye(n)
+    W = inverse_from_cholesky(scipy.linalg.cho_factor(M, lower=lower), block=256)
+    assert np.array_equal(W, W.T)
+    assert np.abs(W @ M - np.eye(n)).max() <= 1e-13

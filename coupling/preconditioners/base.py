@@ -104,6 +104,12 @@ class DenseSignoriniBlock:
             self._signorini_factor = scipy.linalg.cho_factor(self.signorini_metric)
 
     @property
+    def signorini_factor(self) -> tuple[np.ndarray, bool] | None:
+        """M_s's Cholesky factor (``scipy.linalg.cho_factor``'s), for the projection to
+        share; None without Signorini unknowns."""
+        return self._signorini_factor if self.n_signorini else None
+
+    @property
     def lambda_max_signorini(self) -> float:
         if self._lambda_max is None:
             self._lambda_max = (

@@ -40,6 +40,27 @@ class ProjectionResult:
     iterations: int
 
 
+def inverse_from_cholesky(factor: tuple[np.ndarray, bool], block: int = 512) -> np.ndarray:
+    """M^{-1} (n x n) from M's Cholesky factor (``scipy.linalg.cho_factor``'s (c, lower)),
+    in one n x n array: LAPACK's potri on a copy of the factor, then the other triangle
+    filled a block of columns at a time (no identity right-hand side, no triangle-index
+    arrays: the n x n temporaries of ``cho_solve(factor, eye(n))``)."""
+    c, lower = factor
+    inverse, info = scipy.linalg.lapack.dpotri(c, lower=lower, overwrite_c=False)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"potri failed (info {info}): M_s is not positive definite")
+    n = inverse.shape[0]
+    for j in range(0, n, block):  # copy the computed triangle into the other one
+        k = min(j + block, n)
+        if lower:  # rows below the block hold (M^{-1})[k:, j:k]; mirror it to [j:k, k:]
+            inverse[j:k, k:] = inverse[k:, j:k].T
+        else:
+            inverse[k:, j:k] = inverse[j:k, k:].T
+        d = inverse[j:k, j:k]
+        d[...] = np.tril(d) + np.tril(d, -1).T if lower else np.triu(d) + np.triu(d, 1).T
+    return inverse
+
+
 class SignoriniProjection:
     """P_s, the M_s-orthogonal projection onto {phi >= 0}.
 
@@ -56,6 +77,9 @@ class SignoriniProjection:
     lambda_max
         Largest eigenvalue of M_s, or a function returning it (called, or computed from
         M_s when not given, on first use by ``inexact``).
+    factor
+        M_s's Cholesky factor as ``scipy.linalg.cho_factor`` returns it, when the caller
+        has one (the preconditioner's: not factored twice); read, never written.
     """
 
     def __init__(
@@ -66,6 +90,7 @@ class SignoriniProjection:
         rho_in: float,
         max_iterations: int,
         lambda_max: float | Callable[[], float] | None = None,
+        factor: tuple[np.ndarray, bool] | None = None,
     ):
         if method not in ("inexact", "exact"):
             raise ValueError(f'projection must be "inexact" or "exact", got {method!r}')
@@ -76,7 +101,9 @@ class SignoriniProjection:
         n = self.M.shape[0]
         self._lambda_max = lambda_max
         self._theta: float | None = None if n > 0 else 0.0
-        self._factor = scipy.linalg.cho_factor(self.M) if n > 0 else None
+        if factor is None and n > 0:
+            factor = scipy.linalg.cho_factor(self.M)
+        self._factor = factor
         self._active = np.zeros(n, dtype=bool)
         self._inverse: np.ndarray | None = None  # M^{-1}, for the exact projection
 
@@ -141,7 +168,7 @@ class SignoriniProjection:
             psi[free] = scipy.linalg.solve(self.M[np.ix_(free, free)], b[free], assume_a="pos")
             return psi
         if self._inverse is None:
-            self._inverse = scipy.linalg.cho_solve(self._factor, np.eye(n))
+            self._inverse = inverse_from_cholesky(self._factor)
             if self.method == "exact":  # the factor's one use here: W replaces it
                 self._factor = None
         W = self._inverse
