@@ -55,6 +55,26 @@ def test_counts_equal_those_of_the_solve(tmp_path, case):
         assert report["h_max"] == pytest.approx(2**0.5 * case["h"], rel=1e-12)
 
 
+def _estimate_and_peak(config: Path, out: Path) -> tuple[int, int]:
+    """(``fembem info``'s memory estimate, the peak resident memory of ``fembem solve``
+    measured by a fresh parent: ru_maxrss of its one child) of ``config``."""
+    report = json.loads(run_cli("info", str(config), "--json").stdout)
+    probe = (
+        "import resource, subprocess, sys; subprocess.run(sys.argv[1:], check=True, "
+        "capture_output=True); print(resource.getrusage(resource.RUSAGE_CHILDREN)"
+        ".ru_maxrss * 1024)"
+    )
+    proc = subprocess.run(
+        [sys.executable, "-c", probe, FEMBEM, "solve", str(config), "--out", str(out), "--quiet"],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=600,
+    )
+    assert proc.returncode == 0, proc.stderr
+    return report["memory_estimate_bytes"], int(proc.stdout)
+
+
 @pytest.mark.parametrize("h,plots", [(1 / 256, "true"), (1 / 512, "false")])
 def test_memory_estimate_within_2x_of_the_peak(tmp_path, h, plots):
     config = tmp_path / "c.toml"
@@ -62,33 +82,20 @@ def test_memory_estimate_within_2x_of_the_peak(tmp_path, h, plots):
         BASE.format(shape="square", h=h, d=4 * h, structured="true", signorini='["bottom"]')
         + f"[output]\nplots = {plots}\n"
     )
-    report = json.loads(run_cli("info", str(config), "--json").stdout)
-    # the peak resident memory of one child process, measured by a fresh parent
-    probe = (
-        "import resource, subprocess, sys; subprocess.run(sys.argv[1:], check=True, "
-        "capture_output=True); print(resource.getrusage(resource.RUSAGE_CHILDREN)"
-        ".ru_maxrss * 1024)"
+    estimate, peak = _estimate_and_peak(config, tmp_path / "out")
+    assert 0.5 <= estimate / peak <= 2.0, (estimate, peak)
+
+
+def test_memory_estimate_of_a_box_within_1_5x_of_the_peak(tmp_path):
+    """The whole `fembem solve` of the box with 16 cubes per side (nested, figures and
+    XDMF; the H-matrix S_h): measured 274 MB against the estimate's 317 MB (1.16x);
+    docs/design/memory.md fits the model up to 64^3 cubes."""
+    config = tmp_path / "box.toml"
+    config.write_text(
+        load_config('shape = "box"\nwidth = 0.5\nh = 0.03125\nsignorini = ["bottom"]')
     )
-    proc = subprocess.run(
-        [
-            sys.executable,
-            "-c",
-            probe,
-            FEMBEM,
-            "solve",
-            str(config),
-            "--out",
-            str(tmp_path / "out"),
-            "--quiet",
-        ],
-        capture_output=True,
-        text=True,
-        cwd=ROOT,
-        timeout=600,
-    )
-    assert proc.returncode == 0, proc.stderr
-    peak = int(proc.stdout)
-    assert 0.5 <= report["memory_estimate_bytes"] / peak <= 2.0, (report, peak)
+    estimate, peak = _estimate_and_peak(config, tmp_path / "out")
+    assert 1 / 1.5 <= estimate / peak <= 1.5, (estimate, peak)
 
 
 def test_a_run_that_cannot_fit_is_refused(tmp_path):
@@ -188,13 +195,14 @@ def test_memory_estimate_of_a_body_uses_the_3d_constants():
         DOF_BYTES_3D,
         HMATRIX_BOUNDARY_BYTES_3D,
         PROCESS_BYTES,
+        SIGNORINI_BYTES_3D,
         memory_estimate,
     )
     from fem_py.mesh.solid import box_size
 
     size = box_size(24, 0.5, ["bottom"])  # closed form: 15,625 dofs, 3,458 on Gamma
     assert size.dim == 3 and (size.dofs, size.boundary_dofs) == (15_625, 3_458)
-    base = PROCESS_BYTES + DOF_BYTES_3D * size.dofs
+    base = PROCESS_BYTES + DOF_BYTES_3D * size.dofs + SIGNORINI_BYTES_3D * 23**4
     dense = memory_estimate(size, 1, plots=False, boundary_operator="dense")
     held = memory_estimate(size, 1, plots=False, boundary_operator="hmatrix")
     assert dense == pytest.approx(base + BOUNDARY_BYTES_3D * 3_458**2, rel=1e-12)

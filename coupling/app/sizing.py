@@ -17,10 +17,12 @@ estimator's V, K live on rank 0 alone.
 A body in R^3 has its own constants (``DomainSize.dim``): tetrahedra carry more
 matrix entries per dof (DOF_BYTES_3D), the dense boundary matrices are eight n x n
 arrays (V_h, K_h, W_h, S_h and the P0 single layer of Nedelec's identity on the 2n
-triangles, four), and the H-matrix S_h holds about 75 KB per boundary dof at tol 1e-10
-(its ranks grow like |log tol|^3 in 3D). Fitted to library runs of the box (ssn with amg,
-2,197 .. 15,625 dofs; docs/design/three_dimensions.md, "Memory"): 0.98 .. 1.39 times the
-measured peaks.
+triangles, four), the H-matrix S_h holds about 40 KB per boundary dof at the 3D tol 1e-6
+(while it is built; its ranks grow like |log tol|^3 in 3D), and the amg preconditioner's
+M_s = E^T W_h E is dense: SIGNORINI_BYTES_3D n_s^2 (M_s, its Cholesky factor, and M_s^{-1}
+or the factor of a block of it), n_s the Signorini unknowns, which grow like N^(2/3).
+Fitted to whole `fembem solve` runs of the box with figures and XDMF (16^3 .. 64^3
+cubes) and library runs (12^3 .. 24^3; docs/design/memory.md, "Bodies in R^3").
 """
 from __future__ import annotations
 
@@ -40,6 +42,7 @@ __all__ = [
     "DOF_BYTES_3D",
     "BOUNDARY_BYTES_3D",
     "HMATRIX_BOUNDARY_BYTES_3D",
+    "SIGNORINI_BYTES_3D",
     "memory_estimate",
     "memory_available",
     "check_memory",
@@ -56,7 +59,8 @@ PLOT_PROCESS_BYTES = 40e6
 PLOT_DOF_BYTES = 0.02e3
 DOF_BYTES_3D = 3e3
 BOUNDARY_BYTES_3D = 8 * 8.0
-HMATRIX_BOUNDARY_BYTES_3D = 75e3
+HMATRIX_BOUNDARY_BYTES_3D = 40e3
+SIGNORINI_BYTES_3D = 3 * 8.0
 
 
 def memory_estimate(
@@ -72,6 +76,8 @@ def memory_estimate(
         boundary = (HMATRIX_BOUNDARY_BYTES_3D if solid else HMATRIX_BOUNDARY_BYTES) * n
     else:
         boundary = (BOUNDARY_BYTES_3D if solid else BOUNDARY_BYTES) * n**2
+    if solid:  # the dense M_s of the amg preconditioner, on every rank
+        boundary += ranks * SIGNORINI_BYTES_3D * float(size.signorini_dofs) ** 2
     return int(ranks * per_rank + per_dof * size.dofs + boundary)
 
 
