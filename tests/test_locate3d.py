@@ -99,6 +99,16 @@ def test_nodes_of_the_refined_cube_are_matched_without_a_point_location(monkeypa
     monkeypatch.undo()
     far = np.array([[3.0, 3.0, 0.5], [1e300, 0.0, 0.0], [-2.0, 0.5, 0.5]])
     assert np.isnan(interpolate_p1_tetrahedra(x, tets, values, far)).all()
+    # points in the bounding box of two separate tetrahedra, in neither's box or in one's
+    # box but outside it
+    two = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [5, 5, 5], [6, 5, 5]], float)
+    two = np.vstack([two, [[5, 6, 5], [5, 5, 6]]])
+    pair = np.array([[0, 1, 2, 3], [4, 5, 6, 7]])
+    between = np.array([[3.0, 3.0, 3.0]])
+    assert locate_in_tetrahedra(two, pair, between)[0].tolist() == [-1]
+    corner = np.array([[0.9, 0.9, 0.9], [3.0, 3.0, 3.0], [0.1, 0.1, 0.1]])
+    assert locate_in_tetrahedra(two, pair, corner)[0].tolist() == [-1, -1, 0]
+    assert locate_in_tetrahedra(two, pair, corner[:1])[0].tolist() == [-1]  # no candidate
     inner = np.array([[0.3, 0.41, 0.77]])
     c, b = locate_in_tetrahedra(x, tets, inner)
     np.testing.assert_allclose(

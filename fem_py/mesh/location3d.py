@@ -49,6 +49,8 @@ def locate_in_tetrahedra(
     kept = np.flatnonzero(
         ((corners.max(axis=1) >= p_lo) & (corners.min(axis=1) <= p_hi)).all(axis=1)
     )
+    if len(kept) == 0:  # e.g. points in the notch or hole of a body: in no cell's box
+        return cell, bary
     corners = corners[kept]
     candidates = _candidates(corners, points[inside])
     # the inverse Jacobians of the candidate cells only
