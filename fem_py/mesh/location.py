@@ -1,14 +1,17 @@
 """Point location in a triangle mesh: the triangle that holds each point, and the P1
 interpolation there (vectorised; candidates from a uniform grid of squares, or a k-d tree
-of the triangle centroids on strongly graded meshes)."""
+of the triangle centroids on strongly graded meshes). The nodes of a uniform refinement
+are matched by sorting, for triangles and tetrahedra alike (:func:`interpolate_p1_cells`,
+which fem_py.mesh.location3d uses too)."""
 from __future__ import annotations
 
 import itertools
+from typing import Callable
 
 import numpy as np
 from scipy.spatial import cKDTree
 
-__all__ = ["locate", "interpolate_p1", "lattice_weights", "at_lattice_points"]
+__all__ = ["locate", "interpolate_p1", "lattice_weights", "interpolate_p1_cells"]
 
 #: Point location: a grid square holding more triangles than this (a strongly graded
 #: mesh, the squares being as large as the largest triangle) switches :func:`locate` to
@@ -154,7 +157,7 @@ def lattice_weights(divisions: int, corners: int = 3) -> np.ndarray:
     return np.array([c for c in w if max(c) < n], dtype=float).reshape(-1, corners) / n
 
 
-def at_lattice_points(
+def _at_lattice_points(
     x: np.ndarray, cells: np.ndarray, values: np.ndarray, points: np.ndarray, divisions: int
 ) -> tuple[np.ndarray, np.ndarray]:
     """(values, matched) at the points that coincide, up to 1 / GRID_LEVELS of the mesh's
@@ -193,14 +196,30 @@ def interpolate_p1(
     (all nodes of such a refinement: nested iteration; 2 gives the edge midpoints) are
     matched by sorting; the others are located (:func:`locate`)."""
     x = np.asarray(x, dtype=float)[:, :2]
-    triangles = np.asarray(triangles, dtype=np.int64)
-    values = np.asarray(values, dtype=float)
     points = np.asarray(points, dtype=float).reshape(-1, 2)
-    if len(x) == 0 or len(triangles) == 0:
+    return interpolate_p1_cells(x, triangles, values, points, divisions, locate)
+
+
+def interpolate_p1_cells(
+    x: np.ndarray,
+    cells: np.ndarray,
+    values: np.ndarray,
+    points: np.ndarray,
+    divisions: int,
+    locate_cells: Callable[[np.ndarray, np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]],
+) -> np.ndarray:
+    """The P1 function of nodal ``values`` on the simplices ``cells`` (triangles or
+    tetrahedra) of the nodes ``x`` (N, d) at ``points`` (m, d); NaN outside the mesh: the
+    nodes and lattice points of the ``divisions``-fold refinement matched by sorting, the
+    others located by ``locate_cells(x, cells, points) -> (cell, barycentric)`` (cell -1:
+    in none)."""
+    cells = np.asarray(cells, dtype=np.int64)
+    values = np.asarray(values, dtype=float)
+    if len(x) == 0 or len(cells) == 0:
         return np.full(len(points), np.nan)
-    out, matched = at_lattice_points(x, triangles, values, points, max(int(divisions), 1))
+    out, matched = _at_lattice_points(x, cells, values, points, max(int(divisions), 1))
     rest = np.flatnonzero(~matched)
-    cell, bary = locate(x, triangles, points[rest])
+    cell, bary = locate_cells(x, cells, points[rest])
     found = cell >= 0
-    out[rest[found]] = np.einsum("ij,ij->i", bary[found], values[triangles[cell[found]]])
+    out[rest[found]] = np.einsum("ij,ij->i", bary[found], values[cells[cell[found]]])
     return out

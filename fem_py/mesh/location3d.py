@@ -11,7 +11,7 @@ import itertools
 import numpy as np
 from scipy.spatial import cKDTree
 
-from fem_py.mesh.location import at_lattice_points
+from fem_py.mesh.location import interpolate_p1_cells
 
 __all__ = ["locate_in_tetrahedra", "interpolate_p1_tetrahedra", "on_surface"]
 
@@ -85,17 +85,9 @@ def interpolate_p1_tetrahedra(
     (2: the edge midpoints, every node of a box with twice the cubes per side: nested
     iteration) are matched by sorting; the others are located
     (:func:`locate_in_tetrahedra`)."""
-    x, tets = np.asarray(x, dtype=float), np.asarray(tetrahedra, dtype=np.int64)
-    values = np.asarray(values, dtype=float)
+    x = np.asarray(x, dtype=float)
     points = np.asarray(points, dtype=float).reshape(-1, 3)
-    if len(x) == 0 or len(tets) == 0:
-        return np.full(len(points), np.nan)
-    out, matched = at_lattice_points(x, tets, values, points, max(int(divisions), 1))
-    rest = np.flatnonzero(~matched)
-    cell, bary = locate_in_tetrahedra(x, tets, points[rest])
-    found = cell >= 0
-    out[rest[found]] = np.einsum("ij,ij->i", bary[found], values[tets[cell[found]]])
-    return out
+    return interpolate_p1_cells(x, tetrahedra, values, points, divisions, locate_in_tetrahedra)
 
 
 def on_surface(
