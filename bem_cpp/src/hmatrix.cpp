@@ -331,26 +331,11 @@ Eigen::MatrixXd HMatrix::principal_submatrix(const std::vector<Index>& indices) 
       if (const Index a = col_position[static_cast<std::size_t>(b.c0 + c)]; a >= 0)
         c_local.push_back(c), c_out.push_back(a);
     if (c_local.empty()) continue;
-    const auto rows_of = [&](const Eigen::MatrixXd& F, const std::vector<Index>& which) {
-      Eigen::MatrixXd out(static_cast<Index>(which.size()), F.cols());
-      for (std::size_t i = 0; i < which.size(); ++i) out.row(static_cast<Index>(i)) = F.row(which[i]);
-      return out;
-    };
-    Eigen::MatrixXd D(static_cast<Index>(r_local.size()), static_cast<Index>(c_local.size()));
-    if (b.low_rank) {
-      D.noalias() = rows_of(b.factors.U, r_local) * rows_of(b.factors.V, c_local).transpose();
-    } else {
-      for (std::size_t j = 0; j < c_local.size(); ++j)
-        for (std::size_t i = 0; i < r_local.size(); ++i)
-          D(static_cast<Index>(i), static_cast<Index>(j)) = b.dense(r_local[i], c_local[j]);
-    }
-    for (std::size_t j = 0; j < c_out.size(); ++j)
-      for (std::size_t i = 0; i < r_out.size(); ++i)
-        A(r_out[i], c_out[j]) = D(static_cast<Index>(i), static_cast<Index>(j));
-    if (symmetric_ && b.row_cluster != b.col_cluster)
-      for (std::size_t j = 0; j < c_out.size(); ++j)
-        for (std::size_t i = 0; i < r_out.size(); ++i)
-          A(c_out[j], r_out[i]) = D(static_cast<Index>(i), static_cast<Index>(j));
+    const Eigen::MatrixXd D =
+        b.low_rank ? Eigen::MatrixXd(b.factors.U(r_local, Eigen::all) * b.factors.V(c_local, Eigen::all).transpose())
+                   : Eigen::MatrixXd(b.dense(r_local, c_local));
+    A(r_out, c_out) = D;
+    if (symmetric_ && b.row_cluster != b.col_cluster) A(c_out, r_out) = D.transpose();
   }
   return A;
 }
