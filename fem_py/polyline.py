@@ -22,7 +22,8 @@ CORNER_ANGLE = np.pi / 6
 
 def segment_lengths(points: np.ndarray) -> np.ndarray:
     """Lengths of the segments of polylines: (..., k, dim) -> (..., k - 1)."""
-    return np.linalg.norm(np.diff(points, axis=-2), axis=-1)
+    d = np.diff(points, axis=-2)
+    return np.sqrt(np.einsum("...i,...i->...", d, d))
 
 
 def arc_length(points: np.ndarray) -> np.ndarray:

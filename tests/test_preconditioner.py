@@ -28,7 +28,7 @@ from coupling.preconditioners.edge_forms import (
     paper_edge_form,
     sqrt_laplacian_edge_form,
 )
-from coupling.preconditioners.kernels import is_symmetric
+from coupling.preconditioners.kernels import block_diagonal_edge_forms, is_symmetric
 from test_preconditioner_meshes import structured_square, substructuring
 
 RTOL = 1e-12
@@ -237,6 +237,36 @@ def test_edge_forms_match_references_on_uneven_edges():
             a, a_inv = edge_form(batch[k], kind)
             np.testing.assert_allclose(a_b[k], a, rtol=1e-12, atol=1e-12)
             np.testing.assert_allclose(inv_b[k], a_inv, rtol=1e-10, atol=1e-12)
+
+
+def test_block_diagonal_edge_forms_place_every_block_and_sum_shared_rows():
+    """The block-diagonal matrices of the edge forms, written directly into CSR arrays
+    (every row in one block), equal a dense matrix filled block by block; rows in two
+    blocks (not an edge's interior nodes, but allowed) are summed, as COO would."""
+    rng = np.random.default_rng(3)
+    n = 20
+    rows = rng.permutation(n)[:13]
+    # two batches of different node counts: 3 edges of 2 interior nodes, 1 of 3 (+ spare)
+    pts2 = np.cumsum(rng.uniform(0.1, 1.0, (3, 4, 2)), axis=1)
+    pts3 = np.cumsum(rng.uniform(0.1, 1.0, (2, 5, 2)), axis=1)
+    groups = [(rows[:6].reshape(3, 2), pts2), (rows[6:12].reshape(2, 3), pts3)]
+
+    def dense(groups, which):
+        out = np.zeros((n, n))
+        for ix, pts in groups:
+            forms = edge_form(pts, "paper")[which]
+            for k in range(len(ix)):
+                out[np.ix_(ix[k], ix[k])] += forms[k]
+        return out
+
+    a0, a0_inv = block_diagonal_edge_forms(groups, n, "paper")
+    np.testing.assert_array_equal(a0.toarray(), dense(groups, 0))
+    np.testing.assert_array_equal(a0_inv.toarray(), dense(groups, 1))
+    shared = [(rows[:6].reshape(3, 2), pts2), (np.array([[rows[0], rows[12], rows[7]]]), pts3[:1])]
+    a0, a0_inv = block_diagonal_edge_forms(shared, n, "paper")
+    np.testing.assert_allclose(a0.toarray(), dense(shared, 0), rtol=1e-15, atol=1e-15)
+    np.testing.assert_allclose(a0_inv.toarray(), dense(shared, 1), rtol=1e-15, atol=1e-15)
+    assert block_diagonal_edge_forms([], n, "paper")[0].nnz == 0
 
 
 def test_edge_forms_spectrally_equivalent_uniformly_in_m():

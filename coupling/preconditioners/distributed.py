@@ -37,6 +37,7 @@ from petsc4py import PETSc
 from coupling.preconditioners.kernels import (
     SparseFactor,
     fill_reducing_ordering,
+    largest_subdomain_interior,
     block_diagonal_edge_forms,
     coarse_matrix,
     edge_weights,
@@ -171,7 +172,9 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
         self._a_is = sp.csr_matrix(
             (data[~is_int], (rows[~is_int], sk_pos[cols[~is_int]])), shape=(n_i, n_sk)
         )
-        self._interior_factor = SparseFactor(self._a_ii, fill_reducing_ordering(self._a_ii))
+        self._interior_factor = SparseFactor(
+            self._a_ii, fill_reducing_ordering(self._a_ii, largest_subdomain_interior(coarse))
+        )
 
         # the skeleton: edge forms of the edges this rank solves, Pi on all local skeleton dofs
         subdomains = np.asarray(coarse.edge_subdomains, dtype=np.int64)

@@ -73,6 +73,15 @@ def _pairwise_form(weights: np.ndarray, diagonal: np.ndarray) -> np.ndarray:
     return a
 
 
+def _squared_distances(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """|a_i - b_j|^2 for batches of points a (B, k, dim), b (B, l, dim): (B, k, l), summed
+    over the coordinates one at a time (no (B, k, l, dim) temporary)."""
+    out = np.zeros((a.shape[0], a.shape[1], b.shape[1]))
+    for d in range(a.shape[2]):
+        out += np.square(a[:, :, None, d] - b[:, None, :, d])
+    return out
+
+
 def paper_edge_form(points: np.ndarray) -> np.ndarray:
     """A^0_gamma of docs/method.md (5.1) for one edge or a batch of edges.
 
@@ -92,13 +101,12 @@ def paper_edge_form(points: np.ndarray) -> np.ndarray:
     seg = _positive_segment_lengths(p)
     h = 0.5 * (seg[:, :-1] + seg[:, 1:])  # (B, m)
     xi = p[:, 1:-1]  # interior nodes (B, m, dim)
-    dist = np.linalg.norm(xi[:, :, None, :] - xi[:, None, :, :], axis=3)
     m = xi.shape[1]
-    off = ~np.eye(m, dtype=bool)
-    w = np.zeros_like(dist)
-    w[:, off] = (h[:, :, None] * h[:, None, :])[:, off] / dist[:, off] ** 2
-    to_a = np.linalg.norm(xi - p[:, :1], axis=2)
-    to_b = np.linalg.norm(xi - p[:, -1:], axis=2)
+    dist2 = _squared_distances(xi, xi)
+    dist2[:, np.arange(m), np.arange(m)] = np.inf  # no weight on the diagonal
+    w = h[:, :, None] * h[:, None, :] / dist2
+    to_a = np.sqrt(_squared_distances(xi, p[:, :1])[..., 0])
+    to_b = np.sqrt(_squared_distances(xi, p[:, -1:])[..., 0])
     a0 = _pairwise_form(w, h * (1.0 / to_a + 1.0 / to_b))
     return a0[0] if single else a0
 

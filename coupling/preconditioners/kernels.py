@@ -23,6 +23,7 @@ from fem_py.polyline import arc_length
 __all__ = [
     "SparseFactor",
     "fill_reducing_ordering",
+    "largest_subdomain_interior",
     "is_symmetric",
     "DenseFactor",
     "block_diagonal_edge_forms",
@@ -53,18 +54,33 @@ def is_symmetric(matrix: sp.spmatrix, rtol: float = 1e-12) -> bool:
     return bool(abs(a - t).max() <= scale)
 
 
-def fill_reducing_ordering(matrix: sp.spmatrix) -> str:
+def fill_reducing_ordering(matrix: sp.spmatrix, largest_block: int | None = None) -> str:
     """The PETSc ordering for the Cholesky factor of ``matrix``: "natural" when every
     connected component of its graph (a block of a block-diagonal matrix, such as A_II:
     one block per subdomain) has at most NATURAL_ORDERING_MAX_BLOCK rows, "nd" (nested
     dissection) otherwise. Fill never crosses components, and within a small block the
     mesh's own locality-preserving numbering fills about as little as nested dissection,
-    whose ordering of the whole graph costs several times the factorisation."""
+    whose ordering of the whole graph costs several times the factorisation.
+
+    ``largest_block``: a bound on the components' sizes known to the caller (A_II's
+    components lie within subdomains: the most interior dofs of a subdomain), which spares
+    finding the components when it is small enough."""
     n = matrix.shape[0]
     if n == 0:
         return "nd"
+    if largest_block is not None and largest_block <= NATURAL_ORDERING_MAX_BLOCK:
+        return "natural"
     _, labels = connected_components(matrix, directed=False)
     return "natural" if np.bincount(labels).max() <= NATURAL_ORDERING_MAX_BLOCK else "nd"
+
+
+def largest_subdomain_interior(coarse: Any) -> int | None:
+    """The most interior dofs of one subdomain of a coarse structure (a bound on the blocks
+    of A_II), or None if it does not say which subdomain each interior dof is in."""
+    labels = getattr(coarse, "subdomain_of_interior_dof", None)
+    if labels is None or len(labels) == 0:
+        return None
+    return int(np.bincount(np.asarray(labels, dtype=np.int64)).max())
 
 
 class SparseFactor:
@@ -160,26 +176,49 @@ def block_diagonal_edge_forms(
     Each group is ``(ix, pts)`` for a batch of edges with equal node counts: ``ix (B, m)``
     the (local) numbers of the interior nodes, ``pts (B, m+2, dim)`` the nodes with both ends.
     """
-    rows, cols, vals, ivals = [], [], [], []
     batches: dict[tuple, list] = {}  # one batch per shape: one edge_form call each
     for ix, pts in groups:
         if ix.shape[1]:
             batches.setdefault(pts.shape[1:], []).append((ix, pts))
+    blocks = []
     # tiny batched LAPACK calls: threads only add overhead (docs/design/preconditioners.md)
     with threadpool_limits(limits=1):
         for batch in batches.values():
             ix = np.concatenate([b[0] for b in batch])
-            a0, a0_inv = edge_form(np.concatenate([b[1] for b in batch]), kind)
-            rows.append(np.broadcast_to(ix[:, :, None], a0.shape).ravel())
-            cols.append(np.broadcast_to(ix[:, None, :], a0.shape).ravel())
-            vals.append(a0.ravel())
-            ivals.append(a0_inv.ravel())
-    if not rows:
-        return sp.csr_matrix((n, n)), sp.csr_matrix((n, n))
-    r, c = np.concatenate(rows), np.concatenate(cols)
-    a0 = sp.csr_matrix((np.concatenate(vals), (r, c)), shape=(n, n))
-    a0_inv = sp.csr_matrix((np.concatenate(ivals), (r, c)), shape=(n, n))
-    return a0, a0_inv
+            blocks.append((ix, *edge_form(np.concatenate([b[1] for b in batch]), kind)))
+    return _block_diagonal(blocks, n, 1), _block_diagonal(blocks, n, 2)
+
+
+def _block_diagonal(blocks: list[tuple[np.ndarray, ...]], n: int, which: int) -> sp.csr_matrix:
+    """The n x n sparse matrix of the dense blocks ``block[which]`` (B, m, m) on the rows
+    and columns ``block[0]`` (B, m). Where no row is in two blocks (the edges' interior
+    nodes), the CSR arrays are written directly, each row's entries at its offset;
+    otherwise the blocks are summed through COO."""
+    if not blocks:
+        return sp.csr_matrix((n, n))
+    rows = np.concatenate([b[0].ravel() for b in blocks])
+    if np.bincount(rows, minlength=n).max(initial=0) > 1:
+        r = np.concatenate(
+            [np.broadcast_to(b[0][:, :, None], b[which].shape).ravel() for b in blocks]
+        )
+        c = np.concatenate(
+            [np.broadcast_to(b[0][:, None, :], b[which].shape).ravel() for b in blocks]
+        )
+        v = np.concatenate([b[which].ravel() for b in blocks])
+        return sp.csr_matrix((v, (r, c)), shape=(n, n))
+    row_length = np.zeros(n, dtype=np.int64)
+    for b in blocks:
+        row_length[b[0]] = b[0].shape[1]
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(row_length, out=indptr[1:])
+    indices = np.empty(indptr[-1], dtype=np.int64)
+    data = np.empty(indptr[-1])
+    for b in blocks:
+        ix, m = b[0], b[0].shape[1]
+        at = (indptr[ix][:, :, None] + np.arange(m)).ravel()
+        indices[at] = np.broadcast_to(ix[:, None, :], b[which].shape).ravel()
+        data[at] = b[which].ravel()
+    return sp.csr_matrix((data, indices, indptr), shape=(n, n))
 
 
 class TwoLevelForm:

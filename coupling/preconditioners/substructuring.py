@@ -51,6 +51,7 @@ from coupling.preconditioners.base import check_length
 from coupling.preconditioners.kernels import (
     SparseFactor,
     fill_reducing_ordering,
+    largest_subdomain_interior,
     is_symmetric,
     TwoLevelForm,
     block_diagonal_edge_forms,
@@ -239,7 +240,9 @@ class SubstructuringPreconditioner(SignoriniBlock):
         a_i = a[interior]
         self._a_ii = a_i[:, interior].tocsr()
         self._a_is = a_i[:, skeleton].tocsr()
-        self._interior_factor = SparseFactor(self._a_ii, fill_reducing_ordering(self._a_ii))
+        self._interior_factor = SparseFactor(
+            self._a_ii, fill_reducing_ordering(self._a_ii, largest_subdomain_interior(coarse))
+        )
         coarse_of = None
         if coarse_space == "galerkin":
             a_ss = a[skeleton][:, skeleton].tocsr()
