@@ -71,8 +71,8 @@ PYBIND11_MODULE(_bem, m) {
            py::arg("nodes"), py::arg("flux"), py::arg("leaf_size"), py::arg("eta"), py::arg("tol"),
            py::arg("preconditioner_tol"), py::arg("solver_tol"), py::arg("max_iterations"), py::arg("product_threads"),
            py::arg("rank"), py::arg("size"), py::arg("allgather"), py::arg("allreduce"), Release())
-      .def("apply", &bem::SteklovPoincareOperator::apply, py::arg("x"), Release())
-      .def("flux", &bem::SteklovPoincareOperator::flux, py::arg("x"), Release())
+      .def("apply", &bem::SteklovPoincareOperator::apply, py::arg("x"), py::arg("solver_tol") = 0.0, Release())
+      .def("flux", &bem::SteklovPoincareOperator::flux, py::arg("x"), py::arg("solver_tol") = 0.0, Release())
       .def_property_readonly("size", &bem::SteklovPoincareOperator::size)
       .def_property_readonly("nbytes", &bem::SteklovPoincareOperator::nbytes)
       .def_property_readonly("info", &bem::SteklovPoincareOperator::info)
@@ -168,8 +168,8 @@ PYBIND11_MODULE(_bem, m) {
            py::arg("vertices"), py::arg("triangles"), py::arg("leaf_size"), py::arg("eta"), py::arg("tol"),
            py::arg("solver_tol"), py::arg("max_iterations"), py::arg("product_threads"), py::arg("rank"),
            py::arg("size"), py::arg("allgather"), py::arg("allreduce"), Release())
-      .def("apply", &bem::SurfaceSteklovOperator::apply, py::arg("x"), Release())
-      .def("flux", &bem::SurfaceSteklovOperator::flux, py::arg("x"), Release())
+      .def("apply", &bem::SurfaceSteklovOperator::apply, py::arg("x"), py::arg("solver_tol") = 0.0, Release())
+      .def("flux", &bem::SurfaceSteklovOperator::flux, py::arg("x"), py::arg("solver_tol") = 0.0, Release())
       .def("hypersingular", &bem::SurfaceSteklovOperator::hypersingular, py::arg("x"), Release())
       .def("hypersingular_block", &bem::SurfaceSteklovOperator::hypersingular_block, py::arg("indices"), Release())
       .def_property_readonly("size", &bem::SurfaceSteklovOperator::size)

@@ -97,11 +97,12 @@ def vector(value: ArrayLike, n: int, name: str) -> NDArray[np.float64]:
     return arr
 
 
-def tolerance(value: float) -> float:
-    """The relative accuracy ``tol`` of H-matrix blocks: a real number in (0, 1)."""
-    tol = scalar(value, "tol")
+def tolerance(value: float, name: str = "tol") -> float:
+    """A relative accuracy (``tol`` of H-matrix blocks, a solver's tolerance): a real
+    number in (0, 1)."""
+    tol = scalar(value, name)
     if not 0 < tol < 1:
-        raise ValueError(f"tol must lie in (0, 1), got {tol!r}")
+        raise ValueError(f"{name} must lie in (0, 1), got {tol!r}")
     return tol
 
 

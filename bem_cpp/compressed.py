@@ -124,6 +124,19 @@ class SteklovPoincareOperator(_CompiledOperator):
         """S_h x for x of shape (n,) or (n, k) (nodal values of P1 traces)."""
         return checks.columnwise(self._op.apply, x, self._op.size)
 
+    def apply(self, x: ArrayLike, solver_tol: float | None = None) -> NDArray[np.float64]:
+        """S_h x with the V solve to the relative residual ``solver_tol`` where that is
+        looser than the operator's own (1e-3 tol; None or a tighter one: as ``S @ x``). The
+        looser solve makes a cheaper product with an error of about ``solver_tol`` relative
+        to ``S @ x``: for the products inside an outer iteration that needs only a few
+        digits (the CG of a Newton step, ``coupling.solvers.ssn``)."""
+        if solver_tol is None:
+            return self @ x
+        solver_tol = checks.tolerance(solver_tol, "solver_tol")
+        return checks.columnwise(
+            lambda X: self._op.apply(X, solver_tol=solver_tol), x, self._op.size
+        )
+
     def flux(self, dirichlet: ArrayLike) -> NDArray[np.float64]:
         """Coefficients of psi_h = V_h^{-1}(K_h - M_h) v (``exterior_flux`` with a = 0)."""
         return checks.columnwise(self._op.flux, dirichlet, self._op.size)

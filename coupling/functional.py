@@ -97,10 +97,25 @@ class CoupledFunctional:
         return self._value(u_function, z, y), self._gradient(u_function, y, grad_u)
 
     def hessian_action(
-        self, jacobian: PETSc.Mat, e_u: PETSc.Vec, e_phi: np.ndarray, out_u: PETSc.Vec
+        self,
+        jacobian: PETSc.Mat,
+        e_u: PETSc.Vec,
+        e_phi: np.ndarray,
+        out_u: PETSc.Vec,
+        *,
+        solver_tol: float | None = None,
     ) -> np.ndarray:
-        """(out_u, return) = D^2 J_h (e_u, e_phi), with D^2 G given as the matrix ``jacobian``."""
-        y = self.S @ self.boundary_block(e_u, e_phi)
+        """(out_u, return) = D^2 J_h (e_u, e_phi), with D^2 G given as the matrix ``jacobian``.
+
+        ``solver_tol``: the relative residual of the V solve inside an H-matrix S_h's
+        product (``bem_cpp.SteklovPoincareOperator.apply``; None: its own); a dense S_h
+        has none and ignores it."""
+        z = self.boundary_block(e_u, e_phi)
+        y = (
+            self.S @ z
+            if solver_tol is None or not hasattr(self.S, "apply")
+            else self.S.apply(z, solver_tol)
+        )
         jacobian.mult(e_u, out_u)
         self.boundary.scatter_add(y, out_u, refresh_ghosts=False)
         return y[self.signorini].copy()

@@ -121,6 +121,11 @@ SSN_WARM_FORCING_EXPONENT = 1.0
 #: before: its error, O(this), is about such a step's CG tolerance
 #: (docs/design/solvers.md, "ssn keeps the Jacobian after small steps").
 SSN_JACOBIAN_REUSE_STEP = 1e-3
+#: The V solve of every product with an H-matrix S_h inside a Newton step's CG runs to
+#: this times the CG's rtol instead of to the operator's own tolerance: the step needs
+#: only rtol, and products this much more accurate leave its CG iterations as they were
+#: (docs/design/solvers.md, "S_h's V solves to the Newton step's accuracy").
+SSN_INNER_TOL_FACTOR = 1e-2
 #: c of the forcing floor c tol ||xi||_B / (tau r) of a Newton step's CG (no oversolving),
 #: small enough to keep the answer well within tol (docs/design/solvers.md, "ssn's
 #: stopping rule and the oversolving safeguard").

@@ -180,6 +180,32 @@ def test_hmatrix_steklov_poincare_agrees_with_the_dense_one(surface, compressed)
     assert np.linalg.norm(op.flux(x[:, 0]) - psi) <= 1e-8 * np.linalg.norm(psi)
 
 
+@pytest.mark.parametrize("planar", [False, True], ids=["cube", "circle"])
+def test_a_looser_solver_tol_gives_a_cheaper_product_within_it(planar):
+    """S.apply(x, solver_tol): the V solve of the product to solver_tol where that is looser
+    than the operator's own (fewer iterations, the product within solver_tol times the
+    preconditioned V's conditioning, tens, of S @ x); None or a tighter one is S @ x."""
+    if planar:
+        theta = 2 * np.pi * np.arange(2400) / 2400
+        op = bem_cpp.steklov_poincare(
+            0.4 * np.stack([np.cos(theta), np.sin(theta)], 1), compression="hmatrix"
+        )
+    else:
+        X, T = cube(12)
+        op = bem_cpp.steklov_poincare(X, triangles=T, compression="hmatrix", tol=1e-6)
+    x = np.random.default_rng(4).standard_normal(op.shape[0])
+    exact = op @ x
+    own = op.last_iterations
+    for solver_tol in (1e-3, 1e-6):
+        y = op.apply(x, solver_tol)
+        assert op.last_iterations < own
+        assert 0 < np.linalg.norm(y - exact) <= 100 * solver_tol * np.linalg.norm(exact)
+    np.testing.assert_array_equal(op.apply(x), exact)
+    np.testing.assert_array_equal(op.apply(x, 1e-30), exact)
+    with pytest.raises(ValueError, match="solver_tol must lie in"):
+        op.apply(x, 2.0)
+
+
 def test_preconditioned_single_layer_solves_take_a_bounded_number_of_iterations():
     iterations = []
     for level in (1, 2, 3):

@@ -1,5 +1,6 @@
 #include "bem/steklov_operator.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <stdexcept>
 
@@ -56,15 +57,15 @@ Eigen::MatrixXd SteklovPoincareOperator::double_layer_minus_mass(const Eigen::Re
   return Y;
 }
 
-Eigen::MatrixXd SteklovPoincareOperator::flux(const Eigen::Ref<const Eigen::MatrixXd>& X) const {
+Eigen::MatrixXd SteklovPoincareOperator::flux(const Eigen::Ref<const Eigen::MatrixXd>& X, double solver_tol) const {
   if (X.rows() != size()) throw std::invalid_argument("SteklovPoincareOperator: X must have n rows");
   const Eigen::MatrixXd A = double_layer_minus_mass(X, false);
   Eigen::MatrixXd Psi;
-  last_iterations_ = solver_->solve(A, Psi, options_.solver_tol, options_.max_iterations);
+  last_iterations_ = solver_->solve(A, Psi, std::max(solver_tol, options_.solver_tol), options_.max_iterations);
   return Psi;
 }
 
-Eigen::MatrixXd SteklovPoincareOperator::apply(const Eigen::Ref<const Eigen::MatrixXd>& X) const {
+Eigen::MatrixXd SteklovPoincareOperator::apply(const Eigen::Ref<const Eigen::MatrixXd>& X, double solver_tol) const {
   if (X.rows() != size())
     throw std::invalid_argument("SteklovPoincareOperator: X has " + std::to_string(X.rows()) + " rows, expected " +
                                 std::to_string(size()));
@@ -78,7 +79,7 @@ Eigen::MatrixXd SteklovPoincareOperator::apply(const Eigen::Ref<const Eigen::Mat
     const Index jm = (j + n - 1) % n;
     Y.row(j) = Z.row(jm) / polygon_.panel(jm).h - Z.row(j) / polygon_.panel(j).h;
   }
-  Y += double_layer_minus_mass(flux(X), true);
+  Y += double_layer_minus_mass(flux(X, solver_tol), true);
   return 0.5 * Y;
 }
 

@@ -1,5 +1,6 @@
 #include "bem/surface_steklov.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
@@ -84,18 +85,18 @@ Eigen::MatrixXd SurfaceSteklovOperator::precondition(const Eigen::MatrixXd& R) c
   return mass_factor_.solve(Z);
 }
 
-Eigen::MatrixXd SurfaceSteklovOperator::flux(const Eigen::Ref<const Eigen::MatrixXd>& X) const {
+Eigen::MatrixXd SurfaceSteklovOperator::flux(const Eigen::Ref<const Eigen::MatrixXd>& X, double solver_tol) const {
   if (X.rows() != size())
     throw std::invalid_argument("SurfaceSteklovOperator: X has " + std::to_string(X.rows()) + " rows, expected " +
                                 std::to_string(size()));
   const Eigen::MatrixXd A = K_->apply(X) - M_ * X;
   Eigen::MatrixXd Psi;
-  last_iterations_ = solver_->solve(A, Psi, options_.solver_tol, options_.max_iterations);
+  last_iterations_ = solver_->solve(A, Psi, std::max(solver_tol, options_.solver_tol), options_.max_iterations);
   return Psi;
 }
 
-Eigen::MatrixXd SurfaceSteklovOperator::apply(const Eigen::Ref<const Eigen::MatrixXd>& X) const {
-  const Eigen::MatrixXd Psi = flux(X);
+Eigen::MatrixXd SurfaceSteklovOperator::apply(const Eigen::Ref<const Eigen::MatrixXd>& X, double solver_tol) const {
+  const Eigen::MatrixXd Psi = flux(X, solver_tol);
   Eigen::MatrixXd Y = hypersingular(X);
   Y += K_->apply(Psi, true) - M_ * Psi;  // M symmetric
   return 0.5 * Y;

@@ -33,6 +33,15 @@ Globalisation: backtracking on J_h along the projected path (u + a du, max(0, ph
 dphi)); a step that does not decrease J_h after 30 halvings is replaced by a PGPM step.
 A few PGPM steps start the iteration.
 
+Inside a Newton step's CG the V solve of each product with an H-matrix S_h runs only as
+accurately as the step needs: to SSN_INNER_TOL_FACTOR times the CG's rtol, instead of to
+the operator's own tolerance (kept for the gradients and norms that decide convergence).
+The products then differ from the exact ones by far less than the step's own tolerance,
+which leaves the CG's iterations as they were (inexact Krylov methods: Simoncini and
+Szyld, SIAM J. Sci. Comput. 25, 2003). The amg preconditioner's inner CG + GAMG keeps its
+own tolerance: GAMG's hierarchy depends on the number of ranks, and only a solve far
+below the step's accuracy keeps the iterates independent of it.
+
 The active set is predicted in the metric M_s, by the M_s projection of
 phi - tau M_s^{-1} grad_phi J (the active set of a PGPM step), not by the
 componentwise rule A = {phi - c grad_phi J <= 0}, whose edge retreats by a bounded
@@ -49,7 +58,11 @@ import numpy as np
 import scipy.linalg
 from mpi4py import MPI
 
-from coupling.options import OVERSOLVE_SAFEGUARD, SSN_JACOBIAN_REUSE_STEP
+from coupling.options import (
+    OVERSOLVE_SAFEGUARD,
+    SSN_INNER_TOL_FACTOR,
+    SSN_JACOBIAN_REUSE_STEP,
+)
 from coupling.solvers.loop import IterationContext, Loop
 from coupling.solvers.pgpm import energy_increased, pgpm
 from coupling.solvers.projection import SignoriniProjection
@@ -175,10 +188,15 @@ class Hessian:
         """Assemble the interior Jacobian at u."""
         self.forms.assemble_jacobian(u_function, self.matrix)
 
-    def __call__(self, e_u_owned: np.ndarray, e_phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """D^2 J_h (e_u, e_phi): (owned entries of the u part, the phi part)."""
+    def __call__(
+        self, e_u_owned: np.ndarray, e_phi: np.ndarray, solver_tol: float | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """D^2 J_h (e_u, e_phi): (owned entries of the u part, the phi part); ``solver_tol``:
+        that of the V solve in an H-matrix S_h's product (None: the operator's own)."""
         self.e_u.array[:] = e_u_owned
-        h_phi = self.functional.hessian_action(self.matrix, self.e_u, e_phi, self.h_u)
+        h_phi = self.functional.hessian_action(
+            self.matrix, self.e_u, e_phi, self.h_u, solver_tol=solver_tol
+        )
         return self.h_u.array_r.copy(), h_phi
 
     def destroy(self) -> None:
@@ -231,10 +249,12 @@ def newton_direction(
     )
     del metric_free
 
+    inner = SSN_INNER_TOL_FACTOR * rtol  # S_h's V solves (module docstring)
+
     def apply_h(p):
         e_phi = np.zeros(phi.size)
         e_phi[free] = p[1]
-        h_u_owned, h_phi = hessian(p[0], e_phi)
+        h_u_owned, h_phi = hessian(p[0], e_phi, inner)
         return h_u_owned, h_phi[free]
 
     def apply_b_inv(r):
@@ -245,7 +265,7 @@ def newton_direction(
 
     d_phi = np.zeros(phi.size)
     d_phi[active] = -phi[active]
-    h_a_u, h_a_phi = hessian(np.zeros_like(g_u), d_phi)
+    h_a_u, h_a_phi = hessian(np.zeros_like(g_u), d_phi, inner)
     rhs = (np.subtract(-g_u, h_a_u, out=h_a_u), -g_phi[free] - h_a_phi[free])
     (d_u, d_phi_free), cg_its = _pcg(
         apply_h, apply_b_inv, rhs, comm, rtol=rtol, max_iterations=cg_max_iterations

@@ -42,11 +42,13 @@ class SteklovPoincareOperator {
   SteklovPoincareOperator(const Eigen::Ref<const Points>& nodes, Space flux, const SteklovOptions& options);
 
   Index size() const { return polygon_.size(); }
-  /// Y = S_h X for X (n, k).
-  Eigen::MatrixXd apply(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
+  /// Y = S_h X for X (n, k); its V solve to the relative residual `solver_tol` where that
+  /// is looser than the options' solver_tol (else, and for 0, to the options'): a cheaper,
+  /// less accurate product for an outer iteration that needs only a few digits.
+  Eigen::MatrixXd apply(const Eigen::Ref<const Eigen::MatrixXd>& X, double solver_tol = 0.0) const;
   /// Psi = V_h^{-1} (K_h - M_h)(X): the exterior Neumann data of the Dirichlet traces X
-  /// (columns; cf. exterior_flux with a = 0).
-  Eigen::MatrixXd flux(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
+  /// (columns; cf. exterior_flux with a = 0); `solver_tol` as for apply.
+  Eigen::MatrixXd flux(const Eigen::Ref<const Eigen::MatrixXd>& X, double solver_tol = 0.0) const;
   std::size_t nbytes() const;
   const SteklovInfo& info() const { return info_; }
   /// CG iterations of the V solve of the last apply/flux call.

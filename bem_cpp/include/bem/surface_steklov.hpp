@@ -30,10 +30,10 @@ class SurfaceSteklovOperator {
   SurfaceSteklovOperator(VerticesRef vertices, TrianglesRef triangles, const SteklovOptions& options);
 
   Index size() const { return surface_.vertices(); }
-  /// Y = S_h X for X (n, k).
-  Eigen::MatrixXd apply(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
+  /// Y = S_h X for X (n, k); the V solve to `solver_tol` if looser than the options' (as in 2D).
+  Eigen::MatrixXd apply(const Eigen::Ref<const Eigen::MatrixXd>& X, double solver_tol = 0.0) const;
   /// Psi = V_h^{-1} (K_h - M_h) X (the exterior Neumann data of the traces X, a = 0).
-  Eigen::MatrixXd flux(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
+  Eigen::MatrixXd flux(const Eigen::Ref<const Eigen::MatrixXd>& X, double solver_tol = 0.0) const;
   /// W_h X (the H-matrix of Nedelec's identity).
   Eigen::MatrixXd hypersingular(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
   /// The principal submatrix of W_h on the vertices `indices` (m, m), from its H-matrix
