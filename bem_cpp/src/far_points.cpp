@@ -34,6 +34,8 @@ std::vector<Part> parts(const Surface& s, Space space, const Index* dofs, Index 
 FarPoints::FarPoints(const Surface& s, const std::vector<Part>& parts, Index dofs, bool with_values, bool with_curls,
                      const TriangleRule& r) {
   std::vector<Eigen::Triplet<double>> entries[4];
+  per_part = r.size();
+  Index part_index = 0;
   for (const Part& part : parts) {
     const Triangle& T = s.triangle(part.triangle);
     for (int q = 0; q < r.size(); ++q) {
@@ -48,24 +50,40 @@ FarPoints::FarPoints(const Surface& s, const std::vector<Part>& parts, Index dof
       ny.push_back(T.n.y);
       nz.push_back(T.n.z);
       w.push_back(2.0 * T.area * r.w[k]);
-      for (int a = 0; a < part.count; ++a) {
-        if (with_values) entries[0].emplace_back(p, part.position[a], lambda[part.basis[a]]);
-        if (!with_curls) continue;
-        const Vec3 c = surface_curl(T, part.basis[a]);
-        entries[1].emplace_back(p, part.position[a], c.x);
-        entries[2].emplace_back(p, part.position[a], c.y);
-        entries[3].emplace_back(p, part.position[a], c.z);
-      }
+      if (with_values)
+        for (int a = 0; a < part.count; ++a) entries[0].emplace_back(p, part.position[a], lambda[part.basis[a]]);
     }
+    if (with_curls)
+      for (int a = 0; a < part.count; ++a) {
+        const Vec3 c = surface_curl(T, part.basis[a]);
+        entries[1].emplace_back(part_index, part.position[a], c.x);
+        entries[2].emplace_back(part_index, part.position[a], c.y);
+        entries[3].emplace_back(part_index, part.position[a], c.z);
+      }
+    ++part_index;
   }
-  auto map = [&](const std::vector<Eigen::Triplet<double>>& e) {
-    Eigen::SparseMatrix<double> Q(size(), dofs);
+  auto map = [&](const std::vector<Eigen::Triplet<double>>& e, Index rows) {
+    Eigen::SparseMatrix<double> Q(rows, dofs);
     Q.setFromTriplets(e.begin(), e.end());
     return Q;
   };
-  if (with_values) values.push_back(map(entries[0]));
+  if (with_values) values.push_back(map(entries[0], size()));
   if (with_curls)
-    for (int c = 1; c < 4; ++c) curls.push_back(map(entries[c]));
+    for (int c = 1; c < 4; ++c) curls.push_back(map(entries[c], part_index));
+}
+
+Eigen::MatrixXd sum_over_parts(const Eigen::Ref<const Eigen::MatrixXd>& A, Index per_part) {
+  const Index parts = A.rows() / per_part;
+  Eigen::MatrixXd out(parts, A.cols());
+  for (Index j = 0; j < A.cols(); ++j) {
+    const double* a = A.col(j).data();
+    for (Index t = 0; t < parts; ++t) {
+      double sum = 0.0;
+      for (Index q = 0; q < per_part; ++q) sum += a[t * per_part + q];
+      out(t, j) = sum;
+    }
+  }
+  return out;
 }
 
 FarPoints::FarPoints(const Vertices& points, const Index* I, Index m) {

@@ -250,25 +250,39 @@ class SurfaceBlock : public EntryBlock {
     rp_ = std::make_unique<FarPoints>(s_, row_parts_, m_, values, curls, rule);
     cp_ = std::make_unique<FarPoints>(s_, col_parts_, k_, values, curls, rule);
   }
-  /// sum_d Q_r[d]^T A Q_c[d] over the maps (values, or the three curl components).
+  /// Q_r^T A Q_c with the values' maps, or sum_d C_r[d]^T A_t C_c[d] with the curls, A_t the
+  /// sums of A over each triangle pair's points (the curls are constant on a triangle: 81
+  /// times fewer entries to project).
   void project(const Eigen::MatrixXd& A, bool curls, Eigen::Map<Eigen::MatrixXd>& out) const {
-    const auto &qr = rp_->maps(curls), &qc = cp_->maps(curls);
+    if (!curls) {
+      const Eigen::MatrixXd AQ = A * cp_->values[0];
+      out = rp_->values[0].transpose() * AQ;
+      return;
+    }
+    const Eigen::MatrixXd pairs =
+        sum_over_parts(sum_over_parts(A, rp_->per_part).transpose(), cp_->per_part).transpose();
     out.setZero();
-    for (std::size_t d = 0; d < qr.size(); ++d) {
-      const Eigen::MatrixXd AQ = A * qc[d];
-      out += qr[d].transpose() * AQ;
+    for (std::size_t d = 0; d < rp_->curls.size(); ++d) {
+      const Eigen::MatrixXd AC = pairs * cp_->curls[d];
+      out += rp_->curls[d].transpose() * AC;
     }
   }
   /// The point factors projected to the dofs: the maps side by side (the three curl
-  /// components: rank 3r, recompressed by the H-matrix to its rank).
+  /// components, from the factors summed over each triangle's points: rank 3r, recompressed
+  /// by the H-matrix to its rank).
   void project(const LowRank& points, bool curls, LowRank& out) const {
-    const auto &qr = rp_->maps(curls), &qc = cp_->maps(curls);
-    const Index rank = points.rank(), maps = static_cast<Index>(qr.size());
+    if (!curls) {
+      out.U = rp_->values[0].transpose() * points.U;
+      out.V = cp_->values[0].transpose() * points.V;
+      return;
+    }
+    const Eigen::MatrixXd U = sum_over_parts(points.U, rp_->per_part), V = sum_over_parts(points.V, cp_->per_part);
+    const Index rank = points.rank(), maps = static_cast<Index>(rp_->curls.size());
     out.U.resize(m_, maps * rank);
     out.V.resize(k_, maps * rank);
     for (Index d = 0; d < maps; ++d) {
-      out.U.middleCols(d * rank, rank) = qr[static_cast<std::size_t>(d)].transpose() * points.U;
-      out.V.middleCols(d * rank, rank) = qc[static_cast<std::size_t>(d)].transpose() * points.V;
+      out.U.middleCols(d * rank, rank) = rp_->curls[static_cast<std::size_t>(d)].transpose() * U;
+      out.V.middleCols(d * rank, rank) = cp_->curls[static_cast<std::size_t>(d)].transpose() * V;
     }
   }
   /// Whether every triangle pair of the block is far (PairIntegrator::far): from the boxes

@@ -3,6 +3,7 @@
 #include <memory>
 #include <vector>
 
+#include "bem/far_points.hpp"
 #include "bem/hmatrix.hpp"
 #include "bem/surface_entries.hpp"
 #include "test_surfaces.hpp"
@@ -126,4 +127,13 @@ TEST(SurfaceEntries, CompressedOperatorsOfTheSteklovOperatorAgreeWithTheDenseOne
       EXPECT_LE((H[c]->apply(X) - exact).norm(), 1e-7 * exact.norm());
     }
   }
+}
+
+TEST(FarPoints, SumOverPartsAddsEachPartsConsecutiveRows) {
+  const Eigen::MatrixXd A = Eigen::MatrixXd::Random(12, 5);  // 4 parts of 3 points
+  const Eigen::MatrixXd sums = sum_over_parts(A, 3);
+  ASSERT_EQ(sums.rows(), 4);
+  ASSERT_EQ(sums.cols(), 5);
+  for (Index t = 0; t < 4; ++t)
+    for (Index j = 0; j < 5; ++j) EXPECT_NEAR(sums(t, j), A.block(3 * t, j, 3, 1).sum(), 1e-15);
 }

@@ -35,21 +35,25 @@ std::vector<Part> parts(const Surface& s, Space space, const Index* dofs, Index 
 /// themselves (weight 1, no normal, no maps: the rows of a potential).
 struct FarPoints {
   std::vector<double> x, y, z, nx, ny, nz, w;
-  /// points x dofs: the values of the basis functions (`values`, one map), and the three
-  /// components of their surface curls (`curls`, the hypersingular operator by Nedelec's
-  /// identity W = sum_c C_c^T V0 C_c).
-  std::vector<Eigen::SparseMatrix<double>> values, curls;
+  /// points x dofs: the values of the basis functions (one map).
+  std::vector<Eigen::SparseMatrix<double>> values;
+  /// parts x dofs: the three components of the surface curls of the basis functions (the
+  /// hypersingular operator by Nedelec's identity W = sum_c C_c^T V0 C_c), constant on a
+  /// triangle: the map of the points is the points' sum over each part's `per_part` points
+  /// (consecutive, part by part) followed by these (see sum_over_parts).
+  std::vector<Eigen::SparseMatrix<double>> curls;
+  Index per_part = 1;
 
   FarPoints(const Surface& s, const std::vector<Part>& parts, Index dofs, bool with_values, bool with_curls,
             const TriangleRule& rule);
   /// The rows I[0..m) of `points` (m, 3).
   FarPoints(const Vertices& points, const Index* I, Index m);
-  /// The maps of the hypersingular operator's entries (curls) or of the others' (values).
-  const std::vector<Eigen::SparseMatrix<double>>& maps(bool hypersingular) const {
-    return hypersingular ? curls : values;
-  }
   Index size() const { return static_cast<Index>(w.size()); }
 };
+
+/// The sums of the rows of A (points x k) over each part's `per_part` consecutive points:
+/// (parts x k).
+Eigen::MatrixXd sum_over_parts(const Eigen::Ref<const Eigen::MatrixXd>& A, Index per_part);
 
 /// The point kernels: 2 G = 1 / (2 pi r) (single layer), 2 dG/dn_y = n_y . (x - y) / (2 pi r^3)
 /// (double layer, the normal of the column point).
