@@ -179,7 +179,11 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
         # the skeleton: edge forms of the edges this rank solves, Pi on all local skeleton dofs
         subdomains = np.asarray(coarse.edge_subdomains, dtype=np.int64)
         side = np.where(subdomains[:, 0] >= 0, subdomains[:, 0], subdomains[:, 1])
-        mine = np.asarray(subdomain_rank)[side] == comm.rank
+        rank_of = np.asarray(subdomain_rank)
+        mine = rank_of[side] == comm.rank
+        # the edges of this rank's subdomains: every local skeleton dof that B reads lies on
+        # one (an owned dof is in an owned cell); the others' interpolation is never used
+        near = ((subdomains >= 0) & (rank_of[np.maximum(subdomains, 0)] == comm.rank)).any(axis=1)
         ends = np.asarray(coarse.edge_vertices, dtype=np.int64)
         vertex_local = to_local(np.asarray(coarse.vertex_dofs, dtype=np.int64))
         vertex_sk = np.where(vertex_local >= 0, sk_pos[vertex_local], -1)
@@ -190,6 +194,9 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
         edge_dofs = as_ragged(coarse.edge_dofs, dtype=np.int64)
         edge_coords = as_ragged(coarse.edge_coords, dtype=float, item_shape=(2,))
         for length, group in edge_dofs.length_groups():
+            group = group[near[group]]
+            if group.size == 0:
+                continue
             inner_global = edge_dofs.rows(group)[:, 1:-1]
             local = to_local(inner_global)
             inner = np.where(local >= 0, sk_pos[np.maximum(local, 0)], -1)
