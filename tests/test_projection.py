@@ -100,3 +100,37 @@ def test_inverse_from_the_cholesky_factor_is_the_symmetric_inverse(lower):
     W = inverse_from_cholesky(scipy.linalg.cho_factor(M, lower=lower), block=256)
     assert np.array_equal(W, W.T)
     assert np.abs(W @ M - np.eye(n)).max() <= 1e-13
+
+
+def test_a_dense_signorini_block_shares_its_inverse_with_the_exact_projection():
+    """DenseSignoriniBlock.signorini_inverse replaces the block's Cholesky factor (one n x n
+    array kept, not two); build_projection hands it to the exact projection, which then
+    drops the factor too; the projections and M_s^{-1} g equal the unshared ones to
+    round-off (the inverse's products against the triangular solves)."""
+    from coupling.options import SolverOptions
+    from coupling.preconditioners.base import DenseSignoriniBlock
+    from coupling.solvers.solution import build_projection
+
+    n = 120
+    M = h12_like_matrix(n)
+    block = DenseSignoriniBlock(M)
+    g = np.random.default_rng(7).standard_normal(n)
+    before = block.apply_signorini(g)
+    projection = build_projection(block, SolverOptions(method="ssn", projection="exact"))
+    reference = SignoriniProjection.exact(M)
+    target = g - 0.2  # a few nodes active: the projection works through M^{-1}
+    psi = projection(target, np.zeros(n)).phi
+    assert 0 < np.count_nonzero(psi == 0.0) < n / 2
+    np.testing.assert_allclose(psi, reference(target, np.zeros(n)).phi, atol=1e-12)
+    assert block.signorini_factor is None and projection._factor is None
+    assert projection._inverse is block.signorini_inverse
+    np.testing.assert_allclose(block.apply_signorini(g), before, rtol=1e-11)
+    # an inexact projection given only the inverse uses it in its dual bound: run to its
+    # fixed point (rho_in = 0), it is the exact projection
+    inexact = SignoriniProjection(
+        M, "inexact", rho_in=0.0, max_iterations=200000, inverse=lambda: block.signorini_inverse
+    )
+    assert inexact._factor is None
+    result = inexact(target, np.zeros(n))
+    assert result.iterations > 1
+    assert np.linalg.norm(result.phi - psi) < 1e-8 * np.linalg.norm(psi)

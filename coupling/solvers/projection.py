@@ -27,9 +27,9 @@ import numpy as np
 import scipy.linalg
 import scipy.optimize
 
-from coupling.preconditioners.base import largest_eigenvalue
+from coupling.preconditioners.base import inverse_from_cholesky, largest_eigenvalue
 
-__all__ = ["SignoriniProjection", "ProjectionResult"]
+__all__ = ["SignoriniProjection", "ProjectionResult", "inverse_from_cholesky"]
 
 
 @dataclass(frozen=True)
@@ -38,27 +38,6 @@ class ProjectionResult:
 
     phi: np.ndarray
     iterations: int
-
-
-def inverse_from_cholesky(factor: tuple[np.ndarray, bool], block: int = 512) -> np.ndarray:
-    """M^{-1} (n x n) from M's Cholesky factor (``scipy.linalg.cho_factor``'s (c, lower)),
-    in one n x n array: LAPACK's potri on a copy of the factor, then the other triangle
-    filled a block of columns at a time (no identity right-hand side, no triangle-index
-    arrays: the n x n temporaries of ``cho_solve(factor, eye(n))``)."""
-    c, lower = factor
-    inverse, info = scipy.linalg.lapack.dpotri(c, lower=lower, overwrite_c=False)
-    if info != 0:
-        raise np.linalg.LinAlgError(f"potri failed (info {info}): M_s is not positive definite")
-    n = inverse.shape[0]
-    for j in range(0, n, block):  # copy the computed triangle into the other one
-        k = min(j + block, n)
-        if lower:  # rows below the block hold (M^{-1})[k:, j:k]; mirror it to [j:k, k:]
-            inverse[j:k, k:] = inverse[k:, j:k].T
-        else:
-            inverse[k:, j:k] = inverse[j:k, k:].T
-        d = inverse[j:k, j:k]
-        d[...] = np.tril(d) + np.tril(d, -1).T if lower else np.triu(d) + np.triu(d, 1).T
-    return inverse
 
 
 class SignoriniProjection:
@@ -80,6 +59,10 @@ class SignoriniProjection:
     factor
         M_s's Cholesky factor as ``scipy.linalg.cho_factor`` returns it, when the caller
         has one (the preconditioner's: not factored twice); read, never written.
+    inverse
+        A function returning M_s^{-1}, when the caller computes it once for both (the
+        preconditioner's, :class:`coupling.preconditioners.base.DenseSignoriniBlock`);
+        else the exact projection computes its own from the factor when it first needs it.
     """
 
     def __init__(
@@ -91,6 +74,7 @@ class SignoriniProjection:
         max_iterations: int,
         lambda_max: float | Callable[[], float] | None = None,
         factor: tuple[np.ndarray, bool] | None = None,
+        inverse: Callable[[], np.ndarray] | None = None,
     ):
         if method not in ("inexact", "exact"):
             raise ValueError(f'projection must be "inexact" or "exact", got {method!r}')
@@ -101,11 +85,12 @@ class SignoriniProjection:
         n = self.M.shape[0]
         self._lambda_max = lambda_max
         self._theta: float | None = None if n > 0 else 0.0
-        if factor is None and n > 0:
+        if factor is None and inverse is None and n > 0:
             factor = scipy.linalg.cho_factor(self.M)
         self._factor = factor
         self._active = np.zeros(n, dtype=bool)
         self._inverse: np.ndarray | None = None  # M^{-1}, for the exact projection
+        self._inverse_of = inverse
 
     @classmethod
     def exact(cls, metric: np.ndarray) -> "SignoriniProjection":
@@ -145,12 +130,30 @@ class SignoriniProjection:
             phi = np.maximum(0.0, phi - self.theta * residual)
             residual = self.M @ phi - M_target
             lam = np.maximum(0.0, 2.0 * residual)
-            q_lower = -lam @ target - 0.25 * lam @ scipy.linalg.cho_solve(self._factor, lam)
+            m_inv_lam = (
+                scipy.linalg.cho_solve(self._factor, lam)
+                if self._factor is not None
+                else self._inverse_matrix() @ lam
+            )
+            q_lower = -lam @ target - 0.25 * lam @ m_inv_lam
             if (phi - target) @ residual <= (
                 self.rho_in * q_start + (1.0 - self.rho_in) * max(q_lower, 0.0)
             ):
                 return ProjectionResult(phi, i)
         return ProjectionResult(phi, self.max_iterations)
+
+    def _inverse_matrix(self) -> np.ndarray:
+        """W = M^{-1}: the caller's (``inverse``) or from the factor, computed once; the
+        exact projection then drops its reference to the factor (W replaces it)."""
+        if self._inverse is None:
+            self._inverse = (
+                inverse_from_cholesky(self._factor)
+                if self._inverse_of is None
+                else self._inverse_of()
+            )
+            if self.method == "exact":
+                self._factor = None
+        return self._inverse
 
     def _solve_free(self, b: np.ndarray, free: np.ndarray) -> np.ndarray:
         """psi with psi_A = 0 and M_II psi_I = b_I (I = ``free``, A the rest).
@@ -167,11 +170,7 @@ class SignoriniProjection:
             psi = np.zeros(n)
             psi[free] = scipy.linalg.solve(self.M[np.ix_(free, free)], b[free], assume_a="pos")
             return psi
-        if self._inverse is None:
-            self._inverse = inverse_from_cholesky(self._factor)
-            if self.method == "exact":  # the factor's one use here: W replaces it
-                self._factor = None
-        W = self._inverse
+        W = self._inverse_matrix()
         y = W @ np.where(free, b, 0.0)
         if n_active == 0:
             return y

@@ -90,15 +90,17 @@ class Solution:
 
 def build_projection(preconditioner: Preconditioner, options: SolverOptions) -> SignoriniProjection:
     """P_s of ``options`` in the metric M_s of ``preconditioner`` (3.19)-(3.20), sharing
-    its Cholesky factor of M_s when it has one; lambda_max(M_s) is computed only when the
-    inexact projection first needs it."""
+    its Cholesky factor of M_s and M_s^{-1} when it has them (a dense M_s's); lambda_max(M_s)
+    is computed only when the inexact projection first needs it."""
+    dense = hasattr(preconditioner, "signorini_inverse")
     return SignoriniProjection(
         preconditioner.signorini_metric,
         options.projection,
         rho_in=options.projection_tol,
         max_iterations=options.projection_max_iterations,
         lambda_max=lambda: preconditioner.lambda_max_signorini,
-        factor=getattr(preconditioner, "signorini_factor", None),  # a dense M_s's
+        factor=preconditioner.signorini_factor if dense else None,
+        inverse=(lambda: preconditioner.signorini_inverse) if dense else None,
     )
 
 
