@@ -12,7 +12,7 @@ import matplotlib.tri as mtri
 import numpy as np
 import pytest
 
-from conftest import run_cli, run_mpi
+from conftest import ROOT, run_cli, run_mpi
 from coupling.io.figure_data import PLOT_FILES, RASTER_PIXELS, PixelGrid, coarsen, rasterise
 
 FEMBEM = str(Path(sys.executable).parent / "fembem")
@@ -106,7 +106,9 @@ def test_figures_under_mpirun_are_those_of_the_serial_run(tmp_path):
     serial, parallel = tmp_path / "serial", tmp_path / "parallel"
     proc = run_cli("solve", str(config), "--out", str(serial), "--quiet")
     assert proc.returncode == 0, proc.stderr
-    run_mpi(2, FEMBEM, "solve", str(config), "--out", str(parallel), "--quiet")
+    proc = run_mpi(2, FEMBEM, "solve", str(config), "--out", str(parallel), "--quiet")
+    # drawn by the figure process, which is no rank of the job (it once joined it: orte_init)
+    assert "figure process failed" not in proc.stderr, proc.stderr[-2000:]
     files = [json.loads((out / "summary.json").read_text())["files"] for out in (serial, parallel)]
     assert files[0] == files[1] and set(PLOT_FILES) <= set(files[0])
     for name in PLOT_FILES:
@@ -153,3 +155,62 @@ def test_surface_figure_turns_the_normals_of_a_closed_surface_outward():
         normals = _outward_normals(corners)
         centroids = corners.mean(axis=1)
         assert (np.einsum("ij,ij->i", normals, centroids) > 0).all()  # the cube's centre: 0
+
+
+def test_the_figure_process_starts_outside_the_mpi_job():
+    """The figure process of a rank gets the rank's environment without the variables of
+    the MPI job (if it initialises MPI, for a body's figures, it is an MPI process of its
+    own, not a rank that fails to join), with the Open MPI and PMIx settings kept."""
+    from coupling.io.figure_worker import outside_the_mpi_job
+
+    rank = {
+        "PATH": "/usr/bin",
+        "OMPI_MCA_pmix": "^s1,s2,cray,isolated",
+        "OMPI_ALLOW_RUN_AS_ROOT": "1",
+        "PMIX_MCA_mca_base_component_show_load_errors": "1",
+        "OMPI_COMM_WORLD_RANK": "0",
+        "OMPI_COMM_WORLD_SIZE": "2",
+        "OMPI_MCA_orte_hnp_uri": "1.0;tcp://127.0.0.1:1",
+        "OMPI_MCA_ess": "^singleton",
+        "OMPI_MCA_ess_base_vpid": "0",
+        "OMPI_UNIVERSE_SIZE": "2",
+        "PMIX_RANK": "0",
+        "PMIX_NAMESPACE": "1",
+        "PMIX_SERVER_URI4": "1.0;tcp4://127.0.0.1:1",
+        "PMI_RANK": "0",
+    }
+    assert outside_the_mpi_job(rank) == {
+        "PATH": "/usr/bin",
+        "OMPI_MCA_pmix": "^s1,s2,cray,isolated",
+        "OMPI_ALLOW_RUN_AS_ROOT": "1",
+        "PMIX_MCA_mca_base_component_show_load_errors": "1",
+    }
+
+
+def test_planar_figures_are_drawn_without_mpi(tmp_path):
+    """What the figure process of a planar run does, the render of pickled FigureInputs,
+    imports no MPI (it imported the body figures' modules, and through the mesh libraries
+    MPI, in every run: under mpirun the process then tried to join the job)."""
+    import pickle
+    import subprocess
+
+    from coupling.io.plots import figure_inputs
+
+    config = tmp_path / "c.toml"
+    config.write_text(
+        '[geometry]\nshape = "square"\nh = 0.0625\nsubdomain_size = 0.125\n'
+        'structured = true\nsignorini = ["bottom"]\n[data]\nt0 = "-1"\n'
+        "[output]\nxdmf = false\nplots = false\n"
+    )
+    proc = run_cli("solve", str(config), "--out", str(tmp_path / "out"), "--quiet")
+    assert proc.returncode == 0, proc.stderr
+    with np.load(tmp_path / "out" / "fields.npz") as f:
+        inputs = figure_inputs(dict(f), [], tol=1e-8)
+    pickled = tmp_path / "inputs.pkl"
+    pickled.write_bytes(pickle.dumps(inputs))
+    code = (
+        "import pickle, sys; from coupling.io import figures; "
+        f"pngs = figures.render(pickle.loads(open({str(pickled)!r}, 'rb').read())); "
+        "assert 'u.png' in pngs; sys.exit(3 if 'mpi4py' in sys.modules else 0)"
+    )
+    assert subprocess.run([sys.executable, "-c", code], cwd=ROOT).returncode == 0

@@ -8,9 +8,12 @@ first figure (:func:`coupling.io.figures.warm_up`) while the mesh is built, then
 for one :class:`coupling.io.figure_data.FigureInputs` on its standard input (a few MB,
 pickled) and answers with the PNG bytes of :func:`coupling.io.figures.render` on its
 standard output. The run writes the files itself (atomically, into its staged output
-folder). The worker imports neither MPI nor the mesh libraries, so it is no MPI process
-even under mpirun; it runs in a session of its own (Ctrl-C reaches the run, which ends
-the worker) and exits when its standard input closes.
+folder). For planar figures the worker imports neither MPI nor the mesh libraries; a
+body's figures locate points in the tetrahedra, and the mesh libraries import MPI: the
+worker starts without the variables of the run's MPI job (:func:`outside_the_mpi_job`), so
+that under mpirun it is an MPI process of its own, never a rank that fails to join the job.
+It runs in a session of its own (Ctrl-C reaches the run, which ends the worker) and exits
+when its standard input closes.
 """
 from __future__ import annotations
 
@@ -20,7 +23,39 @@ import subprocess
 import sys
 from pathlib import Path
 
-__all__ = ["FigureWorker", "FigureWorkerError"]
+__all__ = ["FigureWorker", "FigureWorkerError", "outside_the_mpi_job"]
+
+
+#: What mpirun adds to a rank's environment (Open MPI 4 and PMIx: the job, the rank, the
+#: daemon's address); a process started with them and initialising MPI tries to join the
+#: job as one of its ranks, and fails (orte_init). The Open MPI settings (OMPI_MCA_pmix,
+#: OMPI_ALLOW_RUN_AS_ROOT, PMIX_MCA_*) stay.
+MPI_JOB_VARIABLES = (
+    "OMPI_COMM_WORLD_",
+    "OMPI_MCA_orte_",
+    "OMPI_MCA_ess",
+    "OMPI_UNIVERSE_SIZE",
+    "OMPI_FIRST_RANKS",
+    "OMPI_APP_CTX_NUM_PROCS",
+    "OMPI_NUM_APP_CTX",
+    "OMPI_FILE_LOCATION",
+    "OMPI_COMMAND",
+    "OMPI_MCA_initial_wdir",
+    "PMI_",
+    "PMIX_",
+)
+
+
+def outside_the_mpi_job(environ: dict[str, str]) -> dict[str, str]:
+    """``environ`` without the variables of an MPI job (:data:`MPI_JOB_VARIABLES`, but the
+    PMIx settings ``PMIX_MCA_*``): the environment of a helper process of one rank (the
+    figure process of a 3D run imports the mesh libraries, and with them MPI, which then
+    starts as a process of its own)."""
+    return {
+        k: v
+        for k, v in environ.items()
+        if k.startswith("PMIX_MCA_") or not k.startswith(MPI_JOB_VARIABLES)
+    }
 
 
 class FigureWorkerError(RuntimeError):
@@ -37,7 +72,7 @@ class FigureWorker:
         root = str(Path(__file__).resolve().parents[2])  # the folder holding ``coupling``
         path = os.environ.get("PYTHONPATH")
         env = dict(
-            os.environ,
+            outside_the_mpi_job(os.environ),
             PYTHONPATH=root if not path else os.pathsep.join([root, path]),
             MPLBACKEND="Agg",
             OMP_NUM_THREADS="1",

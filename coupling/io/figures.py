@@ -312,9 +312,8 @@ def render(inputs: FigureInputs) -> dict[str, bytes]:
     """The PNG files of :data:`PLOT_FILES` drawn from ``inputs``, as {name: bytes} in
     that order (no history.png without history); those of
     :func:`coupling.io.body_figures.render_body` for the inputs of a body in R^3."""
-    from coupling.io.body_figure_data import BodyFigureInputs
-
-    if isinstance(inputs, BodyFigureInputs):
+    if not isinstance(inputs, FigureInputs):  # a body's (BodyFigureInputs): its modules
+        # import the mesh libraries, and with them MPI, which planar figures never need
         from coupling.io.body_figures import render_body
 
         return render_body(inputs)
