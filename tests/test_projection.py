@@ -4,7 +4,8 @@ import pytest
 import scipy.linalg
 import scipy.optimize
 
-from coupling.solvers.projection import SignoriniProjection, inverse_from_cholesky
+from coupling.preconditioners.base import inverse_from_cholesky
+from coupling.solvers.projection import SignoriniProjection
 
 
 def h12_like_matrix(n: int) -> np.ndarray:

@@ -186,39 +186,48 @@ def block_diagonal_edge_forms(
         for batch in batches.values():
             ix = np.concatenate([b[0] for b in batch])
             blocks.append((ix, *edge_form(np.concatenate([b[1] for b in batch]), kind)))
-    return _block_diagonal(blocks, n, 1), _block_diagonal(blocks, n, 2)
+    return _block_diagonal(blocks, n)
 
 
-def _block_diagonal(blocks: list[tuple[np.ndarray, ...]], n: int, which: int) -> sp.csr_matrix:
-    """The n x n sparse matrix of the dense blocks ``block[which]`` (B, m, m) on the rows
-    and columns ``block[0]`` (B, m). Where no row is in two blocks (the edges' interior
-    nodes), the CSR arrays are written directly, each row's entries at its offset;
-    otherwise the blocks are summed through COO."""
+def _block_diagonal(
+    blocks: list[tuple[np.ndarray, np.ndarray, np.ndarray]], n: int
+) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+    """The two n x n sparse matrices of the dense blocks ``(ix, a, b)``: a and b (B, m, m)
+    on the rows and columns ix (B, m), with one sparsity structure. Where no row is in two
+    blocks (the edges' interior nodes), the CSR arrays are written directly, each row's
+    entries at its offset; otherwise the blocks are summed through COO."""
     if not blocks:
-        return sp.csr_matrix((n, n))
-    rows = np.concatenate([b[0].ravel() for b in blocks])
+        return sp.csr_matrix((n, n)), sp.csr_matrix((n, n))
+    rows = np.concatenate([ix.ravel() for ix, _, _ in blocks])
     if np.bincount(rows, minlength=n).max(initial=0) > 1:
         r = np.concatenate(
-            [np.broadcast_to(b[0][:, :, None], b[which].shape).ravel() for b in blocks]
+            [np.broadcast_to(ix[:, :, None], a.shape).ravel() for ix, a, _ in blocks]
         )
         c = np.concatenate(
-            [np.broadcast_to(b[0][:, None, :], b[which].shape).ravel() for b in blocks]
+            [np.broadcast_to(ix[:, None, :], a.shape).ravel() for ix, a, _ in blocks]
         )
-        v = np.concatenate([b[which].ravel() for b in blocks])
-        return sp.csr_matrix((v, (r, c)), shape=(n, n))
+        return tuple(
+            sp.csr_matrix(
+                (np.concatenate([blk[k].ravel() for blk in blocks]), (r, c)), shape=(n, n)
+            )
+            for k in (1, 2)
+        )
     row_length = np.zeros(n, dtype=np.int64)
-    for b in blocks:
-        row_length[b[0]] = b[0].shape[1]
+    for ix, _, _ in blocks:
+        row_length[ix] = ix.shape[1]
     indptr = np.zeros(n + 1, dtype=np.int64)
     np.cumsum(row_length, out=indptr[1:])
     indices = np.empty(indptr[-1], dtype=np.int64)
-    data = np.empty(indptr[-1])
-    for b in blocks:
-        ix, m = b[0], b[0].shape[1]
-        at = (indptr[ix][:, :, None] + np.arange(m)).ravel()
-        indices[at] = np.broadcast_to(ix[:, None, :], b[which].shape).ravel()
-        data[at] = b[which].ravel()
-    return sp.csr_matrix((data, indices, indptr), shape=(n, n))
+    data = (np.empty(indptr[-1]), np.empty(indptr[-1]))
+    for ix, a, b in blocks:
+        at = (indptr[ix][:, :, None] + np.arange(ix.shape[1])).ravel()
+        indices[at] = np.broadcast_to(ix[:, None, :], a.shape).ravel()
+        data[0][at], data[1][at] = a.ravel(), b.ravel()
+    # each matrix its own index array: an in-place sort_indices of one must not reach the other
+    return (
+        sp.csr_matrix((data[0], indices, indptr), shape=(n, n)),
+        sp.csr_matrix((data[1], indices.copy(), indptr.copy()), shape=(n, n)),
+    )
 
 
 class TwoLevelForm:

@@ -29,7 +29,7 @@ import scipy.optimize
 
 from coupling.preconditioners.base import inverse_from_cholesky, largest_eigenvalue
 
-__all__ = ["SignoriniProjection", "ProjectionResult", "inverse_from_cholesky"]
+__all__ = ["SignoriniProjection", "ProjectionResult"]
 
 
 @dataclass(frozen=True)
@@ -90,7 +90,7 @@ class SignoriniProjection:
         self._factor = factor
         self._active = np.zeros(n, dtype=bool)
         self._inverse: np.ndarray | None = None  # M^{-1}, for the exact projection
-        self._inverse_of = inverse
+        self._inverse_of = inverse or (lambda: inverse_from_cholesky(self._factor))
 
     @classmethod
     def exact(cls, metric: np.ndarray) -> "SignoriniProjection":
@@ -146,11 +146,7 @@ class SignoriniProjection:
         """W = M^{-1}: the caller's (``inverse``) or from the factor, computed once; the
         exact projection then drops its reference to the factor (W replaces it)."""
         if self._inverse is None:
-            self._inverse = (
-                inverse_from_cholesky(self._factor)
-                if self._inverse_of is None
-                else self._inverse_of()
-            )
+            self._inverse = self._inverse_of()
             if self.method == "exact":
                 self._factor = None
         return self._inverse
