@@ -135,3 +135,22 @@ def test_a_dense_signorini_block_shares_its_inverse_with_the_exact_projection():
     result = inexact(target, np.zeros(n))
     assert result.iterations > 1
     assert np.linalg.norm(result.phi - psi) < 1e-8 * np.linalg.norm(psi)
+
+
+def test_the_exact_twin_of_a_projection_shares_its_factor_and_inverse():
+    """as_exact: the exact projection is itself; an inexact one's exact twin (the ssn
+    predictor's, and the residual scale's of a nested level) factors and inverts nothing
+    of its own: it reads the same Cholesky factor and the same M_s^{-1} array, and
+    projects as a fresh exact projection does."""
+    n = 60
+    M = h12_like_matrix(n)
+    exact = SignoriniProjection.exact(M)
+    assert exact.as_exact() is exact
+    inexact = SignoriniProjection(M, "inexact", rho_in=0.5, max_iterations=1000)
+    twin = inexact.as_exact()
+    assert twin.method == "exact" and twin.M is inexact.M and twin._factor is inexact._factor
+    target = np.random.default_rng(3).standard_normal(n) - 0.3
+    psi = twin(target, np.zeros(n)).phi
+    assert 0 < np.count_nonzero(psi == 0.0) < n / 2  # through M^{-1}: few active nodes
+    assert twin._inverse is inexact._inverse_matrix()
+    np.testing.assert_allclose(psi, exact(target, np.zeros(n)).phi, atol=1e-12)

@@ -97,6 +97,20 @@ class SignoriniProjection:
         """The exact projection (it has no tolerance or cap)."""
         return cls(metric, "exact", rho_in=0.0, max_iterations=0)
 
+    def as_exact(self) -> "SignoriniProjection":
+        """The exact projection in the same metric: this one when it is exact, else one that
+        shares its Cholesky factor of M_s and M_s^{-1} (nothing factored or inverted twice)."""
+        if self.method == "exact":
+            return self
+        return SignoriniProjection(
+            self.M,
+            "exact",
+            rho_in=0.0,
+            max_iterations=0,
+            factor=self._factor,
+            inverse=self._inverse_matrix,
+        )
+
     @property
     def theta(self) -> float:
         """The step 1 / lambda_max(M_s) of (3.20), computed on first use (only ``inexact``

@@ -269,7 +269,7 @@ def solve(
         )
         tic = time.perf_counter()
         if initial is not None and options.method == "ssn" and residual_scale is None:
-            residual_scale = zero_residual(problem.functional, pc, u, phi0.size, tau)
+            residual_scale = zero_residual(context, phi0.size, tau)
         run = iterate(
             context,
             options,

@@ -65,7 +65,6 @@ from coupling.options import (
 )
 from coupling.solvers.loop import IterationContext, Loop
 from coupling.solvers.pgpm import energy_increased, pgpm
-from coupling.solvers.projection import SignoriniProjection
 from coupling.solvers.records import RunResult, b_norm2, global_dot, set_owned
 
 __all__ = [
@@ -158,16 +157,17 @@ def _predict(preconditioner, predictor, comm, g_u, g_phi, phi, tau):
     return predicted, residual
 
 
-def zero_residual(functional, preconditioner, u_function, n_phi: int, tau: float) -> float:
+def zero_residual(context: IterationContext, n_phi: int, tau: float) -> float:
     """The Newton residual r at xi = (0, 0): the scale of the problem's residuals (for
-    ``residual_scale``; ``u_function`` is left as it was)."""
+    ``residual_scale``; the context's ``u`` is left as it was)."""
+    functional, preconditioner, u_function = context.functional, context.preconditioner, context.u
     comm = functional.comm
     saved = u_function.vector.array_r.copy()
     set_owned(u_function, np.zeros_like(saved))
     grad = u_function.vector.duplicate()
     phi = np.zeros(n_phi)
     g_phi = functional.gradient(u_function, phi, grad)
-    predictor = SignoriniProjection.exact(preconditioner.signorini_metric)
+    predictor = context.projection.as_exact()
     _, residual = _predict(preconditioner, predictor, comm, grad.array_r.copy(), g_phi, phi, tau)
     grad.destroy()
     set_owned(u_function, saved)
@@ -362,13 +362,9 @@ def semismooth_newton(
     grad = u_function.vector.duplicate()
     hessian = Hessian(context)
     energy, g_phi = functional.value_and_gradient(u_function, phi, grad)
-    # the exact M_s-projection predicts the active set (an inexact one would blur it); the
-    # solver's own projection serves when it is exact (one factor of M_s and of its inverse)
-    predictor = (
-        projection
-        if projection.method == "exact"
-        else SignoriniProjection.exact(preconditioner.signorini_metric)
-    )
+    # the exact M_s-projection predicts the active set (an inexact one would blur it), in
+    # the solver's projection's metric with its factor of M_s and its inverse
+    predictor = projection.as_exact()
     residual0 = newton.residual_scale
     active = np.zeros(phi.size, dtype=bool)
     b_u = None  # B_Omega u_k, updated by the steps
