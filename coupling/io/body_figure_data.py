@@ -27,6 +27,11 @@ SLICE_PIXELS = 121
 #: sums (measured at 35,937 dofs: 19 s for every pixel), less compressed (bem_cpp's
 #: crossover), and a quarter of the pixels a quarter of either.
 SLICE_EXTERIOR_STRIDE = 2
+#: Relative accuracy of the section's u_e (the compressed representation formula): a
+#: colour map resolves about 1/256 of the range, and at 1e-4 the image moves by 2e-5 of
+#: it (64^3 box: 2.4 s instead of 5.1 s at the solver's 1e-6; at 1e-2 the compressed
+#: solid angle takes exterior points for interior ones; docs/design/three_dimensions.md)
+SLICE_POTENTIAL_TOL = 1e-4
 
 
 class BodyFigureInputs(NamedTuple):
@@ -63,10 +68,10 @@ def body_figure_inputs(fields: dict, history: dict, *, tol: float) -> BodyFigure
     ue = np.full(len(coarse), np.nan)
     if outside.any():
         try:
-            ue[outside] = exterior_from_fields(fields, coarse[outside])
+            ue[outside] = exterior_from_fields(fields, coarse[outside], SLICE_POTENTIAL_TOL)
         except ValueError:
             outside[outside] = ~_close_to(nodes, coarse[outside], float(g[k] - g[0]))
-            ue[outside] = exterior_from_fields(fields, coarse[outside])
+            ue[outside] = exterior_from_fields(fields, coarse[outside], SLICE_POTENTIAL_TOL)
     section = dict(
         z=float(centre[2]),
         u=u.reshape(X.shape),

@@ -35,13 +35,13 @@ __all__ = ["evaluate", "exterior_from_fields", "ON_GAMMA"]
 ON_GAMMA = 1e-11
 
 
-def exterior_from_fields(fields: dict, points: np.ndarray) -> np.ndarray:
+def exterior_from_fields(fields: dict, points: np.ndarray, tol: float | None = None) -> np.ndarray:
     """u_e at exterior ``points`` (m, 2) by the representation formula (docs/method.md section
     2) from the boundary arrays of a run's fields (``boundary_x``, ``ue``, ``dn_ue``,
     ``a``, ``flux_space``; in 3D (m, 3) points and ``boundary_triangles``), compressed
-    above bem_cpp's measured crossover (tol :func:`coupling.options.hmatrix_tol`);
-    bem_cpp's ValueError for a point inside Omega or on Gamma. bem_cpp releases the GIL
-    while it evaluates."""
+    above bem_cpp's measured crossover to the relative accuracy ``tol`` (default: the
+    solver's, :func:`coupling.options.hmatrix_tol`); bem_cpp's ValueError for a point
+    inside Omega or on Gamma. bem_cpp releases the GIL while it evaluates."""
     surface = fields.get("boundary_triangles")
     return bem_cpp.exterior_potential(
         fields["boundary_x"],
@@ -51,7 +51,7 @@ def exterior_from_fields(fields: dict, points: np.ndarray) -> np.ndarray:
         a=float(fields["a"]),
         flux=str(fields["flux_space"]),
         compression="auto",
-        tol=hmatrix_tol(np.asarray(fields["boundary_x"]).shape[1]),
+        tol=hmatrix_tol(np.asarray(fields["boundary_x"]).shape[1]) if tol is None else tol,
         **({} if surface is None else {"triangles": surface}),
     )
 
