@@ -241,3 +241,47 @@ def test_the_section_of_a_body_draws_u_e_to_a_fraction_of_a_colour_step():
 
     direct = u_e("none")
     assert np.abs(u_e("hmatrix") - direct).max() <= 1e-3 * np.ptp(direct)
+
+
+def test_a_body_s_figures_are_drawn_by_the_figure_process_in_two_parts(tmp_path):
+    """The figure process of a 3D run draws the figures on Gamma and the history from the
+    first inputs, then slice.png from the section the run computed meanwhile (they were
+    all drawn in the run's own process after the section); an error of the section ends
+    the figure process and reaches the run."""
+    from types import SimpleNamespace
+
+    from coupling.io.body_figure_data import section, surface_inputs
+    from coupling.io.figure_worker import FigureWorker
+    from coupling.io.plots import history_arrays
+
+    config = tmp_path / "c.toml"
+    config.write_text(
+        '[geometry]\nshape = "box"\ncenter = [0.0, 0.0, 0.0]\nwidth = 0.5\nh = 0.125\n'
+        'signorini = ["bottom"]\n[data]\nt0 = "-1"\n[output]\nxdmf = false\nplots = false\n'
+    )
+    proc = run_cli("solve", str(config), "--out", str(tmp_path / "out"), "--quiet")
+    assert proc.returncode == 0, proc.stderr
+    with np.load(tmp_path / "out" / "fields.npz") as f:
+        fields = dict(f)
+    records = [
+        SimpleNamespace(iteration=k, energy=-k, step_norm=0.1**k, contact=9) for k in (1, 2)
+    ]
+    surface = surface_inputs(fields, history_arrays(records, 0.01), tol=1e-8)
+    asked = []
+
+    def whole():
+        asked.append(True)
+        return surface._replace(section=section(fields))
+
+    with FigureWorker() as worker:
+        pngs = worker.render(surface, whole)
+    assert asked and set(pngs) == {"signorini.png", "surface.png", "history.png", "slice.png"}
+    assert all(png.startswith(b"\x89PNG") for png in pngs.values())
+
+    def failing():
+        raise ValueError("no section")
+
+    with FigureWorker() as worker:
+        with pytest.raises(ValueError, match="no section"):
+            worker.render(surface, failing)
+        assert worker._process.poll() is not None  # ended, not left waiting

@@ -1,8 +1,8 @@
 """What the figures of a body in R^3 are drawn from (:mod:`coupling.io.body_figures`).
 
-:func:`body_figure_inputs` collects, from the arrays of fields.npz and the iteration
-history: the surface triangulation of Gamma with u_h, the gap, the pressure and the
-contact set at its nodes, and a section of the body by the plane z = z_c through its
+From the arrays of fields.npz and the iteration history, :func:`surface_inputs` collects
+the surface triangulation of Gamma with u_h, the gap, the pressure and the contact set at
+its nodes, and :func:`section` a section of the body by the plane z = z_c through its
 centre (the middle of its bounding box): u_h at the pixel centres inside the body
 (point location in the tetrahedra) and u_e by the representation formula outside
 (docs/method.md section 11). NumPy and bem_cpp only: no matplotlib, no MPI.
@@ -16,7 +16,13 @@ import numpy as np
 from coupling.io.evaluation import exterior_from_fields
 from fem_py.mesh.location3d import interpolate_p1_tetrahedra
 
-__all__ = ["BODY_PLOT_FILES", "BodyFigureInputs", "body_figure_inputs", "SLICE_PIXELS"]
+__all__ = [
+    "BODY_PLOT_FILES",
+    "BodyFigureInputs",
+    "section",
+    "surface_inputs",
+    "SLICE_PIXELS",
+]
 
 #: The figures of a body, in the order they are written.
 BODY_PLOT_FILES = ("signorini.png", "surface.png", "slice.png", "history.png")
@@ -40,16 +46,30 @@ class BodyFigureInputs(NamedTuple):
     nodes: np.ndarray  # (n, 3) boundary nodes
     triangles: np.ndarray  # (m, 3) rows of nodes
     fields: dict  # boundary arrays (n,): u, phi, pressure, active, signorini
-    section: dict  # z, u_h and u_e images (NaN where not) and their extents (x0, x1, y0, y1)
+    section: dict | None  # z, u_h and u_e images (NaN where not), their extents (x0, x1, y0, y1)
     history: dict
     tol: float
 
 
-def body_figure_inputs(fields: dict, history: dict, *, tol: float) -> BodyFigureInputs:
-    """The inputs of the figures of a body from ``fields`` (the arrays of fields.npz of a
-    3D run: ``x``, ``cells``, ``u``, the boundary arrays) and ``history`` (the arrays of
-    :func:`coupling.io.plots.history_arrays`)."""
+def surface_inputs(fields: dict, history: dict, *, tol: float) -> BodyFigureInputs:
+    """The inputs of the figures drawn on Gamma and of the history (``section`` None: no
+    slice.png from them), at once: the surface arrays of ``fields`` as they are."""
+    boundary = dict(
+        u=fields["boundary_u"],
+        phi=fields["phi"],
+        pressure=fields["pressure"],
+        active=fields["active"],
+        signorini=fields["signorini"],
+    )
     nodes, triangles = fields["boundary_x"], fields["boundary_triangles"]
+    return BodyFigureInputs(nodes, triangles, boundary, None, history, float(tol))
+
+
+def section(fields: dict) -> dict:
+    """The section of slice.png: z, the images of u_h and u_e (NaN where they do not apply)
+    and their extents, from ``fields`` (module docstring): the point location in the
+    tetrahedra and the representation formula, the figures' costly part."""
+    nodes = fields["boundary_x"]
     lo, hi = nodes.min(axis=0), nodes.max(axis=0)
     centre, half = 0.5 * (lo + hi), 0.5 * float((hi - lo)[:2].max())
     g = np.linspace(-2.0, 2.0, SLICE_PIXELS) * half  # the body and its surroundings
@@ -72,21 +92,13 @@ def body_figure_inputs(fields: dict, history: dict, *, tol: float) -> BodyFigure
         except ValueError:
             outside[outside] = ~_close_to(nodes, coarse[outside], float(g[k] - g[0]))
             ue[outside] = exterior_from_fields(fields, coarse[outside], SLICE_POTENTIAL_TOL)
-    section = dict(
+    return dict(
         z=float(centre[2]),
         u=u.reshape(X.shape),
         u_extent=_extent(centre, g),
         ue=ue.reshape(X[::k, ::k].shape),
         ue_extent=_extent(centre, g[::k]),
     )
-    boundary = dict(
-        u=fields["boundary_u"],
-        phi=fields["phi"],
-        pressure=fields["pressure"],
-        active=fields["active"],
-        signorini=fields["signorini"],
-    )
-    return BodyFigureInputs(nodes, triangles, boundary, section, history, float(tol))
 
 
 def _extent(centre: np.ndarray, g: np.ndarray) -> tuple[float, float, float, float]:

@@ -11,6 +11,7 @@
 from __future__ import annotations
 
 import io
+from typing import Collection
 
 import matplotlib
 
@@ -131,19 +132,20 @@ def _figure_slice(inputs: BodyFigureInputs):
     return fig
 
 
-def render_body(inputs: BodyFigureInputs) -> dict[str, bytes]:
-    """The PNG files of :data:`BODY_PLOT_FILES` drawn from ``inputs``, as {name: bytes}
-    (no signorini.png without Signorini nodes, no history.png without history)."""
+def render_body(inputs: BodyFigureInputs, skip: Collection[str] = ()) -> dict[str, bytes]:
+    """The PNG files of :data:`BODY_PLOT_FILES` drawn from ``inputs``, as {name: bytes},
+    but those named in ``skip`` (no signorini.png without Signorini nodes, no slice.png
+    without the section, no history.png without history)."""
     figures = {
         "signorini.png": lambda: _figure_signorini(inputs),
         "surface.png": lambda: _figure_surface(inputs),
-        "slice.png": lambda: _figure_slice(inputs),
+        "slice.png": lambda: None if inputs.section is None else _figure_slice(inputs),
         "history.png": lambda: (
             figure_history(inputs.history, inputs.tol) if len(inputs.history["iteration"]) else None
         ),
     }
     pngs = {}
-    for name in BODY_PLOT_FILES:
+    for name in (n for n in BODY_PLOT_FILES if n not in skip):
         with plt.rc_context({"figure.dpi": _DPI}):
             fig = figures[name]()
         if fig is None:

@@ -5,15 +5,17 @@ whatever the mesh size (imports and first draw included), so a thread would not 
 the run's own Python work. :class:`FigureWorker` starts ``python -m
 coupling.io.figure_worker`` when the run starts: it imports matplotlib and draws a
 first figure (:func:`coupling.io.figures.warm_up`) while the mesh is built, then waits
-for one :class:`coupling.io.figure_data.FigureInputs` on its standard input (a few MB,
+for :class:`coupling.io.figure_data.FigureInputs` on its standard input (a few MB,
 pickled) and answers with the PNG bytes of :func:`coupling.io.figures.render` on its
-standard output. The run writes the files itself (atomically, into its staged output
-folder). For planar figures the worker imports neither MPI nor the mesh libraries; a
-body's figures locate points in the tetrahedra, and the mesh libraries import MPI: the
-worker starts without the variables of the run's MPI job (:func:`outside_the_mpi_job`), so
-that under mpirun it is an MPI process of its own, never a rank that fails to join the job.
-It runs in a session of its own (Ctrl-C reaches the run, which ends the worker) and exits
-when its standard input closes.
+standard output. A body's inputs come in two: those of the figures on Gamma and of the
+history at once, which it draws while the run computes the section (point location and
+the representation formula, seconds at 64^3 cubes), then the section's. The run writes
+the files itself (atomically, into its staged output folder). For planar figures the
+worker imports neither MPI nor the mesh libraries; a body's figure modules import the
+mesh libraries, and with them MPI: the worker starts without the variables of the run's
+MPI job (:func:`outside_the_mpi_job`), so that under mpirun it is an MPI process of its
+own, never a rank that fails to join the job. It runs in a session of its own (Ctrl-C
+reaches the run, which ends the worker) and exits when its standard input closes.
 """
 from __future__ import annotations
 
@@ -22,6 +24,7 @@ import pickle
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any, Callable
 
 __all__ = ["FigureWorker", "FigureWorkerError", "outside_the_mpi_job"]
 
@@ -87,15 +90,31 @@ class FigureWorker:
             start_new_session=True,
         )
 
-    def render(self, inputs) -> dict[str, bytes]:
+    def render(self, inputs, *later: Callable[[], Any]) -> dict[str, bytes]:
         """The PNG bytes of the figures of ``inputs`` (:func:`coupling.io.figures.render`),
         drawn in the worker; waits for it to finish.
+
+        ``later``: functions returning more complete inputs (a body's section, which takes
+        seconds to compute), each called here while the worker draws what it was sent
+        before; the worker then draws the figures it has not drawn yet. An error of one
+        of them ends the worker and is raised.
 
         Raises
         ------
         FigureWorkerError
             The worker ended without an answer (its error, or its exit status).
         """
+        for more in later:
+            try:
+                self._process.stdin.write(pickle.dumps(inputs, protocol=5))
+                self._process.stdin.flush()
+            except (BrokenPipeError, ValueError):  # it ended before reading, or was ended
+                break
+            try:
+                inputs = more()
+            except BaseException:
+                self.close()
+                raise
         try:
             out, err = self._process.communicate(pickle.dumps(inputs, protocol=5))
         except (BrokenPipeError, ValueError):  # it ended before reading, or was ended
@@ -124,16 +143,21 @@ class FigureWorker:
 
 
 def main() -> int:
-    """The worker: warm up, read one FigureInputs, answer with the PNG bytes."""
+    """The worker: warm up, draw the figures of each inputs read (those not drawn from the
+    inputs before), and when the input ends answer with all the PNG bytes."""
     from coupling.io import figures
 
     figures.warm_up()
-    try:
-        inputs = pickle.load(sys.stdin.buffer)
-    except EOFError:  # the run ended without figures
-        return 0
-    pickle.dump(figures.render(inputs), sys.stdout.buffer, protocol=5)
-    sys.stdout.buffer.flush()
+    pngs: dict[str, bytes] | None = None
+    while True:
+        try:
+            inputs = pickle.load(sys.stdin.buffer)
+        except EOFError:  # after the last inputs, or the run ended without figures
+            break
+        pngs = (pngs or {}) | figures.render(inputs, skip=pngs or ())
+    if pngs is not None:
+        pickle.dump(pngs, sys.stdout.buffer, protocol=5)
+        sys.stdout.buffer.flush()
     return 0
 
 

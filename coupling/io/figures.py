@@ -21,6 +21,7 @@ The problem is dimensionless, so the axes carry no units.
 from __future__ import annotations
 
 import io
+from typing import Collection
 
 import matplotlib
 
@@ -308,15 +309,16 @@ def _tight_extent(fig) -> Bbox:
     return box.padded(plt.rcParams["savefig.pad_inches"])
 
 
-def render(inputs: FigureInputs) -> dict[str, bytes]:
+def render(inputs: FigureInputs, skip: Collection[str] = ()) -> dict[str, bytes]:
     """The PNG files of :data:`PLOT_FILES` drawn from ``inputs``, as {name: bytes} in
     that order (no history.png without history); those of
-    :func:`coupling.io.body_figures.render_body` for the inputs of a body in R^3."""
+    :func:`coupling.io.body_figures.render_body` for the inputs of a body in R^3; but
+    those named in ``skip``."""
     if not isinstance(inputs, FigureInputs):  # a body's (BodyFigureInputs): its modules
         # import the mesh libraries, and with them MPI, which planar figures never need
         from coupling.io.body_figures import render_body
 
-        return render_body(inputs)
+        return render_body(inputs, skip)
     figures = {
         "u.png": lambda: _figure_u(inputs.boundary, inputs.image, inputs.grid),
         "boundary.png": lambda: _figure_boundary(inputs.boundary),
@@ -326,7 +328,7 @@ def render(inputs: FigureInputs) -> dict[str, bytes]:
         ),
     }
     pngs = {}
-    for name in PLOT_FILES:
+    for name in (n for n in PLOT_FILES if n not in skip):
         with plt.rc_context({"figure.dpi": _DPI}):
             fig = figures[name]()
         if fig is None:

@@ -35,7 +35,7 @@ from coupling.io.atomic import atomic_write
 from coupling.io.levels import LEVEL_FILES, write_levels
 from coupling.io.figure_data import FigureInputs
 from coupling.io.figure_worker import FigureWorker, FigureWorkerError
-from coupling.io.body_figure_data import BODY_PLOT_FILES, body_figure_inputs
+from coupling.io.body_figure_data import BODY_PLOT_FILES, section, surface_inputs
 from coupling.io.plots import (
     PLOT_FILES,
     exterior_samples,
@@ -187,11 +187,17 @@ class RunOutputs:
             self._fields = dict(x=x, u=u, **{"cells" if solid else "triangles": cells}, **on_gamma)
             if not self.indicators:
                 self._jobs["data"] = self._pool.submit(_write_fields, self.out, self._fields)
-            if self.plots and solid:  # the section's u_e and u_h in a thread
+            if self.plots and solid:  # the section's u_e and u_h in a thread, while the
+                # figure process draws those on Gamma and the history
                 history = history_arrays(result.history, result.stop_measure)
+                surface = surface_inputs(self._fields, history, tol=self.tol)
                 self._jobs["inputs"] = self._pool.submit(
-                    body_figure_inputs, self._fields, history, tol=self.tol
+                    lambda: surface._replace(section=section(self._fields))
                 )
+                if self.worker is not None:
+                    self._jobs["pngs"] = self._pool.submit(
+                        self.worker.render, surface, self._jobs["inputs"].result
+                    )
             elif self.plots:
                 samples = self._pool.submit(exterior_samples, on_gamma)
                 inputs = figure_inputs(
