@@ -149,6 +149,12 @@ AUTO_PRECONDITIONER = {2: "substructuring", 3: "amg"}
 #: (docs/design/three_dimensions.md, "The amg preconditioner").
 AMG_RTOL = 1e-12
 AMG_MAX_ITERATIONS = 500
+#: PETSc options of that GAMG (its defaults but one smoothing step per level: measured
+#: per solve of B_Omega on the box, 0.528 -> 0.384 s at 64^3 cubes (17 -> 20 iterations),
+#: 1.69 -> 1.39 s at 96^3; without squaring the graph, GAMG's default unless options are
+#: read: squared, the set-up halves but a solve takes 28 iterations, 0.60 s at 64^3;
+#: docs/design/three_dimensions.md, "The amg preconditioner's multigrid").
+AMG_OPTIONS = {"pc_gamg_square_graph": 0, "mg_levels_ksp_max_it": 1}
 LANCZOS_STEPS = 20  # Lanczos steps of the step estimate C0 (and of lambda_min for apgpm)
 #: Lanczos steps of ssn's C0, only the scale of its PGPM steps, prediction and stopping
 #: rule; the largest Ritz value converges first (docs/design/solvers.md, "ssn's start").

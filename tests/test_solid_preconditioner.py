@@ -7,9 +7,11 @@ import numpy as np
 import pytest
 import scipy.linalg
 from mpi4py import MPI
+from petsc4py import PETSc
 
 from coupling.options import SolverOptions
 from coupling.preconditioners import build_preconditioner
+from coupling.preconditioners.multigrid import AMG_OPTIONS_PREFIX
 from coupling.problem import SignoriniProblem
 from coupling.solvers import solve
 from fem_py.forms import make_material
@@ -50,6 +52,14 @@ def test_blocks(problems, n):
         ratios = scipy.linalg.eigh(S[np.ix_(s, s)], B.signorini_metric, eigvals_only=True)
         assert ratios.min() >= 0.5 and ratios.max() <= 1.5
         assert B.lambda_max_signorini == pytest.approx(np.linalg.eigvalsh(B.signorini_metric)[-1])
+        # GAMG as AMG_OPTIONS configure it (graph not squared, one smoothing step per
+        # level), the options gone from PETSc's database again
+        pc = B._ksp.getPC()
+        assert pc.getType() == "gamg" and pc.getMGLevels() >= 2
+        assert all(
+            pc.getMGSmoother(level).getTolerances()[3] == 1 for level in range(1, pc.getMGLevels())
+        )
+        assert not any(key.startswith(AMG_OPTIONS_PREFIX) for key in PETSc.Options().getAll())
     finally:
         B.destroy()
 

@@ -17,7 +17,8 @@ the diagonal blocks of the Hessian D^2 J_h:
   sphere W Y_l / S Y_l = 2l / (2l + 1): the two agree on the oscillating modes.
 
 B_Omega^{-1} is applied by conjugate gradients preconditioned by one algebraic multigrid
-V-cycle (PETSc GAMG), to the relative tolerance ``rtol`` (the iterations read B_Omega u
+V-cycle (PETSc GAMG with one smoothing step per level, ``coupling.options.AMG_OPTIONS``),
+to the relative tolerance ``rtol`` (the iterations read B_Omega u
 and B_Omega^{-1} g as inverses of each other, so the inner solve is tight, not one cycle);
 its cost per application grows like N, its count stays bounded as h -> 0. M_s is dense
 (n_s x n_s, the projection (3.19) and the Newton steps read it), and factored on every
@@ -36,6 +37,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 import bem_cpp
+from coupling.options import AMG_OPTIONS
 from coupling.preconditioners.base import DenseSignoriniBlock
 from fem_py.forms.interior import compile_form
 from fem_py.parallel import array_from_root
@@ -67,6 +69,27 @@ def signorini_hypersingular(comm: MPI.Comm, boundary: Any, S: Any = None) -> np.
         ),
         all_cores=True,
     )
+
+
+#: The options prefix of the inner solve's KSP (its options live in PETSc's database only
+#: while the KSP reads them).
+AMG_OPTIONS_PREFIX = "fembem_amg_"
+
+
+def _set_up(ksp: PETSc.KSP, prefix: str, options: dict) -> None:
+    """``ksp`` set up with ``options`` under ``prefix`` (the PC's levels read theirs while
+    they are set up), which are then removed from PETSc's global options database again
+    (collective)."""
+    database = PETSc.Options()
+    ksp.setOptionsPrefix(prefix)
+    for key, value in options.items():
+        database[prefix + key] = value
+    try:
+        ksp.setFromOptions()
+        ksp.setUp()
+    finally:
+        for key in options:
+            database.delValue(prefix + key)
 
 
 class MultigridPreconditioner(DenseSignoriniBlock):
@@ -108,7 +131,7 @@ class MultigridPreconditioner(DenseSignoriniBlock):
         self._ksp.getPC().setType(PETSc.PC.Type.GAMG)
         self._ksp.setTolerances(rtol=rtol, atol=0.0, max_it=max_iterations)
         self._ksp.setInitialGuessNonzero(False)
-        self._ksp.setUp()
+        _set_up(self._ksp, AMG_OPTIONS_PREFIX, AMG_OPTIONS)
         self._x, self._b = self._matrix.createVecs()
         self.iterations: list[int] = []  # inner CG iterations per application
         self.n_omega = V.dofmap.index_map.size_local
