@@ -214,6 +214,19 @@ def test_planar_figures_are_drawn_without_mpi(tmp_path):
         "assert 'u.png' in pngs; sys.exit(3 if 'mpi4py' in sys.modules else 0)"
     )
     assert subprocess.run([sys.executable, "-c", code], cwd=ROOT).returncode == 0
+    # the figure process draws u.png and boundary.png from these inputs while the run
+    # computes u_e's samples, then whole_plane.png from the whole inputs
+    from coupling.io.figure_worker import FigureWorker
+    from coupling.io.figures import render
+    from coupling.io.plots import exterior_samples
+
+    assert "whole_plane.png" not in render(inputs)  # no samples yet
+    with np.load(tmp_path / "out" / "fields.npz") as f:
+        samples = exterior_samples(dict(f))
+    whole = inputs._replace(exterior_points=samples.points, exterior_ue=samples.ue)
+    with FigureWorker() as worker:
+        pngs = worker.render(inputs, lambda: whole)
+    assert set(pngs) == {"u.png", "boundary.png", "whole_plane.png"}  # no history
 
 
 def test_the_section_of_a_body_draws_u_e_to_a_fraction_of_a_colour_step():

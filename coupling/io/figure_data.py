@@ -218,16 +218,16 @@ class FigureInputs(NamedTuple):
     nodes; ``boundary`` the boundary arrays of fields.npz (``boundary_x``, ``phi``,
     ``pressure``, ``dn_ue``, ``flux_space``, ``signorini``, ``active``, ``ue``);
     ``exterior_points`` (m, 2) and ``exterior_ue`` (m,) the samples of u_e of
-    whole_plane.png; ``history`` the iteration records as arrays (``iteration``,
-    ``energy``, ``step_norm``, ``contact``; empty: no history.png); ``tol`` the solver
-    tolerance drawn in history.png.
+    whole_plane.png (None: not computed yet, no whole_plane.png); ``history`` the
+    iteration records as arrays (``iteration``, ``energy``, ``step_norm``, ``contact``;
+    empty: no history.png); ``tol`` the solver tolerance drawn in history.png.
     """
 
     image: np.ma.MaskedArray
     grid: PixelGrid
     u_range: tuple[float, float]
     boundary: dict
-    exterior_points: np.ndarray
-    exterior_ue: np.ndarray
+    exterior_points: np.ndarray | None
+    exterior_ue: np.ndarray | None
     history: dict
     tol: float

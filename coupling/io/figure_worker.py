@@ -7,9 +7,10 @@ coupling.io.figure_worker`` when the run starts: it imports matplotlib and draws
 first figure (:func:`coupling.io.figures.warm_up`) while the mesh is built, then waits
 for :class:`coupling.io.figure_data.FigureInputs` on its standard input (a few MB,
 pickled) and answers with the PNG bytes of :func:`coupling.io.figures.render` on its
-standard output. A body's inputs come in two: those of the figures on Gamma and of the
-history at once, which it draws while the run computes the section (point location and
-the representation formula, seconds at 64^3 cubes), then the section's. The run writes
+standard output. The inputs come in two: at once those of the figures that need no
+exterior values, which it draws while the run computes them, then the whole inputs
+(planar: u_e's samples for whole_plane.png; a body: the section of slice.png, point
+location and the representation formula, seconds at 64^3 cubes). The run writes
 the files itself (atomically, into its staged output folder). For planar figures the
 worker imports neither MPI nor the mesh libraries; a body's figure modules import the
 mesh libraries, and with them MPI: the worker starts without the variables of the run's

@@ -322,7 +322,9 @@ def render(inputs: FigureInputs, skip: Collection[str] = ()) -> dict[str, bytes]
     figures = {
         "u.png": lambda: _figure_u(inputs.boundary, inputs.image, inputs.grid),
         "boundary.png": lambda: _figure_boundary(inputs.boundary),
-        "whole_plane.png": lambda: _figure_whole_plane(inputs),
+        "whole_plane.png": lambda: (
+            None if inputs.exterior_points is None else _figure_whole_plane(inputs)
+        ),
         "history.png": lambda: (
             figure_history(inputs.history, inputs.tol) if len(inputs.history["iteration"]) else None
         ),

@@ -165,7 +165,9 @@ class RunOutputs:
         self.worker = worker if self.plots and comm.rank == 0 else None
         #: seconds spent in :meth:`start` and :meth:`finish` (summary.json's ``outputs``)
         self.seconds = 0.0
-        self._pool = ThreadPoolExecutor(max_workers=3) if comm.rank == 0 else None
+        # fields.npz, u_e's samples, the figures' inputs and the figure process's answer
+        # at once (with three, the answer waited for fields.npz to be written)
+        self._pool = ThreadPoolExecutor(max_workers=4) if comm.rank == 0 else None
         self._jobs: dict[str, Future] = {}
 
     def start(self, problem, result) -> None:
@@ -204,9 +206,9 @@ class RunOutputs:
                     self._fields, result.history, tol=self.tol, stop_measure=result.stop_measure
                 )
                 self._jobs["inputs"] = self._pool.submit(_with_samples, inputs, samples)
-                if self.worker is not None:
+                if self.worker is not None:  # whole_plane.png once u_e's samples are in
                     self._jobs["pngs"] = self._pool.submit(
-                        lambda: self.worker.render(self._jobs["inputs"].result())
+                        self.worker.render, inputs, self._jobs["inputs"].result
                     )
         self.seconds += time.perf_counter() - tic
 

@@ -90,10 +90,8 @@ def figure_inputs(
     iteration records of ``history`` (``iteration``, ``energy``, ``step_norm``,
     ``contact``) as arrays, with ``stop_measure`` (the quantity the stopping rule tested
     last, when not the last ``step_norm``: ``coupling.solvers.records.RunResult``) as
-    ``stop``. Without ``exterior`` there are no samples yet (to be set with
-    ``_replace``)."""
-    if exterior is None:
-        exterior = ExteriorSamples(np.zeros((0, 2)), np.zeros(0))
+    ``stop``. Without ``exterior`` there are no samples yet (None; to be set with
+    ``_replace``): no whole_plane.png from these inputs."""
     x, u = fields["x"], fields["u"]
     grid = PixelGrid.covering(x.min(axis=0), x.max(axis=0))
     return FigureInputs(
@@ -101,8 +99,8 @@ def figure_inputs(
         grid=grid,
         u_range=(float(u.min()), float(u.max())),
         boundary={k: fields[k] for k in _BOUNDARY_FIELDS},
-        exterior_points=exterior.points,
-        exterior_ue=exterior.ue,
+        exterior_points=None if exterior is None else exterior.points,
+        exterior_ue=None if exterior is None else exterior.ue,
         history=history_arrays(history, stop_measure),
         tol=float(tol),
     )
