@@ -86,6 +86,34 @@ Eigen::MatrixXd sum_over_parts(const Eigen::Ref<const Eigen::MatrixXd>& A, Index
   return out;
 }
 
+Eigen::Matrix<double, Eigen::Dynamic, 4> basis_values(const TriangleRule& rule) {
+  Eigen::Matrix<double, Eigen::Dynamic, 4> L(rule.size(), 4);
+  for (int q = 0; q < rule.size(); ++q) {
+    const std::size_t k = static_cast<std::size_t>(q);
+    L.row(q) << 1.0 - rule.s[k] - rule.t[k], rule.s[k], rule.t[k], 1.0;
+  }
+  return L;
+}
+
+void add_values_transpose_product(const std::vector<Part>& parts, const TriangleRule& rule,
+                                  const Eigen::Ref<const Eigen::MatrixXd>& A, Eigen::Ref<Eigen::MatrixXd> out) {
+  const Index n = rule.size();
+  const Eigen::Matrix<double, Eigen::Dynamic, 4> L = basis_values(rule);
+  for (Index j = 0; j < A.cols(); ++j) {
+    const double* a = A.col(j).data();
+    double* o = out.col(j).data();
+    for (std::size_t t = 0; t < parts.size(); ++t, a += n) {
+      const Part& part = parts[t];
+      for (int d = 0; d < part.count; ++d) {
+        const double* l = L.col(part.basis[d]).data();
+        double sum = 0.0;
+        for (Index q = 0; q < n; ++q) sum += l[q] * a[q];
+        o[part.position[d]] += sum;
+      }
+    }
+  }
+}
+
 FarPoints::FarPoints(const Vertices& points, const Index* I, Index m) {
   for (Index r = 0; r < m; ++r) {
     x.push_back(points(I[r], 0));

@@ -1,6 +1,7 @@
 #include "bem/surface.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <sstream>
@@ -107,6 +108,20 @@ Surface::Surface(const Eigen::Ref<const Vertices>& vertices, const Eigen::Ref<co
   if (!(volume_ > 0))
     fail("triangles: inward orientation: the normals point into Omega (enclosed volume " + std::to_string(volume_) +
          "); reverse the vertex order of every triangle");
+}
+
+std::vector<int> triangle_planes(const Surface& surface) {
+  double scale = 0.0;
+  for (const Triangle& T : surface.triangles()) scale = std::max(scale, norm(T.c));
+  auto q = [](double v) { return static_cast<long long>(std::llround(v * 1e8)); };
+  std::map<std::array<long long, 4>, int> ids;
+  std::vector<int> out;
+  out.reserve(surface.triangles().size());
+  for (const Triangle& T : surface.triangles()) {
+    const std::array<long long, 4> key{q(T.n.x), q(T.n.y), q(T.n.z), q(dot(T.n, T.c) / (scale + 1e-300))};
+    out.push_back(ids.emplace(key, static_cast<int>(ids.size())).first->second);
+  }
+  return out;
 }
 
 Adjacency adjacency(const Triangle& s, const Triangle& t) {

@@ -2,11 +2,9 @@
 
 #include <Eigen/Sparse>
 #include <algorithm>
-#include <array>
 #include <cmath>
-#include <map>
+#include <iterator>
 #include <optional>
-#include <set>
 #include <stdexcept>
 #include <unordered_map>
 #include <vector>
@@ -19,8 +17,9 @@ namespace {
 
 class SurfaceBlock : public EntryBlock {
  public:
-  SurfaceBlock(const Surface& s, const PairIntegrator& integrator, const SurfaceNearField* near, SurfaceKernel kernel,
-               Space rows, Space cols, const Index* I, Index m, const Index* J, Index k, bool companion)
+  SurfaceBlock(const Surface& s, const PairIntegrator& integrator, const SurfaceNearField* near,
+               const std::vector<int>* planes, SurfaceKernel kernel, Space rows, Space cols, const Index* I, Index m,
+               const Index* J, Index k, bool companion)
       : s_(s),
         integrator_(integrator),
         kernel_(kernel),
@@ -33,15 +32,14 @@ class SurfaceBlock : public EntryBlock {
         row_parts_(parts(s, rows, I, m)),
         col_parts_(parts(s, cols, J, k)),
         companion_(companion),
-        near_(near) {
+        near_(near),
+        planes_(planes) {
     if (near == nullptr) return;
     const bool dl = kernel == SurfaceKernel::DoubleLayer;
     near_rows_ = dl                                       ? &near->double_layer()
                  : kernel == SurfaceKernel::Hypersingular ? &near->hypersingular()
                                                           : &near->single_layer(rows);
     near_cols_ = dl ? &near->double_layer_transpose() : near_rows_;
-    for (Index p = 0; p < m; ++p) row_position_[I[p]] = p;
-    for (Index q = 0; q < k; ++q) col_position_[J[q]] = q;
   }
 
   void row(Index i, double* out) const override {
@@ -49,17 +47,18 @@ class SurfaceBlock : public EntryBlock {
     const std::vector<Part> own = parts(s_, rows_, I_ + i, 1);
     for (const Part& r : own)
       for (const Part& c : col_parts_) add(r, c, out, 0, 1);
-    if (near_rows_) add_near(*near_rows_, I_[i], col_position_, out, 1);
+    if (near_rows_) add_near(*near_rows_, I_[i], col_positions(), out, 1);
   }
   void column(Index j, double* out) const override {
     std::fill(out, out + m_, 0.0);
     const std::vector<Part> own = parts(s_, cols_, J_ + j, 1);
     for (const Part& r : row_parts_)
       for (const Part& c : own) add(r, c, out, 1, 0);
-    if (near_cols_) add_near(*near_cols_, J_[j], row_position_, out, 1);
+    if (near_cols_) add_near(*near_cols_, J_[j], row_positions(), out, 1);
   }
   /// With the near field apart: the far pairs as Q_r^T A Q_c, A the point kernel of the far
-  /// pairs (zero on the near ones), the near pairs from the sparse near field.
+  /// pairs (zero on the near ones; the double layer's pair by pair, double_layer_all), the
+  /// near pairs from the sparse near field.
   void all(double* out) const override {
     Eigen::Map<Eigen::MatrixXd> result(out, m_, k_);
     if (!near_rows_) {
@@ -68,8 +67,11 @@ class SurfaceBlock : public EntryBlock {
         for (const Part& c : col_parts_) add(r, c, out, 1, m_);
       return;
     }
-    project(far_kernel(), kernel_ == SurfaceKernel::Hypersingular, result);
-    for (Index p = 0; p < m_; ++p) add_near(*near_rows_, I_[p], col_position_, out + p, m_);
+    if (kernel_ == SurfaceKernel::DoubleLayer)
+      double_layer_all(result);
+    else
+      project(far_kernel(), kernel_ == SurfaceKernel::Hypersingular, result);
+    for (Index p = 0; p < m_; ++p) add_near(*near_rows_, I_[p], col_positions(), out + p, m_);
   }
 
   /// Far blocks: every triangle pair is evaluated by the far rule (the block's entries are
@@ -77,30 +79,19 @@ class SurfaceBlock : public EntryBlock {
   /// A, one kernel evaluation per entry, and the factors are projected to the dofs.
   /// The double layer's A vanishes between coplanar points (flat faces), a structure on
   /// which ACA's partial pivoting can miss whole sub-blocks (on the cube: products 2e-4 off
-  /// at any tol). In a block where a row and a column triangle share a plane, ACA runs on
-  /// the sub-blocks between different planes only (split_by_plane).
+  /// at any tol): double_layer_low_rank.
   bool low_rank(double tol, LowRank& out) const override {
     if (!far_pairs_only()) return false;
-    prepare_points();
-    const bool dl = kernel_ == SurfaceKernel::DoubleLayer;
-    const Planes planes = dl ? this->planes() : Planes::Distinct;
-    if (planes == Planes::One) {  // n_y . (x - y) = 0
-      out.U.resize(m_, 0);
-      out.V.resize(k_, 0);
-      return true;
-    }
-    const PointKernel kernel{*rp_, *cp_, dl ? PointKernelKind::DoubleLayer : PointKernelKind::SingleLayer};
     // the projection sums about 10 point rows into a dof row: 0.3 tol (0.1 tol gave the same
     // products to 10 % at 1.1x the time, docs/design/bem3d.md)
     const double point_tol = 0.3 * tol;
-    LowRank factors;
-    if (planes == Planes::Shared) {
-      factors = split_by_plane(kernel, point_tol);
-    } else {
-      const Slice row = [&kernel](Index p, double* o) { kernel.row(p, o); };
-      const Slice column = [&kernel](Index q, double* o) { kernel.column(q, o); };
-      factors = aca(rp_->size(), cp_->size(), row, column, point_tol, std::min(rp_->size(), cp_->size()));
+    if (kernel_ == SurfaceKernel::DoubleLayer) {
+      double_layer_low_rank(point_tol, out);
+      return true;
     }
+    prepare_points();
+    const PointKernel kernel{*rp_, *cp_, PointKernelKind::SingleLayer};
+    LowRank factors = aca(kernel, point_tol);
     project(factors, kernel_ == SurfaceKernel::Hypersingular, out);
     if (companion_) point_factors_ = std::move(factors);
     return true;
@@ -118,7 +109,7 @@ class SurfaceBlock : public EntryBlock {
       return;
     }
     project(far_kernel(), true, result);
-    for (Index p = 0; p < m_; ++p) add_near(near_->hypersingular(), I_[p], col_position_, out + p, m_);
+    for (Index p = 0; p < m_; ++p) add_near(near_->hypersingular(), I_[p], col_positions(), out + p, m_);
   }
   bool companion_low_rank(int which, double /*tol*/, LowRank& out) const override {
     check_companion(which);
@@ -128,14 +119,12 @@ class SurfaceBlock : public EntryBlock {
   }
 
  private:
-  /// A at the far-rule points with the near pairs' 9 x 9 parts zero (they are in the near
-  /// field), computed once for the block and its companion.
+  /// The single layer's A at the far-rule points with the near pairs' 9 x 9 parts zero (they
+  /// are in the near field), computed once for the block and its companion.
   const Eigen::MatrixXd& far_kernel() const {
     if (far_kernel_.size() > 0) return far_kernel_;
     prepare_points();
-    const PointKernel kernel{
-        *rp_, *cp_,
-        kernel_ == SurfaceKernel::DoubleLayer ? PointKernelKind::DoubleLayer : PointKernelKind::SingleLayer};
+    const PointKernel kernel{*rp_, *cp_, PointKernelKind::SingleLayer};
     const Index n = triangle_rule(kFarGaussPoints).size();
     far_kernel_.resize(rp_->size(), cp_->size());
     for (Index q = 0; q < cp_->size(); ++q) kernel.column(q, far_kernel_.col(q).data());
@@ -147,95 +136,133 @@ class SurfaceBlock : public EntryBlock {
     }
     return far_kernel_;
   }
-  enum class Planes { Distinct, Shared, One };
-  /// The largest distance of a triangle's centroid from the origin (the offsets' scale).
-  double scale() const {
-    double scale = 0.0;
-    for (const Part& p : row_parts_) scale = std::max(scale, norm(s_.triangle(p.triangle).c));
-    for (const Part& p : col_parts_) scale = std::max(scale, norm(s_.triangle(p.triangle).c));
-    return scale;
+  /// ACA on a point kernel to `tol`.
+  static LowRank aca(const PointKernel& kernel, double tol) {
+    const Slice row = [&kernel](Index p, double* o) { kernel.row(p, o); };
+    const Slice column = [&kernel](Index q, double* o) { kernel.column(q, o); };
+    const Index m = kernel.r.size(), n = kernel.c.size();
+    return bem::aca(m, n, row, column, tol, std::min(m, n));
   }
-  /// The plane of a part's triangle: its normal and offset over `scale`, to 1e-8.
-  std::array<long long, 4> plane_key(const Part& p, double scale) const {
-    const Triangle& T = s_.triangle(p.triangle);
-    auto q = [](double v) { return static_cast<long long>(std::llround(v * 1e8)); };
-    return {q(T.n.x), q(T.n.y), q(T.n.z), q(dot(T.n, T.c) / (scale + 1e-300))};
+  /// The planes of the parts' triangles (triangle_planes), sorted, each once.
+  std::vector<int> planes_of(const std::vector<Part>& parts) const {
+    std::vector<int> out;
+    for (const Part& p : parts) out.push_back((*planes_)[static_cast<std::size_t>(p.triangle)]);
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+    return out;
   }
-  /// Whether a triangle of the rows and one of the columns lie in one plane (Shared), or all
-  /// triangles of both in the same plane (One: the double layer's block is zero); normals
-  /// and offsets compared to 1e-8 relative (a polyhedron's faces, whose triangles' normals
-  /// differ by round-off).
-  Planes planes() const {
-    const double scale = this->scale();
-    std::set<std::array<long long, 4>> rows, cols;
-    for (const Part& p : row_parts_) rows.insert(plane_key(p, scale));
-    for (const Part& p : col_parts_) cols.insert(plane_key(p, scale));
-    if (rows.size() == 1 && rows == cols) return Planes::One;
-    for (const auto& k : cols)
-      if (rows.count(k)) return Planes::Shared;
-    return Planes::Distinct;
-  }
-  /// The double layer's point factors of a block in which a row and a column triangle share
-  /// a plane. A vanishes between the points of one plane, so ACA runs on the sub-blocks
-  /// without such zeros - the rows of each plane p of both sides against the columns off p,
-  /// and the rows on no column plane against every column - and their factors, zero outside
-  /// their rows and columns, are stacked.
-  LowRank split_by_plane(const PointKernel& kernel, double tol) const {
-    const double scale = this->scale();
-    std::map<std::array<long long, 4>, int> ids;
-    auto plane_of = [&](const std::vector<Part>& parts) {
-      std::vector<int> plane;  // per far point: its triangle's plane
-      const int n = triangle_rule(kFarGaussPoints).size();
-      for (const Part& p : parts)
-        plane.insert(plane.end(), static_cast<std::size_t>(n),
-                     ids.emplace(plane_key(p, scale), static_cast<int>(ids.size())).first->second);
-      return plane;
-    };
-    const std::vector<int> row_plane = plane_of(row_parts_), col_plane = plane_of(col_parts_);
-    const std::set<int> col_planes(col_plane.begin(), col_plane.end());
-    const Index m = rp_->size(), n = cp_->size();
+  int plane(const Part& p) const { return (*planes_)[static_cast<std::size_t>(p.triangle)]; }
+  /// The double layer's factors (at the dofs) of a far block. A block whose triangles all
+  /// lie in one plane is zero (n_y . (x - y) = 0). In a block in which a row and a column
+  /// triangle share a plane, ACA runs on the sub-blocks without such zeros - the rows of
+  /// each plane p of both sides against the columns off p, and the rows on no column plane
+  /// against every column - each on the points of its own parts, and the factors of each
+  /// sub-block, projected to the dofs, stand side by side (recompressed by HMatrix::fill).
+  /// Otherwise ACA runs on the whole point kernel.
+  void double_layer_low_rank(double tol, LowRank& out) const {
+    const std::vector<int> row_planes = planes_of(row_parts_), col_planes = planes_of(col_parts_);
+    out.U.setZero(m_, 0);
+    out.V.setZero(k_, 0);
+    if (row_planes.size() == 1 && row_planes == col_planes) return;
+    std::vector<int> shared;
+    std::set_intersection(row_planes.begin(), row_planes.end(), col_planes.begin(), col_planes.end(),
+                          std::back_inserter(shared));
+    const TriangleRule& rule = triangle_rule(kFarGaussPoints);
     std::vector<LowRank> pieces;
-    std::vector<std::vector<Index>> piece_rows, piece_cols;
-    std::vector<double> full_row(static_cast<std::size_t>(n)), full_column(static_cast<std::size_t>(m));
-    // group -1: the rows on no column plane, against every column
-    std::set<int> groups{-1};
-    for (int p : row_plane)
-      if (col_planes.count(p)) groups.insert(p);
-    for (int g : groups) {
-      std::vector<Index> R, C;
-      for (Index i = 0; i < m; ++i) {
-        const int p = row_plane[static_cast<std::size_t>(i)];
-        if (g < 0 ? col_planes.count(p) == 0 : p == g) R.push_back(i);
-      }
-      for (Index j = 0; j < n; ++j)
-        if (col_plane[static_cast<std::size_t>(j)] != g) C.push_back(j);
-      if (R.empty() || C.empty()) continue;
-      const Slice row = [&](Index i, double* o) {
-        kernel.row(R[static_cast<std::size_t>(i)], full_row.data());
-        for (std::size_t c = 0; c < C.size(); ++c) o[c] = full_row[static_cast<std::size_t>(C[c])];
-      };
-      const Slice column = [&](Index j, double* o) {
-        kernel.column(C[static_cast<std::size_t>(j)], full_column.data());
-        for (std::size_t r = 0; r < R.size(); ++r) o[r] = full_column[static_cast<std::size_t>(R[r])];
-      };
-      const Index rows = static_cast<Index>(R.size()), cols = static_cast<Index>(C.size());
-      pieces.push_back(aca(rows, cols, row, column, tol, std::min(rows, cols)));
+    std::vector<std::vector<Part>> piece_rows, piece_cols;
+    auto add_piece = [&](std::vector<Part> R, std::vector<Part> C) {
+      if (R.empty() || C.empty()) return;
+      const FarPoints rp(s_, R, m_, false, false, rule), cp(s_, C, k_, false, false, rule);
+      pieces.push_back(aca(PointKernel{rp, cp, PointKernelKind::DoubleLayer}, tol));
       piece_rows.push_back(std::move(R));
       piece_cols.push_back(std::move(C));
+    };
+    if (shared.empty()) {
+      add_piece(row_parts_, col_parts_);
+    } else {
+      // group -1: the rows on no column plane, against every column
+      std::vector<Part> R;
+      for (const Part& p : row_parts_)
+        if (!std::binary_search(col_planes.begin(), col_planes.end(), plane(p))) R.push_back(p);
+      add_piece(std::move(R), col_parts_);
+      for (int g : shared) {
+        std::vector<Part> Rg, Cg;
+        for (const Part& p : row_parts_)
+          if (plane(p) == g) Rg.push_back(p);
+        for (const Part& p : col_parts_)
+          if (plane(p) != g) Cg.push_back(p);
+        add_piece(std::move(Rg), std::move(Cg));
+      }
     }
     Index rank = 0;
     for (const LowRank& piece : pieces) rank += piece.rank();
-    LowRank out{Eigen::MatrixXd::Zero(m, rank), Eigen::MatrixXd::Zero(n, rank)};
+    out.U.setZero(m_, rank);
+    out.V.setZero(k_, rank);
     Index at = 0;
-    for (std::size_t k = 0; k < pieces.size(); ++k) {
-      const LowRank& piece = pieces[k];
-      for (std::size_t r = 0; r < piece_rows[k].size(); ++r)
-        out.U.row(piece_rows[k][r]).segment(at, piece.rank()) = piece.U.row(static_cast<Index>(r));
-      for (std::size_t c = 0; c < piece_cols[k].size(); ++c)
-        out.V.row(piece_cols[k][c]).segment(at, piece.rank()) = piece.V.row(static_cast<Index>(c));
-      at += piece.rank();
+    for (std::size_t p = 0; p < pieces.size(); ++p) {
+      const Index r = pieces[p].rank();
+      add_values_transpose_product(piece_rows[p], rule, pieces[p].U, out.U.middleCols(at, r));
+      add_values_transpose_product(piece_cols[p], rule, pieces[p].V, out.V.middleCols(at, r));
+      at += r;
     }
-    return out;  // recompressed after the projection (HMatrix::fill), at the dofs' size
+  }
+  /// The double layer's dense block with the near field apart: each triangle pair (a, b)
+  /// that is far and in two planes (coplanar pairs are zero, the near pairs are in the near
+  /// field) adds Lambda^T A_ab Lambda, A_ab its 9 x 9 point kernel and Lambda the basis
+  /// values at the rule's points, to its dofs' entries - no point matrix of the block, no
+  /// maps. The row parts sorted by plane, the row points off b's plane are at most two
+  /// ranges, on which the kernel runs column by column (vectorised).
+  void double_layer_all(Eigen::Map<Eigen::MatrixXd>& out) const {
+    constexpr int n = kFarGaussPoints * kFarGaussPoints;
+    const TriangleRule& rule = triangle_rule(kFarGaussPoints);
+    const Eigen::Matrix<double, n, 4> L = basis_values(rule);
+    std::vector<Part> rows = row_parts_;
+    std::stable_sort(rows.begin(), rows.end(), [this](const Part& a, const Part& b) { return plane(a) < plane(b); });
+    const FarPoints rp(s_, rows, m_, false, false, rule), cp(s_, col_parts_, k_, false, false, rule);
+    const PointKernel kernel{rp, cp, PointKernelKind::DoubleLayer};
+    const Index parts = static_cast<Index>(rows.size()), points = rp.size();
+    Eigen::Matrix<double, Eigen::Dynamic, n> A(points, n);   // the kernel's columns of b's points
+    Eigen::Matrix<double, Eigen::Dynamic, 3> AL(points, 3);  // A times the values of b's dofs
+    out.setZero();
+    for (std::size_t b = 0; b < col_parts_.size(); ++b) {
+      const Part& cb = col_parts_[b];
+      const Triangle& tb = s_.triangle(cb.triangle);
+      const int pb = plane(cb);
+      // the row parts [first, last) in b's plane
+      const Index first =
+          std::lower_bound(rows.begin(), rows.end(), pb, [this](const Part& p, int v) { return plane(p) < v; }) -
+          rows.begin();
+      Index last = first;
+      while (last < parts && plane(rows[static_cast<std::size_t>(last)]) == pb) ++last;
+      const std::pair<Index, Index> ranges[2] = {{0, first}, {last, parts}};
+      for (const auto& [a0, a1] : ranges) {
+        if (a0 == a1) continue;
+        const Index p0 = a0 * n, p1 = a1 * n;
+        for (int q = 0; q < n; ++q) kernel.column(static_cast<Index>(b) * n + q, p0, p1, A.col(q).data());
+        for (int j = 0; j < cb.count; ++j) {
+          double* al = AL.col(j).data();
+          std::fill(al + p0, al + p1, 0.0);
+          for (int q = 0; q < n; ++q) {
+            const double l = L(q, cb.basis[j]);
+            const double* a = A.col(q).data();
+            for (Index p = p0; p < p1; ++p) al[p] += l * a[p];
+          }
+        }
+        for (Index a = a0; a < a1; ++a) {
+          const Part& ra = rows[static_cast<std::size_t>(a)];
+          if (!PairIntegrator::far(s_.triangle(ra.triangle), tb)) continue;
+          for (int i = 0; i < ra.count; ++i) {
+            const double* l = L.col(ra.basis[i]).data();
+            for (int j = 0; j < cb.count; ++j) {
+              const double* al = AL.col(j).data() + a * n;
+              double e = 0.0;
+              for (int p = 0; p < n; ++p) e += l[p] * al[p];
+              out(ra.position[i], cb.position[j]) += e;
+            }
+          }
+        }
+      }
+    }
   }
   void check_companion(int which) const {
     if (which != 1 || !companion_)
@@ -307,6 +334,18 @@ class SurfaceBlock : public EntryBlock {
         if (!PairIntegrator::far(s_.triangle(p.triangle), s_.triangle(q.triangle))) return false;
     return true;
   }
+  /// dof -> position in the block, of the rows and of the columns (built when first asked:
+  /// the low-rank blocks need none).
+  const std::unordered_map<Index, Index>& row_positions() const {
+    if (row_position_.empty())
+      for (Index p = 0; p < m_; ++p) row_position_[I_[p]] = p;
+    return row_position_;
+  }
+  const std::unordered_map<Index, Index>& col_positions() const {
+    if (col_position_.empty())
+      for (Index q = 0; q < k_; ++q) col_position_[J_[q]] = q;
+    return col_position_;
+  }
   /// out[row_stride * row position + col_stride * column position] += the pair's entries
   /// (far pairs only when the near field holds the others).
   void add(const Part& r, const Part& c, double* out, Index row_stride, Index col_stride,
@@ -342,9 +381,10 @@ class SurfaceBlock : public EntryBlock {
   std::vector<Part> row_parts_, col_parts_;
   bool companion_ = false;  ///< the hypersingular companion (single layer only)
   const SurfaceNearField* near_ = nullptr;
-  const RowSparse* near_rows_ = nullptr;  ///< near part by rows, and by columns
+  const std::vector<int>* planes_ = nullptr;  ///< the triangles' planes (the double layer)
+  const RowSparse* near_rows_ = nullptr;      ///< near part by rows, and by columns
   const RowSparse* near_cols_ = nullptr;
-  std::unordered_map<Index, Index> row_position_, col_position_;  ///< dof -> position in the block
+  mutable std::unordered_map<Index, Index> row_position_, col_position_;  ///< row_positions, col_positions
   // computed once per block, shared with the companion
   mutable std::unique_ptr<FarPoints> rp_, cp_;
   mutable Eigen::MatrixXd far_kernel_;
@@ -369,11 +409,13 @@ SurfaceEntries::SurfaceEntries(const Surface& surface, SurfaceKernel kernel, Spa
   if (kernel == SurfaceKernel::Hypersingular && (rows != Space::P1 || cols != Space::P1))
     throw std::invalid_argument("SurfaceEntries: the hypersingular operator is P1 x P1");
   if (near_ && rows != cols) throw std::invalid_argument("SurfaceEntries: the near field is P0 x P0 or P1 x P1");
+  if (kernel == SurfaceKernel::DoubleLayer) planes_ = triangle_planes(surface);
 }
 
 std::unique_ptr<EntryBlock> SurfaceEntries::block(const Index* I, Index m, const Index* J, Index k) const {
-  return std::make_unique<SurfaceBlock>(surface_, integrator_, near_.get(), kernel_, rows_, cols_, I, m, J, k,
-                                        with_hypersingular_);
+  return std::make_unique<SurfaceBlock>(surface_, integrator_, near_.get(),
+                                        kernel_ == SurfaceKernel::DoubleLayer ? &planes_ : nullptr, kernel_, rows_,
+                                        cols_, I, m, J, k, with_hypersingular_);
 }
 
 ClusterTree surface_cluster_tree(const Surface& s, Space space, Index leaf_size) {

@@ -1,7 +1,11 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "bem/surface.hpp"
 #include "test_surfaces.hpp"
@@ -82,4 +86,25 @@ TEST(Surface, AdjacencyListsTheSharedVerticesInMatchingOrder) {
         EXPECT_EQ(s.triangle(a).v[static_cast<std::size_t>(adj.a[k])],
                   s.triangle(b).v[static_cast<std::size_t>(adj.b[k])]);
     }
+}
+
+TEST(Surface, TrianglePlanesAreTheFacesOfAPolyhedron) {
+  // the cube: six planes, a triangle's id that of its face (its normal and offset); the
+  // sphere's triangles lie in as many planes as there are triangles; Fichera's corner (the
+  // cube without an octant): 9 planes, of which the three re-entrant faces' planes through
+  // the origin (offset 0) are told apart by their normals
+  const test::Mesh cube = test::cube(4, 0.25), sphere = test::icosphere(2), fichera = test::fichera(4, 0.25);
+  for (const auto& [mesh, count] :
+       {std::make_pair(&cube, 6), std::make_pair(&sphere, 320), std::make_pair(&fichera, 9)}) {
+    const Surface s(mesh->vertices, mesh->triangles);
+    const std::vector<int> planes = triangle_planes(s);
+    ASSERT_EQ(static_cast<Index>(planes.size()), s.size());
+    EXPECT_EQ(*std::max_element(planes.begin(), planes.end()) + 1, count);
+    for (Index a = 0; a < s.size(); ++a)
+      for (Index b = 0; b < s.size(); ++b) {
+        const Triangle &A = s.triangle(a), &B = s.triangle(b);
+        const bool same = norm(A.n - B.n) < 1e-12 && std::abs(dot(A.n, A.c) - dot(B.n, B.c)) < 1e-12;
+        EXPECT_EQ(planes[static_cast<std::size_t>(a)] == planes[static_cast<std::size_t>(b)], same) << a << " " << b;
+      }
+  }
 }

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <memory>
 #include <vector>
 
@@ -136,4 +138,87 @@ TEST(FarPoints, SumOverPartsAddsEachPartsConsecutiveRows) {
   ASSERT_EQ(sums.cols(), 5);
   for (Index t = 0; t < 4; ++t)
     for (Index j = 0; j < 5; ++j) EXPECT_NEAR(sums(t, j), A.block(3 * t, j, 3, 1).sum(), 1e-15);
+}
+
+TEST(FarPoints, ValuesTransposeProductIsTheMapsProduct) {
+  // Q^T A part by part without the sparse map, P1 (three dofs on a triangle of the block, or
+  // one or two where the block holds only some of its vertices) and P0; and a kernel column
+  // over a range of the row points is that range of the whole column
+  const test::Mesh mesh = test::icosphere(1, 0.7);
+  const Surface s(mesh.vertices, mesh.triangles);
+  const TriangleRule& rule = triangle_rule(kFarGaussPoints);
+  for (Space space : {Space::P1, Space::P0}) {
+    const std::vector<Index> dofs = every_other(space == Space::P1 ? s.vertices() : s.size(), 1);
+    const Index k = static_cast<Index>(dofs.size());
+    const std::vector<Part> p = parts(s, space, dofs.data(), k);
+    const FarPoints points(s, p, k, true, false, rule);
+    const Eigen::MatrixXd A = Eigen::MatrixXd::Random(points.size(), 4);
+    Eigen::MatrixXd out = Eigen::MatrixXd::Ones(k, 4);
+    add_values_transpose_product(p, rule, A, out);
+    const Eigen::MatrixXd expected = Eigen::MatrixXd::Ones(k, 4) + points.values[0].transpose() * A;
+    EXPECT_LT((out - expected).norm(), 1e-14 * expected.norm());
+    for (PointKernelKind kind : {PointKernelKind::SingleLayer, PointKernelKind::DoubleLayer}) {
+      const PointKernel kernel{points, points, kind};
+      Eigen::VectorXd whole(points.size()), range = Eigen::VectorXd::Zero(points.size());
+      kernel.column(0, whole.data());
+      kernel.column(0, 9, 30, range.data());
+      EXPECT_EQ(range.segment(9, 21), whole.segment(9, 21));
+      EXPECT_EQ(range.head(9).norm() + range.tail(points.size() - 30).norm(), 0.0);
+    }
+  }
+}
+
+TEST(SurfaceEntries, DoubleLayerBlocksOnFlatFacesAreThoseOfTheDenseMatrix) {
+  // Blocks of K_h (near field apart) between vertex sets of the cube: a patch inside the
+  // bottom face against the far end of its inside (one plane: zero), against vertices there
+  // and on the side face beyond (a shared plane), against the top face (no shared plane):
+  // the dense block by triangle pairs (coplanar pairs skipped) to round-off, the factors to
+  // the tolerance
+  const int N = 12;
+  const test::Mesh mesh = test::cube(N, 1.0 / N);
+  const Surface s(mesh.vertices, mesh.triangles);
+  SurfaceRequest request;
+  request.double_layer = Space::P1;
+  const Matrix K = assemble(s, request).double_layer;
+  const SurfaceEntries entries(s, SurfaceKernel::DoubleLayer, Space::P1, Space::P1,
+                               std::make_shared<const SurfaceNearField>(s));
+  auto select = [&](auto inside) {
+    std::vector<Index> out;
+    for (Index i = 0; i < s.vertices(); ++i)
+      if (inside(s.vertex(i))) out.push_back(i);
+    return out;
+  };
+  const double low = -0.5, eps = 1e-9;
+  // (hats inside the face: vertices off its edges)
+  auto inner = [&](Vec3 p) { return p.z < low + eps && std::abs(p.x) < 0.5 - eps && std::abs(p.y) < 0.5 - eps; };
+  const std::vector<Index> I = select([&](Vec3 p) { return inner(p) && p.x < -0.1 && p.y < -0.1; });
+  const std::vector<Index> sets[3] = {
+      select([&](Vec3 p) { return inner(p) && p.x > 0.3 && p.y > -0.2; }),
+      select([&](Vec3 p) { return (p.z < low + eps && p.x > 0.3 && p.y > 0.3) || (p.x > 0.5 - eps && p.y > 0.3); }),
+      select([&](Vec3 p) { return p.z > 0.5 - eps && p.x > 0.0; })};
+  const Index m = static_cast<Index>(I.size());
+  for (int c = 0; c < 3; ++c) {
+    SCOPED_TRACE(c);
+    const std::vector<Index>& J = sets[c];
+    const Index k = static_cast<Index>(J.size());
+    ASSERT_GT(m, 10);
+    ASSERT_GT(k, 10);
+    Eigen::MatrixXd exact(m, k);
+    for (Index i = 0; i < m; ++i)
+      for (Index j = 0; j < k; ++j) exact(i, j) = K(I[i], J[j]);
+    const auto block = entries.block(I.data(), m, J.data(), k);
+    Eigen::MatrixXd all(m, k);
+    block->all(all.data());
+    const double scale = std::max(exact.cwiseAbs().maxCoeff(), K.cwiseAbs().maxCoeff() * 1e-3);
+    EXPECT_LT((all - exact).cwiseAbs().maxCoeff(), 1e-14 * scale);
+    LowRank f;
+    ASSERT_TRUE(block->low_rank(1e-8, f));
+    if (c == 0) {
+      EXPECT_EQ(f.rank(), 0);
+      EXPECT_EQ(exact.norm(), 0.0);
+    } else {
+      EXPECT_GT(f.rank(), 0);
+      EXPECT_LT((f.U * f.V.transpose() - exact).norm(), 1e-7 * exact.norm());
+    }
+  }
 }

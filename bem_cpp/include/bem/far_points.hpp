@@ -55,6 +55,17 @@ struct FarPoints {
 /// (parts x k).
 Eigen::MatrixXd sum_over_parts(const Eigen::Ref<const Eigen::MatrixXd>& A, Index per_part);
 
+/// The basis values at the points of `rule` (rule points x 4): column a < 3 the barycentric
+/// coordinate a (P1), column 3 the constant 1 (P0): FarPoints::values part by part.
+Eigen::Matrix<double, Eigen::Dynamic, 4> basis_values(const TriangleRule& rule);
+
+/// out += Q^T A with Q the values' map of `parts` (FarPoints::values) without forming it:
+/// row `position` of out gains, for each dof of a part, the sum over the part's points
+/// (rule.size() consecutive rows of A, part by part) of its basis value times A's row.
+/// A (parts x rule points, k), out (dofs, k).
+void add_values_transpose_product(const std::vector<Part>& parts, const TriangleRule& rule,
+                                  const Eigen::Ref<const Eigen::MatrixXd>& A, Eigen::Ref<Eigen::MatrixXd> out);
+
 /// The point kernels: 2 G = 1 / (2 pi r) (single layer), 2 dG/dn_y = n_y . (x - y) / (2 pi r^3)
 /// (double layer, the normal of the column point).
 enum class PointKernelKind { SingleLayer, DoubleLayer };
@@ -84,12 +95,14 @@ struct PointKernel {
     }
   }
   /// out[p] = A(p, q) for every row point p.
-  void column(Index q, double* out) const {
+  void column(Index q, double* out) const { column(q, 0, r.size(), out); }
+  /// out[p] = A(p, q) for the row points p in [begin, end).
+  void column(Index q, Index begin, Index end, double* out) const {
     switch (kind) {
       case PointKernelKind::SingleLayer:
-        return column<PointKernelKind::SingleLayer>(q, out);
+        return column<PointKernelKind::SingleLayer>(q, begin, end, out);
       case PointKernelKind::DoubleLayer:
-        return column<PointKernelKind::DoubleLayer>(q, out);
+        return column<PointKernelKind::DoubleLayer>(q, begin, end, out);
     }
   }
 
@@ -102,11 +115,11 @@ struct PointKernel {
       out[q] = w * c.w[q] * point_kernel<kind>(x - c.x[q], y - c.y[q], z - c.z[q], c.nx[q], c.ny[q], c.nz[q]);
   }
   template <PointKernelKind kind>
-  void column(Index q, double* out) const {
+  void column(Index q, Index begin, Index end, double* out) const {
     const std::size_t j = static_cast<std::size_t>(q);
     const double x = c.x[j], y = c.y[j], z = c.z[j], w = kInvTwoPi * c.w[j];
     const double nx = c.nx[j], ny = c.ny[j], nz = c.nz[j];
-    for (Index p = 0; p < r.size(); ++p)
+    for (Index p = begin; p < end; ++p)
       out[p] = w * r.w[p] * point_kernel<kind>(r.x[p] - x, r.y[p] - y, r.z[p] - z, nx, ny, nz);
   }
 };

@@ -67,6 +67,12 @@ struct Adjacency {
 };
 Adjacency adjacency(const Triangle& s, const Triangle& t);
 
+/// The plane of each triangle as an id: equal ids for triangles whose normals and offsets
+/// n . c (over the largest distance of a centroid from the origin) agree to 1e-8 - the
+/// faces of a polyhedron, whose triangles' normals differ by round-off. (The double layer's
+/// kernel n_y . (x - y) vanishes between the points of one plane, surface_entries.hpp.)
+std::vector<int> triangle_planes(const Surface& surface);
+
 /// Calls f(t) for every triangle t, OpenMP-parallel over one colour of a greedy vertex
 /// colouring at a time: no two concurrent calls get triangles that share a vertex, so each
 /// may write the rows of its own vertices (the assemblies over triangle pairs).

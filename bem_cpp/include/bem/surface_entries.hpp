@@ -4,6 +4,7 @@
 // columns P1) and W_h (P1), each entry summed over the triangle pairs of the two basis supports, and
 // the cluster tree of a surface space (the 2D tree of cluster_tree.hpp on 3D points).
 #include <memory>
+#include <vector>
 
 #include "bem/cluster_tree.hpp"
 #include "bem/hmatrix.hpp"
@@ -34,6 +35,7 @@ class SurfaceEntries : public EntrySource {
   Space rows_, cols_;
   std::shared_ptr<const SurfaceNearField> near_;
   bool with_hypersingular_;
+  std::vector<int> planes_;  ///< the double layer: the triangles' planes (triangle_planes)
 };
 
 /// Dof points (P1: vertices, P0: centroids) and supports (the triangles the basis
