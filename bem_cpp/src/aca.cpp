@@ -178,10 +178,13 @@ void recompress(LowRank& a, double tol) {
     tail += s(r - 1) * s(r - 1);
     --r;
   }
-  const Eigen::MatrixXd Qu = qu.householderQ() * Eigen::MatrixXd::Identity(m, ku);
-  const Eigen::MatrixXd Qv = qv.householderQ() * Eigen::MatrixXd::Identity(n, kv);
-  a.U = Qu * (svd.matrixU().leftCols(r) * s.head(r).asDiagonal());
-  a.V = Qv * svd.matrixV().leftCols(r);
+  // Q [X; 0] by the Householder reflectors applied to the r columns, not Q formed (m x k)
+  a.U.setZero(m, r);
+  a.U.topRows(ku) = svd.matrixU().leftCols(r) * s.head(r).asDiagonal();
+  a.U.applyOnTheLeft(qu.householderQ());
+  a.V.setZero(n, r);
+  a.V.topRows(kv) = svd.matrixV().leftCols(r);
+  a.V.applyOnTheLeft(qv.householderQ());
 }
 
 }  // namespace bem
