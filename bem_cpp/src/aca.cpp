@@ -3,54 +3,78 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 namespace bem {
 
 namespace {
 
-/// argmax |x[i]| over i with !used[i]; -1 if all are used.
-Index unused_argmax(const Eigen::Ref<const Eigen::VectorXd>& x, const std::vector<char>& used) {
-  Index best = -1;
-  double value = -1.0;
-  for (Index i = 0; i < x.size(); ++i)
-    if (!used[static_cast<std::size_t>(i)] && std::abs(x(i)) > value) {
-      value = std::abs(x(i));
-      best = i;
-    }
-  return best;
+/// argmax |x[i]| over i < n with !used[i] (the first of equal ones); -1 if all are used.
+/// The absolute value of a finite double orders as its bits do as an integer, so the
+/// largest key and then its first index are integer max and min reductions, which
+/// vectorise (a comparison of doubles with an index does not).
+Index unused_argmax(const double* x, Index n, const std::vector<char>& used) {
+  constexpr std::int64_t kAbs = 0x7FFFFFFFFFFFFFFF;
+  auto key = [x, &used](Index i) {
+    std::int64_t bits;
+    std::memcpy(&bits, x + i, sizeof bits);
+    return used[static_cast<std::size_t>(i)] ? std::int64_t{-1} : bits & kAbs;
+  };
+  std::int64_t top = -1;
+  for (Index i = 0; i < n; ++i) {
+    const std::int64_t k = key(i);
+    top = k > top ? k : top;
+  }
+  if (top < 0) return -1;
+  Index first = n;
+  for (Index i = 0; i < n; ++i) {
+    const Index at = key(i) == top ? i : n;
+    first = at < first ? at : first;
+  }
+  return first;
 }
 
 /// The crosses u_k v_k^T found so far, as the columns of two matrices (grown by doubling),
 /// so that the residuals and the norm update are matrix-vector products.
 class Cross {
  public:
-  Cross(Index m, Index n, const Slice& row, const Slice& column)
-      : m_(m), n_(n), row_(row), column_(column), row_used_(m, 0), col_used_(n, 0), U_(m, 8), V_(n, 8) {}
+  /// capacity: the columns held before the first doubling.
+  Cross(Index m, Index n, const Slice& row, const Slice& column, Index capacity)
+      : m_(m),
+        n_(n),
+        row_(row),
+        column_(column),
+        row_used_(m, 0),
+        col_used_(n, 0),
+        U_(m, std::max<Index>(capacity, 1)),
+        V_(n, std::max<Index>(capacity, 1)),
+        r_(n),
+        c_(m) {}
 
-  Eigen::VectorXd residual_row(Index i) const {
-    Eigen::VectorXd r(n_);
-    row_(i, r.data());
-    if (k_ > 0) r.noalias() -= V_.leftCols(k_) * U_.row(i).head(k_).transpose();
-    return r;
+  /// The residual of row i (of column j), in a buffer of the Cross kept until the next call.
+  const Eigen::VectorXd& residual_row(Index i) {
+    row_(i, r_.data());
+    if (k_ > 0) r_.noalias() -= V_.leftCols(k_) * U_.row(i).head(k_).transpose();
+    return r_;
   }
-  Eigen::VectorXd residual_column(Index j) const {
-    Eigen::VectorXd c(m_);
-    column_(j, c.data());
-    if (k_ > 0) c.noalias() -= U_.leftCols(k_) * V_.row(j).head(k_).transpose();
-    return c;
+  const Eigen::VectorXd& residual_column(Index j) {
+    column_(j, c_.data());
+    if (k_ > 0) c_.noalias() -= U_.leftCols(k_) * V_.row(j).head(k_).transpose();
+    return c_;
   }
-  /// Adds u v^T and updates |U V^T|_F^2.
-  void add(const Eigen::VectorXd& u, const Eigen::VectorXd& v) {
-    double cross = 0.0;
-    if (k_ > 0) cross = (U_.leftCols(k_).transpose() * u).dot(V_.leftCols(k_).transpose() * v);
-    norm2_ += u.squaredNorm() * v.squaredNorm() + 2.0 * cross;
+  /// Adds u v^T, v = r / pivot, and updates |U V^T|_F^2.
+  void add(const Eigen::VectorXd& u, const Eigen::VectorXd& r, double pivot) {
     if (k_ == U_.cols()) {
       U_.conservativeResize(Eigen::NoChange, 2 * k_);
       V_.conservativeResize(Eigen::NoChange, 2 * k_);
     }
     U_.col(k_) = u;
-    V_.col(k_) = v;
+    V_.col(k_) = r / pivot;
+    const auto v = V_.col(k_);
+    double cross = 0.0;
+    if (k_ > 0) cross = (U_.leftCols(k_).transpose() * u).dot(V_.leftCols(k_).transpose() * v);
+    norm2_ += u.squaredNorm() * v.squaredNorm() + 2.0 * cross;
     ++k_;
   }
   double norm() const { return std::sqrt(std::max(norm2_, 0.0)); }
@@ -73,6 +97,7 @@ class Cross {
   const Slice& column_;
   std::vector<char> row_used_, col_used_;
   Eigen::MatrixXd U_, V_;
+  Eigen::VectorXd r_, c_;  ///< the last residual row and column
   Index k_ = 0;
   double norm2_ = 0.0;
 };
@@ -93,7 +118,9 @@ constexpr int kZeroRowTries = 3;  // consecutive zero rows before the samples de
 
 LowRank aca(Index m, Index n, const Slice& row, const Slice& column, double tol, Index max_rank) {
   max_rank = std::min({max_rank, m, n});
-  Cross x(m, n, row, column);
+  // room for the ranks of the surface blocks' point kernels (20 to 45 at tol 3e-7) without
+  // growing; larger ranks double it
+  Cross x(m, n, row, column, std::min<Index>(max_rank, 32));
   std::uint64_t seed =
       0x9E3779B97F4A7C15ULL ^ (static_cast<std::uint64_t>(m) * 1315423911ULL + static_cast<std::uint64_t>(n));
   auto random_index = [&seed](Index size) {
@@ -105,20 +132,19 @@ LowRank aca(Index m, Index n, const Slice& row, const Slice& column, double tol,
   while (x.rank() < max_rank) {
     bool stop = false;
     if (i >= 0) {
-      const Eigen::VectorXd r = x.residual_row(i);
+      const Eigen::VectorXd& r = x.residual_row(i);
       x.row_used()[static_cast<std::size_t>(i)] = 1;
-      const Index j = unused_argmax(r, x.col_used());
+      const Index j = unused_argmax(r.data(), n, x.col_used());
       if (j < 0 || r(j) == 0.0) {
         i = ++zero_rows > kZeroRowTries ? -1 : next_unused(x.row_used(), i + m / 3 + 1);
         stop = i < 0;
       } else {
         zero_rows = 0;
-        const Eigen::VectorXd v = r / r(j);
-        const Eigen::VectorXd u = x.residual_column(j);
+        const Eigen::VectorXd& u = x.residual_column(j);
         x.col_used()[static_cast<std::size_t>(j)] = 1;
-        x.add(u, v);
+        x.add(u, r, r(j));
         stop = x.last_u().norm() * x.last_v().norm() <= tol * x.norm();
-        i = unused_argmax(x.last_u(), x.row_used());
+        i = unused_argmax(x.last_u().data(), m, x.row_used());
         if (i < 0) stop = true;
       }
     } else {
@@ -130,34 +156,34 @@ LowRank aca(Index m, Index n, const Slice& row, const Slice& column, double tol,
     bool found = false;
     for (int s = 0; s < kSamples && !found && x.rank() < max_rank; ++s) {
       const Index j = random_index(n);
-      const Eigen::VectorXd c = x.residual_column(j);
+      const Eigen::VectorXd& c = x.residual_column(j);
       if (c.norm() * std::sqrt(static_cast<double>(n)) > tol * x.norm() && c.cwiseAbs().maxCoeff() > 0) {
         Index p;
         c.cwiseAbs().maxCoeff(&p);
-        const Eigen::VectorXd r = x.residual_row(p);
+        const Eigen::VectorXd& r = x.residual_row(p);
         if (r(j) == 0.0) continue;
         x.row_used()[static_cast<std::size_t>(p)] = 1;
         x.col_used()[static_cast<std::size_t>(j)] = 1;
-        x.add(c, r / r(j));
+        x.add(c, r, r(j));
         found = true;
       }
       const Index q = random_index(m);
       if (found || x.rank() >= max_rank) break;
-      const Eigen::VectorXd r = x.residual_row(q);
+      const Eigen::VectorXd& r = x.residual_row(q);
       if (r.norm() * std::sqrt(static_cast<double>(m)) > tol * x.norm() && r.cwiseAbs().maxCoeff() > 0) {
         Index p;
         r.cwiseAbs().maxCoeff(&p);
-        const Eigen::VectorXd cc = x.residual_column(p);
+        const Eigen::VectorXd& cc = x.residual_column(p);
         if (cc(q) == 0.0) continue;
         x.row_used()[static_cast<std::size_t>(q)] = 1;
         x.col_used()[static_cast<std::size_t>(p)] = 1;
-        x.add(cc, r / r(p));
+        x.add(cc, r, r(p));
         found = true;
       }
     }
     if (!found) break;
     zero_rows = 0;
-    i = unused_argmax(x.last_u(), x.row_used());
+    i = unused_argmax(x.last_u().data(), m, x.row_used());
   }
   return x.result();
 }

@@ -35,6 +35,7 @@ FarPoints::FarPoints(const Surface& s, const std::vector<Part>& parts, Index dof
                      const TriangleRule& r) {
   std::vector<Eigen::Triplet<double>> entries[4];
   per_part = r.size();
+  for (auto* v : {&x, &y, &z, &nx, &ny, &nz, &w}) v->reserve(parts.size() * static_cast<std::size_t>(r.size()));
   Index part_index = 0;
   for (const Part& part : parts) {
     const Triangle& T = s.triangle(part.triangle);

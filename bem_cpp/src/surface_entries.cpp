@@ -239,13 +239,30 @@ class SurfaceBlock : public EntryBlock {
         if (a0 == a1) continue;
         const Index p0 = a0 * n, p1 = a1 * n;
         for (int q = 0; q < n; ++q) kernel.column(static_cast<Index>(b) * n + q, p0, p1, A.col(q).data());
-        for (int j = 0; j < cb.count; ++j) {
-          double* al = AL.col(j).data();
-          std::fill(al + p0, al + p1, 0.0);
-          for (int q = 0; q < n; ++q) {
-            const double l = L(q, cb.basis[j]);
-            const double* a = A.col(q).data();
-            for (Index p = p0; p < p1; ++p) al[p] += l * a[p];
+        if (cb.count == 3) {  // the three hats of b in one pass over A
+          double *al0 = AL.col(0).data(), *al1 = AL.col(1).data(), *al2 = AL.col(2).data();
+          const int b0 = cb.basis[0], b1 = cb.basis[1], b2 = cb.basis[2];
+          for (Index p = p0; p < p1; ++p) {
+            double s0 = 0.0, s1 = 0.0, s2 = 0.0;
+            for (int q = 0; q < n; ++q) {
+              const double a = A(p, q);
+              s0 += L(q, b0) * a;
+              s1 += L(q, b1) * a;
+              s2 += L(q, b2) * a;
+            }
+            al0[p] = s0;
+            al1[p] = s1;
+            al2[p] = s2;
+          }
+        } else {
+          for (int j = 0; j < cb.count; ++j) {
+            double* al = AL.col(j).data();
+            std::fill(al + p0, al + p1, 0.0);
+            for (int q = 0; q < n; ++q) {
+              const double l = L(q, cb.basis[j]);
+              const double* a = A.col(q).data();
+              for (Index p = p0; p < p1; ++p) al[p] += l * a[p];
+            }
           }
         }
         for (Index a = a0; a < a1; ++a) {
