@@ -55,26 +55,26 @@ class Cross {
   /// The residual of row i (of column j), in a buffer of the Cross kept until the next call.
   const Eigen::VectorXd& residual_row(Index i) {
     row_(i, r_.data());
-    if (k_ > 0) r_.noalias() -= V_.leftCols(k_) * U_.row(i).head(k_).transpose();
+    subtract(V_, U_.row(i), r_, gr_);
     return r_;
   }
   const Eigen::VectorXd& residual_column(Index j) {
     column_(j, c_.data());
-    if (k_ > 0) c_.noalias() -= U_.leftCols(k_) * V_.row(j).head(k_).transpose();
+    subtract(U_, V_.row(j), c_, gc_);
     return c_;
   }
-  /// Adds u v^T, v = r / pivot, and updates |U V^T|_F^2.
-  void add(const Eigen::VectorXd& u, const Eigen::VectorXd& r, double pivot) {
+  /// Adds u v^T, u the last residual column and v the last residual row over `pivot`, and
+  /// updates |U V^T|_F^2 (the cross term from the products taken with the residuals).
+  void add(double pivot) {
     if (k_ == U_.cols()) {
       U_.conservativeResize(Eigen::NoChange, 2 * k_);
       V_.conservativeResize(Eigen::NoChange, 2 * k_);
     }
-    U_.col(k_) = u;
-    V_.col(k_) = r / pivot;
+    U_.col(k_) = c_;
+    V_.col(k_) = r_ / pivot;
     const auto v = V_.col(k_);
-    double cross = 0.0;
-    if (k_ > 0) cross = (U_.leftCols(k_).transpose() * u).dot(V_.leftCols(k_).transpose() * v);
-    norm2_ += u.squaredNorm() * v.squaredNorm() + 2.0 * cross;
+    const double cross = k_ > 0 ? gc_.head(k_).dot(gr_.head(k_)) / pivot : 0.0;
+    norm2_ += c_.squaredNorm() * v.squaredNorm() + 2.0 * cross;
     ++k_;
   }
   double norm() const { return std::sqrt(std::max(norm2_, 0.0)); }
@@ -96,8 +96,29 @@ class Cross {
   const Slice& row_;
   const Slice& column_;
   std::vector<char> row_used_, col_used_;
+  /// y -= F_k w (F_k: the first k_ columns of F, w: the k_ first entries of `row`) and
+  /// g = F_k^T y, row chunk by row chunk, so that F_k is read once for both products (the
+  /// factors of the large blocks are larger than the cache).
+  template <typename Row>
+  void subtract(const Eigen::MatrixXd& F, const Row& row, Eigen::VectorXd& y, Eigen::VectorXd& g) {
+    if (k_ == 0) return;
+    constexpr Index kChunk = 128;  // rows: 128 x 32 doubles fit the first-level cache
+    w_ = row.head(k_).transpose();
+    const auto w = w_.head(k_);
+    if (g.size() < k_) g.resize(F.cols());
+    g.head(k_).setZero();
+    for (Index r0 = 0; r0 < y.size(); r0 += kChunk) {
+      const Index rows = std::min(kChunk, y.size() - r0);
+      const auto Fc = F.block(r0, 0, rows, k_);
+      auto yc = y.segment(r0, rows);
+      yc.noalias() -= Fc * w;
+      g.head(k_).noalias() += Fc.transpose() * yc;
+    }
+  }
   Eigen::MatrixXd U_, V_;
-  Eigen::VectorXd r_, c_;  ///< the last residual row and column
+  Eigen::VectorXd r_, c_;    ///< the last residual row and column
+  Eigen::VectorXd gr_, gc_;  ///< V_k^T r_ and U_k^T c_
+  Eigen::VectorXd w_;        ///< subtract's row
   Index k_ = 0;
   double norm2_ = 0.0;
 };
@@ -140,9 +161,9 @@ LowRank aca(Index m, Index n, const Slice& row, const Slice& column, double tol,
         stop = i < 0;
       } else {
         zero_rows = 0;
-        const Eigen::VectorXd& u = x.residual_column(j);
+        x.residual_column(j);
         x.col_used()[static_cast<std::size_t>(j)] = 1;
-        x.add(u, r, r(j));
+        x.add(r(j));
         stop = x.last_u().norm() * x.last_v().norm() <= tol * x.norm();
         i = unused_argmax(x.last_u().data(), m, x.row_used());
         if (i < 0) stop = true;
@@ -164,7 +185,7 @@ LowRank aca(Index m, Index n, const Slice& row, const Slice& column, double tol,
         if (r(j) == 0.0) continue;
         x.row_used()[static_cast<std::size_t>(p)] = 1;
         x.col_used()[static_cast<std::size_t>(j)] = 1;
-        x.add(c, r, r(j));
+        x.add(r(j));
         found = true;
       }
       const Index q = random_index(m);
@@ -173,11 +194,10 @@ LowRank aca(Index m, Index n, const Slice& row, const Slice& column, double tol,
       if (r.norm() * std::sqrt(static_cast<double>(m)) > tol * x.norm() && r.cwiseAbs().maxCoeff() > 0) {
         Index p;
         r.cwiseAbs().maxCoeff(&p);
-        const Eigen::VectorXd& cc = x.residual_column(p);
-        if (cc(q) == 0.0) continue;
+        if (x.residual_column(p)(q) == 0.0) continue;
         x.row_used()[static_cast<std::size_t>(q)] = 1;
         x.col_used()[static_cast<std::size_t>(p)] = 1;
-        x.add(cc, r, r(p));
+        x.add(r(p));
         found = true;
       }
     }

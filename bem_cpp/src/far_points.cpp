@@ -1,31 +1,43 @@
 #include "bem/far_points.hpp"
 
 #include <algorithm>
+#include <cstdint>
+#include <stdexcept>
 #include <utility>
 
 namespace bem {
 
 std::vector<Part> parts(const Surface& s, Space space, const Index* dofs, Index k) {
-  std::vector<std::pair<Index, std::pair<int, Index>>> items;  // (triangle, (basis, position))
+  // (triangle, basis, position) as one key, sorted: triangle << 34 | basis << 32 | position
+  // (the order of the triples; a sort of integers, several times faster than of tuples)
+  if (s.size() >= (Index{1} << 30) || k >= (Index{1} << 32))
+    throw std::invalid_argument("parts: more than 2^30 triangles or 2^32 dofs");
+  std::vector<std::uint64_t> keys;
+  keys.reserve(static_cast<std::size_t>(space == Space::P0 ? k : 7 * k));
+  auto key = [](Index t, int basis, Index p) {
+    return static_cast<std::uint64_t>(t) << 34 | static_cast<std::uint64_t>(basis) << 32 |
+           static_cast<std::uint64_t>(p);
+  };
   for (Index p = 0; p < k; ++p) {
     const Index d = dofs[p];
     if (space == Space::P0) {
-      items.push_back({d, {3, p}});
+      keys.push_back(key(d, 3, p));
     } else {
       for (Index t : s.star(d)) {
         const Triangle& T = s.triangle(t);
         const int a = static_cast<int>(std::find(T.v.begin(), T.v.end(), d) - T.v.begin());
-        items.push_back({t, {a, p}});
+        keys.push_back(key(t, a, p));
       }
     }
   }
-  std::sort(items.begin(), items.end());
+  std::sort(keys.begin(), keys.end());
   std::vector<Part> out;
-  for (const auto& [t, bp] : items) {
+  for (const std::uint64_t item : keys) {
+    const Index t = static_cast<Index>(item >> 34);
     if (out.empty() || out.back().triangle != t) out.push_back(Part{t, 0, {0, 0, 0}, {0, 0, 0}});
     Part& q = out.back();
-    q.basis[q.count] = bp.first;
-    q.position[q.count] = bp.second;
+    q.basis[q.count] = static_cast<int>(item >> 32 & 3);
+    q.position[q.count] = static_cast<Index>(item & 0xFFFFFFFF);
     ++q.count;
   }
   return out;
@@ -100,17 +112,21 @@ void add_values_transpose_product(const std::vector<Part>& parts, const Triangle
                                   const Eigen::Ref<const Eigen::MatrixXd>& A, Eigen::Ref<Eigen::MatrixXd> out) {
   const Index n = rule.size();
   const Eigen::Matrix<double, Eigen::Dynamic, 4> L = basis_values(rule);
+  const double *l0 = L.col(0).data(), *l1 = L.col(1).data(), *l2 = L.col(2).data();
   for (Index j = 0; j < A.cols(); ++j) {
     const double* a = A.col(j).data();
     double* o = out.col(j).data();
     for (std::size_t t = 0; t < parts.size(); ++t, a += n) {
-      const Part& part = parts[t];
-      for (int d = 0; d < part.count; ++d) {
-        const double* l = L.col(part.basis[d]).data();
-        double sum = 0.0;
-        for (Index q = 0; q < n; ++q) sum += l[q] * a[q];
-        o[part.position[d]] += sum;
+      // the part's moments against the four basis values, in one pass over its points
+      double m[4] = {0.0, 0.0, 0.0, 0.0};
+      for (Index q = 0; q < n; ++q) {
+        m[0] += l0[q] * a[q];
+        m[1] += l1[q] * a[q];
+        m[2] += l2[q] * a[q];
+        m[3] += a[q];
       }
+      const Part& part = parts[t];
+      for (int d = 0; d < part.count; ++d) o[part.position[d]] += m[part.basis[d]];
     }
   }
 }
