@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -121,13 +122,50 @@ HMatrix::HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const 
 
 void HMatrix::build(const EntrySource& entries, const HMatrixOptions& options) {
   plan(options);
-  const std::vector<std::size_t> order = build_order();
+  // a pair of mirrored dense blocks is one task (the first of the two in the build order)
+  const std::vector<std::ptrdiff_t> mirror = mirrors();
+  std::vector<std::size_t> order;
+  std::vector<char> queued(blocks_.size(), 0);
+  for (std::size_t b : build_order()) {
+    const std::ptrdiff_t t = mirror[b];
+    if (t >= 0 && queued[static_cast<std::size_t>(t)]) continue;
+    queued[b] = 1;
+    order.push_back(b);
+  }
   const long count = static_cast<long>(order.size());
 #pragma omp parallel for schedule(dynamic, 1)
   for (long q = 0; q < count; ++q) {
-    Block& b = blocks_[order[static_cast<std::size_t>(q)]];
-    fill(b, *entry_block(entries, b), 0, options);
+    const std::size_t i = order[static_cast<std::size_t>(q)];
+    Block& b = blocks_[i];
+    const std::unique_ptr<EntryBlock> e = entry_block(entries, b);
+    if (mirror[i] >= 0) {
+      Block& t = blocks_[static_cast<std::size_t>(mirror[i])];
+      b.dense.resize(b.m, b.k);
+      t.dense.resize(t.m, t.k);
+      if (e->all_and_transpose(b.dense.data(), t.dense.data())) {
+        cut_to_rows(b);
+        cut_to_rows(t);
+        continue;
+      }
+      fill(t, *entry_block(entries, t), 0, options);
+    }
+    fill(b, *e, 0, options);
   }
+}
+
+std::vector<std::ptrdiff_t> HMatrix::mirrors() const {
+  std::vector<std::ptrdiff_t> mirror(blocks_.size(), -1);
+  if (symmetric_ || rows_ != cols_) return mirror;
+  std::map<std::pair<int, int>, std::size_t> dense;
+  for (std::size_t b = 0; b < blocks_.size(); ++b)
+    if (!blocks_[b].low_rank) dense[{blocks_[b].row_cluster, blocks_[b].col_cluster}] = b;
+  for (std::size_t b = 0; b < blocks_.size(); ++b) {
+    const Block& x = blocks_[b];
+    if (x.low_rank || x.row_cluster == x.col_cluster) continue;
+    const auto t = dense.find({x.col_cluster, x.row_cluster});
+    if (t != dense.end()) mirror[b] = static_cast<std::ptrdiff_t>(t->second);
+  }
+  return mirror;
 }
 
 void HMatrix::plan(const HMatrixOptions& options) {
@@ -179,16 +217,19 @@ void HMatrix::fill(Block& b, const EntryBlock& e, int which, const HMatrixOption
       b.low_rank = false;
     }
   }
-  if (restricted_) {  // cut to the local rows
-    const Index r0 = std::max(b.r0, row_begin_), r1 = std::min(b.r0 + b.m, row_end_);
-    if (r0 != b.r0 || r1 != b.r0 + b.m) {
-      if (b.low_rank)
-        b.factors.U = Eigen::MatrixXd(b.factors.U.middleRows(r0 - b.r0, r1 - r0));
-      else
-        b.dense = Eigen::MatrixXd(b.dense.middleRows(r0 - b.r0, r1 - r0));
-      b.r0 = r0;
-      b.m = r1 - r0;
-    }
+  cut_to_rows(b);
+}
+
+void HMatrix::cut_to_rows(Block& b) const {
+  if (!restricted_) return;
+  const Index r0 = std::max(b.r0, row_begin_), r1 = std::min(b.r0 + b.m, row_end_);
+  if (r0 != b.r0 || r1 != b.r0 + b.m) {
+    if (b.low_rank)
+      b.factors.U = Eigen::MatrixXd(b.factors.U.middleRows(r0 - b.r0, r1 - r0));
+    else
+      b.dense = Eigen::MatrixXd(b.dense.middleRows(r0 - b.r0, r1 - r0));
+    b.r0 = r0;
+    b.m = r1 - r0;
   }
 }
 

@@ -68,10 +68,19 @@ class SurfaceBlock : public EntryBlock {
       return;
     }
     if (kernel_ == SurfaceKernel::DoubleLayer)
-      double_layer_all(result);
+      double_layer_all(out, nullptr);
     else
       project(far_kernel(), kernel_ == SurfaceKernel::Hypersingular, result);
     for (Index p = 0; p < m_; ++p) add_near(*near_rows_, I_[p], col_positions(), out + p, m_);
+  }
+  /// The double layer's block and its mirror K(J, I) from one pass over the point pairs
+  /// (double_layer_all), each with its near pairs.
+  bool all_and_transpose(double* out, double* transposed) const override {
+    if (kernel_ != SurfaceKernel::DoubleLayer || !near_rows_ || rows_ != cols_) return false;
+    double_layer_all(out, transposed);
+    for (Index p = 0; p < m_; ++p) add_near(*near_rows_, I_[p], col_positions(), out + p, m_);
+    for (Index q = 0; q < k_; ++q) add_near(*near_rows_, J_[q], row_positions(), transposed + q, k_);
+    return true;
   }
 
   /// Far blocks: every triangle pair is evaluated by the far rule (the block's entries are
@@ -211,19 +220,23 @@ class SurfaceBlock : public EntryBlock {
   /// field) adds Lambda^T A_ab Lambda, A_ab its 9 x 9 point kernel and Lambda the basis
   /// values at the rule's points, to its dofs' entries - no point matrix of the block, no
   /// maps. The row parts sorted by plane, the row points off b's plane are at most two
-  /// ranges, on which the kernel runs column by column (vectorised).
-  void double_layer_all(Eigen::Map<Eigen::MatrixXd>& out) const {
+  /// ranges, on which the kernel runs column by column (vectorised), summed at once against
+  /// the values of b's hats. With `transposed` (k x m), also the mirrored block K(J, I):
+  /// between the same points its kernel is -n_x . (x - y) / r^3, from the same 1 / r^3.
+  void double_layer_all(double* out, double* transposed) const {
     constexpr int n = kFarGaussPoints * kFarGaussPoints;
     const TriangleRule& rule = triangle_rule(kFarGaussPoints);
     const Eigen::Matrix<double, n, 4> L = basis_values(rule);
     std::vector<Part> rows = row_parts_;
     std::stable_sort(rows.begin(), rows.end(), [this](const Part& a, const Part& b) { return plane(a) < plane(b); });
     const FarPoints rp(s_, rows, m_, false, false, rule), cp(s_, col_parts_, k_, false, false, rule);
-    const PointKernel kernel{rp, cp, PointKernelKind::DoubleLayer};
     const Index parts = static_cast<Index>(rows.size()), points = rp.size();
-    Eigen::Matrix<double, Eigen::Dynamic, n> A(points, n);   // the kernel's columns of b's points
-    Eigen::Matrix<double, Eigen::Dynamic, 3> AL(points, 3);  // A times the values of b's dofs
-    out.setZero();
+    // the kernel's rows summed against the values of b's (up to three) hats: A Lambda_b, and
+    // the mirror's
+    Eigen::Matrix<double, Eigen::Dynamic, 3> AL(points, 3), BL(transposed ? points : 0, 3);
+    Eigen::Map<Eigen::MatrixXd> result(out, m_, k_);
+    result.setZero();
+    if (transposed) Eigen::Map<Eigen::MatrixXd>(transposed, k_, m_).setZero();
     for (std::size_t b = 0; b < col_parts_.size(); ++b) {
       const Part& cb = col_parts_[b];
       const Triangle& tb = s_.triangle(cb.triangle);
@@ -235,49 +248,70 @@ class SurfaceBlock : public EntryBlock {
       Index last = first;
       while (last < parts && plane(rows[static_cast<std::size_t>(last)]) == pb) ++last;
       const std::pair<Index, Index> ranges[2] = {{0, first}, {last, parts}};
+      double l[n][3];  // the values of b's hats at its points (zero for hats not in the block)
+      for (int q = 0; q < n; ++q)
+        for (int j = 0; j < 3; ++j) l[q][j] = j < cb.count ? L(q, cb.basis[j]) : 0.0;
       for (const auto& [a0, a1] : ranges) {
         if (a0 == a1) continue;
         const Index p0 = a0 * n, p1 = a1 * n;
-        for (int q = 0; q < n; ++q) kernel.column(static_cast<Index>(b) * n + q, p0, p1, A.col(q).data());
-        if (cb.count == 3) {  // the three hats of b in one pass over A
-          double *al0 = AL.col(0).data(), *al1 = AL.col(1).data(), *al2 = AL.col(2).data();
-          const int b0 = cb.basis[0], b1 = cb.basis[1], b2 = cb.basis[2];
-          for (Index p = p0; p < p1; ++p) {
-            double s0 = 0.0, s1 = 0.0, s2 = 0.0;
-            for (int q = 0; q < n; ++q) {
-              const double a = A(p, q);
-              s0 += L(q, b0) * a;
-              s1 += L(q, b1) * a;
-              s2 += L(q, b2) * a;
-            }
-            al0[p] = s0;
-            al1[p] = s1;
-            al2[p] = s2;
-          }
-        } else {
-          for (int j = 0; j < cb.count; ++j) {
-            double* al = AL.col(j).data();
-            std::fill(al + p0, al + p1, 0.0);
-            for (int q = 0; q < n; ++q) {
-              const double l = L(q, cb.basis[j]);
-              const double* a = A.col(q).data();
-              for (Index p = p0; p < p1; ++p) al[p] += l * a[p];
-            }
-          }
+        AL.middleRows(p0, p1 - p0).setZero();
+        if (transposed) BL.middleRows(p0, p1 - p0).setZero();
+        for (int q = 0; q < n; ++q) {
+          const Index c = static_cast<Index>(b) * n + q;
+          if (transposed)
+            accumulate<true>(rp, cp, c, l[q], p0, p1, AL, BL);
+          else
+            accumulate<false>(rp, cp, c, l[q], p0, p1, AL, BL);
         }
         for (Index a = a0; a < a1; ++a) {
           const Part& ra = rows[static_cast<std::size_t>(a)];
           if (!PairIntegrator::far(s_.triangle(ra.triangle), tb)) continue;
           for (int i = 0; i < ra.count; ++i) {
-            const double* l = L.col(ra.basis[i]).data();
+            const double* la = L.col(ra.basis[i]).data();
             for (int j = 0; j < cb.count; ++j) {
               const double* al = AL.col(j).data() + a * n;
               double e = 0.0;
-              for (int p = 0; p < n; ++p) e += l[p] * al[p];
-              out(ra.position[i], cb.position[j]) += e;
+              for (int p = 0; p < n; ++p) e += la[p] * al[p];
+              result(ra.position[i], cb.position[j]) += e;
+              if (!transposed) continue;
+              const double* bl = BL.col(j).data() + a * n;
+              e = 0.0;
+              for (int p = 0; p < n; ++p) e += la[p] * bl[p];
+              transposed[cb.position[j] + k_ * ra.position[i]] += e;
             }
           }
         }
+      }
+    }
+  }
+  /// AL(p, j) += l[j] K(p, c) for the row points p in [p0, p1), K the double layer's point
+  /// kernel (weights included) at the column point c; with `mirror`, BL(p, j) += l[j] times
+  /// the mirrored kernel (the row point's normal, the sign turned).
+  template <bool mirror>
+  static void accumulate(const FarPoints& r, const FarPoints& c, Index q, const double* l, Index p0, Index p1,
+                         Eigen::Matrix<double, Eigen::Dynamic, 3>& AL, Eigen::Matrix<double, Eigen::Dynamic, 3>& BL) {
+    const std::size_t j = static_cast<std::size_t>(q);
+    const double x = c.x[j], y = c.y[j], z = c.z[j], w = kInvTwoPi * c.w[j];
+    const double nx = c.nx[j], ny = c.ny[j], nz = c.nz[j];
+    const double l0 = l[0], l1 = l[1], l2 = l[2];
+    double *a0 = AL.col(0).data(), *a1 = AL.col(1).data(), *a2 = AL.col(2).data();
+    double *b0 = BL.col(0).data(), *b1 = BL.col(1).data(), *b2 = BL.col(2).data();
+    const double *rx = r.x.data(), *ry = r.y.data(), *rz = r.z.data(), *rw = r.w.data();
+    const double *rnx = r.nx.data(), *rny = r.ny.data(), *rnz = r.nz.data();
+#pragma omp simd
+    for (Index p = p0; p < p1; ++p) {
+      const double dx = rx[p] - x, dy = ry[p] - y, dz = rz[p] - z;
+      const double s = 1.0 / std::sqrt(dx * dx + dy * dy + dz * dz);
+      const double s3 = w * rw[p] * s * s * s;
+      const double k = (dx * nx + dy * ny + dz * nz) * s3;
+      a0[p] += l0 * k;
+      a1[p] += l1 * k;
+      a2[p] += l2 * k;
+      if constexpr (mirror) {
+        const double t = -(dx * rnx[p] + dy * rny[p] + dz * rnz[p]) * s3;
+        b0[p] += l0 * t;
+        b1[p] += l1 * t;
+        b2[p] += l2 * t;
       }
     }
   }

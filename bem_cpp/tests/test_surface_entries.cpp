@@ -222,3 +222,25 @@ TEST(SurfaceEntries, DoubleLayerBlocksOnFlatFacesAreThoseOfTheDenseMatrix) {
     }
   }
 }
+
+TEST(SurfaceEntries, DoubleLayerBlockAndItsMirrorFromOnePass) {
+  // K(I, J) and K(J, I) by all_and_transpose are all() of the two blocks (near field apart,
+  // coplanar and cross-face pairs); the other kernels and blocks without the near field
+  // decline
+  const test::Mesh mesh = test::cube(6, 1.0 / 6);
+  const Surface s(mesh.vertices, mesh.triangles);
+  const auto near = std::make_shared<const SurfaceNearField>(s);
+  const std::vector<Index> I = every_other(s.vertices(), 0), J = every_other(s.vertices(), 1);
+  const Index m = static_cast<Index>(I.size()), k = static_cast<Index>(J.size());
+  const SurfaceEntries K(s, SurfaceKernel::DoubleLayer, Space::P1, Space::P1, near);
+  Eigen::MatrixXd IJ(m, k), JI(k, m), both(m, k), mirror(k, m);
+  K.block(I.data(), m, J.data(), k)->all(IJ.data());
+  K.block(J.data(), k, I.data(), m)->all(JI.data());
+  ASSERT_TRUE(K.block(I.data(), m, J.data(), k)->all_and_transpose(both.data(), mirror.data()));
+  EXPECT_LT((both - IJ).cwiseAbs().maxCoeff(), 1e-15 * IJ.cwiseAbs().maxCoeff());
+  EXPECT_LT((mirror - JI).cwiseAbs().maxCoeff(), 1e-15 * JI.cwiseAbs().maxCoeff());
+  const SurfaceEntries V(s, SurfaceKernel::SingleLayer, Space::P1, Space::P1, near);
+  const SurfaceEntries plain(s, SurfaceKernel::DoubleLayer, Space::P1, Space::P1);
+  EXPECT_FALSE(V.block(I.data(), m, J.data(), k)->all_and_transpose(both.data(), mirror.data()));
+  EXPECT_FALSE(plain.block(I.data(), m, J.data(), k)->all_and_transpose(both.data(), mirror.data()));
+}

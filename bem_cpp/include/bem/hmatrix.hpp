@@ -62,6 +62,10 @@ class EntryBlock {
   virtual void row(Index i, double* out) const = 0;     ///< out[c] = A(I[i], J[c])
   virtual void column(Index j, double* out) const = 0;  ///< out[r] = A(I[r], J[j])
   virtual void all(double* out) const = 0;              ///< out[r + c m] = A(I[r], J[c])
+  /// all() and the mirrored block at once, transposed[c + r k] = A(J[c], I[r]), where the
+  /// source computes both cheaper together (a square matrix on one tree: HMatrix builds the
+  /// dense blocks (t, s) and (s, t) it holds by one call). false: not done, nothing written.
+  virtual bool all_and_transpose(double* /*out*/, double* /*transposed*/) const { return false; }
   /// An admissible block's factors A(I, J) ~ U V^T to the relative accuracy tol by a
   /// cheaper route than ACA on row() and column() (false: none, the HMatrix runs that ACA).
   virtual bool low_rank(double /*tol*/, LowRank& /*out*/) const { return false; }
@@ -153,6 +157,11 @@ class HMatrix {
   std::unique_ptr<EntryBlock> entry_block(const EntrySource& entries, const Block& b) const;
   /// The entries of b (matrix `which` of the EntryBlock), compressed, cut to the held rows.
   void fill(Block& b, const EntryBlock& e, int which, const HMatrixOptions& options) const;
+  /// A computed block cut to the held rows (row-restricted).
+  void cut_to_rows(Block& b) const;
+  /// Per block: the index of its mirror, the dense block (s, t) of a dense block (t, s),
+  /// t != s, of a non-symmetric matrix on one tree (both held); -1 otherwise.
+  std::vector<std::ptrdiff_t> mirrors() const;
   /// Y = the held blocks (transposed: tr) times Xp, both permuted; Xp starts at row in0 of
   /// the input if tr (else it is whole), Y at row out0 of the output if !tr (else whole).
   void accumulate(const Eigen::MatrixXd& Xp, Index in0, Index out0, bool tr, Eigen::MatrixXd& Y) const;
