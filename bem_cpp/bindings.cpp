@@ -155,19 +155,20 @@ PYBIND11_MODULE(_bem, m) {
   py::class_<bem::SurfaceSteklovOperator>(m, "SurfaceSteklovOperator")
       .def(py::init([](VerticesRef vertices, TrianglesRef triangles, bem::Index leaf_size, double eta, double tol,
                        double solver_tol, int max_iterations, int product_threads, int rank, int size,
-                       Collective allgather, Collective allreduce) {
+                       Collective allgather, Collective allreduce, bool single_precision) {
              std::shared_ptr<const bem::Communicator> comm;
              if (allgather)
                comm = std::make_shared<const bem::Communicator>(
                    bem::Communicator{rank, size, std::move(allgather), std::move(allreduce)});
-             return std::make_unique<bem::SurfaceSteklovOperator>(
-                 vertices, triangles,
-                 bem::SteklovOptions{
-                     {leaf_size, eta, tol, false, product_threads, comm}, tol, solver_tol, max_iterations});
+             bem::SteklovOptions options{
+                 {leaf_size, eta, tol, false, product_threads, comm}, tol, solver_tol, max_iterations};
+             options.hmatrix.single_precision = single_precision;
+             return std::make_unique<bem::SurfaceSteklovOperator>(vertices, triangles, options);
            }),
            py::arg("vertices"), py::arg("triangles"), py::arg("leaf_size"), py::arg("eta"), py::arg("tol"),
            py::arg("solver_tol"), py::arg("max_iterations"), py::arg("product_threads"), py::arg("rank"),
-           py::arg("size"), py::arg("allgather"), py::arg("allreduce"), Release())
+           py::arg("size"), py::arg("allgather"), py::arg("allreduce"), py::arg("single_precision") = false,
+           Release())
       .def("apply", &bem::SurfaceSteklovOperator::apply, py::arg("x"), py::arg("solver_tol") = 0.0, Release())
       .def("flux", &bem::SurfaceSteklovOperator::flux, py::arg("x"), py::arg("solver_tol") = 0.0, Release())
       .def("hypersingular", &bem::SurfaceSteklovOperator::hypersingular, py::arg("x"), Release())

@@ -290,6 +290,7 @@ def _surface_steklov_poincare(
         tol=tol,
         leaf_size=defaults.HMATRIX_SURFACE_LEAF_SIZE,
         eta=defaults.HMATRIX_SURFACE_ETA,
+        single_precision=tol >= defaults.HMATRIX_SINGLE_PRECISION_MIN_TOL,
     )
 
 

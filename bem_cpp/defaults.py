@@ -20,6 +20,10 @@ HMATRIX_POTENTIAL_CROSSOVER_POINTS = 1000
 HMATRIX_SURFACE_LEAF_SIZE = 16
 HMATRIX_SURFACE_ETA = 4.0
 HMATRIX_SURFACE_AUTO_DOFS = 2000
+# A surface's S_h holds its blocks in single precision (float: round-off 6e-8, half the
+# bytes and about half the traffic of a product) when tol is at least this, so that the
+# rounding stays below tol / 10 (docs/design/bem3d.md, "Single-precision storage").
+HMATRIX_SINGLE_PRECISION_MIN_TOL = 1e-6
 # exterior_potential of a surface: leaf size and eta of its H-matrices (points x dofs), and
 # compression="auto" takes them from VERTICES vertices and POINTS points on (the measured
 # break-even; docs/design/bem3d.md, "The exterior potential").

@@ -65,6 +65,72 @@ Eigen::MatrixXd unpermuted(const Eigen::MatrixXd& Yp, const ClusterTree& tree) {
   return Y;
 }
 
+/// y += A x (A single, m x k, column-major; x, y double), four columns per pass over y.
+void add_product(const Eigen::MatrixXf& A, const double* x, double* y) {
+  const Index m = A.rows(), k = A.cols();
+  const float* a = A.data();
+  Index c = 0;
+  for (; c + 4 <= k; c += 4) {
+    const float *a0 = a + c * m, *a1 = a0 + m, *a2 = a1 + m, *a3 = a2 + m;
+    const double x0 = x[c], x1 = x[c + 1], x2 = x[c + 2], x3 = x[c + 3];
+#pragma omp simd
+    for (Index r = 0; r < m; ++r)
+      y[r] += static_cast<double>(a0[r]) * x0 + static_cast<double>(a1[r]) * x1 + static_cast<double>(a2[r]) * x2 +
+              static_cast<double>(a3[r]) * x3;
+  }
+  for (; c < k; ++c) {
+    const float* a0 = a + c * m;
+    const double x0 = x[c];
+#pragma omp simd
+    for (Index r = 0; r < m; ++r) y[r] += static_cast<double>(a0[r]) * x0;
+  }
+}
+
+/// y += A^T x (A single, m x k, column-major; x, y double), four columns per pass over x.
+void add_transposed_product(const Eigen::MatrixXf& A, const double* x, double* y) {
+  const Index m = A.rows(), k = A.cols();
+  const float* a = A.data();
+  Index c = 0;
+  for (; c + 4 <= k; c += 4) {
+    const float *a0 = a + c * m, *a1 = a0 + m, *a2 = a1 + m, *a3 = a2 + m;
+    double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+#pragma omp simd reduction(+ : s0, s1, s2, s3)
+    for (Index r = 0; r < m; ++r) {
+      s0 += static_cast<double>(a0[r]) * x[r];
+      s1 += static_cast<double>(a1[r]) * x[r];
+      s2 += static_cast<double>(a2[r]) * x[r];
+      s3 += static_cast<double>(a3[r]) * x[r];
+    }
+    y[c] += s0, y[c + 1] += s1, y[c + 2] += s2, y[c + 3] += s3;
+  }
+  for (; c < k; ++c) {
+    const float* a0 = a + c * m;
+    double s0 = 0.0;
+#pragma omp simd reduction(+ : s0)
+    for (Index r = 0; r < m; ++r) s0 += static_cast<double>(a0[r]) * x[r];
+    y[c] += s0;
+  }
+}
+
+/// y += B x for a single-precision block B (transposed: tr), x and y double, column by
+/// column of the right-hand sides; z: room for B's rank (the low-rank factors' product).
+template <class In, class Out>
+void accumulate_single(const HMatrix::Block& b, bool tr, const In& x, Out& y, std::vector<double>& z) {
+  const Index rank = b.rank();
+  if (b.low_rank && static_cast<Index>(z.size()) < rank) z.resize(static_cast<std::size_t>(rank));
+  for (Index j = 0; j < x.cols(); ++j) {
+    const double* xj = x.col(j).data();
+    double* yj = y.col(j).data();
+    if (!b.low_rank) {
+      (tr ? add_transposed_product : add_product)(b.dense_single, xj, yj);
+    } else if (rank > 0) {
+      std::fill_n(z.begin(), rank, 0.0);
+      add_transposed_product(tr ? b.u_single : b.v_single, xj, z.data());
+      add_product(tr ? b.v_single : b.u_single, z.data(), yj);
+    }
+  }
+}
+
 void check_rows(Index got, Index expected, const char* what) {
   if (got != expected)
     throw std::invalid_argument(std::string("HMatrix::") + what + ": X has " + std::to_string(got) +
@@ -81,7 +147,11 @@ HMatrix::HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const 
 
 HMatrix::HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const ClusterTree> cols,
                  const HMatrixOptions& options, Unfilled)
-    : rows_(std::move(rows)), cols_(std::move(cols)), product_threads_(options.product_threads), comm_(options.comm) {
+    : rows_(std::move(rows)),
+      cols_(std::move(cols)),
+      single_(options.single_precision),
+      product_threads_(options.product_threads),
+      comm_(options.comm) {
   row_end_ = rows_->size();
   if (comm_) {
     if (comm_->size < 1 || comm_->rank < 0 || comm_->rank >= comm_->size || !comm_->allgather || !comm_->allreduce)
@@ -110,6 +180,7 @@ HMatrix::HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const 
                  const EntrySource& entries, const HMatrixOptions& options, Index row_begin, Index row_end)
     : rows_(std::move(rows)),
       cols_(std::move(cols)),
+      single_(options.single_precision),
       restricted_(true),
       row_begin_(row_begin),
       row_end_(row_end),
@@ -143,8 +214,8 @@ void HMatrix::build(const EntrySource& entries, const HMatrixOptions& options) {
       b.dense.resize(b.m, b.k);
       t.dense.resize(t.m, t.k);
       if (e->all_and_transpose(b.dense.data(), t.dense.data())) {
-        cut_to_rows(b);
-        cut_to_rows(t);
+        hold(b);
+        hold(t);
         continue;
       }
       fill(t, *entry_block(entries, t), 0, options);
@@ -217,12 +288,12 @@ void HMatrix::fill(Block& b, const EntryBlock& e, int which, const HMatrixOption
       b.low_rank = false;
     }
   }
-  cut_to_rows(b);
+  hold(b);
 }
 
-void HMatrix::cut_to_rows(Block& b) const {
-  if (!restricted_) return;
-  const Index r0 = std::max(b.r0, row_begin_), r1 = std::min(b.r0 + b.m, row_end_);
+void HMatrix::hold(Block& b) const {
+  const Index r0 = restricted_ ? std::max(b.r0, row_begin_) : b.r0;
+  const Index r1 = restricted_ ? std::min(b.r0 + b.m, row_end_) : b.r0 + b.m;
   if (r0 != b.r0 || r1 != b.r0 + b.m) {
     if (b.low_rank)
       b.factors.U = Eigen::MatrixXd(b.factors.U.middleRows(r0 - b.r0, r1 - r0));
@@ -230,6 +301,15 @@ void HMatrix::cut_to_rows(Block& b) const {
       b.dense = Eigen::MatrixXd(b.dense.middleRows(r0 - b.r0, r1 - r0));
     b.r0 = r0;
     b.m = r1 - r0;
+  }
+  if (!single_) return;
+  if (b.low_rank) {
+    b.u_single = b.factors.U.cast<float>();
+    b.v_single = b.factors.V.cast<float>();
+    b.factors = LowRank{};
+  } else {
+    b.dense_single = b.dense.cast<float>();
+    b.dense = Eigen::MatrixXd();
   }
 }
 
@@ -266,6 +346,7 @@ void HMatrix::accumulate(const Eigen::MatrixXd& Xp, Index in0, Index out0, bool 
   {
     Eigen::MatrixXd& Y = partial[static_cast<std::size_t>(omp_get_thread_num())];
     Y.setZero(Yp.rows(), nrhs);
+    std::vector<double> z;  // single storage: a low-rank block's V^T x
 #pragma omp for schedule(dynamic, 4)
     for (long q = 0; q < count; ++q) {
       const Block& b = blocks_[static_cast<std::size_t>(q)];
@@ -277,7 +358,9 @@ void HMatrix::accumulate(const Eigen::MatrixXd& Xp, Index in0, Index out0, bool 
         const Index o0 = tr ? b.c0 : b.r0, n_o = tr ? b.k : b.m;
         const auto x = Xp.middleRows(i0 - (tr ? in0 : 0), n_in);
         auto y = Y.middleRows(o0 - (tr ? 0 : out0), n_o);
-        if (!b.low_rank) {
+        if (single_) {
+          accumulate_single(b, tr, x, y, z);
+        } else if (!b.low_rank) {
           if (tr)
             y.noalias() += b.dense.transpose() * x;
           else
@@ -330,7 +413,12 @@ Eigen::MatrixXd HMatrix::to_dense() const {
   const std::vector<Index>& rp = rows_->permutation();
   const std::vector<Index>& cp = cols_->permutation();
   for (const Block& b : blocks_) {
-    const Eigen::MatrixXd D = b.low_rank ? Eigen::MatrixXd(b.factors.U * b.factors.V.transpose()) : b.dense;
+    Eigen::MatrixXd D;
+    if (single_)
+      D = b.low_rank ? Eigen::MatrixXd(b.u_single.cast<double>() * b.v_single.cast<double>().transpose())
+                     : Eigen::MatrixXd(b.dense_single.cast<double>());
+    else
+      D = b.low_rank ? Eigen::MatrixXd(b.factors.U * b.factors.V.transpose()) : b.dense;
     for (Index c = 0; c < b.k; ++c)
       for (Index r = 0; r < b.m; ++r)
         A(rp[static_cast<std::size_t>(b.r0 + r)], cp[static_cast<std::size_t>(b.c0 + c)]) = D(r, c);
@@ -372,9 +460,14 @@ Eigen::MatrixXd HMatrix::principal_submatrix(const std::vector<Index>& indices) 
       if (const Index a = col_position[static_cast<std::size_t>(b.c0 + c)]; a >= 0)
         c_local.push_back(c), c_out.push_back(a);
     if (c_local.empty()) continue;
-    const Eigen::MatrixXd D =
-        b.low_rank ? Eigen::MatrixXd(b.factors.U(r_local, Eigen::all) * b.factors.V(c_local, Eigen::all).transpose())
-                   : Eigen::MatrixXd(b.dense(r_local, c_local));
+    Eigen::MatrixXd D;
+    if (single_)
+      D = b.low_rank ? Eigen::MatrixXd(b.u_single(r_local, Eigen::all).cast<double>() *
+                                       b.v_single(c_local, Eigen::all).cast<double>().transpose())
+                     : Eigen::MatrixXd(b.dense_single(r_local, c_local).cast<double>());
+    else
+      D = b.low_rank ? Eigen::MatrixXd(b.factors.U(r_local, Eigen::all) * b.factors.V(c_local, Eigen::all).transpose())
+                     : Eigen::MatrixXd(b.dense(r_local, c_local));
     A(r_out, c_out) = D;
     if (symmetric_ && b.row_cluster != b.col_cluster) A(c_out, r_out) = D.transpose();
   }
@@ -382,16 +475,18 @@ Eigen::MatrixXd HMatrix::principal_submatrix(const std::vector<Index>& indices) 
 }
 
 std::size_t HMatrix::nbytes() const {
-  std::size_t entries = 0;
-  for (const Block& b : blocks_)
-    entries += static_cast<std::size_t>(b.dense.size() + b.factors.U.size() + b.factors.V.size());
-  return entries * sizeof(double) + (rows_->permutation().size() + cols_->permutation().size()) * sizeof(Index) +
-         blocks_.size() * sizeof(Block);
+  std::size_t doubles = 0, singles = 0;
+  for (const Block& b : blocks_) {
+    doubles += static_cast<std::size_t>(b.dense.size() + b.factors.U.size() + b.factors.V.size());
+    singles += static_cast<std::size_t>(b.dense_single.size() + b.u_single.size() + b.v_single.size());
+  }
+  return doubles * sizeof(double) + singles * sizeof(float) +
+         (rows_->permutation().size() + cols_->permutation().size()) * sizeof(Index) + blocks_.size() * sizeof(Block);
 }
 
 Index HMatrix::max_rank() const {
   Index r = 0;
-  for (const Block& b : blocks_) r = std::max(r, b.factors.rank());
+  for (const Block& b : blocks_) r = std::max(r, b.rank());
   return r;
 }
 

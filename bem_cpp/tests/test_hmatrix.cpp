@@ -96,6 +96,41 @@ TEST(HMatrix, PrincipalSubmatrixIsThatOfTheDenseMatrix) {
   EXPECT_THROW(sym.principal_submatrix({n}), std::invalid_argument);
 }
 
+TEST(HMatrix, SinglePrecisionStorageRoundsEachBlockOnce) {
+  // The same block tree and factors as double storage, each entry rounded to float (relative
+  // 2^-24 = 6e-8): products within a few float round-offs of double storage's, products and
+  // principal submatrices those of to_dense() (the entries as held), half the bytes.
+  const Polygon poly(test::circle(600));
+  const Index n = poly.size();
+  auto tree = std::make_shared<const ClusterTree>(ClusterTree::for_space(poly, Space::P1, 16));
+  const OperatorEntries single(poly, Kernel::SingleLayer, Space::P1, Space::P1);
+  const OperatorEntries dbl(poly, Kernel::DoubleLayer, Space::P1, Space::P1);
+  for (const bool symmetric : {true, false}) {
+    const OperatorEntries& e = symmetric ? single : dbl;
+    HMatrixOptions o{16, 1.0, 1e-6, symmetric};
+    const HMatrix d(tree, tree, e, o);
+    o.single_precision = true;
+    const HMatrix f(tree, tree, e, o);
+    EXPECT_TRUE(f.single_precision());
+    EXPECT_FALSE(d.single_precision());
+    EXPECT_EQ(f.blocks().size(), d.blocks().size());
+    EXPECT_EQ(f.max_rank(), d.max_rank());
+    const Eigen::MatrixXd Dd = d.to_dense(), Df = f.to_dense();
+    EXPECT_LT((Df - Dd).norm(), 3e-7 * Dd.norm());
+    EXPECT_GT((Df - Dd).norm(), 0.0);  // rounded indeed
+    const Eigen::MatrixXd X = Eigen::MatrixXd::Random(n, 3);
+    for (const bool tr : {false, true}) {
+      const Eigen::MatrixXd Y = tr ? Eigen::MatrixXd(Df.transpose() * X) : Eigen::MatrixXd(Df * X);
+      EXPECT_LT((f.apply(X, tr) - Y).norm(), 1e-13 * Y.norm());
+    }
+    std::vector<Index> arc;
+    for (Index i = 100; i < 260; ++i) arc.push_back(i);
+    const Eigen::MatrixXd B = f.principal_submatrix(arc);
+    EXPECT_LE((B - Df(arc, arc)).norm(), 1e-14 * B.norm());
+    EXPECT_LT(static_cast<double>(f.nbytes()), 0.6 * static_cast<double>(d.nbytes()));
+  }
+}
+
 namespace {
 // The entries of a dense matrix; its blocks also give all_and_transpose, counted.
 class PairedEntries : public EntrySource {

@@ -18,6 +18,7 @@
 // A^T X, and A X of a symmetric A (an off-diagonal block also acts on the rows of its
 // columns), are partial sums and one allreduce (Communicator: the same bits everywhere).
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cstddef>
 #include <functional>
 #include <memory>
@@ -53,6 +54,12 @@ struct HMatrixOptions {
   /// surface operators: every triangle pair of an admissible block is then a far pair,
   /// surface_entries.hpp).
   double min_distance = 0.0;
+  /// Blocks held in single precision (float, round-off 6e-8), the products still summed
+  /// in double: half the bytes and about half the memory traffic of a product, for a
+  /// matrix whose tol is well above float's round-off (the 3D S_h at tol 1e-6,
+  /// docs/design/bem3d.md "Single-precision storage"). Each block is computed in double
+  /// and rounded once.
+  bool single_precision = false;
 };
 
 /// Entries of one block A(I, J) (original dof order), by rows, columns or all at once.
@@ -91,8 +98,12 @@ class HMatrix {
     int row_cluster, col_cluster;
     Index r0, m, c0, k;  ///< ranges in the permuted orders
     bool low_rank;
-    Eigen::MatrixXd dense;  ///< m x k if !low_rank
-    LowRank factors;        ///< if low_rank
+    Eigen::MatrixXd dense;  ///< m x k if !low_rank (double storage)
+    LowRank factors;        ///< if low_rank (double storage)
+    /// Single storage: dense_single (m x k) or the factors u_single, v_single; the double
+    /// ones are then empty.
+    Eigen::MatrixXf dense_single, u_single, v_single;
+    Index rank() const { return std::max(factors.rank(), static_cast<Index>(u_single.cols())); }
   };
 
   HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const ClusterTree> cols, const EntrySource& entries,
@@ -139,6 +150,7 @@ class HMatrix {
   std::size_t nbytes() const;
   Index max_rank() const;
   bool symmetric() const { return symmetric_; }
+  bool single_precision() const { return single_; }
   const std::vector<Block>& blocks() const { return blocks_; }
   const ClusterTree& row_tree() const { return *rows_; }
   const ClusterTree& col_tree() const { return *cols_; }
@@ -157,8 +169,9 @@ class HMatrix {
   std::unique_ptr<EntryBlock> entry_block(const EntrySource& entries, const Block& b) const;
   /// The entries of b (matrix `which` of the EntryBlock), compressed, cut to the held rows.
   void fill(Block& b, const EntryBlock& e, int which, const HMatrixOptions& options) const;
-  /// A computed block cut to the held rows (row-restricted).
-  void cut_to_rows(Block& b) const;
+  /// A computed block as it is held: cut to the held rows (row-restricted), rounded to
+  /// single precision (single storage).
+  void hold(Block& b) const;
   /// Per block: the index of its mirror, the dense block (s, t) of a dense block (t, s),
   /// t != s, of a non-symmetric matrix on one tree (both held); -1 otherwise.
   std::vector<std::ptrdiff_t> mirrors() const;
@@ -167,6 +180,7 @@ class HMatrix {
   void accumulate(const Eigen::MatrixXd& Xp, Index in0, Index out0, bool tr, Eigen::MatrixXd& Y) const;
   std::vector<Block> blocks_;
   bool symmetric_ = false;  ///< symmetric storage (upper blocks, used twice)
+  bool single_ = false;     ///< single-precision blocks
   bool restricted_ = false;
   Index row_begin_ = 0, row_end_ = 0;
   int product_threads_ = 0;
