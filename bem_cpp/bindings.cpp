@@ -167,8 +167,7 @@ PYBIND11_MODULE(_bem, m) {
            }),
            py::arg("vertices"), py::arg("triangles"), py::arg("leaf_size"), py::arg("eta"), py::arg("tol"),
            py::arg("solver_tol"), py::arg("max_iterations"), py::arg("product_threads"), py::arg("rank"),
-           py::arg("size"), py::arg("allgather"), py::arg("allreduce"), py::arg("single_precision") = false,
-           Release())
+           py::arg("size"), py::arg("allgather"), py::arg("allreduce"), py::arg("single_precision") = false, Release())
       .def("apply", &bem::SurfaceSteklovOperator::apply, py::arg("x"), py::arg("solver_tol") = 0.0, Release())
       .def("flux", &bem::SurfaceSteklovOperator::flux, py::arg("x"), py::arg("solver_tol") = 0.0, Release())
       .def("hypersingular", &bem::SurfaceSteklovOperator::hypersingular, py::arg("x"), Release())
