@@ -194,7 +194,8 @@ def steklov_poincare(
         to about ``tol`` relative.
     tol : float
         Relative accuracy of the H-matrix blocks (``"hmatrix"`` only); the V solves run
-        to the relative residual 1e-3 tol.
+        to the relative residual 1e-3 tol. A surface's blocks are held in single precision
+        (products summed in double) when tol >= ``defaults.HMATRIX_SINGLE_PRECISION_MIN_TOL``.
     timings : dict, optional
         If given, filled with the wall-clock seconds of the stages ``assembly``
         (V_h, K_h, W_h), ``cholesky``, ``triangular_solve`` and ``rank_update``

@@ -149,8 +149,32 @@ def test_the_exact_twin_of_a_projection_shares_its_factor_and_inverse():
     inexact = SignoriniProjection(M, "inexact", rho_in=0.5, max_iterations=1000)
     twin = inexact.as_exact()
     assert twin.method == "exact" and twin.M is inexact.M and twin._factor is inexact._factor
-    target = np.random.default_rng(3).standard_normal(n) - 0.3
-    psi = twin(target, np.zeros(n)).phi
-    assert 0 < np.count_nonzero(psi == 0.0) < n / 2  # through M^{-1}: few active nodes
+    targets = np.random.default_rng(3).standard_normal((20, n)) - 0.3
+    for target in targets:  # until M^{-1} is bought (below), then through it
+        psi = twin(target, np.zeros(n)).phi
+        assert 0 < np.count_nonzero(psi == 0.0) < n / 2  # few active nodes
+        np.testing.assert_allclose(psi, exact(target, np.zeros(n)).phi, atol=1e-12)
     assert twin._inverse is inexact._inverse_matrix()
-    np.testing.assert_allclose(psi, exact(target, np.zeros(n)).phi, atol=1e-12)
+
+
+def test_the_exact_projection_buys_the_inverse_only_once_it_pays():
+    """M^{-1} costs about n^3 flops: the exact projection factors M_II instead until those
+    factorisations have cost as much (|I|^3 / 3 each), then computes M^{-1} once and uses
+    it from there on; with no active node it solves with M's factor. The projections
+    are the same either way (to round-off)."""
+    n = 60
+    M = h12_like_matrix(n)
+    reference = SignoriniProjection.exact(M)
+    reference._factorised_flops = float(n) ** 3  # buys M^{-1} at once
+    projection = SignoriniProjection.exact(M)
+    positive = projection(np.ones(n), np.zeros(n))  # no active node: the factor solves
+    np.testing.assert_allclose(positive.phi, np.ones(n), atol=1e-12)
+    assert projection._inverse is None
+    targets = np.random.default_rng(5).standard_normal((20, n)) - 0.3
+    bought = []
+    for target in targets:
+        psi = projection(target, np.zeros(n)).phi
+        np.testing.assert_allclose(psi, reference(target, np.zeros(n)).phi, atol=1e-12)
+        bought.append(projection._inverse is not None)
+    assert not bought[0] and bought[-1] and bought == sorted(bought)  # bought once, kept
+    assert projection._factorised_flops <= float(n) ** 3

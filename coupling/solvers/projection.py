@@ -90,6 +90,7 @@ class SignoriniProjection:
         self._factor = factor
         self._active = np.zeros(n, dtype=bool)
         self._inverse: np.ndarray | None = None  # M^{-1}, for the exact projection
+        self._factorised_flops = 0.0  # of the M_II factorisations done while W was not there
         self._inverse_of = inverse or (lambda: inverse_from_cholesky(self._factor))
 
     @classmethod
@@ -168,15 +169,26 @@ class SignoriniProjection:
     def _solve_free(self, b: np.ndarray, free: np.ndarray) -> np.ndarray:
         """psi with psi_A = 0 and M_II psi_I = b_I (I = ``free``, A the rest).
 
-        With few active nodes, through W = M^{-1} (computed once) and the block-inverse
-        identity (M_II)^{-1} = W_II - W_IA W_AA^{-1} W_AI: y = W (b on I, 0 on A),
+        With few active nodes, through W = M^{-1} and the block-inverse identity
+        (M_II)^{-1} = W_II - W_IA W_AA^{-1} W_AI: y = W (b on I, 0 on A),
         psi = y - W_:A W_AA^{-1} y_A (so psi_A = 0 exactly). This costs n^2 + |A|^3/3
-        flops instead of |I|^3/3 for a factorisation of M_II.
+        flops instead of |I|^3/3 for a factorisation of M_II, once W is there; W itself
+        costs about n^3 (LAPACK's potri from the factor: 2.6 times the Cholesky's time,
+        90 s at n = 16,129). So W is bought only once the factorisations of M_II done
+        instead would have cost as much (rent or buy: at most twice the cheaper of the
+        two whatever the number of calls); with no active node the factor of M_s solves.
         """
         n, n_active = b.size, int(np.count_nonzero(~free))
+        n_free = n - n_active
         if n_active == n:
             return np.zeros(n)
-        if n_active >= n - n_active:  # few free nodes: factor M_II itself
+        if self._inverse is None and self._factor is not None:
+            if n_active == 0:
+                return scipy.linalg.cho_solve(self._factor, b)
+            if self._factorised_flops + n_free**3 / 3 <= float(n) ** 3:
+                self._factorised_flops += n_free**3 / 3
+                n_active = n  # factor M_II below
+        if n_active >= n_free:  # few free nodes (or W not bought yet): factor M_II itself
             psi = np.zeros(n)
             psi[free] = scipy.linalg.solve(self.M[np.ix_(free, free)], b[free], assume_a="pos")
             return psi
