@@ -17,7 +17,7 @@ HMATRIX_POTENTIAL_CROSSOVER_DOFS = 1300
 HMATRIX_POTENTIAL_CROSSOVER_POINTS = 1000
 # Surfaces (3D): leaf size and eta of the 3D cluster trees, and the size from which
 # compression="auto" takes the H-matrix S_h (docs/design/bem3d.md).
-HMATRIX_SURFACE_LEAF_SIZE = 16
+HMATRIX_SURFACE_LEAF_SIZE = 64
 HMATRIX_SURFACE_ETA = 4.0
 HMATRIX_SURFACE_AUTO_DOFS = 2000
 # A surface's S_h holds its blocks in single precision (float: round-off 6e-8, half the
