@@ -24,6 +24,7 @@ from coupling.options import (
     SolverOptions,
 )
 from coupling.preconditioners import Preconditioner, build_preconditioner
+from coupling.preconditioners.base import DenseSignoriniBlock
 from coupling.solvers.apgpm import apgpm
 from coupling.solvers.lanczos import extremes_at
 from coupling.solvers.loop import IterationContext
@@ -92,7 +93,9 @@ def build_projection(preconditioner: Preconditioner, options: SolverOptions) -> 
     """P_s of ``options`` in the metric M_s of ``preconditioner`` (3.19)-(3.20), sharing
     its Cholesky factor of M_s and M_s^{-1} when it has them (a dense M_s's); lambda_max(M_s)
     is computed only when the inexact projection first needs it."""
-    dense = hasattr(preconditioner, "signorini_inverse")
+    # the class, not the object: hasattr on the object would evaluate the property, i.e.
+    # compute M_s^{-1} (n_s^3 flops) whether or not the projection ever reads it
+    dense = isinstance(preconditioner, DenseSignoriniBlock)
     return SignoriniProjection(
         preconditioner.signorini_metric,
         options.projection,
