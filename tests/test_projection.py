@@ -193,3 +193,20 @@ def test_building_the_projection_computes_no_inverse(method):
     if method == "exact":
         projection(np.ones(n), np.zeros(n))
         assert block._signorini_inverse is None
+
+
+def test_a_dense_signorini_block_holds_a_fortran_ordered_metric_without_a_copy():
+    """M_s comes from bem_cpp in Eigen's column-major order; the block holds the transpose,
+    a C-ordered view of the same symmetric matrix (no n_s^2 copy), and works as with a
+    C-ordered copy."""
+    n = 50
+    M = h12_like_matrix(n)
+    M = 0.5 * (M + M.T)  # symmetric to the bit, as bem_cpp's W_h block is
+    fortran = np.asfortranarray(M)
+    block = DenseSignoriniBlock(fortran)
+    assert np.shares_memory(block.signorini_metric, fortran)
+    assert block.signorini_metric.flags.c_contiguous
+    reference = DenseSignoriniBlock(np.ascontiguousarray(M))
+    g = np.random.default_rng(11).standard_normal(n)
+    np.testing.assert_array_equal(block.matvec_signorini(g), reference.matvec_signorini(g))
+    np.testing.assert_allclose(block.apply_signorini(g), reference.apply_signorini(g), rtol=1e-13)

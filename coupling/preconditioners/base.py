@@ -97,7 +97,15 @@ class DenseSignoriniBlock:
     interface, for preconditioners to inherit."""
 
     def __init__(self, metric: np.ndarray):
-        self.signorini_metric = np.ascontiguousarray(metric, dtype=float)
+        metric = np.asarray(metric, dtype=float)
+        # M_s is symmetric: a Fortran-ordered array (Eigen's, from bem_cpp) is held as its
+        # transpose, a C-ordered view of the same bytes, not copied (n_s^2 doubles: 2.1 GB
+        # at 128^3 cubes, a third array at the peak next to the caller's and the factor)
+        self.signorini_metric = (
+            metric.T
+            if metric.flags.f_contiguous and not metric.flags.c_contiguous
+            else np.ascontiguousarray(metric)
+        )
         self.n_signorini = self.signorini_metric.shape[0]
         self._lambda_max: float | None = None
         self._signorini_factor = None
