@@ -131,6 +131,18 @@ void accumulate_single(const HMatrix::Block& b, bool tr, const In& x, Out& y, st
   }
 }
 
+/// The entries (rows, cols) of block b (its local indices: index lists or Eigen::all) in
+/// double, from either storage.
+template <class Rows, class Cols>
+Eigen::MatrixXd block_entries(const HMatrix::Block& b, bool single, const Rows& rows, const Cols& cols) {
+  if (single)
+    return b.low_rank ? Eigen::MatrixXd(b.u_single(rows, Eigen::all).template cast<double>() *
+                                        b.v_single(cols, Eigen::all).template cast<double>().transpose())
+                      : Eigen::MatrixXd(b.dense_single(rows, cols).template cast<double>());
+  return b.low_rank ? Eigen::MatrixXd(b.factors.U(rows, Eigen::all) * b.factors.V(cols, Eigen::all).transpose())
+                    : Eigen::MatrixXd(b.dense(rows, cols));
+}
+
 void check_rows(Index got, Index expected, const char* what) {
   if (got != expected)
     throw std::invalid_argument(std::string("HMatrix::") + what + ": X has " + std::to_string(got) +
@@ -413,12 +425,7 @@ Eigen::MatrixXd HMatrix::to_dense() const {
   const std::vector<Index>& rp = rows_->permutation();
   const std::vector<Index>& cp = cols_->permutation();
   for (const Block& b : blocks_) {
-    Eigen::MatrixXd D;
-    if (single_)
-      D = b.low_rank ? Eigen::MatrixXd(b.u_single.cast<double>() * b.v_single.cast<double>().transpose())
-                     : Eigen::MatrixXd(b.dense_single.cast<double>());
-    else
-      D = b.low_rank ? Eigen::MatrixXd(b.factors.U * b.factors.V.transpose()) : b.dense;
+    const Eigen::MatrixXd D = block_entries(b, single_, Eigen::all, Eigen::all);
     for (Index c = 0; c < b.k; ++c)
       for (Index r = 0; r < b.m; ++r)
         A(rp[static_cast<std::size_t>(b.r0 + r)], cp[static_cast<std::size_t>(b.c0 + c)]) = D(r, c);
@@ -460,14 +467,7 @@ Eigen::MatrixXd HMatrix::principal_submatrix(const std::vector<Index>& indices) 
       if (const Index a = col_position[static_cast<std::size_t>(b.c0 + c)]; a >= 0)
         c_local.push_back(c), c_out.push_back(a);
     if (c_local.empty()) continue;
-    Eigen::MatrixXd D;
-    if (single_)
-      D = b.low_rank ? Eigen::MatrixXd(b.u_single(r_local, Eigen::all).cast<double>() *
-                                       b.v_single(c_local, Eigen::all).cast<double>().transpose())
-                     : Eigen::MatrixXd(b.dense_single(r_local, c_local).cast<double>());
-    else
-      D = b.low_rank ? Eigen::MatrixXd(b.factors.U(r_local, Eigen::all) * b.factors.V(c_local, Eigen::all).transpose())
-                     : Eigen::MatrixXd(b.dense(r_local, c_local));
+    const Eigen::MatrixXd D = block_entries(b, single_, r_local, c_local);
     A(r_out, c_out) = D;
     if (symmetric_ && b.row_cluster != b.col_cluster) A(c_out, r_out) = D.transpose();
   }
