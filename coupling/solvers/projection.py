@@ -90,7 +90,7 @@ class SignoriniProjection:
         self._factor = factor
         self._active = np.zeros(n, dtype=bool)
         self._inverse: np.ndarray | None = None  # M^{-1}, for the exact projection
-        self._factorised_flops = 0.0  # of the M_II factorisations done while W was not there
+        self._factorised_flops = 0.0  # of the M_II factorisations done instead of buying W
         self._inverse_of = inverse or (lambda: inverse_from_cholesky(self._factor))
 
     @classmethod
@@ -182,13 +182,19 @@ class SignoriniProjection:
         n_free = n - n_active
         if n_active == n:
             return np.zeros(n)
-        if self._inverse is None and self._factor is not None:
-            if n_active == 0:
-                return scipy.linalg.cho_solve(self._factor, b)
-            if self._factorised_flops + n_free**3 / 3 <= float(n) ** 3:
-                self._factorised_flops += n_free**3 / 3
-                n_active = n  # factor M_II below
-        if n_active >= n_free:  # few free nodes (or W not bought yet): factor M_II itself
+        not_bought = self._inverse is None and self._factor is not None
+        if not_bought and n_active == 0:
+            return scipy.linalg.cho_solve(self._factor, b)
+        # W would serve (few active nodes) but is not bought yet: rent, i.e. factor M_II,
+        # while the rents paid stay below W's price
+        rent = (
+            not_bought
+            and n_active < n_free
+            and self._factorised_flops + n_free**3 / 3 <= float(n) ** 3
+        )
+        if rent:
+            self._factorised_flops += n_free**3 / 3
+        if rent or n_active >= n_free:  # factor M_II itself
             psi = np.zeros(n)
             psi[free] = scipy.linalg.solve(self.M[np.ix_(free, free)], b[free], assume_a="pos")
             return psi
