@@ -1,5 +1,7 @@
 #include "bem/aca.hpp"
 
+#include "bem/linear_algebra.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -215,8 +217,8 @@ void recompress(LowRank& a, double tol) {
   const Index ku = std::min(m, k), kv = std::min(n, k);
   const Eigen::MatrixXd ru = qu.matrixQR().topRows(ku).triangularView<Eigen::Upper>();
   const Eigen::MatrixXd rv = qv.matrixQR().topRows(kv).triangularView<Eigen::Upper>();
-  Eigen::BDCSVD<Eigen::MatrixXd> svd(ru * rv.transpose(), Eigen::ComputeThinU | Eigen::ComputeThinV);
-  const Eigen::VectorXd& s = svd.singularValues();
+  const ThinSvd svd = thin_svd(ru * rv.transpose());
+  const Eigen::VectorXd& s = svd.s;
   const double total = s.squaredNorm();
   Index r = s.size();
   double tail = 0.0;
@@ -226,10 +228,10 @@ void recompress(LowRank& a, double tol) {
   }
   // Q [X; 0] by the Householder reflectors applied to the r columns, not Q formed (m x k)
   a.U.setZero(m, r);
-  a.U.topRows(ku) = svd.matrixU().leftCols(r) * s.head(r).asDiagonal();
+  a.U.topRows(ku) = svd.U.leftCols(r) * s.head(r).asDiagonal();
   a.U.applyOnTheLeft(qu.householderQ());
   a.V.setZero(n, r);
-  a.V.topRows(kv) = svd.matrixV().leftCols(r);
+  a.V.topRows(kv) = svd.V.leftCols(r);
   a.V.applyOnTheLeft(qv.householderQ());
 }
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <stdexcept>
+#include <vector>
 
 // Fortran LAPACK/BLAS symbols (LP64). The trailing lengths are the hidden
 // character-argument lengths of the Fortran calling convention.
@@ -14,6 +15,9 @@ void dtrsm_(const char* side, const char* uplo, const char* transa, const char* 
             std::size_t, std::size_t);
 void dsyrk_(const char* uplo, const char* trans, const int* n, const int* k, const double* alpha, const double* a,
             const int* lda, const double* beta, double* c, const int* ldc, std::size_t, std::size_t);
+void dgesvd_(const char* jobu, const char* jobvt, const int* m, const int* n, double* a, const int* lda, double* s,
+             double* u, const int* ldu, double* vt, const int* ldvt, double* work, const int* lwork, int* info,
+             std::size_t, std::size_t);
 }
 
 // A row-major n x n buffer is the column-major buffer of the transpose: the row-major
@@ -76,6 +80,28 @@ void add_gram_symmetric(const Matrix& Y, double scale, Matrix& C) {
           C(r, c) = s;
           C(c, r) = s;
         }
+}
+
+ThinSvd thin_svd(Eigen::MatrixXd A) {
+  const int m = static_cast<int>(A.rows()), n = static_cast<int>(A.cols()), k = std::min(m, n);
+  ThinSvd r{Eigen::MatrixXd(m, k), Eigen::VectorXd(k), Eigen::MatrixXd(k, n)};
+  if (k == 0) {
+    r.V.resize(n, 0);
+    return r;
+  }
+  const int lda = std::max(1, m), ldvt = std::max(1, k);
+  int info = 0, lwork = -1;
+  double query = 0.0;
+  dgesvd_("S", "S", &m, &n, A.data(), &lda, r.s.data(), r.U.data(), &lda, r.V.data(), &ldvt, &query, &lwork, &info, 1,
+          1);
+  lwork = static_cast<int>(query);
+  std::vector<double> work(static_cast<std::size_t>(std::max(lwork, 1)));
+  dgesvd_("S", "S", &m, &n, A.data(), &lda, r.s.data(), r.U.data(), &lda, r.V.data(), &ldvt, work.data(), &lwork, &info,
+          1, 1);
+  if (info < 0) throw std::logic_error("dgesvd: illegal argument");
+  if (info > 0) throw std::runtime_error("dgesvd: the QR iteration did not converge");
+  r.V.transposeInPlace();  // V^T (k x n) -> V (n x k)
+  return r;
 }
 
 }  // namespace bem

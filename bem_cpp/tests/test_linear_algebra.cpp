@@ -1,5 +1,9 @@
 #include <gtest/gtest.h>
 
+#include <cstdint>
+#include <fstream>
+
+#include "bem/aca.hpp"
 #include "bem/linear_algebra.hpp"
 
 using namespace bem;
@@ -23,4 +27,48 @@ TEST(LinearAlgebra, WrappersMatchEigen) {
   EXPECT_LT((V * x - b).norm(), 1e-12 * b.norm());
   Matrix indefinite = -V;
   EXPECT_EQ(cholesky_in_place(indefinite), 1);
+}
+
+namespace {
+void expect_thin_svd_of(const Eigen::MatrixXd& A) {
+  const ThinSvd d = thin_svd(A);
+  const Index k = std::min(A.rows(), A.cols());
+  ASSERT_EQ(d.U.rows(), A.rows());
+  ASSERT_EQ(d.V.rows(), A.cols());
+  ASSERT_EQ(d.s.size(), k);
+  const double tol = 1e-14 * static_cast<double>(std::max(A.rows(), A.cols()));
+  EXPECT_LT((d.U * d.s.asDiagonal() * d.V.transpose() - A).norm(), tol * A.norm());
+  EXPECT_LT((d.U.transpose() * d.U - Eigen::MatrixXd::Identity(k, k)).norm(), tol);
+  EXPECT_LT((d.V.transpose() * d.V - Eigen::MatrixXd::Identity(k, k)).norm(), tol);
+  for (Index i = 1; i < k; ++i) EXPECT_GE(d.s(i - 1), d.s(i));
+}
+}  // namespace
+
+TEST(LinearAlgebra, ThinSvdOfWideTallAndRankDeficientMatrices) {
+  expect_thin_svd_of(Eigen::MatrixXd::Random(7, 12));
+  expect_thin_svd_of(Eigen::MatrixXd::Random(12, 7));
+  const Eigen::MatrixXd low = Eigen::MatrixXd::Random(30, 3) * Eigen::MatrixXd::Random(3, 20);
+  expect_thin_svd_of(low);
+  EXPECT_LT(thin_svd(low).s(3), 1e-13 * thin_svd(low).s(0));
+}
+
+TEST(LinearAlgebra, ThinSvdOfTheMatrixThatCrashedBdcsvd) {
+  // R_U R_V^T of one block's recompression in S_h's set-up on the cube of 96 squares per
+  // side (singular values 2e-5 .. 2e-27): Eigen 3.4.0's BDCSVD, built with -march=native,
+  // read out of bounds on it and the set-up ended in a segmentation fault.
+  std::ifstream in(std::string(BEM_TEST_DATA) + "/bdcsvd_crash_36x72.bin", std::ios::binary);
+  ASSERT_TRUE(in.good());
+  std::int64_t shape[2];
+  in.read(reinterpret_cast<char*>(shape), sizeof(shape));
+  ASSERT_EQ(shape[0], 36);
+  ASSERT_EQ(shape[1], 72);
+  Eigen::MatrixXd A(shape[0], shape[1]);  // column-major, as written
+  in.read(reinterpret_cast<char*>(A.data()), static_cast<std::streamsize>(A.size() * sizeof(double)));
+  ASSERT_TRUE(in.good());
+  expect_thin_svd_of(A);
+  // and the recompression that met it keeps the block to its tolerance
+  LowRank a{A, Eigen::MatrixXd::Identity(72, 72)};
+  recompress(a, 1e-6);
+  EXPECT_LT(a.rank(), 36);
+  EXPECT_LT((a.U * a.V.transpose() - A).norm(), 1e-6 * A.norm());
 }

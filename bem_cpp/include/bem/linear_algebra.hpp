@@ -1,7 +1,10 @@
 #pragma once
 // Thin wrappers of the dense LAPACK/BLAS kernels (dpotrf, dpotrs, dtrsm, dsyrk) used
-// by the Steklov-Poincare operator. They run on the row-major matrices in place;
-// OpenBLAS (what libblas.so.3/liblapack.so.3 point to) parallelises them.
+// by the Steklov-Poincare operator, and of dgesvd for the recompression of low-rank
+// blocks. The first four run on the row-major matrices in place; OpenBLAS (what
+// libblas.so.3/liblapack.so.3 point to) parallelises them.
+#include <Eigen/Dense>
+
 #include "bem/geometry.hpp"
 
 namespace bem {
@@ -22,5 +25,16 @@ void lower_solve_in_place(const Matrix& factor, Matrix& A);
 /// C := scale * (C + Y^T Y), computed on the upper triangle by a rank-k update and
 /// mirrored, so C is exactly symmetric on return (only C's upper triangle is read).
 void add_gram_symmetric(const Matrix& Y, double scale, Matrix& C);
+
+/// The thin singular value decomposition A = U diag(s) V^T of an m x n matrix: U m x k,
+/// s (descending) and V n x k, k = min(m, n), by LAPACK's dgesvd. (Eigen 3.4.0's
+/// BDCSVD, used before, reads out of bounds on some rank-deficient matrices when built
+/// with -march=native, as this library is: a segmentation fault in S_h's set-up.)
+struct ThinSvd {
+  Eigen::MatrixXd U;
+  Eigen::VectorXd s;
+  Eigen::MatrixXd V;
+};
+ThinSvd thin_svd(Eigen::MatrixXd A);
 
 }  // namespace bem
