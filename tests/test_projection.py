@@ -147,7 +147,8 @@ def test_the_exact_twin_of_a_projection_shares_its_factor_and_inverse():
     assert exact.as_exact() is exact
     inexact = SignoriniProjection(M, "inexact", rho_in=0.5, max_iterations=1000)
     twin = inexact.as_exact()
-    assert twin.method == "exact" and twin.M is inexact.M and twin._factor is inexact._factor
+    assert twin.method == "exact" and twin.M is inexact.M
+    assert twin._cholesky() is inexact._cholesky()  # one factor, made once
     targets = np.random.default_rng(3).standard_normal((20, n)) - 0.3
     for target in targets:  # until M^{-1} is bought (below), then through it
         psi = twin(target, np.zeros(n)).phi
@@ -183,16 +184,66 @@ def test_the_exact_projection_buys_the_inverse_only_once_it_pays():
 def test_building_the_projection_computes_no_inverse(method):
     """The solver's projection shares the preconditioner's factor and, lazily, its M_s^{-1}:
     building it computes neither the inverse (n_s^3 flops: 90 s at 128^3 cubes, once paid by
-    a hasattr on the property) nor lambda_max; a projection with no active node solves
-    with the factor."""
+    a hasattr on the property), nor lambda_max, nor the factor; a projection with no
+    active node solves with the factor, made then and shared with the block."""
     n = 40
     block = DenseSignoriniBlock(h12_like_matrix(n))
     projection = build_projection(block, SolverOptions(projection=method))
     assert block._signorini_inverse is None and block._lambda_max is None
-    assert projection._factor is block.signorini_factor
-    if method == "exact":
-        projection(np.ones(n), np.zeros(n))
-        assert block._signorini_inverse is None
+    assert block._signorini_factor is None
+    projection(np.ones(n), np.zeros(n))
+    assert projection._factor is block._signorini_factor is not None
+    assert block._signorini_inverse is None
+
+
+def test_an_exact_projected_step_solves_nothing_with_the_metric():
+    """step(phi, g, tau) = P_s(phi - tau M_s^{-1} g) for both methods; the exact projection
+    reads the target only through M_s phi - tau g, so from an iterate with active nodes it
+    factors M_s[I, I] alone: the block's factor of M_s (n_s^3/3 flops, an n_s^2 array) is
+    never made. The inexact projection forms the target with the solve it is given."""
+    n = 80
+    M = h12_like_matrix(n)
+    rng = np.random.default_rng(13)
+    phi = np.maximum(rng.standard_normal(n), 0.0)
+    g = rng.standard_normal(n) + 0.5
+    tau = 0.7
+    target = phi - tau * np.linalg.solve(M, g)
+    reference = SignoriniProjection.exact(M)(target, phi).phi
+    assert 0 < np.count_nonzero(reference == 0.0) < n
+    block = DenseSignoriniBlock(M)
+    exact = build_projection(block, SolverOptions(projection="exact"))
+    rents = []
+    for _ in range(2):  # the second from the first one's active set and kept factor of M_II
+        psi = exact.step(phi, g, tau).phi
+        np.testing.assert_allclose(psi, reference, atol=1e-12)
+        rents.append(exact._factorised_flops)
+    assert block._signorini_factor is None and exact._factor is None
+    assert rents[0] > 0 and rents[1] == rents[0]  # the second step factored nothing
+    inexact = SignoriniProjection(M, "inexact", rho_in=0.0, max_iterations=200000)
+    solves = []
+    result = inexact.step(phi, g, tau, lambda v: solves.append(v) or np.linalg.solve(M, v))
+    assert len(solves) == 1
+    assert np.linalg.norm(result.phi - reference) < 1e-8 * np.linalg.norm(reference)
+
+
+def test_the_factor_of_m_ii_is_kept_for_the_same_free_set():
+    """free_factor keeps the last factor of M_II: asked again for the same free set (the
+    Newton step after the prediction that found it) it returns that one; another set
+    replaces it; destroy drops it."""
+    n = 30
+    M = h12_like_matrix(n)
+    projection = SignoriniProjection.exact(M)
+    free = np.arange(n) % 3 != 0
+    factor = projection.free_factor(free)
+    b = np.random.default_rng(2).standard_normal(n)
+    np.testing.assert_allclose(
+        scipy.linalg.cho_solve(factor, b[free]), np.linalg.solve(M[np.ix_(free, free)], b[free])
+    )
+    assert projection.free_factor(free.copy()) is factor
+    other = projection.free_factor(~free)
+    assert other is not factor and projection.free_factor(~free) is other
+    projection.destroy()
+    assert projection._free is None
 
 
 def test_a_dense_signorini_block_holds_a_fortran_ordered_metric_without_a_copy():

@@ -440,36 +440,74 @@ Eigen::MatrixXd HMatrix::to_dense() const {
 Eigen::MatrixXd HMatrix::principal_submatrix(const std::vector<Index>& indices) const {
   const Index m = static_cast<Index>(indices.size());
   if (rows() != cols()) throw std::invalid_argument("HMatrix::principal_submatrix: the matrix is not square");
-  // position[permuted index] = the index's place in `indices`, or -1
-  std::vector<Index> row_position(static_cast<std::size_t>(rows()), -1), col_position(row_position);
+  // The block is written in the trees' order first: the selected rows (columns) of a block are
+  // consecutive there, so each block lands as one contiguous sub-block (the scattered writes
+  // of the callers' order missed the cache on every entry: 25 s for 16,129^2 entries), then
+  // put into the callers' order in place, one column at a time.
+  std::vector<Index> row_rank(static_cast<std::size_t>(rows()), -1), col_rank(row_rank);
   std::vector<Index> inverse_rows(static_cast<std::size_t>(rows())), inverse_cols(inverse_rows);
   const std::vector<Index>& rp = rows_->permutation();
   const std::vector<Index>& cp = cols_->permutation();
   for (std::size_t i = 0; i < rp.size(); ++i) inverse_rows[static_cast<std::size_t>(rp[i])] = static_cast<Index>(i);
   for (std::size_t i = 0; i < cp.size(); ++i) inverse_cols[static_cast<std::size_t>(cp[i])] = static_cast<Index>(i);
-  for (Index a = 0; a < m; ++a) {
-    const Index i = indices[static_cast<std::size_t>(a)];
+  for (const Index i : indices) {
     if (i < 0 || i >= rows()) throw std::invalid_argument("HMatrix::principal_submatrix: an index is out of range");
-    if (row_position[static_cast<std::size_t>(inverse_rows[static_cast<std::size_t>(i)])] != -1)
-      throw std::invalid_argument("HMatrix::principal_submatrix: an index appears twice");
-    row_position[static_cast<std::size_t>(inverse_rows[static_cast<std::size_t>(i)])] = a;
-    col_position[static_cast<std::size_t>(inverse_cols[static_cast<std::size_t>(i)])] = a;
+    Index& mark = row_rank[static_cast<std::size_t>(inverse_rows[static_cast<std::size_t>(i)])];
+    if (mark != -1) throw std::invalid_argument("HMatrix::principal_submatrix: an index appears twice");
+    mark = 0;
+    col_rank[static_cast<std::size_t>(inverse_cols[static_cast<std::size_t>(i)])] = 0;
+  }
+  // rank = the place of a selected tree position among the selected ones, in the trees' order
+  for (std::vector<Index>* rank : {&row_rank, &col_rank}) {
+    Index next = 0;
+    for (Index& r : *rank)
+      if (r == 0) r = next++;
   }
   Eigen::MatrixXd A = Eigen::MatrixXd::Zero(m, m);
-  std::vector<Index> r_local, r_out, c_local, c_out;
+  std::vector<Index> r_local, c_local;
   for (const Block& b : blocks_) {
-    r_local.clear(), r_out.clear(), c_local.clear(), c_out.clear();
+    r_local.clear(), c_local.clear();
     for (Index r = 0; r < b.m; ++r)
-      if (const Index a = row_position[static_cast<std::size_t>(b.r0 + r)]; a >= 0)
-        r_local.push_back(r), r_out.push_back(a);
+      if (row_rank[static_cast<std::size_t>(b.r0 + r)] >= 0) r_local.push_back(r);
     if (r_local.empty()) continue;
     for (Index c = 0; c < b.k; ++c)
-      if (const Index a = col_position[static_cast<std::size_t>(b.c0 + c)]; a >= 0)
-        c_local.push_back(c), c_out.push_back(a);
+      if (col_rank[static_cast<std::size_t>(b.c0 + c)] >= 0) c_local.push_back(c);
     if (c_local.empty()) continue;
+    const Index r_first = row_rank[static_cast<std::size_t>(b.r0 + r_local.front())];
+    const Index c_first = col_rank[static_cast<std::size_t>(b.c0 + c_local.front())];
+    const Index nr = static_cast<Index>(r_local.size()), nc = static_cast<Index>(c_local.size());
     const Eigen::MatrixXd D = block_entries(b, single_, r_local, c_local);
-    A(r_out, c_out) = D;
-    if (symmetric_ && b.row_cluster != b.col_cluster) A(c_out, r_out) = D.transpose();
+    A.block(r_first, c_first, nr, nc) = D;
+    // symmetric storage has one tree: row and column ranks agree
+    if (symmetric_ && b.row_cluster != b.col_cluster) A.block(c_first, r_first, nc, nr) = D.transpose();
+  }
+  // to the callers' order: A(a, b) <- A(row_of[a], col_of[b])
+  std::vector<Index> row_of(static_cast<std::size_t>(m)), col_of(row_of);
+  for (Index a = 0; a < m; ++a) {
+    const auto i = static_cast<std::size_t>(indices[static_cast<std::size_t>(a)]);
+    row_of[static_cast<std::size_t>(a)] = row_rank[static_cast<std::size_t>(inverse_rows[i])];
+    col_of[static_cast<std::size_t>(a)] = col_rank[static_cast<std::size_t>(inverse_cols[i])];
+  }
+  Eigen::VectorXd column(m);
+  for (Index j = 0; j < m; ++j) {
+    column = A.col(j);
+    A.col(j) = column(row_of);
+  }
+  std::vector<bool> placed(static_cast<std::size_t>(m), false);
+  for (Index start = 0; start < m; ++start) {  // the column permutation, cycle by cycle
+    if (placed[static_cast<std::size_t>(start)]) continue;
+    column = A.col(start);
+    Index j = start;
+    for (;;) {
+      placed[static_cast<std::size_t>(j)] = true;
+      const Index from = col_of[static_cast<std::size_t>(j)];
+      if (from == start) {
+        A.col(j) = column;
+        break;
+      }
+      A.col(j) = A.col(from);
+      j = from;
+    }
   }
   return A;
 }

@@ -91,7 +91,8 @@ class IdentityPreconditioner:
 
 
 class DenseSignoriniBlock:
-    """A Signorini block B_s given by its dense SPD matrix M_s (n_s x n_s), Cholesky-factored:
+    """A Signorini block B_s given by its dense SPD matrix M_s (n_s x n_s), Cholesky-factored
+    on first use:
     ``apply_signorini`` (M_s^{-1}), ``matvec_signorini``, ``lambda_max_signorini`` (computed
     on first use: only the inexact projection reads it) and ``signorini_metric`` of the
     interface, for preconditioners to inherit."""
@@ -110,14 +111,16 @@ class DenseSignoriniBlock:
         self._lambda_max: float | None = None
         self._signorini_factor = None
         self._signorini_inverse: np.ndarray | None = None
-        if self.n_signorini:
-            self._signorini_factor = scipy.linalg.cho_factor(self.signorini_metric)
 
     @property
     def signorini_factor(self) -> tuple[np.ndarray, bool] | None:
-        """M_s's Cholesky factor (``scipy.linalg.cho_factor``'s), for the projection to
-        share; None without Signorini unknowns, or once :attr:`signorini_inverse` has
-        replaced it."""
+        """M_s's Cholesky factor (``scipy.linalg.cho_factor``'s), computed on first use (n_s^3/3
+        flops and a second n_s^2 array, which a Newton step from an iterate with active nodes
+        never needs: :meth:`coupling.solvers.projection.SignoriniProjection.step`), for the
+        projection to share; None without Signorini unknowns, or once
+        :attr:`signorini_inverse` has replaced it."""
+        if self._signorini_factor is None and self._signorini_inverse is None and self.n_signorini:
+            self._signorini_factor = scipy.linalg.cho_factor(self.signorini_metric)
         return self._signorini_factor
 
     @property
@@ -127,7 +130,7 @@ class DenseSignoriniBlock:
         two triangular solves): for the exact projection to share."""
         if self._signorini_inverse is None:
             self._signorini_inverse = (
-                inverse_from_cholesky(self._signorini_factor)
+                inverse_from_cholesky(self.signorini_factor)
                 if self.n_signorini
                 else np.zeros((0, 0))
             )
@@ -147,7 +150,7 @@ class DenseSignoriniBlock:
             return np.zeros(0)
         if self._signorini_inverse is not None:
             return self._signorini_inverse @ g
-        return scipy.linalg.cho_solve(self._signorini_factor, g)
+        return scipy.linalg.cho_solve(self.signorini_factor, g)
 
     def matvec_signorini(self, phi: np.ndarray) -> np.ndarray:
         return self.signorini_metric @ phi

@@ -57,8 +57,10 @@ class SignoriniProjection:
         Largest eigenvalue of M_s, or a function returning it (called, or computed from
         M_s when not given, on first use by ``inexact``).
     factor
-        M_s's Cholesky factor as ``scipy.linalg.cho_factor`` returns it, when the caller
-        has one (the preconditioner's: not factored twice); read, never written.
+        M_s's Cholesky factor as ``scipy.linalg.cho_factor`` returns it, or a function
+        returning it on first use, when the caller has one (the preconditioner's: not
+        factored twice); read, never written. Without it (and without ``inverse``) the
+        projection factors M_s itself when it first needs to solve with it.
     inverse
         A function returning M_s^{-1}, when the caller computes it once for both (the
         preconditioner's, :class:`coupling.preconditioners.base.DenseSignoriniBlock`);
@@ -73,7 +75,7 @@ class SignoriniProjection:
         rho_in: float,
         max_iterations: int,
         lambda_max: float | Callable[[], float] | None = None,
-        factor: tuple[np.ndarray, bool] | None = None,
+        factor: tuple[np.ndarray, bool] | Callable[[], tuple[np.ndarray, bool]] | None = None,
         inverse: Callable[[], np.ndarray] | None = None,
     ):
         if method not in ("inexact", "exact"):
@@ -85,13 +87,17 @@ class SignoriniProjection:
         n = self.M.shape[0]
         self._lambda_max = lambda_max
         self._theta: float | None = None if n > 0 else 0.0
-        if factor is None and inverse is None and n > 0:
-            factor = scipy.linalg.cho_factor(self.M)
-        self._factor = factor
-        self._active = np.zeros(n, dtype=bool)
+        if factor is None and inverse is None:
+            factor = lambda: scipy.linalg.cho_factor(self.M)  # noqa: E731
+        # M's Cholesky factor, from _factor_of on first use (the exact projection of an
+        # iterate with active nodes never needs it)
+        self._factor_of = factor if factor is None or callable(factor) else (lambda: factor)
+        self._factor: tuple[np.ndarray, bool] | None = None
+        self._free: tuple[np.ndarray, tuple[np.ndarray, bool]] | None = None  # I, M_II's factor
+        self._active: np.ndarray | None = None  # of the last exact projection
         self._inverse: np.ndarray | None = None  # M^{-1}, for the exact projection
         self._factorised_flops = 0.0  # of the M_II factorisations done instead of buying W
-        self._inverse_of = inverse or (lambda: inverse_from_cholesky(self._factor))
+        self._inverse_of = inverse or (lambda: inverse_from_cholesky(self._cholesky()))
 
     @classmethod
     def exact(cls, metric: np.ndarray) -> "SignoriniProjection":
@@ -108,7 +114,7 @@ class SignoriniProjection:
             "exact",
             rho_in=0.0,
             max_iterations=0,
-            factor=self._factor,
+            factor=self._cholesky if self._factor_of is not None else None,
             inverse=self._inverse_matrix,
         )
 
@@ -132,8 +138,58 @@ class SignoriniProjection:
         if target.size == 0:
             return ProjectionResult(target.copy(), 0)
         if self.method == "exact":
-            return self._exact(target)
+            return self._exact(self.M @ target)
         return self._projected_iteration(target, start)
+
+    def step(
+        self,
+        phi: np.ndarray,
+        gradient: np.ndarray,
+        tau: float,
+        solve: Callable[[np.ndarray], np.ndarray] | None = None,
+    ) -> ProjectionResult:
+        """P_s(phi - tau M_s^{-1} gradient), the projected gradient step (3.19) from the
+        feasible ``phi``. The exact projection reads the target only through
+        M_s (phi - tau M_s^{-1} gradient) = M_s phi - tau gradient, so it solves nothing
+        with M_s; the inexact one forms the target with ``solve`` (M_s^{-1}, the
+        preconditioner's; default: its own)."""
+        if phi.size == 0:
+            return ProjectionResult(phi.copy(), 0)
+        if self.method == "exact":
+            return self._exact(self.M @ phi - tau * gradient)
+        return self._projected_iteration(phi - tau * (solve or self._solve)(gradient), phi)
+
+    def free_factor(self, free: np.ndarray) -> tuple[np.ndarray, bool]:
+        """The Cholesky factor of M_II (I = ``free``, boolean), as ``scipy.linalg.cho_factor``
+        gives it. The last one is kept: the exact projection's last free set is the
+        prediction that a Newton step solves on, and the next prediction often keeps it
+        (:func:`coupling.solvers.ssn.newton_direction`)."""
+        if self._free is not None and np.array_equal(self._free[0], free):
+            return self._free[1]
+        self._free = None  # the old factor goes before the new one is made
+        # factored in place through the transpose of the copy, a Fortran-ordered view
+        # (LAPACK would copy the C-ordered array); M_II is symmetric
+        block = self.M[np.ix_(free, free)]
+        factor = scipy.linalg.cho_factor(block.T, lower=True, overwrite_a=True)
+        self._free = (free.copy(), factor)
+        return factor
+
+    def destroy(self) -> None:
+        """Drop the kept factor of M_II (an n_s^2 array at most)."""
+        self._free = None
+
+    def _cholesky(self) -> tuple[np.ndarray, bool]:
+        """M's Cholesky factor, made (or read from the caller's) on first use."""
+        if self._factor is None:
+            self._factor = self._factor_of()
+        return self._factor
+
+    def _solve(self, v: np.ndarray) -> np.ndarray:
+        """M^{-1} v: through M^{-1} once it is there (or when it is all the caller gave),
+        else the factor."""
+        if self._inverse is not None or self._factor_of is None:
+            return self._inverse_matrix() @ v
+        return scipy.linalg.cho_solve(self._cholesky(), v)
 
     def _projected_iteration(self, target: np.ndarray, start: np.ndarray) -> ProjectionResult:
         """(3.20) from phi_k = ``start`` until (3.6) is certified by the dual bound."""
@@ -145,11 +201,7 @@ class SignoriniProjection:
             phi = np.maximum(0.0, phi - self.theta * residual)
             residual = self.M @ phi - M_target
             lam = np.maximum(0.0, 2.0 * residual)
-            m_inv_lam = (
-                scipy.linalg.cho_solve(self._factor, lam)
-                if self._factor is not None
-                else self._inverse_matrix() @ lam
-            )
+            m_inv_lam = self._solve(lam)
             q_lower = -lam @ target - 0.25 * lam @ m_inv_lam
             if (phi - target) @ residual <= (
                 self.rho_in * q_start + (1.0 - self.rho_in) * max(q_lower, 0.0)
@@ -163,7 +215,7 @@ class SignoriniProjection:
         if self._inverse is None:
             self._inverse = self._inverse_of()
             if self.method == "exact":
-                self._factor = None
+                self._factor = self._free = None
         return self._inverse
 
     def _solve_free(self, b: np.ndarray, free: np.ndarray) -> np.ndarray:
@@ -176,27 +228,30 @@ class SignoriniProjection:
         costs about n^3 (LAPACK's potri from the factor: 2.6 times the Cholesky's time,
         90 s at n = 16,129). So W is bought only once the factorisations of M_II done
         instead would have cost as much (rent or buy: at most twice the cheaper of the
-        two whatever the number of calls); with no active node the factor of M_s solves.
+        two whatever the number of calls); with no active node the factor of M solves.
+        The last factor of M_II is kept (:meth:`free_factor`): the same free set again
+        costs nothing.
         """
         n, n_active = b.size, int(np.count_nonzero(~free))
         n_free = n - n_active
         if n_active == n:
             return np.zeros(n)
-        not_bought = self._inverse is None and self._factor is not None
-        if not_bought and n_active == 0:
-            return scipy.linalg.cho_solve(self._factor, b)
+        bought = self._inverse is not None
+        if not bought and n_active == 0:
+            return self._solve(b)
+        kept = self._free is not None and np.array_equal(self._free[0], free)
         # W would serve (few active nodes) but is not bought yet: rent, i.e. factor M_II,
         # while the rents paid stay below W's price
         rent = (
-            not_bought
+            not bought
             and n_active < n_free
-            and self._factorised_flops + n_free**3 / 3 <= float(n) ** 3
+            and (kept or self._factorised_flops + n_free**3 / 3 <= float(n) ** 3)
         )
-        if rent:
+        if rent and not kept:
             self._factorised_flops += n_free**3 / 3
-        if rent or n_active >= n_free:  # factor M_II itself
+        if rent or n_active >= n_free:  # M_II's factor
             psi = np.zeros(n)
-            psi[free] = scipy.linalg.solve(self.M[np.ix_(free, free)], b[free], assume_a="pos")
+            psi[free] = scipy.linalg.cho_solve(self.free_factor(free), b[free])
             return psi
         W = self._inverse_matrix()
         y = W @ np.where(free, b, 0.0)
@@ -208,12 +263,13 @@ class SignoriniProjection:
         psi[active] = 0.0
         return psi
 
-    def _exact(self, target: np.ndarray) -> ProjectionResult:
-        """Primal-dual active set: psi_A = 0, M_II psi_I = (M phi~)_I, lam = M (psi - phi~)."""
-        M, n = self.M, target.size
-        b = M @ target
+    def _exact(self, b: np.ndarray) -> ProjectionResult:
+        """Primal-dual active set on min 1/2 psi^T M psi - b^T psi over psi >= 0 (b = M phi~):
+        psi_A = 0, M_II psi_I = b_I, lam = M psi - b, from the last projection's active set
+        (the first one from {b <= 0}, exact for a diagonal M)."""
+        M, n = self.M, b.size
         c = float(np.mean(np.diag(M)))
-        active = self._active.copy()
+        active = self._active.copy() if self._active is not None else b <= 0.0
         for iteration in range(1, 4 * n + 10):
             free = ~active
             psi = self._solve_free(b, free)
@@ -224,8 +280,11 @@ class SignoriniProjection:
                 self._active = active
                 return ProjectionResult(np.maximum(psi, 0.0), iteration)
             active = new_active
-        # The active-set iteration cycled (possible for matrices that are not M-matrices).
+        # The active-set iteration cycled (possible for matrices that are not M-matrices):
+        # min ||L^T psi - L^{-1} b|| over psi >= 0, M = L L^T
         L = scipy.linalg.cholesky(M, lower=True)
-        psi, _ = scipy.optimize.nnls(L.T, L.T @ target, maxiter=50 * n)
+        psi, _ = scipy.optimize.nnls(
+            L.T, scipy.linalg.solve_triangular(L, b, lower=True), maxiter=50 * n
+        )
         self._active = psi <= 0
         return ProjectionResult(psi, iteration)

@@ -91,8 +91,9 @@ class Solution:
 
 def build_projection(preconditioner: Preconditioner, options: SolverOptions) -> SignoriniProjection:
     """P_s of ``options`` in the metric M_s of ``preconditioner`` (3.19)-(3.20), sharing
-    its Cholesky factor of M_s and M_s^{-1} when it has them (a dense M_s's); lambda_max(M_s)
-    is computed only when the inexact projection first needs it."""
+    its Cholesky factor of M_s and M_s^{-1} when it has them (a dense M_s's), each made when
+    first needed; lambda_max(M_s) is computed only when the inexact projection first
+    needs it."""
     # the class, not the object: hasattr on the object would evaluate the property, i.e.
     # compute M_s^{-1} (n_s^3 flops) whether or not the projection ever reads it
     dense = isinstance(preconditioner, DenseSignoriniBlock)
@@ -102,7 +103,7 @@ def build_projection(preconditioner: Preconditioner, options: SolverOptions) -> 
         rho_in=options.projection_tol,
         max_iterations=options.projection_max_iterations,
         lambda_max=lambda: preconditioner.lambda_max_signorini,
-        factor=preconditioner.signorini_factor if dense else None,
+        factor=(lambda: preconditioner.signorini_factor) if dense else None,
         inverse=(lambda: preconditioner.signorini_inverse) if dense else None,
     )
 
