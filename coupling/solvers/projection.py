@@ -57,9 +57,9 @@ class SignoriniProjection:
         Largest eigenvalue of M_s, or a function returning it (called, or computed from
         M_s when not given, on first use by ``inexact``).
     factor
-        M_s's Cholesky factor as ``scipy.linalg.cho_factor`` returns it, or a function
-        returning it on first use, when the caller has one (the preconditioner's: not
-        factored twice); read, never written. Without it (and without ``inverse``) the
+        A function returning M_s's Cholesky factor as ``scipy.linalg.cho_factor`` gives it,
+        called on first use, when the caller has one (the preconditioner's: not factored
+        twice); the factor is read, never written. Without it (and without ``inverse``) the
         projection factors M_s itself when it first needs to solve with it.
     inverse
         A function returning M_s^{-1}, when the caller computes it once for both (the
@@ -75,7 +75,7 @@ class SignoriniProjection:
         rho_in: float,
         max_iterations: int,
         lambda_max: float | Callable[[], float] | None = None,
-        factor: tuple[np.ndarray, bool] | Callable[[], tuple[np.ndarray, bool]] | None = None,
+        factor: Callable[[], tuple[np.ndarray, bool]] | None = None,
         inverse: Callable[[], np.ndarray] | None = None,
     ):
         if method not in ("inexact", "exact"):
@@ -91,7 +91,7 @@ class SignoriniProjection:
             factor = lambda: scipy.linalg.cho_factor(self.M)  # noqa: E731
         # M's Cholesky factor, from _factor_of on first use (the exact projection of an
         # iterate with active nodes never needs it)
-        self._factor_of = factor if factor is None or callable(factor) else (lambda: factor)
+        self._factor_of = factor
         self._factor: tuple[np.ndarray, bool] | None = None
         self._free: tuple[np.ndarray, tuple[np.ndarray, bool]] | None = None  # I, M_II's factor
         self._active: np.ndarray | None = None  # of the last exact projection
@@ -164,7 +164,7 @@ class SignoriniProjection:
         gives it. The last one is kept: the exact projection's last free set is the
         prediction that a Newton step solves on, and the next prediction often keeps it
         (:func:`coupling.solvers.ssn.newton_direction`)."""
-        if self._free is not None and np.array_equal(self._free[0], free):
+        if self._kept(free):
             return self._free[1]
         self._free = None  # the old factor goes before the new one is made
         # factored in place through the transpose of the copy, a Fortran-ordered view
@@ -173,6 +173,10 @@ class SignoriniProjection:
         factor = scipy.linalg.cho_factor(block.T, lower=True, overwrite_a=True)
         self._free = (free.copy(), factor)
         return factor
+
+    def _kept(self, free: np.ndarray) -> bool:
+        """Whether the kept factor of M_II is that of this free set."""
+        return self._free is not None and np.array_equal(self._free[0], free)
 
     def destroy(self) -> None:
         """Drop the kept factor of M_II (an n_s^2 array at most)."""
@@ -239,7 +243,7 @@ class SignoriniProjection:
         bought = self._inverse is not None
         if not bought and n_active == 0:
             return self._solve(b)
-        kept = self._free is not None and np.array_equal(self._free[0], free)
+        kept = self._kept(free)
         # W would serve (few active nodes) but is not bought yet: rent, i.e. factor M_II,
         # while the rents paid stay below W's price
         rent = (
