@@ -1,8 +1,10 @@
 """The 3D contact problem on the box and on the gmsh ball gives the same iterations, phi
 and u_h on 1, 2 and 3 ranks (tests/mpi/solid_problem_check.py; relative 1e-10: the sums
-of the distributed assembly are ordered differently, and the amg preconditioner's inner
-solve, whose multigrid hierarchy depends on the partition, stops at the relative
-residual coupling.options.AMG_RTOL = 1e-12)."""
+of the distributed assembly are ordered differently, and on the ball the amg
+preconditioner's inner solve, whose GAMG hierarchy depends on the partition, stops at the
+relative residual coupling.options.AMG_RTOL = 1e-12; on the box its geometric multigrid
+is the same operator on any number of ranks, and one V-cycle of it preconditions the
+Newton steps' CG)."""
 from __future__ import annotations
 
 import numpy as np

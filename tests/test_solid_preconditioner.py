@@ -9,7 +9,7 @@ import scipy.linalg
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from coupling.options import SolverOptions
+from coupling.options import LATTICE_MG_SMOOTHING_STEPS, SolverOptions
 from coupling.preconditioners import build_preconditioner
 from coupling.preconditioners.multigrid import AMG_OPTIONS_PREFIX
 from coupling.problem import SignoriniProblem
@@ -52,13 +52,21 @@ def test_blocks(problems, n):
         ratios = scipy.linalg.eigh(S[np.ix_(s, s)], B.signorini_metric, eigvals_only=True)
         assert ratios.min() >= 0.5 and ratios.max() <= 1.5
         assert B.lambda_max_signorini == pytest.approx(np.linalg.eigvalsh(B.signorini_metric)[-1])
-        # GAMG as AMG_OPTIONS configure it (graph not squared, one smoothing step per
-        # level), the options gone from PETSc's database again
         pc = B._ksp.getPC()
-        assert pc.getType() == "gamg" and pc.getMGLevels() >= 2
+        if n == 4:
+            # no coarser lattice: GAMG as AMG_OPTIONS configure it (graph not squared, one
+            # smoothing step per level)
+            assert pc.getType() == "gamg" and pc.getMGLevels() >= 2
+            steps = 1
+        else:
+            # the geometric multigrid of the box's lattice (8 and 4 cubes per side)
+            assert pc.getType() == "mg" and pc.getMGLevels() == 2
+            steps = LATTICE_MG_SMOOTHING_STEPS
         assert all(
-            pc.getMGSmoother(level).getTolerances()[3] == 1 for level in range(1, pc.getMGLevels())
+            pc.getMGSmoother(level).getTolerances()[3] == steps
+            for level in range(1, pc.getMGLevels())
         )
+        # the options gone from PETSc's database again
         assert not any(key.startswith(AMG_OPTIONS_PREFIX) for key in PETSc.Options().getAll())
     finally:
         B.destroy()

@@ -8,7 +8,8 @@
 - :mod:`~coupling.preconditioners.distributed`: the same B, distributed by subdomains;
 - :mod:`~coupling.preconditioners.root`: any serial B set up on rank 0 under MPI;
 - :mod:`~coupling.preconditioners.exact`: the diagonal blocks of (4.2), the reference;
-- :mod:`~coupling.preconditioners.multigrid`: algebraic multigrid and E^T W_h E (3D, section 11).
+- :mod:`~coupling.preconditioners.multigrid`: multigrid and E^T W_h E (3D, section 11);
+- :mod:`~coupling.preconditioners.lattice_multigrid`: its geometric multigrid on the box.
 
 :func:`build_preconditioner` chooses and builds one for an assembled problem.
 """
@@ -103,6 +104,7 @@ def build_preconditioner(
             V,
             constant_mode_weight(V, problem.S),
             signorini_hypersingular(comm, problem.boundary, problem.S),
+            lattice=problem.domain.lattice,
             rtol=AMG_RTOL,
             max_iterations=AMG_MAX_ITERATIONS,
         )

@@ -3,7 +3,7 @@
 """
 from __future__ import annotations
 
-from typing import Protocol
+from typing import Callable, Protocol
 
 import numpy as np
 import scipy.linalg
@@ -15,6 +15,7 @@ __all__ = [
     "DenseSignoriniBlock",
     "check_length",
     "largest_eigenvalue",
+    "omega_cycle",
 ]
 
 #: Up to this size the largest eigenvalue of M_s comes from LAPACK, above it from Lanczos.
@@ -47,6 +48,13 @@ class Preconditioner(Protocol):
 
     def destroy(self) -> None:
         ...  # free solver objects (PETSc) on every rank
+
+
+def omega_cycle(preconditioner: Preconditioner) -> Callable[[np.ndarray], np.ndarray]:
+    """The preconditioner's fixed approximation of B_Omega^{-1} for preconditioning a Krylov
+    solve (the Newton steps' CG): its ``cycle_omega`` where it has one (one multigrid cycle,
+    the same on any number of ranks), else ``apply_omega``."""
+    return getattr(preconditioner, "cycle_omega", preconditioner.apply_omega)
 
 
 class IdentityPreconditioner:

@@ -16,11 +16,15 @@ the diagonal blocks of the Hessian D^2 J_h:
   norm, on which W is elliptic (phi vanishes on the boundary curves of Gamma_s). On the
   sphere W Y_l / S Y_l = 2l / (2l + 1): the two agree on the oscillating modes.
 
-B_Omega^{-1} is applied by conjugate gradients preconditioned by one algebraic multigrid
-V-cycle (PETSc GAMG with one smoothing step per level, ``coupling.options.AMG_OPTIONS``),
-to the relative tolerance ``rtol`` (the iterations read B_Omega u
-and B_Omega^{-1} g as inverses of each other, so the inner solve is tight, not one cycle);
-its cost per application grows like N, its count stays bounded as h -> 0. M_s is dense
+B_Omega^{-1} is applied by conjugate gradients preconditioned by one multigrid V-cycle, to
+the relative tolerance ``rtol`` (the iterations read B_Omega u and B_Omega^{-1} g as
+inverses of each other, so the inner solve is tight, not one cycle); its cost per
+application grows like N, its count stays bounded as h -> 0. On the box the V-cycle is
+the geometric multigrid of its vertex lattice (``coupling.preconditioners.lattice_multigrid``),
+the same operator on any number of ranks, so that one cycle alone (``cycle_omega``) may
+precondition the Newton steps' CG; on other bodies it is PETSc's GAMG with one smoothing
+step per level (``coupling.options.AMG_OPTIONS``), whose aggregates follow the partition,
+and ``cycle_omega`` is the tight solve. M_s is dense
 (n_s x n_s, the projection (3.19) and the Newton steps read it), and factored on every
 rank; with the H-matrix S_h it is read from the H-matrix of W_h that S_h holds (to its
 tolerance), else integrated over the triangles of Gamma_s alone
@@ -39,6 +43,7 @@ from petsc4py import PETSc
 import bem_cpp
 from coupling.options import AMG_OPTIONS
 from coupling.preconditioners.base import DenseSignoriniBlock
+from coupling.preconditioners.lattice_multigrid import LatticeHierarchy, lattice_levels
 from fem_py.forms.interior import compile_form
 from fem_py.parallel import array_from_root
 
@@ -105,6 +110,9 @@ class MultigridPreconditioner(DenseSignoriniBlock):
         c of the boundary mass term.
     signorini_metric
         M_s, (n_s, n_s), the same on every rank.
+    lattice
+        The box's vertex lattice (``fem_py.mesh.box.BoxLattice``): the geometric multigrid
+        on it when it can be coarsened (``lattice_levels``), else (and for ``None``) GAMG.
     rtol, max_iterations
         Of the inner CG + GAMG solve of B_Omega (a solve that stops short raises on every
         rank: B would not be the fixed operator the iterations need).
@@ -116,6 +124,7 @@ class MultigridPreconditioner(DenseSignoriniBlock):
         weight: float,
         signorini_metric: np.ndarray,
         *,
+        lattice: Any = None,
         rtol: float,
         max_iterations: int,
     ):
@@ -128,10 +137,20 @@ class MultigridPreconditioner(DenseSignoriniBlock):
         self._ksp = PETSc.KSP().create(comm)
         self._ksp.setOperators(self._matrix)
         self._ksp.setType(PETSc.KSP.Type.CG)
-        self._ksp.getPC().setType(PETSc.PC.Type.GAMG)
+        self._ksp.setOptionsPrefix(AMG_OPTIONS_PREFIX)  # before PCMG names its levels' KSPs
         self._ksp.setTolerances(rtol=rtol, atol=0.0, max_it=max_iterations)
         self._ksp.setInitialGuessNonzero(False)
-        _set_up(self._ksp, AMG_OPTIONS_PREFIX, AMG_OPTIONS)
+        levels = lattice_levels(lattice.n) if lattice is not None else None
+        self._hierarchy = None
+        if levels is None:
+            self._ksp.getPC().setType(PETSc.PC.Type.GAMG)
+            _set_up(self._ksp, AMG_OPTIONS_PREFIX, AMG_OPTIONS)
+        else:
+            owned = V.dofmap.index_map.size_local
+            points = lattice.indices(V.tabulate_dof_coordinates()[:owned])
+            self._hierarchy = LatticeHierarchy(self._matrix, points, levels)
+            options = self._hierarchy.configure(self._ksp.getPC())
+            _set_up(self._ksp, AMG_OPTIONS_PREFIX, options)
         self._x, self._b = self._matrix.createVecs()
         self.iterations: list[int] = []  # inner CG iterations per application
         self.n_omega = V.dofmap.index_map.size_local
@@ -149,6 +168,17 @@ class MultigridPreconditioner(DenseSignoriniBlock):
         self.iterations.append(self._ksp.getIterationNumber())
         return self._x.array.copy()
 
+    def cycle_omega(self, g: np.ndarray) -> np.ndarray:
+        """A fixed symmetric positive definite approximation of B_Omega^{-1} g, the same on
+        any number of ranks, for preconditioning a Krylov solve: one V-cycle of the lattice
+        multigrid (condition number about 1.2 against B_Omega on the box), else (GAMG) the
+        tight solve ``apply_omega``."""
+        if self._hierarchy is None:
+            return self.apply_omega(g)
+        self._b.array[:] = g
+        self._ksp.getPC().apply(self._b, self._x)
+        return self._x.array.copy()
+
     def matvec_omega(self, u: np.ndarray) -> np.ndarray:
         self._x.array[:] = u
         self._matrix.mult(self._x, self._b)
@@ -157,3 +187,5 @@ class MultigridPreconditioner(DenseSignoriniBlock):
     def destroy(self) -> None:
         for obj in (self._ksp, self._matrix, self._x, self._b):
             obj.destroy()
+        if self._hierarchy is not None:
+            self._hierarchy.destroy()

@@ -16,7 +16,9 @@ inactive set I (grad_phi J_I = 0). The Newton step solves, with H = D^2 J_h at t
 by preconditioned CG: H is applied as a product (the interior Jacobian, assembled once
 per step, plus S_h on the boundary block), the preconditioner is the
 substructuring B restricted to the inactive set (B_Omega^{-1} for u, M_s[I, I]^{-1} for
-phi_I). The CG tolerance follows the Newton residual r = (||grad_u J||_{B_Omega^{-1}}^2
+phi_I; on the box one V-cycle of the amg preconditioner's geometric multigrid stands for
+B_Omega^{-1}: a fixed operator, the same on any number of ranks). The CG tolerance
+follows the Newton residual r = (||grad_u J||_{B_Omega^{-1}}^2
 + ||phi - P_s(phi - tau M_s^{-1} grad_phi J)||_{M_s}^2 / tau^2)^{1/2} (inexact Newton,
 forcing term min(0.1, (r_k / r_0)^p), p = 1/2 from a cold start and p = 1 from a given
 iterate (``forcing_exponent``), kept above c tol ||xi_k||_B / (tau r_k) with
@@ -38,9 +40,10 @@ accurately as the step needs: to SSN_INNER_TOL_FACTOR times the CG's rtol, inste
 the operator's own tolerance (kept for the gradients and norms that decide convergence).
 The products then differ from the exact ones by far less than the step's own tolerance,
 which leaves the CG's iterations as they were (inexact Krylov methods: Simoncini and
-Szyld, SIAM J. Sci. Comput. 25, 2003). The amg preconditioner's inner CG + GAMG keeps its
-own tolerance: GAMG's hierarchy depends on the number of ranks, and only a solve far
-below the step's accuracy keeps the iterates independent of it.
+Szyld, SIAM J. Sci. Comput. 25, 2003). Where the amg preconditioner has GAMG (bodies other
+than the box) its inner CG + GAMG keeps its own tolerance inside the CG as well: GAMG's
+hierarchy depends on the number of ranks, and only a solve far below the step's accuracy
+keeps the iterates independent of it.
 
 The active set is predicted in the metric M_s, by the M_s projection of
 phi - tau M_s^{-1} grad_phi J (the active set of a PGPM step), not by the
@@ -63,6 +66,7 @@ from coupling.options import (
     SSN_INNER_TOL_FACTOR,
     SSN_JACOBIAN_REUSE_STEP,
 )
+from coupling.preconditioners.base import omega_cycle
 from coupling.solvers.loop import IterationContext, Loop
 from coupling.solvers.pgpm import energy_increased, pgpm
 from coupling.solvers.projection import SignoriniProjection
@@ -236,7 +240,8 @@ def newton_direction(
 ) -> tuple[np.ndarray, np.ndarray, int]:
     """The Newton direction of the active-set system (module docstring): dphi_A = -phi_A,
     and (du, dphi_I) from H_[(u,I),(u,I)] (du, dphi_I) = -(grad_u J, grad_phi J_I)
-    - H_[(u,I),A] dphi_A by CG to ``rtol``, preconditioned by B_Omega^{-1} and
+    - H_[(u,I),A] dphi_A by CG to ``rtol``, preconditioned by B_Omega^{-1} (one multigrid
+    cycle where the preconditioner has a rank-independent one, ``omega_cycle``) and
     M_s[I, I]^{-1}. ``gradient`` = (grad_u J owned, grad_phi J) at the iterate; returns
     (du owned, dphi, the CG iterations). M_s[I, I]'s Cholesky factor is ``projection``'s
     (default: the context's), the exact projection's that predicted the active set: it
@@ -247,6 +252,7 @@ def newton_direction(
     factor = (projection or context.projection).free_factor(free) if free.any() else None
 
     inner = SSN_INNER_TOL_FACTOR * rtol  # S_h's V solves (module docstring)
+    precondition_u = omega_cycle(preconditioner)
 
     def apply_h(p):
         e_phi = np.zeros(phi.size)
@@ -256,7 +262,7 @@ def newton_direction(
 
     def apply_b_inv(r):
         return (
-            preconditioner.apply_omega(r[0]),
+            precondition_u(r[0]),
             scipy.linalg.cho_solve(factor, r[1]) if factor is not None else r[1],
         )
 

@@ -21,7 +21,15 @@ from mpi4py import MPI
 
 from fem_py.mesh.args3d import checked_point, checked_positive
 
-__all__ = ["BOX_FACES", "BoxCounts", "box_counts", "box_mesh", "check_box", "cubes_per_side"]
+__all__ = [
+    "BOX_FACES",
+    "BoxCounts",
+    "BoxLattice",
+    "box_counts",
+    "box_mesh",
+    "check_box",
+    "cubes_per_side",
+]
 
 #: Face name -> (coordinate axis, 0 for its minimum / 1 for its maximum); the facet tag of
 #: a face is its position in this table plus one (bottom 1, ..., back 6).
@@ -44,6 +52,31 @@ class BoxCounts:
     vertices: int
     boundary_vertices: int
     boundary_triangles: int
+
+
+@dataclass(frozen=True, eq=False)
+class BoxLattice:
+    """The box's vertices as the lattice ``lower + spacing * (i, j, k)``, 0 <= i, j, k <= n
+    (the geometric multigrid of the amg preconditioner coarsens it,
+    ``coupling.preconditioners.lattice_multigrid``).
+
+    Attributes
+    ----------
+    lower : (3,) array
+        The corner c - w/2.
+    spacing : float
+        w / n, the cubes' side.
+    n : int
+        Cubes per side.
+    """
+
+    lower: np.ndarray
+    spacing: float
+    n: int
+
+    def indices(self, x: np.ndarray) -> np.ndarray:
+        """The lattice indices (m, 3) of points ``x`` (m, 3) that are vertices of the box."""
+        return np.rint((np.asarray(x)[:, :3] - self.lower) / self.spacing).astype(np.int64)
 
 
 def cubes_per_side(width: float, h: float) -> int:

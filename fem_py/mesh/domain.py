@@ -85,6 +85,8 @@ class Domain:
 
     #: Omega's dimension (``fem_py.mesh.solid.SolidDomain.dim`` is 3).
     dim = 2
+    #: No vertex lattice (``fem_py.mesh.solid.SolidDomain.lattice``: the box's).
+    lattice = None
 
     @property
     def comm(self) -> Any:

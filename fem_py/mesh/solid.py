@@ -19,7 +19,7 @@ from mpi4py import MPI
 
 from fem_py.mesh.args3d import signorini_tags
 from fem_py.mesh.ball import BALL_FACES, ball_mesh, check_ball
-from fem_py.mesh.box import BOX_FACES, box_counts, box_mesh, check_box, cubes_per_side
+from fem_py.mesh.box import BOX_FACES, BoxLattice, box_counts, box_mesh, check_box, cubes_per_side
 from fem_py.mesh.domain import DomainSize
 from fem_py.mesh.tet_distribute import solid_mesh
 from fem_py.mesh.tet_file import check_solid, read_tet_msh
@@ -49,6 +49,8 @@ class SolidDomain:
         The requested mesh size (the longest edge for a file).
     h_min, h_max
         The shortest and the longest edge of the mesh.
+    lattice : BoxLattice or None
+        The box's vertex lattice (``None`` for other shapes).
     """
 
     mesh: Any
@@ -59,6 +61,7 @@ class SolidDomain:
     h: float
     h_min: float
     h_max: float
+    lattice: BoxLattice | None = None
 
     #: Omega's dimension (``Domain.dim`` is 2).
     dim = 3
@@ -87,20 +90,22 @@ def solid_domain(comm: Any, spec: GeometrySpec) -> SolidDomain:
         # the Signorini groups only get tags (other groups may overlap them)
         groups = [] if spec.signorini == "all" else [str(s) for s in _items(spec.signorini)]
         msh, facet_tags, names = solid_mesh(comm, solid, groups)
-        shape, h = "mesh", 0.0
+        shape, h, lattice = "mesh", 0.0, None
     elif spec.shape == "box":
         c, width, h = check_box(spec.center, spec.width, spec.h)
         _check_faces(spec.signorini, _BOX_TAGS)  # before meshing
         msh, facet_tags, names = box_mesh(comm, c, width, h)
         shape = "box"
+        n = cubes_per_side(width, h)
+        lattice = BoxLattice(c - width / 2, width / n, n)
     else:
         c, radius, h = check_ball(spec.center, spec.radius, spec.h)
         _check_faces(spec.signorini, BALL_FACES)
         msh, facet_tags, names = ball_mesh(comm, c, radius, h)
-        shape = "ball"
+        shape, lattice = "ball", None
     tags = signorini_tags(spec.signorini, names) if _items(spec.signorini) else ()
     h_min, h_max = edge_range(msh)
-    return SolidDomain(msh, facet_tags, names, tags, shape, h or h_max, h_min, h_max)
+    return SolidDomain(msh, facet_tags, names, tags, shape, h or h_max, h_min, h_max, lattice)
 
 
 #: The facet tags ``box_mesh`` gives the faces (their position in BOX_FACES plus one).
