@@ -45,6 +45,7 @@ from coupling.options import AMG_OPTIONS
 from coupling.preconditioners.base import DenseSignoriniBlock
 from coupling.preconditioners.lattice_multigrid import LatticeHierarchy, lattice_levels
 from fem_py.forms.interior import compile_form
+from fem_py.mesh.box import BoxLattice
 from fem_py.parallel import array_from_root
 
 __all__ = ["MultigridPreconditioner", "constant_mode_weight", "signorini_hypersingular"]
@@ -114,7 +115,7 @@ class MultigridPreconditioner(DenseSignoriniBlock):
         The box's vertex lattice (``fem_py.mesh.box.BoxLattice``): the geometric multigrid
         on it when it can be coarsened (``lattice_levels``), else (and for ``None``) GAMG.
     rtol, max_iterations
-        Of the inner CG + GAMG solve of B_Omega (a solve that stops short raises on every
+        Of the inner CG + multigrid solve of B_Omega (a solve that stops short raises on every
         rank: B would not be the fixed operator the iterations need).
     """
 
@@ -124,7 +125,7 @@ class MultigridPreconditioner(DenseSignoriniBlock):
         weight: float,
         signorini_metric: np.ndarray,
         *,
-        lattice: Any = None,
+        lattice: BoxLattice | None = None,
         rtol: float,
         max_iterations: int,
     ):
@@ -162,8 +163,8 @@ class MultigridPreconditioner(DenseSignoriniBlock):
         reason = self._ksp.getConvergedReason()
         if reason < 0:  # the same reason on every rank: raised everywhere
             raise RuntimeError(
-                f"the amg preconditioner's inner CG + GAMG solve failed (PETSc reason {reason} "
-                f"after {self._ksp.getIterationNumber()} iterations)"
+                "the amg preconditioner's inner CG + multigrid solve failed (PETSc reason "
+                f"{reason} after {self._ksp.getIterationNumber()} iterations)"
             )
         self.iterations.append(self._ksp.getIterationNumber())
         return self._x.array.copy()
