@@ -19,8 +19,9 @@ same run (n <= --dense-max). The issue-20 targets are printed with met / NOT MET
 
 A third table is 3D (issue 30, docs/method.md section 11; docs/design/bem3d.md): dense V_h,
 K_h, W_h (P1) on the cube with 2,028 triangles, then the H-matrix S_h on icospheres of
---surface-levels (10 4^level + 2 vertices) at each tol of --surface-tols (the first: the
-coupled solver's, ``coupling.options.HMATRIX_TOL_3D``), each size in a fresh process so that
+--surface-levels (10 4^level + 2 vertices) at each tol of --surface-tols (default 1e-5 and
+1e-6, the coupled solver's at about 25,000 and 250,000 boundary dofs,
+``coupling.options.hmatrix_tol``, and 1e-8), each size in a fresh process so that
 its peak resident memory is its own: set-up wall time and its split (near field; V_h and
 W_h from one ACA per block; K_h), peak memory, one product, CG iterations, and the log-log
 slope of the set-up between the two largest sizes.
@@ -188,7 +189,9 @@ def main() -> None:
         "--surface-tols",
         type=float,
         nargs="+",
-        help="default: the coupled solver's (coupling.options.HMATRIX_TOL_3D) and 1e-8",
+        default=[1e-5, 1e-6, 1e-8],
+        help="default: 1e-5 and 1e-6 (the coupled solver's at 25,000 and 250,000 boundary "
+        "dofs, coupling.options.hmatrix_tol) and 1e-8",
     )
     parser.add_argument("--surface-only", action="store_true", help="only the 3D table")
     parser.add_argument("--surface-one", type=int, help=argparse.SUPPRESS)  # child process
@@ -212,10 +215,6 @@ def main() -> None:
         for shape in args.shapes:
             rows = hmatrix_table(shape, args.hmatrix_sizes, args)
             print_targets(shape, rows)
-    if args.surface_tols is None:  # (imported here: the child processes measure bem_cpp alone)
-        from coupling.options import HMATRIX_TOL_3D
-
-        args.surface_tols = [HMATRIX_TOL_3D, 1e-8]
     surface_table(args.surface_levels, args.surface_tols)
     print(f"load average at the end {os.getloadavg()[0]:.2f}")
 

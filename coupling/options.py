@@ -189,18 +189,28 @@ HMATRIX_CROSSOVER_3D = 1000
 #: products agree with the dense S_h to a few times this (docs/design/hmatrix.md), far
 #: below the solver tolerances (1e-8 by default).
 HMATRIX_TOL = 1e-10
-#: The same for a surface in R^3, chosen from the discretisation error it must not spoil:
-#: on the manufactured box (coupling.manufactured.box_contact, 16 cubes per side, ssn to
-#: 1e-10) u_h moves by 7e-9 at tol 1e-6 and 1e-7 at 1e-5 from its value at 1e-10, while
-#: its nodal error is 1.1e-3 (O(h^2): still 1.6e-5 at 128 cubes per side), and the S_h set-up
-#: takes about half the time of tol 1e-10 (docs/design/three_dimensions.md, "The boundary
-#: operators' accuracy").
-HMATRIX_TOL_3D = 1e-6
+#: For a surface in R^3 the tolerance is chosen from the discretisation error it must not
+#: spoil: tol = min(HMATRIX_TOL_3D_MAX, HMATRIX_TOL_3D_SCALE / N_Gamma) for N_Gamma boundary
+#: dofs. P1's nodal error falls like h^2, i.e. like 1 / N_Gamma, and u_h moves by about
+#: 3e-2 tol, so this tol keeps u_h's change a fixed small fraction of its error at every
+#: size. Measured on the manufactured box (coupling.manufactured.box_contact, ssn, tol
+#: 1e-8): max |u_h(tol) - u_h(1e-7)| = 2.2e-7 at 1e-5 and 7.4e-7 at 3e-5 against a nodal
+#: error of 3.0e-4 at 32^3 cubes (6,146 boundary dofs: tol 4.1e-5), 3.0e-7 at 1e-5
+#: against 8.2e-5 at 64^3 (24,578: tol 1.0e-5), 2.9e-6 at 1e-4 against 1.1e-3 at 16^3
+#: (1,538: tol 1e-4): 0.3-0.4 % of the error, which itself moves in its fourth digit; the
+#: S_h set-up at 64^3 takes a quarter less time than at 1e-6 (docs/design/
+#: three_dimensions.md, "The boundary operators' accuracy").
+HMATRIX_TOL_3D_SCALE = 0.25
+HMATRIX_TOL_3D_MAX = 1e-4
 
 
-def hmatrix_tol(dim: int) -> float:
-    """The H-matrix tolerance of the boundary operators of a body in R^dim."""
-    return HMATRIX_TOL if dim == 2 else HMATRIX_TOL_3D
+def hmatrix_tol(dim: int, boundary_dofs: int) -> float:
+    """The H-matrix tolerance of the boundary operators of a body in R^dim whose boundary
+    carries ``boundary_dofs`` dofs (``HMATRIX_TOL`` in 2D; in 3D see
+    ``HMATRIX_TOL_3D_SCALE``)."""
+    if dim == 2:
+        return HMATRIX_TOL
+    return min(HMATRIX_TOL_3D_MAX, HMATRIX_TOL_3D_SCALE / max(int(boundary_dofs), 1))
 
 
 #: The adaptive loop splits a subdomain (``fem_py.mesh.grading``) once its diameter over its

@@ -51,7 +51,7 @@ def exterior_from_fields(fields: dict, points: np.ndarray, tol: float | None = N
         a=float(fields["a"]),
         flux=str(fields["flux_space"]),
         compression="auto",
-        tol=hmatrix_tol(np.asarray(fields["boundary_x"]).shape[1]) if tol is None else tol,
+        tol=hmatrix_tol(*np.asarray(fields["boundary_x"]).shape[::-1]) if tol is None else tol,
         **({} if surface is None else {"triangles": surface}),
     )
 
