@@ -198,7 +198,7 @@ HMATRIX_TOL = 1e-10
 #: error of 3.0e-4 at 32^3 cubes (6,146 boundary dofs: tol 4.1e-5), 3.0e-7 at 1e-5
 #: against 8.2e-5 at 64^3 (24,578: tol 1.0e-5), 2.9e-6 at 1e-4 against 1.1e-3 at 16^3
 #: (1,538: tol 1e-4): 0.3-0.4 % of the error, which itself moves in its fourth digit; the
-#: S_h set-up at 64^3 takes a quarter less time than at 1e-6 (docs/design/
+#: S_h set-up at 64^3 takes about a fifth less time than at 1e-6 (docs/design/
 #: three_dimensions.md, "The boundary operators' accuracy").
 HMATRIX_TOL_3D_SCALE = 0.25
 HMATRIX_TOL_3D_MAX = 1e-4
