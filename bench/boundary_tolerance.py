@@ -53,7 +53,7 @@ def main() -> None:
             u = result.u.x.array.copy()
             reference = u if reference is None else reference
             options.HMATRIX_TOL_3D_MAX, options.HMATRIX_TOL_3D_SCALE = saved
-            own = options.hmatrix_tol(3, problem.boundary.n_gamma)
+            own = options.hmatrix_tol(problem.boundary.nodes)
             print(
                 f"cells {cells} (N_Gamma {problem.boundary.n_gamma}, the solver's tol "
                 f"{own:.1e}) tol {tol:.0e}: set-up {set_up:.1f} s, "

@@ -6,7 +6,7 @@ each row. The H-matrix time includes its set-up (each call builds it). The table
 the crossover of ``compression="auto"`` (``bem_cpp.HMATRIX_POTENTIAL_CROSSOVER``) are in
 docs/design/hmatrix.md, "Potentials".
 
-3D (``--shape sphere|cube``, tol ``coupling.options.hmatrix_tol(3, n)``): n is the number
+3D (``--shape sphere|cube``, tol ``coupling.options.hmatrix_tol``): n is the number
 of vertices (the nearest icosphere level, or cube with that many), the m points a pixel
 grid on the body's mid-plane out to twice its half-width, outside it (the slice picture
 of a 3D run, coupling/io/body_figure_data.py); docs/design/bem3d.md, "The exterior
@@ -89,7 +89,7 @@ def cases(shape: str, sizes: list[str]):
         n, m = (int(x) for x in size.split(":"))
         if shape in ("sphere", "cube"):
             X, T = surface(shape, n)
-            yield X, slice_grid(shape, m), {"triangles": T, "tol": hmatrix_tol(3, X.shape[0])}
+            yield X, slice_grid(shape, m), {"triangles": T, "tol": hmatrix_tol(X)}
         else:
             X = circle(n) if shape == "circle" else l_shape(n)
             yield X, image_grid(X, m), {"tol": HMATRIX_TOL}

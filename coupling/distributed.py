@@ -125,7 +125,7 @@ def steklov_poincare(
             nodes,
             flux=flux,
             compression="hmatrix",
-            tol=hmatrix_tol(nodes.shape[1], nodes.shape[0]),
+            tol=hmatrix_tol(nodes),
             comm=comm if comm.size > 1 else None,
             **surface,
         )

@@ -17,6 +17,8 @@ import dataclasses
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
+
 from fem_py.spec import GeometrySpec
 
 __all__ = [
@@ -204,10 +206,10 @@ HMATRIX_TOL_3D_SCALE = 0.25
 HMATRIX_TOL_3D_MAX = 1e-4
 
 
-def hmatrix_tol(dim: int, boundary_dofs: int) -> float:
-    """The H-matrix tolerance of the boundary operators of a body in R^dim whose boundary
-    carries ``boundary_dofs`` dofs (``HMATRIX_TOL`` in 2D; in 3D see
-    ``HMATRIX_TOL_3D_SCALE``)."""
+def hmatrix_tol(nodes: Any) -> float:
+    """The H-matrix tolerance of the boundary operators on the boundary nodes ``nodes``
+    (N_Gamma, dim): ``HMATRIX_TOL`` in 2D; in 3D see ``HMATRIX_TOL_3D_SCALE``."""
+    boundary_dofs, dim = np.shape(nodes)
     if dim == 2:
         return HMATRIX_TOL
     return min(HMATRIX_TOL_3D_MAX, HMATRIX_TOL_3D_SCALE / max(int(boundary_dofs), 1))

@@ -173,6 +173,6 @@ class SignoriniProblem:
             a=self.a,
             flux=self.flux_space,
             compression="auto",
-            tol=hmatrix_tol(self.boundary.nodes.shape[1], self.boundary.nodes.shape[0]),
+            tol=hmatrix_tol(self.boundary.nodes),
             **self._surface,
         )

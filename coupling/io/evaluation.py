@@ -51,15 +51,9 @@ def exterior_from_fields(fields: dict, points: np.ndarray, tol: float | None = N
         a=float(fields["a"]),
         flux=str(fields["flux_space"]),
         compression="auto",
-        tol=_solver_tol(fields["boundary_x"]) if tol is None else tol,
+        tol=hmatrix_tol(fields["boundary_x"]) if tol is None else tol,
         **({} if surface is None else {"triangles": surface}),
     )
-
-
-def _solver_tol(boundary_x: np.ndarray) -> float:
-    """The solver's H-matrix tolerance for the boundary nodes ``boundary_x`` (m, dim)."""
-    m, dim = np.asarray(boundary_x).shape
-    return hmatrix_tol(dim, m)
 
 
 def evaluate(fields: dict, points: np.ndarray) -> dict[str, np.ndarray]:
