@@ -1,8 +1,10 @@
 """The structured box and the gmsh ball of fem_py.mesh (docs/method.md section 11): the
-closed-form counts equal the meshed ones, the faces are tagged by name, bad sizes are
-refused in one line."""
+closed-form counts equal the meshed ones, the box written down in parallel is
+``create_box``'s with a complete ghost layer on 1, 2 and 3 ranks, the faces are tagged by
+name, bad sizes are refused in one line."""
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -12,6 +14,7 @@ from dolfinx import fem
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
+from conftest import ROOT, run_mpi
 from fem_py.mesh.args3d import signorini_tags
 from fem_py.mesh.ball import BALL_FACES, EQUATOR_TAG, ball_mesh, check_ball
 from fem_py.mesh.box import BOX_FACES, box_counts, box_mesh, check_box, cubes_per_side
@@ -39,6 +42,21 @@ def test_counts_closed_form_equal_meshed(n):
     msh.topology.create_connectivity(2, 3)
     n_ext = len(dmesh.exterior_facet_indices(msh.topology))  # owned only
     assert COMM.allreduce(n_ext) == counts.boundary_triangles
+
+
+@pytest.mark.mpi
+def test_box_is_create_boxs_on_one_two_and_three_ranks(tmp_path):
+    """The same tetrahedra as ``dolfinx.mesh.create_box``, every facet of an owned cell
+    inside the box shared with a local (owned or ghost) cell, and the cubes split evenly."""
+    for ranks in (1, 2, 3):
+        out = tmp_path / f"box{ranks}.json"
+        run_mpi(ranks, str(ROOT / "tests" / "mpi" / "box_mesh_check.py"), str(out), timeout=120)
+        result = json.loads(out.read_text())
+        assert result["ranks"] == ranks
+        assert result["same_tetrahedra"] and result["tetrahedra"] == 6 * 5**3
+        assert result["open_facets_inside"] == 0
+        assert sum(result["owned"]) == 6 * 5**3
+        assert max(result["owned"]) - min(result["owned"]) <= 6  # whole cubes, evenly
 
 
 def test_faces_tagged_by_name():

@@ -1,7 +1,8 @@
 """The structured box of ``[geometry] shape = "box"`` (docs/method.md section 11).
 
 The cube [c - w/2, c + w/2]^3 is cut into n = round(w / h) cubes per side, each split
-into six tetrahedra (``dolfinx.mesh.create_box`` with ``CellType.tetrahedron``), so
+into six tetrahedra (:data:`KUHN_TETRAHEDRA`, those of ``dolfinx.mesh.create_box`` with
+``CellType.tetrahedron``), so
 
     cells 6 n^3,  vertices (n+1)^3 (the P1 dofs),
     boundary vertices (n+1)^3 - (n-1)^3 = 6 n^2 + 2,  boundary triangles 12 n^2
@@ -9,6 +10,14 @@ into six tetrahedra (``dolfinx.mesh.create_box`` with ``CellType.tetrahedron``),
 (:func:`box_counts`, without meshing, for the size plan). The six faces carry facet tags
 named after their outward normal: ``bottom`` (z min), ``top`` (z max), ``left`` (x min),
 ``right`` (x max), ``front`` (y min), ``back`` (y max) (:data:`BOX_FACES`).
+
+:func:`box_mesh` writes the mesh down in parallel from its closed form, as the 2D
+structured mesh does (``fem_py.mesh.distribute.distribute_structured``): each rank makes
+the tetrahedra of a contiguous range of cubes (lexicographic, x fastest: slabs of the box
+when the ranks divide n) and an even block of the vertex coordinates, and tells DOLFINx
+where each cell goes, so no graph is partitioned and no rank holds the whole mesh
+(measured against ``create_box``: docs/design/three_dimensions.md, "The box written down
+in parallel").
 """
 from __future__ import annotations
 
@@ -20,11 +29,13 @@ from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
 from fem_py.mesh.args3d import checked_point, checked_positive
+from fem_py.mesh.distribute import destinations
 
 __all__ = [
     "BOX_FACES",
     "BoxCounts",
     "BoxLattice",
+    "KUHN_TETRAHEDRA",
     "box_counts",
     "box_mesh",
     "check_box",
@@ -41,6 +52,13 @@ BOX_FACES: dict[str, tuple[int, int]] = {
     "front": (1, 0),
     "back": (1, 1),
 }
+
+#: The six tetrahedra of a cube around its diagonal from corner 0 to corner 7 (Kuhn's, in
+#: ``create_box``'s order); corner k of the cube with lowest vertex (i, j, l) is
+#: (i + (k & 1), j + (k >> 1 & 1), l + (k >> 2)).
+KUHN_TETRAHEDRA = np.array(
+    [[0, 1, 3, 7], [0, 1, 7, 5], [0, 5, 7, 4], [0, 3, 2, 7], [0, 6, 4, 7], [0, 2, 6, 7]]
+)
 
 
 @dataclass(frozen=True)
@@ -130,7 +148,17 @@ def box_mesh(
     c, width, h = check_box(center, width, h)
     n = cubes_per_side(width, h)
     lo, hi = c - width / 2, c + width / 2
-    msh = dmesh.create_box(comm, [lo, hi], [n, n, n], dmesh.CellType.tetrahedron)
+    starts = n**3 * np.arange(comm.size + 1, dtype=np.int64) // comm.size
+    cubes = np.arange(starts[comm.rank], starts[comm.rank + 1])
+    cells = _cells_of_cubes(n, cubes)
+    links = _ghost_links(n, cubes, starts, comm.rank)
+    N = (n + 1) ** 3
+    x = _vertices(lo, hi, n, comm.rank * N // comm.size, (comm.rank + 1) * N // comm.size)
+
+    def partitioner(comm_, nparts, tdim, local_cells, ghost_mode):
+        return destinations(np.full(len(cells), comm.rank, dtype=np.int64), links)
+
+    msh = dmesh.create_mesh(comm, cells, x, _ufl_tetrahedron_mesh(), partitioner=partitioner)
     fdim = msh.topology.dim - 1
     msh.topology.create_connectivity(fdim, msh.topology.dim)
     tol = 1e-10 * width
@@ -149,3 +177,66 @@ def box_mesh(
     order = np.argsort(idx, kind="stable")
     facet_tags = dmesh.meshtags(msh, fdim, idx[order], val[order])
     return msh, facet_tags, names
+
+
+def _corner_offsets(n: int) -> np.ndarray:
+    """Vertex number of each cube corner (0..7) less that of its corner 0 (vertices
+    numbered i + (n+1) (j + (n+1) l), as ``create_box`` numbers them)."""
+    k = np.arange(8)
+    return (k & 1) + (n + 1) * ((k >> 1 & 1) + (n + 1) * (k >> 2))
+
+
+def _cube_indices(n: int, cubes: np.ndarray) -> np.ndarray:
+    """(len(cubes), 3) lattice indices (i, j, l) of cubes numbered i + n (j + n l)."""
+    return np.stack([cubes % n, cubes // n % n, cubes // (n * n)], axis=1)
+
+
+def _cells_of_cubes(n: int, cubes: np.ndarray) -> np.ndarray:
+    """(6 len(cubes), 4) vertex numbers of the Kuhn tetrahedra of ``cubes``, cube after cube."""
+    ijl = _cube_indices(n, cubes)
+    corner0 = ijl[:, 0] + (n + 1) * (ijl[:, 1] + (n + 1) * ijl[:, 2])
+    local = _corner_offsets(n)[KUHN_TETRAHEDRA]  # (6, 4)
+    return (corner0[:, None, None] + local[None]).reshape(-1, 4)
+
+
+def _faces_of_tetrahedra() -> list[list[tuple[int, int]]]:
+    """Per Kuhn tetrahedron, the cube faces (axis, side) it has a facet on (three of its
+    corners on the face)."""
+    bits = (KUHN_TETRAHEDRA[..., None] >> np.arange(3)) & 1  # (6, 4, 3)
+    return [
+        [(a, s) for a in range(3) for s in (0, 1) if np.sum(bits[t, :, a] == s) == 3]
+        for t in range(len(KUHN_TETRAHEDRA))
+    ]
+
+
+def _ghost_links(n: int, cubes: np.ndarray, starts: np.ndarray, rank: int) -> np.ndarray:
+    """(cell, rank) rows for DOLFINx's shared-facet ghost mode: a local tetrahedron is
+    ghosted on the rank owning the cube across any of its facets on its cube's faces
+    (cube ranges ``starts``: rank r owns cubes starts[r] .. starts[r+1] - 1)."""
+    if len(starts) == 2:
+        return np.empty((0, 2), dtype=np.int64)
+    ijl, stride = _cube_indices(n, cubes), np.array([1, n, n * n])
+    rows = []
+    for t, faces in enumerate(_faces_of_tetrahedra()):
+        for axis, side in faces:
+            step = 2 * side - 1
+            inside = np.flatnonzero((ijl[:, axis] + step >= 0) & (ijl[:, axis] + step < n))
+            owner = np.searchsorted(starts, cubes[inside] + step * stride[axis], "right") - 1
+            away = owner != rank
+            rows.append(np.stack([6 * inside[away] + t, owner[away]], axis=1))
+    return np.unique(np.concatenate(rows), axis=0)
+
+
+def _vertices(lo: np.ndarray, hi: np.ndarray, n: int, start: int, stop: int) -> np.ndarray:
+    """Coordinates (stop - start, 3) of the box's vertices numbered start .. stop - 1."""
+    v = np.arange(start, stop, dtype=np.int64)
+    ijl = np.stack([v % (n + 1), v // (n + 1) % (n + 1), v // (n + 1) ** 2], axis=1)
+    return lo + (hi - lo) * (ijl / n)
+
+
+def _ufl_tetrahedron_mesh() -> Any:
+    """The UFL domain of a P1 tetrahedral mesh."""
+    import ufl
+
+    cell = ufl.Cell("tetrahedron", geometric_dimension=3)
+    return ufl.Mesh(ufl.VectorElement(ufl.FiniteElement("Lagrange", cell, 1, variant="equispaced")))

@@ -25,7 +25,7 @@ from dolfinx import mesh as dmesh
 from fem_py.mesh.structured import StructuredRefinement
 from fem_py.parallel import broadcast_from_root, gather_to_root
 
-__all__ = ["distribute_mesh", "distribute_structured", "subdomain_owners", "reghost"]
+__all__ = ["destinations", "distribute_mesh", "distribute_structured", "subdomain_owners", "reghost"]
 
 #: (mesh, cell tags "subdomains" (dim 2), facet tags "boundary" (dim 1)).
 TaggedMesh = tuple[Any, Any, Any]
@@ -74,7 +74,7 @@ def subdomain_owners(
     return part[subdomain]
 
 
-def _destinations(owner: np.ndarray, links: np.ndarray) -> Any:
+def destinations(owner: np.ndarray, links: np.ndarray) -> Any:
     """DOLFINx partitioner output: per local cell its owner, then the ranks ghosting it
     (``links``: unique (cell, rank) rows)."""
     from dolfinx import cpp
@@ -107,7 +107,7 @@ def _owner_and_ghosts(cells: np.ndarray, owner: np.ndarray) -> Any:
     cut = owner[a] != owner[b]
     a, b = a[cut], b[cut]
     links = np.unique(np.stack([np.concatenate([a, b]), owner[np.concatenate([b, a])]], 1), axis=0)
-    return _destinations(owner, links.reshape(-1, 2))
+    return destinations(owner, links.reshape(-1, 2))
 
 
 def _tagged_mesh(
@@ -243,7 +243,7 @@ def distribute_structured(
     x = ref.coordinates(comm.rank * N // comm.size, (comm.rank + 1) * N // comm.size)
 
     def partitioner(comm_, nparts, tdim, local_cells, ghost_mode):
-        return _destinations(
+        return destinations(
             np.full(len(cells), comm.rank, dtype=np.int64),
             ref.ghost_ranks(mine, rank_of_cell, comm.rank),
         )
@@ -320,7 +320,7 @@ def reghost(msh: Any) -> Any:
     links = np.unique(np.array(links, dtype=np.int64).reshape(-1, 2), axis=0)
 
     def partitioner(comm_, nparts, tdim, local_cells, ghost_mode):
-        return _destinations(np.full(n_own, comm.rank, dtype=np.int64), links)
+        return destinations(np.full(n_own, comm.rank, dtype=np.int64), links)
 
     return dmesh.create_mesh(
         comm,
