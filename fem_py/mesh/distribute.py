@@ -25,7 +25,13 @@ from dolfinx import mesh as dmesh
 from fem_py.mesh.structured import StructuredRefinement
 from fem_py.parallel import broadcast_from_root, gather_to_root
 
-__all__ = ["destinations", "distribute_mesh", "distribute_structured", "subdomain_owners", "reghost"]
+__all__ = [
+    "destinations",
+    "distribute_mesh",
+    "distribute_structured",
+    "subdomain_owners",
+    "reghost",
+]
 
 #: (mesh, cell tags "subdomains" (dim 2), facet tags "boundary" (dim 1)).
 TaggedMesh = tuple[Any, Any, Any]
