@@ -27,7 +27,8 @@ Gauss rules whose size follows from distance/length. Matrix entries agree with 3
 mpmath references to better than 1e-12 relative (docs/design/quadrature.md).
 
 Modules: ``checks`` (input validation), ``defaults`` (every default), ``operators``
-(dense Galerkin matrices), ``compressed`` (H-matrix operators and S_h), ``potentials``
+(dense Galerkin matrices), ``compressed`` (H-matrix operators and S_h), ``dense`` (a
+matrix held in single precision, applied in double), ``potentials``
 (the representation formula), ``surfaces`` (test surfaces in 3D); this module only
 re-exports their public names.
 """

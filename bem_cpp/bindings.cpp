@@ -9,6 +9,7 @@
 #include <memory>
 
 #include "bem/boundary_operators.hpp"
+#include "bem/linear_algebra.hpp"
 #include "bem/operators.hpp"
 #include "bem/potential_operator.hpp"
 #include "bem/potentials.hpp"
@@ -96,6 +97,7 @@ PYBIND11_MODULE(_bem, m) {
   m.def("double_layer", py::overload_cast<NodesRef, Space>(&bem::double_layer), py::arg("nodes"), py::arg("space"),
         Release());
   m.def("hypersingular", py::overload_cast<NodesRef>(&bem::hypersingular), py::arg("nodes"), Release());
+  m.def("single_matvec", &bem::single_matvec, py::arg("matrix"), py::arg("x"), Release());
   m.def("mass", py::overload_cast<NodesRef, Space>(&bem::mass), py::arg("nodes"), py::arg("space"), Release());
   m.def("steklov_poincare", py::overload_cast<NodesRef, Space>(&bem::steklov_poincare), py::arg("nodes"),
         py::arg("flux"), Release());
@@ -172,6 +174,8 @@ PYBIND11_MODULE(_bem, m) {
       .def("flux", &bem::SurfaceSteklovOperator::flux, py::arg("x"), py::arg("solver_tol") = 0.0, Release())
       .def("hypersingular", &bem::SurfaceSteklovOperator::hypersingular, py::arg("x"), Release())
       .def("hypersingular_block", &bem::SurfaceSteklovOperator::hypersingular_block, py::arg("indices"), Release())
+      .def("hypersingular_block_single", &bem::SurfaceSteklovOperator::hypersingular_block_single, py::arg("indices"),
+           Release())
       .def_property_readonly("size", &bem::SurfaceSteklovOperator::size)
       .def_property_readonly("nbytes", &bem::SurfaceSteklovOperator::nbytes)
       .def_property_readonly("info", &bem::SurfaceSteklovOperator::info)

@@ -14,6 +14,7 @@ from numpy.typing import ArrayLike, NDArray
 import bem_cpp._bem as _bem
 from bem_cpp import checks, defaults
 from bem_cpp.collectives import mpi_collectives
+from bem_cpp.dense import SingleMatrix
 
 
 class _CompiledOperator:
@@ -112,6 +113,12 @@ class SteklovPoincareOperator(_CompiledOperator):
 
     dtype = np.dtype(np.float64)
 
+    def __init__(self, compiled: _bem.SteklovPoincareOperator, *, single_precision: bool = False):
+        super().__init__(compiled)
+        #: whether the H-matrix blocks are held in single precision (a surface's at the
+        #: tolerances ``defaults.HMATRIX_SINGLE_PRECISION_MIN_TOL`` and looser)
+        self.single_precision = bool(single_precision)
+
     @property
     def last_iterations(self) -> int:
         return int(self._op.last_iterations)
@@ -147,14 +154,19 @@ class SteklovPoincareOperator(_CompiledOperator):
         :meth:`hypersingular_block` can read blocks of it."""
         return hasattr(self._op, "hypersingular_block")
 
-    def hypersingular_block(self, indices: ArrayLike) -> NDArray[np.float64]:
+    def hypersingular_block(self, indices: ArrayLike) -> NDArray[np.float64] | SingleMatrix:
         """W_h[indices, indices] = E^T W_h E (k, k) read from the H-matrix of W_h (to its
         tolerance), in O(k^2 r) work instead of integrating the block again (a surface's S_h
         only: :attr:`holds_hypersingular`; collective when distributed, the same on every
-        rank)."""
+        rank). In the precision of the blocks: a float64 array, or, when they are held in
+        single precision (:attr:`single_precision`), a :class:`bem_cpp.dense.SingleMatrix`
+        (its entries carry the blocks' rounding already; half the memory)."""
         if not self.holds_hypersingular:
             raise TypeError("hypersingular_block: this S_h holds no H-matrix of W_h on P1 nodes")
-        return self._op.hypersingular_block(checks.indices(indices, self._op.size, "indices"))
+        indices = checks.indices(indices, self._op.size, "indices")
+        if self.single_precision:  # Eigen's column-major array: its transpose, in C order
+            return SingleMatrix(self._op.hypersingular_block_single(indices).T)
+        return self._op.hypersingular_block(indices)
 
     def __repr__(self) -> str:
         n = self._op.size
@@ -314,7 +326,8 @@ def _compressed_operator(
             allgather=allgather,
             allreduce=allreduce,
             **params,
-        )
+        ),
+        single_precision=params.get("single_precision", False),
     )
     if timings is not None:
         timings.update(setup=op.info.setup_seconds)

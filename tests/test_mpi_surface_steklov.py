@@ -26,3 +26,7 @@ def test_distributed_surface_operator_equals_the_serial_one(tmp_path):
     assert np.array_equal(d["block"], d["block_serial"]) and len(d["block"]) > 100
     integrated = d["block_integrated"]
     assert np.linalg.norm(d["block"] - integrated) <= 1e-8 * np.linalg.norm(integrated)
+    # in single precision (blocks held in single at tol 1e-5): summed over the ranks in
+    # double, then rounded once, the serial block's entries to the bit
+    assert d["single"].dtype == np.float32 and np.array_equal(d["single"], d["single_serial"])
+    assert np.linalg.norm(d["single"] - integrated) <= 1e-5 * np.linalg.norm(integrated)

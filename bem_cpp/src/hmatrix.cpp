@@ -437,7 +437,10 @@ Eigen::MatrixXd HMatrix::to_dense() const {
   return A;
 }
 
-Eigen::MatrixXd HMatrix::principal_submatrix(const std::vector<Index>& indices) const {
+template <typename Scalar>
+Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic> HMatrix::principal_submatrix(
+    const std::vector<Index>& indices) const {
+  using Dense = Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>;
   const Index m = static_cast<Index>(indices.size());
   if (rows() != cols()) throw std::invalid_argument("HMatrix::principal_submatrix: the matrix is not square");
   // The block is written in the trees' order first: the selected rows (columns) of a block are
@@ -463,7 +466,7 @@ Eigen::MatrixXd HMatrix::principal_submatrix(const std::vector<Index>& indices) 
     for (Index& r : *rank)
       if (r == 0) r = next++;
   }
-  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(m, m);
+  Dense A = Dense::Zero(m, m);
   std::vector<Index> r_local, c_local;
   for (const Block& b : blocks_) {
     r_local.clear(), c_local.clear();
@@ -477,9 +480,10 @@ Eigen::MatrixXd HMatrix::principal_submatrix(const std::vector<Index>& indices) 
     const Index c_first = col_rank[static_cast<std::size_t>(b.c0 + c_local.front())];
     const Index nr = static_cast<Index>(r_local.size()), nc = static_cast<Index>(c_local.size());
     const Eigen::MatrixXd D = block_entries(b, single_, r_local, c_local);
-    A.block(r_first, c_first, nr, nc) = D;
+    A.block(r_first, c_first, nr, nc) = D.template cast<Scalar>();
     // symmetric storage has one tree: row and column ranks agree
-    if (symmetric_ && b.row_cluster != b.col_cluster) A.block(c_first, r_first, nc, nr) = D.transpose();
+    if (symmetric_ && b.row_cluster != b.col_cluster)
+      A.block(c_first, r_first, nc, nr) = D.transpose().template cast<Scalar>();
   }
   // to the callers' order: A(a, b) <- A(row_of[a], col_of[b])
   std::vector<Index> row_of(static_cast<std::size_t>(m)), col_of(row_of);
@@ -488,7 +492,7 @@ Eigen::MatrixXd HMatrix::principal_submatrix(const std::vector<Index>& indices) 
     row_of[static_cast<std::size_t>(a)] = row_rank[static_cast<std::size_t>(inverse_rows[i])];
     col_of[static_cast<std::size_t>(a)] = col_rank[static_cast<std::size_t>(inverse_cols[i])];
   }
-  Eigen::VectorXd column(m);
+  Eigen::Matrix<Scalar, Eigen::Dynamic, 1> column(m);
   for (Index j = 0; j < m; ++j) {
     column = A.col(j);
     A.col(j) = column(row_of);
@@ -511,6 +515,9 @@ Eigen::MatrixXd HMatrix::principal_submatrix(const std::vector<Index>& indices) 
   }
   return A;
 }
+
+template Eigen::MatrixXd HMatrix::principal_submatrix<double>(const std::vector<Index>&) const;
+template Eigen::MatrixXf HMatrix::principal_submatrix<float>(const std::vector<Index>&) const;
 
 std::size_t HMatrix::nbytes() const {
   std::size_t doubles = 0, singles = 0;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 // Fortran LAPACK/BLAS symbols (LP64). The trailing lengths are the hidden
@@ -102,6 +103,24 @@ ThinSvd thin_svd(Eigen::MatrixXd A) {
   if (info > 0) throw std::runtime_error("dgesvd: the QR iteration did not converge");
   r.V.transposeInPlace();  // V^T (k x n) -> V (n x k)
   return r;
+}
+
+Eigen::VectorXd single_matvec(const Eigen::Ref<const SingleMatrix>& A, const Eigen::Ref<const Eigen::VectorXd>& x) {
+  if (A.cols() != x.size())
+    throw std::invalid_argument("single_matvec: A has " + std::to_string(A.cols()) + " columns, x " +
+                                std::to_string(x.size()) + " entries");
+  const Index m = A.rows(), n = A.cols();
+  Eigen::VectorXd y(m);
+  const double* xs = x.data();
+#pragma omp parallel for schedule(static)
+  for (Index i = 0; i < m; ++i) {
+    const float* a = A.data() + i * A.outerStride();
+    double s = 0.0;
+#pragma omp simd reduction(+ : s)
+    for (Index j = 0; j < n; ++j) s += static_cast<double>(a[j]) * xs[j];
+    y(i) = s;
+  }
+  return y;
 }
 
 }  // namespace bem

@@ -68,7 +68,7 @@ Eigen::MatrixXd SurfaceSteklovOperator::hypersingular(const Eigen::Ref<const Eig
 }
 
 Eigen::MatrixXd SurfaceSteklovOperator::hypersingular_block(const std::vector<Index>& indices) const {
-  const Eigen::MatrixXd partial = W_->principal_submatrix(indices);
+  const Eigen::MatrixXd partial = W_->principal_submatrix<double>(indices);
   const std::shared_ptr<const Communicator>& comm = options_.hmatrix.comm;
   if (!comm || comm->size == 1) return partial;
   // every entry comes from one block of one rank: the sum is exact, in any order
@@ -76,6 +76,12 @@ Eigen::MatrixXd SurfaceSteklovOperator::hypersingular_block(const std::vector<In
   std::vector<Index> counts(static_cast<std::size_t>(comm->size), m / comm->size);
   for (Index r = 0; r < m % comm->size; ++r) ++counts[static_cast<std::size_t>(r)];
   return comm->allreduce(partial, counts);
+}
+
+Eigen::MatrixXf SurfaceSteklovOperator::hypersingular_block_single(const std::vector<Index>& indices) const {
+  const std::shared_ptr<const Communicator>& comm = options_.hmatrix.comm;
+  if (!comm || comm->size == 1) return W_->principal_submatrix<float>(indices);
+  return hypersingular_block(indices).cast<float>();
 }
 
 Eigen::MatrixXd SurfaceSteklovOperator::precondition(const Eigen::MatrixXd& R) const {

@@ -83,7 +83,7 @@ TEST(HMatrix, PrincipalSubmatrixIsThatOfTheDenseMatrix) {
   for (const HMatrix* H : {&sym, &general}) {
     const Eigen::MatrixXd D = H->to_dense();
     for (const auto& idx : {scattered, arc}) {
-      const Eigen::MatrixXd B = H->principal_submatrix(idx);
+      const Eigen::MatrixXd B = H->principal_submatrix<double>(idx);
       ASSERT_EQ(B.rows(), static_cast<Index>(idx.size()));
       Eigen::MatrixXd expected(B.rows(), B.cols());
       for (std::size_t a = 0; a < idx.size(); ++a)
@@ -92,8 +92,8 @@ TEST(HMatrix, PrincipalSubmatrixIsThatOfTheDenseMatrix) {
       EXPECT_LE((B - expected).norm(), 1e-14 * expected.norm());
     }
   }
-  EXPECT_THROW(sym.principal_submatrix({0, 5, 5}), std::invalid_argument);
-  EXPECT_THROW(sym.principal_submatrix({n}), std::invalid_argument);
+  EXPECT_THROW(sym.principal_submatrix<double>({0, 5, 5}), std::invalid_argument);
+  EXPECT_THROW(sym.principal_submatrix<double>({n}), std::invalid_argument);
 }
 
 TEST(HMatrix, SinglePrecisionStorageRoundsEachBlockOnce) {
@@ -125,8 +125,11 @@ TEST(HMatrix, SinglePrecisionStorageRoundsEachBlockOnce) {
     }
     std::vector<Index> arc;
     for (Index i = 100; i < 260; ++i) arc.push_back(i);
-    const Eigen::MatrixXd B = f.principal_submatrix(arc);
+    const Eigen::MatrixXd B = f.principal_submatrix<double>(arc);
     EXPECT_LE((B - Df(arc, arc)).norm(), 1e-14 * B.norm());
+    // in single precision: each entry of the double block rounded once, to the bit
+    const Eigen::MatrixXf Bf = f.principal_submatrix<float>(arc);
+    EXPECT_EQ(Bf, B.cast<float>());
     EXPECT_LT(static_cast<double>(f.nbytes()), 0.6 * static_cast<double>(d.nbytes()));
   }
 }

@@ -9,11 +9,15 @@ import numpy as np
 import scipy.linalg
 import scipy.sparse.linalg
 
+from bem_cpp.dense import SingleMatrix
+
 __all__ = [
     "Preconditioner",
     "IdentityPreconditioner",
     "DenseSignoriniBlock",
     "check_length",
+    "cholesky_of",
+    "dense_metric",
     "largest_eigenvalue",
     "omega_cycle",
 ]
@@ -105,16 +109,8 @@ class DenseSignoriniBlock:
     on first use: only the inexact projection reads it) and ``signorini_metric`` of the
     interface, for preconditioners to inherit."""
 
-    def __init__(self, metric: np.ndarray):
-        metric = np.asarray(metric, dtype=float)
-        # M_s is symmetric: a Fortran-ordered array (Eigen's, from bem_cpp) is held as its
-        # transpose, a C-ordered view of the same bytes, not copied (n_s^2 doubles: 2.1 GB
-        # at 128^3 cubes, a third array at the peak next to the caller's and the factor)
-        self.signorini_metric = (
-            metric.T
-            if metric.flags.f_contiguous and not metric.flags.c_contiguous
-            else np.ascontiguousarray(metric)
-        )
+    def __init__(self, metric: np.ndarray | SingleMatrix):
+        self.signorini_metric = dense_metric(metric)
         self.n_signorini = self.signorini_metric.shape[0]
         self._lambda_max: float | None = None
         self._signorini_factor = None
@@ -128,7 +124,7 @@ class DenseSignoriniBlock:
         projection to share; None without Signorini unknowns, or once
         :attr:`signorini_inverse` has replaced it."""
         if self._signorini_factor is None and self._signorini_inverse is None and self.n_signorini:
-            self._signorini_factor = scipy.linalg.cho_factor(self.signorini_metric)
+            self._signorini_factor = cholesky_of(self.signorini_metric)
         return self._signorini_factor
 
     @property
@@ -162,6 +158,27 @@ class DenseSignoriniBlock:
 
     def matvec_signorini(self, phi: np.ndarray) -> np.ndarray:
         return self.signorini_metric @ phi
+
+
+def dense_metric(metric: np.ndarray | SingleMatrix) -> np.ndarray | SingleMatrix:
+    """A dense symmetric M_s as held: a :class:`bem_cpp.dense.SingleMatrix` as it is (single
+    precision, applied in double); an array as float64 in C order, a Fortran-ordered one
+    (Eigen's, from bem_cpp) as its transpose, a view of the same bytes, not copied (n_s^2
+    doubles: 2.1 GB at 128^3 cubes)."""
+    if isinstance(metric, SingleMatrix):
+        return metric
+    metric = np.asarray(metric, dtype=float)
+    if metric.flags.f_contiguous and not metric.flags.c_contiguous:
+        return metric.T
+    return np.ascontiguousarray(metric)
+
+
+def cholesky_of(metric: np.ndarray | SingleMatrix) -> tuple[np.ndarray, bool]:
+    """The Cholesky factor (``scipy.linalg.cho_factor``'s) of a dense SPD M: of a float64
+    copy factored in place for a :class:`bem_cpp.dense.SingleMatrix`, else of a copy."""
+    if isinstance(metric, SingleMatrix):
+        return scipy.linalg.cho_factor(metric.to_dense(), overwrite_a=True)
+    return scipy.linalg.cho_factor(metric)
 
 
 def inverse_from_cholesky(factor: tuple[np.ndarray, bool], block: int = 512) -> np.ndarray:

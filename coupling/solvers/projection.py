@@ -27,7 +27,12 @@ import numpy as np
 import scipy.linalg
 import scipy.optimize
 
-from coupling.preconditioners.base import inverse_from_cholesky, largest_eigenvalue
+from coupling.preconditioners.base import (
+    cholesky_of,
+    dense_metric,
+    inverse_from_cholesky,
+    largest_eigenvalue,
+)
 
 __all__ = ["SignoriniProjection", "ProjectionResult"]
 
@@ -80,7 +85,7 @@ class SignoriniProjection:
     ):
         if method not in ("inexact", "exact"):
             raise ValueError(f'projection must be "inexact" or "exact", got {method!r}')
-        self.M = np.asarray(metric, dtype=float)
+        self.M = dense_metric(metric)
         self.method = method
         self.rho_in = rho_in
         self.max_iterations = max_iterations
@@ -88,7 +93,7 @@ class SignoriniProjection:
         self._lambda_max = lambda_max
         self._theta: float | None = None if n > 0 else 0.0
         if factor is None and inverse is None:
-            factor = lambda: scipy.linalg.cho_factor(self.M)  # noqa: E731
+            factor = lambda: cholesky_of(self.M)  # noqa: E731
         # M's Cholesky factor, from _factor_of on first use (the exact projection of an
         # iterate with active nodes never needs it)
         self._factor_of = factor
@@ -272,7 +277,7 @@ class SignoriniProjection:
         psi_A = 0, M_II psi_I = b_I, lam = M psi - b, from the last projection's active set
         (the first one from {b <= 0}, exact for a diagonal M)."""
         M, n = self.M, b.size
-        c = float(np.mean(np.diag(M)))
+        c = float(np.mean(M.diagonal()))
         active = self._active.copy() if self._active is not None else b <= 0.0
         for iteration in range(1, 4 * n + 10):
             free = ~active
@@ -286,7 +291,7 @@ class SignoriniProjection:
             active = new_active
         # The active-set iteration cycled (possible for matrices that are not M-matrices):
         # min ||L^T psi - L^{-1} b|| over psi >= 0, M = L L^T
-        L = scipy.linalg.cholesky(M, lower=True)
+        L = scipy.linalg.cholesky(np.asarray(M), lower=True)
         psi, _ = scipy.optimize.nnls(
             L.T, scipy.linalg.solve_triangular(L, b, lower=True), maxiter=50 * n
         )

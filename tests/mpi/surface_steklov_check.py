@@ -22,7 +22,11 @@ y_serial = serial @ x
 # W_h on the nodes of the cap z > 0.4 (a patch, as Gamma_s), read from the H-matrices
 cap = np.flatnonzero(X[:, 2] > 0.4)
 block, block_serial = distributed.hypersingular_block(cap), serial.hypersingular_block(cap)
-same = comm.allgather(y.tobytes() + block.tobytes())
+# the same block from operators whose blocks are held in single precision
+kw = dict(triangles=T, compression="hmatrix", tol=1e-5)
+single = bem_cpp.steklov_poincare(X, comm=comm, **kw).hypersingular_block(cap).entries
+single_serial = bem_cpp.steklov_poincare(X, **kw).hypersingular_block(cap).entries
+same = comm.allgather(y.tobytes() + block.tobytes() + single.tobytes())
 bytes_per_rank = comm.allgather(distributed.nbytes)
 if comm.rank == 0:
     np.savez(
@@ -31,6 +35,8 @@ if comm.rank == 0:
         y_serial=y_serial,
         block=block,
         block_serial=block_serial,
+        single=single,
+        single_serial=single_serial,
         block_integrated=bem_cpp.hypersingular(X, triangles=T, block=cap),
         iterations=[iterations, serial.last_iterations],
         same_everywhere=all(s == same[0] for s in same),

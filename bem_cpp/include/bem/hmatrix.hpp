@@ -141,7 +141,9 @@ class HMatrix {
   /// dof indices (distinct, in [0, rows())): to_dense()'s submatrix without forming the
   /// whole, in O(sum over the blocks of their selected entries times their rank).
   /// Row-restricted: this rank's contribution (summed over the ranks: the whole block).
-  Eigen::MatrixXd principal_submatrix(const std::vector<Index>& indices) const;
+  /// In single precision (Scalar = float) the entries are rounded once, as they are written.
+  template <typename Scalar = double>
+  Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic> principal_submatrix(const std::vector<Index>& indices) const;
   Index row_begin() const { return row_begin_; }
   Index row_end() const { return row_end_; }
   /// Built on a row range, with or without a communicator.

@@ -2,7 +2,8 @@
 // Thin wrappers of the dense LAPACK/BLAS kernels (dpotrf, dpotrs, dtrsm, dsyrk) used
 // by the Steklov-Poincare operator, and of dgesvd for the recompression of low-rank
 // blocks. The first four run on the row-major matrices in place; OpenBLAS (what
-// libblas.so.3/liblapack.so.3 point to) parallelises them.
+// libblas.so.3/liblapack.so.3 point to) parallelises them. And one kernel of their own:
+// the product of a matrix stored in single precision with a vector in double.
 #include <Eigen/Dense>
 
 #include "bem/geometry.hpp"
@@ -36,5 +37,12 @@ struct ThinSvd {
   Eigen::MatrixXd V;
 };
 ThinSvd thin_svd(Eigen::MatrixXd A);
+
+using SingleMatrix = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+/// y = A x for A held in single precision (row-major), every product and sum in double:
+/// the product of the double matrix with A's entries, at half the memory traffic of a
+/// double matrix (rows split over the OpenMP threads).
+Eigen::VectorXd single_matvec(const Eigen::Ref<const SingleMatrix>& A, const Eigen::Ref<const Eigen::VectorXd>& x);
 
 }  // namespace bem

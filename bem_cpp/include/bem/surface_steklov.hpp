@@ -41,6 +41,10 @@ class SurfaceSteklovOperator {
   /// the surface (e.g. Gamma_s's interior nodes), without integrating it again. The same
   /// on every rank (collective when distributed).
   Eigen::MatrixXd hypersingular_block(const std::vector<Index>& indices) const;
+  /// The same block in single precision (half the memory), for an operator that stores its
+  /// blocks in single precision (its entries carry that rounding already). Serial: written
+  /// in single precision directly; distributed: summed in double, then rounded.
+  Eigen::MatrixXf hypersingular_block_single(const std::vector<Index>& indices) const;
   std::size_t nbytes() const;
   const SteklovInfo& info() const { return info_; }
   int last_iterations() const { return last_iterations_.load(); }
