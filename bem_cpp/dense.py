@@ -14,6 +14,20 @@ import bem_cpp._bem as _bem
 
 __all__ = ["SingleMatrix"]
 
+#: Rows of A[np.ix_(rows, cols)] gathered at a time (a band of 256 x n_s floats).
+_ROWS_PER_BAND = 256
+
+
+def _is_open_mesh(key: Any) -> bool:
+    """Whether ``key`` is ``np.ix_(rows, cols)`` of two integer index arrays."""
+    return (
+        isinstance(key, tuple)
+        and len(key) == 2
+        and all(isinstance(k, np.ndarray) and k.dtype.kind in "iu" for k in key)
+        and key[0].shape == (key[0].size, 1)
+        and key[1].shape == (1, key[1].size)
+    )
+
 
 class SingleMatrix(scipy.sparse.linalg.LinearOperator):
     """The square matrix A whose entries are those of ``entries`` (float32, C order), as a
@@ -51,6 +65,14 @@ class SingleMatrix(scipy.sparse.linalg.LinearOperator):
         return self._matvec(x) if x.ndim == 1 else self._matmat(x)
 
     def __getitem__(self, key: Any) -> NDArray[np.float64]:
+        if _is_open_mesh(key):  # A[np.ix_(rows, cols)]: filled a band of rows at a time,
+            # without the whole block in single precision next to it
+            rows, cols = np.ravel(key[0]), np.ravel(key[1])
+            block = np.empty((rows.size, cols.size))
+            for start in range(0, rows.size, _ROWS_PER_BAND):
+                band = rows[start : start + _ROWS_PER_BAND]
+                block[start : start + band.size] = self.entries[band][:, cols]
+            return block
         return self.entries[key].astype(np.float64)
 
     def diagonal(self) -> NDArray[np.float64]:

@@ -29,6 +29,9 @@ def test_products_are_those_of_the_double_matrix_of_the_entries(spd):
     rows, cols = np.array([5, 1, 7]), np.array([2, 9])
     block = M[np.ix_(rows, cols)]
     assert block.dtype == np.float64 and np.array_equal(block, D[np.ix_(rows, cols)])
+    free = np.random.default_rng(5).random(300) < 0.6  # a boolean mask, as a free set
+    assert np.array_equal(M[np.ix_(free, free)], D[np.ix_(free, free)])  # in bands of rows
+    assert np.array_equal(M[3:7, ::2], D[3:7, ::2])
     assert np.array_equal(M.diagonal(), np.diag(D))
     assert np.array_equal(np.asarray(M), D) and np.asarray(M).dtype == np.float64
     assert M.shape == (300, 300) and M.dtype == np.float64 and M.nbytes == 300 * 300 * 4

@@ -19,10 +19,11 @@ matrix entries per dof (DOF_BYTES_3D), the dense boundary matrices are eight n x
 arrays (V_h, K_h, W_h, S_h and the P0 single layer of Nedelec's identity on the 2n
 triangles, four), the H-matrix S_h holds about 20 KB per boundary dof at the 3D tol 1e-6
 (its blocks in single precision; its ranks grow like |log tol|^3 in 3D), and the amg
-preconditioner's M_s = E^T W_h E is dense: SIGNORINI_BYTES_3D n_s^2 (M_s and one more
-n_s x n_s array at most in a nested run: the factor of its block M_s[I, I] that the
-projection keeps for the Newton steps; M_s's own factor only where a step solves with the
-whole M_s), n_s the Signorini unknowns, which grow like N^(2/3).
+preconditioner's M_s = E^T W_h E is dense: SIGNORINI_BYTES_3D n_s^2 (M_s in single
+precision, as the H-matrix's blocks, and one n_s x n_s double array at most in a nested
+run: the factor of its block M_s[I, I] that the projection keeps for the Newton steps;
+M_s's own factor only where a step solves with the whole M_s), n_s the Signorini
+unknowns, which grow like N^(2/3).
 Fitted to whole `fembem solve` runs of the box with figures and XDMF (16^3 .. 128^3
 cubes) and library runs (12^3 .. 24^3; docs/design/memory.md, "Bodies in R^3").
 """
@@ -62,7 +63,7 @@ PLOT_DOF_BYTES = 0.02e3
 DOF_BYTES_3D = 3e3
 BOUNDARY_BYTES_3D = 8 * 8.0
 HMATRIX_BOUNDARY_BYTES_3D = 20e3
-SIGNORINI_BYTES_3D = 2 * 8.0
+SIGNORINI_BYTES_3D = 4.0 + 8.0
 
 
 def memory_estimate(

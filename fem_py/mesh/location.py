@@ -167,8 +167,10 @@ def _at_lattice_points(
     a point location."""
     weights = lattice_weights(divisions, cells.shape[1])
     d = x.shape[1]
-    coords = np.concatenate([x, np.einsum("kc,tcd->tkd", weights, x[cells]).reshape(-1, d)])
-    known = np.concatenate([values, (values[cells] @ weights.T).ravel()])
+    coords, known = x, values
+    if len(weights):  # not for divisions = 1: the nodes alone (no cells' corners gathered)
+        coords = np.concatenate([x, np.einsum("kc,tcd->tkd", weights, x[cells]).reshape(-1, d)])
+        known = np.concatenate([values, (values[cells] @ weights.T).ravel()])
     origin = x.min(axis=0)
     quantum = max(float(np.ptp(x, axis=0).max()), 1e-300) / GRID_LEVELS[d]
     keys = _grid_keys(coords, origin, quantum)
