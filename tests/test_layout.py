@@ -30,6 +30,7 @@ LAYERS = [
         "bem_cpp._bem",
         "bem_cpp.collectives",
         "bem_cpp.defaults",
+        "bem_cpp.dense",
         "bem_cpp.surfaces",
         "bem_cpp.polygons",
     ),

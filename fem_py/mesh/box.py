@@ -16,8 +16,8 @@ structured mesh does (``fem_py.mesh.distribute.distribute_structured``): each ra
 the tetrahedra of a contiguous range of cubes (lexicographic, x fastest: slabs of the box
 when the ranks divide n) and an even block of the vertex coordinates, and tells DOLFINx
 where each cell goes, so no graph is partitioned and no rank holds the whole mesh
-(measured against ``create_box``: docs/design/three_dimensions.md, "The box written down
-in parallel").
+(measured against ``create_box``: docs/design/three_dimensions.md, "Issue 34, continued
+(2026-12-06)").
 """
 from __future__ import annotations
 
