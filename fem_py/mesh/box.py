@@ -29,7 +29,7 @@ from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
 from fem_py.mesh.args3d import checked_point, checked_positive
-from fem_py.mesh.distribute import destinations
+from fem_py.mesh.distribute import destinations, p1_domain
 
 __all__ = [
     "BOX_FACES",
@@ -158,7 +158,7 @@ def box_mesh(
     def partitioner(comm_, nparts, tdim, local_cells, ghost_mode):
         return destinations(np.full(len(cells), comm.rank, dtype=np.int64), links)
 
-    msh = dmesh.create_mesh(comm, cells, x, _ufl_tetrahedron_mesh(), partitioner=partitioner)
+    msh = dmesh.create_mesh(comm, cells, x, p1_domain("tetrahedron"), partitioner=partitioner)
     fdim = msh.topology.dim - 1
     msh.topology.create_connectivity(fdim, msh.topology.dim)
     tol = 1e-10 * width
@@ -186,14 +186,15 @@ def _corner_offsets(n: int) -> np.ndarray:
     return (k & 1) + (n + 1) * ((k >> 1 & 1) + (n + 1) * (k >> 2))
 
 
-def _cube_indices(n: int, cubes: np.ndarray) -> np.ndarray:
-    """(len(cubes), 3) lattice indices (i, j, l) of cubes numbered i + n (j + n l)."""
-    return np.stack([cubes % n, cubes // n % n, cubes // (n * n)], axis=1)
+def _lattice_indices(numbers: np.ndarray, m: int) -> np.ndarray:
+    """(len(numbers), 3) indices (i, j, l) of lattice points numbered i + m (j + m l)
+    (cubes: m = n; vertices: m = n + 1)."""
+    return np.stack([numbers % m, numbers // m % m, numbers // (m * m)], axis=1)
 
 
 def _cells_of_cubes(n: int, cubes: np.ndarray) -> np.ndarray:
     """(6 len(cubes), 4) vertex numbers of the Kuhn tetrahedra of ``cubes``, cube after cube."""
-    ijl = _cube_indices(n, cubes)
+    ijl = _lattice_indices(cubes, n)
     corner0 = ijl[:, 0] + (n + 1) * (ijl[:, 1] + (n + 1) * ijl[:, 2])
     local = _corner_offsets(n)[KUHN_TETRAHEDRA]  # (6, 4)
     return (corner0[:, None, None] + local[None]).reshape(-1, 4)
@@ -215,7 +216,7 @@ def _ghost_links(n: int, cubes: np.ndarray, starts: np.ndarray, rank: int) -> np
     (cube ranges ``starts``: rank r owns cubes starts[r] .. starts[r+1] - 1)."""
     if len(starts) == 2:
         return np.empty((0, 2), dtype=np.int64)
-    ijl, stride = _cube_indices(n, cubes), np.array([1, n, n * n])
+    ijl, stride = _lattice_indices(cubes, n), np.array([1, n, n * n])
     rows = []
     for t, faces in enumerate(_faces_of_tetrahedra()):
         for axis, side in faces:
@@ -229,14 +230,5 @@ def _ghost_links(n: int, cubes: np.ndarray, starts: np.ndarray, rank: int) -> np
 
 def _vertices(lo: np.ndarray, hi: np.ndarray, n: int, start: int, stop: int) -> np.ndarray:
     """Coordinates (stop - start, 3) of the box's vertices numbered start .. stop - 1."""
-    v = np.arange(start, stop, dtype=np.int64)
-    ijl = np.stack([v % (n + 1), v // (n + 1) % (n + 1), v // (n + 1) ** 2], axis=1)
+    ijl = _lattice_indices(np.arange(start, stop, dtype=np.int64), n + 1)
     return lo + (hi - lo) * (ijl / n)
-
-
-def _ufl_tetrahedron_mesh() -> Any:
-    """The UFL domain of a P1 tetrahedral mesh."""
-    import ufl
-
-    cell = ufl.Cell("tetrahedron", geometric_dimension=3)
-    return ufl.Mesh(ufl.VectorElement(ufl.FiniteElement("Lagrange", cell, 1, variant="equispaced")))

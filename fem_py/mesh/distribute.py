@@ -27,6 +27,7 @@ from fem_py.parallel import broadcast_from_root, gather_to_root
 
 __all__ = [
     "destinations",
+    "p1_domain",
     "distribute_mesh",
     "distribute_structured",
     "subdomain_owners",
@@ -143,13 +144,14 @@ def _tagged_mesh(
     return msh, ct, ft
 
 
-def _ufl_triangle_mesh() -> Any:
-    """The UFL domain of a P1 triangle mesh in 2D (``gmshio.ufl_mesh(2, 2)`` without
-    importing gmsh where no gmsh is needed; measurements: docs/design/fem_py.md)."""
+def p1_domain(cell: str) -> Any:
+    """The UFL domain of a P1 mesh of ``cell`` ("triangle" in 2D, "tetrahedron" in 3D;
+    ``gmshio.ufl_mesh`` without importing gmsh where no gmsh is needed; measurements:
+    docs/design/fem_py.md)."""
     import ufl
 
-    cell = ufl.Cell("triangle", geometric_dimension=2)
-    return ufl.Mesh(ufl.VectorElement(ufl.FiniteElement("Lagrange", cell, 1, variant="equispaced")))
+    c = ufl.Cell(cell, geometric_dimension=3 if cell == "tetrahedron" else 2)
+    return ufl.Mesh(ufl.VectorElement(ufl.FiniteElement("Lagrange", c, 1, variant="equispaced")))
 
 
 def _n_local_cells(msh: Any) -> int:
@@ -203,7 +205,7 @@ def distribute_mesh(comm: Any, arrays: tuple | None) -> TaggedMesh:
         comm,
         cells,
         x,
-        _ufl_triangle_mesh(),
+        p1_domain("triangle"),
         **({"partitioner": partitioner} if by_subdomain else {}),
     )
     # cell tags by the input index of every local cell (all cells were input on rank 0)
@@ -261,7 +263,7 @@ def distribute_structured(
         comm,
         cells,
         x,
-        _ufl_triangle_mesh(),
+        p1_domain("triangle"),
         **({"partitioner": partitioner} if by_subdomain else {}),
     )
     # input cells are numbered rank after rank, each rank's coarse cells in increasing order
@@ -332,6 +334,6 @@ def reghost(msh: Any) -> Any:
         comm,
         glob.astype(np.int64),
         np.ascontiguousarray(x),
-        _ufl_triangle_mesh(),
+        p1_domain("triangle"),
         partitioner=partitioner,
     )

@@ -12,11 +12,11 @@ from __future__ import annotations
 from typing import Any, Sequence
 
 import numpy as np
-import ufl
 from dolfinx import cpp
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
+from fem_py.mesh.distribute import p1_domain
 from fem_py.mesh.tet_checks import boundary_faces, row_codes
 from fem_py.mesh.tet_file import SolidFile
 from fem_py.parallel import run_on_root
@@ -92,8 +92,7 @@ def solid_mesh(
         cells, x = np.empty((0, 4), dtype=np.int64), np.empty((0, 3))
         facets, values, names = np.empty((0, 3), np.int64), np.empty(0, np.int32), None
     names = comm.bcast(names, root=0) if comm.size > 1 else names
-    domain = ufl.Mesh(ufl.VectorElement("Lagrange", ufl.tetrahedron, 1))
-    msh = dmesh.create_mesh(comm, cells, x, domain)
+    msh = dmesh.create_mesh(comm, cells, x, p1_domain("tetrahedron"))
     # the tags follow the facets to their owners (entities given by input node numbers)
     entities, local_values = cpp.io.distribute_entity_data(msh._mesh, 2, facets, values)
     msh.topology.create_connectivity(2, 0)
