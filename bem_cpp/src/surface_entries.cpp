@@ -128,13 +128,13 @@ class SurfaceBlock : public EntryBlock {
   }
 
  private:
-  /// The single layer's A at the far-rule points with the near pairs' 9 x 9 parts zero (they
+  /// The single layer's A at the far-rule points with the near pairs' 7 x 7 parts zero (they
   /// are in the near field), computed once for the block and its companion.
   const Eigen::MatrixXd& far_kernel() const {
     if (far_kernel_.size() > 0) return far_kernel_;
     prepare_points();
     const PointKernel kernel{*rp_, *cp_, PointKernelKind::SingleLayer};
-    const Index n = triangle_rule(kFarGaussPoints).size();
+    const Index n = far_rule().size();
     far_kernel_.resize(rp_->size(), cp_->size());
     for (Index q = 0; q < cp_->size(); ++q) kernel.column(q, far_kernel_.col(q).data());
     for (std::size_t b = 0; b < col_parts_.size(); ++b) {
@@ -176,7 +176,7 @@ class SurfaceBlock : public EntryBlock {
     std::vector<int> shared;
     std::set_intersection(row_planes.begin(), row_planes.end(), col_planes.begin(), col_planes.end(),
                           std::back_inserter(shared));
-    const TriangleRule& rule = triangle_rule(kFarGaussPoints);
+    const TriangleRule& rule = far_rule();
     std::vector<LowRank> pieces;
     std::vector<std::vector<Part>> piece_rows, piece_cols;
     auto add_piece = [&](std::vector<Part> R, std::vector<Part> C) {
@@ -217,15 +217,15 @@ class SurfaceBlock : public EntryBlock {
   }
   /// The double layer's dense block with the near field apart: each triangle pair (a, b)
   /// that is far and in two planes (coplanar pairs are zero, the near pairs are in the near
-  /// field) adds Lambda^T A_ab Lambda, A_ab its 9 x 9 point kernel and Lambda the basis
+  /// field) adds Lambda^T A_ab Lambda, A_ab its 7 x 7 point kernel and Lambda the basis
   /// values at the rule's points, to its dofs' entries - no point matrix of the block, no
   /// maps. The row parts sorted by plane, the row points off b's plane are at most two
   /// ranges, on which the kernel runs column by column (vectorised), summed at once against
   /// the values of b's hats. With `transposed` (k x m), also the mirrored block K(J, I):
   /// between the same points its kernel is -n_x . (x - y) / r^3, from the same 1 / r^3.
   void double_layer_all(double* out, double* transposed) const {
-    constexpr int n = kFarGaussPoints * kFarGaussPoints;
-    const TriangleRule& rule = triangle_rule(kFarGaussPoints);
+    constexpr int n = kFarRulePoints;
+    const TriangleRule& rule = far_rule();
     const Eigen::Matrix<double, n, 4> L = basis_values(rule);
     std::vector<Part> rows = row_parts_;
     std::stable_sort(rows.begin(), rows.end(), [this](const Part& a, const Part& b) { return plane(a) < plane(b); });
@@ -324,12 +324,12 @@ class SurfaceBlock : public EntryBlock {
     if (rp_) return;
     const bool values = kernel_ != SurfaceKernel::Hypersingular;
     const bool curls = kernel_ == SurfaceKernel::Hypersingular || companion_;
-    const TriangleRule& rule = triangle_rule(kFarGaussPoints);
+    const TriangleRule& rule = far_rule();
     rp_ = std::make_unique<FarPoints>(s_, row_parts_, m_, values, curls, rule);
     cp_ = std::make_unique<FarPoints>(s_, col_parts_, k_, values, curls, rule);
   }
   /// Q_r^T A Q_c with the values' maps, or sum_d C_r[d]^T A_t C_c[d] with the curls, A_t the
-  /// sums of A over each triangle pair's points (the curls are constant on a triangle: 81
+  /// sums of A over each triangle pair's points (the curls are constant on a triangle: 49
   /// times fewer entries to project).
   void project(const Eigen::MatrixXd& A, bool curls, Eigen::Map<Eigen::MatrixXd>& out) const {
     if (!curls) {

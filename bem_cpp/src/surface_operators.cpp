@@ -210,17 +210,17 @@ Index dofs(const Surface& surface, Space space) { return space == Space::P1 ? su
 PairIntegrator::PairIntegrator(const Surface& surface) : surface_(surface) {
   singular_[0] = nullptr;
   for (int shared = 1; shared <= 3; ++shared) singular_[shared] = &singular_rule(shared, kSingularGaussPoints[shared]);
-  for (int p = 0; p < 6; ++p) regular_[p] = p < 3 ? nullptr : &triangle_rule(p);
+  for (int p = 0; p < 6; ++p) regular_[p] = p == 0 ? &far_rule() : p < 4 ? nullptr : &triangle_rule(p);
 }
 
-int PairIntegrator::regular_points(const Triangle& a, const Triangle& b) {
+int PairIntegrator::regular_rule(const Triangle& a, const Triangle& b) {
   // distance of the circumscribing balls about the centroids, over the larger diameter
   const double h = 2.0 * std::max(a.radius, b.radius);
   const double q = (norm(a.c - b.c) - (a.radius + b.radius)) / h;  // symmetric in a, b to the last bit
   // one rule for every pair from q = 1.5 on: the entries of an admissible block are then a
   // smooth function of the positions (a rule switching inside a block would add a jump at
   // the rule's error, which ACA could not compress below it; docs/design/bem3d.md)
-  if (q >= kFarSeparation) return kFarGaussPoints;
+  if (q >= kFarSeparation) return 0;
   if (q >= 0.5) return 4;
   return 5;
 }
@@ -247,7 +247,7 @@ void PairIntegrator::integrate(Index tau, Index sigma, bool double_layer, PairIn
     else
       accumulate_pairs<false>(ma, mb, a.n, b.n, *singular_[adj.shared], acc);
   else
-    accumulate_tensor(ma, mb, a.n, b.n, *regular_[regular_points(a, b)], double_layer, acc);
+    accumulate_tensor(ma, mb, a.n, b.n, *regular_[regular_rule(a, b)], double_layer, acc);
   const double jac = 4.0 * a.area * b.area;
   for (int i = 0; i < 4; ++i)
     for (int j = 0; j < 4; ++j) out.V[i][j] = jac * (swap ? acc.V[j][i] : acc.V[i][j]);

@@ -1,6 +1,7 @@
 #include "bem/surface_quadrature.hpp"
 
 #include <array>
+#include <cmath>
 #include <map>
 #include <mutex>
 #include <stdexcept>
@@ -73,6 +74,27 @@ PairRule make_singular_rule(int shared, int p) {
   return r;
 }
 
+TriangleRule make_far_rule() {
+  // barycentric (a, a, 1 - 2a) and its rotations, weights relative to the area
+  TriangleRule r;
+  auto orbit = [&r](double a, double w) {
+    const double b = 1.0 - 2.0 * a;
+    const double s[3] = {a, a, b}, t[3] = {a, b, a};
+    for (int k = 0; k < 3; ++k) {
+      r.s.push_back(s[k]);
+      r.t.push_back(t[k]);
+      r.w.push_back(0.5 * w);
+    }
+  };
+  r.s.push_back(1.0 / 3.0);
+  r.t.push_back(1.0 / 3.0);
+  r.w.push_back(0.5 * 9.0 / 40.0);
+  const double root15 = std::sqrt(15.0);
+  orbit((6.0 - root15) / 21.0, (155.0 - root15) / 1200.0);
+  orbit((6.0 + root15) / 21.0, (155.0 + root15) / 1200.0);
+  return r;
+}
+
 template <class Rule, class Make, class Key>
 const Rule& cached(std::map<Key, Rule>& cache, const Key& key, Make make) {
   static std::mutex mutex;
@@ -88,6 +110,11 @@ const TriangleRule& triangle_rule(int p) {
   static std::map<int, TriangleRule> cache;
   if (p < 1 || p > kMaxGaussPoints) throw std::invalid_argument("triangle_rule: need 1 <= p <= 24");
   return cached(cache, p, [p] { return make_triangle_rule(p); });
+}
+
+const TriangleRule& far_rule() {
+  static const TriangleRule rule = make_far_rule();
+  return rule;
 }
 
 const PairRule& singular_rule(int shared, int p) {

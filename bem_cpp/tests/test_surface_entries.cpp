@@ -146,7 +146,7 @@ TEST(FarPoints, ValuesTransposeProductIsTheMapsProduct) {
   // over a range of the row points is that range of the whole column
   const test::Mesh mesh = test::icosphere(1, 0.7);
   const Surface s(mesh.vertices, mesh.triangles);
-  const TriangleRule& rule = triangle_rule(kFarGaussPoints);
+  const TriangleRule& rule = far_rule();
   for (Space space : {Space::P1, Space::P0}) {
     const std::vector<Index> dofs = every_other(space == Space::P1 ? s.vertices() : s.size(), 1);
     const Index k = static_cast<Index>(dofs.size());

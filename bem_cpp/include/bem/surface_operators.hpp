@@ -21,11 +21,10 @@ namespace bem {
 /// relative (K and V, perpendicular edge-adjacent pair; docs/design/bem3d.md).
 constexpr int kSingularGaussPoints[4] = {0, 5, 6, 6};
 
-/// The rule of the far pairs, separation q >= kFarSeparation (PairIntegrator::regular_points):
-/// triangle_rule(kFarGaussPoints) on both triangles. The admissible H-matrix blocks hold
-/// far pairs only, so their entries are this rule's sums over the point kernel
+/// The far pairs, separation q >= kFarSeparation (PairIntegrator::regular_rule), are
+/// integrated with far_rule() on both triangles. The admissible H-matrix blocks hold far
+/// pairs only, so their entries are this rule's sums over the point kernel
 /// (surface_entries.hpp).
-constexpr int kFarGaussPoints = 3;
 constexpr double kFarSeparation = 1.5;
 
 /// The distance between two triangles' centroids (or two sets of them) from which every
@@ -52,17 +51,17 @@ class PairIntegrator {
   explicit PairIntegrator(const Surface& surface);
   /// `double_layer`: also K and Kt (otherwise they are left unset).
   void integrate(Index tau, Index sigma, bool double_layer, PairIntegrals& out) const;
-  /// The rule (triangle_rule's p) of a disjoint pair, from the distance of the balls about
-  /// the centroids over the larger diameter, q: p = 5 below q = 0.5, 4 below 1.5, 3 beyond
-  /// (docs/design/bem3d.md).
-  static int regular_points(const Triangle& a, const Triangle& b);
+  /// The rule of a disjoint pair, from the distance of the balls about the centroids over
+  /// the larger diameter, q: triangle_rule(p) with p = 5 below q = 0.5, 4 below 1.5, and
+  /// far_rule() beyond (returned as 0; docs/design/bem3d.md).
+  static int regular_rule(const Triangle& a, const Triangle& b);
   /// Whether the pair is a far pair (integrated by the far rule): disjoint, q >= kFarSeparation.
-  static bool far(const Triangle& a, const Triangle& b) { return regular_points(a, b) == kFarGaussPoints; }
+  static bool far(const Triangle& a, const Triangle& b) { return regular_rule(a, b) == 0; }
 
  private:
   const Surface& surface_;
   const PairRule* singular_[4];     ///< by the number of shared vertices (1..3)
-  const TriangleRule* regular_[6];  ///< triangle_rule(p), p = 3..5, of the regular pairs
+  const TriangleRule* regular_[6];  ///< by regular_rule: far_rule(), triangle_rule(4), (5)
 };
 
 /// The surface curl n x grad(lambda_a) of the barycentric coordinate a on triangle t.

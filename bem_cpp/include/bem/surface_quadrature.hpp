@@ -4,7 +4,8 @@
 // triangle with vertices (q0, q1, q2) as q0 + s (q1 - q0) + t (q2 - q0); the weights of
 // a pair rule sum to 1/4 (the product of the two reference areas), those of a triangle
 // rule to 1/2.
-//   regular pairs:   the tensor product of two collapsed (Stroud) Gauss rules;
+//   near regular pairs: the tensor product of two collapsed (Stroud) Gauss rules;
+//   far pairs:       the tensor product of two 7-point rules of degree 5 (Radon's);
 //   singular pairs:  the Sauter-Schwab transformations of [0, 1]^4 (Sauter and Schwab,
 //                    Boundary Element Methods, 2011, sect. 5.2) with a Gauss-Legendre rule
 //                    in each of the four directions: 6 regions for identical triangles,
@@ -28,6 +29,12 @@ struct PairRule {
 
 /// The collapsed Gauss rule with p x p points (exact for polynomials of degree 2p - 1).
 const TriangleRule& triangle_rule(int p);
+
+/// Points of far_rule().
+constexpr int kFarRulePoints = 7;
+/// Radon's symmetric rule: the centroid and two orbits of three points, exact for
+/// polynomials of degree 5 (as triangle_rule(3)) with 7 points instead of 9.
+const TriangleRule& far_rule();
 
 /// Sauter-Schwab rule for two triangles sharing `shared` = 3 (identical), 2 (an edge:
 /// vertices 0 and 1 of both) or 1 (vertex 0 of both) vertices, p Gauss points per direction.
