@@ -25,6 +25,28 @@ double quotient(const Matrix& A, const Matrix& M, const Eigen::VectorXd& u) { re
 
 }  // namespace
 
+TEST(SurfaceQuadrature, FarRuleIsExactToDegreeFiveTheCollapsedGaussRuleToFour) {
+  // int_T s^i t^j = i! j! / (i + j + 2)! on the reference triangle
+  auto exact = [](int i, int j) { return std::tgamma(i + 1) * std::tgamma(j + 1) / std::tgamma(i + j + 3); };
+  auto error = [&exact](const TriangleRule& r, int i, int j) {
+    double out = 0.0;
+    for (int k = 0; k < r.size(); ++k) out += r.w[k] * std::pow(r.s[k], i) * std::pow(r.t[k], j);
+    return std::abs(out - exact(i, j));
+  };
+  const TriangleRule &far = far_rule(), &gauss = triangle_rule(3);
+  ASSERT_EQ(far.size(), kFarRulePoints);
+  for (int k = 0; k < far.size(); ++k)
+    EXPECT_TRUE(far.w[k] > 0 && far.s[k] > 0 && far.t[k] > 0 && far.s[k] + far.t[k] < 1);
+  for (int d = 0; d <= 5; ++d)
+    for (int i = 0; i <= d; ++i) {
+      EXPECT_LT(error(far, i, d - i), 1e-15) << i << " " << d - i;
+      // p x p collapsed Gauss points: degree 2p - 2 (the collapse's Jacobian 1 - u takes one)
+      if (d <= 4) EXPECT_LT(error(gauss, i, d - i), 1e-15) << i << " " << d - i;
+    }
+  EXPECT_GT(error(gauss, 0, 5), 1e-5);
+  EXPECT_GT(error(far, 6, 0), 1e-6);
+}
+
 TEST(SurfaceOperators, SphereRayleighQuotientsConvergeAtOrderTwo) {
   const double R = 0.7;
   const int levels[3] = {1, 2, 3};

@@ -27,13 +27,14 @@ struct PairRule {
   int size() const { return static_cast<int>(w.size()); }
 };
 
-/// The collapsed Gauss rule with p x p points (exact for polynomials of degree 2p - 1).
+/// The collapsed Gauss rule with p x p points (exact for polynomials of degree 2p - 2: the
+/// collapse's Jacobian takes one degree from the Gauss rules' 2p - 1).
 const TriangleRule& triangle_rule(int p);
 
 /// Points of far_rule().
 constexpr int kFarRulePoints = 7;
 /// Radon's symmetric rule: the centroid and two orbits of three points, exact for
-/// polynomials of degree 5 (as triangle_rule(3)) with 7 points instead of 9.
+/// polynomials of degree 5 with 7 points (triangle_rule(3): degree 4 with 9).
 const TriangleRule& far_rule();
 
 /// Sauter-Schwab rule for two triangles sharing `shared` = 3 (identical), 2 (an edge:
