@@ -210,7 +210,7 @@ Index dofs(const Surface& surface, Space space) { return space == Space::P1 ? su
 PairIntegrator::PairIntegrator(const Surface& surface) : surface_(surface) {
   singular_[0] = nullptr;
   for (int shared = 1; shared <= 3; ++shared) singular_[shared] = &singular_rule(shared, kSingularGaussPoints[shared]);
-  for (int p = 0; p < 6; ++p) regular_[p] = p == 0 ? &far_rule() : p < 4 ? nullptr : &triangle_rule(p);
+  for (int d = 0; d < 9; ++d) regular_[d] = d == 5 || d == 6 || d == 8 ? &symmetric_rule(d) : nullptr;
 }
 
 int PairIntegrator::regular_rule(const Triangle& a, const Triangle& b) {
@@ -220,9 +220,9 @@ int PairIntegrator::regular_rule(const Triangle& a, const Triangle& b) {
   // one rule for every pair from q = 1.5 on: the entries of an admissible block are then a
   // smooth function of the positions (a rule switching inside a block would add a jump at
   // the rule's error, which ACA could not compress below it; docs/design/bem3d.md)
-  if (q >= kFarSeparation) return 0;
-  if (q >= 0.5) return 4;
-  return 5;
+  if (q >= kFarSeparation) return kFarRuleDegree;
+  if (q >= 0.5) return 6;
+  return 8;
 }
 
 void PairIntegrator::integrate(Index tau, Index sigma, bool double_layer, PairIntegrals& out) const {

@@ -74,25 +74,65 @@ PairRule make_singular_rule(int shared, int p) {
   return r;
 }
 
-TriangleRule make_far_rule() {
-  // barycentric (a, a, 1 - 2a) and its rotations, weights relative to the area
+/// Orbits of a symmetric rule in barycentric coordinates, weights relative to the area:
+/// the centroid, (a, a, 1 - 2a) and its 3 rotations, (a, b, 1 - a - b) and its 6 permutations.
+struct Orbits {
+  double centroid;                           ///< its weight (0: none)
+  std::vector<std::array<double, 2>> three;  ///< a, w
+  std::vector<std::array<double, 3>> six;    ///< a, b, w
+};
+
+TriangleRule make_symmetric_rule(const Orbits& o) {
   TriangleRule r;
-  auto orbit = [&r](double a, double w) {
-    const double b = 1.0 - 2.0 * a;
-    const double s[3] = {a, a, b}, t[3] = {a, b, a};
-    for (int k = 0; k < 3; ++k) {
-      r.s.push_back(s[k]);
-      r.t.push_back(t[k]);
-      r.w.push_back(0.5 * w);
-    }
+  auto add_point = [&r](double s, double t, double w) {
+    r.s.push_back(s);
+    r.t.push_back(t);
+    r.w.push_back(0.5 * w);  // the reference triangle's area
   };
-  r.s.push_back(1.0 / 3.0);
-  r.t.push_back(1.0 / 3.0);
-  r.w.push_back(0.5 * 9.0 / 40.0);
-  const double root15 = std::sqrt(15.0);
-  orbit((6.0 - root15) / 21.0, (155.0 - root15) / 1200.0);
-  orbit((6.0 + root15) / 21.0, (155.0 + root15) / 1200.0);
+  if (o.centroid > 0) add_point(1.0 / 3.0, 1.0 / 3.0, o.centroid);
+  for (const auto& [a, w] : o.three) {
+    const double b = 1.0 - 2.0 * a;
+    add_point(a, a, w);
+    add_point(a, b, w);
+    add_point(b, a, w);
+  }
+  for (const auto& [a, b, w] : o.six) {
+    const double c = 1.0 - a - b;
+    add_point(a, b, w);
+    add_point(b, a, w);
+    add_point(a, c, w);
+    add_point(c, a, w);
+    add_point(b, c, w);
+    add_point(c, b, w);
+  }
   return r;
+}
+
+/// Radon's rule (degree 5) in closed form; Dunavant's rules of degree 6 and 8 (Int. J. Numer.
+/// Meth. Eng. 21, 1985), their 15 published digits refined by Newton's method on the moment
+/// equations to the last bit.
+TriangleRule make_symmetric_rule(int degree) {
+  const double root15 = std::sqrt(15.0);
+  switch (degree) {
+    case 5:
+      return make_symmetric_rule(Orbits{
+          9.0 / 40.0,
+          {{(6.0 - root15) / 21.0, (155.0 - root15) / 1200.0}, {(6.0 + root15) / 21.0, (155.0 + root15) / 1200.0}},
+          {}});
+    case 6:
+      return make_symmetric_rule(
+          Orbits{0.0,
+                 {{0.063089014491508957, 0.050844906370216263}, {0.24928674517087865, 0.11678627572643321}},
+                 {{0.053145049844794359, 0.31035245103380865, 0.082851075618341929}}});
+    case 8:
+      return make_symmetric_rule(Orbits{0.14431560767778701,
+                                        {{0.45929258829272301, 0.095091634267284994},
+                                         {0.17056930775175999, 0.10321737053471799},
+                                         {0.050547228317030998, 0.032458497623198003}},
+                                        {{0.0083947774099580007, 0.263112829634638, 0.027230314174435}}});
+    default:
+      throw std::invalid_argument("symmetric_rule: degree must be 5, 6 or 8");
+  }
 }
 
 template <class Rule, class Make, class Key>
@@ -112,9 +152,9 @@ const TriangleRule& triangle_rule(int p) {
   return cached(cache, p, [p] { return make_triangle_rule(p); });
 }
 
-const TriangleRule& far_rule() {
-  static const TriangleRule rule = make_far_rule();
-  return rule;
+const TriangleRule& symmetric_rule(int degree) {
+  static std::map<int, TriangleRule> cache;
+  return cached(cache, degree, [degree] { return make_symmetric_rule(degree); });
 }
 
 const PairRule& singular_rule(int shared, int p) {

@@ -51,17 +51,17 @@ class PairIntegrator {
   explicit PairIntegrator(const Surface& surface);
   /// `double_layer`: also K and Kt (otherwise they are left unset).
   void integrate(Index tau, Index sigma, bool double_layer, PairIntegrals& out) const;
-  /// The rule of a disjoint pair, from the distance of the balls about the centroids over
-  /// the larger diameter, q: triangle_rule(p) with p = 5 below q = 0.5, 4 below 1.5, and
-  /// far_rule() beyond (returned as 0; docs/design/bem3d.md).
+  /// The degree of the symmetric_rule of a disjoint pair, from the distance of the balls
+  /// about the centroids over the larger diameter, q: 8 below q = 0.5, 6 below 1.5, and
+  /// kFarRuleDegree beyond (docs/design/bem3d.md).
   static int regular_rule(const Triangle& a, const Triangle& b);
   /// Whether the pair is a far pair (integrated by the far rule): disjoint, q >= kFarSeparation.
-  static bool far(const Triangle& a, const Triangle& b) { return regular_rule(a, b) == 0; }
+  static bool far(const Triangle& a, const Triangle& b) { return regular_rule(a, b) == kFarRuleDegree; }
 
  private:
   const Surface& surface_;
   const PairRule* singular_[4];     ///< by the number of shared vertices (1..3)
-  const TriangleRule* regular_[6];  ///< by regular_rule: far_rule(), triangle_rule(4), (5)
+  const TriangleRule* regular_[9];  ///< symmetric_rule(d) at d = regular_rule (5, 6, 8)
 };
 
 /// The surface curl n x grad(lambda_a) of the barycentric coordinate a on triangle t.

@@ -4,8 +4,8 @@
 // triangle with vertices (q0, q1, q2) as q0 + s (q1 - q0) + t (q2 - q0); the weights of
 // a pair rule sum to 1/4 (the product of the two reference areas), those of a triangle
 // rule to 1/2.
-//   near regular pairs: the tensor product of two collapsed (Stroud) Gauss rules;
-//   far pairs:       the tensor product of two 7-point rules of degree 5 (Radon's);
+//   regular pairs:   the tensor product of two symmetric rules, of degree 8, 6 or 5 (far
+//                    pairs) by the pair's separation (surface_operators.hpp);
 //   singular pairs:  the Sauter-Schwab transformations of [0, 1]^4 (Sauter and Schwab,
 //                    Boundary Element Methods, 2011, sect. 5.2) with a Gauss-Legendre rule
 //                    in each of the four directions: 6 regions for identical triangles,
@@ -31,11 +31,15 @@ struct PairRule {
 /// collapse's Jacobian takes one degree from the Gauss rules' 2p - 1).
 const TriangleRule& triangle_rule(int p);
 
-/// Points of far_rule().
+/// A fully symmetric rule with positive weights and interior points, exact for
+/// polynomials of degree 5 (Radon's, 7 points), 6 (Dunavant's, 12) or 8 (Dunavant's, 16):
+/// a third to three fifths of the points of the collapsed Gauss rules of the same degree.
+const TriangleRule& symmetric_rule(int degree);
+
+/// The degree of the far pairs' rule (surface_operators.hpp) and its points.
+constexpr int kFarRuleDegree = 5;
 constexpr int kFarRulePoints = 7;
-/// Radon's symmetric rule: the centroid and two orbits of three points, exact for
-/// polynomials of degree 5 with 7 points (triangle_rule(3): degree 4 with 9).
-const TriangleRule& far_rule();
+inline const TriangleRule& far_rule() { return symmetric_rule(kFarRuleDegree); }
 
 /// Sauter-Schwab rule for two triangles sharing `shared` = 3 (identical), 2 (an edge:
 /// vertices 0 and 1 of both) or 1 (vertex 0 of both) vertices, p Gauss points per direction.
