@@ -204,6 +204,9 @@ def test_a_looser_solver_tol_gives_a_cheaper_product_within_it(planar):
     np.testing.assert_array_equal(op.apply(x, 1e-30), exact)
     with pytest.raises(ValueError, match="solver_tol must lie in"):
         op.apply(x, 2.0)
+    if not planar:  # S 0 = 0 with no V solve (a Newton step's first product often is one)
+        np.testing.assert_array_equal(op.apply(np.zeros_like(x), 1e-3), 0.0)
+        assert op.last_iterations == 0
 
 
 def test_preconditioned_single_layer_solves_take_a_bounded_number_of_iterations():

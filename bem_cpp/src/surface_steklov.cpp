@@ -102,6 +102,10 @@ Eigen::MatrixXd SurfaceSteklovOperator::flux(const Eigen::Ref<const Eigen::Matri
 }
 
 Eigen::MatrixXd SurfaceSteklovOperator::apply(const Eigen::Ref<const Eigen::MatrixXd>& X, double solver_tol) const {
+  if (X.rows() == size() && X.isZero(0.0)) {  // S 0 = 0 without four products (X is the same on every rank)
+    last_iterations_ = 0;
+    return Eigen::MatrixXd::Zero(X.rows(), X.cols());
+  }
   const Eigen::MatrixXd Psi = flux(X, solver_tol);
   Eigen::MatrixXd Y = hypersingular(X);
   Y += K_->apply(Psi, true) - M_ * Psi;  // M symmetric
