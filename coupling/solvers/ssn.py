@@ -36,11 +36,15 @@ dphi)); a step that does not decrease J_h after 30 halvings is replaced by a PGP
 A few PGPM steps start the iteration.
 
 Inside a Newton step's CG the V solve of each product with an H-matrix S_h runs only as
-accurately as the step needs: to SSN_INNER_TOL_FACTOR times the CG's rtol, instead of to
-the operator's own tolerance (kept for the gradients and norms that decide convergence).
-The products then differ from the exact ones by far less than the step's own tolerance,
-which leaves the CG's iterations as they were (inexact Krylov methods: Simoncini and
-Szyld, SIAM J. Sci. Comput. 25, 2003). Where the amg preconditioner has GAMG (bodies other
+accurately as the step needs: to SSN_INNER_TOL_FACTOR times the CG's rtol at the first
+iteration, instead of to the operator's own tolerance (kept for the gradients and norms
+that decide convergence), and looser as the CG's residual falls, by the factor it has
+fallen, up to SSN_INNER_TOL_FACTOR: a product's error enters the computed solution
+weighted by the residual at its iteration, so the late products, at a residual near
+rtol, need only a few digits (relaxed inexact Krylov methods: Simoncini and Szyld, SIAM
+J. Sci. Comput. 25, 2003; van den Eshof and Sleijpen, SIAM J. Matrix Anal. Appl. 26,
+2004). The products then differ from the exact ones by far less than the step's own
+tolerance, which leaves the CG's iterations as they were. Where the amg preconditioner has GAMG (bodies other
 than the box) its inner CG + GAMG keeps its own tolerance inside the CG as well: GAMG's
 hierarchy depends on the number of ranks, and only a solve far below the step's accuracy
 keeps the iterates independent of it.
@@ -122,17 +126,20 @@ def _pcg(
     w = alpha p, x += w): the same floating-point operations as x + alpha p, without
     new arrays of 10^6 entries every iteration; p starts as a copy of z, so that no
     in-place update can reach an array apply_b_inv returned or was given). ``rhs`` is
-    overwritten: its arrays hold the residual."""
+    overwritten: its arrays hold the residual. ``apply_h(p, slack)`` is given
+    slack = ||r_0|| / ||r_k|| (B^{-1}-norms, >= 1 as the residual falls): the factor by
+    which the product may be less accurate than at the start (relaxed inexact Krylov
+    products, module docstring)."""
     dot = lambda a, b: global_dot(comm, a[0], b[0]) + a[1] @ b[1]  # noqa: E731
     x = (np.zeros_like(rhs[0]), np.zeros_like(rhs[1]))
     r = rhs
     work = (np.empty_like(rhs[0]), np.empty_like(rhs[1]))
     z = apply_b_inv(r)
     p = (z[0].copy(), z[1].copy())
-    rz = dot(r, z)
+    rz = rz0 = dot(r, z)
     stop = rtol * np.sqrt(max(rz, 0.0))
     for it in range(1, max_iterations + 1):
-        hp = apply_h(p)
+        hp = apply_h(p, np.sqrt(rz0 / rz) if rz > 0 else 1.0)
         alpha = rz / dot(p, hp)
         for k in (0, 1):
             np.add(x[k], np.multiply(alpha, p[k], out=work[k]), out=x[k])
@@ -254,10 +261,10 @@ def newton_direction(
     inner = SSN_INNER_TOL_FACTOR * rtol  # S_h's V solves (module docstring)
     precondition_u = omega_cycle(preconditioner)
 
-    def apply_h(p):
+    def apply_h(p, slack):
         e_phi = np.zeros(phi.size)
         e_phi[free] = p[1]
-        h_u_owned, h_phi = hessian(p[0], e_phi, inner)
+        h_u_owned, h_phi = hessian(p[0], e_phi, min(SSN_INNER_TOL_FACTOR, inner * slack))
         return h_u_owned, h_phi[free]
 
     def apply_b_inv(r):
