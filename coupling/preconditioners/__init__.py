@@ -92,6 +92,7 @@ def build_preconditioner(
     ``matrix`` (optional, from ``problem.forms.create_matrix()``, the caller's) receives
     the stiffness matrix, which is otherwise assembled into a new Mat and destroyed: a
     caller that needs a P1 matrix afterwards (the solvers' Jacobian) saves creating one.
+    The amg preconditioner, which keeps its matrix, copies its nonzero structure instead.
     B keeps no reference to it.
     """
     kind = preconditioner_kind(options.preconditioner, problem.domain.dim)
@@ -107,6 +108,7 @@ def build_preconditioner(
             lattice=problem.domain.lattice,
             rtol=AMG_RTOL,
             max_iterations=AMG_MAX_ITERATIONS,
+            pattern=matrix,
         )
     domain = problem.domain
     if kind == "substructuring" and domain.dim == 3:

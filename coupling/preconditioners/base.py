@@ -154,7 +154,7 @@ class DenseSignoriniBlock:
             return np.zeros(0)
         if self._signorini_inverse is not None:
             return self._signorini_inverse @ g
-        return scipy.linalg.cho_solve(self.signorini_factor, g)
+        return scipy.linalg.cho_solve(self.signorini_factor, g, check_finite=False)
 
     def matvec_signorini(self, phi: np.ndarray) -> np.ndarray:
         return self.signorini_metric @ phi

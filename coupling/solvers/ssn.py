@@ -44,8 +44,9 @@ weighted by the residual at its iteration, so the late products, at a residual n
 rtol, need only a few digits (relaxed inexact Krylov methods: Simoncini and Szyld, SIAM
 J. Sci. Comput. 25, 2003; van den Eshof and Sleijpen, SIAM J. Matrix Anal. Appl. 26,
 2004). The products then differ from the exact ones by far less than the step's own
-tolerance, which leaves the CG's iterations as they were. Where the amg preconditioner has GAMG (bodies other
-than the box) its inner CG + GAMG keeps its own tolerance inside the CG as well: GAMG's
+tolerance, which leaves the CG's iterations as they were. Where the amg preconditioner
+has GAMG (bodies other than the box) its inner CG + GAMG keeps its own tolerance inside
+the CG as well: GAMG's
 hierarchy depends on the number of ranks, and only a solve far below the step's accuracy
 keeps the iterates independent of it.
 
@@ -270,7 +271,9 @@ def newton_direction(
     def apply_b_inv(r):
         return (
             precondition_u(r[0]),
-            scipy.linalg.cho_solve(factor, r[1]) if factor is not None else r[1],
+            scipy.linalg.cho_solve(factor, r[1], check_finite=False)
+            if factor is not None
+            else r[1],
         )
 
     d_phi = np.zeros(phi.size)
