@@ -122,3 +122,26 @@ def test_lattice_weights_of_a_tetrahedron_are_its_non_corner_points(n):
     assert w.shape == ((n + 1) * (n + 2) * (n + 3) // 6 - 4, 4)
     np.testing.assert_allclose(w.sum(axis=1), 1.0)
     assert (w.max(axis=1) < 1.0).all() and len(np.unique(w, axis=0)) == len(w)
+
+
+@pytest.mark.parametrize("chunk", [7, 1 << 18], ids=["chunked", "whole"])
+def test_cells_meeting_a_box_are_those_whose_bounding_boxes_meet_it(chunk, monkeypatch):
+    """The cells a section's plane (or any box) meets, tested one coordinate at a time, the
+    box's thinnest first, against every cell's bounding box at once."""
+    monkeypatch.setattr(fem_py.mesh.location3d, "_CELLS_PER_CHUNK", chunk)
+    x, tets = _cube(5)
+    x = x * np.array([1.0, 2.0, 0.5])  # unequal extents
+    corners = x[tets]
+    rng = np.random.default_rng(0)
+    boxes = [
+        (np.array([0.0, 0.0, 0.21]), np.array([1.0, 2.0, 0.21])),  # a plane z = const
+        (np.array([0.3, -1.0, -1.0]), np.array([0.3, 3.0, 1.0])),  # a plane x = const
+        (np.array([-1.0, -1.0, -1.0]), np.array([2.0, 3.0, 1.0])),  # all of it
+        (np.array([5.0, 5.0, 5.0]), np.array([6.0, 6.0, 6.0])),  # none of it
+    ] + [tuple(np.sort(rng.uniform(-0.2, 2.2, (2, 3)), axis=0)) for _ in range(5)]
+    for lo, hi in boxes:
+        expected = np.flatnonzero(
+            ((corners.max(axis=1) >= lo) & (corners.min(axis=1) <= hi)).all(axis=1)
+        )
+        found = fem_py.mesh.location3d._cells_meeting_box(x, tets, lo, hi)
+        np.testing.assert_array_equal(found, expected)

@@ -33,12 +33,21 @@ def _cells_meeting_box(
     x: np.ndarray, tets: np.ndarray, lo: np.ndarray, hi: np.ndarray
 ) -> np.ndarray:
     """The cells (indices into ``tets``) whose bounding boxes meet the box [lo, hi], found
-    a chunk of cells at a time."""
+    a chunk of cells at a time and one coordinate at a time, the box's thinnest (relative
+    to the mesh's extent) first: for a section's plane that first test, on one coordinate
+    of the four corners, leaves the few cells along the plane for the others."""
+    extent = np.maximum(x.max(axis=0) - x.min(axis=0), np.finfo(float).tiny)
+    axes = np.argsort((hi - lo) / extent, kind="stable")
+    coordinates = [np.ascontiguousarray(x[:, a]) for a in range(x.shape[1])]
     kept = []
     for start in range(0, len(tets), _CELLS_PER_CHUNK):
-        corners = x[tets[start : start + _CELLS_PER_CHUNK]]  # (chunk, 4, 3)
-        meets = ((corners.max(axis=1) >= lo) & (corners.min(axis=1) <= hi)).all(axis=1)
-        kept.append(start + np.flatnonzero(meets))
+        cells = np.arange(start, min(start + _CELLS_PER_CHUNK, len(tets)))
+        for a in axes:
+            c0, c1, c2, c3 = coordinates[a][tets[cells]].T  # the corners' coordinate a
+            top = np.maximum(np.maximum(c0, c1), np.maximum(c2, c3))
+            bottom = np.minimum(np.minimum(c0, c1), np.minimum(c2, c3))
+            cells = cells[(top >= lo[a]) & (bottom <= hi[a])]
+        kept.append(cells)
     return np.concatenate(kept) if kept else np.zeros(0, dtype=np.int64)
 
 
