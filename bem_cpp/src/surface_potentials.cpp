@@ -58,8 +58,9 @@ void integrate(const Triangle& T, Vec3 z, const double cs[3], const double ct[3]
 }  // namespace
 
 const TriangleRule* point_rule(double q) {
-  static const TriangleRule& far = triangle_rule(3);  // triangle_rule locks its cache
-  static const TriangleRule& middle = triangle_rule(5);
+  // degrees 4, 8 and 14 (symmetric rules of 6 and 16 points, 8 x 8 collapsed Gauss points)
+  static const TriangleRule& far = symmetric_rule(4);  // the rules' caches lock
+  static const TriangleRule& middle = symmetric_rule(8);
   static const TriangleRule& near = triangle_rule(8);
   if (q >= 6.0) return &far;
   if (q >= 3.0) return &middle;

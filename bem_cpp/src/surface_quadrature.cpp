@@ -108,12 +108,15 @@ TriangleRule make_symmetric_rule(const Orbits& o) {
   return r;
 }
 
-/// Radon's rule (degree 5) in closed form; Dunavant's rules of degree 6 and 8 (Int. J. Numer.
+/// Radon's rule (degree 5) in closed form; Dunavant's rules of degree 4, 6 and 8 (Int. J. Numer.
 /// Meth. Eng. 21, 1985), their 15 published digits refined by Newton's method on the moment
 /// equations to the last bit.
 TriangleRule make_symmetric_rule(int degree) {
   const double root15 = std::sqrt(15.0);
   switch (degree) {
+    case 4:
+      return make_symmetric_rule(
+          Orbits{0.0, {{0.44594849091596483, 0.22338158967801136}, {0.091576213509770771, 0.10995174365532195}}, {}});
     case 5:
       return make_symmetric_rule(Orbits{
           9.0 / 40.0,
@@ -131,7 +134,7 @@ TriangleRule make_symmetric_rule(int degree) {
                                          {0.050547228317030998, 0.032458497623198003}},
                                         {{0.0083947774099580007, 0.263112829634638, 0.027230314174435}}});
     default:
-      throw std::invalid_argument("symmetric_rule: degree must be 5, 6 or 8");
+      throw std::invalid_argument("symmetric_rule: degree must be 4, 5, 6 or 8");
   }
 }
 

@@ -39,8 +39,8 @@ TEST(SurfaceQuadrature, SymmetricRulesAreExactToTheirDegreeTheCollapsedGaussRule
     for (int i = 0; i <= d; ++i) out = std::max(out, error(r, i, d - i));
     return out;
   };
-  const int degrees[3] = {5, 6, 8}, points[3] = {7, 12, 16};
-  for (int k = 0; k < 3; ++k) {
+  const int degrees[4] = {4, 5, 6, 8}, points[4] = {6, 7, 12, 16};
+  for (int k = 0; k < 4; ++k) {
     const TriangleRule& rule = symmetric_rule(degrees[k]);
     ASSERT_EQ(rule.size(), points[k]);
     for (int q = 0; q < rule.size(); ++q)

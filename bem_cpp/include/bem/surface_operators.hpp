@@ -7,7 +7,7 @@
 //   M_h[i, j] = <v_j, psi_i>
 // v_j: P1 hat of vertex j; psi_i: P1 hat of vertex i ("p1") or indicator of triangle i
 // ("p0"). Pairs sharing a vertex, an edge or the triangle: Sauter-Schwab rules
-// (surface_quadrature.hpp); other pairs: collapsed Gauss rules raised for near pairs.
+// (surface_quadrature.hpp); other pairs: symmetric rules raised for near pairs.
 #include <optional>
 
 #include "bem/operators.hpp"

@@ -4,7 +4,7 @@
 //   K w(z) = 2 int dG/dn_y(z, y) w(y) ds_y,   V psi(z) = 2 int G(z, y) psi(y) ds_y,
 // G = 1/(4 pi |z - y|). Near-panel integration: a triangle is split into four (recursively)
 // until the point is at least 1.5 of its diameters from each piece, and every piece is
-// integrated by a collapsed Gauss rule sized from that ratio (docs/design/bem3d.md).
+// integrated by a rule sized from that ratio (point_rule; docs/design/bem3d.md).
 #include "bem/operators.hpp"
 #include "bem/surface_operators.hpp"
 
@@ -14,9 +14,10 @@ namespace bem {
 /// around the centroid), a point splits it.
 constexpr double kPointSplitDiameters = 1.5;
 
-/// The collapsed Gauss rule (triangle_rule) over a whole (sub)triangle for a point at q of
-/// its diameters from it, as above: 3 points per direction from 6 diameters, 5 from 3, 8
-/// from kPointSplitDiameters; null below (split).
+/// The rule over a whole (sub)triangle for a point at q of its diameters from it, as
+/// above: symmetric_rule(4) (6 points) from 6 diameters, symmetric_rule(8) (16) from 3,
+/// the 8 x 8 collapsed Gauss rule (degree 14) from kPointSplitDiameters; null below
+/// (split).
 const TriangleRule* point_rule(double q);
 
 /// Integrals over triangle t of 2G(z, .) lambda_b (b = 0..2), 2G(z, .) (index 3) and

@@ -32,8 +32,9 @@ struct PairRule {
 const TriangleRule& triangle_rule(int p);
 
 /// A fully symmetric rule with positive weights and interior points, exact for
-/// polynomials of degree 5 (Radon's, 7 points), 6 (Dunavant's, 12) or 8 (Dunavant's, 16):
-/// a third to three fifths of the points of the collapsed Gauss rules of the same degree.
+/// polynomials of degree 4 (Dunavant's, 6 points), 5 (Radon's, 7), 6 (Dunavant's, 12) or 8
+/// (Dunavant's, 16): two fifths to three quarters of the points of the collapsed Gauss
+/// rules of the same degree.
 const TriangleRule& symmetric_rule(int degree);
 
 /// The degree of the far pairs' rule (surface_operators.hpp) and its points.
