@@ -46,9 +46,8 @@ J. Sci. Comput. 25, 2003; van den Eshof and Sleijpen, SIAM J. Matrix Anal. Appl.
 2004). The products then differ from the exact ones by far less than the step's own
 tolerance, which leaves the CG's iterations as they were. Where the amg preconditioner
 has GAMG (bodies other than the box) its inner CG + GAMG keeps its own tolerance inside
-the CG as well: GAMG's
-hierarchy depends on the number of ranks, and only a solve far below the step's accuracy
-keeps the iterates independent of it.
+the CG as well: GAMG's hierarchy depends on the number of ranks, and only a solve far
+below the step's accuracy keeps the iterates independent of it.
 
 The active set is predicted in the metric M_s, by the M_s projection of
 phi - tau M_s^{-1} grad_phi J (the active set of a PGPM step), not by the
