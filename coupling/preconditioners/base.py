@@ -20,6 +20,7 @@ __all__ = [
     "dense_metric",
     "largest_eigenvalue",
     "omega_cycle",
+    "solve_with_cholesky",
 ]
 
 #: Up to this size the largest eigenvalue of M_s comes from LAPACK, above it from Lanczos.
@@ -154,7 +155,7 @@ class DenseSignoriniBlock:
             return np.zeros(0)
         if self._signorini_inverse is not None:
             return self._signorini_inverse @ g
-        return scipy.linalg.cho_solve(self.signorini_factor, g, check_finite=False)
+        return solve_with_cholesky(self.signorini_factor, g)
 
     def matvec_signorini(self, phi: np.ndarray) -> np.ndarray:
         return self.signorini_metric @ phi
@@ -179,6 +180,14 @@ def cholesky_of(metric: np.ndarray | SingleMatrix) -> tuple[np.ndarray, bool]:
     if isinstance(metric, SingleMatrix):
         return scipy.linalg.cho_factor(metric.to_dense(), overwrite_a=True)
     return scipy.linalg.cho_factor(metric)
+
+
+def solve_with_cholesky(factor: tuple[np.ndarray, bool], b: np.ndarray) -> np.ndarray:
+    """M^{-1} b from M's Cholesky factor (``scipy.linalg.cho_factor``'s, as
+    :func:`cholesky_of` gives it), without scipy's finiteness check of the factor: the
+    factor came from a checked M, and the check reads all n^2 entries at every solve (2.1 s
+    in 210 solves at n_s = 16,129)."""
+    return scipy.linalg.cho_solve(factor, b, check_finite=False)
 
 
 def inverse_from_cholesky(factor: tuple[np.ndarray, bool], block: int = 512) -> np.ndarray:

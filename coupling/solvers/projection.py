@@ -32,6 +32,7 @@ from coupling.preconditioners.base import (
     dense_metric,
     inverse_from_cholesky,
     largest_eigenvalue,
+    solve_with_cholesky,
 )
 
 __all__ = ["SignoriniProjection", "ProjectionResult"]
@@ -198,7 +199,7 @@ class SignoriniProjection:
         else the factor."""
         if self._inverse is not None or self._factor_of is None:
             return self._inverse_matrix() @ v
-        return scipy.linalg.cho_solve(self._cholesky(), v, check_finite=False)
+        return solve_with_cholesky(self._cholesky(), v)
 
     def _projected_iteration(self, target: np.ndarray, start: np.ndarray) -> ProjectionResult:
         """(3.20) from phi_k = ``start`` until (3.6) is certified by the dual bound."""
@@ -260,7 +261,7 @@ class SignoriniProjection:
             self._factorised_flops += n_free**3 / 3
         if rent or n_active >= n_free:  # M_II's factor
             psi = np.zeros(n)
-            psi[free] = scipy.linalg.cho_solve(self.free_factor(free), b[free], check_finite=False)
+            psi[free] = solve_with_cholesky(self.free_factor(free), b[free])
             return psi
         W = self._inverse_matrix()
         y = W @ np.where(free, b, 0.0)
