@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -210,7 +211,8 @@ Index dofs(const Surface& surface, Space space) { return space == Space::P1 ? su
 PairIntegrator::PairIntegrator(const Surface& surface) : surface_(surface) {
   singular_[0] = nullptr;
   for (int shared = 1; shared <= 3; ++shared) singular_[shared] = &singular_rule(shared, kSingularGaussPoints[shared]);
-  for (int d = 0; d < 9; ++d) regular_[d] = d == 5 || d == 6 || d == 8 ? &symmetric_rule(d) : nullptr;
+  std::fill(std::begin(regular_), std::end(regular_), nullptr);
+  for (int d : kRegularDegrees) regular_[d] = &symmetric_rule(d);
 }
 
 int PairIntegrator::regular_rule(const Triangle& a, const Triangle& b) {
@@ -220,9 +222,9 @@ int PairIntegrator::regular_rule(const Triangle& a, const Triangle& b) {
   // one rule for every pair from q = 1.5 on: the entries of an admissible block are then a
   // smooth function of the positions (a rule switching inside a block would add a jump at
   // the rule's error, which ACA could not compress below it; docs/design/bem3d.md)
-  if (q >= kFarSeparation) return kFarRuleDegree;
-  if (q >= 0.5) return 6;
-  return 8;
+  if (q >= kFarSeparation) return kRegularDegrees[2];
+  if (q >= 0.5) return kRegularDegrees[1];
+  return kRegularDegrees[0];
 }
 
 void PairIntegrator::integrate(Index tau, Index sigma, bool double_layer, PairIntegrals& out) const {

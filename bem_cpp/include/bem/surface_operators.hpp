@@ -26,6 +26,9 @@ constexpr int kSingularGaussPoints[4] = {0, 5, 6, 6};
 /// pairs only, so their entries are this rule's sums over the point kernel
 /// (surface_entries.hpp).
 constexpr double kFarSeparation = 1.5;
+/// The degrees of the symmetric rules of the regular pairs (PairIntegrator::regular_rule):
+/// below q = 0.5, below kFarSeparation, and the far rule's.
+constexpr int kRegularDegrees[3] = {8, 6, kFarRuleDegree};
 
 /// The distance between two triangles' centroids (or two sets of them) from which every
 /// pair of triangles of radius <= `radius` is a far pair: 2 (1 + kFarSeparation) radius.
@@ -52,8 +55,8 @@ class PairIntegrator {
   /// `double_layer`: also K and Kt (otherwise they are left unset).
   void integrate(Index tau, Index sigma, bool double_layer, PairIntegrals& out) const;
   /// The degree of the symmetric_rule of a disjoint pair, from the distance of the balls
-  /// about the centroids over the larger diameter, q: 8 below q = 0.5, 6 below 1.5, and
-  /// kFarRuleDegree beyond (docs/design/bem3d.md).
+  /// about the centroids over the larger diameter, q: kRegularDegrees below q = 0.5, below
+  /// 1.5 and beyond (8, 6 and kFarRuleDegree; docs/design/bem3d.md).
   static int regular_rule(const Triangle& a, const Triangle& b);
   /// Whether the pair is a far pair (integrated by the far rule): disjoint, q >= kFarSeparation.
   static bool far(const Triangle& a, const Triangle& b) { return regular_rule(a, b) == kFarRuleDegree; }
@@ -61,7 +64,7 @@ class PairIntegrator {
  private:
   const Surface& surface_;
   const PairRule* singular_[4];     ///< by the number of shared vertices (1..3)
-  const TriangleRule* regular_[9];  ///< symmetric_rule(d) at d = regular_rule (5, 6, 8)
+  const TriangleRule* regular_[9];  ///< symmetric_rule(d) at d = regular_rule (kRegularDegrees)
 };
 
 /// The surface curl n x grad(lambda_a) of the barycentric coordinate a on triangle t.
