@@ -17,7 +17,7 @@ the tetrahedra of a contiguous range of cubes (lexicographic, x fastest: slabs o
 when the ranks divide n) and an even block of the vertex coordinates, and tells DOLFINx
 where each cell goes, so no graph is partitioned and no rank holds the whole mesh
 (measured against ``create_box``: docs/design/three_dimensions.md, "Issue 34, continued
-(2026-12-06)").
+(2026-12-06): the box written down in parallel ...").
 """
 from __future__ import annotations
 
