@@ -298,3 +298,32 @@ def test_a_body_s_figures_are_drawn_by_the_figure_process_in_two_parts(tmp_path)
         with pytest.raises(ValueError, match="no section"):
             worker.render(surface, failing)
         assert worker._process.poll() is not None  # ended, not left waiting
+
+
+@pytest.mark.parametrize("elev, nearer", [(90, "blue"), (-90, "red")])
+def test_surface_figure_draws_the_nearer_of_two_overlapping_triangles_last(elev, nearer):
+    """surface.png's triangles are sorted by depth in the axes' view and drawn farthest
+    first (a painter's order, as mplot3d's polygons): of two triangles one above the other
+    the one nearer the eye covers the other, seen from above and from below."""
+    import io
+
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import to_rgba
+
+    from coupling.io.body_figures import _GouraudSurface
+
+    square = np.array([[-1.0, -1.0], [1.0, -1.0], [0.0, 1.0]])
+    corners = np.stack([np.column_stack([square, np.full(3, z)]) for z in (0.0, 1.0)])
+    colours = np.array([[to_rgba("red")] * 3, [to_rgba("blue")] * 3])
+    fig = plt.figure(figsize=(2, 2), dpi=50)
+    ax = fig.add_subplot(projection="3d")
+    ax.add_collection(_GouraudSurface(corners, colours), autolim=False)
+    ax.set(xlim=(-1, 1), ylim=(-1, 1), zlim=(0, 1))
+    ax.set_axis_off()
+    ax.view_init(elev=elev, azim=-90)
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png")
+    plt.close(fig)
+    image = plt.imread(io.BytesIO(buffer.getvalue()))
+    centre = image[image.shape[0] // 2, image.shape[1] // 2, :3]
+    np.testing.assert_allclose(centre, to_rgba(nearer)[:3], atol=0.02)

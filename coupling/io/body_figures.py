@@ -18,7 +18,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
+from matplotlib import collections as mcollections  # noqa: E402
+from mpl_toolkits.mplot3d import proj3d  # noqa: E402
 
 from coupling.io.body_figure_data import BODY_PLOT_FILES, BodyFigureInputs  # noqa: E402
 from coupling.io.history_figure import figure_history  # noqa: E402
@@ -76,11 +77,41 @@ def _plane_axes(normal: np.ndarray) -> tuple[np.ndarray, tuple[str, str]]:
     return np.stack([first, second]), (names[0], names[1])
 
 
+class _GouraudSurface(mcollections.Collection):
+    """Triangles in a 3D axes with a colour per corner, drawn farthest first in one call
+    of the renderer's Gouraud triangles: what mplot3d's Poly3DCollection does (project,
+    sort by mean depth, draw) with one numpy pass instead of a Path per polygon (3 s for
+    the 49,152 triangles of a 64^3 box, against 0.1 s)."""
+
+    def __init__(self, corners: np.ndarray, colours: np.ndarray):
+        super().__init__()
+        self._paths = []  # no polygons: draw() below is the drawing
+        self._corners, self._colours = corners, colours  # (t, 3, 3), (t, 3, 4)
+        self._projected = (np.empty((0, 3, 2)), np.empty((0, 3, 4)))
+
+    def do_3d_projection(self) -> float:
+        """Project onto the axes' view and sort by depth; returns the nearest depth (the
+        artists' own order, as Poly3DCollection's)."""
+        x, y, z = proj3d.proj_transform(*self._corners.reshape(-1, 3).T, self.axes.M)
+        depth = z.reshape(-1, 3).mean(axis=1)
+        far_first = np.argsort(-depth, kind="stable")
+        flat = np.stack([x, y], axis=-1).reshape(-1, 3, 2)
+        self._projected = (flat[far_first], self._colours[far_first])
+        return float(depth.min()) if len(depth) else np.nan
+
+    def draw(self, renderer) -> None:
+        if not self.get_visible() or not len(self._projected[0]):
+            return
+        gc = renderer.new_gc()
+        self._set_gc_clip(gc)
+        renderer.draw_gouraud_triangles(gc, *self._projected, self.axes.transData.frozen())
+        gc.restore()
+
+
 def _figure_surface(inputs: BodyFigureInputs):
     nodes, tri, u = inputs.nodes, inputs.triangles, inputs.fields["u"]
-    values = u[tri].mean(axis=1)
     norm = plt.Normalize(float(u.min()), float(u.max()))
-    colours = plt.get_cmap("viridis")(norm(values))
+    colours = plt.get_cmap("viridis")(norm(u))[tri]  # (t, 3, 4): a colour per corner
     lo, hi = nodes.min(axis=0), nodes.max(axis=0)
     corners = nodes[tri]
     outward = _outward_normals(corners)
@@ -88,13 +119,11 @@ def _figure_surface(inputs: BodyFigureInputs):
     for k, (elev, azim) in enumerate(((25, -60), (-25, 120))):
         ax = fig.add_subplot(1, 2, k + 1, projection="3d")
         # the triangles facing away from the eye are hidden behind the others (a closed
-        # surface): only those facing it are drawn (half the polygons to sort and fill)
+        # surface): only those facing it are drawn (half the triangles to sort and fill)
         e, a = np.radians(elev), np.radians(azim)
         eye = np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])
         front = outward @ eye > 0.0
-        ax.add_collection3d(
-            Poly3DCollection(corners[front], facecolors=colours[front], linewidths=0)
-        )
+        ax.add_collection(_GouraudSurface(corners[front], colours[front]), autolim=False)
         ax.set(xlim=(lo[0], hi[0]), ylim=(lo[1], hi[1]), zlim=(lo[2], hi[2]))
         ax.set(xlabel="$x$", ylabel="$y$", zlabel="$z$")
         ax.set_box_aspect(hi - lo)
