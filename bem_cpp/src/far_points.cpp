@@ -43,9 +43,9 @@ std::vector<Part> parts(const Surface& s, Space space, const Index* dofs, Index 
   return out;
 }
 
-FarPoints::FarPoints(const Surface& s, const std::vector<Part>& parts, Index dofs, bool with_values, bool with_curls,
+FarPoints::FarPoints(const Surface& s, const std::vector<Part>& parts, Index dofs, bool with_curls,
                      const TriangleRule& r) {
-  std::vector<Eigen::Triplet<double>> entries[4];
+  std::vector<Eigen::Triplet<double>> entries[3];
   per_part = r.size();
   for (auto* v : {&x, &y, &z, &nx, &ny, &nz, &w}) v->reserve(parts.size() * static_cast<std::size_t>(r.size()));
   Index part_index = 0;
@@ -53,8 +53,6 @@ FarPoints::FarPoints(const Surface& s, const std::vector<Part>& parts, Index dof
     const Triangle& T = s.triangle(part.triangle);
     for (int q = 0; q < r.size(); ++q) {
       const std::size_t k = static_cast<std::size_t>(q);
-      const double lambda[4] = {1.0 - r.s[k] - r.t[k], r.s[k], r.t[k], 1.0};
-      const Index p = size();
       const Vec3 v = T.p[0] + r.s[k] * (T.p[1] - T.p[0]) + r.t[k] * (T.p[2] - T.p[0]);
       x.push_back(v.x);
       y.push_back(v.y);
@@ -63,26 +61,22 @@ FarPoints::FarPoints(const Surface& s, const std::vector<Part>& parts, Index dof
       ny.push_back(T.n.y);
       nz.push_back(T.n.z);
       w.push_back(2.0 * T.area * r.w[k]);
-      if (with_values)
-        for (int a = 0; a < part.count; ++a) entries[0].emplace_back(p, part.position[a], lambda[part.basis[a]]);
     }
     if (with_curls)
       for (int a = 0; a < part.count; ++a) {
         const Vec3 c = surface_curl(T, part.basis[a]);
-        entries[1].emplace_back(part_index, part.position[a], c.x);
-        entries[2].emplace_back(part_index, part.position[a], c.y);
-        entries[3].emplace_back(part_index, part.position[a], c.z);
+        entries[0].emplace_back(part_index, part.position[a], c.x);
+        entries[1].emplace_back(part_index, part.position[a], c.y);
+        entries[2].emplace_back(part_index, part.position[a], c.z);
       }
     ++part_index;
   }
-  auto map = [&](const std::vector<Eigen::Triplet<double>>& e, Index rows) {
-    Eigen::SparseMatrix<double> Q(rows, dofs);
-    Q.setFromTriplets(e.begin(), e.end());
-    return Q;
-  };
-  if (with_values) values.push_back(map(entries[0], size()));
   if (with_curls)
-    for (int c = 1; c < 4; ++c) curls.push_back(map(entries[c], part_index));
+    for (const auto& e : entries) {
+      Eigen::SparseMatrix<double> C(part_index, dofs);
+      C.setFromTriplets(e.begin(), e.end());
+      curls.push_back(std::move(C));
+    }
 }
 
 Eigen::MatrixXd sum_over_parts(const Eigen::Ref<const Eigen::MatrixXd>& A, Index per_part) {

@@ -67,10 +67,14 @@ class SurfaceBlock : public EntryBlock {
         for (const Part& c : col_parts_) add(r, c, out, 1, m_);
       return;
     }
-    if (kernel_ == SurfaceKernel::DoubleLayer)
+    if (kernel_ == SurfaceKernel::DoubleLayer) {
       double_layer_all(out, nullptr);
-    else
-      project(far_kernel(), kernel_ == SurfaceKernel::Hypersingular, result);
+    } else if (kernel_ == SurfaceKernel::SingleLayer) {
+      single_layer_far(out);
+    } else {
+      single_layer_far(nullptr);
+      project_pairs(result);
+    }
     for (Index p = 0; p < m_; ++p) add_near(*near_rows_, I_[p], col_positions(), out + p, m_);
   }
   /// The double layer's block and its mirror K(J, I) from one pass over the point pairs
@@ -117,7 +121,8 @@ class SurfaceBlock : public EntryBlock {
         for (const Part& c : col_parts_) add(r, c, out, 1, m_, true);
       return;
     }
-    project(far_kernel(), true, result);
+    if (far_pairs_.size() == 0) single_layer_far(nullptr);  // all() computed them otherwise
+    project_pairs(result);
     for (Index p = 0; p < m_; ++p) add_near(near_->hypersingular(), I_[p], col_positions(), out + p, m_);
   }
   bool companion_low_rank(int which, double /*tol*/, LowRank& out) const override {
@@ -128,22 +133,68 @@ class SurfaceBlock : public EntryBlock {
   }
 
  private:
-  /// The single layer's A at the far-rule points with the near pairs' 7 x 7 parts zero (they
-  /// are in the near field), computed once for the block and its companion.
-  const Eigen::MatrixXd& far_kernel() const {
-    if (far_kernel_.size() > 0) return far_kernel_;
+  /// The single layer's far pairs in one pass over the point pairs, without the block's
+  /// point matrix: per column part b, the kernel between every row point and b's points
+  /// summed against the values of b's hats (A Lambda_b, vectorised over the rows) and, with
+  /// the hypersingular companion, over b's points (A 1); then each far row part a adds
+  /// Lambda_a^T A Lambda_b to its dofs' entries of `out` (m x k, unless null) and 1^T A 1 to
+  /// far_pairs_(a, b), the sums the surface curls project (project_pairs). The near pairs
+  /// are left out of both (they are in the near field).
+  void single_layer_far(double* out) const {
+    constexpr int n = kFarRulePoints;
     prepare_points();
-    const PointKernel kernel{*rp_, *cp_, PointKernelKind::SingleLayer};
-    const Index n = far_rule().size();
-    far_kernel_.resize(rp_->size(), cp_->size());
-    for (Index q = 0; q < cp_->size(); ++q) kernel.column(q, far_kernel_.col(q).data());
+    const Eigen::Matrix<double, n, 4> L = basis_values(far_rule());
+    const bool sums = companion_ || kernel_ == SurfaceKernel::Hypersingular;
+    const Index parts = static_cast<Index>(row_parts_.size());
+    Eigen::Matrix<double, Eigen::Dynamic, 4> AL(rp_->size(), 4);  // b's three hats, and 1
+    Eigen::Map<Eigen::MatrixXd> result(out, out ? m_ : 0, out ? k_ : 0);
+    result.setZero();
+    if (sums) far_pairs_.setZero(parts, static_cast<Index>(col_parts_.size()));
     for (std::size_t b = 0; b < col_parts_.size(); ++b) {
-      const Triangle& tb = s_.triangle(col_parts_[b].triangle);
-      for (std::size_t a = 0; a < row_parts_.size(); ++a)
-        if (!PairIntegrator::far(s_.triangle(row_parts_[a].triangle), tb))
-          far_kernel_.block(static_cast<Index>(a) * n, static_cast<Index>(b) * n, n, n).setZero();
+      const Part& cb = col_parts_[b];
+      const Triangle& tb = s_.triangle(cb.triangle);
+      AL.setZero();
+      for (int q = 0; q < n; ++q) {
+        double l[4];  // the values of b's hats at its point q (zero for hats not in the block), 1
+        for (int j = 0; j < 3; ++j) l[j] = j < cb.count ? L(q, cb.basis[j]) : 0.0;
+        l[3] = 1.0;
+        const Index c = static_cast<Index>(b) * n + q;
+        if (sums)
+          accumulate_single_layer<true>(*rp_, *cp_, c, l, AL);
+        else
+          accumulate_single_layer<false>(*rp_, *cp_, c, l, AL);
+      }
+      for (Index a = 0; a < parts; ++a) {
+        const Part& ra = row_parts_[static_cast<std::size_t>(a)];
+        if (!PairIntegrator::far(s_.triangle(ra.triangle), tb)) continue;
+        if (sums) far_pairs_(a, static_cast<Index>(b)) = AL.col(3).segment(a * n, n).sum();
+        if (!out) continue;
+        for (int i = 0; i < ra.count; ++i)
+          for (int j = 0; j < cb.count; ++j)
+            result(ra.position[i], cb.position[j]) += L.col(ra.basis[i]).dot(AL.col(j).segment(a * n, n));
+      }
     }
-    return far_kernel_;
+  }
+  /// AL(p, j) += l[j] A(p, c) for every row point p, j < 3 (and j = 3 with `sums`), A the
+  /// single layer's point kernel (weights included) at the column point c.
+  template <bool sums>
+  static void accumulate_single_layer(const FarPoints& r, const FarPoints& c, Index q, const double* l,
+                                      Eigen::Matrix<double, Eigen::Dynamic, 4>& AL) {
+    const std::size_t j = static_cast<std::size_t>(q);
+    const double x = c.x[j], y = c.y[j], z = c.z[j], w = kInvTwoPi * c.w[j];
+    const double l0 = l[0], l1 = l[1], l2 = l[2];
+    double *a0 = AL.col(0).data(), *a1 = AL.col(1).data(), *a2 = AL.col(2).data(), *a3 = AL.col(3).data();
+    const double *rx = r.x.data(), *ry = r.y.data(), *rz = r.z.data(), *rw = r.w.data();
+    const Index points = r.size();
+#pragma omp simd
+    for (Index p = 0; p < points; ++p) {
+      const double dx = rx[p] - x, dy = ry[p] - y, dz = rz[p] - z;
+      const double k = w * rw[p] / std::sqrt(dx * dx + dy * dy + dz * dz);
+      a0[p] += l0 * k;
+      a1[p] += l1 * k;
+      a2[p] += l2 * k;
+      if constexpr (sums) a3[p] += k;
+    }
   }
   /// ACA on a point kernel to `tol`.
   static LowRank aca(const PointKernel& kernel, double tol) {
@@ -181,7 +232,7 @@ class SurfaceBlock : public EntryBlock {
     std::vector<std::vector<Part>> piece_rows, piece_cols;
     auto add_piece = [&](std::vector<Part> R, std::vector<Part> C) {
       if (R.empty() || C.empty()) return;
-      const FarPoints rp(s_, R, m_, false, false, rule), cp(s_, C, k_, false, false, rule);
+      const FarPoints rp(s_, R, m_, false, rule), cp(s_, C, k_, false, rule);
       pieces.push_back(aca(PointKernel{rp, cp, PointKernelKind::DoubleLayer}, tol));
       piece_rows.push_back(std::move(R));
       piece_cols.push_back(std::move(C));
@@ -229,7 +280,7 @@ class SurfaceBlock : public EntryBlock {
     const Eigen::Matrix<double, n, 4> L = basis_values(rule);
     std::vector<Part> rows = row_parts_;
     std::stable_sort(rows.begin(), rows.end(), [this](const Part& a, const Part& b) { return plane(a) < plane(b); });
-    const FarPoints rp(s_, rows, m_, false, false, rule), cp(s_, col_parts_, k_, false, false, rule);
+    const FarPoints rp(s_, rows, m_, false, rule), cp(s_, col_parts_, k_, false, rule);
     const Index parts = static_cast<Index>(rows.size()), points = rp.size();
     // the kernel's rows summed against the values of b's (up to three) hats: A Lambda_b, and
     // the mirror's
@@ -319,30 +370,21 @@ class SurfaceBlock : public EntryBlock {
     if (which != 1 || !companion_)
       throw std::logic_error("SurfaceBlock: only the single layer has a companion, the hypersingular operator");
   }
-  /// The far-rule points of both sides, with the maps of the matrices asked for.
+  /// The far-rule points of both sides, with the curls' maps when W is asked for.
   void prepare_points() const {
     if (rp_) return;
-    const bool values = kernel_ != SurfaceKernel::Hypersingular;
     const bool curls = kernel_ == SurfaceKernel::Hypersingular || companion_;
-    const TriangleRule& rule = far_rule();
-    rp_ = std::make_unique<FarPoints>(s_, row_parts_, m_, values, curls, rule);
-    cp_ = std::make_unique<FarPoints>(s_, col_parts_, k_, values, curls, rule);
+    rp_ = std::make_unique<FarPoints>(s_, row_parts_, m_, curls, far_rule());
+    cp_ = std::make_unique<FarPoints>(s_, col_parts_, k_, curls, far_rule());
   }
-  /// Q_r^T A Q_c with the values' maps, or sum_d C_r[d]^T A_t C_c[d] with the curls, A_t the
-  /// sums of A over each triangle pair's points (the curls are constant on a triangle: 49
-  /// times fewer entries to project).
-  void project(const Eigen::MatrixXd& A, bool curls, Eigen::Map<Eigen::MatrixXd>& out) const {
-    if (!curls) {
-      const Eigen::MatrixXd AQ = A * cp_->values[0];
-      out = rp_->values[0].transpose() * AQ;
-      return;
-    }
-    const Eigen::MatrixXd pairs =
-        sum_over_parts(sum_over_parts(A, rp_->per_part).transpose(), cp_->per_part).transpose();
+  /// out = sum_d C_r[d]^T P C_c[d], P = far_pairs_ (single_layer_far): the hypersingular
+  /// block's far part by Nedelec's identity (the curls are constant on a triangle, so the
+  /// point kernel enters through its sums over each pair's points only).
+  void project_pairs(Eigen::Map<Eigen::MatrixXd>& out) const {
     out.setZero();
     for (std::size_t d = 0; d < rp_->curls.size(); ++d) {
-      const Eigen::MatrixXd AC = pairs * cp_->curls[d];
-      out += rp_->curls[d].transpose() * AC;
+      const Eigen::MatrixXd PC = far_pairs_ * cp_->curls[d];
+      out += rp_->curls[d].transpose() * PC;
     }
   }
   /// The point factors projected to the dofs: the maps side by side (the three curl
@@ -350,8 +392,10 @@ class SurfaceBlock : public EntryBlock {
   /// by the H-matrix to its rank).
   void project(const LowRank& points, bool curls, LowRank& out) const {
     if (!curls) {
-      out.U = rp_->values[0].transpose() * points.U;
-      out.V = cp_->values[0].transpose() * points.V;
+      out.U.setZero(m_, points.rank());
+      out.V.setZero(k_, points.rank());
+      add_values_transpose_product(row_parts_, far_rule(), points.U, out.U);
+      add_values_transpose_product(col_parts_, far_rule(), points.V, out.V);
       return;
     }
     const Eigen::MatrixXd U = sum_over_parts(points.U, rp_->per_part), V = sum_over_parts(points.V, cp_->per_part);
@@ -438,7 +482,7 @@ class SurfaceBlock : public EntryBlock {
   mutable std::unordered_map<Index, Index> row_position_, col_position_;  ///< row_positions, col_positions
   // computed once per block, shared with the companion
   mutable std::unique_ptr<FarPoints> rp_, cp_;
-  mutable Eigen::MatrixXd far_kernel_;
+  mutable Eigen::MatrixXd far_pairs_;  ///< single_layer_far's sums over the far pairs' points
   mutable std::optional<LowRank> point_factors_;  ///< the ACA factors on the points (companion only)
 };
 

@@ -118,7 +118,8 @@ class SurfacePotentialBlock : public EntryBlock {
     const Index n = cols_points_->size();
     const LowRank A = aca(m_, n, row, column, 0.3 * tol, std::min(m_, n));
     out.U = A.U;
-    out.V = cols_points_->values[0].transpose() * A.V;
+    out.V.setZero(k_, A.rank());
+    add_values_transpose_product(parts_, *rule_, A.V, out.V);
     return true;
   }
 
@@ -141,7 +142,8 @@ class SurfacePotentialBlock : public EntryBlock {
     const TriangleRule* rule = point_rule((points.distance(supports) - radius) / diameter);
     if (rule == nullptr) return false;
     rows_ = std::make_unique<FarPoints>(points_, I_, m_);
-    cols_points_ = std::make_unique<FarPoints>(surface_, parts_, k_, true, false, *rule);
+    cols_points_ = std::make_unique<FarPoints>(surface_, parts_, k_, false, *rule);
+    rule_ = rule;
     return true;
   }
 
@@ -162,6 +164,7 @@ class SurfacePotentialBlock : public EntryBlock {
   mutable Eigen::MatrixXd other_;  ///< the companion's dense block (all())
   mutable bool far_checked_ = false;
   mutable std::unique_ptr<FarPoints> rows_, cols_points_;  ///< the points of I, the rule's on J
+  mutable const TriangleRule* rule_ = nullptr;              ///< cols_points_'s rule
 };
 
 /// The first point within `on` of a vertex or a centroid of the surface (-1: none), through

@@ -141,7 +141,7 @@ TEST(FarPoints, SumOverPartsAddsEachPartsConsecutiveRows) {
 }
 
 TEST(FarPoints, ValuesTransposeProductIsTheMapsProduct) {
-  // Q^T A part by part without the sparse map, P1 (three dofs on a triangle of the block, or
+  // Q^T A part by part without forming Q (built here entry by entry), P1 (three dofs on a triangle of the block, or
   // one or two where the block holds only some of its vertices) and P0; and a kernel column
   // over a range of the row points is that range of the whole column
   const test::Mesh mesh = test::icosphere(1, 0.7);
@@ -151,11 +151,21 @@ TEST(FarPoints, ValuesTransposeProductIsTheMapsProduct) {
     const std::vector<Index> dofs = every_other(space == Space::P1 ? s.vertices() : s.size(), 1);
     const Index k = static_cast<Index>(dofs.size());
     const std::vector<Part> p = parts(s, space, dofs.data(), k);
-    const FarPoints points(s, p, k, true, false, rule);
+    const FarPoints points(s, p, k, false, rule);
     const Eigen::MatrixXd A = Eigen::MatrixXd::Random(points.size(), 4);
     Eigen::MatrixXd out = Eigen::MatrixXd::Ones(k, 4);
     add_values_transpose_product(p, rule, A, out);
-    const Eigen::MatrixXd expected = Eigen::MatrixXd::Ones(k, 4) + points.values[0].transpose() * A;
+    // the map Q (points x dofs) entry by entry: the dof's barycentric coordinate (P1) or 1
+    // (P0) at the rule's points of each of its triangles
+    Eigen::MatrixXd Q = Eigen::MatrixXd::Zero(points.size(), k);
+    for (std::size_t t = 0; t < p.size(); ++t)
+      for (int q = 0; q < rule.size(); ++q) {
+        const std::size_t i = static_cast<std::size_t>(q);
+        const double value[4] = {1.0 - rule.s[i] - rule.t[i], rule.s[i], rule.t[i], 1.0};
+        for (int a = 0; a < p[t].count; ++a)
+          Q(static_cast<Index>(t) * rule.size() + q, p[t].position[a]) = value[p[t].basis[a]];
+      }
+    const Eigen::MatrixXd expected = Eigen::MatrixXd::Ones(k, 4) + Q.transpose() * A;
     EXPECT_LT((out - expected).norm(), 1e-14 * expected.norm());
     for (PointKernelKind kind : {PointKernelKind::SingleLayer, PointKernelKind::DoubleLayer}) {
       const PointKernel kernel{points, points, kind};

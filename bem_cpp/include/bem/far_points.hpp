@@ -30,13 +30,11 @@ std::vector<Part> parts(const Surface& s, Space space, const Index* dofs, Index 
 
 /// The points of `rule` on the triangles of `parts` (by coordinate, so that the kernel
 /// loops below vectorise), with weights (the rule's weight times twice the area: the
-/// physical measure) and normals, and the basis values Q that take a function of the
-/// points to the block's dofs: dof value = sum_p Q(p, dof) f(p). Or target points
-/// themselves (weight 1, no normal, no maps: the rows of a potential).
+/// physical measure) and normals; a function of the points goes to the block's dofs by the
+/// basis values (add_values_transpose_product). Or target points themselves (weight 1, no
+/// normal, no maps: the rows of a potential).
 struct FarPoints {
   std::vector<double> x, y, z, nx, ny, nz, w;
-  /// points x dofs: the values of the basis functions (one map).
-  std::vector<Eigen::SparseMatrix<double>> values;
   /// parts x dofs: the three components of the surface curls of the basis functions (the
   /// hypersingular operator by Nedelec's identity W = sum_c C_c^T V0 C_c), constant on a
   /// triangle: the map of the points is the points' sum over each part's `per_part` points
@@ -44,9 +42,7 @@ struct FarPoints {
   std::vector<Eigen::SparseMatrix<double>> curls;
   Index per_part = 1;
 
-  FarPoints(const Surface& s, const std::vector<Part>& parts, Index dofs, bool with_values, bool with_curls,
-            const TriangleRule& rule);
-  /// The rows I[0..m) of `points` (m, 3).
+  FarPoints(const Surface& s, const std::vector<Part>& parts, Index dofs, bool with_curls, const TriangleRule& rule);
   FarPoints(const Vertices& points, const Index* I, Index m);
   Index size() const { return static_cast<Index>(w.size()); }
 };
@@ -56,10 +52,11 @@ struct FarPoints {
 Eigen::MatrixXd sum_over_parts(const Eigen::Ref<const Eigen::MatrixXd>& A, Index per_part);
 
 /// The basis values at the points of `rule` (rule points x 4): column a < 3 the barycentric
-/// coordinate a (P1), column 3 the constant 1 (P0): FarPoints::values part by part.
+/// coordinate a (P1), column 3 the constant 1 (P0).
 Eigen::Matrix<double, Eigen::Dynamic, 4> basis_values(const TriangleRule& rule);
 
-/// out += Q^T A with Q the values' map of `parts` (FarPoints::values) without forming it:
+/// out += Q^T A with Q the basis values of `parts` at the rule's points (points x dofs),
+/// without forming it:
 /// row `position` of out gains, for each dof of a part, the sum over the part's points
 /// (rule.size() consecutive rows of A, part by part) of its basis value times A's row.
 /// A (parts x rule points, k), out (dofs, k).
