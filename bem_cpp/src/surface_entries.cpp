@@ -482,7 +482,7 @@ class SurfaceBlock : public EntryBlock {
   mutable std::unordered_map<Index, Index> row_position_, col_position_;  ///< row_positions, col_positions
   // computed once per block, shared with the companion
   mutable std::unique_ptr<FarPoints> rp_, cp_;
-  mutable Eigen::MatrixXd far_pairs_;  ///< single_layer_far's sums over the far pairs' points
+  mutable Eigen::MatrixXd far_pairs_;             ///< single_layer_far's sums over the far pairs' points
   mutable std::optional<LowRank> point_factors_;  ///< the ACA factors on the points (companion only)
 };
 

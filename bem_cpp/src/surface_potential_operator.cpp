@@ -164,7 +164,7 @@ class SurfacePotentialBlock : public EntryBlock {
   mutable Eigen::MatrixXd other_;  ///< the companion's dense block (all())
   mutable bool far_checked_ = false;
   mutable std::unique_ptr<FarPoints> rows_, cols_points_;  ///< the points of I, the rule's on J
-  mutable const TriangleRule* rule_ = nullptr;              ///< cols_points_'s rule
+  mutable const TriangleRule* rule_ = nullptr;             ///< cols_points_'s rule
 };
 
 /// The first point within `on` of a vertex or a centroid of the surface (-1: none), through
