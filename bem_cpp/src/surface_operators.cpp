@@ -227,6 +227,19 @@ int PairIntegrator::regular_rule(const Triangle& a, const Triangle& b) {
   return kRegularDegrees[0];
 }
 
+namespace {
+
+/// Whether the triangles a and b (sharing `shared` vertices) lie in one plane: the same
+/// triangle, or normals parallel and b's centroid in a's plane, both to 1e-12 (relative to
+/// the triangles' size).
+bool coplanar(const Triangle& a, const Triangle& b, int shared) {
+  if (shared == 3) return true;
+  constexpr double kTol = 1e-12;
+  return norm(cross(a.n, b.n)) <= kTol && std::abs(dot(a.n, b.c - a.c)) <= kTol * (a.radius + b.radius);
+}
+
+}  // namespace
+
 void PairIntegrator::integrate(Index tau, Index sigma, bool double_layer, PairIntegrals& out) const {
   const bool swap = tau > sigma;  // evaluate on (min, max), the same points for both orders
   const Triangle& a = surface_.triangle(swap ? sigma : tau);
@@ -243,13 +256,16 @@ void PairIntegrator::integrate(Index tau, Index sigma, bool double_layer, PairIn
   }
   const Mapped ma = mapped(a, oa), mb = mapped(b, ob);
   Accumulated acc;
+  // n . (x - y) vanishes between the points of one plane: K is zero on a triangle with
+  // itself and between coplanar triangles (a polyhedron's faces), where V alone is integrated
+  const bool k = double_layer && !coplanar(a, b, adj.shared);
   if (adj.shared > 0)
-    if (double_layer)
+    if (k)
       accumulate_pairs<true>(ma, mb, a.n, b.n, *singular_[adj.shared], acc);
     else
       accumulate_pairs<false>(ma, mb, a.n, b.n, *singular_[adj.shared], acc);
   else
-    accumulate_tensor(ma, mb, a.n, b.n, *regular_[regular_rule(a, b)], double_layer, acc);
+    accumulate_tensor(ma, mb, a.n, b.n, *regular_[regular_rule(a, b)], k, acc);
   const double jac = 4.0 * a.area * b.area;
   for (int i = 0; i < 4; ++i)
     for (int j = 0; j < 4; ++j) out.V[i][j] = jac * (swap ? acc.V[j][i] : acc.V[i][j]);
