@@ -133,13 +133,17 @@ def _grid_keys(coords: np.ndarray, origin: np.ndarray, quantum: float) -> np.nda
     d = coords.shape[1]
     levels = GRID_LEVELS[d]
     with np.errstate(over="ignore", invalid="ignore"):
-        k = np.rint((coords - origin) / quantum)
+        k = coords - origin
+        k /= quantum
+        np.rint(k, out=k)
     inside = ((k >= 0) & (k <= levels)).all(axis=1)
-    keys = np.full(len(coords), -1, dtype=np.int64)
-    ki = k[inside].astype(np.int64)
-    keys[inside] = ki[:, 0]
+    k[~inside] = 0  # whole arrays below, no selections: the outside keys set to -1 last
+    ki = k.astype(np.int64)
+    keys = ki[:, 0].copy()
     for axis in range(1, d):
-        keys[inside] = keys[inside] * (levels + 1) + ki[:, axis]
+        keys *= levels + 1
+        keys += ki[:, axis]
+    keys[~inside] = -1
     return keys
 
 
@@ -169,7 +173,7 @@ def _at_lattice_points(
     d = x.shape[1]
     coords, known = x, values
     if len(weights):  # not for divisions = 1: the nodes alone (no cells' corners gathered)
-        coords = np.concatenate([x, np.einsum("kc,tcd->tkd", weights, x[cells]).reshape(-1, d)])
+        coords = np.concatenate([x, np.matmul(weights, x[cells]).reshape(-1, d)])
         known = np.concatenate([values, (values[cells] @ weights.T).ravel()])
     origin = x.min(axis=0)
     quantum = max(float(np.ptp(x, axis=0).max()), 1e-300) / GRID_LEVELS[d]
@@ -177,7 +181,11 @@ def _at_lattice_points(
     order = np.argsort(keys, kind="stable")
     keys = keys[order]
     wanted = _grid_keys(points, origin, quantum)
-    at = np.minimum(np.searchsorted(keys, wanted), len(keys) - 1)
+    # searched in increasing order (a binary search for each point in turn would jump
+    # across the sorted keys: 2-3x the time of sorting the points first, at 10^6 points)
+    by_key = np.argsort(wanted)
+    at = np.empty(len(wanted), dtype=np.int64)
+    at[by_key] = np.minimum(np.searchsorted(keys, wanted[by_key]), len(keys) - 1)
     matched = (keys[at] == wanted) & (wanted >= 0)
     out = np.full(len(points), np.nan)
     out[matched] = known[order[at[matched]]]
