@@ -87,3 +87,49 @@ def test_errors(args, kw, match):
     with pytest.raises(ValueError, match=match) as err:
         make_material(*args, **kw)
     assert "\n" not in str(err.value)
+
+
+BUILTINS = [("linear", {}), ("carstensen", {}), ("power", {"p": 1.5, "eps": 0.1})]
+BUILTINS += [("power", {"p": 3.0, "eps": 0.5})]
+
+
+@pytest.mark.parametrize("name, kw", BUILTINS, ids=lambda v: str(v))
+def test_builtin_closed_forms_are_sympys_derivation(name, kw):
+    """The built-ins' hand-derived closed forms (written out so that a run never imports
+    sympy) equal what sympy derives from rho: g = int_0^t s rho(s) ds and rho' exactly
+    (symbolic difference simplified to 0), G2(s) = g(sqrt(s)) at s in [0, 100] to
+    round-off."""
+    import sympy
+
+    from fem_py.forms.materials import _evaluate
+
+    m = make_material(name, **kw)
+    t, x = sympy.Symbol("t", positive=True), sympy.Symbol("x", positive=True)
+    rho = m.rho_sym
+    assert sympy.simplify(m.g_sym - sympy.integrate(x * rho.subs(t, x), (x, 0, t))) == 0
+    assert sympy.simplify(m.drho_sym - sympy.diff(rho, t)) == 0
+    s = np.linspace(0.0, 100.0, 201)
+    g2 = _evaluate(m._g2_term, {"s": s}, "numpy")
+    assert np.allclose(g2, m.g_np(np.sqrt(s)), rtol=1e-14, atol=1e-15)
+
+
+def test_a_run_with_a_builtin_material_does_not_import_sympy():
+    """sympy costs about half a second of every start-up: the modules of a solve and a
+    built-in material do without it (a user's rho imports it, to derive g and rho')."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys\n"
+        "import coupling.app.cli, coupling.app.from_config, coupling.app.run\n"
+        "import coupling.io.outputs, coupling.solvers\n"
+        "from fem_py.forms import make_material\n"
+        "for name in ('linear', 'carstensen'):\n"
+        "    make_material(name).tangent\n"
+        "make_material('power', p=1.5, eps=0.1)\n"
+        "assert 'sympy' not in sys.modules, 'sympy imported'\n"
+        "make_material('2 + 1/(1 + t)')\n"
+        "assert 'sympy' in sys.modules\n"
+    )
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr

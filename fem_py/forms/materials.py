@@ -7,8 +7,12 @@ we need
 - ``rho'(t)``                     for the tangent rho^(x) (docs/method.md section 6, (4.1)),
 - ``rho^(x) = rho(|x|) I + rho'(|x|) x x^T / |x|``, ``rho^(0) = rho(0) I``.
 
-Every material is held as sympy expressions in the symbol t, translated to UFL or numpy
-on demand. Built-ins (``make_material``):
+Every material is held as expressions in the symbol t, translated to UFL or numpy on
+demand: the built-ins as closed forms written out below (rho', g and G2 derived by hand;
+tests/test_fem_materials.py checks them against sympy's derivation), so that a run with
+a built-in material never imports sympy (half a second of every start-up); a user's rho
+as sympy expressions, which sympy integrates and differentiates. Built-ins
+(``make_material``):
 
 ==============  ====================================  ==========================================
 name            rho(t)                                g(t)
@@ -51,7 +55,6 @@ from dataclasses import dataclass, field
 from typing import Any, Callable
 
 import numpy as np
-import sympy
 
 from fem_py.forms.expressions import Expression, from_sympy
 
@@ -61,8 +64,28 @@ __all__ = ["Material", "make_material", "BUILTIN_MATERIALS", "S0", "check_grid"]
 S0 = 1e-40
 BUILTIN_MATERIALS = ("linear", "carstensen", "power")
 
-_T = sympy.Symbol("t", positive=True)
-_S = sympy.Symbol("s", positive=True)
+
+def _symbol(name: str) -> Any:
+    """The positive sympy symbol ``name`` (t or s; sympy returns the same object for the
+    same name and assumptions)."""
+    import sympy
+
+    return sympy.Symbol(name, positive=True)
+
+
+def _evaluate(term: Any, variables: dict[str, Any], backend: str) -> Any:
+    """A material's term (an :class:`Expression`: a built-in's closed form; or a sympy
+    expression: derived for a user's rho) in ``backend`` ("ufl" or "numpy")."""
+    if isinstance(term, Expression):
+        return term.evaluate(variables, backend)
+    return from_sympy(term, variables, backend)
+
+
+def _as_sympy(term: Any, name: str) -> Any:
+    """A material's term as a sympy expression in the positive symbol ``name``."""
+    if isinstance(term, Expression):
+        return term.evaluate({name: _symbol(name)}, "sympy")
+    return term
 
 
 def check_grid() -> np.ndarray:
@@ -84,8 +107,10 @@ class Material:
     ----------
     name
         ``"linear"``, ``"carstensen"``, ``"power(p=..,eps=..)"`` or the user expression.
-    rho_sym, g_sym, drho_sym
-        sympy expressions in the positive symbol ``t``.
+    rho_term, g_term, drho_term
+        rho(t), g(t) and rho'(t): closed forms (:class:`Expression` in ``t``) for the
+        built-ins, sympy expressions in the positive symbol ``t`` for a user's rho
+        (:attr:`rho_sym` and the others give sympy expressions in both cases).
     rho0
         rho(0) (the tangent at grad u = 0 is rho(0) I).
     alpha, beta
@@ -93,48 +118,64 @@ class Material:
     """
 
     name: str
-    rho_sym: Any
-    g_sym: Any
-    drho_sym: Any
+    rho_term: Any = field(compare=False)
+    g_term: Any = field(repr=False, compare=False)
+    drho_term: Any = field(repr=False, compare=False)
     rho0: float
     alpha: float
     beta: float
-    _g2_sym: Any = field(repr=False, compare=False, default=None)
+    #: G2(s) = g(sqrt(s)), in the symbol ``s``
+    _g2_term: Any = field(repr=False, compare=False, default=None)
+
+    @property
+    def rho_sym(self) -> Any:
+        """rho(t) as a sympy expression (imports sympy)."""
+        return _as_sympy(self.rho_term, "t")
+
+    @property
+    def g_sym(self) -> Any:
+        """g(t) as a sympy expression (imports sympy)."""
+        return _as_sympy(self.g_term, "t")
+
+    @property
+    def drho_sym(self) -> Any:
+        """rho'(t) as a sympy expression (imports sympy)."""
+        return _as_sympy(self.drho_term, "t")
 
     # ------------------------------------------------------ dispatching API
     def rho(self, t: Any) -> Any:
         """rho(t) for a UFL expression t (UFL result) or an array/float t (numpy)."""
-        return self._eval(self.rho_sym, t)
+        return self._eval(self.rho_term, t)
 
     def drho(self, t: Any) -> Any:
         """rho'(t), UFL or numpy like :meth:`rho`."""
-        return self._eval(self.drho_sym, t)
+        return self._eval(self.drho_term, t)
 
     def energy_density(self, t: Any) -> Any:
         """g(t) = int_0^t s rho(s) ds (2.1), UFL or numpy like :meth:`rho`.
 
         For UFL use on |grad u| prefer :meth:`energy_density_sq`, which is safe at 0.
         """
-        return self._eval(self.g_sym, t)
+        return self._eval(self.g_term, t)
 
     def rho_np(self, t: Any) -> np.ndarray:
         """numpy rho(t)."""
-        return self._eval(self.rho_sym, np.asarray(t, dtype=float))
+        return self._eval(self.rho_term, np.asarray(t, dtype=float))
 
     def drho_np(self, t: Any) -> np.ndarray:
         """numpy rho'(t)."""
-        return self._eval(self.drho_sym, np.asarray(t, dtype=float))
+        return self._eval(self.drho_term, np.asarray(t, dtype=float))
 
     def g_np(self, t: Any) -> np.ndarray:
         """numpy g(t)."""
-        return self._eval(self.g_sym, np.asarray(t, dtype=float))
+        return self._eval(self.g_term, np.asarray(t, dtype=float))
 
-    def _eval(self, e: Any, t: Any) -> Any:
+    def _eval(self, term: Any, t: Any) -> Any:
         if _is_ufl(t):
-            return from_sympy(e, {"t": t}, "ufl")
+            return _evaluate(term, {"t": t}, "ufl")
         t = np.asarray(t, dtype=float)
         with np.errstate(all="ignore"):
-            v = from_sympy(e, {"t": t}, "numpy")
+            v = _evaluate(term, {"t": t}, "numpy")
         return np.broadcast_to(np.asarray(v, dtype=float), t.shape).copy() if t.shape else float(v)
 
     # ------------------------------------------------------ UFL building blocks
@@ -142,7 +183,7 @@ class Material:
         """UFL ``G2(s) = g(sqrt(s))`` for s = |grad u|^2, safe at s = 0 (module docstring)."""
         import ufl
 
-        g2 = from_sympy(self._g2_sym, {"s": s}, "ufl")
+        g2 = _evaluate(self._g2_term, {"s": s}, "ufl")
         return ufl.conditional(ufl.gt(s, S0), g2, 0.5 * self.rho0 * s)
 
     def tangent(self, x: Any) -> Any:
@@ -189,32 +230,48 @@ def _check_structure(name: str, rho_np: Callable[[np.ndarray], np.ndarray]) -> t
     return float(q.min()), float(q.max())
 
 
-def _rational(v: float) -> Any:
-    return sympy.Rational(repr(float(v)))
+def _builtin(name: str, rho: str, g: str, drho: str, g2: str) -> Material:
+    """A built-in material from its closed forms in t (rho, g, rho') and s (G2(s) =
+    g(sqrt(s))), without sympy."""
+    terms = [Expression(text, (var,)) for text, var in ((rho, "t"), (g, "t"), (drho, "t"))]
+    rho_np = lambda tt: terms[0].evaluate({"t": tt}, "numpy")  # noqa: E731
+    alpha, beta = _check_structure(name, rho_np)
+    return Material(
+        name=name,
+        rho_term=terms[0],
+        g_term=terms[1],
+        drho_term=terms[2],
+        rho0=float(np.broadcast_to(rho_np(np.zeros(1)), (1,))[0]),
+        alpha=alpha,
+        beta=beta,
+        _g2_term=Expression(g2, ("s",)),
+    )
 
 
-def _build(name: str, rho: Any, g: Any | None) -> Material:
-    """Complete a material from sympy rho (and g if known in closed form)."""
+def _build(name: str, rho: Any) -> Material:
+    """A material from a user's rho (a sympy expression in t): g and rho' by sympy."""
+    import sympy
+
+    t, s = _symbol("t"), _symbol("s")
     rho = sympy.sympify(rho)
     rho_np = lambda tt: from_sympy(rho, {"t": tt}, "numpy")  # noqa: E731
     alpha, beta = _check_structure(name, rho_np)
-    if g is None:
-        anti = sympy.integrate(_T * rho, _T)
-        if anti.has(sympy.Integral) or anti.has(sympy.Piecewise):
-            raise ValueError(
-                f"material {name!r}: sympy cannot integrate t*rho(t) in closed form; "
-                "give a rho with an elementary antiderivative"
-            )
-        at0 = anti.subs(_T, 0)
-        if not at0.is_finite:
-            at0 = sympy.limit(anti, _T, 0, "+")
-        if not at0.is_finite:
-            raise ValueError(
-                f"material {name!r}: int_0^t s rho(s) ds diverges at 0; rho must be finite at 0"
-            )
-        g = anti - at0
-    drho = sympy.diff(rho, _T)
-    g2 = g.subs(_T, sympy.sqrt(_S))
+    anti = sympy.integrate(t * rho, t)
+    if anti.has(sympy.Integral) or anti.has(sympy.Piecewise):
+        raise ValueError(
+            f"material {name!r}: sympy cannot integrate t*rho(t) in closed form; "
+            "give a rho with an elementary antiderivative"
+        )
+    at0 = anti.subs(t, 0)
+    if not at0.is_finite:
+        at0 = sympy.limit(anti, t, 0, "+")
+    if not at0.is_finite:
+        raise ValueError(
+            f"material {name!r}: int_0^t s rho(s) ds diverges at 0; rho must be finite at 0"
+        )
+    g = anti - at0
+    drho = sympy.diff(rho, t)
+    g2 = g.subs(t, sympy.sqrt(s))
     rho0 = float(np.broadcast_to(rho_np(np.zeros(1)), (1,))[0])
     for e, what in ((g, "g(t)"), (drho, "rho'(t)")):  # fail here, not at form compilation
         try:
@@ -225,13 +282,13 @@ def _build(name: str, rho: Any, g: Any | None) -> Material:
             ) from None
     return Material(
         name=name,
-        rho_sym=rho,
-        g_sym=g,
-        drho_sym=drho,
+        rho_term=rho,
+        g_term=g,
+        drho_term=drho,
         rho0=rho0,
         alpha=alpha,
         beta=beta,
-        _g2_sym=g2,
+        _g2_term=g2,
     )
 
 
@@ -262,11 +319,16 @@ def make_material(
             "material must be a non-empty string: linear, carstensen, power or an expression in t"
         )
     key = name_or_expression.strip()
-    t = _T
     if key == "linear":
-        return _build("linear", sympy.Integer(1), t**2 / 2)
+        return _builtin("linear", "1", "t^2/2", "0", "s/2")
     if key == "carstensen":
-        return _build("carstensen", 2 + 1 / (1 + t), t**2 + t - sympy.log(1 + t))
+        return _builtin(
+            "carstensen",
+            "2 + 1/(1 + t)",
+            "t^2 + t - log(1 + t)",
+            "-1/(1 + t)^2",
+            "s + sqrt(s) - log(1 + sqrt(s))",
+        )
     if key == "power":
         if p is None or eps is None:
             raise ValueError("material 'power' needs both p > 1 and eps > 0, e.g. p=1.5, eps=0.1")
@@ -280,14 +342,18 @@ def make_material(
             raise ValueError(f"material 'power' needs p > 1, got p={p}")
         if not (np.isfinite(eps) and eps > 0):
             raise ValueError(f"material 'power' needs eps > 0, got eps={eps}")
-        ps, es = _rational(p), _rational(eps)
-        rho = (es**2 + t**2) ** ((ps - 2) / 2)
-        g = ((es**2 + t**2) ** (ps / 2) - es**ps) / ps
-        return _build(f"power(p={float(p):g},eps={float(eps):g})", rho, g)
+        q, e = repr(p), repr(eps)  # exact: repr round-trips a float
+        return _builtin(
+            f"power(p={p:g},eps={eps:g})",
+            f"({e}^2 + t^2)^(({q} - 2)/2)",
+            f"(({e}^2 + t^2)^({q}/2) - {e}^{q})/{q}",
+            f"({q} - 2)*t*({e}^2 + t^2)^(({q} - 4)/2)",
+            f"(({e}^2 + s)^({q}/2) - {e}^{q})/{q}",
+        )
     if re.fullmatch(r"[A-Za-z_]\w*", key) and key != "t":
         raise ValueError(
             f"unknown material {key!r}; the named materials are {', '.join(BUILTIN_MATERIALS)} "
             '(lower case), or give rho(t) as an expression in t, e.g. "2 + 1/(1+t)"'
         )
-    rho = Expression(key, ("t",)).evaluate({"t": t}, "sympy")
-    return _build(key, rho, None)
+    rho = Expression(key, ("t",)).evaluate({"t": _symbol("t")}, "sympy")
+    return _build(key, rho)
