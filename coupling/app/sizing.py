@@ -52,7 +52,10 @@ __all__ = [
     "size_of_domain",
 ]
 
-PROCESS_BYTES = 200e6
+#: The process itself: the libraries imported (dolfinx, PETSc, bem_cpp; no sympy with a
+#: built-in material) and the small runs' arrays: 134 MB measured for a 1,089-dof square
+#: without figures, 2026-12-06 (200 MB while every run imported sympy; docs/design/memory.md)
+PROCESS_BYTES = 135e6
 DOF_BYTES = 1.05e3  # fitted to the H-matrix runs at 1e6, 4e6 and 1.6e7 dofs
 BOUNDARY_BYTES = 5 * 8.0
 #: The H-matrix S_h operator and the estimator's V, K per boundary dof: 86 MB at n =
