@@ -17,9 +17,8 @@ namespace {
 
 class SurfaceBlock : public EntryBlock {
  public:
-  SurfaceBlock(const Surface& s, const PairIntegrator& integrator, const SurfaceNearField* near,
-               const std::vector<int>* planes, SurfaceKernel kernel, Space rows, Space cols, const Index* I, Index m,
-               const Index* J, Index k, bool companion)
+  SurfaceBlock(const Surface& s, const PairIntegrator& integrator, const SurfaceNearField* near, SurfaceKernel kernel,
+               Space rows, Space cols, const Index* I, Index m, const Index* J, Index k, bool companion)
       : s_(s),
         integrator_(integrator),
         kernel_(kernel),
@@ -32,8 +31,7 @@ class SurfaceBlock : public EntryBlock {
         row_parts_(parts(s, rows, I, m)),
         col_parts_(parts(s, cols, J, k)),
         companion_(companion),
-        near_(near),
-        planes_(planes) {
+        near_(near) {
     if (near == nullptr) return;
     const bool dl = kernel == SurfaceKernel::DoubleLayer;
     near_rows_ = dl                                       ? &near->double_layer()
@@ -206,12 +204,12 @@ class SurfaceBlock : public EntryBlock {
   /// The planes of the parts' triangles (triangle_planes), sorted, each once.
   std::vector<int> planes_of(const std::vector<Part>& parts) const {
     std::vector<int> out;
-    for (const Part& p : parts) out.push_back((*planes_)[static_cast<std::size_t>(p.triangle)]);
+    for (const Part& p : parts) out.push_back(integrator_.planes()[static_cast<std::size_t>(p.triangle)]);
     std::sort(out.begin(), out.end());
     out.erase(std::unique(out.begin(), out.end()), out.end());
     return out;
   }
-  int plane(const Part& p) const { return (*planes_)[static_cast<std::size_t>(p.triangle)]; }
+  int plane(const Part& p) const { return integrator_.planes()[static_cast<std::size_t>(p.triangle)]; }
   /// The double layer's factors (at the dofs) of a far block. A block whose triangles all
   /// lie in one plane is zero (n_y . (x - y) = 0). In a block in which a row and a column
   /// triangle share a plane, ACA runs on the sub-blocks without such zeros - the rows of
@@ -476,8 +474,7 @@ class SurfaceBlock : public EntryBlock {
   std::vector<Part> row_parts_, col_parts_;
   bool companion_ = false;  ///< the hypersingular companion (single layer only)
   const SurfaceNearField* near_ = nullptr;
-  const std::vector<int>* planes_ = nullptr;  ///< the triangles' planes (the double layer)
-  const RowSparse* near_rows_ = nullptr;      ///< near part by rows, and by columns
+  const RowSparse* near_rows_ = nullptr;  ///< near part by rows, and by columns
   const RowSparse* near_cols_ = nullptr;
   mutable std::unordered_map<Index, Index> row_position_, col_position_;  ///< row_positions, col_positions
   // computed once per block, shared with the companion
@@ -504,13 +501,11 @@ SurfaceEntries::SurfaceEntries(const Surface& surface, SurfaceKernel kernel, Spa
   if (kernel == SurfaceKernel::Hypersingular && (rows != Space::P1 || cols != Space::P1))
     throw std::invalid_argument("SurfaceEntries: the hypersingular operator is P1 x P1");
   if (near_ && rows != cols) throw std::invalid_argument("SurfaceEntries: the near field is P0 x P0 or P1 x P1");
-  if (kernel == SurfaceKernel::DoubleLayer) planes_ = triangle_planes(surface);
 }
 
 std::unique_ptr<EntryBlock> SurfaceEntries::block(const Index* I, Index m, const Index* J, Index k) const {
-  return std::make_unique<SurfaceBlock>(surface_, integrator_, near_.get(),
-                                        kernel_ == SurfaceKernel::DoubleLayer ? &planes_ : nullptr, kernel_, rows_,
-                                        cols_, I, m, J, k, with_hypersingular_);
+  return std::make_unique<SurfaceBlock>(surface_, integrator_, near_.get(), kernel_, rows_, cols_, I, m, J, k,
+                                        with_hypersingular_);
 }
 
 ClusterTree surface_cluster_tree(const Surface& s, Space space, Index leaf_size) {

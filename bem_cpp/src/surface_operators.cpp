@@ -208,7 +208,7 @@ void accumulate_tensor(const Mapped& a, const Mapped& b, Vec3 na, Vec3 nb, const
 
 Index dofs(const Surface& surface, Space space) { return space == Space::P1 ? surface.vertices() : surface.size(); }
 
-PairIntegrator::PairIntegrator(const Surface& surface) : surface_(surface) {
+PairIntegrator::PairIntegrator(const Surface& surface) : surface_(surface), planes_(triangle_planes(surface)) {
   singular_[0] = nullptr;
   for (int shared = 1; shared <= 3; ++shared) singular_[shared] = &singular_rule(shared, kSingularGaussPoints[shared]);
   std::fill(std::begin(regular_), std::end(regular_), nullptr);
@@ -227,19 +227,6 @@ int PairIntegrator::regular_rule(const Triangle& a, const Triangle& b) {
   return kRegularDegrees[0];
 }
 
-namespace {
-
-/// Whether the triangles a and b (sharing `shared` vertices) lie in one plane: the same
-/// triangle, or normals parallel and b's centroid in a's plane, both to 1e-12 (relative to
-/// the triangles' size).
-bool coplanar(const Triangle& a, const Triangle& b, int shared) {
-  if (shared == 3) return true;
-  constexpr double kTol = 1e-12;
-  return norm(cross(a.n, b.n)) <= kTol && std::abs(dot(a.n, b.c - a.c)) <= kTol * (a.radius + b.radius);
-}
-
-}  // namespace
-
 void PairIntegrator::integrate(Index tau, Index sigma, bool double_layer, PairIntegrals& out) const {
   const bool swap = tau > sigma;  // evaluate on (min, max), the same points for both orders
   const Triangle& a = surface_.triangle(swap ? sigma : tau);
@@ -257,8 +244,8 @@ void PairIntegrator::integrate(Index tau, Index sigma, bool double_layer, PairIn
   const Mapped ma = mapped(a, oa), mb = mapped(b, ob);
   Accumulated acc;
   // n . (x - y) vanishes between the points of one plane: K is zero on a triangle with
-  // itself and between coplanar triangles (a polyhedron's faces), where V alone is integrated
-  const bool k = double_layer && !coplanar(a, b, adj.shared);
+  // itself and between the triangles of one face of a polyhedron, where V alone is integrated
+  const bool k = double_layer && planes_[static_cast<std::size_t>(tau)] != planes_[static_cast<std::size_t>(sigma)];
   if (adj.shared > 0)
     if (k)
       accumulate_pairs<true>(ma, mb, a.n, b.n, *singular_[adj.shared], acc);

@@ -35,7 +35,6 @@ class SurfaceEntries : public EntrySource {
   Space rows_, cols_;
   std::shared_ptr<const SurfaceNearField> near_;
   bool with_hypersingular_;
-  std::vector<int> planes_;  ///< the double layer: the triangles' planes (triangle_planes)
 };
 
 /// Dof points (P1: vertices, P0: centroids) and supports (the triangles the basis

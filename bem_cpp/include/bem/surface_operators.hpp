@@ -60,9 +60,13 @@ class PairIntegrator {
   static int regular_rule(const Triangle& a, const Triangle& b);
   /// Whether the pair is a far pair (integrated by the far rule): disjoint, q >= kFarSeparation.
   static bool far(const Triangle& a, const Triangle& b) { return regular_rule(a, b) == kFarRuleDegree; }
+  /// The triangles' planes (triangle_planes): the double layer is zero between two
+  /// triangles of one plane.
+  const std::vector<int>& planes() const { return planes_; }
 
  private:
   const Surface& surface_;
+  std::vector<int> planes_;
   const PairRule* singular_[4];     ///< by the number of shared vertices (1..3)
   const TriangleRule* regular_[9];  ///< symmetric_rule(d) at d = regular_rule (kRegularDegrees)
 };
