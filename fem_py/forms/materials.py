@@ -204,7 +204,11 @@ class Material:
         return ufl.conditional(ufl.gt(s, S0), self.rho(ufl.sqrt(s)), self.rho0) * x
 
 
-def _check_structure(name: str, rho_np: Callable[[np.ndarray], np.ndarray]) -> tuple[float, float]:
+def _check_structure(
+    name: str, rho_np: Callable[[np.ndarray], np.ndarray]
+) -> tuple[float, float, float]:
+    """(rho(0), alpha, beta) of ``rho_np`` on :func:`check_grid` (whose first point is t =
+    0), or the ValueError of the structural condition it violates (module docstring)."""
     t = check_grid()
     with np.errstate(all="ignore"):
         r = np.asarray(rho_np(t), dtype=float) * np.ones_like(t)
@@ -227,7 +231,7 @@ def _check_structure(name: str, rho_np: Callable[[np.ndarray], np.ndarray]) -> t
             f"material {name!r}: t*rho(t) is not strictly increasing near t = {t[i]:.6g}; "
             "docs/method.md section 1 needs alpha (t-s) <= t rho(t) - s rho(s)"
         )
-    return float(q.min()), float(q.max())
+    return float(r[0]), float(q.min()), float(q.max())
 
 
 def _builtin(name: str, rho: str, g: str, drho: str, g2: str) -> Material:
@@ -235,13 +239,13 @@ def _builtin(name: str, rho: str, g: str, drho: str, g2: str) -> Material:
     g(sqrt(s))), without sympy."""
     terms = [Expression(text, (var,)) for text, var in ((rho, "t"), (g, "t"), (drho, "t"))]
     rho_np = lambda tt: terms[0].evaluate({"t": tt}, "numpy")  # noqa: E731
-    alpha, beta = _check_structure(name, rho_np)
+    rho0, alpha, beta = _check_structure(name, rho_np)
     return Material(
         name=name,
         rho_term=terms[0],
         g_term=terms[1],
         drho_term=terms[2],
-        rho0=float(np.broadcast_to(rho_np(np.zeros(1)), (1,))[0]),
+        rho0=rho0,
         alpha=alpha,
         beta=beta,
         _g2_term=Expression(g2, ("s",)),
@@ -255,7 +259,7 @@ def _build(name: str, rho: Any) -> Material:
     t, s = _symbol("t"), _symbol("s")
     rho = sympy.sympify(rho)
     rho_np = lambda tt: from_sympy(rho, {"t": tt}, "numpy")  # noqa: E731
-    alpha, beta = _check_structure(name, rho_np)
+    rho0, alpha, beta = _check_structure(name, rho_np)
     anti = sympy.integrate(t * rho, t)
     if anti.has(sympy.Integral) or anti.has(sympy.Piecewise):
         raise ValueError(
@@ -272,7 +276,6 @@ def _build(name: str, rho: Any) -> Material:
     g = anti - at0
     drho = sympy.diff(rho, t)
     g2 = g.subs(t, sympy.sqrt(s))
-    rho0 = float(np.broadcast_to(rho_np(np.zeros(1)), (1,))[0])
     for e, what in ((g, "g(t)"), (drho, "rho'(t)")):  # fail here, not at form compilation
         try:
             from_sympy(e, {"t": np.ones(1), "s": np.ones(1)}, "numpy")
