@@ -161,6 +161,16 @@ def test_arcs_and_boundary_edges(domain):
     assert set(np.unique(domain.facet_tags.values)) == expected_tags
 
 
+def test_input_node_numbers_are_the_mesh_s_read_once(domain):
+    """fem_py.dofs.input_node_numbers is the mesh's input_global_indices, read once per
+    mesh (the same read-only array on every call, so that no caller can change it)."""
+    from fem_py.dofs import input_node_numbers
+
+    numbers = input_node_numbers(domain.mesh)
+    assert np.array_equal(numbers, domain.mesh.geometry.input_global_indices)
+    assert input_node_numbers(domain.mesh) is numbers and not numbers.flags.writeable
+
+
 def test_structured_is_uniform():
     dom = build_domain(
         COMM, GeometrySpec("square", h=1 / 16, subdomain_size=1 / 4, structured=True)

@@ -214,19 +214,38 @@ def test_planar_figures_are_drawn_without_mpi(tmp_path):
         "assert 'u.png' in pngs; sys.exit(3 if 'mpi4py' in sys.modules else 0)"
     )
     assert subprocess.run([sys.executable, "-c", code], cwd=ROOT).returncode == 0
-    # the figure process draws u.png and boundary.png from these inputs while the run
-    # computes u_e's samples, then whole_plane.png from the whole inputs
+    # the figure process draws boundary.png and history.png from the boundary arrays
+    # and the records while the run gathers and rasterises u_h, u.png from these inputs
+    # while the run computes u_e's samples, then whole_plane.png from the whole inputs
+    from types import SimpleNamespace
+
     from coupling.io.figure_worker import FigureWorker
     from coupling.io.figures import render
-    from coupling.io.plots import exterior_samples
+    from coupling.io.plots import boundary_figure_inputs, exterior_samples
 
-    assert "whole_plane.png" not in render(inputs)  # no samples yet
+    records = [
+        SimpleNamespace(iteration=k, energy=-k, step_norm=0.1**k, contact=3) for k in (1, 2)
+    ]
     with np.load(tmp_path / "out" / "fields.npz") as f:
+        early = boundary_figure_inputs(dict(f), records, tol=1e-8)
         samples = exterior_samples(dict(f))
+    assert set(render(early)) == {"boundary.png", "history.png"}  # no image of u_h yet
+    assert "whole_plane.png" not in render(inputs)  # no samples yet
     whole = inputs._replace(exterior_points=samples.points, exterior_ue=samples.ue)
+    sent = []
     with FigureWorker() as worker:
-        pngs = worker.render(inputs, lambda: whole)
-    assert set(pngs) == {"u.png", "boundary.png", "whole_plane.png"}  # no history
+        pngs = worker.render(early, lambda: sent.append(1) or inputs, lambda: whole)
+    assert sent and set(pngs) == set(PLOT_FILES)
+    assert all(png.startswith(b"\x89PNG") for png in pngs.values())
+
+
+def test_the_figure_process_warms_up_on_every_planar_figure():
+    """The figure process's warm-up draws each planar figure once (a small square), so
+    that matplotlib's fonts, parsers and mathtext strings of every figure are ready
+    before the run's inputs come."""
+    from coupling.io.figures import _warm_up_inputs, render
+
+    assert set(render(_warm_up_inputs())) == set(PLOT_FILES)
 
 
 def test_the_section_of_a_body_draws_u_e_to_a_fraction_of_a_colour_step():

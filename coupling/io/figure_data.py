@@ -215,17 +215,19 @@ class FigureInputs(NamedTuple):
     """What the figures are drawn from (:func:`coupling.io.plots.figure_inputs`).
 
     ``image`` is u_h rasterised on ``grid`` and ``u_range`` its (min, max) over the
-    nodes; ``boundary`` the boundary arrays of fields.npz (``boundary_x``, ``phi``,
-    ``pressure``, ``dn_ue``, ``flux_space``, ``signorini``, ``active``, ``ue``);
+    nodes (all three None: not rasterised yet, no u.png or whole_plane.png from these
+    inputs, :func:`coupling.io.plots.boundary_figure_inputs`); ``boundary`` the boundary
+    arrays of fields.npz (``boundary_x``, ``phi``, ``pressure``, ``dn_ue``,
+    ``flux_space``, ``signorini``, ``active``, ``ue``);
     ``exterior_points`` (m, 2) and ``exterior_ue`` (m,) the samples of u_e of
     whole_plane.png (None: not computed yet, no whole_plane.png); ``history`` the
     iteration records as arrays (``iteration``, ``energy``, ``step_norm``, ``contact``;
     empty: no history.png); ``tol`` the solver tolerance drawn in history.png.
     """
 
-    image: np.ma.MaskedArray
-    grid: PixelGrid
-    u_range: tuple[float, float]
+    image: np.ma.MaskedArray | None
+    grid: PixelGrid | None
+    u_range: tuple[float, float] | None
     boundary: dict
     exterior_points: np.ndarray | None
     exterior_ue: np.ndarray | None

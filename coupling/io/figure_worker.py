@@ -91,6 +91,37 @@ class FigureWorker:
             start_new_session=True,
         )
 
+    def send(self, inputs) -> None:
+        """Hand the worker ``inputs`` (pickled into its standard input): it draws the
+        figures of :func:`coupling.io.figures.render` it has not drawn from earlier
+        inputs. Returns once the worker has read them (at once, unless it is drawing);
+        if it has ended, :meth:`answer` raises its error."""
+        try:
+            self._process.stdin.write(pickle.dumps(inputs, protocol=5))
+            self._process.stdin.flush()
+        except (BrokenPipeError, ValueError):  # it ended before reading, or was ended
+            pass
+
+    def answer(self) -> dict[str, bytes]:
+        """The PNG bytes of all the figures drawn from the inputs sent; waits for the
+        worker to finish.
+
+        Raises
+        ------
+        FigureWorkerError
+            The worker ended without an answer (its error, or its exit status).
+        """
+        try:
+            out, err = self._process.communicate()  # closes its input: the last inputs
+        except (BrokenPipeError, ValueError):  # it ended before reading, or was ended
+            out, err = b"", b""
+            self.close()
+        status = self._process.returncode
+        if status == 0 and out:
+            return pickle.loads(out)
+        lines = err.decode(errors="replace").strip().splitlines()
+        raise FigureWorkerError(lines[-1] if lines else f"the figure process exited with {status}")
+
     def render(self, inputs, *later: Callable[[], Any]) -> dict[str, bytes]:
         """The PNG bytes of the figures of ``inputs`` (:func:`coupling.io.figures.render`),
         drawn in the worker; waits for it to finish.
@@ -106,26 +137,14 @@ class FigureWorker:
             The worker ended without an answer (its error, or its exit status).
         """
         for more in later:
-            try:
-                self._process.stdin.write(pickle.dumps(inputs, protocol=5))
-                self._process.stdin.flush()
-            except (BrokenPipeError, ValueError):  # it ended before reading, or was ended
-                break
+            self.send(inputs)
             try:
                 inputs = more()
             except BaseException:
                 self.close()
                 raise
-        try:
-            out, err = self._process.communicate(pickle.dumps(inputs, protocol=5))
-        except (BrokenPipeError, ValueError):  # it ended before reading, or was ended
-            out, err = b"", b""
-            self.close()
-        status = self._process.returncode
-        if status == 0 and out:
-            return pickle.loads(out)
-        lines = err.decode(errors="replace").strip().splitlines()
-        raise FigureWorkerError(lines[-1] if lines else f"the figure process exited with {status}")
+        self.send(inputs)
+        return self.answer()
 
     def close(self) -> None:
         """End the worker if it still runs."""

@@ -320,10 +320,14 @@ def render(inputs: FigureInputs, skip: Collection[str] = ()) -> dict[str, bytes]
 
         return render_body(inputs, skip)
     figures = {
-        "u.png": lambda: _figure_u(inputs.boundary, inputs.image, inputs.grid),
+        "u.png": lambda: (
+            None if inputs.image is None else _figure_u(inputs.boundary, inputs.image, inputs.grid)
+        ),
         "boundary.png": lambda: _figure_boundary(inputs.boundary),
         "whole_plane.png": lambda: (
-            None if inputs.exterior_points is None else _figure_whole_plane(inputs)
+            None
+            if inputs.exterior_points is None or inputs.image is None
+            else _figure_whole_plane(inputs)
         ),
         "history.png": lambda: (
             figure_history(inputs.history, inputs.tol) if len(inputs.history["iteration"]) else None
@@ -344,18 +348,48 @@ def render(inputs: FigureInputs, skip: Collection[str] = ()) -> dict[str, bytes]
 
 
 def warm_up() -> None:
-    """Draw and discard a small figure with the elements of the real ones (mathtext,
-    colour bar, legend, line collection, tight layout): matplotlib loads its fonts and
-    builds its parsers on the first draw, which the figure process does while the run
-    computes."""
-    fig, ax = plt.subplots(figsize=(2, 2))
-    im = ax.imshow(np.zeros((2, 2)), cmap="viridis")
-    fig.colorbar(im, ax=ax, label=r"$u_h$ in $\Omega$")
-    ax.add_collection(LineCollection([[(0, 0), (1, 1)]], label=r"$\Gamma_s$ ($\phi_h = 0$)"))
-    ax.semilogy([1, 2], [1, 0.1], label=r"$\Vert\xi\Vert_B$")
-    ax.contour(np.arange(3), np.arange(3), np.arange(9.0).reshape(3, 3), levels=[4.0])
-    ax.legend(fontsize=8)
-    ax.set(xlabel="$x$", title=r"$\partial u_e / \partial n$")
-    fig.tight_layout()
-    fig.savefig(io.BytesIO(), dpi=_DPI, format="png", pil_kwargs=_PNG)
-    plt.close(fig)
+    """Draw and discard the figures of a small square (:func:`_warm_up_inputs`): matplotlib
+    loads its fonts, builds its parsers and lays out the figures' mathtext strings on the
+    first draw, which the figure process does while the run computes."""
+    render(_warm_up_inputs())
+
+
+def _warm_up_inputs() -> FigureInputs:
+    """Figure inputs of the unit square with 8 boundary nodes, two of them in contact on
+    its lower side, u = x + y, two iterations and the exterior samples of one ring."""
+    corners = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    nodes = np.repeat(corners, 2, axis=0)
+    nodes[1::2] = 0.5 * (corners + np.roll(corners, -1, axis=0))
+    n = len(nodes)
+    signorini = np.zeros(n, bool)
+    signorini[1] = True
+    grid = PixelGrid.covering(corners[0], corners[2], pixels=8)
+    image = rasterise(corners, np.array([[0, 1, 2], [0, 2, 3]]), corners.sum(axis=1), grid)
+    ring = np.linspace(0.0, 2.0 * np.pi, 12, endpoint=False)
+    outside = 0.5 + 1.5 * np.column_stack([np.cos(ring), np.sin(ring)])
+    history = dict(
+        iteration=np.array([1.0, 2.0]),
+        energy=np.array([-1.0, -1.5]),
+        step_norm=np.array([0.1, 0.01]),
+        contact=np.array([1.0, 1.0]),
+        stop=np.array([]),
+    )
+    return FigureInputs(
+        image=image,
+        grid=grid,
+        u_range=(0.0, 2.0),
+        boundary=dict(
+            boundary_x=nodes,
+            phi=np.where(signorini, 0.0, 0.1),
+            pressure=np.linspace(-1.0, 1.0, n),
+            dn_ue=np.linspace(1.0, -1.0, n),
+            flux_space=np.array("p1"),
+            signorini=signorini,
+            active=signorini.copy(),
+            ue=nodes.sum(axis=1),
+        ),
+        exterior_points=outside,
+        exterior_ue=1.0 / np.linalg.norm(outside - 0.5, axis=1),
+        history=history,
+        tol=1e-8,
+    )

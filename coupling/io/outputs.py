@@ -38,6 +38,7 @@ from coupling.io.figure_worker import FigureWorker, FigureWorkerError
 from coupling.io.body_figure_data import BODY_PLOT_FILES, section, surface_inputs
 from coupling.io.plots import (
     PLOT_FILES,
+    boundary_figure_inputs,
     exterior_samples,
     figure_inputs,
     history_arrays,
@@ -176,17 +177,26 @@ class RunOutputs:
         release_free_memory()  # the solve's freed memory, before the outputs' (fem_py.memory)
         self._problem, self._result = problem, result
         solid = problem.domain.dim == 3
-        gathered = gather_p1(result.u)
-        release_free_memory()  # and the gather's sort buffers (1.3 GB at 128^3 cubes)
         self._pressure = boundary_flux(problem, result)
         if self.comm.rank == 0:
-            x, u, cells = gathered
-            self._mesh = (x, cells)  # triangles, or tetrahedra for a body
             on_gamma = dict(
                 boundary_fields(problem, result, self._pressure),
                 a=np.array(problem.a),
                 flux_space=np.array(problem.flux_space),
             )
+            if self.plots and not solid:  # u_e's samples and, in the figure process,
+                # boundary.png and history.png while u_h is gathered and rasterised here
+                samples = self._pool.submit(exterior_samples, on_gamma)
+                if self.worker is not None:
+                    early = boundary_figure_inputs(
+                        on_gamma, result.history, tol=self.tol, stop_measure=result.stop_measure
+                    )
+                    self._jobs["early"] = self._pool.submit(self.worker.send, early)
+        gathered = gather_p1(result.u)
+        release_free_memory()  # and the gather's sort buffers (1.3 GB at 128^3 cubes)
+        if self.comm.rank == 0:
+            x, u, cells = gathered
+            self._mesh = (x, cells)  # triangles, or tetrahedra for a body
             self._fields = dict(x=x, u=u, **{"cells" if solid else "triangles": cells}, **on_gamma)
             if not self.indicators:
                 self._jobs["data"] = self._pool.submit(_write_fields, self.out, self._fields)
@@ -202,15 +212,15 @@ class RunOutputs:
                         self.worker.render, surface, self._jobs["inputs"].result
                     )
             elif self.plots:
-                samples = self._pool.submit(exterior_samples, on_gamma)
                 inputs = figure_inputs(
                     self._fields, result.history, tol=self.tol, stop_measure=result.stop_measure
                 )
                 self._jobs["inputs"] = self._pool.submit(_with_samples, inputs, samples)
-                if self.worker is not None:  # whole_plane.png once u_e's samples are in
-                    self._jobs["pngs"] = self._pool.submit(
-                        self.worker.render, inputs, self._jobs["inputs"].result
-                    )
+                if self.worker is not None:  # sent from here, before the XDMF file: its
+                    # writer holds the GIL, which a thread sending them would wait for
+                    self._jobs["early"].result()
+                    self.worker.send(self._jobs["inputs"].result())
+                    self._jobs["pngs"] = self._pool.submit(self.worker.answer)
         self.seconds += time.perf_counter() - tic
 
     def finish(

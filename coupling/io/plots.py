@@ -25,6 +25,7 @@ from fem_py.polyline import closest_on_polygon, polygon_corners, segment_lengths
 __all__ = [
     "PLOT_FILES",
     "ExteriorSamples",
+    "boundary_figure_inputs",
     "exterior_samples",
     "figure_inputs",
     "history_arrays",
@@ -94,13 +95,29 @@ def figure_inputs(
     ``_replace``): no whole_plane.png from these inputs."""
     x, u = fields["x"], fields["u"]
     grid = PixelGrid.covering(x.min(axis=0), x.max(axis=0))
-    return FigureInputs(
+    return boundary_figure_inputs(fields, history, tol=tol, stop_measure=stop_measure)._replace(
         image=rasterise(x, fields["triangles"], u, grid),
         grid=grid,
         u_range=(float(u.min()), float(u.max())),
-        boundary={k: fields[k] for k in _BOUNDARY_FIELDS},
         exterior_points=None if exterior is None else exterior.points,
         exterior_ue=None if exterior is None else exterior.ue,
+    )
+
+
+def boundary_figure_inputs(
+    boundary: dict, history: Sequence, *, tol: float, stop_measure: float | None = None
+) -> FigureInputs:
+    """The inputs of the figures drawn from the boundary arrays (``boundary``: those of
+    fields.npz) and the iteration records alone, boundary.png and history.png: no image of
+    u_h and no samples of u_e yet. The figure process draws them while the run gathers and
+    rasterises u_h (:class:`coupling.io.outputs.RunOutputs`)."""
+    return FigureInputs(
+        image=None,
+        grid=None,
+        u_range=None,
+        boundary={k: boundary[k] for k in _BOUNDARY_FIELDS},
+        exterior_points=None,
+        exterior_ue=None,
         history=history_arrays(history, stop_measure),
         tol=float(tol),
     )

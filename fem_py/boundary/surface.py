@@ -38,6 +38,7 @@ from dolfinx import mesh as dmesh
 from scipy.sparse.csgraph import connected_components
 
 from fem_py.boundary.vectors import BoundaryVectors
+from fem_py.dofs import input_node_numbers
 from fem_py.parallel import broadcast_from_root, gather_to_root
 
 __all__ = ["SurfaceMap", "surface_arrays"]
@@ -172,7 +173,7 @@ def _owned_triangles(V: fem.FunctionSpace, facet_tags: Any) -> tuple[np.ndarray,
     local = v2dof[vertices].ravel().astype(np.int32)
     dofs = np.asarray(im.local_to_global(local), dtype=np.int64).reshape(-1, 3)
     node = v2node[vertices]
-    ids = np.asarray(msh.geometry.input_global_indices, dtype=np.int64)[node]
+    ids = input_node_numbers(msh)[node]
     n_facets = top.index_map(2).size_local + top.index_map(2).num_ghosts
     tag = np.zeros(n_facets, dtype=np.int32)
     if facet_tags is not None:

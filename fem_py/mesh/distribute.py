@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 from dolfinx import mesh as dmesh
 
+from fem_py.dofs import input_node_numbers
 from fem_py.mesh.structured import StructuredRefinement
 from fem_py.parallel import broadcast_from_root, gather_to_root
 
@@ -281,7 +282,7 @@ def distribute_structured(
     vertices = topology.index_map(0)
     node_of_vertex = np.empty(vertices.size_local + vertices.num_ghosts, dtype=np.int64)
     node_of_vertex[topology.connectivity(2, 0).array] = msh.geometry.dofmap.array
-    node = ref.node_numbers(np.asarray(msh.geometry.input_global_indices, dtype=np.int64))
+    node = ref.node_numbers(input_node_numbers(msh))
     ends = node[node_of_vertex[topology.connectivity(1, 0).array]].reshape(-1, 2)
     edge = ref.edge_of_segments(ends[:, 0], ends[:, 1])
     tags = np.where(edge >= 0, edge_tags[np.maximum(edge, 0)], -1)

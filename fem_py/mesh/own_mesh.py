@@ -22,6 +22,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
+from fem_py.dofs import input_node_numbers
 from fem_py.mesh.shapes import Arc
 from fem_py.mesh.tet_file import opened_msh, used_nodes
 from fem_py.parallel import gather_to_root
@@ -354,7 +355,7 @@ def gather_mesh(msh: Any, facet_tags: Any, cell_tags: Any = None, names: Any = N
     if msh.topology.dim != 2 or msh.geometry.dofmap.array.size != 3 * n_local:
         raise ValueError("mesh: domain_from_mesh needs a mesh of linear triangles")
     n_owned = msh.topology.index_map(2).size_local
-    node = np.asarray(msh.geometry.input_global_indices, dtype=np.int64)
+    node = input_node_numbers(msh)
     x = msh.geometry.x[:, :2]
     cells = node[msh.geometry.dofmap.array.reshape(-1, 3)[:n_owned]]
     msh.topology.create_connectivity(1, 0)
