@@ -123,6 +123,9 @@ def test_a_refused_run_ends_its_figure_process(monkeypatch, tmp_path):
     closed = []
 
     class Worker:
+        def __init__(self, body=False):
+            pass
+
         def __enter__(self):
             return self
 

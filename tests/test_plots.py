@@ -305,7 +305,7 @@ def test_a_body_s_figures_are_drawn_by_the_figure_process_in_two_parts(tmp_path)
         asked.append(True)
         return surface._replace(section=section(fields))
 
-    with FigureWorker() as worker:
+    with FigureWorker(body=True) as worker:  # a body's figure modules imported at once
         pngs = worker.render(surface, whole)
     assert asked and set(pngs) == {"signorini.png", "surface.png", "history.png", "slice.png"}
     assert all(png.startswith(b"\x89PNG") for png in pngs.values())

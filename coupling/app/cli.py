@@ -246,7 +246,11 @@ def _solve(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
 
     # the figure process starts first, to import matplotlib while the run imports and
     # computes; it is ended on every way out of the run (a refused size included)
-    worker = FigureWorker() if config.output.plots and comm.rank == 0 else None
+    worker = (
+        FigureWorker(body=config.geometry.dim == 3)
+        if config.output.plots and comm.rank == 0
+        else None
+    )
     with worker if worker is not None else contextlib.nullcontext():
         return _solve_config(args, interrupts, comm, config, worker)
 

@@ -3,13 +3,16 @@
 matplotlib holds the GIL while it draws, and the figures take one to two seconds
 whatever the mesh size (imports and first draw included), so a thread would not run them beside
 the run's own Python work. :class:`FigureWorker` starts ``python -m
-coupling.io.figure_worker`` when the run starts: it imports matplotlib and draws a
-first figure (:func:`coupling.io.figures.warm_up`) while the mesh is built, then waits
-for :class:`coupling.io.figure_data.FigureInputs` on its standard input (a few MB,
-pickled) and answers with the PNG bytes of :func:`coupling.io.figures.render` on its
-standard output. The inputs come in two: at once those of the figures that need no
-exterior values, which it draws while the run computes them, then the whole inputs
-(planar: u_e's samples for whole_plane.png; a body: the section of slice.png, point
+coupling.io.figure_worker`` when the run starts: it imports matplotlib and draws the
+figures of a small square (:func:`coupling.io.figures.warm_up`; for a body it imports
+the body's figure modules too) while the mesh is built, then waits for
+:class:`coupling.io.figure_data.FigureInputs` on its standard input (a few MB, pickled,
+each preceded by its length) and answers with the PNG bytes of
+:func:`coupling.io.figures.render` on its standard output. The inputs come in parts, the
+first right after the solve, and the worker draws each figure as soon as its inputs are
+in: planar, boundary.png and history.png from the boundary arrays while the run gathers
+and rasterises u_h, then u.png and whole_plane.png (u_e's samples); a body, the figures
+on Gamma and the history while the run computes the section of slice.png (point
 location and the representation formula, seconds at 64^3 cubes). The run writes
 the files itself (atomically, into its staged output folder). For planar figures the
 worker imports neither MPI nor the mesh libraries; a body's figure modules import the
@@ -62,6 +65,10 @@ def outside_the_mpi_job(environ: dict[str, str]) -> dict[str, str]:
     }
 
 
+#: The bytes of the length that precedes each pickled message to the worker.
+_LENGTH_BYTES = 8
+
+
 class FigureWorkerError(RuntimeError):
     """The figure process failed (its last line of error output, or how it ended)."""
 
@@ -72,7 +79,9 @@ class FigureWorker:
     Use as a context manager: leaving it ends the process if it still runs.
     """
 
-    def __init__(self) -> None:
+    def __init__(self, body: bool = False) -> None:
+        """Start the worker; ``body``: the run's Omega is a body in R^3, whose figure
+        modules the worker imports while it warms up (about a second)."""
         root = str(Path(__file__).resolve().parents[2])  # the folder holding ``coupling``
         path = os.environ.get("PYTHONPATH")
         env = dict(
@@ -83,7 +92,7 @@ class FigureWorker:
             OPENBLAS_NUM_THREADS="1",
         )
         self._process = subprocess.Popen(
-            [sys.executable, "-m", __name__],
+            [sys.executable, "-m", __name__, *(["--body"] if body else [])],
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
             stderr=subprocess.PIPE,
@@ -94,10 +103,14 @@ class FigureWorker:
     def send(self, inputs) -> None:
         """Hand the worker ``inputs`` (pickled into its standard input): it draws the
         figures of :func:`coupling.io.figures.render` it has not drawn from earlier
-        inputs. Returns once the worker has read them (at once, unless it is drawing);
+        inputs. Returns once the pipe has taken them (at once, unless the worker is still
+        drawing or warming up and they exceed the pipe's 64 KB);
         if it has ended, :meth:`answer` raises its error."""
-        try:
-            self._process.stdin.write(pickle.dumps(inputs, protocol=5))
+        data = pickle.dumps(inputs, protocol=5)
+        try:  # its length first: the worker reads the whole message before unpickling it,
+            # which may import modules for a second (the pipe would wait for that)
+            self._process.stdin.write(len(data).to_bytes(_LENGTH_BYTES, "little"))
+            self._process.stdin.write(data)
             self._process.stdin.flush()
         except (BrokenPipeError, ValueError):  # it ended before reading, or was ended
             pass
@@ -136,14 +149,18 @@ class FigureWorker:
         FigureWorkerError
             The worker ended without an answer (its error, or its exit status).
         """
+        self.send(inputs)
+        return self.render_rest(*later)
+
+    def render_rest(self, *later: Callable[[], Any]) -> dict[str, bytes]:
+        """:meth:`render` for a worker already sent its first inputs (:meth:`send`)."""
         for more in later:
-            self.send(inputs)
             try:
                 inputs = more()
             except BaseException:
                 self.close()
                 raise
-        self.send(inputs)
+            self.send(inputs)
         return self.answer()
 
     def close(self) -> None:
@@ -162,18 +179,21 @@ class FigureWorker:
         self.close()
 
 
-def main() -> int:
-    """The worker: warm up, draw the figures of each inputs read (those not drawn from the
-    inputs before), and when the input ends answer with all the PNG bytes."""
+def main(argv: list[str]) -> int:
+    """The worker: warm up (``--body``: import a body's figure modules too), draw the
+    figures of each inputs read (those not drawn from the inputs before), and when the
+    input ends answer with all the PNG bytes."""
     from coupling.io import figures
 
     figures.warm_up()
+    if "--body" in argv:
+        import coupling.io.body_figures  # noqa: F401
     pngs: dict[str, bytes] | None = None
     while True:
-        try:
-            inputs = pickle.load(sys.stdin.buffer)
-        except EOFError:  # after the last inputs, or the run ended without figures
-            break
+        length = sys.stdin.buffer.read(_LENGTH_BYTES)
+        if len(length) < _LENGTH_BYTES:  # after the last inputs, or the run ended
+            break  # without figures
+        inputs = pickle.loads(sys.stdin.buffer.read(int.from_bytes(length, "little")))
         pngs = (pngs or {}) | figures.render(inputs, skip=pngs or ())
     if pngs is not None:
         pickle.dump(pngs, sys.stdout.buffer, protocol=5)
@@ -182,4 +202,4 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(main(sys.argv[1:]))

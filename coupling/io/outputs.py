@@ -207,17 +207,18 @@ class RunOutputs:
                 self._jobs["inputs"] = self._pool.submit(
                     lambda: surface._replace(section=section(self._fields))
                 )
-                if self.worker is not None:
+                if self.worker is not None:  # sent from here, before the XDMF file: its
+                    # writer holds the GIL, which a thread sending them would wait for
+                    self.worker.send(surface)
                     self._jobs["pngs"] = self._pool.submit(
-                        self.worker.render, surface, self._jobs["inputs"].result
+                        self.worker.render_rest, self._jobs["inputs"].result
                     )
             elif self.plots:
                 inputs = figure_inputs(
                     self._fields, result.history, tol=self.tol, stop_measure=result.stop_measure
                 )
                 self._jobs["inputs"] = self._pool.submit(_with_samples, inputs, samples)
-                if self.worker is not None:  # sent from here, before the XDMF file: its
-                    # writer holds the GIL, which a thread sending them would wait for
+                if self.worker is not None:  # sent from here, as a body's surface
                     self._jobs["early"].result()
                     self.worker.send(self._jobs["inputs"].result())
                     self._jobs["pngs"] = self._pool.submit(self.worker.answer)
