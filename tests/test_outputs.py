@@ -129,3 +129,38 @@ def test_every_figure_is_written(tmp_path, case):
 def test_arc_length():
     nodes = np.array([[0.0, 0.0], [3.0, 0.0], [3.0, 4.0], [0.0, 0.0]])
     np.testing.assert_allclose(arc_length(nodes), [0.0, 3.0, 7.0, 12.0])
+
+
+@pytest.mark.parametrize("shape", ["square", "box"])
+def test_a_figure_process_that_died_leaves_the_figures_to_the_run(
+    tmp_path, monkeypatch, capsys, shape
+):
+    """The figure process ended before the run sent it anything (killed, out of memory):
+    the sends do not fail, its answer does, and the run draws every figure itself with a
+    one-line warning."""
+    import coupling.app.cli as cli
+    import coupling.io.figure_worker as figure_worker
+    from coupling.io.body_figure_data import BODY_PLOT_FILES
+
+    class Dead(figure_worker.FigureWorker):
+        def __init__(self, body=False):
+            super().__init__(body)
+            self._process.kill()
+            self._process.wait()
+
+    monkeypatch.setattr(figure_worker, "FigureWorker", Dead)
+    geometry = (
+        'shape = "square"\nh = 0.0625\nsubdomain_size = 0.125\n'
+        if shape == "square"
+        else 'shape = "box"\ncenter = [0.0, 0.0, 0.0]\nwidth = 0.5\nh = 0.125\n'
+    )
+    config = tmp_path / "c.toml"
+    config.write_text(
+        f'[geometry]\n{geometry}signorini = ["bottom"]\n[data]\nt0 = "-1"\n'
+        "[output]\nxdmf = false\nplots = true\n"
+    )
+    out = tmp_path / "out"
+    assert cli.main(["solve", str(config), "--out", str(out), "--quiet"]) == 0
+    expected = PLOT_FILES if shape == "square" else BODY_PLOT_FILES
+    assert all((out / name).read_bytes()[:8] == PNG for name in expected)
+    assert "warning: the figure process failed" in capsys.readouterr().err

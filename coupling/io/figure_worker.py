@@ -23,8 +23,10 @@ reaches the run, which ends the worker) and exits when its standard input closes
 """
 from __future__ import annotations
 
+import contextlib
 import os
 import pickle
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -69,6 +71,22 @@ def outside_the_mpi_job(environ: dict[str, str]) -> dict[str, str]:
 _LENGTH_BYTES = 8
 
 
+@contextlib.contextmanager
+def _sigpipe_blocked():
+    """Writes to a pipe whose reader has ended raise BrokenPipeError inside, whatever
+    handles SIGPIPE in this process (PETSc initialised with its signal handlers, as in a
+    script or a test, aborts the process on it; ``fembem`` turns them off): the signal is
+    blocked in this thread, and one that a write raised is taken before it is unblocked."""
+    blocked = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGPIPE})
+    try:
+        yield
+    finally:
+        if signal.SIGPIPE not in blocked:
+            if signal.SIGPIPE in signal.sigpending():
+                signal.sigwait({signal.SIGPIPE})
+            signal.pthread_sigmask(signal.SIG_SETMASK, blocked)
+
+
 class FigureWorkerError(RuntimeError):
     """The figure process failed (its last line of error output, or how it ended)."""
 
@@ -109,9 +127,9 @@ class FigureWorker:
         data = pickle.dumps(inputs, protocol=5)
         try:  # its length first: the worker reads the whole message before unpickling it,
             # which may import modules for a second (the pipe would wait for that)
-            self._process.stdin.write(len(data).to_bytes(_LENGTH_BYTES, "little"))
-            self._process.stdin.write(data)
-            self._process.stdin.flush()
+            with _sigpipe_blocked():
+                self._process.stdin.write(len(data).to_bytes(_LENGTH_BYTES, "little") + data)
+                self._process.stdin.flush()
         except (BrokenPipeError, ValueError):  # it ended before reading, or was ended
             pass
 
@@ -124,9 +142,16 @@ class FigureWorker:
         FigureWorkerError
             The worker ended without an answer (its error, or its exit status).
         """
+        stdin, self._process.stdin = self._process.stdin, None
+        if stdin is not None:  # the end of the inputs (and a flush of what a write to an
+            with _sigpipe_blocked():  # ended worker left in the buffer)
+                try:
+                    stdin.close()
+                except BrokenPipeError:
+                    pass
         try:
-            out, err = self._process.communicate()  # closes its input: the last inputs
-        except (BrokenPipeError, ValueError):  # it ended before reading, or was ended
+            out, err = self._process.communicate()
+        except ValueError:  # its output was closed: it was ended
             out, err = b"", b""
             self.close()
         status = self._process.returncode
