@@ -96,9 +96,18 @@ class SparseFactor:
         self._alive = True
         if self.n == 0:
             return
-        mat = PETSc.Mat().createAIJ(
-            size=m.shape,
-            csr=(m.indptr.astype(PETSc.IntType), m.indices.astype(PETSc.IntType), m.data),
+        if not m.has_canonical_format:  # PETSc's arrays: sorted rows without duplicates
+            m = m.copy()
+            m.sum_duplicates()
+        # the Mat wraps the arrays (no copy, no insertion): they outlive it, as it is
+        # destroyed below once factored
+        mat = PETSc.Mat().createAIJWithArrays(
+            m.shape,
+            (
+                m.indptr.astype(PETSc.IntType, copy=False),
+                m.indices.astype(PETSc.IntType, copy=False),
+                m.data,
+            ),
             comm=PETSc.COMM_SELF,
         )
         mat.setOption(PETSc.Mat.Option.SPD, True)
