@@ -178,7 +178,7 @@ class FigureWorker:
         return self.render_rest(*later)
 
     def render_rest(self, *later: Callable[[], Any]) -> dict[str, bytes]:
-        """:meth:`render` for a worker already sent its first inputs (:meth:`send`)."""
+        """:meth:`render` for a worker that was sent its first inputs already (:meth:`send`)."""
         for more in later:
             try:
                 inputs = more()
