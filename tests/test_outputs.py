@@ -164,3 +164,35 @@ def test_a_figure_process_that_died_leaves_the_figures_to_the_run(
     expected = PLOT_FILES if shape == "square" else BODY_PLOT_FILES
     assert all((out / name).read_bytes()[:8] == PNG for name in expected)
     assert "warning: the figure process failed" in capsys.readouterr().err
+
+
+def test_a_dead_figure_process_ends_quietly_in_a_process_with_petsc_s_handlers():
+    """In a process whose PETSc keeps its signal handlers (a user's script), a figure
+    process that has died is sent inputs, then ended without an answer (the run failed)
+    or asked for one: no write to its pipe raises SIGPIPE, which PETSc's handler would
+    turn into MPI_Abort; the answer is FigureWorkerError."""
+    import subprocess
+    import sys
+
+    from conftest import ROOT
+
+    code = """
+from petsc4py import PETSc  # its signal handlers on
+from coupling.io.figure_worker import FigureWorker, FigureWorkerError
+for ask in (False, True):
+    with FigureWorker() as worker:
+        worker._process.kill()
+        worker._process.wait()
+        worker.send(list(range(1000)))  # stays in the pipe's buffer
+        if ask:
+            try:
+                worker.answer()
+            except FigureWorkerError:
+                print("answer failed", flush=True)
+print("ended", flush=True)
+"""
+    proc = subprocess.run(
+        [sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=120
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert proc.stdout.split() == ["answer", "failed", "ended"]

@@ -87,6 +87,15 @@ def _sigpipe_blocked():
             signal.pthread_sigmask(signal.SIG_SETMASK, blocked)
 
 
+def _close(stream) -> None:
+    """Close a pipe of the worker: what a failed write left in its buffer is dropped."""
+    with _sigpipe_blocked():
+        try:
+            stream.close()
+        except BrokenPipeError:
+            pass
+
+
 class FigureWorkerError(RuntimeError):
     """The figure process failed (its last line of error output, or how it ended)."""
 
@@ -144,11 +153,7 @@ class FigureWorker:
         """
         stdin, self._process.stdin = self._process.stdin, None
         if stdin is not None:  # the end of the inputs (and a flush of what a write to an
-            with _sigpipe_blocked():  # ended worker left in the buffer)
-                try:
-                    stdin.close()
-                except BrokenPipeError:
-                    pass
+            _close(stdin)  # ended worker left in the buffer)
         try:
             out, err = self._process.communicate()
         except ValueError:  # its output was closed: it was ended
@@ -194,8 +199,8 @@ class FigureWorker:
             self._process.kill()
         self._process.wait()
         for stream in (self._process.stdin, self._process.stdout, self._process.stderr):
-            if stream is not None:
-                stream.close()
+            if stream is not None:  # the input may hold what a failed send left
+                _close(stream)
 
     def __enter__(self) -> FigureWorker:
         return self
