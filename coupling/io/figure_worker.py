@@ -26,6 +26,7 @@ from __future__ import annotations
 import contextlib
 import os
 import pickle
+import select
 import signal
 import subprocess
 import sys
@@ -215,9 +216,9 @@ def main(argv: list[str]) -> int:
     input ends answer with all the PNG bytes."""
     from coupling.io import figures
 
-    figures.warm_up()
     if "--body" in argv:
         import coupling.io.body_figures  # noqa: F401
+    figures.warm_up(stop=lambda: bool(select.select([sys.stdin], [], [], 0)[0]))
     pngs: dict[str, bytes] | None = None
     while True:
         length = sys.stdin.buffer.read(_LENGTH_BYTES)

@@ -21,7 +21,7 @@ The problem is dimensionless, so the axes carry no units.
 from __future__ import annotations
 
 import io
-from typing import Collection
+from typing import Callable, Collection
 
 import matplotlib
 
@@ -347,11 +347,17 @@ def render(inputs: FigureInputs, skip: Collection[str] = ()) -> dict[str, bytes]
     return pngs
 
 
-def warm_up() -> None:
-    """Draw and discard the figures of a small square (:func:`_warm_up_inputs`): matplotlib
-    loads its fonts, builds its parsers and lays out the figures' mathtext strings on the
-    first draw, which the figure process does while the run computes."""
-    render(_warm_up_inputs())
+def warm_up(stop: Callable[[], bool] = lambda: False) -> None:
+    """Draw and discard the figures of a small square (:func:`_warm_up_inputs`), one by one
+    until ``stop()`` is true (the run's inputs have come: a short run does not wait for
+    the warm-up): matplotlib loads its fonts, builds its parsers and lays out the figures'
+    mathtext strings on the first draw, which the figure process does while the run
+    computes."""
+    inputs = _warm_up_inputs()
+    for name in PLOT_FILES:
+        if stop():
+            return
+        render(inputs, skip=[n for n in PLOT_FILES if n != name])
 
 
 def _warm_up_inputs() -> FigureInputs:
