@@ -14,7 +14,7 @@ DEBS    := python3-dolfinx python3-petsc4py python3-mpi4py python3-gmsh \
            python3-scipy python3-sympy python3-matplotlib python3-pytest python3-pytest-xdist \
            python3-pybind11 pybind11-dev libeigen3-dev libgtest-dev cmake g++ make \
            python3-venv python3-setuptools python3-wheel python3-pip python3-tqdm \
-           python3-slepc4py python3-threadpoolctl openmpi-bin libopenblas-dev \
+           python3-slepc4py python3-threadpoolctl python3-h5py-mpi openmpi-bin libopenblas-dev \
            black flake8 clang-format
 # the documentation site (make docs) and its test (tests/test_docs.py: headless Chromium)
 DOCS_DEBS := python3-sphinx python3-myst-parser furo libjs-mathjax chromium python3-pil

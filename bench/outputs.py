@@ -60,7 +60,7 @@ VARIANTS = (("data", False, False), ("xdmf", True, False), ("plots", True, True)
 PIECES = (
     ("coupling.io.outputs", "gather_p1"),
     ("coupling.io.outputs", "boundary_flux"),
-    ("coupling.io.outputs", "_write_xdmf"),
+    ("coupling.io.outputs", "write_solution_xdmf"),
     ("coupling.io.plots", "rasterise"),
     ("coupling.io.figures", "render"),
     ("coupling.io.figures", "_figure_u"),

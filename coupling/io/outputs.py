@@ -13,15 +13,13 @@ panel values for "p0", panel i = [node i, node i+1]); and the scalars ``a`` and
 eta^2, coupling.adapt.estimator).
 
 Every file is written atomically (:mod:`coupling.io.atomic`), so an interrupted run
-never leaves a half-written file under its final name. Rank 0 writes the gathered
-files; the XDMF file is written collectively.
+never leaves a half-written file under its final name. Rank 0 writes every file, from
+what is gathered there (:mod:`coupling.io.xdmf` for solution.xdmf/.h5).
 """
 from __future__ import annotations
 
 import dataclasses
 import json
-import os
-import shutil
 import time
 import sys
 from concurrent.futures import Future, ThreadPoolExecutor
@@ -44,9 +42,10 @@ from coupling.io.plots import (
     history_arrays,
     write_pngs,
 )
+from coupling.io.xdmf import gather_xdmf_inputs, owned_cell_tags, write_solution_xdmf
 from coupling.io.quantities import boundary_flux, complementarity, far_field_coefficient
 from coupling.options import OutputOptions, RunConfig
-from fem_py.dofs import gather_cells, gather_p1
+from fem_py.dofs import gather_cells, gather_p1, gather_p1_and_cells
 from fem_py.mesh import mesh_facts
 from fem_py.memory import release_free_memory
 from fem_py.parallel import broadcast_from_root
@@ -125,13 +124,13 @@ class RunOutputs:
     (the a posteriori estimator).
 
     :meth:`start`, right after the solve, gathers u_h, computes the boundary flux and
-    hands the rest to background work on rank 0: fields.npz (file writes), the samples
-    of u_e (bem_cpp), both in threads (they release the GIL), and the figures, drawn by
+    hands the rest to background work on rank 0: fields.npz and solution.xdmf/.h5 (file
+    writes), the samples of u_e (bem_cpp), all in threads, and the figures, drawn by
     the figure process ``worker`` (:class:`coupling.io.figure_worker.FigureWorker`) when
-    one is given, from u_h rasterised here. :meth:`finish` writes the XDMF file
-    (collective), waits for the background work, writes the figures and, last,
-    summary.json. Without a worker the figures are drawn in :meth:`finish`, in this
-    process; so they are too, with a warning, if the worker fails.
+    one is given, from u_h rasterised here. :meth:`finish` waits for the background
+    work, writes the figures and, last, summary.json. Without a worker the figures are
+    drawn in :meth:`finish`, in this process; so they are too, with a warning, if the
+    worker fails.
 
     Use as a context manager: leaving it (on an error or KeyboardInterrupt too) ends the
     figure process and waits for the threads, so no file is left half-written.
@@ -166,9 +165,11 @@ class RunOutputs:
         self.worker = worker if self.plots and comm.rank == 0 else None
         #: seconds spent in :meth:`start` and :meth:`finish` (summary.json's ``outputs``)
         self.seconds = 0.0
-        # fields.npz, u_e's samples, the figures' inputs and the figure process's answer
-        # at once (with three, the answer waited for fields.npz to be written)
-        self._pool = ThreadPoolExecutor(max_workers=4) if comm.rank == 0 else None
+        # fields.npz, solution.xdmf/.h5, u_e's samples, the early figures' send, the
+        # figures' inputs and the figure process's answer at once (with fewer threads, a
+        # job waited for another to end: the answer for fields.npz, the XDMF file for
+        # the answer)
+        self._pool = ThreadPoolExecutor(max_workers=6) if comm.rank == 0 else None
         self._jobs: dict[str, Future] = {}
 
     def start(self, problem, result) -> None:
@@ -192,10 +193,14 @@ class RunOutputs:
                         on_gamma, result.history, tol=self.tol, stop_measure=result.stop_measure
                     )
                     self._jobs["early"] = self._pool.submit(self.worker.send, early)
-        gathered = gather_p1(result.u)
+        cell_tags = owned_cell_tags(problem.domain) if self.xdmf else None
+        gathered = gather_p1_and_cells(result.u, cell_tags)
         release_free_memory()  # and the gather's sort buffers (1.3 GB at 128^3 cubes)
+        if self.xdmf:
+            cells, cell_tags = (None, None) if gathered is None else gathered[2:]
+            xdmf_tags = gather_xdmf_inputs(problem, cells, cell_tags)
         if self.comm.rank == 0:
-            x, u, cells = gathered
+            x, u, cells, _ = gathered
             self._mesh = (x, cells)  # triangles, or tetrahedra for a body
             self._fields = dict(x=x, u=u, **{"cells" if solid else "triangles": cells}, **on_gamma)
             if not self.indicators:
@@ -222,6 +227,10 @@ class RunOutputs:
                     self._jobs["early"].result()
                     self.worker.send(self._jobs["inputs"].result())
                     self._jobs["pngs"] = self._pool.submit(self.worker.answer)
+            if self.xdmf:  # after the figures' jobs, which the figure process waits for
+                self._jobs["xdmf"] = self._pool.submit(
+                    write_solution_xdmf, self.out, self._fields, xdmf_tags, on_gamma
+                )
         self.seconds += time.perf_counter() - tic
 
     def finish(
@@ -262,13 +271,12 @@ class RunOutputs:
         wanted = self.indicators and indicators is not None
         cells = gather_cells(problem.V, np.sqrt(indicators)) if wanted else None
         facts = mesh_facts(problem.domain) if facts is None else facts  # collective
-        written = []
-        if self.xdmf:
-            _write_xdmf(self.comm, out, problem, result, self._pressure)
-            written += ["solution.xdmf", "solution.h5"]
 
         def write_gathered() -> list[str]:  # rank 0
-            names = list(written)
+            names = []
+            if self.xdmf:
+                self._jobs["xdmf"].result()  # its error, if any
+                names += ["solution.xdmf", "solution.h5"]
             if self.indicators:  # fields.npz waited for them
                 if cells is not None:
                     self._fields["indicators"] = cells
@@ -382,43 +390,6 @@ def write_outputs(
     with RunOutputs(comm, out, options, tol=tol) as run:
         run.start(problem, result)
         return run.finish(**finish)
-
-
-#: The boundary fields of solution.xdmf (name -> key of :func:`boundary_fields`): P1
-#: functions on the mesh, their values on Gamma, 0 inside.
-XDMF_BOUNDARY_FIELDS = {"gap": "phi", "ue": "ue", "pressure": "pressure", "contact": "active"}
-
-
-def _write_xdmf(comm: MPI.Comm, out: Path, problem, result, pressure: np.ndarray) -> None:
-    """solution.xdmf/.h5 written in a temporary subfolder, then moved (the .xdmf names
-    its .h5 relatively, so both keep their final names): u_h, the subdomain tags (the
-    named faces of a body) and the boundary fields :data:`XDMF_BOUNDARY_FIELDS`."""
-    from dolfinx import fem, io
-
-    tmp = out / ".xdmf-tmp"
-    if comm.rank == 0:
-        tmp.mkdir(exist_ok=True)
-    comm.barrier()
-    with io.XDMFFile(comm, str(tmp / "solution.xdmf"), "w") as xdmf:
-        domain = problem.domain
-        xdmf.write_mesh(domain.mesh)
-        # the subdomains of a planar domain; the named faces (facet tags) of a body
-        tags = domain.facet_tags if domain.dim == 3 else domain.cell_tags
-        tags.name = "faces" if domain.dim == 3 else "subdomains"
-        xdmf.write_meshtags(tags)
-        xdmf.write_function(result.u)
-        on_gamma = boundary_fields(problem, result, pressure)
-        for name, key in XDMF_BOUNDARY_FIELDS.items():
-            field = fem.Function(problem.V, name=name)
-            field.x.array[:] = 0.0
-            problem.boundary.scatter_add(on_gamma[key].astype(float), field.vector)
-            xdmf.write_function(field)
-    comm.barrier()
-    if comm.rank == 0:
-        for name in ("solution.h5", "solution.xdmf"):
-            os.replace(tmp / name, out / name)
-        shutil.rmtree(tmp, ignore_errors=True)
-    comm.barrier()
 
 
 def load_summary(result_dir: Path) -> dict:

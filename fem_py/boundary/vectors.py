@@ -89,15 +89,19 @@ class BoundaryVectors:
         m = self.n_signorini
         return sp.csr_matrix((np.ones(m), (self.signorini, np.arange(m))), shape=(self.n_gamma, m))
 
-    def _owned(self, vec: PETSc.Vec) -> tuple[np.ndarray, np.ndarray]:
-        """(boundary positions, local indices) of the boundary dofs owned by this rank in
-        the layout of ``vec`` (computed once per ownership range)."""
-        key = vec.getOwnershipRange()
+    def owned(self, local_range: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+        """(boundary positions, local indices) of the boundary dofs a rank owns whose
+        owned dofs are the global ``local_range`` [start, stop) (computed once per range)."""
+        key = tuple(int(i) for i in local_range)
         cached = self.__dict__.setdefault("_owned_cache", {})
         if key not in cached:
             mine = np.flatnonzero((self.dofs >= key[0]) & (self.dofs < key[1]))
             cached[key] = (mine, (self.dofs[mine] - key[0]).astype(np.int32))
         return cached[key]
+
+    def _owned(self, vec: PETSc.Vec) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`owned` in the layout of ``vec``."""
+        return self.owned(vec.getOwnershipRange())
 
     def gather(self, vec: PETSc.Vec) -> np.ndarray:
         """T u for a distributed PETSc Vec u: the values in the map's order on every rank

@@ -5,6 +5,7 @@ from fem_py.dofs.numbering import (
     gather_by_input,
     gather_cells,
     gather_p1,
+    gather_p1_and_cells,
     input_indices,
     input_node_numbers,
 )
@@ -29,6 +30,7 @@ __all__ = [
     "gather_cells",
     "gather_facet_data",
     "gather_p1",
+    "gather_p1_and_cells",
     "input_indices",
     "input_node_numbers",
     "p1_space",

@@ -15,7 +15,14 @@ import scipy.sparse as sp
 
 from fem_py.parallel import gather_to_root
 
-__all__ = ["input_indices", "input_node_numbers", "gather_by_input", "gather_p1", "gather_cells"]
+__all__ = [
+    "input_indices",
+    "input_node_numbers",
+    "gather_by_input",
+    "gather_p1",
+    "gather_p1_and_cells",
+    "gather_cells",
+]
 
 
 def input_node_numbers(msh: Any) -> np.ndarray:
@@ -122,6 +129,16 @@ def gather_p1(u) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     the triangles (counter-clockwise as in the mesh) are sorted by their node numbers.
     On a tetrahedral mesh: x (N, 3) and the tetrahedra (n_cells, 4).
     """
+    gathered = gather_p1_and_cells(u, None)
+    return None if gathered is None else gathered[:3]
+
+
+def gather_p1_and_cells(
+    u, cell_values: np.ndarray | None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None] | None:
+    """:func:`gather_p1` and, with the triangles, per-cell ``cell_values`` of the owned
+    cells (local cell order) in their order (None when not given): the cells sorted once
+    for both."""
     V = u.function_space
     comm = V.mesh.comm
     index_map = V.dofmap.index_map
@@ -132,11 +149,13 @@ def gather_p1(u) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     gdim = V.mesh.topology.dim
     x = gather_by_input(comm, numbers, V.tabulate_dof_coordinates()[:n_owned, :gdim], n_global)
     values = gather_by_input(comm, numbers, u.x.array[:n_owned].real, n_global)
-    parts = gather_to_root(comm, _owned_triangles(V, cell_nodes))
+    parts = gather_to_root(comm, (_owned_triangles(V, cell_nodes), cell_values))
     if comm.rank != 0:
         return None
-    triangles = _joined(parts)
-    return x, values, triangles[_cell_order(triangles)]
+    triangles = _joined([t for t, _ in parts])
+    order = _cell_order(triangles)
+    per_cell = None if cell_values is None else _joined([v for _, v in parts])[order]
+    return x, values, triangles[order], per_cell
 
 
 def gather_cells(V: Any, values: np.ndarray) -> np.ndarray | None:
