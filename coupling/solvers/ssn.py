@@ -363,11 +363,20 @@ def semismooth_newton(
         context.projection,
     )
     comm, u_function, tol = context.comm, context.u, context.tol
-    start = replace(context, max_iterations=min(newton.start_steps, context.max_iterations))
-    warm = pgpm(start, phi0, tau=tau)
-    if warm.converged or warm.iterations >= context.max_iterations:
-        return warm
-    phi = warm.phi
+    if newton.start_steps > 0 or context.max_iterations == 0:
+        start = replace(context, max_iterations=min(newton.start_steps, context.max_iterations))
+        warm = pgpm(start, phi0, tau=tau)
+        if warm.converged or warm.iterations >= context.max_iterations:
+            return warm
+        phi, first, history, increases = (
+            warm.phi,
+            warm.iterations + 1,
+            warm.history,
+            warm.energy_increases,
+        )
+    else:  # Newton from xi_0 itself (a warm start): no PGPM run of no steps, whose set-up
+        # would evaluate J_h and its gradient at xi_0 once more than below
+        phi, first, history, increases = np.maximum(np.asarray(phi0, dtype=float), 0.0), 1, [], 0
     grad = u_function.vector.duplicate()
     hessian = Hessian(context)
     energy, g_phi = functional.value_and_gradient(u_function, phi, grad)
@@ -381,9 +390,9 @@ def semismooth_newton(
     loop = Loop(
         context,
         "||xi_k+1 - xi_k||_B <= {tol:g} ||xi_k+1||_B, active set settled",
-        first=warm.iterations + 1,
-        history=warm.history,
-        increases=warm.energy_increases,
+        first=first,
+        history=history,
+        increases=increases,
     )
     for k in loop.steps():
         g_u = grad.array_r.copy()
