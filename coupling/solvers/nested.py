@@ -133,6 +133,7 @@ def solve_nested(
             initial=initial,
             residual_scale=scale,
             monitor=monitor if level is problem else None,
+            exterior_flux=level is problem,  # a coarser level passes on (u, phi) alone
         )
         levels.append(
             LevelRecord(

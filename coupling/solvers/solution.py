@@ -57,7 +57,8 @@ class Solution:
         (n_s,) bool, phi_h == 0: the discrete contact set.
     boundary_u, ue, flux
         u_h on Gamma, u_e = u + phi - u0 on Gamma (boundary order), and the
-        coefficients of the exterior normal derivative psi_h (flux space).
+        coefficients of the exterior normal derivative psi_h (flux space; None when
+        :func:`solve` was asked not to compute it).
     converged, reason, iterations, energy, history, energy_increases, stop_measure
         The outcome of the iteration (:class:`coupling.solvers.records.RunResult`).
     tau, C0
@@ -75,7 +76,7 @@ class Solution:
     contact: np.ndarray
     boundary_u: np.ndarray
     ue: np.ndarray
-    flux: np.ndarray
+    flux: np.ndarray | None
     converged: bool
     reason: str
     iterations: int
@@ -198,6 +199,7 @@ def solve(
     preconditioner: Preconditioner | None = None,
     residual_scale: float | None = None,
     monitor: Monitor | None = None,
+    exterior_flux: bool = True,
 ) -> Solution:
     """Solve the discrete problem (2.3) with ``options.method`` (collective).
 
@@ -228,6 +230,10 @@ def solve(
         The solution reports the scale it used.
     monitor
         Called with every :class:`coupling.solvers.records.IterationRecord`.
+    exterior_flux
+        Whether to compute the flux psi_h of u_e (one solve with the boundary operator;
+        False for a coarser level of nested iteration, which only passes on (u, phi)):
+        the solution's ``flux`` is then None.
     """
     from dolfinx import fem
 
@@ -295,9 +301,11 @@ def solve(
     gap = np.zeros_like(boundary_u)
     gap[boundary.signorini] = run.phi
     ue = boundary_u + gap - problem.u0
-    tic = time.perf_counter()
-    flux = problem.exterior_flux(ue)
-    timings["exterior_flux"] = time.perf_counter() - tic
+    flux = None
+    if exterior_flux:
+        tic = time.perf_counter()
+        flux = problem.exterior_flux(ue)
+        timings["exterior_flux"] = time.perf_counter() - tic
     return Solution(
         u=u,
         contact=run.phi <= 0.0,
