@@ -114,31 +114,32 @@ def test_a_run_that_cannot_fit_is_refused(tmp_path):
     assert report["dofs"] == 50001**2 and report["memory_estimate_bytes"] > 1e11
 
 
-def test_a_refused_run_ends_its_figure_process(monkeypatch, tmp_path):
-    """The figure process starts before the size check (to import matplotlib meanwhile);
-    a run refused there ends it too."""
+def test_a_refused_run_starts_no_figure_process(monkeypatch, tmp_path):
+    """The geometry and size checks come before the figure process starts (checks alike
+    on every rank, made before rank 0 alone has more work): a run refused there never
+    starts it."""
     import coupling.app.cli as cli
     import coupling.io.figure_worker as figure_worker
 
-    closed = []
+    started = []
 
-    class Worker:
-        def __init__(self, body=False):
-            pass
+    def worker(body=False):  # records the start and ends the run there (exit code 1)
+        started.append(True)
+        raise RuntimeError("the figure process started")
 
-        def __enter__(self):
-            return self
-
-        def __exit__(self, *exc):
-            closed.append(True)
-
-    monkeypatch.setattr(figure_worker, "FigureWorker", Worker)
+    monkeypatch.setattr(figure_worker, "FigureWorker", worker)
     config = tmp_path / "c.toml"
     config.write_text(
         BASE.format(shape="square", h=1e-5, d=1 / 16, structured="true", signorini='["bottom"]')
     )
     assert cli.main(["solve", str(config), "--out", str(tmp_path / "out")]) == 2
-    assert closed == [True]
+    assert started == []
+    # a run that is not refused starts it, after the same checks
+    config.write_text(
+        BASE.format(shape="square", h=1 / 32, d=1 / 8, structured="true", signorini='["bottom"]')
+    )
+    assert cli.main(["solve", str(config), "--out", str(tmp_path / "out")]) == 1
+    assert started == [True]
 
 
 def test_memory_error_ends_as_one_line(monkeypatch, tmp_path, capsys):

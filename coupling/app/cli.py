@@ -242,31 +242,47 @@ def _solve(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
 
     comm = MPI.COMM_WORLD
     config = _problem_inputs(args)
+    from coupling.app.from_config import estimated_size, planned_size
+    from coupling.app.sizing import check_memory
     from coupling.io.figure_worker import FigureWorker
 
-    # the figure process starts first, to import matplotlib while the run imports and
-    # computes; it is ended on every way out of the run (a refused size included)
+    # the geometry and the size refused before anything is built: checks alike on every
+    # rank, made before rank 0 alone starts the figure process (which competes for the
+    # cores), so that every rank meets a bad input at the same moment (coupling.app.ending)
+    size = _with_geometry_key(planned_size, config)
+    # closed form, else estimated from the area and h
+    rough = size if size is not None else _with_geometry_key(estimated_size, config)
+    if rough is not None:
+        check_memory(
+            rough,
+            comm.size,
+            plots=config.output.plots,
+            boundary_operator=config.solver.boundary_operator,
+        )
+    # the figure process starts next, to import matplotlib while the run imports and
+    # computes; it is ended on every way out of the run
     worker = (
         FigureWorker(body=config.geometry.dim == 3)
         if config.output.plots and comm.rank == 0
         else None
     )
     with worker if worker is not None else contextlib.nullcontext():
-        return _solve_config(args, interrupts, comm, config, worker)
+        return _solve_config(args, interrupts, comm, config, worker, size)
 
 
 def _solve_config(
-    args: argparse.Namespace, interrupts: InterruptHandler, comm: Any, config: Any, worker: Any
+    args: argparse.Namespace,
+    interrupts: InterruptHandler,
+    comm: Any,
+    config: Any,
+    worker: Any,
+    size: Any,
 ) -> int:
-    """``fembem solve`` of the validated ``config`` (the figure process ``worker`` started)."""
+    """``fembem solve`` of the validated ``config`` (the figure process ``worker`` started;
+    ``size``: :func:`coupling.app.from_config.planned_size`, None for a gmsh mesh)."""
     plots, kind = config.output.plots, config.solver.boundary_operator
     from coupling.app.advice import arc_warnings, material_warnings
-    from coupling.app.from_config import (
-        domain_from_config,
-        estimated_size,
-        planned_size,
-        problem_on_domain,
-    )
+    from coupling.app.from_config import domain_from_config, problem_on_domain
     from coupling.app.progress import ProgressMonitor
     from coupling.app.run import run_solver
     from coupling.app.sizing import check_memory, size_of_domain
@@ -278,11 +294,6 @@ def _solve_config(
     out = Path(args.out if args.out is not None else config.output.dir)
     # the run is written beside ``out`` and moved into place once complete
     monitor = None if args.quiet else ProgressMonitor(comm)
-    size = _with_geometry_key(planned_size, config)
-    # refuse before anything is built: closed form, else estimated from the area and h
-    rough = size if size is not None else _with_geometry_key(estimated_size, config)
-    if rough is not None:
-        check_memory(rough, comm.size, plots=plots, boundary_operator=kind)
     with staged_output_dir(comm, out, force=args.force) as staging, RunOutputs(
         comm, staging, config.output, tol=config.solver.tol, worker=worker
     ) as outputs:

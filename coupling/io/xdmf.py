@@ -128,12 +128,14 @@ def write_solution_xdmf(
     tmp = Path(out) / ".xdmf-tmp"
     tmp.mkdir(exist_ok=True)
     names = ["u", *BOUNDARY_FIELDS]
-    _write_h5(tmp / "solution.h5", x, cells, tags, u, on_gamma)
-    (tmp / "solution.xdmf").write_text(_xdmf_text(x.shape, cells.shape, tags, names))
-    # the .h5 first: a solution.xdmf under its final name always has its data
-    for name in ("solution.h5", "solution.xdmf"):
-        os.replace(tmp / name, Path(out) / name)
-    shutil.rmtree(tmp, ignore_errors=True)
+    try:
+        _write_h5(tmp / "solution.h5", x, cells, tags, u, on_gamma)
+        (tmp / "solution.xdmf").write_text(_xdmf_text(x.shape, cells.shape, tags, names))
+        # the .h5 first: a solution.xdmf under its final name always has its data
+        for name in ("solution.h5", "solution.xdmf"):
+            os.replace(tmp / name, Path(out) / name)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
 
 
 def _h5py():
