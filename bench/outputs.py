@@ -58,7 +58,7 @@ method = "ssn"
 VARIANTS = (("data", False, False), ("xdmf", True, False), ("plots", True, True))
 #: The pieces of the outputs stage that --pieces times: (module, function) pairs.
 PIECES = (
-    ("coupling.io.outputs", "gather_p1"),
+    ("coupling.io.outputs", "gather_p1_and_cells"),
     ("coupling.io.outputs", "boundary_flux"),
     ("coupling.io.outputs", "write_solution_xdmf"),
     ("coupling.io.plots", "rasterise"),
