@@ -165,10 +165,9 @@ class RunOutputs:
         self.worker = worker if self.plots and comm.rank == 0 else None
         #: seconds spent in :meth:`start` and :meth:`finish` (summary.json's ``outputs``)
         self.seconds = 0.0
-        # fields.npz, solution.xdmf/.h5, u_e's samples, the early figures' send, the
-        # figures' inputs and the figure process's answer at once (with fewer threads, a
-        # job waited for another to end: the answer for fields.npz, the XDMF file for
-        # the answer)
+        # a thread for each job that may run at once: fields.npz, solution.xdmf/.h5, u_e's
+        # samples, the early figures' send, the figures' inputs and the figure process's
+        # answer (with three, the answer waited in the queue for fields.npz to be written)
         self._pool = ThreadPoolExecutor(max_workers=6) if comm.rank == 0 else None
         self._jobs: dict[str, Future] = {}
 
@@ -212,8 +211,8 @@ class RunOutputs:
                 self._jobs["inputs"] = self._pool.submit(
                     lambda: surface._replace(section=section(self._fields))
                 )
-                if self.worker is not None:  # sent from here, before the XDMF file: its
-                    # writer holds the GIL, which a thread sending them would wait for
+                if self.worker is not None:  # sent from here at once: the figure
+                    # process draws the figures on Gamma from them meanwhile
                     self.worker.send(surface)
                     self._jobs["pngs"] = self._pool.submit(
                         self.worker.render_rest, self._jobs["inputs"].result
@@ -223,7 +222,7 @@ class RunOutputs:
                     self._fields, result.history, tol=self.tol, stop_measure=result.stop_measure
                 )
                 self._jobs["inputs"] = self._pool.submit(_with_samples, inputs, samples)
-                if self.worker is not None:  # sent from here, as a body's surface
+                if self.worker is not None:  # sent from here at once, as a body's surface
                     self._jobs["early"].result()
                     self.worker.send(self._jobs["inputs"].result())
                     self._jobs["pngs"] = self._pool.submit(self.worker.answer)

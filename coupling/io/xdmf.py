@@ -24,7 +24,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from fem_py.dofs import input_indices, input_node_numbers
+from fem_py.dofs import input_indices, input_node_numbers, tag_array
 from fem_py.parallel import gather_to_root
 
 __all__ = [
@@ -64,12 +64,8 @@ def owned_cell_tags(domain) -> np.ndarray | None:
     (:func:`fem_py.dofs.gather_p1_and_cells`); None for a body (its tags are facets)."""
     if domain.dim == 3:
         return None
-    tags = domain.cell_tags
-    n_owned = domain.mesh.topology.index_map(tags.dim).size_local
-    values = np.full(n_owned, -1, dtype=np.int32)
-    owned = tags.indices < n_owned
-    values[tags.indices[owned]] = tags.values[owned]
-    return values
+    cells = domain.mesh.topology.index_map(domain.cell_tags.dim)
+    return tag_array(domain.cell_tags, cells.size_local + cells.num_ghosts)[: cells.size_local]
 
 
 def gather_xdmf_inputs(
