@@ -170,3 +170,22 @@ def test_the_generators_coarse_structure_is_the_recovered_one(case):
     recovered = compute_coarse_structure(d.mesh, d.cell_tags, d.facet_tags)
     assert d.coarse.n_edges > 4 and len(d.coarse.interior_dofs) > 0
     assert script["differing_fields"](d.coarse, recovered) == []
+
+
+@pytest.mark.parametrize("shuffle", [False, True])
+def test_partitioner_destinations(shuffle):
+    """DOLFINx's partitioner output: each cell's owner, then its ghost ranks in the order
+    the links give them (links unsorted or sorted); no links: the owners alone."""
+    from fem_py.mesh.distribute import destinations
+
+    owner = np.array([2, 0, 1, 1])
+    links = np.array([[0, 1], [2, 0], [0, 3], [3, 2], [2, 2]])
+    if shuffle:
+        links = links[[4, 1, 3, 0, 2]]
+    graph = destinations(owner, links)
+    rows = [list(graph.links(c)) for c in range(4)]
+    assert rows[1] == [0] and rows[3] == [1, 2]
+    assert rows[0] == [2, 1, 3]
+    assert rows[2] == ([1, 2, 0] if shuffle else [1, 0, 2])
+    alone = destinations(owner, np.empty((0, 2), dtype=np.int64))
+    assert [list(alone.links(c)) for c in range(4)] == [[2], [0], [1], [1]]
