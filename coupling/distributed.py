@@ -27,6 +27,7 @@ __all__ = [
     "steklov_poincare",
     "dense_matrix",
     "gather_matrix",
+    "gather_owned_rows",
     "gather_rows",
 ]
 
@@ -169,11 +170,16 @@ def gather_rows(comm: MPI.Comm, owned: np.ndarray) -> np.ndarray | None:
 
 def gather_matrix(matrix: PETSc.Mat) -> sp.csr_matrix | None:
     """A distributed PETSc AIJ matrix as one scipy CSR matrix on rank 0 (None elsewhere)."""
-    comm = matrix.comm.tompi4py()
     r0, r1 = matrix.getOwnershipRange()
     indptr, indices, data = matrix.getValuesCSR()
     local = sp.csr_matrix((data, indices, indptr), shape=(r1 - r0, matrix.getSize()[1]))
-    parts = gather_to_root(comm, local)
+    return gather_owned_rows(matrix.comm.tompi4py(), local)
+
+
+def gather_owned_rows(comm: MPI.Comm, owned: sp.csr_matrix) -> sp.csr_matrix | None:
+    """Every rank's owned rows (global column numbers, ranks' rows in order) stacked into
+    one scipy CSR matrix on rank 0 (None elsewhere)."""
+    parts = gather_to_root(comm, owned)
     if comm.rank != 0:
         return None
     return parts[0] if len(parts) == 1 else sp.vstack(parts).tocsr()

@@ -13,6 +13,8 @@ Allreduce.
 """
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from petsc4py import PETSc
 
@@ -98,14 +100,15 @@ class CoupledFunctional:
 
     def hessian_action(
         self,
-        jacobian: PETSc.Mat,
+        jacobian: Any,
         e_u: PETSc.Vec,
         e_phi: np.ndarray,
         out_u: PETSc.Vec,
         *,
         solver_tol: float | None = None,
     ) -> np.ndarray:
-        """(out_u, return) = D^2 J_h (e_u, e_phi), with D^2 G given as the matrix ``jacobian``.
+        """(out_u, return) = D^2 J_h (e_u, e_phi), with D^2 G given as the matrix ``jacobian``
+        (a ``fem_py.forms.P1Matrix`` or a PETSc Mat: its ``mult``).
 
         ``solver_tol``: the relative residual of the V solve inside an H-matrix S_h's
         product (``bem_cpp.SteklovPoincareOperator.apply``; None: its own); a dense S_h

@@ -15,9 +15,11 @@
 """
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-from coupling.distributed import dense_matrix, gather_matrix
+from petsc4py import PETSc
+
+from coupling.distributed import dense_matrix, gather_owned_rows
 from coupling.options import AMG_MAX_ITERATIONS, AMG_RTOL, AUTO_PRECONDITIONER, SolverOptions
 from coupling.preconditioners.base import IdentityPreconditioner, Preconditioner
 from coupling.preconditioners.distributed import (
@@ -33,10 +35,8 @@ from coupling.preconditioners.multigrid import (
 from coupling.preconditioners.root import RootPreconditioner
 from coupling.preconditioners.signorini import SignoriniArc, signorini_arcs
 from coupling.preconditioners.substructuring import SubstructuringPreconditioner
+from fem_py.forms.p1_matrix import P1Matrix
 from fem_py.tags import GAMMA_T_TAG
-
-if TYPE_CHECKING:
-    from petsc4py import PETSc
 
 __all__ = [
     "Preconditioner",
@@ -48,6 +48,7 @@ __all__ = [
     "MultigridPreconditioner",
     "SignoriniArc",
     "build_preconditioner",
+    "create_matrix",
     "preconditioner_kind",
     "coarse_space",
     "problem_arcs",
@@ -77,6 +78,14 @@ def preconditioner_kind(choice: str, dim: int) -> str:
     return AUTO_PRECONDITIONER[dim] if choice == "auto" else choice
 
 
+def create_matrix(problem: Any, options: SolverOptions) -> P1Matrix | PETSc.Mat:
+    """The P1 matrix :func:`build_preconditioner` assembles in, which the solvers' Jacobians
+    then reuse (the caller destroys it): a PETSc Mat for the amg preconditioner, which
+    copies its nonzero structure, else a :class:`fem_py.forms.p1_matrix.P1Matrix`."""
+    kind = preconditioner_kind(options.preconditioner, problem.domain.dim)
+    return problem.forms.create_matrix() if kind == "amg" else problem.forms.create_p1_matrix()
+
+
 def build_preconditioner(
     problem: Any, options: SolverOptions, *, matrix: PETSc.Mat | None = None
 ) -> Preconditioner:
@@ -89,11 +98,12 @@ def build_preconditioner(
     many subdomains as ranks); otherwise, and for the exact preconditioner, B is built
     from the gathered stiffness matrix and runs on rank 0 (:class:`RootPreconditioner`).
 
-    ``matrix`` (optional, from ``problem.forms.create_matrix()``, the caller's) receives
-    the stiffness matrix, which is otherwise assembled into a new Mat and destroyed: a
-    caller that needs a P1 matrix afterwards (the solvers' Jacobian) saves creating one.
-    The amg preconditioner, which keeps its matrix, copies its nonzero structure instead.
-    B keeps no reference to it.
+    ``matrix`` (optional, the caller's, from :func:`create_matrix`): the amg
+    preconditioner, which keeps a PETSc Mat, copies the nonzero structure of a PETSc Mat;
+    the others assemble the stiffness matrix in a
+    :class:`fem_py.forms.p1_matrix.P1Matrix`, this one or a new one. A caller that needs
+    a P1 matrix afterwards (the solvers' Jacobian) saves creating one. B keeps no
+    reference to it.
     """
     kind = preconditioner_kind(options.preconditioner, problem.domain.dim)
     comm, V = problem.comm, problem.V
@@ -108,7 +118,7 @@ def build_preconditioner(
             lattice=problem.domain.lattice,
             rtol=AMG_RTOL,
             max_iterations=AMG_MAX_ITERATIONS,
-            pattern=matrix,
+            pattern=matrix if isinstance(matrix, PETSc.Mat) else None,
         )
     domain = problem.domain
     if kind == "substructuring" and domain.dim == 3:
@@ -118,12 +128,7 @@ def build_preconditioner(
         )
     substructuring = kind == "substructuring"
     coarse = coarse_space(domain, options.coarse_space) if substructuring else None
-    stiffness = problem.forms.assemble_stiffness(matrix)
-
-    def release() -> None:
-        if matrix is None:
-            stiffness.destroy()
-
+    stiffness = problem.forms.stiffness_rows(matrix if isinstance(matrix, P1Matrix) else None)
     arcs = problem_arcs(problem) if substructuring else None
     if kind == "substructuring" and comm.size > 1:
         ranks = subdomain_ranks(
@@ -133,23 +138,20 @@ def build_preconditioner(
             domain.coarse.n_subdomains,
         )
         if ranks is not None:  # whole subdomains per rank: no gathering
-            try:
-                return DistributedSubstructuringPreconditioner(
-                    comm,
-                    stiffness,
-                    V.dofmap.index_map,
-                    domain.coarse,
-                    ranks,
-                    domain.subdomain_size,
-                    arcs,
-                    edge_form=options.edge_form,
-                    signorini_weight=options.signorini_weight,
-                    coarse_space=coarse,
-                )
-            finally:
-                release()
-    csr = gather_matrix(stiffness)
-    release()
+            return DistributedSubstructuringPreconditioner(
+                comm,
+                stiffness,
+                V.dofmap.index_map,
+                domain.coarse,
+                ranks,
+                domain.subdomain_size,
+                arcs,
+                edge_form=options.edge_form,
+                signorini_weight=options.signorini_weight,
+                coarse_space=coarse,
+            )
+    csr = gather_owned_rows(comm, stiffness)
+    del stiffness  # rank 0 holds the gathered copy
     S = dense_matrix(problem.S, "the exact preconditioner") if kind == "exact" else None
 
     def build() -> Preconditioner:

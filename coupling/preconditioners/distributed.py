@@ -103,7 +103,8 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
     comm
         Communicator of the mesh.
     stiffness
-        The distributed P1 Laplace matrix A (PETSc AIJ, rows in the dof ownership ranges).
+        The owned rows of the P1 Laplace matrix A, global column numbers (scipy CSR,
+        ``InteriorForms.stiffness_rows``).
     index_map
         The dof index map of the P1 space (owned range, ghosts).
     coarse
@@ -119,7 +120,7 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
     def __init__(
         self,
         comm: MPI.Comm,
-        stiffness: PETSc.Mat,
+        stiffness: sp.csr_matrix,
         index_map: Any,
         coarse: Any,
         subdomain_rank: np.ndarray,
@@ -152,7 +153,7 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
         int_pos[self._int] = np.arange(self._int.size)
 
         # A_II (rank-local by the partition) and A_IS, from the owned rows of A
-        indptr, indices, data = stiffness.getValuesCSR()
+        indptr, indices, data = stiffness.indptr, stiffness.indices, stiffness.data
         rows = np.repeat(np.arange(n_owned), np.diff(indptr))
         cols = to_local(indices.astype(np.int64))
         keep = int_pos[rows] >= 0
@@ -237,20 +238,30 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
             raise ValueError(f"coarse_space must be 'graph' or 'galerkin', got {coarse_space!r}")
         self._coarse = SparseFactor(self._coarse_matrix)
 
-    def _schur_of(self, stiffness: PETSc.Mat, e: np.ndarray) -> np.ndarray:
+    def _schur_of(self, stiffness: sp.csr_matrix, e: np.ndarray) -> np.ndarray:
         """Pi^T S Pi e for coarse vertex values e (n_v, K), collective: the discrete
         harmonic extension u of Pi e (local Dirichlet solves), then Pi^T (A u) on the
-        owned skeleton rows, summed over the ranks."""
+        owned skeleton rows, summed over the ranks (A as a PETSc Mat for its products)."""
         out = np.zeros(e.shape)
-        u, au = stiffness.createVecs()
+        n, n_global = stiffness.shape
+        matrix = PETSc.Mat().createAIJ(
+            size=((n, n_global), (n, n_global)),
+            csr=(
+                stiffness.indptr.astype(PETSc.IntType),
+                stiffness.indices.astype(PETSc.IntType),
+                stiffness.data,
+            ),
+            comm=self.comm,
+        )
+        u, au = matrix.createVecs()
         for k in range(e.shape[1]):
             p = self._interp @ e[:, k]  # Pi e on the local skeleton (owned and ghost)
             u.array[self._int] = -self._interior_factor.solve(self._a_is @ p)
             u.array[self._owned_sk] = p[self._sk_owned]
-            stiffness.mult(u, au)
+            matrix.mult(u, au)
             out[:, k] = self._interp_owned_t @ au.array[self._owned_sk]
-        u.destroy()
-        au.destroy()
+        for obj in (u, au, matrix):
+            obj.destroy()
         return self._sum(out)
 
     def _sum(self, v: np.ndarray) -> np.ndarray:

@@ -3,9 +3,10 @@ the gradient methods, and the smallest Ritz value from which APGPM sets its mome
 """
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import scipy.linalg
-from petsc4py import PETSc
 
 from coupling.solvers.records import global_dot
 from fem_py.dofs import input_indices
@@ -14,7 +15,7 @@ __all__ = ["estimate_extremes", "extremes_at"]
 
 
 def estimate_extremes(
-    functional, preconditioner, jacobian: PETSc.Mat, n_phi: int, *, steps: int, seed: int = 0
+    functional, preconditioner, jacobian: Any, n_phi: int, *, steps: int, seed: int = 0
 ) -> tuple[float, float]:
     """The smallest and the largest Ritz value of a ``steps``-step Lanczos recurrence for
     the pencil (D^2 J_h(xi), B) (docs/method.md (3.5); D^2 G(xi) given as ``jacobian``).
@@ -29,7 +30,7 @@ def estimate_extremes(
     r = B^{-1} H q_j - alpha q_j - beta q_{j-1},  B r = H q_j - alpha p_j - beta p_{j-1}.
     """
     comm = functional.comm
-    work = jacobian.createVecRight()
+    work = functional.forms.create_vector()
     # the same start vector for any number of ranks: drawn in the input numbering
     V = functional.forms.V
     rng = np.random.default_rng(seed)
@@ -40,7 +41,7 @@ def estimate_extremes(
     q_u, q_phi, p_u, p_phi = q_u / norm, q_phi / norm, p_u / norm, p_phi / norm
     p_prev_u, p_prev_phi = np.zeros_like(p_u), np.zeros_like(p_phi)
     alphas, betas, beta = [], [], 0.0
-    e_u = jacobian.createVecRight()
+    e_u = functional.forms.create_vector()
     for _ in range(steps):
         e_u.array[:] = q_u
         h_phi = functional.hessian_action(jacobian, e_u, q_phi, work)
@@ -69,11 +70,12 @@ def extremes_at(
     n_phi: int,
     *,
     steps: int,
-    matrix: PETSc.Mat | None = None,
+    matrix: Any = None,
 ) -> tuple[float, float]:
     """:func:`estimate_extremes` with D^2 G assembled at the current u, into ``matrix``
-    (the caller's, from ``forms.create_matrix()``) or into a new Mat destroyed here."""
-    jacobian = functional.forms.create_matrix() if matrix is None else matrix
+    (the caller's P1 matrix: a ``fem_py.forms.P1Matrix`` or a PETSc Mat) or into a new
+    P1Matrix."""
+    jacobian = functional.forms.create_p1_matrix() if matrix is None else matrix
     functional.forms.assemble_jacobian(u_function, jacobian)
     try:
         return estimate_extremes(functional, preconditioner, jacobian, n_phi, steps=steps)

@@ -46,8 +46,8 @@ class IterationContext:
         The interior forms (``create_matrix``, ``assemble_jacobian``): the Jacobians of
         the Newton steps (ssn only).
     matrix
-        A Mat of the caller's from ``forms.create_matrix()`` for those Jacobians (default:
-        a new one, destroyed at the end).
+        The caller's P1 matrix for those Jacobians (``coupling.preconditioners.create_matrix``:
+        a ``fem_py.forms.P1Matrix`` or a PETSc Mat; default: a new P1Matrix).
     """
 
     functional: Any

@@ -23,7 +23,7 @@ from coupling.options import (
     SSN_WARM_START_STEPS,
     SolverOptions,
 )
-from coupling.preconditioners import Preconditioner, build_preconditioner
+from coupling.preconditioners import Preconditioner, build_preconditioner, create_matrix
 from coupling.preconditioners.base import DenseSignoriniBlock
 from coupling.solvers.apgpm import apgpm
 from coupling.solvers.lanczos import extremes_at
@@ -239,12 +239,12 @@ def solve(
 
     timings: dict[str, float] = {}
     owned = preconditioner is None
-    # one P1 Mat for the stiffness of B, the Jacobian of the step estimate and those of
+    # one P1 matrix for the stiffness of B, the Jacobian of the step estimate and those of
     # the iteration (each assembled over the last): creating one costs about one assembly
     matrix = None
     if owned:
         tic = time.perf_counter()
-        matrix = problem.forms.create_matrix()
+        matrix = create_matrix(problem, options)
         preconditioner = build_preconditioner(problem, options, matrix=matrix)
         timings["preconditioner"] = time.perf_counter() - tic
     try:
@@ -269,7 +269,7 @@ def solve(
             set_owned(u, u_values)
         tic = time.perf_counter()
         if matrix is None and (options.step == "auto" or options.method != "pgpm"):
-            matrix = problem.forms.create_matrix()
+            matrix = problem.forms.create_p1_matrix()
         tau, C0, lambda_min = step_length(
             problem.functional, pc, u, phi0.size, options, matrix=matrix
         )

@@ -186,14 +186,15 @@ def zero_residual(context: IterationContext, n_phi: int, tau: float) -> float:
 
 
 class Hessian:
-    """D^2 J_h at the iterate as a product: the interior Jacobian, assembled into a Mat
-    (the context's, or a new one destroyed with this), plus S_h on the boundary block."""
+    """D^2 J_h at the iterate as a product: the interior Jacobian, assembled into a P1
+    matrix (the context's, or a new ``fem_py.forms.P1Matrix``), plus S_h on the boundary
+    block."""
 
     def __init__(self, context: IterationContext):
         self.functional, self.forms = context.functional, context.forms
         self.owns_matrix = context.matrix is None
-        self.matrix = context.forms.create_matrix() if self.owns_matrix else context.matrix
-        self.e_u, self.h_u = self.matrix.createVecRight(), self.matrix.createVecRight()
+        self.matrix = context.forms.create_p1_matrix() if self.owns_matrix else context.matrix
+        self.e_u, self.h_u = self.forms.create_vector(), self.forms.create_vector()
 
     def assemble(self, u_function) -> None:
         """Assemble the interior Jacobian at u."""

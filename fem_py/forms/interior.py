@@ -23,6 +23,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+import scipy.sparse as sp
 import ufl
 from dolfinx import cpp, fem, la
 from mpi4py import MPI
@@ -31,6 +32,7 @@ from petsc4py import PETSc
 from fem_py.dofs.p1 import quiet_jit
 from fem_py.forms.expressions import parse_expression
 from fem_py.forms.materials import Material
+from fem_py.forms.p1_matrix import P1Matrix
 
 __all__ = [
     "spatial_variables",
@@ -236,6 +238,11 @@ class InteriorForms:
         """A PETSc Mat with the P1 sparsity (caller destroys it)."""
         return fem.petsc.create_matrix(self._form(self.jacobian_kind))
 
+    def create_p1_matrix(self) -> P1Matrix:
+        """A :class:`fem_py.forms.p1_matrix.P1Matrix` with the P1 sparsity: the Jacobians'
+        and the stiffness's matrix without PETSc's insertion (its module docstring)."""
+        return P1Matrix(self._form(self.jacobian_kind))
+
     def assemble_residual(self, u: Any, b: PETSc.Vec) -> PETSc.Vec:
         """b_i = DG(u, v_i) = int rho(|grad u|) grad u . grad v_i dx; ghosts summed (REVERSE)
         and then refreshed (FORWARD). Returns ``b``."""
@@ -247,13 +254,19 @@ class InteriorForms:
         b.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         return b
 
-    def assemble_jacobian(self, u: Any, A: PETSc.Mat, kind: str | None = None) -> PETSc.Mat:
+    def assemble_jacobian(
+        self, u: Any, A: PETSc.Mat | P1Matrix, kind: str | None = None
+    ) -> PETSc.Mat | P1Matrix:
         """A_ij = D^2G(u)(v_j, v_i) (4.1), ``kind`` ``"ufl"`` or ``"handwritten"``
-        (default: the constructor's). Returns the assembled ``A``."""
+        (default: the constructor's), into a PETSc Mat or, for its products, a
+        :class:`P1Matrix`. Returns the assembled ``A``."""
         kind = self.jacobian_kind if kind is None else kind
         if kind not in JACOBIANS:
             raise ValueError(f"kind must be one of {JACOBIANS}, got {kind!r}")
         self.set_state(u)
+        if isinstance(A, P1Matrix):
+            A.assemble_local(self._form(kind), self._coefficients(kind))
+            return A
         A.zeroEntries()
         fem.petsc.assemble_matrix(A, self._form(kind), coeffs=self._coefficients(kind))
         A.assemble()
@@ -271,6 +284,13 @@ class InteriorForms:
             return boundary.gather(b)
         finally:
             b.destroy()
+
+    def stiffness_rows(self, A: P1Matrix | None = None) -> sp.csr_matrix:
+        """The owned rows of the Laplace stiffness matrix int grad v_j . grad v_i dx, with
+        global column numbers (collective), assembled in ``A`` (whose values it overwrites)
+        or in a new :class:`P1Matrix`."""
+        A = P1Matrix(self._form("stiffness")) if A is None else A
+        return A.assemble_owned(self._form("stiffness"))
 
     def assemble_stiffness(self, A: PETSc.Mat | None = None) -> PETSc.Mat:
         """The Laplace stiffness matrix int grad v_j . grad v_i dx, assembled into ``A``
