@@ -112,10 +112,12 @@ class P1Matrix:
         return (owned + received).tocsr()
 
     def _global(self, columns: np.ndarray) -> np.ndarray:
-        """Global numbers of local column numbers."""
-        columns = np.asarray(columns, dtype=np.int64)
-        out = columns + self._column_start
-        ghost = columns >= self._n_owned_columns
+        """Global numbers of local column numbers (a new array; int32 while they fit)."""
+        if self.comm.size == 1:  # one rank: the local numbers are the global ones
+            return np.array(columns)
+        index_type = np.int32 if self.n_global <= np.iinfo(np.int32).max else np.int64
+        out = np.add(columns, self._column_start, dtype=index_type)
+        ghost = np.flatnonzero(columns >= self._n_owned_columns)
         out[ghost] = self._column_ghosts[columns[ghost] - self._n_owned_columns]
         return out
 
