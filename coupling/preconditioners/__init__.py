@@ -87,7 +87,7 @@ def create_matrix(problem: Any, options: SolverOptions) -> P1Matrix | PETSc.Mat:
 
 
 def build_preconditioner(
-    problem: Any, options: SolverOptions, *, matrix: PETSc.Mat | None = None
+    problem: Any, options: SolverOptions, *, matrix: P1Matrix | PETSc.Mat | None = None
 ) -> Preconditioner:
     """B of ``options.preconditioner`` for ``problem`` (docs/method.md sections 5-6), factored
     once (collective). The caller owns it: call ``destroy()`` on every rank when done.
