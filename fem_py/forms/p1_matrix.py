@@ -1,11 +1,10 @@
 """A P1 bilinear form's matrix in DOLFINx's own compressed-row storage, applied by scipy.
 
 DOLFINx 0.5 assembles into a PETSc Mat through ``MatSetValuesLocal``, whose insertion costs
-more than the element kernels of the P1 forms here: at 10^6 dofs the Laplace stiffness took
-0.28 s into a PETSc Mat and 0.11 s into DOLFINx's ``MatrixCSR`` (the same values), and
-PETSc's ``getValuesCSR`` copy 0.12 s more (docs/design/speed.md, "The P1 matrices without
-PETSc"). :class:`P1Matrix` holds one sparsity pattern in a ``MatrixCSR`` and offers the two
-things the solvers do with a P1 matrix:
+more than the element kernels of the P1 forms here, and reading the rows back costs a copy
+(measured: docs/design/speed.md, "The P1 matrices without PETSc"). :class:`P1Matrix`
+holds one sparsity pattern in a ``MatrixCSR`` and offers the two things the solvers do
+with a P1 matrix:
 
 - **products** y = A x, with A assembled from each rank's own cells
   (:meth:`assemble_local`): every rank multiplies its rows (owned and ghost) by its local
