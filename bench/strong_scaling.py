@@ -19,6 +19,10 @@ an array that stays in L1/L2), each splitting a fixed amount of work over the ra
 The two bracket what a phase of the solve can gain from P = 1 to 2: memory-bound work
 (sparse assembly, sparse triangular solves and products, the dense S_h product) scales
 like the triad, compute-bound work (quadrature of a nonlinear material) like the second.
+The workload's own ceiling is measured beside them (:func:`independent_parts`): for each
+P > 1, P serial solves of 1/P of the dofs at the same time, one thread each, with no
+communication and nothing computed twice. On the 2-core VMs of issue 33 it was below the
+triad's (1.69-1.74x against 1.91-2.12x at 4e6 dofs, docs/design/parallel.md).
 
 Every rank count is run ``--repeat`` times, alternating between the rank counts, and the
 run with the smallest total is reported for each (the machine is shared: other load
@@ -145,8 +149,8 @@ def ceiling_worker() -> None:
         print(json.dumps({"ranks": comm.size, **times}), flush=True)
 
 
-def _mpirun(ranks: int, args: list[str]) -> dict:
-    """The last JSON line printed by ``mpirun -n ranks`` of this script with ``args``."""
+def _command(ranks: int, args: list[str]) -> list[str]:
+    """``mpirun -n ranks`` of this script with ``args`` (the script alone for one rank)."""
     cmd = [
         "mpirun",
         "--allow-run-as-root",
@@ -159,20 +163,61 @@ def _mpirun(ranks: int, args: list[str]) -> dict:
         __file__,
         *args,
     ]
-    if ranks == 1:
-        cmd = cmd[cmd.index(sys.executable) :]
+    return cmd[cmd.index(sys.executable) :] if ranks == 1 else cmd
+
+
+def _start(cmd: list[str], **env: str) -> subprocess.Popen:
     # os.environ, not the C environment: an MPI-initialised parent (a test process) has
     # Open MPI singleton variables there that make mpirun fail
-    out = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, env=dict(os.environ))
-    if out.returncode != 0:
-        sys.exit(
-            f"error: the run with {ranks} rank(s) failed:\n{(out.stdout + out.stderr)[-2000:]}"
-        )
-    return json.loads(out.stdout.strip().splitlines()[-1])
+    return subprocess.Popen(
+        cmd,
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env={**os.environ, **env},
+    )
+
+
+def _last_json(proc: subprocess.Popen, what: str) -> dict:
+    """The last JSON line ``proc`` printed, once it has ended (exit if it failed)."""
+    stdout, stderr = proc.communicate()
+    if proc.returncode != 0:
+        sys.exit(f"error: {what} failed:\n{(stdout + stderr)[-2000:]}")
+    return json.loads(stdout.strip().splitlines()[-1])
+
+
+def _mpirun(ranks: int, args: list[str]) -> dict:
+    """The last JSON line printed by ``mpirun -n ranks`` of this script with ``args``."""
+    return _last_json(_start(_command(ranks, args)), f"the run with {ranks} rank(s)")
+
+
+def _worker_args(cells: int, method: str) -> list[str]:
+    return ["--worker", "--cells", str(cells), "--method", method]
 
 
 def run(ranks: int, cells: int, method: str) -> dict:
-    return _mpirun(ranks, ["--worker", "--cells", str(cells), "--method", method])
+    return _mpirun(ranks, _worker_args(cells, method))
+
+
+def independent_parts(parts: int, cells: int, method: str) -> dict:
+    """``parts`` serial solves of the problem with 1/parts of the dofs (``cells`` /
+    sqrt(parts) per side), run at the same time with one thread each and no
+    communication: the time of the slowest, and the part's size.
+
+    This is what ``parts`` ranks could reach at best on this machine if the solve split
+    into independent pieces: each piece meets its twins' load on the memory system and
+    the cores, but never waits for them, and nothing is computed twice. The full size's
+    one-rank time over this time is the workload's own ceiling for P = ``parts``, beside
+    the triad's (docs/design/parallel.md)."""
+    part_cells = max(8, round(cells / parts**0.5))
+    procs = [
+        _start(_command(1, _worker_args(part_cells, method)), OMP_NUM_THREADS="1")
+        for _ in range(parts)
+    ]
+    results = [_last_json(proc, f"an independent part of {part_cells} cells") for proc in procs]
+    slowest = max(results, key=lambda r: r["total"])
+    return {"parts": parts, "part_dofs": slowest["dofs"], "total": slowest["total"]}
 
 
 def ceilings(ranks: list[int], repeat: int) -> str:
@@ -205,21 +250,29 @@ def ceilings(ranks: list[int], repeat: int) -> str:
     return "\n".join(lines) + f"\n\ntriad speed-up of every round: {every}\n"
 
 
-def best_runs(ranks: list[int], cells: int, method: str, repeat: int) -> tuple[list[dict], dict]:
-    """The fastest of ``repeat`` runs for every rank count (rounds alternate between the
-    rank counts, so slow spells of the machine hit all of them), and every total."""
+def best_runs(
+    ranks: list[int], cells: int, method: str, repeat: int
+) -> tuple[list[dict], dict, dict]:
+    """The fastest of ``repeat`` runs for every rank count and, for every count P > 1, the
+    fastest of ``repeat`` runs of P independent parts (:func:`independent_parts`); every
+    total. Rounds alternate between them, so slow spells of the machine hit all."""
     totals: dict[int, list[float]] = {p: [] for p in ranks}
     best: dict[int, dict] = {}
+    parts: dict[int, dict] = {}
     for _ in range(repeat):
         for p in ranks:
             r = run(p, cells, method)
             totals[p].append(r["total"])
             if p not in best or r["total"] < best[p]["total"]:
                 best[p] = r
-    return [best[p] for p in ranks], totals
+            if p > 1:
+                r = independent_parts(p, cells, method)
+                if p not in parts or r["total"] < parts[p]["total"]:
+                    parts[p] = r
+    return [best[p] for p in ranks], totals, parts
 
 
-def table(runs: list[dict], totals: dict[int, list[float]]) -> str:
+def table(runs: list[dict], totals: dict[int, list[float]], parts: dict[int, dict]) -> str:
     base = runs[0]
     head = (
         f"# Strong scaling: {base['dofs']} dofs, {base['boundary_dofs']} boundary dofs, "
@@ -241,7 +294,19 @@ def table(runs: list[dict], totals: dict[int, list[float]]) -> str:
             + " |"
         )
     every = "; ".join(f"P = {p}: " + ", ".join(f"{t:.2f}" for t in ts) for p, ts in totals.items())
-    return head + "\n".join(lines) + f"\n\ntotals of every run (s): {every}\n"
+    text = head + "\n".join(lines) + f"\n\ntotals of every run (s): {every}\n"
+    if base["ranks"] == 1 and parts:
+        text += (
+            "\nIndependent parts (P serial solves of 1/P of the dofs at the same time, one "
+            "thread each, no communication; the slowest of the fastest run): "
+            + "; ".join(
+                f"P = {p}: {r['part_dofs']} dofs each, {r['total']:.2f} s, a ceiling of "
+                f"{base['total'] / r['total']:.2f}x"
+                for p, r in parts.items()
+            )
+            + "\n"
+        )
+    return text
 
 
 def main(argv: list[str] | None = None) -> int:

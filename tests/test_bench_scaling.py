@@ -1,5 +1,6 @@
-"""bench/strong_scaling.py runs end to end at a small size, the machine ceilings included
-(its figures are for people: no timing is asserted), and rejects bad arguments with exit code 2."""
+"""bench/strong_scaling.py runs end to end at a small size, the machine's and the workload's
+ceilings included (its figures are for people: no timing is asserted), and rejects bad
+arguments with exit code 2."""
 from __future__ import annotations
 
 import os
@@ -53,8 +54,16 @@ def test_strong_scaling_small_run(tmp_path):
     # step can land on either side of the tolerance (measured here: 195 and 194)
     assert abs(int(serial[3]) - int(parallel[3])) <= 1
     assert "the fastest of 2 run(s) per P" in out.read_text()
-    every = out.read_text().split("totals of every run (s): ")[1]
+    every = out.read_text().split("totals of every run (s): ")[1].splitlines()[0]
     assert every.count(",") == 2 and "P = 1:" in every and "P = 2:" in every  # two totals each
+    # the workload's ceiling: two serial solves of half the dofs each (whole subdomains of 4
+    # cells at 32 / sqrt(2) cells a side round the half), and the P = 1 total over theirs
+    dofs = int(scaling.split(" dofs,")[0].split()[-1])
+    parts = out.read_text().split("Independent parts")[1].split("P = 2: ")[1]
+    part_dofs, seconds, ceiling_ratio = parts.split(" dofs each, ")[0], *parts.split(", ")[1:3]
+    assert 0.3 * dofs < int(part_dofs) < 0.7 * dofs
+    assert float(seconds.removesuffix(" s")) > 0
+    assert float(ceiling_ratio.removeprefix("a ceiling of ").split("x")[0]) > 0
     # the machine's ceilings, measured in the same run: a row per rank count, P = 1 the reference
     ceiling = [
         line.split("|")
