@@ -45,3 +45,16 @@ def test_subdomain_owners_balances_whole_subdomains(nparts):
     assert cells_per_part.min() > 0
     assert cells_per_part.max() - cells_per_part.min() <= 2 * 2 * np.ceil(np.log2(nparts))
     np.testing.assert_array_equal(owner, subdomain_owners(V, tris, subdomain, nparts))
+
+
+@pytest.mark.parametrize("ghosts", [[17, 3, 12], []])
+def test_global_to_local_numbers(ghosts):
+    """Owned numbers r0..r1-1 map to 0.., ghosts to r1-r0 + their place in ``ghosts``, any
+    other number to -1, in the input's shape and with int32 input."""
+    from coupling.preconditioners.distributed import _global_to_local
+
+    to_local = _global_to_local(5, 10, np.array(ghosts, dtype=np.int64))
+    g = np.array([[5, 9, 17, 3], [12, 4, 10, 0]], dtype=np.int32)
+    expected = [[0, 4, 5, 6], [7, -1, -1, -1]] if ghosts else [[0, 4, -1, -1], [-1, -1, -1, -1]]
+    assert to_local(g).tolist() == expected
+    assert to_local(g[:, 1:3]).tolist() == [row[1:3] for row in expected]  # a strided view

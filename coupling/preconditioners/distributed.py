@@ -155,9 +155,8 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
         # A_II (rank-local by the partition) and A_IS, from the owned rows of A
         indptr, indices, data = stiffness.indptr, stiffness.indices, stiffness.data
         rows = np.repeat(np.arange(n_owned), np.diff(indptr))
-        cols = to_local(indices.astype(np.int64))
-        keep = int_pos[rows] >= 0
-        rows, cols, data = int_pos[rows[keep]], cols[keep], data[keep]
+        keep = int_pos[rows] >= 0  # the interior rows' entries
+        rows, cols, data = int_pos[rows[keep]], to_local(indices[keep]), data[keep]
         if np.any(cols < 0) or np.any(
             (sk_pos[np.maximum(cols, 0)] < 0) & (int_pos[np.maximum(cols, 0)] < 0)
         ):
@@ -329,17 +328,20 @@ def _global_to_local(r0: int, r1: int, ghosts: np.ndarray):
     """A vectorised map of global dof numbers to local ones (owned, then ghosts; -1 if absent)."""
     order = np.argsort(ghosts)
     sorted_ghosts = ghosts[order]
+    n_owned = r1 - r0
 
     def to_local(g: np.ndarray) -> np.ndarray:
-        g = np.asarray(g, dtype=np.int64)
-        owned = (g >= r0) & (g < r1)
-        out = np.where(owned, g - r0, -1)
-        if len(ghosts):  # look up only the entries owned elsewhere
-            other = np.flatnonzero(~owned.ravel())
-            wanted = g.ravel()[other]
+        out = np.subtract(g, r0, dtype=np.int64)  # a new array: the owned ones' local numbers
+        other = np.flatnonzero((out < 0) | (out >= n_owned))
+        if len(other) == 0:
+            return out
+        wanted = out.ravel()[other] + r0  # look up only the entries owned elsewhere, a few
+        local = np.full(len(other), -1, dtype=np.int64)
+        if len(ghosts):
             at = np.minimum(np.searchsorted(sorted_ghosts, wanted), len(ghosts) - 1)
             found = sorted_ghosts[at] == wanted
-            out.ravel()[other[found]] = (r1 - r0) + order[at[found]]
+            local[found] = n_owned + order[at[found]]
+        out.ravel()[other] = local
         return out
 
     return to_local
