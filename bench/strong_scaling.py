@@ -215,7 +215,12 @@ def independent_parts(parts: int, cells: int, method: str) -> dict:
         _start(_command(1, _worker_args(part_cells, method)), OMP_NUM_THREADS="1")
         for _ in range(parts)
     ]
-    results = [_last_json(proc, f"an independent part of {part_cells} cells") for proc in procs]
+    try:
+        results = [_last_json(proc, f"an independent part of {part_cells} cells") for proc in procs]
+    finally:  # one failed: the others do not outlive the bench
+        for proc in procs:
+            if proc.poll() is None:
+                proc.kill()
     slowest = max(results, key=lambda r: r["total"])
     return {"parts": parts, "part_dofs": slowest["dofs"], "total": slowest["total"]}
 
