@@ -32,6 +32,10 @@ TABLE = [
     ("max(x, y) - 2*min(x, y)", lambda x, y: np.maximum(x, y) - 2 * np.minimum(x, y)),
     ("e**x + (x + 1)/(y + 3)", lambda x, y: np.e**x + (x + 1) / (y + 3)),
     ("+x - -y", lambda x, y: x + y),
+    (
+        "x**5 - (y + 2)**-3 + (x*y)^16 + x**17 - abs(x)**2.5",
+        lambda x, y: x**5 - (y + 2) ** -3.0 + (x * y) ** 16 + x**17 - np.abs(x) ** 2.5,
+    ),
 ]
 
 POINTS = np.array([[0.3, -0.7], [-0.45, 0.2], [0.1, 0.9], [-0.8, -0.35]])
@@ -82,6 +86,29 @@ def test_ufl_backend_matches_numpy():
         )
         vals = fem.Expression(expr, ref_point).eval(cells).ravel()
         assert np.allclose(vals, ref(mid[:, 0], mid[:, 1]), rtol=1e-12, atol=1e-12), text
+
+
+def test_ufl_integer_powers_are_products():
+    """Integer exponents 2..16 (either sign) become products in UFL (FFCx would emit libm's
+    pow); other exponents stay powers. Their values: test_ufl_backend_matches_numpy."""
+    from ufl.corealg.traversal import unique_pre_traversal
+
+    msh = mesh.create_unit_square(MPI.COMM_SELF, 1, 1)
+    X = ufl.SpatialCoordinate(msh)
+
+    def exponents(text: str) -> list[str]:
+        e = parse_expression(text, {"x": X[0], "y": X[1]})
+        return sorted(
+            str(n.ufl_operands[1])
+            for n in unique_pre_traversal(e)
+            if isinstance(n, ufl.classes.Power)
+        )
+
+    assert exponents("x**3 + y**-2 + (x*y)^16 + x**2 + x**6.0") == []
+    assert exponents("x**2.5 + y**17 + x**y + x**-17") == ["-17.0", "17.0", "2.5", "x[1]"]
+    x = sympy.Symbol("x")
+    e = from_sympy(x**5 + x**-4, {"x": X[0]})
+    assert not any(isinstance(n, ufl.classes.Power) for n in unique_pre_traversal(e))
 
 
 def test_constant_expression_and_names():

@@ -293,7 +293,7 @@ class Expression:
                     return a * b
                 if op == "/":
                     return a / b
-                return a**b
+                return _ufl_power(a, b) if backend == "ufl" else a**b
             except (ZeroDivisionError, OverflowError) as err:
                 raise ValueError(
                     f"'{self._segment(node)}' in expression {self.text!r} cannot be evaluated "
@@ -435,7 +435,7 @@ def from_sympy(expr: Any, variables: Mapping[str, Any], backend: str = "ufl") ->
                 return 1.0 / b
             if ex.is_Integer and backend == "numpy":
                 return b ** int(ex)
-            return b ** walk(ex)
+            return b ** walk(ex) if backend == "numpy" else _ufl_power(b, walk(ex))
         func = e.func
         if func in table:
             args = [walk(a) for a in e.args]
@@ -452,6 +452,32 @@ def from_sympy(expr: Any, variables: Mapping[str, Any], backend: str = "ufl") ->
         )
 
     return walk(sympy.sympify(expr))
+
+
+#: The largest integer exponent written out as products in UFL (:func:`_ufl_power`).
+_PRODUCT_POWER_LIMIT = 16
+
+
+def _ufl_power(a: Any, b: Any) -> Any:
+    """a**b for UFL, with an integer exponent n, 2 <= |n| <= :data:`_PRODUCT_POWER_LIMIT`,
+    written as products of a (repeated squaring: a**5 = (a*a)**2 * a; a**-n = 1/a**n).
+
+    FFCx emits every power as C's ``pow``, and at the JIT's -O2 the compiler replaces only
+    ``pow(a, 2.0)`` by a product; the other exponents call libm, whose ``pow`` costs many
+    products. A product may differ from ``pow`` in the last bit or two (two roundings
+    instead of one); the data are known to no better. Any other exponent, or a number
+    base, is left to ``**``."""
+    n = b if isinstance(b, int) else int(b) if isinstance(b, float) and b.is_integer() else 0
+    if isinstance(a, (int, float)) or not 2 <= abs(n) <= _PRODUCT_POWER_LIMIT:
+        return a**b
+    result, factor, k = None, a, abs(n)
+    while k:
+        if k & 1:
+            result = factor if result is None else result * factor
+        k >>= 1
+        if k:
+            factor = factor * factor
+    return 1.0 / result if n < 0 else result
 
 
 def _ufl_sqrt(b: Any) -> Any:
