@@ -464,9 +464,9 @@ def _ufl_power(a: Any, b: Any) -> Any:
 
     FFCx emits every power as C's ``pow``, and at the JIT's -O2 the compiler replaces only
     ``pow(a, 2.0)`` by a product; the other exponents call libm, whose ``pow`` costs many
-    products. A product may differ from ``pow`` in the last bit or two (two roundings
-    instead of one); the data are known to no better. Any other exponent, or a number
-    base, is left to ``**``."""
+    products. The products round up to 7 times (n = -15) where ``pow`` rounds once, a few
+    units in the last place; the data are known to no better. Any other exponent, or a
+    number base, is left to ``**``."""
     n = b if isinstance(b, int) else int(b) if isinstance(b, float) and b.is_integer() else 0
     if isinstance(a, (int, float)) or not 2 <= abs(n) <= _PRODUCT_POWER_LIMIT:
         return a**b
