@@ -415,19 +415,36 @@ def manufactured_problem(
     )
 
 
+#: The largest quadrature degree of :func:`energy_error`. UFL's estimate for an exact
+#: solution's expression grows with its nesting (20 for lshape_corner_contact, 26 for
+#: ellipse_contact: 30 s and 57 s at 2e6 triangles, against a 13 s solve). For smooth
+#: solutions degree 10 errs by O(h^10) (1e-15 relative on square_contact); at a corner
+#: singularity, whose cells carry a share of |u - u_h|_1^2 of the same order as their
+#: quadrature error, by a mesh-independent fraction: 1.3e-3 and 1.7e-3 relative against
+#: degree 20 at 3,201 and 49,665 dofs, which leaves convergence rates unchanged
+#: (docs/design/speed.md, "The energy error's quadrature").
+ERROR_QUADRATURE_DEGREE = 10
+
+
 def energy_error(problem, u_h, exact: str) -> float:
     """|u_h - u|_1, the H^1 seminorm (energy) error of ``u_h`` against the exact solution
     ``exact`` (an expression in x, y; :mod:`fem_py.forms.expressions`) on the problem's mesh,
-    integrated by UFL at the default quadrature of the expression (collective)."""
+    integrated at UFL's estimated degree of the integrand, at most
+    :data:`ERROR_QUADRATURE_DEGREE` (collective)."""
     from dolfinx import fem
     from mpi4py import MPI
+    from ufl.algorithms import estimate_total_polynomial_degree
+    from ufl.algorithms.apply_algebra_lowering import apply_algebra_lowering
 
     from fem_py.forms import compile_form
 
     mesh = problem.domain.mesh
     X = ufl.SpatialCoordinate(mesh)
     e = u_h - parse_expression(exact, dict(zip(("x", "y", "z"), X)))
-    local = fem.assemble_scalar(compile_form(ufl.inner(ufl.grad(e), ufl.grad(e)) * ufl.dx))
+    integrand = ufl.inner(ufl.grad(e), ufl.grad(e))
+    degree = estimate_total_polynomial_degree(apply_algebra_lowering(integrand))
+    dx = ufl.dx(metadata={"quadrature_degree": min(degree, ERROR_QUADRATURE_DEGREE)})
+    local = fem.assemble_scalar(compile_form(integrand * dx))
     return float(np.sqrt(mesh.comm.allreduce(local, op=MPI.SUM)))
 
 
