@@ -415,14 +415,13 @@ def manufactured_problem(
     )
 
 
-#: The largest quadrature degree of :func:`energy_error`. UFL's estimate for an exact
-#: solution's expression grows with its nesting (20 for lshape_corner_contact, 26 for
-#: ellipse_contact: 30 s and 57 s at 2e6 triangles, against a 13 s solve). For smooth
-#: solutions degree 10 errs by O(h^10) (1e-15 relative on square_contact); at a corner
-#: singularity, whose cells carry a share of |u - u_h|_1^2 of the same order as their
-#: quadrature error, by a mesh-independent fraction: 1.3e-3 and 1.7e-3 relative against
-#: degree 20 at 3,201 and 49,665 dofs, which leaves convergence rates unchanged
-#: (docs/design/speed.md, "The energy error's quadrature").
+#: The largest quadrature degree of :func:`energy_error`. UFL's estimate grows with the
+#: nesting of the exact expression (20-26 for the manufactured corner and ellipse
+#: solutions), and with it the points per cell. For a smooth u degree q errs by
+#: O(h^(q+1)); at a corner singularity (|grad u|^2 ~ r^(-2/3)) the corner cells carry a
+#: share of |u - u_h|_1^2 of the same order, O(h^(4/3)), as their quadrature error, so the
+#: reported error is off by a mesh-independent fraction and its convergence rate is
+#: kept. Measurements: docs/design/speed.md, "The energy error's quadrature".
 ERROR_QUADRATURE_DEGREE = 10
 
 
