@@ -22,7 +22,7 @@ like the triad, compute-bound work (quadrature of a nonlinear material) like the
 The workload's own ceiling is measured beside them (:func:`independent_parts`): for each
 P > 1, P serial solves of 1/P of the dofs at the same time, one thread each, with no
 communication and nothing computed twice. On the 2-core VMs of issue 33 it was below the
-triad's (1.69-1.74x against 1.91-2.12x at 4e6 dofs, docs/design/parallel.md).
+triad's at 4e6 dofs (docs/design/parallel.md).
 
 Every rank count is run ``--repeat`` times, alternating between the rank counts, and the
 run with the smallest total is reported for each (the machine is shared: other load
