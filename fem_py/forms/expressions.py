@@ -433,9 +433,9 @@ def from_sympy(expr: Any, variables: Mapping[str, Any], backend: str = "ufl") ->
                 return np.sqrt(b) if backend == "numpy" else _ufl_sqrt(b)
             if ex == -1:
                 return 1.0 / b
-            if ex.is_Integer and backend == "numpy":
-                return b ** int(ex)
-            return b ** walk(ex) if backend == "numpy" else _ufl_power(b, walk(ex))
+            if backend == "numpy":
+                return b ** int(ex) if ex.is_Integer else b ** walk(ex)
+            return _ufl_power(b, walk(ex))
         func = e.func
         if func in table:
             args = [walk(a) for a in e.args]
