@@ -222,7 +222,7 @@ def independent_parts(parts: int, cells: int, method: str) -> dict:
             if proc.poll() is None:
                 proc.kill()
     slowest = max(results, key=lambda r: r["total"])
-    return {"parts": parts, "part_dofs": slowest["dofs"], "total": slowest["total"]}
+    return {"part_dofs": slowest["dofs"], "total": slowest["total"]}
 
 
 def ceilings(ranks: list[int], repeat: int) -> str:

@@ -86,8 +86,8 @@ def destinations(owner: np.ndarray, links: np.ndarray) -> Any:
     """DOLFINx partitioner output: per local cell its owner, then the ranks ghosting it
     (``links``: unique (cell, rank) rows), those of a cell in the order of ``links``.
 
-    Written by offsets: a sort of the whole list (cells and links) took 0.27 s at 2e6
-    cells, most of the Python part of the mesh on one rank, where there are no links."""
+    Written by offsets, without a sort of every cell and link (docs/design/speed.md, "The
+    mesh on one rank")."""
     from dolfinx import cpp
 
     n = len(owner)
