@@ -13,6 +13,7 @@
 #include "bem/operators.hpp"
 #include "bem/potential_operator.hpp"
 #include "bem/potentials.hpp"
+#include "bem/sparse_cholesky.hpp"
 #include "bem/steklov_operator.hpp"
 #include "bem/steklov_poincare.hpp"
 #include "bem/surface_operators.hpp"
@@ -180,4 +181,14 @@ PYBIND11_MODULE(_bem, m) {
       .def_property_readonly("nbytes", &bem::SurfaceSteklovOperator::nbytes)
       .def_property_readonly("info", &bem::SurfaceSteklovOperator::info)
       .def_property_readonly("last_iterations", &bem::SurfaceSteklovOperator::last_iterations);
+  using bem::SparseCholesky;
+  py::register_exception<bem::NotPositiveDefinite>(m, "NotPositiveDefinite", PyExc_ArithmeticError);
+  using IndicesRef = const Eigen::Ref<const SparseCholesky::Indices>&;
+  py::class_<SparseCholesky>(m, "SparseCholesky")
+      .def(py::init<bem::Index, IndicesRef, IndicesRef, VectorRef, IndicesRef>(), py::arg("n"), py::arg("indptr"),
+           py::arg("indices"), py::arg("data"), py::arg("ordering"), Release())
+      .def("solve", &SparseCholesky::solve, py::arg("B"), Release())
+      .def_property_readonly("size", &SparseCholesky::size)
+      .def_property_readonly("factor_nonzeros", &SparseCholesky::factor_nonzeros)
+      .def_property_readonly("supernodes", &SparseCholesky::supernodes);
 }

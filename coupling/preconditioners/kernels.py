@@ -17,6 +17,7 @@ from threadpoolctl import threadpool_limits
 
 from coupling.options import NATURAL_ORDERING_MAX_BLOCK
 from coupling.preconditioners.edge_forms import edge_form
+from bem_cpp.sparse import SparseCholesky
 from fem_py.partition import as_ragged
 from fem_py.polyline import arc_length
 
@@ -84,15 +85,19 @@ def largest_subdomain_interior(coarse: Any) -> int | None:
 
 
 class SparseFactor:
-    """Sparse Cholesky factor of an SPD matrix, computed once (PETSc built-in, nested
-    dissection by default; chosen by measurement, docs/design/preconditioners.md).
-    Works on ``PETSc.COMM_SELF``: the factor is rank-local.
+    """Sparse Cholesky factor of an SPD matrix, computed once and rank-local.
+
+    ``ordering="nd"`` (a connected graph, such as the coarse matrix C): bem_cpp's
+    supernodal multifrontal factor (:class:`bem_cpp.sparse.SparseCholesky`) on PETSc's
+    nested-dissection ordering. ``"natural"`` (A_II: many small diagonal blocks, whose
+    fronts are too small for dense kernels): PETSc's built-in Cholesky, row by row. Both
+    chosen by measurement (docs/design/preconditioners.md).
     """
 
     def __init__(self, matrix: sp.spmatrix, ordering: str = "nd") -> None:
         m = sp.csr_matrix(matrix, dtype=float)
         self.n = m.shape[0]
-        self._factor = None
+        self._factor: Any = None
         self._alive = True
         if self.n == 0:
             return
@@ -100,7 +105,7 @@ class SparseFactor:
             m = m.copy()
             m.sum_duplicates()
         # the Mat wraps the arrays (no copy, no insertion): they outlive it, as it is
-        # destroyed below once factored
+        # destroyed below
         mat = PETSc.Mat().createAIJWithArrays(
             m.shape,
             (
@@ -110,6 +115,37 @@ class SparseFactor:
             ),
             comm=PETSc.COMM_SELF,
         )
+        try:
+            if ordering == "natural":
+                self._factor = _PetscCholesky(mat, ordering)
+            else:
+                rows, _ = mat.getOrdering(ordering)
+                self._factor = SparseCholesky(m, rows.getIndices())
+                rows.destroy()
+        finally:
+            mat.destroy()
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        """A^{-1} b for b of shape (n,) or (n, k)."""
+        if not self._alive:
+            raise RuntimeError("this factor has been destroyed; build a new preconditioner")
+        if self._factor is None:  # empty matrix
+            return np.zeros_like(b, dtype=float)
+        return self._factor.solve(b)
+
+    def destroy(self) -> None:
+        """Free the PETSc objects (call on every rank)."""
+        if isinstance(self._factor, _PetscCholesky):
+            self._factor.destroy()
+        self._factor = None
+        self._alive = False
+
+
+class _PetscCholesky:
+    """PETSc's built-in Cholesky factor of ``mat`` (COMM_SELF) with ``ordering``."""
+
+    def __init__(self, mat: PETSc.Mat, ordering: str) -> None:
+        self.n = mat.getSize()[0]
         mat.setOption(PETSc.Mat.Option.SPD, True)
         ksp = PETSc.KSP().create(PETSc.COMM_SELF)
         ksp.setOperators(mat)
@@ -123,14 +159,8 @@ class SparseFactor:
         self._factor = pc.getFactorMatrix()
         self._rhs, self._sol = mat.createVecs()
         ksp.destroy()
-        mat.destroy()
 
     def solve(self, b: np.ndarray) -> np.ndarray:
-        """A^{-1} b for b of shape (n,) or (n, k)."""
-        if not self._alive:
-            raise RuntimeError("this factor has been destroyed; build a new preconditioner")
-        if self._factor is None:  # empty matrix
-            return np.zeros_like(b, dtype=float)
         if b.ndim == 1:  # the Vecs wrap b and the result: no copies in and out
             out, rhs = np.empty(self.n), np.ascontiguousarray(b, dtype=float)
             self._rhs.placeArray(rhs)
@@ -152,12 +182,8 @@ class SparseFactor:
         return np.ascontiguousarray(out)
 
     def destroy(self) -> None:
-        """Free the PETSc objects (call on every rank)."""
-        if self._factor is not None:
-            for obj in (self._rhs, self._sol, self._factor):
-                obj.destroy()
-            self._factor = None
-        self._alive = False
+        for obj in (self._rhs, self._sol, self._factor):
+            obj.destroy()
 
 
 class DenseFactor:
