@@ -29,8 +29,9 @@ mpmath references to better than 1e-12 relative (docs/design/quadrature.md).
 Modules: ``checks`` (input validation), ``defaults`` (every default), ``operators``
 (dense Galerkin matrices), ``compressed`` (H-matrix operators and S_h), ``dense`` (a
 matrix held in single precision, applied in double), ``potentials``
-(the representation formula), ``surfaces`` (test surfaces in 3D); this module only
-re-exports their public names.
+(the representation formula), ``surfaces`` (test surfaces in 3D), ``sparse`` (a
+supernodal sparse Cholesky factor, for the coarse problem of the FEM preconditioner);
+this module only re-exports their public names.
 """
 from __future__ import annotations
 

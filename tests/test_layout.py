@@ -31,6 +31,7 @@ LAYERS = [
         "bem_cpp.collectives",
         "bem_cpp.defaults",
         "bem_cpp.dense",
+        "bem_cpp.sparse",
         "bem_cpp.surfaces",
         "bem_cpp.polygons",
     ),

@@ -17,14 +17,23 @@ void dtrsm_(const char* side, const char* uplo, const char* transa, const char* 
             std::size_t, std::size_t);
 void dsyrk_(const char* uplo, const char* trans, const int* n, const int* k, const double* alpha, const double* a,
             const int* lda, const double* beta, double* c, const int* ldc, std::size_t, std::size_t);
+void dtrsv_(const char* uplo, const char* trans, const char* diag, const int* n, const double* a, const int* lda,
+            double* x, const int* incx, std::size_t, std::size_t, std::size_t);
+void dgemv_(const char* trans, const int* m, const int* n, const double* alpha, const double* a, const int* lda,
+            const double* x, const int* incx, const double* beta, double* y, const int* incy, std::size_t);
 }
 
 namespace bem {
 
 namespace {
 
-/// Fronts of at most this many rows are factored by plain loops.
+/// Fronts of at most this many rows are factored by plain loops, and supernodes of at
+/// most kSmallBlock columns solved by them (a LAPACK or BLAS call costs more there).
 constexpr std::size_t kSmallFront = 24;
+constexpr Index kSmallBlock = 16;
+/// Relaxed supernodes: widths up to which a child block is merged into its parent
+/// always, while explicit zeros are at most 20 % of the block, or at most 5 %.
+constexpr std::size_t kRelaxSmall = 8, kRelaxMedium = 16, kRelaxLarge = 64;
 
 /// One triangle of P A P^T in compressed form: entry (r, c) of P A P^T with r > c
 /// (strictly lower) or r >= c (lower with the diagonal), filed under r (`by_row`) or c.
@@ -344,8 +353,9 @@ void SparseCholesky::amalgamate(const std::vector<Index>& parent) {
 
 void SparseCholesky::solve_permuted(double* y, double* work) const {
   // Small blocks (most of them, at the leaves of the tree) by plain loops; large ones by
-  // Eigen's blocked kernels.
-  using Block = Eigen::Map<const Eigen::MatrixXd, 0, Eigen::OuterStride<>>;
+  // BLAS (dtrsv, dgemv).
+  const int one = 1;
+  const double d_one = 1.0, d_zero = 0.0, d_minus_one = -1.0;
   const std::size_t S = first_.size() - 1;
   for (std::size_t s = 0; s < S; ++s) {  // L z = y
     const Index f = first_[s], k = first_[s + 1] - f, m = static_cast<Index>(rows_at_[s + 1] - rows_at_[s]);
@@ -365,12 +375,10 @@ void SparseCholesky::solve_permuted(double* y, double* work) const {
       }
       continue;
     }
-    const Block block(L, m, k, Eigen::OuterStride<>(m));
-    Eigen::Map<Eigen::VectorXd> xs(x, k);
-    block.topRows(k).triangularView<Eigen::Lower>().solveInPlace(xs);
-    if (m > k) {
-      Eigen::Map<Eigen::VectorXd> update(work, m - k);
-      update.noalias() = block.bottomRows(m - k) * xs;
+    const int K = static_cast<int>(k), M = static_cast<int>(m), R = M - K;
+    dtrsv_("L", "N", "N", &K, L, &M, x, &one, 1, 1, 1);
+    if (R > 0) {
+      dgemv_("N", &R, &K, &d_one, L + k, &M, x, &one, &d_zero, work, &one, 1);
       for (Index i = k; i < m; ++i) y[rows[i]] -= work[i - k];
     }
   }
@@ -390,13 +398,12 @@ void SparseCholesky::solve_permuted(double* y, double* work) const {
       }
       continue;
     }
-    const Block block(L, m, k, Eigen::OuterStride<>(m));
-    Eigen::Map<Eigen::VectorXd> xs(x, k);
-    if (m > k) {
+    const int K = static_cast<int>(k), M = static_cast<int>(m), R = M - K;
+    if (R > 0) {
       for (Index i = k; i < m; ++i) work[i - k] = y[rows[i]];
-      xs.noalias() -= block.bottomRows(m - k).transpose() * Eigen::Map<const Eigen::VectorXd>(work, m - k);
+      dgemv_("T", &R, &K, &d_minus_one, L + k, &M, work, &one, &d_one, x, &one, 1);
     }
-    block.topRows(k).transpose().triangularView<Eigen::Upper>().solveInPlace(xs);
+    dtrsv_("L", "T", "N", &K, L, &M, x, &one, 1, 1, 1);
   }
 }
 

@@ -52,10 +52,6 @@ class SparseCholesky {
   Eigen::MatrixXd solve(const Eigen::Ref<const Eigen::MatrixXd>& B) const;
 
  private:
-  /// Relaxed supernodes: widths up to which a child block is merged into its parent
-  /// always, while explicit zeros are at most 20 % of the block, or at most 5 %.
-  static constexpr std::size_t kRelaxSmall = 8, kRelaxMedium = 16, kRelaxLarge = 64;
-  static constexpr Index kSmallBlock = 16;             ///< blocks of at most this many columns: plain loops
   void amalgamate(const std::vector<Index>& parent);   ///< merge the fundamental supernodes
   void solve_permuted(double* y, double* work) const;  ///< y := (L L^T)^{-1} y, in place
 
