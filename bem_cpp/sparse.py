@@ -48,9 +48,7 @@ class SparseCholesky:
                 np.ascontiguousarray(m.data),
                 np.asarray(ordering, dtype=np.int64),
             )
-        except ValueError as error:  # the C++ invalid_argument
-            raise ValueError(str(error)) from None
-        except _bem.NotPositiveDefinite as error:
+        except _bem.NotPositiveDefinite as error:  # malformed input: ValueError as it is
             raise np.linalg.LinAlgError(str(error)) from None
 
     @property

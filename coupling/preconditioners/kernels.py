@@ -15,9 +15,9 @@ from petsc4py import PETSc
 from scipy.sparse.csgraph import connected_components
 from threadpoolctl import threadpool_limits
 
+from bem_cpp.sparse import SparseCholesky
 from coupling.options import NATURAL_ORDERING_MAX_BLOCK
 from coupling.preconditioners.edge_forms import edge_form
-from bem_cpp.sparse import SparseCholesky
 from fem_py.partition import as_ragged
 from fem_py.polyline import arc_length
 
