@@ -188,7 +188,5 @@ PYBIND11_MODULE(_bem, m) {
       .def(py::init<bem::Index, IndicesRef, IndicesRef, VectorRef, IndicesRef>(), py::arg("n"), py::arg("indptr"),
            py::arg("indices"), py::arg("data"), py::arg("ordering"), Release())
       .def("solve", &SparseCholesky::solve, py::arg("B"), Release())
-      .def_property_readonly("size", &SparseCholesky::size)
-      .def_property_readonly("factor_nonzeros", &SparseCholesky::factor_nonzeros)
-      .def_property_readonly("supernodes", &SparseCholesky::supernodes);
+      .def_property_readonly("factor_nonzeros", &SparseCholesky::factor_nonzeros);
 }

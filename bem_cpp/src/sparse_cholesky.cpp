@@ -212,7 +212,8 @@ SparseCholesky::SparseCholesky(Index n, const Eigen::Ref<const Indices>& indptr_
   for (std::size_t j = 0; j < N; ++j)
     if (parent[j] != -1) ++children[static_cast<std::size_t>(parent[j])];
   std::vector<std::vector<Index>> stack;
-  std::vector<Index> mark(N, -1), count(N, 0);
+  std::vector<Index> mark(N, -1);
+  Index previous_count = 0;  // rows of column j - 1's structure, its diagonal included
   for (Index j = 0; j < n; ++j) {
     const std::size_t J = static_cast<std::size_t>(j);
     std::vector<Index> structure;
@@ -231,8 +232,9 @@ SparseCholesky::SparseCholesky(Index n, const Eigen::Ref<const Indices>& indptr_
         }
       stack.pop_back();
     }
-    count[J] = static_cast<Index>(structure.size()) + 1;
-    const bool continues = j > 0 && parent[J - 1] == j && children[J] == 1 && count[J - 1] == count[J] + 1;
+    const Index count = static_cast<Index>(structure.size()) + 1;
+    const bool continues = j > 0 && parent[J - 1] == j && children[J] == 1 && previous_count == count + 1;
+    previous_count = count;
     if (!continues) {
       first_.push_back(j);
       rows_at_.push_back(rows_.size());
@@ -254,11 +256,10 @@ SparseCholesky::SparseCholesky(Index n, const Eigen::Ref<const Indices>& indptr_
   values_at_.resize(S + 1);
   values_at_[0] = 0;
   std::vector<Index> supernode_of(N), child_supernodes(S, 0);
-  std::size_t largest = 0;
   for (std::size_t s = 0; s < S; ++s) {
     const std::size_t k = static_cast<std::size_t>(first_[s + 1] - first_[s]), m = rows_at_[s + 1] - rows_at_[s];
     values_at_[s + 1] = values_at_[s] + m * k;
-    largest = std::max(largest, m);
+    largest_front_ = std::max(largest_front_, m);
     for (Index j = first_[s]; j < first_[s + 1]; ++j) supernode_of[static_cast<std::size_t>(j)] = static_cast<Index>(s);
   }
   for (std::size_t s = 0; s < S; ++s) {
@@ -266,7 +267,7 @@ SparseCholesky::SparseCholesky(Index n, const Eigen::Ref<const Indices>& indptr_
     if (p != -1) ++child_supernodes[static_cast<std::size_t>(supernode_of[static_cast<std::size_t>(p)])];
   }
   values_ = huge_page_buffer(values_at_[S]);
-  Buffer front = huge_page_buffer(largest * largest);
+  Buffer front = huge_page_buffer(largest_front_ * largest_front_);
   std::vector<double> updates;
   std::vector<std::size_t> update_at;     // where each stacked update begins
   std::vector<std::size_t> update_owner;  // the supernode it came from
@@ -410,10 +411,8 @@ void SparseCholesky::solve_permuted(double* y, double* work) const {
 Eigen::MatrixXd SparseCholesky::solve(const Eigen::Ref<const Eigen::MatrixXd>& B) const {
   const Index n = size();
   if (B.rows() != n) throw std::invalid_argument("sparse Cholesky: the right-hand side has the wrong number of rows");
-  std::size_t largest = 0;
-  for (std::size_t s = 0; s + 1 < first_.size(); ++s) largest = std::max(largest, rows_at_[s + 1] - rows_at_[s]);
   Eigen::MatrixXd X(n, B.cols());
-  std::vector<double> y(static_cast<std::size_t>(n)), work(largest);
+  std::vector<double> y(static_cast<std::size_t>(n)), work(largest_front_);
   for (Index c = 0; c < B.cols(); ++c) {
     for (Index i = 0; i < n; ++i) y[static_cast<std::size_t>(i)] = B(perm_[static_cast<std::size_t>(i)], c);
     solve_permuted(y.data(), work.data());

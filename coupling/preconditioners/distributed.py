@@ -77,10 +77,9 @@ class _GhostExchange:
         self._vec = PETSc.Vec().createGhost(
             np.asarray(ghosts, dtype=PETSc.IntType), (n_owned, n_global), comm=comm
         )
-        self.n_owned, self.n_local = n_owned, n_owned + len(ghosts)
 
     def forward(self, owned: np.ndarray) -> np.ndarray:
-        """The owned values and the ghost values from their owners (length n_local)."""
+        """The owned values and the ghost values from their owners (owned, then ghosts)."""
         self._vec.array[:] = owned
         self._vec.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         with self._vec.localForm() as loc:

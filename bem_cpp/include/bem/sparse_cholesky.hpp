@@ -61,6 +61,7 @@ class SparseCholesky {
   std::vector<Index> rows_;             ///< sorted; the first ones are the supernode's own columns
   std::vector<std::size_t> values_at_;  ///< supernode s's dense m x k block (column-major) at values_at_[s]
   Buffer values_;
+  std::size_t largest_front_ = 0;  ///< the most rows of a supernode (a solve's work array)
 };
 
 }  // namespace bem
