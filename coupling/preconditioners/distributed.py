@@ -177,29 +177,24 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
         self._int = np.flatnonzero(~on_skeleton[:n_owned])
         sk_pos = np.full(n_local, -1, dtype=np.int64)
         sk_pos[self._sk] = np.arange(self._sk.size)
-        int_pos = np.full(n_local, -1, dtype=np.int64)
-        int_pos[self._int] = np.arange(self._int.size)
 
-        # A_II (rank-local by the partition) and A_IS, from the owned rows of A
-        indptr, indices, data = stiffness.indptr, stiffness.indices, stiffness.data
-        rows = np.repeat(np.arange(n_owned), np.diff(indptr))
-        keep = int_pos[rows] >= 0  # the interior rows' entries
-        rows, cols, data = int_pos[rows[keep]], to_local(indices[keep]), data[keep]
-        if np.any(cols < 0) or np.any(
-            (sk_pos[np.maximum(cols, 0)] < 0) & (int_pos[np.maximum(cols, 0)] < 0)
-        ):
+        # A_II (rank-local by the partition) and A_IS, from the owned interior rows of A:
+        # a code per local dof, its interior position i >= 0 or -2 - its skeleton position,
+        # and -1 last, for the columns to_local does not find
+        n_i, n_sk = self._int.size, self._sk.size
+        code = np.full(n_local + 1, -1, dtype=np.int64)
+        code[self._int] = np.arange(n_i)
+        code[self._sk] = -2 - np.arange(n_sk)
+        a_int = stiffness[self._int]  # CSR rows, in the order of self._int
+        column = code[to_local(a_int.indices)]
+        if np.any(column == -1):
             raise RuntimeError(  # an invariant of the distributed mesh, not a user's input
                 "a subdomain interior dof couples to a dof owned by another rank: "
                 "the mesh is not partitioned by subdomains (use fem_py.mesh.build_domain)"
             )
-        is_int = int_pos[cols] >= 0
-        n_i, n_sk = self._int.size, self._sk.size
-        self._a_ii = sp.csr_matrix(
-            (data[is_int], (rows[is_int], int_pos[cols[is_int]])), shape=(n_i, n_i)
-        )
-        self._a_is = sp.csr_matrix(
-            (data[~is_int], (rows[~is_int], sk_pos[cols[~is_int]])), shape=(n_i, n_sk)
-        )
+        on_interior = column >= 0
+        self._a_ii = _column_block(a_int, on_interior, column, n_i)
+        self._a_is = _column_block(a_int, ~on_interior, -2 - column, n_sk)
         self._interior_factor = SparseFactor(
             self._a_ii, fill_reducing_ordering(self._a_ii, largest_subdomain_interior(coarse))
         )
@@ -345,6 +340,22 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
         self._interior_factor.destroy()
         self._coarse.destroy()
         self._exchange.destroy()
+
+
+def _column_block(
+    rows: sp.csr_matrix, keep: np.ndarray, column: np.ndarray, n_columns: int
+) -> sp.csr_matrix:
+    """The entries ``keep`` of the CSR matrix ``rows`` (one flag per stored entry), their
+    columns renumbered to ``column`` (aligned with ``rows.indices``): a column block of
+    ``rows`` without a sparse matrix of triplets (rows and their order are kept)."""
+    kept_before = np.zeros(keep.size + 1, dtype=np.int64)
+    np.cumsum(keep, out=kept_before[1:])
+    block = sp.csr_matrix(
+        (rows.data[keep], column[keep], kept_before[rows.indptr]),
+        shape=(rows.shape[0], n_columns),
+    )
+    block.sort_indices()
+    return block
 
 
 def _global_to_local(r0: int, r1: int, ghosts: np.ndarray):

@@ -199,8 +199,8 @@ def _plan(spec: GeometrySpec, grid: bool = True) -> _Plan:
                         f"multiple of the coarse size {csize:g} or use "
                         "structured=False"
                     )
-        elif grid:
-            cV, ccells = insert_boundary_points(cV, ccells, ends, B.tol)
+        elif grid:  # gmsh meshes the coarse loops; arc ends may lengthen them
+            cV, ccells = insert_boundary_points(cV, ccells.tolist(), ends, B.tol)
     return _Plan(h, d, P, B, arcs, whole, ends, cV, ccells, csize)
 
 

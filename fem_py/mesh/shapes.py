@@ -342,7 +342,7 @@ def edge_tag(V: np.ndarray, a: int, b: int, boundary: BoundaryCurve, arcs: tuple
 # =================================================== coarse cells of the built-in shapes
 def grid_partition(
     shape: str, center: Sequence[float], width: float, d: float
-) -> tuple[np.ndarray, np.ndarray, list[list[int]], float]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
     """Coarse squares of the square / L-shape.
 
     Parameters
@@ -362,7 +362,7 @@ def grid_partition(
         The polygon of Omega, counter-clockwise from the lower-left corner.
     vertices : (n_v, 2) float
         Coarse vertices, numbered in the order they first appear in ``cells``.
-    cells : list of [a, b, c, d]
+    cells : (m, 4) int64
         Coarse squares row by row (y, then x), corners counter-clockwise.
     size : float
         The coarse square side width / n_c.
@@ -386,9 +386,8 @@ def grid_partition(
     vid = np.empty((nc + 1) ** 2, dtype=np.int64)
     vid[grid_point] = np.arange(len(grid_point))
     verts = np.stack([xs[grid_point % (nc + 1)], ys[grid_point // (nc + 1)]], 1)
-    cells = vid[corner].reshape(-1, 4).tolist()
     P = grid_outline(shape, center, width, nc)
-    return P, np.array(verts, dtype=float), cells, width / nc
+    return P, verts, vid[corner].reshape(-1, 4), width / nc
 
 
 def grid_cells_per_side(shape: str, width: float, d: float) -> int:

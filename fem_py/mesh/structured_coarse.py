@@ -60,6 +60,8 @@ def structured_coarse_structure(
     interior_dof, interior_subdomain = allgather_arrays(comm, (dof[~on_skeleton], subdomain))
     dof_of_node = np.empty(n_skeleton, dtype=np.int64)
     dof_of_node[skeleton_node] = skeleton_dof
+    on_skeleton_dof = np.zeros(index_map.size_global, dtype=bool)  # sorted by flatnonzero
+    on_skeleton_dof[skeleton_dof] = True
     order = np.argsort(interior_dof)
 
     # coarse vertices sorted by (y, x), keys rounded as compute_coarse_structure's
@@ -106,7 +108,7 @@ def structured_coarse_structure(
         edge_on_boundary=on_boundary[edge_order],
         edge_arc=arc[edge_order].astype(np.int64),
         edge_subdomains=sub[edge_order].astype(np.int64),
-        skeleton_dofs=np.sort(dof_of_node),
+        skeleton_dofs=np.flatnonzero(on_skeleton_dof),
         interior_dofs=interior_dof[order],
         subdomain_of_interior_dof=interior_subdomain[order],
         n_subdomains=int(n_cells),
