@@ -185,8 +185,12 @@ PYBIND11_MODULE(_bem, m) {
   py::register_exception<bem::NotPositiveDefinite>(m, "NotPositiveDefinite", PyExc_ArithmeticError);
   using IndicesRef = const Eigen::Ref<const SparseCholesky::Indices>&;
   py::class_<SparseCholesky>(m, "SparseCholesky")
-      .def(py::init<bem::Index, IndicesRef, IndicesRef, VectorRef, IndicesRef>(), py::arg("n"), py::arg("indptr"),
-           py::arg("indices"), py::arg("data"), py::arg("ordering"), Release())
+      .def(py::init<bem::Index, IndicesRef, IndicesRef, VectorRef, IndicesRef, bem::Index>(), py::arg("n"),
+           py::arg("indptr"), py::arg("indices"), py::arg("data"), py::arg("ordering"), py::arg("n_schur") = 0,
+           Release())
       .def("solve", &SparseCholesky::solve, py::arg("B"), Release())
+      .def("eliminate", &SparseCholesky::eliminate, py::arg("B"), Release())
+      .def("back_substitute", &SparseCholesky::back_substitute, py::arg("W"), Release())
+      .def_property_readonly("schur", &SparseCholesky::schur)
       .def_property_readonly("factor_nonzeros", &SparseCholesky::factor_nonzeros);
 }

@@ -177,6 +177,12 @@ SSN_LANCZOS_STEPS = 10
 #: ("natural" ordering) when no block has more rows than this, nested dissection otherwise:
 #: small blocks fill little either way (docs/design/preconditioners.md, "Set-up cuts").
 NATURAL_ORDERING_MAX_BLOCK = 1024
+#: On two or more ranks the coarse matrix C is solved through its interface Schur
+#: complement (dense, |S| x |S| on every rank) while the coarse vertices shared by
+#: subdomains of different ranks are at most this many (128 MB for Sigma and its factor),
+#: and factored whole on every rank beyond (docs/design/parallel.md, "The coarse problem
+#: over the ranks").
+INTERFACE_COARSE_MAX_VERTICES = 4000
 #: ``boundary_operator = "auto"``: the H-matrix S_h from this many boundary dofs on, the
 #: dense one below, where the H-matrix is clearly the cheaper in a whole solve
 #: (docs/design/hmatrix.md, "The crossover after the set-up and product speed-ups").

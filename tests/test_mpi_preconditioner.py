@@ -26,6 +26,9 @@ def test_distributed_equals_serial(tmp_path, nprocs):
         # largest entry (1e-13 allows the A_II and coarse solves' round-off)
         for key in ("apply", "matvec", "signorini"):
             assert r[key] <= 1e-13, (name, key, r[key])
+        # C solved over the ranks, through its interface (another elimination order: the
+        # same round-off bound, C being well conditioned at these sizes)
+        assert r["coarse_factor"] == "InterfaceCoarseFactor", (name, r["coarse_factor"])
         # every rank owns whole subdomains, and all ranks have some
         assert sum(r["owned_subdomains"]) == r["subdomains"]
         assert min(r["owned_subdomains"]) > 0, (name, r["owned_subdomains"])

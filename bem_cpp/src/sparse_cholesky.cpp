@@ -165,7 +165,7 @@ bool partial_cholesky(double* F, std::size_t m, std::size_t k) {
 SparseCholesky::SparseCholesky(Index n, const Eigen::Ref<const Indices>& indptr_ref,
                                const Eigen::Ref<const Indices>& indices_ref,
                                const Eigen::Ref<const Eigen::VectorXd>& data_ref,
-                               const Eigen::Ref<const Indices>& ordering) {
+                               const Eigen::Ref<const Indices>& ordering, Index n_schur) {
   const std::int64_t *indptr = indptr_ref.data(), *indices = indices_ref.data();
   if (n < 0 || indptr_ref.size() != n + 1 || indptr[0] != 0 || indptr[n] != indices_ref.size() ||
       indices_ref.size() != data_ref.size())
@@ -175,7 +175,10 @@ SparseCholesky::SparseCholesky(Index n, const Eigen::Ref<const Indices>& indptr_
   for (Index p = 0; p < indices_ref.size(); ++p)
     if (indices[p] < 0 || indices[p] >= n) throw std::invalid_argument("sparse Cholesky: a column index out of range");
   if (ordering.size() != n) throw std::invalid_argument("sparse Cholesky: the ordering must have n entries");
+  if (n_schur < 0 || n_schur > n) throw std::invalid_argument("sparse Cholesky: n_schur must be in 0..n");
   const std::size_t N = static_cast<std::size_t>(n);
+  const Index n_h = n - n_schur;  // the rows eliminated sparsely (H), then S
+  const std::size_t NH = static_cast<std::size_t>(n_h);
   std::vector<Index> inverse(N, -1);
   for (Index i = 0; i < n; ++i) {
     const std::int64_t old = ordering[i];
@@ -184,22 +187,27 @@ SparseCholesky::SparseCholesky(Index n, const Eigen::Ref<const Indices>& indptr_
     inverse[static_cast<std::size_t>(old)] = i;
   }
 
-  // The elimination tree in the caller's ordering, then the ordering postordered.
+  // The elimination tree in the caller's ordering, then H's part postordered (a column
+  // whose parent is in S is a root of H's forest); S stays last, in the caller's order.
   std::vector<Index> parent;
   {
-    const std::vector<Index> tree =
+    std::vector<Index> tree =
         elimination_tree(n, triangle(n, indptr, indices, nullptr, inverse, /*by_row=*/true, /*diagonal=*/false));
+    tree.resize(NH);
+    for (Index& p : tree)
+      if (p >= n_h) p = -1;
     const std::vector<Index> post = postorder(tree);
-    std::vector<Index> position(N);
-    for (std::size_t i = 0; i < N; ++i) position[static_cast<std::size_t>(post[i])] = static_cast<Index>(i);
+    std::vector<Index> position(NH);
+    for (std::size_t i = 0; i < NH; ++i) position[static_cast<std::size_t>(post[i])] = static_cast<Index>(i);
     perm_.resize(N);
-    parent.resize(N);
-    for (std::size_t i = 0; i < N; ++i) {
+    parent.resize(NH);
+    for (std::size_t i = 0; i < NH; ++i) {
       const Index old = post[i];
       perm_[i] = ordering[old];
       const Index p = tree[static_cast<std::size_t>(old)];
       parent[i] = p == -1 ? -1 : position[static_cast<std::size_t>(p)];
     }
+    for (std::size_t i = NH; i < N; ++i) perm_[i] = ordering[static_cast<Index>(i)];
     for (std::size_t i = 0; i < N; ++i) inverse[static_cast<std::size_t>(perm_[i])] = static_cast<Index>(i);
   }
   const Triangle lower = triangle(n, indptr, indices, data_ref.data(), inverse, /*by_row=*/false, /*diagonal=*/true);
@@ -208,13 +216,13 @@ SparseCholesky::SparseCholesky(Index n, const Eigen::Ref<const Indices>& indptr_
   // children's, merged; the children's structures are the top of a stack in postorder),
   // kept only for the first column of each supernode. Column j continues the supernode of
   // j - 1 when j - 1 is its only child and has one more row (the same structure).
-  std::vector<Index> children(N, 0);
-  for (std::size_t j = 0; j < N; ++j)
+  std::vector<Index> children(NH, 0);
+  for (std::size_t j = 0; j < NH; ++j)
     if (parent[j] != -1) ++children[static_cast<std::size_t>(parent[j])];
   std::vector<std::vector<Index>> stack;
   std::vector<Index> mark(N, -1);
   Index previous_count = 0;  // rows of column j - 1's structure, its diagonal included
-  for (Index j = 0; j < n; ++j) {
+  for (Index j = 0; j < n_h; ++j) {
     const std::size_t J = static_cast<std::size_t>(j);
     std::vector<Index> structure;
     for (std::size_t p = lower.start[J]; p < lower.start[J + 1]; ++p) {
@@ -245,13 +253,14 @@ SparseCholesky::SparseCholesky(Index n, const Eigen::Ref<const Indices>& indptr_
     }
     if (parent[J] != -1) stack.push_back(std::move(structure));
   }
-  first_.push_back(n);
+  first_.push_back(n_h);
   rows_at_.push_back(rows_.size());
   amalgamate(parent);
 
   // Numeric: the fronts in postorder. Front s (m x m, column-major) gathers A's columns of
   // the supernode and its children's update matrices (extend-add), factors its k x k
-  // block, and leaves the (m - k) x (m - k) Schur complement on the update stack.
+  // block, and leaves the (m - k) x (m - k) Schur complement on the update stack, or,
+  // from a root of H's forest (its rows all in S), adds it to S's Schur complement.
   const std::size_t S = first_.size() - 1;
   values_at_.resize(S + 1);
   values_at_[0] = 0;
@@ -272,6 +281,10 @@ SparseCholesky::SparseCholesky(Index n, const Eigen::Ref<const Indices>& indptr_
   std::vector<std::size_t> update_at;     // where each stacked update begins
   std::vector<std::size_t> update_owner;  // the supernode it came from
   std::vector<Index> local(N, -1);
+  schur_ = Eigen::MatrixXd::Zero(n_schur, n_schur);  // its lower triangle, then symmetrised
+  for (std::size_t col = NH; col < N; ++col)
+    for (std::size_t p = lower.start[col]; p < lower.start[col + 1]; ++p)
+      schur_(lower.other[p] - n_h, static_cast<Index>(col) - n_h) += lower.value[p];
   for (std::size_t s = 0; s < S; ++s) {
     const Index f = first_[s];
     const std::size_t k = static_cast<std::size_t>(first_[s + 1] - f), m = rows_at_[s + 1] - rows_at_[s];
@@ -301,7 +314,12 @@ SparseCholesky::SparseCholesky(Index n, const Eigen::Ref<const Indices>& indptr_
       throw NotPositiveDefinite("sparse Cholesky: the matrix is not positive definite (at row " +
                                 std::to_string(perm_[static_cast<std::size_t>(f)]) + " or after)");
     std::copy(front.get(), front.get() + m * k, values_.get() + values_at_[s]);
-    if (m > k) {
+    if (m > k && parent[static_cast<std::size_t>(first_[s + 1] - 1)] == -1) {
+      const Index* urows = rows + k;
+      for (std::size_t jj = 0; jj < m - k; ++jj)
+        for (std::size_t ii = jj; ii < m - k; ++ii)
+          schur_(urows[ii] - n_h, urows[jj] - n_h) += front[k + ii + (k + jj) * m];
+    } else if (m > k) {
       const std::size_t mu = m - k, at = updates.size();
       updates.resize(at + mu * mu);
       for (std::size_t jj = 0; jj < mu; ++jj)
@@ -310,6 +328,12 @@ SparseCholesky::SparseCholesky(Index n, const Eigen::Ref<const Indices>& indptr_
       update_at.push_back(at);
       update_owner.push_back(s);
     }
+  }
+  if (n_schur > 0) {
+    schur_ = schur_.selfadjointView<Eigen::Lower>();
+    schur_factor_.compute(schur_);
+    if (schur_factor_.info() != Eigen::Success)
+      throw NotPositiveDefinite("sparse Cholesky: the matrix is not positive definite (in the Schur complement)");
   }
 }
 
@@ -352,11 +376,11 @@ void SparseCholesky::amalgamate(const std::vector<Index>& parent) {
   rows_ = std::move(rows);
 }
 
-void SparseCholesky::solve_permuted(double* y, double* work) const {
-  // Small blocks (most of them, at the leaves of the tree) by plain loops; large ones by
-  // BLAS (dtrsv, dgemv).
+// Small blocks (most of them, at the leaves of the tree) by plain loops; large ones by
+// BLAS (dtrsv, dgemv).
+void SparseCholesky::forward(double* y, double* work) const {
   const int one = 1;
-  const double d_one = 1.0, d_zero = 0.0, d_minus_one = -1.0;
+  const double d_one = 1.0, d_zero = 0.0;
   const std::size_t S = first_.size() - 1;
   for (std::size_t s = 0; s < S; ++s) {  // L z = y
     const Index f = first_[s], k = first_[s + 1] - f, m = static_cast<Index>(rows_at_[s + 1] - rows_at_[s]);
@@ -383,6 +407,12 @@ void SparseCholesky::solve_permuted(double* y, double* work) const {
       for (Index i = k; i < m; ++i) y[rows[i]] -= work[i - k];
     }
   }
+}
+
+void SparseCholesky::backward(double* y, double* work) const {
+  const int one = 1;
+  const double d_one = 1.0, d_minus_one = -1.0;
+  const std::size_t S = first_.size() - 1;
   for (std::size_t s = S; s-- > 0;) {  // L^T x = z
     const Index f = first_[s], k = first_[s + 1] - f, m = static_cast<Index>(rows_at_[s + 1] - rows_at_[s]);
     const double* L = values_.get() + values_at_[s];
@@ -408,17 +438,45 @@ void SparseCholesky::solve_permuted(double* y, double* work) const {
   }
 }
 
-Eigen::MatrixXd SparseCholesky::solve(const Eigen::Ref<const Eigen::MatrixXd>& B) const {
+Eigen::MatrixXd SparseCholesky::permuted(const Eigen::Ref<const Eigen::MatrixXd>& B, bool back) const {
   const Index n = size();
   if (B.rows() != n) throw std::invalid_argument("sparse Cholesky: the right-hand side has the wrong number of rows");
-  Eigen::MatrixXd X(n, B.cols());
-  std::vector<double> y(static_cast<std::size_t>(n)), work(largest_front_);
-  for (Index c = 0; c < B.cols(); ++c) {
-    for (Index i = 0; i < n; ++i) y[static_cast<std::size_t>(i)] = B(perm_[static_cast<std::size_t>(i)], c);
-    solve_permuted(y.data(), work.data());
-    for (Index i = 0; i < n; ++i) X(perm_[static_cast<std::size_t>(i)], c) = y[static_cast<std::size_t>(i)];
+  Eigen::MatrixXd Y(n, B.cols());
+  for (Index c = 0; c < B.cols(); ++c)
+    for (Index i = 0; i < n; ++i) {
+      const Index p = perm_[static_cast<std::size_t>(i)];
+      if (back)
+        Y(p, c) = B(i, c);
+      else
+        Y(i, c) = B(p, c);
+    }
+  return Y;
+}
+
+Eigen::MatrixXd SparseCholesky::solve(const Eigen::Ref<const Eigen::MatrixXd>& B) const {
+  Eigen::MatrixXd Y = permuted(B, false);
+  const Index n_h = first_.back(), n_schur = size() - n_h;
+  std::vector<double> work(largest_front_);
+  for (Index c = 0; c < Y.cols(); ++c) {
+    forward(Y.col(c).data(), work.data());
+    if (n_schur > 0) Y.col(c).tail(n_schur) = schur_factor_.solve(Y.col(c).tail(n_schur));
+    backward(Y.col(c).data(), work.data());
   }
-  return X;
+  return permuted(Y, true);
+}
+
+Eigen::MatrixXd SparseCholesky::eliminate(const Eigen::Ref<const Eigen::MatrixXd>& B) const {
+  Eigen::MatrixXd Y = permuted(B, false);
+  std::vector<double> work(largest_front_);
+  for (Index c = 0; c < Y.cols(); ++c) forward(Y.col(c).data(), work.data());
+  return permuted(Y, true);
+}
+
+Eigen::MatrixXd SparseCholesky::back_substitute(const Eigen::Ref<const Eigen::MatrixXd>& W) const {
+  Eigen::MatrixXd Y = permuted(W, false);
+  std::vector<double> work(largest_front_);
+  for (Index c = 0; c < Y.cols(); ++c) backward(Y.col(c).data(), work.data());
+  return permuted(Y, true);
 }
 
 }  // namespace bem

@@ -67,11 +67,11 @@ Indices identity(Index n) {
   return p;
 }
 
-SparseCholesky factor(const RowMajorSparse& A, const Indices& ordering) {
+SparseCholesky factor(const RowMajorSparse& A, const Indices& ordering, Index n_schur = 0) {
   const Eigen::Map<const Indices> indptr(A.outerIndexPtr(), A.rows() + 1);
   const Eigen::Map<const Indices> indices(A.innerIndexPtr(), A.nonZeros());
   const Eigen::Map<const Eigen::VectorXd> data(A.valuePtr(), A.nonZeros());
-  return SparseCholesky(A.rows(), indptr, indices, data, ordering);
+  return SparseCholesky(A.rows(), indptr, indices, data, ordering, n_schur);
 }
 
 /// The nonzeros of the exact Cholesky factor of P A P^T, computed densely.
@@ -141,4 +141,52 @@ TEST(SparseCholesky, HandlesTheEmptyMatrixAndDiagonalOnes) {
   D.makeCompressed();
   const Eigen::MatrixXd X = factor(D, random_permutation(5, 7)).solve(Eigen::MatrixXd::Ones(5, 1));
   for (Index i = 0; i < 5; ++i) EXPECT_DOUBLE_EQ(X(i, 0), 1.0 / (i + 1.0));
+}
+
+TEST(SparseCholesky, KeepsTheLastRowsAsADenseSchurComplement) {
+  struct Case {
+    RowMajorSparse A;
+    Indices ordering;
+    Index n_schur;
+  };
+  const Index m = 24;
+  std::vector<Case> cases{{grid_laplacian(m, 0.0), random_permutation(m * m, 11), 37},
+                          {grid_laplacian(m, 0.0), identity(m * m), m},  // the last grid line
+                          {grid_laplacian(7, 0.5), random_permutation(49, 12), 1},
+                          {grid_laplacian(7, 0.5), random_permutation(49, 13), 49},  // all of it
+                          {random_spd(400, 3, 14), random_permutation(400, 15), 120}};
+  for (const Case& c : cases) {
+    const Index n = c.A.rows(), h = n - c.n_schur;
+    const SparseCholesky F = factor(c.A, c.ordering, c.n_schur);
+    // the dense blocks of A in the order of the ordering: H first, then S
+    const Eigen::MatrixXd dense = Eigen::MatrixXd(c.A);
+    Eigen::MatrixXd P(n, n);
+    for (Index i = 0; i < n; ++i)
+      for (Index j = 0; j < n; ++j) P(i, j) = dense(c.ordering[i], c.ordering[j]);
+    const Eigen::MatrixXd A_hh = P.topLeftCorner(h, h), A_sh = P.bottomLeftCorner(c.n_schur, h);
+    const Eigen::MatrixXd expected_schur =
+        P.bottomRightCorner(c.n_schur, c.n_schur) - A_sh * Eigen::LLT<Eigen::MatrixXd>(A_hh).solve(A_sh.transpose());
+    ASSERT_EQ(F.schur().rows(), c.n_schur);
+    // both backward stable: the condition number (< 1e3 here) times round-off
+    EXPECT_LT((F.schur() - expected_schur).norm(), 1e-12 * expected_schur.norm()) << n << " " << c.n_schur;
+
+    const Eigen::MatrixXd B = Eigen::MatrixXd::Random(n, 2);
+    const Eigen::MatrixXd X = Eigen::LLT<Eigen::MatrixXd>(dense).solve(B);
+    EXPECT_LT((F.solve(B) - X).norm(), 1e-11 * X.norm()) << n << " " << c.n_schur;
+
+    // the sweeps: W_S = B_S - A_SH A_HH^{-1} B_H; with W_S := X_S, back to X
+    Eigen::MatrixXd B_h(h, 2), B_s(c.n_schur, 2), X_s(c.n_schur, 2);
+    for (Index i = 0; i < n; ++i) (i < h ? B_h.row(i) : B_s.row(i - h)) = B.row(c.ordering[i]);
+    const Eigen::MatrixXd expected_w_s = B_s - A_sh * Eigen::LLT<Eigen::MatrixXd>(A_hh).solve(B_h);
+    Eigen::MatrixXd W = F.eliminate(B);
+    for (Index i = h; i < n; ++i) {
+      EXPECT_LT((W.row(c.ordering[i]) - expected_w_s.row(i - h)).norm(), 1e-11 * expected_w_s.norm());
+      W.row(c.ordering[i]) = X.row(c.ordering[i]);
+    }
+    EXPECT_LT((F.back_substitute(W) - X).norm(), 1e-11 * X.norm()) << n << " " << c.n_schur;
+  }
+  // not positive definite within S alone, and n_schur out of range
+  EXPECT_THROW(factor(grid_laplacian(10, -1.0), identity(100), 100), NotPositiveDefinite);
+  EXPECT_THROW(factor(grid_laplacian(4, 0.0), identity(16), 17), std::invalid_argument);
+  EXPECT_THROW(factor(grid_laplacian(4, 0.0), identity(16), -1), std::invalid_argument);
 }

@@ -10,12 +10,13 @@ With the mesh partitioned so that every subdomain lies whole on one rank
 3. v = (A^0)^{-1} r + Pi C^{-1} Pi^T r: every coarse edge is solved on one rank, the
    owner of the subdomain on its first side, which holds all nodes of the edge as
    owned or ghost dofs (a forward scatter brings r there, a reverse scatter takes the
-   edge solutions back); Pi^T r is summed over owned rows (one Allreduce of n_v
-   numbers) and the small coarse system C is solved redundantly on every rank.
+   edge solutions back); C^{-1} Pi^T r is solved over the ranks through C's interface
+   Schur complement (:mod:`coupling.preconditioners.interface_coarse`: one Allreduce
+   of the interface's numbers).
 4. u_I = x_I - A_II^{-1} A_IS v, after a forward scatter of v.
 
 So one application costs two local A_II solves, four neighbour scatters (of skeleton
-vectors: steps 2-4 touch no interior value) and one Allreduce of the coarse vector.
+vectors: steps 2-4 touch no interior value) and one Allreduce of the coarse interface.
 B_Omega u (``matvec_omega``) is the same pattern: one forward scatter, one local A_II
 solve, one reverse scatter, two Allreduces. The Signorini block (a few hundred to a few
 thousand unknowns) is replicated on every rank
@@ -44,6 +45,7 @@ from coupling.preconditioners.kernels import (
     edge_weights,
     galerkin_coarse_matrix,
 )
+from coupling.preconditioners.interface_coarse import coarse_factor, vertex_rank_range
 from coupling.preconditioners.signorini import SignoriniArc, SignoriniBlock
 from fem_py.partition import as_ragged
 
@@ -258,7 +260,9 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
             self._coarse_matrix = coarse_matrix(coarse, self.subdomain_size)
         else:
             raise ValueError(f"coarse_space must be 'graph' or 'galerkin', got {coarse_space!r}")
-        self._coarse = SparseFactor(self._coarse_matrix)
+        self._coarse = coarse_factor(
+            comm, self._coarse_matrix, vertex_rank_range(ends, subdomains, rank_of, n_v)
+        )
 
     def _schur_of(self, stiffness: sp.csr_matrix, e: np.ndarray) -> np.ndarray:
         """Pi^T S Pi e for coarse vertex values e (n_v, K), collective: the discrete
@@ -306,7 +310,7 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
         x_i = self._interior_factor.solve(g[self._int])
         r_owned = g[self._owned_sk] - self._exchange.reverse_add(self._a_is.T @ x_i)
         r_sk = self._exchange.forward(r_owned)
-        c = self._coarse.solve(self._sum(self._interp_owned_t @ r_owned))
+        c = self._coarse.solve(self._interp_owned_t @ r_owned)
         v_owned = self._exchange.reverse_add(self._a0_inv @ r_sk) + self._interp_owned @ c
         v_sk = self._exchange.forward(v_owned)
         u = np.empty(self.n_omega)

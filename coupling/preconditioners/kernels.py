@@ -23,6 +23,7 @@ from fem_py.polyline import arc_length
 
 __all__ = [
     "SparseFactor",
+    "nested_dissection",
     "fill_reducing_ordering",
     "largest_subdomain_interior",
     "is_symmetric",
@@ -101,27 +102,15 @@ class SparseFactor:
         self._alive = True
         if self.n == 0:
             return
-        if not m.has_canonical_format:  # PETSc's arrays: sorted rows without duplicates
-            m = m.copy()
-            m.sum_duplicates()
+        m = _canonical(m)
         # the Mat wraps the arrays (no copy, no insertion): they outlive it, as it is
         # destroyed below
-        mat = PETSc.Mat().createAIJWithArrays(
-            m.shape,
-            (
-                m.indptr.astype(PETSc.IntType, copy=False),
-                m.indices.astype(PETSc.IntType, copy=False),
-                m.data,
-            ),
-            comm=PETSc.COMM_SELF,
-        )
+        mat = _wrapped(m)
         try:
             if ordering == "natural":
                 self._factor = _PetscCholesky(mat, ordering)
             else:
-                rows, _ = mat.getOrdering(ordering)
-                self._factor = SparseCholesky(m, rows.getIndices())
-                rows.destroy()
+                self._factor = SparseCholesky(m, _petsc_ordering(mat, ordering))
         finally:
             mat.destroy()
 
@@ -139,6 +128,50 @@ class SparseFactor:
             self._factor.destroy()
         self._factor = None
         self._alive = False
+
+
+def nested_dissection(matrix: sp.spmatrix) -> np.ndarray:
+    """PETSc's nested-dissection ordering of a sparse symmetric matrix: ``ordering[i]``
+    is the row that becomes row i (as :class:`bem_cpp.sparse.SparseCholesky` takes it)."""
+    m = _canonical(sp.csr_matrix(matrix, dtype=float))
+    if m.shape[0] == 0:
+        return np.zeros(0, dtype=np.int64)
+    mat = _wrapped(m)
+    try:
+        return _petsc_ordering(mat, "nd")
+    finally:
+        mat.destroy()
+
+
+def _canonical(m: sp.csr_matrix) -> sp.csr_matrix:
+    """``m``, or a copy with sorted rows and no duplicates (PETSc's arrays)."""
+    if m.has_canonical_format:
+        return m
+    m = m.copy()
+    m.sum_duplicates()
+    return m
+
+
+def _wrapped(m: sp.csr_matrix) -> PETSc.Mat:
+    """A sequential PETSc Mat on the arrays of ``m`` (no copy: they must outlive it)."""
+    return PETSc.Mat().createAIJWithArrays(
+        m.shape,
+        (
+            m.indptr.astype(PETSc.IntType, copy=False),
+            m.indices.astype(PETSc.IntType, copy=False),
+            m.data,
+        ),
+        comm=PETSc.COMM_SELF,
+    )
+
+
+def _petsc_ordering(mat: PETSc.Mat, ordering: str) -> np.ndarray:
+    rows, columns = mat.getOrdering(ordering)
+    try:
+        return rows.getIndices().astype(np.int64)
+    finally:
+        rows.destroy()
+        columns.destroy()
 
 
 class _PetscCholesky:

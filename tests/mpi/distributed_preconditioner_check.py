@@ -78,6 +78,7 @@ for name, kwargs in MESHES.items():
             "apply": rel(applied, serial.apply_omega(g)),
             "matvec": rel(product, serial.matvec_omega(g)),
             "signorini": rel(dist.apply_signorini(phi), serial.apply_signorini(phi)),
+            "coarse_factor": type(dist._coarse).__name__,
             "subdomains": int(domain.coarse.n_subdomains),
             "owned_subdomains": np.bincount(ranks, minlength=comm.size).tolist(),
         }

@@ -40,20 +40,40 @@ class SparseCholesky {
   /// diagonal of P A P^T are read). `ordering[i]` is the row of A that becomes row i
   /// (a permutation of 0..n-1). Throws std::invalid_argument on malformed input and
   /// NotPositiveDefinite if A is not positive definite.
+  ///
+  /// `n_schur` > 0 keeps the last n_schur rows of the ordering (the set S, in that order)
+  /// out of the sparse elimination: the other rows H are eliminated by the multifrontal
+  /// method, and S's block becomes the dense Schur complement A_SS - A_SH A_HH^{-1} A_HS
+  /// (schur()), factored densely. The sweeps eliminate() and back_substitute() let a
+  /// caller solve with another Schur complement in between (the interface problem of a
+  /// coarse matrix split over ranks).
   SparseCholesky(Index n, const Eigen::Ref<const Indices>& indptr, const Eigen::Ref<const Indices>& indices,
-                 const Eigen::Ref<const Eigen::VectorXd>& data, const Eigen::Ref<const Indices>& ordering);
+                 const Eigen::Ref<const Eigen::VectorXd>& data, const Eigen::Ref<const Indices>& ordering,
+                 Index n_schur = 0);
 
   Index size() const { return static_cast<Index>(perm_.size()); }
   /// Nonzeros of L (with the explicit zeros inside the supernodes' dense blocks).
   std::size_t factor_nonzeros() const { return values_at_.back(); }
   Index supernodes() const { return static_cast<Index>(first_.size()) - 1; }
+  /// The Schur complement A_SS - A_SH A_HH^{-1} A_HS (n_schur x n_schur, S in the order
+  /// of the ordering's last n_schur rows).
+  const Eigen::MatrixXd& schur() const { return schur_; }
 
   /// X = A^{-1} B for the columns of B.
   Eigen::MatrixXd solve(const Eigen::Ref<const Eigen::MatrixXd>& B) const;
+  /// The forward sweep over H for the columns of B: on S, B_S - A_SH A_HH^{-1} B_H; on H,
+  /// intermediate values for back_substitute() (rows in A's numbering).
+  Eigen::MatrixXd eliminate(const Eigen::Ref<const Eigen::MatrixXd>& B) const;
+  /// The backward sweep over H: with W from eliminate() whose S rows were replaced by
+  /// X_S, X_H = A_HH^{-1} (B_H - A_HS X_S); returns X (X_S as given).
+  Eigen::MatrixXd back_substitute(const Eigen::Ref<const Eigen::MatrixXd>& W) const;
 
  private:
-  void amalgamate(const std::vector<Index>& parent);   ///< merge the fundamental supernodes
-  void solve_permuted(double* y, double* work) const;  ///< y := (L L^T)^{-1} y, in place
+  void amalgamate(const std::vector<Index>& parent);  ///< merge the fundamental supernodes
+  void forward(double* y, double* work) const;        ///< y := L_H^{-1} y over H, in place
+  void backward(double* y, double* work) const;       ///< y := L_H^{-T} y over H, in place
+  /// The columns of B permuted (a = false: Y_i = B_perm(i)) or back (a = true).
+  Eigen::MatrixXd permuted(const Eigen::Ref<const Eigen::MatrixXd>& B, bool back) const;
 
   std::vector<Index> perm_;             ///< row i of P A P^T is row perm_[i] of A
   std::vector<Index> first_;            ///< supernode s holds the columns first_[s] .. first_[s+1]-1
@@ -62,6 +82,8 @@ class SparseCholesky {
   std::vector<std::size_t> values_at_;  ///< supernode s's dense m x k block (column-major) at values_at_[s]
   Buffer values_;
   std::size_t largest_front_ = 0;  ///< the most rows of a supernode (a solve's work array)
+  Eigen::MatrixXd schur_;          ///< S's Schur complement (lower and upper triangles)
+  Eigen::LLT<Eigen::MatrixXd> schur_factor_;
 };
 
 }  // namespace bem
