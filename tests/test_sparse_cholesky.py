@@ -58,3 +58,24 @@ def test_supernodal_factor_rejects_bad_input():
         SparseCholesky(a[:-1], np.arange(n))
     with pytest.raises(ValueError, match="b must have shape"):
         SparseCholesky(a, np.arange(n)).solve(np.ones(n + 1))
+
+
+def test_supernodal_factor_leaves_the_last_rows_to_a_dense_schur_complement():
+    a = grid_laplacian(30, 0.1)
+    n, n_s = a.shape[0], 30
+    rng = np.random.default_rng(2)
+    ordering = rng.permutation(n)
+    h, s = ordering[:-n_s], ordering[-n_s:]
+    factor = SparseCholesky(a, ordering, n_schur=n_s)
+    a_hh, a_hs = a[h][:, h].tocsc(), a[h][:, s].toarray()
+    expected = a[s][:, s].toarray() - a_hs.T @ spla.spsolve(a_hh, a_hs)
+    assert np.abs(factor.schur - expected).max() <= RTOL * np.abs(expected).max()
+    b = rng.standard_normal(n)
+    x = spla.spsolve(a.tocsc(), b)
+    assert np.abs(factor.solve(b) - x).max() <= RTOL * np.abs(x).max()
+    # the sweeps with the Schur complement solved in between give the same x
+    w = factor.eliminate(b)
+    w[s] = np.linalg.solve(factor.schur, w[s])
+    assert np.abs(factor.back_substitute(w) - x).max() <= RTOL * np.abs(x).max()
+    with pytest.raises(ValueError, match="n_schur"):
+        SparseCholesky(a, ordering, n_schur=n + 1)

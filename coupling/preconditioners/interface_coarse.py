@@ -55,14 +55,16 @@ def vertex_rank_range(
 
     Every subdomain at a vertex has two of its coarse edges there, so the subdomains on
     the sides of the vertex's edges are all of them (``edge_subdomains``: -1 outside)."""
-    lowest = np.full(n_v, np.iinfo(np.int64).max, dtype=np.int64)
-    highest = np.full(n_v, -1, dtype=np.int64)
+    rank_of = np.asarray(subdomain_rank, dtype=np.int64)
+    n_ranks = int(rank_of.max(initial=0)) + 1
+    present = np.zeros((n_v, n_ranks), dtype=bool)  # a rank's subdomain at the vertex
     for side in range(2):
         inside = edge_subdomains[:, side] >= 0
-        rank = np.asarray(subdomain_rank, dtype=np.int64)[edge_subdomains[inside, side]]
+        rank = rank_of[edge_subdomains[inside, side]]
         for end in range(2):
-            np.minimum.at(lowest, edge_vertices[inside, end], rank)
-            np.maximum.at(highest, edge_vertices[inside, end], rank)
+            present[edge_vertices[inside, end], rank] = True
+    lowest = np.argmax(present, axis=1)
+    highest = n_ranks - 1 - np.argmax(present[:, ::-1], axis=1)
     return lowest, highest
 
 
