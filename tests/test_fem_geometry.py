@@ -8,6 +8,7 @@ from mpi4py import MPI
 
 from fem_py.dofs import p1_space
 from fem_py.mesh import GeometrySpec, build_domain
+from fem_py.mesh.domain import max_facet_length
 from fem_py.tags import GAMMA_T_TAG, SIGNORINI_TAG0
 
 COMM = MPI.COMM_WORLD
@@ -182,6 +183,14 @@ def test_structured_is_uniform():
     X = p1_space(dom.mesh).tabulate_dof_coordinates()[:, :2]
     grid = np.round((X + 0.25) * 16, 9)
     assert np.allclose(grid, np.round(grid))  # all nodes on the h-grid
+
+
+@pytest.mark.parametrize("shape", ["square", "lshape"])
+def test_structured_grid_knows_its_longest_facet(shape):
+    # written down from the grid (no pass over the cells), equal to the one measured
+    spec = GeometrySpec(shape, h=0.03, subdomain_size=0.11, structured=True)
+    dom = build_domain(COMM, spec)
+    assert dom.h_max == pytest.approx(max_facet_length(dom.mesh), rel=1e-14)
 
 
 def test_whole_boundary_flag():

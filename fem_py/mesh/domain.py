@@ -230,15 +230,17 @@ def tagged_domain(
     facet_tags: Any,
     corner_angle: float | None = None,
     coarse: CoarseStructure | None = None,
+    h_max: float | None = None,
     **fields: Any,
 ) -> Domain:
     """The :class:`Domain` of a distributed mesh and its tags (collective): its coarse
     structure ``coarse``, or recovered from the mesh (``corner_angle``:
-    ``compute_coarse_structure``), and its longest facet measured; ``fields``: the other
-    fields of the domain (``h`` defaults to the longest facet)."""
+    ``compute_coarse_structure``), and its longest facet ``h_max``, or measured;
+    ``fields``: the other fields of the domain (``h`` defaults to the longest facet)."""
     if coarse is None:
         coarse = compute_coarse_structure(mesh, cell_tags, facet_tags, corner_angle=corner_angle)
-    h_max = max_facet_length(mesh)
+    if h_max is None:
+        h_max = max_facet_length(mesh)
     return Domain(
         mesh=mesh,
         cell_tags=cell_tags,

@@ -266,9 +266,11 @@ def polygon_domain(comm: Any, spec: GeometrySpec) -> Domain:
             csize = float(np.mean(np.concatenate([segment_lengths(cV[c]) for c in loops])))
         if meshed is not None:
             arrays = meshed[2]
-    coarse = None
+    coarse = h_max = None
     if structured:  # every rank writes down its own part of the refinement
         n = max(2, int(round((d if shape == "polygon" else csize) / h)))
+        if shape != "polygon":  # the diagonal of the grid's right triangles (polygon_size)
+            h_max = math.sqrt(2.0) * csize / n
         ref = refine(cV, ccells, n)
         tags = ref.edge_tags(lambda a, b: edge_tag(cV, a, b, B, arcs))
         msh, ct0, ft = distribute_structured(comm, ref, tags)
@@ -281,6 +283,7 @@ def polygon_domain(comm: Any, spec: GeometrySpec) -> Domain:
         ct0,
         ft,
         coarse=coarse,
+        h_max=h_max,
         arcs=arcs,
         h=h,
         subdomain_size=d,
