@@ -246,6 +246,31 @@ def test_the_factor_of_m_ii_is_kept_for_the_same_free_set():
     assert projection._free is None
 
 
+def test_the_factor_of_w_aa_is_kept_for_the_same_free_set():
+    """Once M^{-1} = W is bought, a solve on the free set I goes through W_AA's factor (A the
+    active nodes); the last one is kept, as an exact projection starts from the last active
+    set; another set replaces it; destroy drops it."""
+    n = 40
+    M = h12_like_matrix(n)
+    projection = SignoriniProjection.exact(M)
+    projection._factorised_flops = float(n) ** 3  # buys W at once
+    free = np.arange(n) % 4 != 0  # 10 active nodes, fewer than the free ones: through W
+    b = np.random.default_rng(3).standard_normal(n)
+    expected = np.zeros(n)
+    expected[free] = np.linalg.solve(M[np.ix_(free, free)], b[free])
+    psi = projection._solve_free(b, free)
+    np.testing.assert_allclose(psi, expected, atol=1e-12 * np.abs(expected).max())
+    assert np.all(psi[~free] == 0.0) and projection._inverse is not None
+    factor = projection._kept_active[1]
+    np.testing.assert_array_equal(projection._solve_free(b, free.copy()), psi)
+    assert projection._kept_active[1] is factor
+    other = np.arange(n) % 5 != 0
+    projection._solve_free(b, other)
+    assert projection._kept_active[1] is not factor
+    projection.destroy()
+    assert projection._kept_active is None
+
+
 def test_a_dense_signorini_block_holds_a_fortran_ordered_metric_without_a_copy():
     """M_s comes from bem_cpp in Eigen's column-major order; the block holds the transpose,
     a C-ordered view of the same symmetric matrix (no n_s^2 copy), and works as with a

@@ -100,6 +100,7 @@ class SignoriniProjection:
         self._factor_of = factor
         self._factor: tuple[np.ndarray, bool] | None = None
         self._free: tuple[np.ndarray, tuple[np.ndarray, bool]] | None = None  # I, M_II's factor
+        self._kept_active: tuple[np.ndarray, tuple[np.ndarray, bool]] | None = None  # I, W_AA's
         self._active: np.ndarray | None = None  # of the last exact projection
         self._inverse: np.ndarray | None = None  # M^{-1}, for the exact projection
         self._factorised_flops = 0.0  # of the M_II factorisations done instead of buying W
@@ -185,8 +186,20 @@ class SignoriniProjection:
         return self._free is not None and np.array_equal(self._free[0], free)
 
     def destroy(self) -> None:
-        """Drop the kept factor of M_II (an n_s^2 array at most)."""
-        self._free = None
+        """Drop the kept factors of M_II and W_AA (n_s^2 and n_s^2 / 4 arrays at most)."""
+        self._free = self._kept_active = None
+
+    def _active_factor(self, free: np.ndarray, W: np.ndarray) -> tuple[np.ndarray, bool]:
+        """The Cholesky factor of W_AA (A: the nodes not ``free``). The last one is kept: an
+        exact projection starts from the last one's active set (:meth:`_exact`)."""
+        if self._kept_active is not None and np.array_equal(self._kept_active[0], free):
+            return self._kept_active[1]
+        self._kept_active = None
+        active = np.flatnonzero(~free)
+        block = W[np.ix_(active, active)]  # symmetric: its transpose is a Fortran view
+        factor = scipy.linalg.cho_factor(block.T, lower=True, overwrite_a=True)
+        self._kept_active = (free.copy(), factor)
+        return factor
 
     def _cholesky(self) -> tuple[np.ndarray, bool]:
         """M's Cholesky factor, made (or read from the caller's) on first use."""
@@ -239,8 +252,8 @@ class SignoriniProjection:
         90 s at n = 16,129). So W is bought only once the factorisations of M_II done
         instead would have cost as much (rent or buy: at most twice the cheaper of the
         two whatever the number of calls); with no active node the factor of M solves.
-        The last factor of M_II is kept (:meth:`free_factor`): the same free set again
-        costs nothing.
+        The last factors of M_II and of W_AA are kept (:meth:`free_factor`,
+        :meth:`_active_factor`): the same free set again costs no factorisation.
         """
         n, n_active = b.size, int(np.count_nonzero(~free))
         n_free = n - n_active
@@ -268,7 +281,7 @@ class SignoriniProjection:
         if n_active == 0:
             return y
         active = np.flatnonzero(~free)
-        z = scipy.linalg.solve(W[np.ix_(active, active)], y[active], assume_a="pos")
+        z = solve_with_cholesky(self._active_factor(free, W), y[active])
         psi = y - W[:, active] @ z
         psi[active] = 0.0
         return psi
