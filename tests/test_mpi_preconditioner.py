@@ -73,6 +73,8 @@ def test_coarse_problem_over_the_ranks_equals_a_direct_solve(tmp_path, nprocs):
     assert report["covered"] == report["vertices"]
     for r in report["ranks"]:
         assert r["factor"] == "InterfaceCoarseFactor"
+        # past INTERFACE_COARSE_MAX_VERTICES shared vertices, C whole on every rank
+        assert r["beyond_the_limit"] == "RedundantCoarseFactor"
         assert r["shared"] > 0 and r["inside"] > 0
         assert r["corners_local"] and r["zero_elsewhere"]
         # C's condition number is below 400 (Gershgorin: spectrum in [0.1, 36.1], at most

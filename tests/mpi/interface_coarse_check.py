@@ -10,6 +10,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from mpi4py import MPI
 
+import coupling.preconditioners.interface_coarse as interface_coarse
 from coupling.preconditioners.interface_coarse import (
     InterfaceCoarseFactor,
     RedundantCoarseFactor,
@@ -63,6 +64,8 @@ factor = coarse_factor(comm, C, ranks)
 x = factor.solve(mine)
 local = inside | shared
 redundant = RedundantCoarseFactor(comm, C).solve(mine)
+interface_coarse.INTERFACE_COARSE_MAX_VERTICES = int(shared.sum()) - 1  # one too many
+beyond = coarse_factor(comm, C, ranks)
 # every corner of this rank's subdomains is inside or shared
 needed = np.zeros(n_v, dtype=bool)
 needed[corners[subdomain_rank == comm.rank].ravel()] = True
@@ -71,6 +74,7 @@ report = {
     "interface": float(np.abs(x[local] - expected[local]).max() / scale),
     "zero_elsewhere": bool(np.all(x[~local] == 0.0)),
     "redundant": float(np.abs(redundant - expected).max() / scale),
+    "beyond_the_limit": type(beyond).__name__,
     "corners_local": bool(np.all(local[needed])),
     "shared": int(shared.sum()),
     "inside": int(inside.sum()),
