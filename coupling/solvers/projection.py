@@ -174,10 +174,7 @@ class SignoriniProjection:
         if self._kept(free):
             return self._free[1]
         self._free = None  # the old factor goes before the new one is made
-        # factored in place through the transpose of the copy, a Fortran-ordered view
-        # (LAPACK would copy the C-ordered array); M_II is symmetric
-        block = self.M[np.ix_(free, free)]
-        factor = scipy.linalg.cho_factor(block.T, lower=True, overwrite_a=True)
+        factor = _principal_cholesky(self.M, free)
         self._free = (free.copy(), factor)
         return factor
 
@@ -195,9 +192,7 @@ class SignoriniProjection:
         if self._kept_active is not None and np.array_equal(self._kept_active[0], free):
             return self._kept_active[1]
         self._kept_active = None
-        active = np.flatnonzero(~free)
-        block = W[np.ix_(active, active)]  # symmetric: its transpose is a Fortran view
-        factor = scipy.linalg.cho_factor(block.T, lower=True, overwrite_a=True)
+        factor = _principal_cholesky(W, ~free)
         self._kept_active = (free.copy(), factor)
         return factor
 
@@ -311,3 +306,12 @@ class SignoriniProjection:
         )
         self._active = psi <= 0
         return ProjectionResult(psi, iteration)
+
+
+def _principal_cholesky(matrix: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, bool]:
+    """The Cholesky factor of the principal block of the symmetric ``matrix`` on ``rows``
+    (boolean), as ``scipy.linalg.cho_factor`` gives it: factored in place through the
+    transpose of the block's copy, a Fortran-ordered view (LAPACK would copy the
+    C-ordered array)."""
+    block = matrix[np.ix_(rows, rows)]
+    return scipy.linalg.cho_factor(block.T, lower=True, overwrite_a=True)
