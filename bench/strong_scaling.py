@@ -55,7 +55,7 @@ def worker(cells: int, method: str) -> None:
 
     from coupling.manufactured import manufactured_problem, square_contact
     from coupling.options import SolverOptions
-    from coupling.preconditioners import build_preconditioner
+    from coupling.preconditioners import build_preconditioner, create_matrix
     from coupling.solvers import solve
     from fem_py.forms import make_material
     from fem_py.parallel import threads_per_rank
@@ -69,13 +69,17 @@ def worker(cells: int, method: str) -> None:
             comm, square_contact(), make_material("carstensen"), cells=cells
         )
         assembled = time.perf_counter()
-        B = build_preconditioner(problem, options)  # built here to report its class
+        # built here to report its class; one P1 matrix for B and the Jacobians, as
+        # solve() shares it when it builds B itself
+        matrix = create_matrix(problem, options)
+        B = build_preconditioner(problem, options, matrix=matrix)
         factorisations = time.perf_counter() - assembled
         comm.Barrier()  # the slowest rank's set-up
         built = time.perf_counter() - tic
-        result = solve(problem, options, preconditioner=B)
+        result = solve(problem, options, preconditioner=B, matrix=matrix)
         total = time.perf_counter() - tic
         B.destroy()
+        matrix.destroy()
     t = {**problem.timings, **result.timings}
     phases = {
         "S_h": t["steklov_poincare"],

@@ -1,5 +1,5 @@
 """fem_py.forms.P1Matrix (DOLFINx's CSR storage, scipy products) gives the Jacobian
-products and the stiffness rows of DOLFINx's PETSc assembly, in serial and on 3 ranks
+products, the stiffness rows and the ranks' shares of DOLFINx's PETSc assembly, in serial and on 3 ranks
 (tests/mpi/p1_matrix_check.py)."""
 from __future__ import annotations
 
@@ -25,6 +25,7 @@ def _check(result: dict) -> None:
     assert result["stiffness_shape"]
     assert result["stiffness_rows"] <= ROUND_OFF, result
     assert result["stiffness_alone"] == 0.0
+    assert result["stiffness_local"] <= ROUND_OFF, result
 
 
 def test_p1_matrix_serial():

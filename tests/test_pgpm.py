@@ -17,7 +17,7 @@ from petsc4py import PETSc
 from coupling.distributed import gather_matrix
 from coupling.manufactured import manufactured_problem, square_contact
 from coupling.options import LANCZOS_STEPS, SolverOptions
-from coupling.preconditioners import build_preconditioner
+from coupling.preconditioners import build_preconditioner, create_matrix
 from coupling.problem import SignoriniProblem
 from coupling.solvers import solve
 from coupling.solvers.apgpm import apgpm
@@ -194,6 +194,22 @@ def test_accelerated_method_accepts_its_strong_convexity(carstensen):
     with pytest.raises(ValueError, match="strong_convexity"):
         apgpm(context, phi0, tau=result.tau, strong_convexity=0.0)
     pc.destroy()
+
+
+def test_a_callers_preconditioner_and_matrix_give_the_same_run(carstensen):
+    """solve() with the caller's B and the P1 matrix it was built with runs as solve()
+    building both itself (the matrix only holds a pattern and the last assembly)."""
+    problem = manufactured_problem(COMM, square_contact(), carstensen, cells=8)
+    options = SolverOptions(method="ssn")
+    own = solve(problem, options)
+    matrix = create_matrix(problem, options)
+    pc = build_preconditioner(problem, options, matrix=matrix)
+    given = solve(problem, options, preconditioner=pc, matrix=matrix)
+    assert given.iterations == own.iterations
+    assert np.array_equal(given.phi, own.phi)
+    assert np.array_equal(given.u.x.array, own.u.x.array)
+    pc.destroy()
+    matrix.destroy()
 
 
 @pytest.mark.parametrize("method", METHODS)

@@ -128,7 +128,7 @@ def build_preconditioner(
         )
     substructuring = kind == "substructuring"
     coarse = coarse_space(domain, options.coarse_space) if substructuring else None
-    stiffness = problem.forms.stiffness_rows(matrix if isinstance(matrix, P1Matrix) else None)
+    p1_matrix = matrix if isinstance(matrix, P1Matrix) else None
     arcs = problem_arcs(problem) if substructuring else None
     if kind == "substructuring" and comm.size > 1:
         ranks = subdomain_ranks(
@@ -140,7 +140,7 @@ def build_preconditioner(
         if ranks is not None:  # whole subdomains per rank: no gathering
             return DistributedSubstructuringPreconditioner(
                 comm,
-                stiffness,
+                problem.forms.stiffness_local(p1_matrix),
                 V.dofmap.index_map,
                 domain.coarse,
                 ranks,
@@ -150,8 +150,7 @@ def build_preconditioner(
                 signorini_weight=options.signorini_weight,
                 coarse_space=coarse,
             )
-    csr = gather_owned_rows(comm, stiffness)
-    del stiffness  # rank 0 holds the gathered copy
+    csr = gather_owned_rows(comm, problem.forms.stiffness_rows(p1_matrix))
     S = dense_matrix(problem.S, "the exact preconditioner") if kind == "exact" else None
 
     def build() -> Preconditioner:

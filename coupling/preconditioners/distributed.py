@@ -131,8 +131,10 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
     comm
         Communicator of the mesh.
     stiffness
-        The owned rows of the P1 Laplace matrix A, global column numbers (scipy CSR,
-        ``InteriorForms.stiffness_rows``).
+        This rank's cells' share of the P1 Laplace matrix A on its local dofs, local
+        column numbers (scipy CSR, ``InteriorForms.stiffness_local``; columns past the
+        local dofs, which only other ranks' cells reach, are allowed). A row whose cells
+        are all on this rank, as every subdomain interior dof's are, is complete there.
     index_map
         The dof index map of the P1 space (owned range, ghosts).
     coarse
@@ -181,14 +183,14 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
         sk_pos[self._sk] = np.arange(self._sk.size)
 
         # A_II (rank-local by the partition) and A_IS, from the owned interior rows of A:
-        # a code per local dof, its interior position i >= 0 or -2 - its skeleton position,
-        # and -1 last, for the columns to_local does not find
+        # a code per local column, its interior position i >= 0 or -2 - its skeleton
+        # position, -1 for the others (ghost interior dofs, columns past the local dofs)
         n_i, n_sk = self._int.size, self._sk.size
-        code = np.full(n_local + 1, -1, dtype=np.int64)
+        code = np.full(max(stiffness.shape[1], n_local), -1, dtype=np.int64)
         code[self._int] = np.arange(n_i)
         code[self._sk] = -2 - np.arange(n_sk)
         a_int = stiffness[self._int]  # CSR rows, in the order of self._int
-        column = code[to_local(a_int.indices)]
+        column = code[a_int.indices]
         if np.any(column == -1):
             raise RuntimeError(  # an invariant of the distributed mesh, not a user's input
                 "a subdomain interior dof couples to a dof owned by another rank: "
@@ -267,27 +269,15 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
     def _schur_of(self, stiffness: sp.csr_matrix, e: np.ndarray) -> np.ndarray:
         """Pi^T S Pi e for coarse vertex values e (n_v, K), collective: the discrete
         harmonic extension u of Pi e (local Dirichlet solves), then Pi^T (A u) on the
-        owned skeleton rows, summed over the ranks (A as a PETSc Mat for its products)."""
+        owned skeleton rows, each rank's cells' share of A u summed on the owners."""
         out = np.zeros(e.shape)
-        n, n_global = stiffness.shape
-        matrix = PETSc.Mat().createAIJ(
-            size=((n, n_global), (n, n_global)),
-            csr=(
-                stiffness.indptr.astype(PETSc.IntType),
-                stiffness.indices.astype(PETSc.IntType),
-                stiffness.data,
-            ),
-            comm=self.comm,
-        )
-        u, au = matrix.createVecs()
+        u = np.zeros(stiffness.shape[1])  # 0 past the local dofs: no local cell reaches them
+        skeleton_rows = stiffness[self._sk]
         for k in range(e.shape[1]):
             p = self._interp @ e[:, k]  # Pi e on the local skeleton (owned and ghost)
-            u.array[self._int] = -self._interior_factor.solve(self._a_is @ p)
-            u.array[self._owned_sk] = p[self._sk_owned]
-            matrix.mult(u, au)
-            out[:, k] = self._interp_owned_t @ au.array[self._owned_sk]
-        for obj in (u, au, matrix):
-            obj.destroy()
+            u[self._int] = -self._interior_factor.solve(self._a_is @ p)
+            u[self._sk] = p
+            out[:, k] = self._interp_owned_t @ self._exchange.reverse_add(skeleton_rows @ u)
         return self._sum(out)
 
     def _sum(self, v: np.ndarray) -> np.ndarray:

@@ -197,6 +197,7 @@ def solve(
     *,
     initial: tuple[np.ndarray, np.ndarray] | None = None,
     preconditioner: Preconditioner | None = None,
+    matrix: Any = None,
     residual_scale: float | None = None,
     monitor: Monitor | None = None,
     exterior_flux: bool = True,
@@ -222,6 +223,11 @@ def solve(
         A B built by :func:`coupling.preconditioners.build_preconditioner` for this
         problem, to reuse it (the caller destroys it); default: built for
         ``options.preconditioner`` here and destroyed at the end.
+    matrix
+        A P1 matrix of the caller's (:func:`coupling.preconditioners.create_matrix`, the
+        one a given ``preconditioner`` was built with) for the stiffness of B when built
+        here and the Jacobians of the step estimate and the iteration (each assembled over
+        the last); default a new one, whose sparsity pattern costs about one assembly.
     residual_scale
         From an ``initial`` iterate, ssn's scale of the residuals (the residual at
         xi = (0, 0), :func:`coupling.solvers.ssn.zero_residual`): that of a coarser level's
@@ -241,10 +247,11 @@ def solve(
     owned = preconditioner is None
     # one P1 matrix for the stiffness of B, the Jacobian of the step estimate and those of
     # the iteration (each assembled over the last): creating one costs about one assembly
-    matrix = None
+    own_matrix = matrix is None
     if owned:
         tic = time.perf_counter()
-        matrix = create_matrix(problem, options)
+        if own_matrix:
+            matrix = create_matrix(problem, options)
         preconditioner = build_preconditioner(problem, options, matrix=matrix)
         timings["preconditioner"] = time.perf_counter() - tic
     try:
@@ -293,7 +300,7 @@ def solve(
     finally:
         if owned:
             preconditioner.destroy()
-        if matrix is not None:
+        if own_matrix and matrix is not None:
             matrix.destroy()
 
     boundary = problem.boundary

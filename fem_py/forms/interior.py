@@ -292,6 +292,17 @@ class InteriorForms:
         A = P1Matrix(self._form("stiffness")) if A is None else A
         return A.assemble_owned(self._form("stiffness"))
 
+    def stiffness_local(self, A: P1Matrix | None = None) -> sp.csr_matrix:
+        """This rank's cells' share of the Laplace stiffness matrix on its local dofs, local
+        column numbers (:attr:`P1Matrix.local_rows`; no communication): a view into ``A``
+        (whose values it overwrites, valid until its next assembly) or a new matrix."""
+        if A is None:
+            A = P1Matrix(self._form("stiffness"))
+            A.assemble_local(self._form("stiffness"))
+            return A.local_rows.copy()
+        A.assemble_local(self._form("stiffness"))
+        return A.local_rows
+
     def assemble_stiffness(self, A: PETSc.Mat | None = None) -> PETSc.Mat:
         """The Laplace stiffness matrix int grad v_j . grad v_i dx, assembled into ``A``
         (a Mat of :meth:`create_matrix`: the same P1 sparsity) or into a new Mat."""

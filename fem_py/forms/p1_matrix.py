@@ -12,7 +12,10 @@ with a P1 matrix:
   vector's do). No rank needs the values of dofs outside its cells;
 - **the owned rows** of the assembled matrix with global column numbers
   (:meth:`assemble_owned`), as PETSc's ``getValuesCSR`` gives them, for the
-  preconditioners that factor blocks of it.
+  preconditioners that factor blocks of it;
+- **this rank's share** of it in local numbering (:attr:`local_rows`), for a
+  preconditioner distributed by subdomains: a row whose cells are all local is complete
+  there, with no communication and no global numbers.
 """
 from __future__ import annotations
 
@@ -71,6 +74,14 @@ class P1Matrix:
         """Assemble ``form`` over this rank's cells, for :meth:`mult` (no communication)."""
         self._matrix.set(0.0)
         fem.assemble_matrix(self._matrix, form, coeffs=coefficients)
+
+    @property
+    def local_rows(self) -> sp.csr_matrix:
+        """The matrix as last assembled by :meth:`assemble_local`: this rank's cells' sums on
+        its local rows (owned, then ghost) and local columns (V's local numbering, then the
+        columns that only other ranks' cells reach, zero here). A view: the next assembly
+        overwrites it."""
+        return self._rows
 
     def assemble_owned(self, form: Any, coefficients: Any = None) -> sp.csr_matrix:
         """Assemble ``form`` and return its owned rows (n_owned, n_global) with global column

@@ -39,13 +39,13 @@ for name, kwargs in MESHES.items():
     index_map = problem.V.dofmap.index_map
     n_cells = domain.mesh.topology.index_map(2).size_local
     ranks = subdomain_ranks(comm, domain.cell_tags, n_cells, domain.coarse.n_subdomains)
-    stiffness = problem.forms.stiffness_rows()  # owned rows, global columns
+    stiffness = problem.forms.stiffness_rows()  # owned rows, global columns (the serial B)
     arcs = problem_arcs(problem)
     # the unstructured case also checks the Galerkin coarse matrix (its probing products)
     coarse_space = "galerkin" if "unstructured" in name else "graph"
     dist = DistributedSubstructuringPreconditioner(
         comm,
-        stiffness,
+        problem.forms.stiffness_local(),  # this rank's cells' share, local numbers
         index_map,
         domain.coarse,
         ranks,

@@ -1,6 +1,6 @@
 """fem_py.forms.P1Matrix against DOLFINx's PETSc assembly of the same forms, on any
-communicator: Jacobian products y = A x (both Jacobian kinds) and the stiffness matrix's
-owned rows. Run by tests/test_p1_matrix.py in serial and under ``mpirun -n 3``, where a
+communicator: Jacobian products y = A x (both Jacobian kinds), the stiffness matrix's
+owned rows, and the ranks' local shares of it, which sum to it. Run by tests/test_p1_matrix.py in serial and under ``mpirun -n 3``, where a
 rank's owned rows reach columns that none of its own cells has (``python
 p1_matrix_check.py out.json``)."""
 from __future__ import annotations
@@ -52,6 +52,17 @@ def compute(comm: MPI.Comm) -> dict:
     # a new P1Matrix for the stiffness alone gives the same rows
     alone = forms.stiffness_rows()
     out["stiffness_alone"] = largest((alone - rows).data)
+    # the ranks' shares (their cells' sums, local numbers) add up to the whole matrix
+    local = forms.stiffness_local(p1).tocoo()
+    index_map = V.dofmap.index_map
+    row_global = np.concatenate([np.arange(r0, r1), index_map.ghosts])
+    n = petsc.getSize()[0]
+    total, whole = np.zeros((n, n)), np.zeros((n, n))
+    np.add.at(total, (row_global[local.row], p1._global(local.col)), local.data)
+    whole[r0:r1] = reference.toarray()
+    for a in (total, whole):
+        comm.Allreduce(MPI.IN_PLACE, a, op=MPI.SUM)
+    out["stiffness_local"] = float(np.abs(total - whole).max() / np.abs(whole).max())
     out["is_p1_matrix"] = isinstance(p1, P1Matrix)
     for obj in (petsc, x, y, y_p1):
         obj.destroy()
