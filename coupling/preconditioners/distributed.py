@@ -182,23 +182,27 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
         sk_pos = np.full(n_local, -1, dtype=np.int64)
         sk_pos[self._sk] = np.arange(self._sk.size)
 
-        # A_II (rank-local by the partition) and A_IS, from the owned interior rows of A:
-        # a code per local column, its interior position i >= 0 or -2 - its skeleton
-        # position, -1 for the others (ghost interior dofs, columns past the local dofs)
+        # A_II (rank-local by the partition) and A_IS, from the owned interior rows of this
+        # rank's share of A (complete there): a code per local column, its interior
+        # position i >= 0 or -2 - its skeleton position, -1 for the others (ghost interior
+        # dofs, columns past the local dofs); no copy of the rows is cut first
         n_i, n_sk = self._int.size, self._sk.size
-        code = np.full(max(stiffness.shape[1], n_local), -1, dtype=np.int64)
+        code = np.full(max(stiffness.shape[1], n_local), -1, dtype=np.int32)
         code[self._int] = np.arange(n_i)
         code[self._sk] = -2 - np.arange(n_sk)
-        a_int = stiffness[self._int]  # CSR rows, in the order of self._int
-        column = code[a_int.indices]
-        if np.any(column == -1):
+        column = code[stiffness.indices]
+        interior_row = np.zeros(stiffness.shape[0], dtype=bool)
+        interior_row[self._int] = True
+        on_interior_row = np.repeat(interior_row, np.diff(stiffness.indptr))
+        if np.any(on_interior_row & (column == -1)):
             raise RuntimeError(  # an invariant of the distributed mesh, not a user's input
                 "a subdomain interior dof couples to a dof owned by another rank: "
                 "the mesh is not partitioned by subdomains (use fem_py.mesh.build_domain)"
             )
-        on_interior = column >= 0
-        self._a_ii = _column_block(a_int, on_interior, column, n_i)
-        self._a_is = _column_block(a_int, ~on_interior, -2 - column, n_sk)
+        keep = on_interior_row & (column >= 0)
+        self._a_ii = _column_block(stiffness, self._int, keep, column[keep], n_i)
+        keep = on_interior_row & (column < -1)
+        self._a_is = _column_block(stiffness, self._int, keep, -2 - column[keep], n_sk)
         self._interior_factor = SparseFactor(
             self._a_ii, fill_reducing_ordering(self._a_ii, largest_subdomain_interior(coarse))
         )
@@ -337,17 +341,20 @@ class DistributedSubstructuringPreconditioner(SignoriniBlock):
 
 
 def _column_block(
-    rows: sp.csr_matrix, keep: np.ndarray, column: np.ndarray, n_columns: int
+    matrix: sp.csr_matrix, rows: np.ndarray, keep: np.ndarray, columns: np.ndarray, n_columns: int
 ) -> sp.csr_matrix:
-    """The entries ``keep`` of the CSR matrix ``rows`` (one flag per stored entry), their
-    columns renumbered to ``column`` (aligned with ``rows.indices``): a column block of
-    ``rows`` without a sparse matrix of triplets (rows and their order are kept)."""
-    kept_before = np.zeros(keep.size + 1, dtype=np.int64)
-    np.cumsum(keep, out=kept_before[1:])
-    block = sp.csr_matrix(
-        (rows.data[keep], column[keep], kept_before[rows.indptr]),
-        shape=(rows.shape[0], n_columns),
-    )
+    """The block of the CSR ``matrix`` on the (increasing) ``rows``: its stored entries
+    ``keep`` (one flag per entry, none outside ``rows``), renumbered to the ``columns``
+    (one per kept entry), built directly in CSR (no matrix of triplets, no copy of the
+    rows, no array of the matrix's size but the flags)."""
+    per_row = np.zeros(matrix.shape[0], dtype=np.int64)
+    starts, ends = matrix.indptr[:-1], matrix.indptr[1:]
+    filled = np.flatnonzero(ends > starts)
+    if keep.size:
+        per_row[filled] = np.add.reduceat(keep.view(np.uint8), starts[filled], dtype=np.int64)
+    indptr = np.zeros(len(rows) + 1, dtype=np.int64)
+    np.cumsum(per_row[rows], out=indptr[1:])
+    block = sp.csr_matrix((matrix.data[keep], columns, indptr), shape=(len(rows), n_columns))
     block.sort_indices()
     return block
 
