@@ -259,14 +259,35 @@ def test_block_diagonal_edge_forms_place_every_block_and_sum_shared_rows():
                 out[np.ix_(ix[k], ix[k])] += forms[k]
         return out
 
+    def close(a, b):  # the forms are computed from the nodes less the first: round-off
+        np.testing.assert_allclose(a, b, rtol=0.0, atol=1e-14 * np.abs(b).max())
+
     a0, a0_inv = block_diagonal_edge_forms(groups, n, "paper")
-    np.testing.assert_array_equal(a0.toarray(), dense(groups, 0))
-    np.testing.assert_array_equal(a0_inv.toarray(), dense(groups, 1))
+    close(a0.toarray(), dense(groups, 0))
+    close(a0_inv.toarray(), dense(groups, 1))
     shared = [(rows[:6].reshape(3, 2), pts2), (np.array([[rows[0], rows[12], rows[7]]]), pts3[:1])]
     a0, a0_inv = block_diagonal_edge_forms(shared, n, "paper")
-    np.testing.assert_allclose(a0.toarray(), dense(shared, 0), rtol=1e-15, atol=1e-15)
-    np.testing.assert_allclose(a0_inv.toarray(), dense(shared, 1), rtol=1e-15, atol=1e-15)
+    close(a0.toarray(), dense(shared, 0))
+    close(a0_inv.toarray(), dense(shared, 1))
     assert block_diagonal_edge_forms([], n, "paper")[0].nnz == 0
+
+
+@pytest.mark.parametrize("kind", ["paper", "sqrt-laplacian"])
+def test_translated_edges_share_one_form(kind):
+    """Edges that are translates of each other (a structured grid's) get one form, computed
+    once from the nodes less the first; the other edges of the batch get their own."""
+    rng = np.random.default_rng(5)
+    # eighths and whole shifts: the translates' differences are exact, as a grid's often are
+    shape = np.cumsum(rng.integers(1, 8, (5, 2)) / 8.0, axis=0)
+    shifts = rng.integers(-3, 4, (6, 1, 2)).astype(float)
+    pts = np.concatenate([shape + shifts, np.cumsum(rng.uniform(0.1, 1.0, (2, 5, 2)), axis=1)])
+    relative = pts - pts[:, :1]
+    n = 3 * len(pts)
+    a0, a0_inv = block_diagonal_edge_forms([(np.arange(n).reshape(-1, 3), pts)], n, kind)
+    for k, rows in enumerate(np.arange(n).reshape(-1, 3)):
+        expected = edge_form(relative[0 if k < 6 else k], kind)
+        np.testing.assert_array_equal(a0[rows][:, rows].toarray(), expected[0])
+        np.testing.assert_array_equal(a0_inv[rows][:, rows].toarray(), expected[1])
 
 
 def test_edge_forms_spectrally_equivalent_uniformly_in_m():
