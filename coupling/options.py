@@ -183,6 +183,13 @@ NATURAL_ORDERING_MAX_BLOCK = 1024
 #: and factored whole on every rank beyond (docs/design/parallel.md, "The coarse problem
 #: over the ranks").
 INTERFACE_COARSE_MAX_VERTICES = 4000
+#: The exact Signorini projection factors a principal block M_II of M_s through a sparse
+#: elimination of the rows of M_s with at most this many nonzeros and at most a quarter of
+#: the row (the two-level form's edge nodes: an edge's nodes and its two ends) and a dense
+#: Schur complement on the others (its coarse nodes, dense among themselves), when those
+#: are at most half the rows; a dense M_s is factored densely (docs/design/solvers.md,
+#: "The projection's factors").
+METRIC_SPARSE_ROW_NONZEROS = 64
 #: ``boundary_operator = "auto"``: the H-matrix S_h from this many boundary dofs on, the
 #: dense one below, where the H-matrix is clearly the cheaper in a whole solve
 #: (docs/design/hmatrix.md, "The crossover after the set-up and product speed-ups").

@@ -6,7 +6,8 @@ import scipy.optimize
 
 from coupling.options import SolverOptions
 from coupling.preconditioners.base import DenseSignoriniBlock, inverse_from_cholesky
-from coupling.solvers.projection import SignoriniProjection
+from bem_cpp.sparse import SparseCholesky
+from coupling.solvers.projection import DenseBlockFactor, SignoriniProjection
 from coupling.solvers.solution import build_projection
 
 
@@ -20,6 +21,28 @@ def h12_like_matrix(n: int) -> np.ndarray:
     rng = np.random.default_rng(1)
     Q = np.eye(n) + 0.3 * rng.standard_normal((n, n)) / np.sqrt(n)
     return Q @ M @ Q.T
+
+
+def two_level_like_matrix(n_coarse: int, m: int) -> np.ndarray:
+    """M = E^T A0 E + R^T C R on a chain of n_coarse coarse nodes with m nodes on each
+    edge between them, like the Signorini block's two-level form: A0 block diagonal on
+    the edges' nodes, C dense on the coarse nodes, E = I - P R with P the linear
+    interpolation of the coarse values. SPD, sparse but for the coarse rows."""
+    n = n_coarse + (n_coarse - 1) * m
+    coarse = np.arange(0, n, m + 1)
+    P = np.zeros((n, n_coarse))
+    A0 = np.zeros((n, n))
+    P[coarse, np.arange(n_coarse)] = 1.0
+    t = np.arange(1, m + 1) / (m + 1)
+    for j in range(n_coarse - 1):
+        nodes = coarse[j] + np.arange(1, m + 1)
+        P[nodes, j], P[nodes, j + 1] = 1.0 - t, t
+        A0[np.ix_(nodes, nodes)] = h12_like_matrix(m)
+    R = np.zeros((n_coarse, n))
+    R[np.arange(n_coarse), coarse] = 1.0
+    E = np.eye(n) - P @ R
+    M = E.T @ A0 @ E + R.T @ h12_like_matrix(n_coarse) @ R
+    return 0.5 * (M + M.T)
 
 
 def kkt_residual(M, target, psi):
@@ -237,13 +260,40 @@ def test_the_factor_of_m_ii_is_kept_for_the_same_free_set():
     factor = projection.free_factor(free)
     b = np.random.default_rng(2).standard_normal(n)
     np.testing.assert_allclose(
-        scipy.linalg.cho_solve(factor, b[free]), np.linalg.solve(M[np.ix_(free, free)], b[free])
+        factor.solve(b[free]), np.linalg.solve(M[np.ix_(free, free)], b[free])
     )
     assert projection.free_factor(free.copy()) is factor
     other = projection.free_factor(~free)
     assert other is not factor and projection.free_factor(~free) is other
     projection.destroy()
     assert projection._free is None
+
+
+def test_a_two_level_metric_is_factored_sparsely_around_its_coarse_nodes():
+    """M_s sparse but for its coarse rows: M_II is factored by a sparse elimination and a
+    dense Schur complement on the coarse nodes, solves as M_II does (to round-off: M's
+    condition number is below 1e3), and the exact projection through it solves the QP as
+    the dense factors do; a dense M keeps dense factors."""
+    M = two_level_like_matrix(40, 3)
+    n = M.shape[0]
+    assert np.linalg.cond(M) < 1e3
+    projection = SignoriniProjection.exact(M)
+    rng = np.random.default_rng(4)
+    free = rng.random(n) < 0.7
+    factor = projection.free_factor(free)
+    assert isinstance(factor, SparseCholesky)
+    assert factor.schur.shape[0] == np.count_nonzero(free[::4])  # the free coarse nodes
+    b = rng.standard_normal(n)
+    np.testing.assert_allclose(
+        factor.solve(b[free]), np.linalg.solve(M[np.ix_(free, free)], b[free]), rtol=1e-12
+    )
+    for _ in range(3):
+        target = rng.standard_normal(n)
+        psi = projection(target, np.zeros(n)).phi
+        assert kkt_residual(M, target, psi) <= 1e-12 * np.abs(M).max() * np.abs(target).max()
+    assert isinstance(
+        SignoriniProjection.exact(h12_like_matrix(n)).free_factor(free), DenseBlockFactor
+    )
 
 
 def test_the_factor_of_w_aa_is_kept_for_the_same_free_set():

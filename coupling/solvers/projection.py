@@ -21,12 +21,15 @@ Lawson-Hanson NNLS method on the Cholesky factor as a fallback should it cycle.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable
+from typing import Callable, NamedTuple, Protocol
 
 import numpy as np
 import scipy.linalg
 import scipy.optimize
+import scipy.sparse as sp
 
+from bem_cpp.sparse import SparseCholesky
+from coupling.options import METRIC_SPARSE_ROW_NONZEROS
 from coupling.preconditioners.base import (
     cholesky_of,
     dense_metric,
@@ -35,7 +38,23 @@ from coupling.preconditioners.base import (
     solve_with_cholesky,
 )
 
-__all__ = ["SignoriniProjection", "ProjectionResult"]
+__all__ = ["SignoriniProjection", "ProjectionResult", "BlockFactor", "DenseBlockFactor"]
+
+
+class BlockFactor(Protocol):
+    """A factor of a principal block M_II of M_s (:meth:`SignoriniProjection.free_factor`)."""
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        """M_II^{-1} b."""
+
+
+class DenseBlockFactor(NamedTuple):
+    """A dense Cholesky factor, as ``scipy.linalg.cho_factor`` gives it."""
+
+    factor: tuple[np.ndarray, bool]
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        return solve_with_cholesky(self.factor, b)
 
 
 @dataclass(frozen=True)
@@ -99,7 +118,8 @@ class SignoriniProjection:
         # iterate with active nodes never needs it)
         self._factor_of = factor
         self._factor: tuple[np.ndarray, bool] | None = None
-        self._free: tuple[np.ndarray, tuple[np.ndarray, bool]] | None = None  # I, M_II's factor
+        self._sparse = _sparse_structure(self.M)
+        self._free: tuple[np.ndarray, BlockFactor] | None = None  # I, M_II's factor
         self._kept_active: tuple[np.ndarray, tuple[np.ndarray, bool]] | None = None  # I, W_AA's
         self._active: np.ndarray | None = None  # of the last exact projection
         self._inverse: np.ndarray | None = None  # M^{-1}, for the exact projection
@@ -166,15 +186,28 @@ class SignoriniProjection:
             return self._exact(self.M @ phi - tau * gradient)
         return self._projected_iteration(phi - tau * (solve or self._solve)(gradient), phi)
 
-    def free_factor(self, free: np.ndarray) -> tuple[np.ndarray, bool]:
-        """The Cholesky factor of M_II (I = ``free``, boolean), as ``scipy.linalg.cho_factor``
-        gives it. The last one is kept: the exact projection's last free set is the
-        prediction that a Newton step solves on, and the next prediction often keeps it
-        (:func:`coupling.solvers.ssn.newton_direction`)."""
+    def free_factor(self, free: np.ndarray) -> BlockFactor:
+        """A Cholesky factor of M_II (I = ``free``, boolean). Where M_s is sparse but for a
+        few dense rows (the two-level form's coarse nodes: ``METRIC_SPARSE_ROW_NONZEROS``),
+        the other rows of I are eliminated sparsely and the dense ones through their
+        dense Schur complement (:class:`bem_cpp.sparse.SparseCholesky`); else M_II is
+        factored densely. The last one is kept: the exact projection's last free set is
+        the prediction that a Newton step solves on, and the next prediction often keeps
+        it (:func:`coupling.solvers.ssn.newton_direction`)."""
         if self._kept(free):
             return self._free[1]
         self._free = None  # the old factor goes before the new one is made
-        factor = _principal_cholesky(self.M, free)
+        if self._sparse is None:
+            factor: BlockFactor = DenseBlockFactor(_principal_cholesky(self.M, free))
+        else:
+            matrix, dense_row = self._sparse
+            rows = np.flatnonzero(free)
+            dense = dense_row[rows]
+            factor = SparseCholesky(
+                matrix[rows][:, rows],
+                np.concatenate([np.flatnonzero(~dense), np.flatnonzero(dense)]),
+                int(np.count_nonzero(dense)),
+            )
         self._free = (free.copy(), factor)
         return factor
 
@@ -259,17 +292,22 @@ class SignoriniProjection:
             return self._solve(b)
         kept = self._kept(free)
         # W would serve (few active nodes) but is not bought yet: rent, i.e. factor M_II,
-        # while the rents paid stay below W's price
+        # while the rents paid stay below W's price (a sparse M_s's factors are cheap:
+        # always rented)
         rent = (
             not bought
             and n_active < n_free
-            and (kept or self._factorised_flops + n_free**3 / 3 <= float(n) ** 3)
+            and (
+                kept
+                or self._sparse is not None
+                or self._factorised_flops + n_free**3 / 3 <= float(n) ** 3
+            )
         )
         if rent and not kept:
             self._factorised_flops += n_free**3 / 3
         if rent or n_active >= n_free:  # M_II's factor
             psi = np.zeros(n)
-            psi[free] = solve_with_cholesky(self.free_factor(free), b[free])
+            psi[free] = self.free_factor(free).solve(b[free])
             return psi
         W = self._inverse_matrix()
         y = W @ np.where(free, b, 0.0)
@@ -306,6 +344,17 @@ class SignoriniProjection:
         )
         self._active = psi <= 0
         return ProjectionResult(psi, iteration)
+
+
+def _sparse_structure(M: np.ndarray) -> tuple[sp.csr_matrix, np.ndarray] | None:
+    """M as a sparse matrix and its dense rows (more than ``METRIC_SPARSE_ROW_NONZEROS``
+    nonzeros or a quarter of the row), when those are at most half of them; None for a
+    dense M."""
+    limit = min(METRIC_SPARSE_ROW_NONZEROS, M.shape[0] // 4)
+    dense_row = np.count_nonzero(M, axis=1) > limit
+    if np.count_nonzero(dense_row) > M.shape[0] // 2:
+        return None
+    return sp.csr_matrix(M), dense_row
 
 
 def _principal_cholesky(matrix: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, bool]:

@@ -69,7 +69,7 @@ from coupling.options import (
     SSN_INNER_TOL_FACTOR,
     SSN_JACOBIAN_REUSE_STEP,
 )
-from coupling.preconditioners.base import omega_cycle, solve_with_cholesky
+from coupling.preconditioners.base import omega_cycle
 from coupling.solvers.loop import IterationContext, Loop
 from coupling.solvers.pgpm import energy_increased, pgpm
 from coupling.solvers.projection import SignoriniProjection
@@ -270,7 +270,7 @@ def newton_direction(
     def apply_b_inv(r):
         return (
             precondition_u(r[0]),
-            solve_with_cholesky(factor, r[1]) if factor is not None else r[1],
+            factor.solve(r[1]) if factor is not None else r[1],
         )
 
     d_phi = np.zeros(phi.size)
