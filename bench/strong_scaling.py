@@ -8,7 +8,8 @@ phase ends in a collective):
 - setup: the mesh (generated on rank 0 and distributed, whole subdomains per rank),
   the coarse structure, the interior forms, the boundary map and the loads;
 - S_h: the Steklov-Poincare matrix (computed once on rank 0 and broadcast);
-- factorisations: the preconditioner set-up (A_II per rank, the coarse matrix);
+- factorisations: the preconditioner set-up (the P1 matrix's pattern, which the Jacobians
+  then share as in ``solve``, A_II per rank, the coarse matrix);
 - iterations: the step estimate and the solver iterations;
 - outputs: u_e on Gamma and its exterior normal derivative (one V_h solve on rank 0).
 

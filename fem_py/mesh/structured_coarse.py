@@ -48,21 +48,17 @@ def structured_coarse_structure(
     n_skeleton = nv + n_edges * (n - 1)  # the nodes on coarse vertices and edges
     interior_per_cell = len(ref.lattice.interior)
 
-    # every owned dof's node, then the global dof of each skeleton node and the
-    # (dof, subdomain) of every interior one, from all ranks
+    # the node of every dof, in dof order (the ranks own consecutive ranges of dofs, in
+    # rank order): the skeleton and interior dofs, sorted, and the dof of each skeleton node
     index_map = V.dofmap.index_map
     n_owned = index_map.size_local
-    node = ref.node_numbers(input_indices(V)[:n_owned])
-    dof = index_map.local_range[0] + np.arange(n_owned, dtype=np.int64)
-    on_skeleton = node < n_skeleton
-    subdomain = (node[~on_skeleton] - n_skeleton) // max(interior_per_cell, 1)
-    skeleton_node, skeleton_dof = allgather_arrays(comm, (node[on_skeleton], dof[on_skeleton]))
-    interior_dof, interior_subdomain = allgather_arrays(comm, (dof[~on_skeleton], subdomain))
+    (node_of_dof,) = allgather_arrays(comm, (ref.node_numbers(input_indices(V)[:n_owned]),))
+    on_skeleton_dof = node_of_dof < n_skeleton
+    skeleton_dofs = np.flatnonzero(on_skeleton_dof)
+    interior_dofs = np.flatnonzero(~on_skeleton_dof)
     dof_of_node = np.empty(n_skeleton, dtype=np.int64)
-    dof_of_node[skeleton_node] = skeleton_dof
-    on_skeleton_dof = np.zeros(index_map.size_global, dtype=bool)  # sorted by flatnonzero
-    on_skeleton_dof[skeleton_dof] = True
-    order = np.argsort(interior_dof)
+    dof_of_node[node_of_dof[skeleton_dofs]] = skeleton_dofs
+    interior_subdomain = (node_of_dof[interior_dofs] - n_skeleton) // max(interior_per_cell, 1)
 
     # coarse vertices sorted by (y, x), keys rounded as compute_coarse_structure's
     X = ref.node_coordinates(np.arange(n_skeleton))
@@ -108,9 +104,9 @@ def structured_coarse_structure(
         edge_on_boundary=on_boundary[edge_order],
         edge_arc=arc[edge_order].astype(np.int64),
         edge_subdomains=sub[edge_order].astype(np.int64),
-        skeleton_dofs=np.flatnonzero(on_skeleton_dof),
-        interior_dofs=interior_dof[order],
-        subdomain_of_interior_dof=interior_subdomain[order],
+        skeleton_dofs=skeleton_dofs,
+        interior_dofs=interior_dofs,
+        subdomain_of_interior_dof=interior_subdomain,
         n_subdomains=int(n_cells),
         n_dofs=int(index_map.size_global),
         n_skeleton_facets=int(n_edges * n),
