@@ -1,6 +1,6 @@
 """fem_py.forms.P1Matrix (DOLFINx's CSR storage, scipy products) gives the Jacobian
-products, the stiffness rows and the ranks' shares of DOLFINx's PETSc assembly, in serial and on 3 ranks
-(tests/mpi/p1_matrix_check.py)."""
+products, the stiffness rows and the ranks' shares of DOLFINx's PETSc assembly, in serial
+and on 3 ranks (tests/mpi/p1_matrix_check.py)."""
 from __future__ import annotations
 
 import importlib.util

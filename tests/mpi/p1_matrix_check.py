@@ -1,8 +1,8 @@
 """fem_py.forms.P1Matrix against DOLFINx's PETSc assembly of the same forms, on any
 communicator: Jacobian products y = A x (both Jacobian kinds), the stiffness matrix's
-owned rows, and the ranks' local shares of it, which sum to it. Run by tests/test_p1_matrix.py in serial and under ``mpirun -n 3``, where a
-rank's owned rows reach columns that none of its own cells has (``python
-p1_matrix_check.py out.json``)."""
+owned rows, and the ranks' local shares of it, which sum to it. Run by
+tests/test_p1_matrix.py in serial and under ``mpirun -n 3``, where a rank's owned rows
+reach columns that none of its own cells has (``python p1_matrix_check.py out.json``)."""
 from __future__ import annotations
 
 import json
