@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 from typing import Any, Callable
 
@@ -51,8 +52,25 @@ def demo_parser(
 def start_demo(
     parser: argparse.ArgumentParser, comm: MPI.Comm
 ) -> tuple[argparse.Namespace, Callable[..., None]]:
-    """Parse the command line: (the arguments, ``print`` on rank 0 of ``comm``)."""
+    """Parse the command line: (the arguments, ``print`` on rank 0 of ``comm``).
+
+    Under ``mpirun`` an exception that ends one rank then aborts every rank of ``comm``
+    once its traceback is printed (``MPI_Abort``, as ``python -m mpi4py`` does): the
+    other ranks never wait for it in a collective."""
+    if comm.size > 1:
+        sys.excepthook = _aborting(comm, sys.excepthook)
     return parser.parse_args(), rank0_print(comm)
+
+
+def _aborting(comm: MPI.Comm, hook: Callable[..., None]) -> Callable[..., None]:
+    """``hook``, then ``comm.Abort(1)``."""
+
+    def excepthook(*exc_info: Any) -> None:
+        hook(*exc_info)
+        sys.stderr.flush()
+        comm.Abort(1)
+
+    return excepthook
 
 
 def rank0_print(comm: MPI.Comm) -> Callable[..., None]:

@@ -191,3 +191,24 @@ def test_own_body_demo_the_same_on_one_and_two_ranks(tmp_path):
         assert parallel[key] == serial[key], key
     assert parallel["energy"] == pytest.approx(serial["energy"], rel=1e-10)
     assert (tmp_path / "one" / "block.msh").is_file()
+
+
+@pytest.mark.mpi
+def test_an_exception_on_one_rank_ends_a_demo_on_every_rank(tmp_path):
+    """A demo under mpirun whose rank 1 raises ends at once with the traceback and a
+    nonzero exit code; rank 0, waiting in a collective, does not hang."""
+    script = tmp_path / "fails_on_rank_1.py"
+    script.write_text(
+        "import sys\n"
+        f"sys.path.insert(0, {str(DEMOS)!r})\n"
+        "from mpi4py import MPI\n"
+        "from common import demo_parser, start_demo\n"
+        "comm = MPI.COMM_WORLD\n"
+        "start_demo(demo_parser('fails', 'fails', cells=1), comm)\n"
+        "if comm.rank == 1:\n"
+        "    raise ValueError('raised on rank 1 only')\n"
+        "comm.barrier()\n"
+    )
+    proc = run_mpi(2, str(script), timeout=120, check=False)
+    assert proc.returncode != 0
+    assert "raised on rank 1 only" in proc.stderr

@@ -270,6 +270,9 @@ def test_block_diagonal_edge_forms_place_every_block_and_sum_shared_rows():
     close(a0.toarray(), dense(shared, 0))
     close(a0_inv.toarray(), dense(shared, 1))
     assert block_diagonal_edge_forms([], n, "paper")[0].nnz == 0
+    # a batch without edges (a rank without edges of that node count)
+    none = [(np.zeros((0, 3), dtype=np.int64), np.zeros((0, 5, 2)))]
+    assert all(m.nnz == 0 for m in block_diagonal_edge_forms(none, n, "paper"))
 
 
 @pytest.mark.parametrize("kind", ["paper", "sqrt-laplacian"])

@@ -266,6 +266,8 @@ def _edge_forms_by_shape(points: np.ndarray, kind: str) -> tuple[np.ndarray, np.
     share a handful of computations, and an edge's form does not depend on the other edges
     of its batch (so on the rank that computes it)."""
     relative = points - points[:, :1]
+    if len(relative) == 0:  # a rank without such edges
+        return edge_form(relative, kind)
     flat = relative.reshape(len(relative), -1)
     key = flat @ np.sqrt(np.arange(2.0, 2.0 + flat.shape[1]))  # equal for equal rows
     _, first, inverse = np.unique(key, return_index=True, return_inverse=True)
