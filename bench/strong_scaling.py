@@ -290,7 +290,8 @@ def table(runs: list[dict], totals: dict[int, list[float]], parts: dict[int, dic
         f"machine: {platform.node()}, {os.cpu_count()} cores, load average "
         f"{os.getloadavg()[0]:.2f} at the end; times in s (slowest rank), speed-up "
         f"relative to P = {base['ranks']}; the fastest of "
-        f"{len(totals[base['ranks']])} run(s) per P\n\n"
+        f"{len(totals[base['ranks']])} run(s) per P; GLIBC_TUNABLES="
+        f"{os.environ.get('GLIBC_TUNABLES', '(unset)')} (docs/guide/mpi.md)\n\n"
     )
     lines = [
         "| P | B | iterations | " + " | ".join(PHASES) + " |",
