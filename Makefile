@@ -80,10 +80,6 @@ test-py:
 demo: setup
 	$(PY) demos/demo_signorini_square.py
 
-# malloc's memory in transparent huge pages (NumPy's arrays have them already): 13 % less
-# time on one rank and 19 % on two at 4e6 dofs on the 2-core VMs (docs/guide/mpi.md)
-bench bench-large demo: export GLIBC_TUNABLES ?= glibc.malloc.hugetlb=1
-
 bench: setup
 	$(PY) bench/bem_assembly.py
 	$(PY) bench/steklov_mpi.py
