@@ -20,6 +20,7 @@ Lawson-Hanson NNLS method on the Cholesky factor as a fallback should it cycle.
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import Callable, NamedTuple, Protocol
 
@@ -118,7 +119,6 @@ class SignoriniProjection:
         # iterate with active nodes never needs it)
         self._factor_of = factor
         self._factor: tuple[np.ndarray, bool] | None = None
-        self._sparse = _sparse_structure(self.M)
         self._free: tuple[np.ndarray, BlockFactor] | None = None  # I, M_II's factor
         self._kept_active: tuple[np.ndarray, tuple[np.ndarray, bool]] | None = None  # I, W_AA's
         self._active: np.ndarray | None = None  # of the last exact projection
@@ -194,7 +194,7 @@ class SignoriniProjection:
         factored densely. The last one is kept: the exact projection's last free set is
         the prediction that a Newton step solves on, and the next prediction often keeps
         it (:func:`coupling.solvers.ssn.newton_direction`)."""
-        if self._kept(free):
+        if _kept_for(self._free, free):
             return self._free[1]
         self._free = None  # the old factor goes before the new one is made
         if self._sparse is None:
@@ -211,9 +211,11 @@ class SignoriniProjection:
         self._free = (free.copy(), factor)
         return factor
 
-    def _kept(self, free: np.ndarray) -> bool:
-        """Whether the kept factor of M_II is that of this free set."""
-        return self._free is not None and np.array_equal(self._free[0], free)
+    @functools.cached_property
+    def _sparse(self) -> tuple[sp.csr_matrix, np.ndarray] | None:
+        """M as a sparse matrix and its dense rows, or None (:func:`_sparse_structure`),
+        made on first use: the inexact projection never factors a block of M."""
+        return _sparse_structure(self.M)
 
     def destroy(self) -> None:
         """Drop the kept factors of M_II and W_AA (n_s^2 and n_s^2 / 4 arrays at most)."""
@@ -222,7 +224,7 @@ class SignoriniProjection:
     def _active_factor(self, free: np.ndarray, W: np.ndarray) -> tuple[np.ndarray, bool]:
         """The Cholesky factor of W_AA (A: the nodes not ``free``). The last one is kept: an
         exact projection starts from the last one's active set (:meth:`_exact`)."""
-        if self._kept_active is not None and np.array_equal(self._kept_active[0], free):
+        if _kept_for(self._kept_active, free):
             return self._kept_active[1]
         self._kept_active = None
         factor = _principal_cholesky(W, ~free)
@@ -290,7 +292,7 @@ class SignoriniProjection:
         bought = self._inverse is not None
         if not bought and n_active == 0:
             return self._solve(b)
-        kept = self._kept(free)
+        kept = _kept_for(self._free, free)
         # W would serve (few active nodes) but is not bought yet: rent, i.e. factor M_II,
         # while the rents paid stay below W's price (a sparse M_s's factors are cheap:
         # always rented)
@@ -344,6 +346,11 @@ class SignoriniProjection:
         )
         self._active = psi <= 0
         return ProjectionResult(psi, iteration)
+
+
+def _kept_for(kept: tuple[np.ndarray, object] | None, free: np.ndarray) -> bool:
+    """Whether ``kept`` (a free set and the factor made for it, or None) is for ``free``."""
+    return kept is not None and np.array_equal(kept[0], free)
 
 
 def _sparse_structure(M: np.ndarray) -> tuple[sp.csr_matrix, np.ndarray] | None:

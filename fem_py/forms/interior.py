@@ -296,12 +296,10 @@ class InteriorForms:
         """This rank's cells' share of the Laplace stiffness matrix on its local dofs, local
         column numbers (:attr:`P1Matrix.local_rows`; no communication): a view into ``A``
         (whose values it overwrites, valid until its next assembly) or a new matrix."""
-        if A is None:
-            A = P1Matrix(self._form("stiffness"))
-            A.assemble_local(self._form("stiffness"))
-            return A.local_rows.copy()
+        own = A is None
+        A = P1Matrix(self._form("stiffness")) if own else A
         A.assemble_local(self._form("stiffness"))
-        return A.local_rows
+        return A.local_rows.copy() if own else A.local_rows
 
     def assemble_stiffness(self, A: PETSc.Mat | None = None) -> PETSc.Mat:
         """The Laplace stiffness matrix int grad v_j . grad v_i dx, assembled into ``A``
