@@ -71,6 +71,14 @@ def test_strong_scaling_small_run(tmp_path):
         if line.startswith("| 1 |") or line.startswith("| 2 |")
     ]
     assert len(ceiling) == 2 and "(1.00x)" in ceiling[0][2] and "GB/s" in ceiling[1][3]
+    # the sustained triad: the slowest rank's time, then each rank's own
+    assert ceiling[0][4].strip().startswith(tuple("0123456789")) and "(1.00x; " in ceiling[0][4]
+    own = ceiling[1][4].split("x; ")[1].rstrip(") ").split(", ")
+    assert len(own) == 2 and max(map(float, own)) <= float(ceiling[1][4].split(" s")[0])
+    # the speed-up set beside every ceiling of the same run
+    verdict = scaling.split("\nP = 2: speed-up ")[1].splitlines()[0]
+    for ceiling_name in ("peak triad", "sustained triad", "compute-bound", "independent parts"):
+        assert f"{ceiling_name} " in verdict
 
 
 @pytest.mark.parametrize("args", [["--cells", "2"], ["--repeat", "0"]])
