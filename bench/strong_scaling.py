@@ -267,9 +267,9 @@ def ceilings(ranks: list[int], repeat: int) -> tuple[str, dict[int, dict[str, fl
         "|---|---|---|---|---|",
     ]
     for p, r in zip(ranks, best):
-        ranks_own = min(
-            (rnd[ranks.index(p)] for rnd in rounds), key=lambda x: x["sustained"]
-        )["sustained_ranks"]
+        ranks_own = min((rnd[ranks.index(p)] for rnd in rounds), key=lambda x: x["sustained"])[
+            "sustained_ranks"
+        ]
         lines.append(
             f"| {p} | {r['triad']:.3f} s ({speedups[p]['triad']:.2f}x) | "
             f"{5 * 8 * TRIAD_ENTRIES / r['triad'] / 1e9:.1f} GB/s | "
