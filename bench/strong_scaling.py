@@ -266,16 +266,14 @@ def ceilings(ranks: list[int], repeat: int) -> tuple[str, dict[int, dict[str, fl
         "| P | peak triad | triad bandwidth | sustained triad | compute-bound kernel |",
         "|---|---|---|---|---|",
     ]
-    for p, r in zip(ranks, best):
-        ranks_own = min((rnd[ranks.index(p)] for rnd in rounds), key=lambda x: x["sustained"])[
-            "sustained_ranks"
-        ]
+    for i, (p, r) in enumerate(zip(ranks, best)):
+        fastest = min((rnd[i] for rnd in rounds), key=lambda x: x["sustained"])
+        own = ", ".join(f"{t:.2f}" for t in fastest["sustained_ranks"])
         lines.append(
             f"| {p} | {r['triad']:.3f} s ({speedups[p]['triad']:.2f}x) | "
             f"{5 * 8 * TRIAD_ENTRIES / r['triad'] / 1e9:.1f} GB/s | "
-            f"{r['sustained']:.2f} s ({speedups[p]['sustained']:.2f}x; "
-            + ", ".join(f"{t:.2f}" for t in ranks_own)
-            + f") | {r['compute']:.3f} s ({speedups[p]['compute']:.2f}x) |"
+            f"{r['sustained']:.2f} s ({speedups[p]['sustained']:.2f}x; {own}) | "
+            f"{r['compute']:.3f} s ({speedups[p]['compute']:.2f}x) |"
         )
     every = "; ".join(
         f"P = {p}: "
