@@ -354,9 +354,7 @@ def table(
             + "\n"
         )
     for r in runs[1:]:
-        c = ceiling.get(r["ranks"])
-        if c is None:
-            continue
+        c = ceiling[r["ranks"]]
         text += (
             f"\nP = {r['ranks']}: speed-up {base['total'] / r['total']:.2f}x; ceilings in this "
             f"run: peak triad {c['triad']:.2f}x, sustained triad {c['sustained']:.2f}x, "
