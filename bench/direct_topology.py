@@ -123,8 +123,8 @@ def main(argv: list[str] | None = None) -> int:
             a, b = runs["create_mesh"][0], runs["direct"][0]
             same = all(abs(a[k] - b[k]) <= 1e-12 * abs(a[k]) for k in ("area", "integral"))
             print(
-                f"| {cells} | {2 * cells * cells} | {best['create_mesh']:.2f} s | "
-                f"{best['direct']:.2f} s | {best['create_mesh'] / best['direct']:.2f}x | "
+                f"| {cells} | {2 * cells * cells} | {best['create_mesh']:.3f} s | "
+                f"{best['direct']:.3f} s | {best['create_mesh'] / best['direct']:.2f}x | "
                 f"{'yes' if same else 'NO'} |",
                 flush=True,
             )
