@@ -20,7 +20,7 @@ DEBS    := python3-dolfinx python3-petsc4py python3-mpi4py python3-gmsh \
 DOCS_DEBS := python3-sphinx python3-myst-parser furo libjs-mathjax chromium python3-pil
 CXX_BUILD := build/cpp
 CXX_FILES := $(wildcard bem_cpp/src/*.cpp bem_cpp/include/bem/*.hpp bem_cpp/tests/*.cpp bem_cpp/tests/*.hpp) \
-             bem_cpp/bindings.cpp
+             bem_cpp/bindings.cpp bench/direct_topology/direct_topology.cpp
 SOURCES := $(wildcard bem_cpp/src/*.cpp bem_cpp/include/bem/*.hpp) bem_cpp/bindings.cpp setup.py pyproject.toml
 
 .PHONY: setup debs debs-docs venv build lint test test-cpp test-py demo bench bench-large study docs clean
