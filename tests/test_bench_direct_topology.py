@@ -1,5 +1,5 @@
-"""bench/direct_topology.py builds its probe and makes the same mesh both ways (its times
-are for people: none is asserted), and rejects bad arguments with one line."""
+"""bench/direct_topology.py builds its probe and makes the same mesh both ways on one and two
+ranks (its times are for people: none is asserted), and rejects bad arguments with one line."""
 from __future__ import annotations
 
 import os
@@ -13,26 +13,29 @@ from conftest import ROOT
 SCRIPT = str(ROOT / "bench" / "direct_topology.py")
 
 
-def test_direct_topology_makes_the_same_mesh():
+@pytest.mark.mpi
+def test_direct_topology_makes_the_same_mesh_on_one_and_two_ranks():
     proc = subprocess.run(
-        [sys.executable, SCRIPT, "--cells", "8", "--repeat", "1"],
+        [sys.executable, SCRIPT, "--cells", "8", "--ranks", "1", "2", "--repeat", "1"],
         capture_output=True,
         text=True,
         timeout=600,
         cwd=ROOT,
         env=dict(os.environ),
-    )
+    )  # not MPI singleton variables
     assert proc.returncode == 0, proc.stderr
-    row = [line for line in proc.stdout.splitlines() if line.startswith("| 8 |")]
-    assert len(row) == 1
-    cells = [c.strip() for c in row[0].split("|")[1:-1]]
-    assert cells[1] == "128"  # 2 x 8 x 8 triangles
-    for seconds in cells[2:4]:  # the fastest time of each path, in seconds
-        assert seconds.endswith(" s") and float(seconds.removesuffix(" s")) >= 0
-    assert cells[5] == "yes"  # area and integral equal to round-off on both meshes
+    rows = [line for line in proc.stdout.splitlines() if line.startswith("| 8 |")]
+    assert len(rows) == 2
+    for ranks, row in zip(("1", "2"), rows):
+        cells = [c.strip() for c in row.split("|")[1:-1]]
+        assert cells[1] == "128" and cells[2] == ranks  # 2 x 8 x 8 triangles
+        for seconds in cells[3:5]:  # the fastest time of each path, in seconds
+            assert seconds.endswith(" s") and float(seconds.removesuffix(" s")) >= 0
+        # the cells, the ghost cells, the area and an integral agree on both meshes
+        assert cells[6] == "yes"
 
 
-@pytest.mark.parametrize("args", [["--cells", "0"], ["--repeat", "0"]])
+@pytest.mark.parametrize("args", [["--cells", "0"], ["--repeat", "0"], ["--ranks", "0"]])
 def test_direct_topology_rejects_bad_arguments(args):
     proc = subprocess.run([sys.executable, SCRIPT, *args], capture_output=True, text=True, cwd=ROOT)
     assert proc.returncode == 2
