@@ -173,6 +173,9 @@ def main(argv: list[str] | None = None) -> int:
     if any(c < 1 for c in args.cells) or args.repeat < 1 or any(p < 1 for p in args.ranks):
         print("error: --cells, --ranks and --repeat must be >= 1", file=sys.stderr)
         return 2
+    if min(args.cells) < max(args.ranks):
+        print("error: --cells must be >= every --ranks (a rank owns whole rows)", file=sys.stderr)
+        return 2
     if args.worker:
         worker(args.cells[0], args.worker, args.module_dir)
         return 0

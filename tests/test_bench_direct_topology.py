@@ -35,7 +35,10 @@ def test_direct_topology_makes_the_same_mesh_on_one_and_two_ranks():
         assert cells[6] == "yes"
 
 
-@pytest.mark.parametrize("args", [["--cells", "0"], ["--repeat", "0"], ["--ranks", "0"]])
+@pytest.mark.parametrize(
+    "args",
+    [["--cells", "0"], ["--repeat", "0"], ["--ranks", "0"], ["--cells", "2", "--ranks", "3"]],
+)
 def test_direct_topology_rejects_bad_arguments(args):
     proc = subprocess.run([sys.executable, SCRIPT, *args], capture_output=True, text=True, cwd=ROOT)
     assert proc.returncode == 2
