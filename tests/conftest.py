@@ -1,4 +1,4 @@
-"""Shared test helpers: running scripts under mpirun, the project root."""
+"""Shared test helpers: running scripts under mpirun, the benches, the project root."""
 from __future__ import annotations
 
 import json
@@ -28,6 +28,20 @@ def load_config(geometry: str, **sections: str) -> str:
     ``sections`` (name -> their lines), e.g. ``solver='method = "ssn"'``."""
     text = f"[geometry]\n{geometry}\n{LOAD_CASE}"
     return text + "".join(f"[{name}]\n{lines}\n" for name, lines in sections.items())
+
+
+def run_bench(script: str, *args: str, timeout: float = 600) -> subprocess.CompletedProcess:
+    """Run ``bench/<script> args...`` with this interpreter from the project root, in this
+    process's environment (``os.environ``: an MPI-initialised test process has Open MPI
+    singleton variables in its C environment that would make the bench's mpirun fail)."""
+    return subprocess.run(
+        [sys.executable, str(ROOT / "bench" / script), *args],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        cwd=ROOT,
+        env=dict(os.environ),
+    )
 
 
 def run_mpi(

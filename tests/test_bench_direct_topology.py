@@ -2,27 +2,14 @@
 ranks (its times are for people: none is asserted), and rejects bad arguments with one line."""
 from __future__ import annotations
 
-import os
-import subprocess
-import sys
-
 import pytest
 
-from conftest import ROOT
-
-SCRIPT = str(ROOT / "bench" / "direct_topology.py")
+from conftest import run_bench
 
 
 @pytest.mark.mpi
 def test_direct_topology_makes_the_same_mesh_on_one_and_two_ranks():
-    proc = subprocess.run(
-        [sys.executable, SCRIPT, "--cells", "8", "--ranks", "1", "2", "--repeat", "1"],
-        capture_output=True,
-        text=True,
-        timeout=600,
-        cwd=ROOT,
-        env=dict(os.environ),
-    )  # not MPI singleton variables
+    proc = run_bench("direct_topology.py", "--cells", "8", "--ranks", "1", "2", "--repeat", "1")
     assert proc.returncode == 0, proc.stderr
     rows = [line for line in proc.stdout.splitlines() if line.startswith("| 8 |")]
     assert len(rows) == 2
@@ -40,6 +27,6 @@ def test_direct_topology_makes_the_same_mesh_on_one_and_two_ranks():
     [["--cells", "0"], ["--repeat", "0"], ["--ranks", "0"], ["--cells", "2", "--ranks", "3"]],
 )
 def test_direct_topology_rejects_bad_arguments(args):
-    proc = subprocess.run([sys.executable, SCRIPT, *args], capture_output=True, text=True, cwd=ROOT)
+    proc = run_bench("direct_topology.py", *args)
     assert proc.returncode == 2
     assert proc.stderr.strip().startswith("error:") and len(proc.stderr.strip().splitlines()) == 1

@@ -3,42 +3,16 @@ ceilings included (its figures are for people: no timing is asserted), and rejec
 arguments with exit code 2."""
 from __future__ import annotations
 
-import os
-import subprocess
-import sys
-
 import pytest
 
-from conftest import ROOT
-
-SCRIPT = str(ROOT / "bench" / "strong_scaling.py")
+from conftest import run_bench
 
 
 @pytest.mark.mpi
 def test_strong_scaling_small_run(tmp_path):
     out = tmp_path / "scaling.md"
-    proc = subprocess.run(
-        [
-            sys.executable,
-            SCRIPT,
-            "--cells",
-            "32",
-            "--ranks",
-            "1",
-            "2",
-            "--method",
-            "pgpm",
-            "--repeat",
-            "2",
-            "--output",
-            str(out),
-        ],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        cwd=ROOT,
-        env=dict(os.environ),
-    )  # not MPI singleton variables
+    args = ["--cells", "32", "--ranks", "1", "2", "--method", "pgpm", "--repeat", "2"]
+    proc = run_bench("strong_scaling.py", *args, "--output", str(out), timeout=300)
     assert proc.returncode == 0, proc.stderr
     ceilings, scaling = out.read_text().split("# Strong scaling")
     rows = [
@@ -83,6 +57,6 @@ def test_strong_scaling_small_run(tmp_path):
 
 @pytest.mark.parametrize("args", [["--cells", "2"], ["--repeat", "0"]])
 def test_strong_scaling_rejects_bad_arguments(args):
-    proc = subprocess.run([sys.executable, SCRIPT, *args], capture_output=True, text=True, cwd=ROOT)
+    proc = run_bench("strong_scaling.py", *args)
     assert proc.returncode == 2
     assert proc.stderr.strip().startswith("error:") and len(proc.stderr.strip().splitlines()) == 1
