@@ -62,9 +62,11 @@ def worker(cells: int, path: str, module_dir: str) -> None:
     last rows' outer facets."""
     import numpy as np
     import ufl
-    from dolfinx import cpp, fem
+    from dolfinx import fem
     from dolfinx import mesh as dmesh
     from mpi4py import MPI
+
+    from fem_py.mesh.distribute import destinations
 
     comm = MPI.COMM_WORLD
     rank, size = comm.rank, comm.size
@@ -99,19 +101,15 @@ def worker(cells: int, path: str, module_dir: str) -> None:
         def partitioner(comm_, nparts, tdim, local_cells, ghost_mode):
             # every cell stays here; the first row's lower and the last row's upper
             # triangles are ghosted by the neighbour across their outer facet
-            extra = np.full(len(owned), -1, dtype=np.int32)
+            links = [np.zeros((0, 2), dtype=np.int64)]
             per_row = 2 * cells
             if rank > 0:
-                extra[0:per_row:2] = rank - 1
+                lower = np.arange(0, per_row, 2)
+                links.append(np.stack([lower, np.full_like(lower, rank - 1)], axis=1))
             if rank < size - 1:
-                extra[len(owned) - per_row + 1 :: 2] = rank + 1
-            counts = 1 + (extra >= 0)
-            offsets = np.zeros(len(owned) + 1, dtype=np.int32)
-            np.cumsum(counts, out=offsets[1:])
-            ranks = np.empty(offsets[-1], dtype=np.int32)
-            ranks[offsets[:-1]] = rank
-            ranks[offsets[:-1][extra >= 0] + 1] = extra[extra >= 0]
-            return cpp.graph.AdjacencyList_int32(ranks, offsets)
+                upper = np.arange(len(owned) - per_row + 1, len(owned), 2)
+                links.append(np.stack([upper, np.full_like(upper, rank + 1)], axis=1))
+            return destinations(np.full(len(owned), rank), np.concatenate(links))
 
         msh = dmesh.create_mesh(comm, owned, x, domain, partitioner=partitioner)
     else:

@@ -3,21 +3,13 @@ is asserted): the fembem solve of the box and the 3D Poisson pipeline, one recor
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
-from conftest import ROOT
+from conftest import run_bench
 
 
 def test_solid_bench_small_run(tmp_path):
     out = tmp_path / "solid.json"
-    proc = subprocess.run(
-        [sys.executable, str(ROOT / "bench" / "solid.py"), "--sizes", "4", "--json", str(out)],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        cwd=ROOT,
-    )
+    proc = run_bench("solid.py", "--sizes", "4", "--json", str(out), timeout=300)
     assert proc.returncode == 0, proc.stderr[-3000:]
     (row,) = json.loads(out.read_text())
     assert row["n"] == 4 and row["run"]["dofs"] == row["poisson"]["dofs"] == 125
