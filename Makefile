@@ -12,7 +12,7 @@ VENV    := .venv
 PY      := $(VENV)/bin/python
 DEBS    := python3-dolfinx python3-petsc4py python3-mpi4py python3-gmsh \
            python3-scipy python3-sympy python3-matplotlib python3-pytest python3-pytest-xdist \
-           python3-pybind11 pybind11-dev libeigen3-dev libgtest-dev cmake g++ make \
+           python3-pybind11 pybind11-dev libeigen3-dev libgtest-dev libdolfinx-dev cmake g++ make \
            python3-venv python3-setuptools python3-wheel python3-pip python3-tqdm \
            python3-slepc4py python3-threadpoolctl python3-h5py-mpi openmpi-bin libopenblas-dev \
            black flake8 clang-format
@@ -20,8 +20,9 @@ DEBS    := python3-dolfinx python3-petsc4py python3-mpi4py python3-gmsh \
 DOCS_DEBS := python3-sphinx python3-myst-parser furo libjs-mathjax chromium python3-pil
 CXX_BUILD := build/cpp
 CXX_FILES := $(wildcard bem_cpp/src/*.cpp bem_cpp/include/bem/*.hpp bem_cpp/tests/*.cpp bem_cpp/tests/*.hpp) \
-             bem_cpp/bindings.cpp bench/direct_topology/direct_topology.cpp
-SOURCES := $(wildcard bem_cpp/src/*.cpp bem_cpp/include/bem/*.hpp) bem_cpp/bindings.cpp setup.py pyproject.toml
+             bem_cpp/bindings.cpp fem_py/mesh/cpp/placed_cells.cpp
+SOURCES := $(wildcard bem_cpp/src/*.cpp bem_cpp/include/bem/*.hpp) bem_cpp/bindings.cpp \
+           fem_py/mesh/cpp/placed_cells.cpp fem_py/mesh/cpp/CMakeLists.txt setup.py pyproject.toml
 
 .PHONY: setup debs debs-docs venv build lint test test-cpp test-py demo bench bench-large study docs clean
 

@@ -1,13 +1,18 @@
-"""Build of the compiled part of bem_cpp (``bem_cpp._bem``).
+"""Build of the compiled parts: ``bem_cpp._bem`` and ``fem_py.mesh._placed_cells``.
 
-Everything else lives in pyproject.toml. The C++ sources are globbed so that the
-CMake build of the GoogleTest suite (bem_cpp/CMakeLists.txt) and this build always
-compile the same files.
+Everything else lives in pyproject.toml. The C++ sources of bem_cpp are globbed so that
+the CMake build of the GoogleTest suite (bem_cpp/CMakeLists.txt) and this build always
+compile the same files. ``fem_py.mesh._placed_cells`` links libdolfinx, whose compile and
+link flags only DOLFINx's CMake configuration knows: it is built by CMake
+(fem_py/mesh/cpp/CMakeLists.txt) into the place setuptools expects.
 """
+import subprocess
+import sys
 from pathlib import Path
 
+import pybind11
 from pybind11.setup_helpers import ParallelCompile, Pybind11Extension, build_ext
-from setuptools import setup
+from setuptools import Extension, setup
 
 # the sources compile in parallel (one job per core; NPY_NUM_BUILD_JOBS overrides)
 ParallelCompile("NPY_NUM_BUILD_JOBS").install()
@@ -31,4 +36,34 @@ bem = Pybind11Extension(
     libraries=["lapack", "blas", "mvec"],
 )
 
-setup(ext_modules=[bem], cmdclass={"build_ext": build_ext})
+
+class CMakeExtension(Extension):
+    """A module built by the CMake project in ``source_dir``, whose target is the module's
+    last name."""
+
+    def __init__(self, name: str, source_dir: str) -> None:
+        super().__init__(name, sources=[])
+        self.source_dir = str((root / source_dir).resolve())
+
+
+class BuildExtensions(build_ext):
+    """pybind11's ``build_ext``, and CMake for a :class:`CMakeExtension`."""
+
+    def build_extension(self, ext: Extension) -> None:
+        if not isinstance(ext, CMakeExtension):
+            return super().build_extension(ext)
+        target = Path(self.get_ext_fullpath(ext.name)).resolve()
+        build = Path(self.build_temp).resolve() / ext.name
+        configure = ["cmake", "-S", ext.source_dir, "-B", str(build), "-DCMAKE_BUILD_TYPE=Release"]
+        configure += [f"-DPython3_EXECUTABLE={sys.executable}"]  # the one that sees mpi4py
+        configure += [f"-Dpybind11_DIR={pybind11.get_cmake_dir()}"]
+        configure += [f"-DCMAKE_LIBRARY_OUTPUT_DIRECTORY={target.parent}"]
+        subprocess.run(configure, check=True)
+        subprocess.run(["cmake", "--build", str(build), "-j", "2"], check=True)
+        if not target.exists():
+            raise RuntimeError(f"CMake did not write {target}")
+
+
+placed_cells = CMakeExtension("fem_py.mesh._placed_cells", "fem_py/mesh/cpp")
+
+setup(ext_modules=[bem, placed_cells], cmdclass={"build_ext": BuildExtensions})

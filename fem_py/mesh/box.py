@@ -29,7 +29,7 @@ from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
 from fem_py.mesh.args3d import checked_point, checked_positive
-from fem_py.mesh.distribute import destinations, p1_domain
+from fem_py.mesh.placed import mesh_of_placed_cells
 
 __all__ = [
     "BOX_FACES",
@@ -154,11 +154,7 @@ def box_mesh(
     links = _ghost_links(n, cubes, starts, comm.rank)
     N = (n + 1) ** 3
     x = _vertices(lo, hi, n, comm.rank * N // comm.size, (comm.rank + 1) * N // comm.size)
-
-    def partitioner(comm_, nparts, tdim, local_cells, ghost_mode):
-        return destinations(np.full(len(cells), comm.rank, dtype=np.int64), links)
-
-    msh = dmesh.create_mesh(comm, cells, x, p1_domain("tetrahedron"), partitioner=partitioner)
+    msh = mesh_of_placed_cells(comm, "tetrahedron", cells, x, links)
     fdim = msh.topology.dim - 1
     msh.topology.create_connectivity(fdim, msh.topology.dim)
     tol = 1e-10 * width

@@ -23,12 +23,12 @@ import numpy as np
 from dolfinx import mesh as dmesh
 
 from fem_py.dofs import input_node_numbers
+from fem_py.mesh.placed import mesh_of_placed_cells, p1_domain
 from fem_py.mesh.structured import StructuredRefinement
 from fem_py.parallel import broadcast_from_root, gather_to_root
 
 __all__ = [
     "destinations",
-    "p1_domain",
     "distribute_mesh",
     "distribute_structured",
     "subdomain_owners",
@@ -159,16 +159,6 @@ def _tagged_mesh(
     return msh, ct, ft
 
 
-def p1_domain(cell: str) -> Any:
-    """The UFL domain of a P1 mesh of ``cell`` ("triangle" in 2D, "tetrahedron" in 3D;
-    ``gmshio.ufl_mesh`` without importing gmsh where no gmsh is needed; measurements:
-    docs/design/fem_py.md)."""
-    import ufl
-
-    c = ufl.Cell(cell, geometric_dimension=3 if cell == "tetrahedron" else 2)
-    return ufl.Mesh(ufl.VectorElement(ufl.FiniteElement("Lagrange", c, 1, variant="equispaced")))
-
-
 def _n_local_cells(msh: Any) -> int:
     """Number of local cells, owned and ghosts."""
     cells = msh.topology.index_map(2)
@@ -265,22 +255,14 @@ def distribute_structured(
     N = ref.n_nodes
     x = ref.coordinates(comm.rank * N // comm.size, (comm.rank + 1) * N // comm.size)
 
-    def partitioner(comm_, nparts, tdim, local_cells, ghost_mode):
-        return destinations(
-            np.full(len(cells), comm.rank, dtype=np.int64),
-            ref.ghost_ranks(mine, rank_of_cell, comm.rank),
-        )
-
-    # whole subdomains per rank when there are enough subdomains, else DOLFINx's graph
-    # partitioner (the preconditioner then runs on rank 0, coupling.distributed)
-    by_subdomain = nc >= comm.size  # also in serial: no graph partitioner for one part
-    msh = dmesh.create_mesh(
-        comm,
-        cells,
-        x,
-        p1_domain("triangle"),
-        **({"partitioner": partitioner} if by_subdomain else {}),
-    )
+    # whole subdomains per rank when there are enough subdomains, made where they are
+    # (fem_py.mesh.placed), else DOLFINx's graph partitioner (the preconditioner then runs
+    # on rank 0, coupling.distributed)
+    if nc >= comm.size:
+        links = ref.ghost_ranks(mine, rank_of_cell, comm.rank)
+        msh = mesh_of_placed_cells(comm, "triangle", cells, x, links)
+    else:
+        msh = dmesh.create_mesh(comm, cells, x, p1_domain("triangle"))
     # input cells are numbered rank after rank, each rank's coarse cells in increasing order
     by_rank = np.argsort(rank_of_cell, kind="stable")
     ct = dmesh.meshtags(
@@ -337,22 +319,13 @@ def reghost(msh: Any) -> Any:
     owner = np.concatenate([np.full(n_own, comm.rank), np.asarray(cells.owners)])
     f2c = topology.connectivity(1, 2)
     c2f = topology.connectivity(2, 1).array.reshape(-1, 3)[:n_own]
-    links = [
-        (c, int(owner[g]))
-        for c in range(n_own)
-        for f in c2f[c]
-        for g in f2c.links(f)
-        if owner[g] != comm.rank
-    ]
-    links = np.unique(np.array(links, dtype=np.int64).reshape(-1, 2), axis=0)
-
-    def partitioner(comm_, nparts, tdim, local_cells, ghost_mode):
-        return destinations(np.full(n_own, comm.rank, dtype=np.int64), links)
-
-    return dmesh.create_mesh(
-        comm,
-        glob.astype(np.int64),
-        np.ascontiguousarray(x),
-        p1_domain("triangle"),
-        partitioner=partitioner,
-    )
+    # every (owned cell, cell across one of its facets) pair, itself included (a facet may
+    # have more than two cells here: the doubled ghosts)
+    facet = c2f.ravel()
+    count = np.diff(f2c.offsets)[facet]
+    start = np.repeat(f2c.offsets[facet] - np.cumsum(count) + count, count)
+    other = f2c.array[start + np.arange(count.sum())]
+    cell = np.repeat(np.repeat(np.arange(n_own), 3), count)
+    away = owner[other] != comm.rank
+    links = np.unique(np.stack([cell[away], owner[other][away]], axis=1), axis=0)
+    return mesh_of_placed_cells(comm, "triangle", glob, x, links)

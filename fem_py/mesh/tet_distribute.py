@@ -16,7 +16,7 @@ from dolfinx import cpp
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
-from fem_py.mesh.distribute import p1_domain
+from fem_py.mesh.placed import p1_domain
 from fem_py.mesh.tet_checks import boundary_faces, row_codes
 from fem_py.mesh.tet_file import SolidFile
 from fem_py.parallel import run_on_root

@@ -1,4 +1,4 @@
-"""bench/direct_topology.py builds its probe and makes the same mesh both ways on one and two
+"""bench/placed_cells.py makes the same mesh both ways (create_mesh and placed cells) on one and two
 ranks (its times are for people: none is asserted), and rejects bad arguments with one line."""
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ from conftest import run_bench
 
 
 @pytest.mark.mpi
-def test_direct_topology_makes_the_same_mesh_on_one_and_two_ranks():
-    proc = run_bench("direct_topology.py", "--cells", "8", "--ranks", "1", "2", "--repeat", "1")
+def test_placed_cells_bench_makes_the_same_mesh_on_one_and_two_ranks():
+    proc = run_bench("placed_cells.py", "--cells", "8", "--ranks", "1", "2", "--repeat", "1")
     assert proc.returncode == 0, proc.stderr
     rows = [line for line in proc.stdout.splitlines() if line.startswith("| 8 |")]
     assert len(rows) == 2
@@ -26,7 +26,7 @@ def test_direct_topology_makes_the_same_mesh_on_one_and_two_ranks():
     "args",
     [["--cells", "0"], ["--repeat", "0"], ["--ranks", "0"], ["--cells", "2", "--ranks", "3"]],
 )
-def test_direct_topology_rejects_bad_arguments(args):
-    proc = run_bench("direct_topology.py", *args)
+def test_placed_cells_bench_rejects_bad_arguments(args):
+    proc = run_bench("placed_cells.py", *args)
     assert proc.returncode == 2
     assert proc.stderr.strip().startswith("error:") and len(proc.stderr.strip().splitlines()) == 1
