@@ -14,8 +14,9 @@ named after their outward normal: ``bottom`` (z min), ``top`` (z max), ``left`` 
 :func:`box_mesh` writes the mesh down in parallel from its closed form, as the 2D
 structured mesh does (``fem_py.mesh.distribute.distribute_structured``): each rank makes
 the tetrahedra of a contiguous range of cubes (lexicographic, x fastest: slabs of the box
-when the ranks divide n) and an even block of the vertex coordinates, and tells DOLFINx
-where each cell goes, so no graph is partitioned and no rank holds the whole mesh
+when the ranks divide n) and an even block of the vertex coordinates, and the mesh is made
+from them where they are (``fem_py.mesh.placed``), so no graph is partitioned and no rank
+holds the whole mesh
 (measured against ``create_box``: docs/design/three_dimensions.md, "Issue 34, continued
 (2026-12-06): the box written down in parallel ...").
 """

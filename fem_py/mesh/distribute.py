@@ -1,16 +1,18 @@
 """Distribute a triangle mesh over the ranks by whole subdomains (docs/method.md section 6).
 
-Every rank gets whole subdomains (:func:`subdomain_owners`, passed to
-``dolfinx.mesh.create_mesh`` as its partitioner), so the local Dirichlet problems of
-the substructuring preconditioner are rank-local; cells are ghosted in DOLFINx's
-shared-facet mode. Two inputs:
+Every rank gets whole subdomains (:func:`subdomain_owners`), so the local Dirichlet
+problems of the substructuring preconditioner are rank-local; cells are ghosted in
+DOLFINx's shared-facet mode. Two inputs:
 
 - :func:`distribute_mesh`: a mesh held whole on rank 0 (the gmsh arrays of
   ``fem_py.mesh.gmsh_mesh``), distributed the way ``gmshio.model_to_mesh`` does it
-  (``create_mesh`` + ``distribute_entity_data`` + ``meshtags_from_entities``);
+  (``create_mesh`` with :func:`subdomain_owners` as its partitioner,
+  ``distribute_entity_data``, ``meshtags_from_entities``);
 - :func:`distribute_structured`: a structured refinement (``fem_py.mesh.structured``),
   written down in parallel: each rank makes the triangles of its own coarse cells and a
-  block of the node coordinates, and the tags follow from the closed-form numbering.
+  block of the node coordinates, the mesh is made from them where they are
+  (``fem_py.mesh.placed``, without ``create_mesh``), and the tags follow from the
+  closed-form numbering.
 
 With fewer subdomains than ranks, DOLFINx's graph partitioner is used instead (the
 preconditioner then runs on rank 0, ``coupling.distributed``).
