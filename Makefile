@@ -104,4 +104,4 @@ docs: build debs-docs
 	echo "open docs/_build/html/index.html"
 
 clean:
-	rm -rf build $(VENV) *.egg-info bem_cpp/*.so docs/_build docs/api docs/demos
+	rm -rf build $(VENV) *.egg-info bem_cpp/*.so fem_py/mesh/*.so docs/_build docs/api docs/demos
