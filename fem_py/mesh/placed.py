@@ -4,10 +4,9 @@ The structured meshes (``fem_py.mesh.distribute.distribute_structured`` in 2D,
 ``fem_py.mesh.box`` in 3D) write each rank's own cells on that rank and know, from their
 closed form, which cells each neighbouring rank must ghost (DOLFINx's shared-facet mode).
 ``dolfinx.mesh.create_mesh`` would still call a partitioner, send every cell to its rank
-(itself), build the dual graph and reorder the cells before it makes the topology: at 8e6
-triangles 16.3 s on one rank against 5.8 s for the two steps that remain
-(docs/design/parallel.md, "The tenth session"). :func:`mesh_of_placed_cells` calls those
-two steps, ``dolfinx::mesh::create_topology`` and ``create_geometry``, through the module
+(itself), build the dual graph and reorder the cells before it makes the topology, which
+costs more than the two steps that remain (measured in docs/design/parallel.md, "The
+tenth session"). :func:`mesh_of_placed_cells` calls those two steps, ``dolfinx::mesh::create_topology`` and ``create_geometry``, through the module
 ``fem_py.mesh._placed_cells`` (fem_py/mesh/cpp/, built by ``make build``), after one
 exchange of the ghost cells between neighbours.
 
