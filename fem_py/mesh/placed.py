@@ -6,7 +6,8 @@ closed form, which cells each neighbouring rank must ghost (DOLFINx's shared-fac
 ``dolfinx.mesh.create_mesh`` would still call a partitioner, send every cell to its rank
 (itself), build the dual graph and reorder the cells before it makes the topology, which
 costs more than the two steps that remain (measured in docs/design/parallel.md, "The
-tenth session"). :func:`mesh_of_placed_cells` calls those two steps, ``dolfinx::mesh::create_topology`` and ``create_geometry``, through the module
+tenth session"). :func:`mesh_of_placed_cells` calls those two steps,
+``dolfinx::mesh::create_topology`` and ``create_geometry``, through the module
 ``fem_py.mesh._placed_cells`` (fem_py/mesh/cpp/, built by ``make build``), after one
 exchange of the ghost cells between neighbours.
 
