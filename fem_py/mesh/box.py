@@ -37,6 +37,7 @@ __all__ = [
     "BoxCounts",
     "BoxLattice",
     "KUHN_TETRAHEDRA",
+    "box_cells",
     "box_counts",
     "box_mesh",
     "check_box",
@@ -149,13 +150,7 @@ def box_mesh(
     c, width, h = check_box(center, width, h)
     n = cubes_per_side(width, h)
     lo, hi = c - width / 2, c + width / 2
-    starts = n**3 * np.arange(comm.size + 1, dtype=np.int64) // comm.size
-    cubes = np.arange(starts[comm.rank], starts[comm.rank + 1])
-    cells = _cells_of_cubes(n, cubes)
-    links = _ghost_links(n, cubes, starts, comm.rank)
-    N = (n + 1) ** 3
-    x = _vertices(lo, hi, n, comm.rank * N // comm.size, (comm.rank + 1) * N // comm.size)
-    msh = mesh_of_placed_cells(comm, "tetrahedron", cells, x, links)
+    msh = mesh_of_placed_cells(comm, "tetrahedron", *box_cells(comm, lo, hi, n))
     fdim = msh.topology.dim - 1
     msh.topology.create_connectivity(fdim, msh.topology.dim)
     tol = 1e-10 * width
@@ -174,6 +169,21 @@ def box_mesh(
     order = np.argsort(idx, kind="stable")
     facet_tags = dmesh.meshtags(msh, fdim, idx[order], val[order])
     return msh, facet_tags, names
+
+
+def box_cells(
+    comm: MPI.Comm, lo: np.ndarray, hi: np.ndarray, n: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """This rank's part of the box [lo, hi] of n cubes a side, written down where it is
+    owned: the tetrahedra of its contiguous range of cubes (vertex numbers), its even block
+    of the vertex coordinates, and the (tetrahedron, rank) rows of the ranks ghosting its
+    tetrahedra (the inputs of ``fem_py.mesh.placed.mesh_of_placed_cells``; no
+    communication)."""
+    starts = n**3 * np.arange(comm.size + 1, dtype=np.int64) // comm.size
+    cubes = np.arange(starts[comm.rank], starts[comm.rank + 1])
+    N = (n + 1) ** 3
+    x = _vertices(lo, hi, n, comm.rank * N // comm.size, (comm.rank + 1) * N // comm.size)
+    return _cells_of_cubes(n, cubes), x, _ghost_links(n, cubes, starts, comm.rank)
 
 
 def _corner_offsets(n: int) -> np.ndarray:

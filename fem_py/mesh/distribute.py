@@ -33,6 +33,7 @@ __all__ = [
     "destinations",
     "distribute_mesh",
     "distribute_structured",
+    "structured_cells",
     "subdomain_owners",
     "reghost",
 ]
@@ -224,6 +225,26 @@ def distribute_mesh(comm: Any, arrays: tuple | None) -> TaggedMesh:
     return _tagged_mesh(msh, values, facets, facet_values)
 
 
+def structured_cells(
+    comm: Any, ref: StructuredRefinement
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """This rank's part of the structured mesh, written down where it is owned: the rank of
+    every coarse cell (:func:`subdomain_owners`), the triangles of this rank's coarse cells
+    (input node numbers), this rank's even block of the node coordinates, and the (triangle,
+    rank) rows of the ranks ghosting its triangles (the inputs of
+    ``fem_py.mesh.placed.mesh_of_placed_cells``; no communication)."""
+    nc = len(ref.cells)
+    rank_of_cell = (
+        subdomain_owners(ref.V, ref.cells, np.arange(nc), comm.size)
+        if comm.size > 1
+        else np.zeros(nc, dtype=np.int32)
+    )
+    mine = np.flatnonzero(rank_of_cell == comm.rank)
+    N = ref.n_nodes
+    x = ref.coordinates(comm.rank * N // comm.size, (comm.rank + 1) * N // comm.size)
+    return rank_of_cell, ref.triangles(mine), x, ref.ghost_ranks(mine, rank_of_cell, comm.rank)
+
+
 def distribute_structured(
     comm: Any, ref: StructuredRefinement, edge_tags: np.ndarray
 ) -> TaggedMesh:
@@ -247,21 +268,11 @@ def distribute_structured(
     (mesh, cell tags, facet tags)
     """
     nc, T = len(ref.cells), ref.triangles_per_cell
-    rank_of_cell = (
-        subdomain_owners(ref.V, ref.cells, np.arange(nc), comm.size)
-        if comm.size > 1
-        else np.zeros(nc, dtype=np.int32)
-    )
-    mine = np.flatnonzero(rank_of_cell == comm.rank)
-    cells = ref.triangles(mine)
-    N = ref.n_nodes
-    x = ref.coordinates(comm.rank * N // comm.size, (comm.rank + 1) * N // comm.size)
-
+    rank_of_cell, cells, x, links = structured_cells(comm, ref)
     # whole subdomains per rank when there are enough subdomains, made where they are
     # (fem_py.mesh.placed), else DOLFINx's graph partitioner (the preconditioner then runs
     # on rank 0, coupling.distributed)
     if nc >= comm.size:
-        links = ref.ghost_ranks(mine, rank_of_cell, comm.rank)
         msh = mesh_of_placed_cells(comm, "triangle", cells, x, links)
     else:
         msh = dmesh.create_mesh(comm, cells, x, p1_domain("triangle"))

@@ -62,7 +62,7 @@ def mesh_of_placed_cells(
     outgoing = [
         (cells[links[a:b, 0]], offset + links[a:b, 0]) for a, b in zip(bounds[:-1], bounds[1:])
     ]
-    incoming = comm.alltoall(outgoing) if comm.size > 1 else []
+    incoming = comm.alltoall(outgoing)
     ghost_cells = [c for c, _ in incoming]
     ghost_numbers = [g for _, g in incoming]
     owners = [np.full(len(g), r, dtype=np.int32) for r, g in enumerate(ghost_numbers)]
@@ -72,8 +72,7 @@ def mesh_of_placed_cells(
         np.concatenate([cells, *ghost_cells]),
         np.ascontiguousarray(x, dtype=np.float64),
         np.concatenate([offset + np.arange(len(cells), dtype=np.int64), *ghost_numbers]),
-        np.concatenate([np.zeros(0, dtype=np.int32), *owners]),
-        comm.size > 1,
+        np.concatenate(owners),
     )
     return dmesh.Mesh(cpp_mesh, p1_domain(cell))
 

@@ -18,15 +18,15 @@ from dolfinx import fem
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
-from fem_py.mesh import box
-from fem_py.mesh.distribute import destinations, subdomain_owners
+from fem_py.mesh.box import box_cells
+from fem_py.mesh.distribute import destinations, structured_cells
 from fem_py.mesh.placed import mesh_of_placed_cells, p1_domain
 from fem_py.mesh.structured import refine
 
 
 def square_inputs(comm: MPI.Comm):
     """A 6 x 5 grid of coarse squares on [0, 1.2] x [0, 1], each refined into 4 x 4
-    squares of 2 triangles, the coarse squares over the ranks as the solver places them."""
+    squares of 2 triangles, written down over the ranks as the solver does it."""
     nx, ny = 6, 5
     V = np.array([[0.2 * i, 0.2 * j] for j in range(ny + 1) for i in range(nx + 1)])
     q = np.array(
@@ -36,24 +36,14 @@ def square_inputs(comm: MPI.Comm):
             for a in range(nx)
         ]
     )
-    ref = refine(V, q, 4)
-    rank_of_cell = subdomain_owners(ref.V, ref.cells, np.arange(len(q)), comm.size)
-    mine = np.flatnonzero(rank_of_cell == comm.rank)
-    N = ref.n_nodes
-    x = ref.coordinates(comm.rank * N // comm.size, (comm.rank + 1) * N // comm.size)
-    return "triangle", ref.triangles(mine), x, ref.ghost_ranks(mine, rank_of_cell, comm.rank)
+    _, cells, x, links = structured_cells(comm, refine(V, q, 4))
+    return "triangle", cells, x, links
 
 
 def box_inputs(comm: MPI.Comm):
-    """The box of 4 cubes a side, 6 tetrahedra each, in slabs of cubes over the ranks."""
-    n = 4
-    starts = n**3 * np.arange(comm.size + 1, dtype=np.int64) // comm.size
-    cubes = np.arange(starts[comm.rank], starts[comm.rank + 1])
-    N = (n + 1) ** 3
-    lo, hi = np.zeros(3), np.ones(3)
-    x = box._vertices(lo, hi, n, comm.rank * N // comm.size, (comm.rank + 1) * N // comm.size)
-    links = box._ghost_links(n, cubes, starts, comm.rank)
-    return "tetrahedron", box._cells_of_cubes(n, cubes), x, links
+    """The unit box of 4 cubes a side, 6 tetrahedra each, in slabs of cubes over the ranks,
+    written down as ``fem_py.mesh.box.box_mesh`` does it."""
+    return "tetrahedron", *box_cells(comm, np.zeros(3), np.ones(3), 4)
 
 
 def summary(msh) -> dict:

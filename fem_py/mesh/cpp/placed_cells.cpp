@@ -33,14 +33,13 @@ using Int64Array = py::array_t<std::int64_t, py::array::c_style>;
 // The mesh of the P1 cells ``cells`` (n x k global node numbers: this rank's own cells, then
 // its ghost cells across their facets), numbered ``original`` in the input, with the ghost
 // cells' owners ``ghost_owners`` and this rank's block of the input node coordinates ``x``
-// (m x gdim, the blocks rank after rank). ``ghosted``: DOLFINx's shared-facet ghost mode
-// (on every rank of a communicator of more than one rank), else none.
+// (m x gdim, the blocks rank after rank). On more than one rank the cells are ghosted in
+// DOLFINx's shared-facet mode, on one rank not at all.
 std::shared_ptr<dolfinx::mesh::Mesh> mesh_of_placed_cells(const py::object& comm_object, const std::string& cell,
                                                           const Int64Array& cells,
                                                           const py::array_t<double, py::array::c_style>& x,
                                                           const Int64Array& original,
-                                                          const py::array_t<int, py::array::c_style>& ghost_owners,
-                                                          bool ghosted) {
+                                                          const py::array_t<int, py::array::c_style>& ghost_owners) {
   const dolfinx::mesh::CellType type = dolfinx::mesh::to_type(cell);
   const int k = dolfinx::mesh::num_cell_vertices(type);
   const int tdim = dolfinx::mesh::cell_dim(type);
@@ -58,7 +57,9 @@ std::shared_ptr<dolfinx::mesh::Mesh> mesh_of_placed_cells(const py::object& comm
   std::vector<std::int32_t> offsets(n + 1);
   for (std::size_t c = 0; c <= n; ++c) offsets[c] = static_cast<std::int32_t>(k * c);
   const dolfinx::graph::AdjacencyList<std::int64_t> adjacency(std::move(nodes), std::move(offsets));
-  const auto mode = ghosted ? dolfinx::mesh::GhostMode::shared_facet : dolfinx::mesh::GhostMode::none;
+  int ranks = 1;
+  MPI_Comm_size(comm, &ranks);
+  const auto mode = ranks > 1 ? dolfinx::mesh::GhostMode::shared_facet : dolfinx::mesh::GhostMode::none;
   dolfinx::mesh::Topology topology =
       dolfinx::mesh::create_topology(comm, adjacency, std::span<const std::int64_t>(original.data(), original.size()),
                                      std::span<const int>(ghost_owners.data(), ghost_owners.size()), type, mode);
@@ -75,5 +76,5 @@ PYBIND11_MODULE(_placed_cells, m) {
   py::module::import("dolfinx.cpp");  // the Mesh type is registered there
   m.doc() = "A DOLFINx mesh from cells already on their ranks (create_topology + create_geometry).";
   m.def("mesh_of_placed_cells", &mesh_of_placed_cells, py::arg("comm"), py::arg("cell"), py::arg("cells"), py::arg("x"),
-        py::arg("original"), py::arg("ghost_owners"), py::arg("ghosted"));
+        py::arg("original"), py::arg("ghost_owners"));
 }
