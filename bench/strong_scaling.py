@@ -355,18 +355,38 @@ def table(
         )
     for r in runs[1:]:
         c = ceiling[r["ranks"]]
+        speedup = base["total"] / r["total"]
+        independent = (
+            base["total"] / parts[r["ranks"]]["total"]
+            if r["ranks"] in parts and base["ranks"] == 1
+            else None
+        )
         text += (
-            f"\nP = {r['ranks']}: speed-up {base['total'] / r['total']:.2f}x; ceilings in this "
+            f"\nP = {r['ranks']}: speed-up {speedup:.2f}x; ceilings in this "
             f"run: peak triad {c['triad']:.2f}x, sustained triad {c['sustained']:.2f}x, "
             f"compute-bound {c['compute']:.2f}x"
-            + (
-                f", independent parts {base['total'] / parts[r['ranks']]['total']:.2f}x"
-                if r["ranks"] in parts and base["ranks"] == 1
-                else ""
-            )
+            + (f", independent parts {independent:.2f}x" if independent else "")
             + "\n"
+            + _verdict(speedup, c["triad"], independent)
         )
     return text
+
+
+def _verdict(speedup: float, triad: float, independent: float | None) -> str:
+    """Whether the speed-up is at or above the peak triad's (the target), and whether the
+    workload's own ceiling let any code reach it in this run: P independent parts never
+    wait for each other and compute nothing twice, so no P-rank solve can beat them. The
+    ratios are compared as printed, to two decimals."""
+    speedup, triad = round(speedup, 2), round(triad, 2)
+    text = f"target (at or above the peak triad): {'met' if speedup >= triad else 'missed'}"
+    if independent is not None:
+        reach = round(independent, 2) >= triad
+        text += (
+            f"; the independent parts ({independent:.2f}x) "
+            f"{'reach' if reach else 'fall short of'} the peak triad, so the target was "
+            f"{'reachable' if reach else 'out of reach'} in this run"
+        )
+    return text + "\n"
 
 
 def main(argv: list[str] | None = None) -> int:

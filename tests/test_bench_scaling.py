@@ -53,6 +53,16 @@ def test_strong_scaling_small_run(tmp_path):
     verdict = scaling.split("\nP = 2: speed-up ")[1].splitlines()[0]
     for ceiling_name in ("peak triad", "sustained triad", "compute-bound", "independent parts"):
         assert f"{ceiling_name} " in verdict
+    # then whether the target was met, and whether the workload's own ceiling let any code
+    # meet it in this run, both read off the figures printed above
+    speedup = float(verdict.split("x;")[0])
+    triad = float(verdict.split("peak triad ")[1].split("x")[0])
+    independent = float(verdict.split("independent parts ")[1].split("x")[0])
+    target = scaling.split("\nP = 2: speed-up ")[1].splitlines()[1]
+    assert target.startswith(
+        f"target (at or above the peak triad): {'met' if speedup >= triad else 'missed'}; "
+    )
+    assert f"so the target was {'reachable' if independent >= triad else 'out of reach'}" in target
 
 
 @pytest.mark.parametrize("args", [["--cells", "2"], ["--repeat", "0"]])
