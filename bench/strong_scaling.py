@@ -224,7 +224,8 @@ def run(ranks: int, cells: int, method: str) -> dict:
 def independent_parts(parts: int, cells: int, method: str) -> dict:
     """``parts`` serial solves of the problem with 1/parts of the dofs (``cells`` /
     sqrt(parts) per side), run at the same time with one thread each and no
-    communication: the time of the slowest, and the part's size.
+    communication: the slowest one's result (its phase times, as :func:`worker` prints
+    them) and its size, ``part_dofs``.
 
     This is what ``parts`` ranks could reach at best on this machine if the solve split
     into independent pieces: each piece meets its twins' load on the memory system and
@@ -243,7 +244,7 @@ def independent_parts(parts: int, cells: int, method: str) -> dict:
             if proc.poll() is None:
                 proc.kill()
     slowest = max(results, key=lambda r: r["total"])
-    return {"part_dofs": slowest["dofs"], "total": slowest["total"]}
+    return {**slowest, "part_dofs": slowest["dofs"]}
 
 
 def ceilings(ranks: list[int], repeat: int) -> tuple[str, dict[int, dict[str, float]]]:
@@ -333,10 +334,13 @@ def table(
         "| P | B | iterations | " + " | ".join(PHASES) + " |",
         "|---|---|---|" + "---|" * len(PHASES),
     ]
-    for r in runs:
+    rows = [(str(r["ranks"]), r) for r in runs]
+    if base["ranks"] == 1:  # each phase of the slowest part beside the P-rank run's
+        rows += [(f"{p} independent parts", r) for p, r in parts.items()]
+    for label, r in rows:
         cells = [f"{r[p]:.2f} ({base[p] / r[p]:.2f}x)" for p in PHASES]
         lines.append(
-            f"| {r['ranks']} | {r['preconditioner']} | {r['iterations_count']} | "
+            f"| {label} | {r['preconditioner']} | {r['iterations_count']} | "
             + " | ".join(cells)
             + " |"
         )
