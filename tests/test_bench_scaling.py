@@ -39,7 +39,9 @@ def test_strong_scaling_small_run(tmp_path):
     assert float(seconds.removesuffix(" s")) > 0
     assert float(ceiling_ratio.removeprefix("a ceiling of ").split("x")[0]) > 0
     # and its phases beside the two-rank run's, in the same table
-    (halves,) = [line.split("|") for line in scaling.splitlines() if "| 2 independent parts |" in line]
+    (halves,) = [
+        line.split("|") for line in scaling.splitlines() if "| 2 independent parts |" in line
+    ]
     assert halves[2].strip() == "SubstructuringPreconditioner"
     assert f"{float(seconds.removesuffix(' s')):.2f} (" in halves[-2]  # the total
     # the machine's ceilings, measured in the same run: a row per rank count, P = 1 the reference
