@@ -26,14 +26,17 @@ each rank's own time: on a VM the vCPUs' speeds differ over seconds, and a run t
 synchronises its ranks goes at the slower one's pace).
 The workload's own ceiling is measured beside them (:func:`independent_parts`): for each
 P > 1, P serial solves of 1/P of the dofs at the same time, one thread each, with no
-communication and nothing computed twice. On the 2-core VMs of issue 33 it was below the
-triad's at 4e6 dofs (docs/design/parallel.md).
+communication and nothing computed twice; the slowest part's phases are a row of the
+phase table. No P-rank solve can beat them, so when they fall short of the triad no code
+could meet issue 33's target in that run; on the 2-core VMs of issue 33 that happened in
+about half of the runs at 4e6 dofs (docs/design/parallel.md).
 
 Every rank count is run ``--repeat`` times, alternating between the rank counts, and the
 run with the smallest total is reported for each (the machine is shared: other load
-only ever adds time). Prints a table of times and speed-ups (target: total speed-up
->= 1.6 from P = 1 to 2 on this 2-core machine), the totals of every run, and writes
-them to ``--output`` (markdown) if given.
+only ever adds time). Prints a table of times and speed-ups, the totals of every run,
+each speed-up beside the ceilings with the verdict on the target (at or above the peak
+triad) and on whether the independent parts reached it, and writes them to ``--output``
+(markdown) if given.
 
     .venv/bin/python bench/strong_scaling.py [--cells 1000] [--ranks 1 2]
                                              [--method ssn pgpm] [--repeat 3]
