@@ -28,8 +28,8 @@ The workload's own ceiling is measured beside them (:func:`independent_parts`): 
 P > 1, P serial solves of 1/P of the dofs at the same time, one thread each, with no
 communication and nothing computed twice; the slowest part's phases are a row of the
 phase table. No P-rank solve can beat them, so when they fall short of the triad no code
-could meet issue 33's target in that run; on the 2-core VMs of issue 33 that happened in
-about half of the runs at 4e6 dofs (docs/design/parallel.md).
+could meet issue 33's target in that run (how often that happened on the 2-core VMs:
+docs/design/parallel.md, "The eleventh session").
 
 Every rank count is run ``--repeat`` times, alternating between the rank counts, and the
 run with the smallest total is reported for each (the machine is shared: other load
