@@ -34,10 +34,10 @@ docs/design/parallel.md, "The eleventh session").
 Every rank count is run ``--repeat`` times, alternating between the rank counts, and the
 run with the smallest total is reported for each (the machine is shared: other load
 only ever adds time). Prints a table of times and speed-ups (issue 7's target: at least
-1.6x from P = 1 to 2 at 10^6 dofs), the totals of every run,
-each speed-up beside the ceilings with the verdict on the target (at or above the peak
-triad) and on whether the independent parts reached it, and writes them to ``--output``
-(markdown) if given.
+1.6x from P = 1 to 2 at 10^6 dofs), the totals of every run, and each speed-up beside
+the ceilings with the verdict on issue 33's target (at or above the peak triad) and on
+whether the independent parts reached it; writes them to ``--output`` (markdown) if
+given.
 
     .venv/bin/python bench/strong_scaling.py [--cells 1000] [--ranks 1 2]
                                              [--method ssn pgpm] [--repeat 3]
