@@ -338,9 +338,11 @@ def table(
         "| P | B | iterations | " + " | ".join(PHASES) + " |",
         "|---|---|---|" + "---|" * len(PHASES),
     ]
+    # the parts are a ceiling against one rank only: each part's speed-up over it
+    parts = parts if base["ranks"] == 1 else {}
+    parts_speedup = {p: base["total"] / r["total"] for p, r in parts.items()}
     rows = [(str(r["ranks"]), r) for r in runs]
-    if base["ranks"] == 1:  # each phase of the slowest part beside the P-rank run's
-        rows += [(f"{p} independent parts", r) for p, r in parts.items()]
+    rows += [(f"{p} independent parts", r) for p, r in parts.items()]  # beside the P-rank run
     for label, r in rows:
         cells = [f"{r[p]:.2f} ({base[p] / r[p]:.2f}x)" for p in PHASES]
         lines.append(
@@ -350,13 +352,13 @@ def table(
         )
     every = "; ".join(f"P = {p}: " + ", ".join(f"{t:.2f}" for t in ts) for p, ts in totals.items())
     text = head + "\n".join(lines) + f"\n\ntotals of every run (s): {every}\n"
-    if base["ranks"] == 1 and parts:
+    if parts:
         text += (
             "\nIndependent parts (P serial solves of 1/P of the dofs at the same time, one "
             "thread each, no communication; the slowest of the fastest run): "
             + "; ".join(
                 f"P = {p}: {r['part_dofs']} dofs each, {r['total']:.2f} s, a ceiling of "
-                f"{base['total'] / r['total']:.2f}x"
+                f"{parts_speedup[p]:.2f}x"
                 for p, r in parts.items()
             )
             + "\n"
@@ -364,16 +366,12 @@ def table(
     for r in runs[1:]:
         c = ceiling[r["ranks"]]
         speedup = base["total"] / r["total"]
-        independent = (
-            base["total"] / parts[r["ranks"]]["total"]
-            if r["ranks"] in parts and base["ranks"] == 1
-            else None
-        )
+        independent = parts_speedup.get(r["ranks"])
         text += (
             f"\nP = {r['ranks']}: speed-up {speedup:.2f}x; ceilings in this "
             f"run: peak triad {c['triad']:.2f}x, sustained triad {c['sustained']:.2f}x, "
             f"compute-bound {c['compute']:.2f}x"
-            + (f", independent parts {independent:.2f}x" if independent else "")
+            + ("" if independent is None else f", independent parts {independent:.2f}x")
             + "\n"
             + _verdict(speedup, c["triad"], independent)
         )
