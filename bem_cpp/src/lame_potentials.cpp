@@ -37,6 +37,8 @@ double dotd(const double* a, const double* b) {
   return s;
 }
 
+double sq(double x) { return x * x; }
+
 /// 1/rho^d for r2 = rho^2.
 template <int D>
 double inverse_power(double r2) {
@@ -45,8 +47,9 @@ double inverse_power(double r2) {
 
 /// F (header) at r for the data w and normal n.
 template <int D>
-void double_layer_f(const Constants& k, const double* r, const double* n, const double* w, double* F) {
-  const double r2 = dotd<D>(r, r), inv = inverse_power<D>(r2), inv2 = inv / r2;
+void double_layer_f(const Constants& k, const double* r, double r2, double inv, const double* n, const double* w,
+                    double* F) {
+  const double inv2 = inv / r2;
   const double nw = dotd<D>(n, w), nr = dotd<D>(n, r), wr = dotd<D>(w, r);
   const double radial = k.c * ((k.b + 2.0 * k.mu) * nw * inv - 2.0 * D * k.mu * nr * wr * inv2);
   const double tangential = k.c * k.mu * k.oma * inv;
@@ -90,7 +93,7 @@ inline void add_node(const Constants& k, const double* r, const double* n, const
   // single layer: 1/2 V t = int U t, U t = c (alpha g(rho) t + r (r.t) / rho^d), g = 1/rho (3D), -log rho (2D)
   const double g = D == 3 ? inv * r2 : -0.5 * std::log(r2);
   double F[D];
-  double_layer_f<D>(k, r, n, w, F);
+  double_layer_f<D>(k, r, r2, inv, n, w, F);
   for (int i = 0; i < D; ++i) s.u[i] -= omega * (F[i] + k.c * (k.alpha * g * t[i] + r[i] * rt * inv));
   if constexpr (Stress) {
     const double inv2 = inv / r2, nw = dotd<D>(n, w), nr = dotd<D>(n, r), wr = dotd<D>(w, r);
@@ -159,7 +162,7 @@ void store(const Constants& k, const Sums<D>& s, const Eigen::Ref<const Vector>&
 template <class F>
 void panel_nodes(double qn, double u0, double u1, int depth, const F& f) {
   const double len = u1 - u0;
-  const double dist = std::hypot(u0 > 0.0 ? u0 : (u1 < 0.0 ? -u1 : 0.0), qn);
+  const double dist = std::sqrt(sq(u0 > 0.0 ? u0 : (u1 < 0.0 ? -u1 : 0.0)) + qn * qn);
   if (dist < kPanelSplitLengths * len && depth < kMaxDepth) {
     const double mid = 0.5 * (u0 + u1);
     panel_nodes(qn, u0, mid, depth + 1, f);
@@ -265,9 +268,11 @@ void triangle_nodes(double qn, const double x[3], const double y[3], int depth, 
   const double cx = (x[0] + x[1] + x[2]) / 3.0, cy = (y[0] + y[1] + y[2]) / 3.0;
   double diam = 0.0, radius = 0.0;
   for (int k = 0; k < 3; ++k) {
-    diam = std::max(diam, std::hypot(x[(k + 1) % 3] - x[k], y[(k + 1) % 3] - y[k]));
-    radius = std::max(radius, std::hypot(x[k] - cx, y[k] - cy));
+    diam = std::max(diam, sq(x[(k + 1) % 3] - x[k]) + sq(y[(k + 1) % 3] - y[k]));
+    radius = std::max(radius, sq(x[k] - cx) + sq(y[k] - cy));
   }
+  diam = std::sqrt(diam);  // from the squares
+  radius = std::sqrt(radius);
   const TriangleRule* rule = point_rule((std::sqrt(cx * cx + cy * cy + qn * qn) - radius) / diam);
   if (rule == nullptr && depth >= kMaxDepth) rule = point_rule(kPointSplitDiameters);
   if (rule == nullptr) {  // split at the edge midpoints
@@ -296,33 +301,46 @@ Matrix evaluate(const Surface& surface, const Lame& medium, const Eigen::Ref<con
   check_exterior_surface(surface, points);  // before any work
   const Constants k = constants(medium, 3);
   Matrix out(count, Stress ? 9 : 3);
+  // per triangle: the data w = v - a and t at its vertices, [vertex][component], and the
+  // orthonormal frame (b1, b2, n) of its plane
+  struct Local {
+    double w[3][3], t[3][3];
+    Vec3 b1, b2;
+  };
+  std::vector<Local> local(static_cast<std::size_t>(m));
+  for (Index j = 0; j < m; ++j) {
+    const Triangle& T = surface.triangle(j);
+    Local& L = local[static_cast<std::size_t>(j)];
+    for (int b = 0; b < 3; ++b) {
+      const Index v = 3 * T.v[static_cast<std::size_t>(b)], c = space == Space::P1 ? v : 3 * j;
+      for (int l = 0; l < 3; ++l) {
+        L.w[b][l] = dirichlet(v + l) - a(l);
+        L.t[b][l] = traction(c + l);
+      }
+    }
+    L.b1 = (1.0 / norm(T.p[1] - T.p[0])) * (T.p[1] - T.p[0]);
+    L.b2 = cross(T.n, L.b1);
+  }
 #pragma omp parallel for schedule(dynamic, 4)
   for (Index i = 0; i < count; ++i) {
     const Vec3 z{points(i, 0), points(i, 1), points(i, 2)};
     Sums<3> sums;
     for (Index j = 0; j < m; ++j) {
       const Triangle& T = surface.triangle(j);
+      const Local& L = local[static_cast<std::size_t>(j)];
       const double n_y[3] = {T.n.x, T.n.y, T.n.z};
-      double w[3][3], t[3][3];  // [vertex][component]
-      for (int b = 0; b < 3; ++b) {
-        const Index v = 3 * T.v[static_cast<std::size_t>(b)], c = space == Space::P1 ? v : 3 * j;
-        for (int l = 0; l < 3; ++l) {
-          w[b][l] = dirichlet(v + l) - a(l);
-          t[b][l] = traction(c + l);
-        }
-      }
-      // the triangle in the orthonormal frame (b1, b2, n) from the foot of z: vertices (x, y),
-      // r = z - y = qn n - X b1 - Y b2 at the node (X, Y)
-      const Vec3 b1 = (1.0 / norm(T.p[1] - T.p[0])) * (T.p[1] - T.p[0]), b2 = cross(T.n, b1);
-      // (qn from the vertex nearest to z: a vertex near z is then the same vector from z in
-      // all its triangles, as in 2D)
+      const Vec3 b1 = L.b1, b2 = L.b2;
+      // the triangle in the frame (b1, b2, n) from the foot of z: vertices (x, y), r = z - y =
+      // qn n - X b1 - Y b2 at the node (X, Y); qn from the vertex nearest to z, so that a
+      // vertex near z is the same vector from z in all its triangles (as in 2D)
       double x[3], y[3], qn = 0.0, nearest = std::numeric_limits<double>::infinity();
       for (int b = 0; b < 3; ++b) {
         const Vec3 e = T.p[b] - z;
+        const double e2 = dot(e, e);
         x[b] = dot(e, b1);
         y[b] = dot(e, b2);
-        if (dot(e, e) < nearest) {
-          nearest = dot(e, e);
+        if (e2 < nearest) {
+          nearest = e2;
           qn = -dot(e, T.n);
         }
       }
@@ -337,8 +355,8 @@ Matrix evaluate(const Surface& surface, const Lame& medium, const Eigen::Ref<con
                              qn * T.n.z - X * b1.z - Y * b2.z};
         double wy[3], ty[3];
         for (int c = 0; c < 3; ++c) {
-          wy[c] = l[0] * w[0][c] + l[1] * w[1][c] + l[2] * w[2][c];
-          ty[c] = l[0] * t[0][c] + l[1] * t[1][c] + l[2] * t[2][c];
+          wy[c] = l[0] * L.w[0][c] + l[1] * L.w[1][c] + l[2] * L.w[2][c];
+          ty[c] = l[0] * L.t[0][c] + l[1] * L.t[1][c] + l[2] * L.t[2][c];
         }
         add_node<3, Stress>(k, r, n_y, wy, ty, weight, sums);
       });
@@ -353,10 +371,11 @@ Matrix evaluate(const Surface& surface, const Lame& medium, const Eigen::Ref<con
 std::array<double, 3> lame_double_layer_kernel(const Lame& m, int d, const double* r, const double* n,
                                                const double* w) {
   std::array<double, 3> F{};
+  const double r2 = r[0] * r[0] + r[1] * r[1] + (d == 3 ? r[2] * r[2] : 0.0);
   if (d == 3)
-    double_layer_f<3>(constants(m, 3), r, n, w, F.data());
+    double_layer_f<3>(constants(m, 3), r, r2, inverse_power<3>(r2), n, w, F.data());
   else
-    double_layer_f<2>(constants(m, 2), r, n, w, F.data());
+    double_layer_f<2>(constants(m, 2), r, r2, inverse_power<2>(r2), n, w, F.data());
   return F;
 }
 
