@@ -37,7 +37,15 @@
 // lengths from each piece, and each piece gets gauss_points_for(distance, length) Gauss-
 // Legendre points (log_integrals.hpp). 3D: a triangle is split into four until the point is
 // kPointSplitDiameters of its diameters from each piece, each piece integrated by point_rule
-// (surface_potentials.hpp). OpenMP over the points.
+// (surface_potentials.hpp). OpenMP over the points. The nodes are placed in coordinates from
+// the foot of z on the panel's line / triangle's plane, anchored at the vertex nearest to z,
+// so that the small pieces near z have nodes accurate to the round-off of their own distance
+// from z and a vertex near z is one vector from z in all its panels / triangles: on exact data
+// (test_lame_potentials.cpp) the stress at a distance delta from Gamma is then accurate to
+// ~4e-14 h / delta in 2D (|sigma| ~ 1), and in 3D to point_rule's ~1e-12 h / delta (~1e-7 at
+// delta = 1e-3 h; worse, ~1 / delta^2, right above an edge below delta ~ 1e-6 h, where the
+// two triangles' planes meet to round-off of h only). The displacement: ~1e-15 (2D), ~5e-10
+// (3D, point_rule's degree-4 rule from 6 diameters).
 #include "bem/geometry.hpp"
 #include "bem/kelvin.hpp"
 #include "bem/operators.hpp"
