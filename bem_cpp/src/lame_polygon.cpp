@@ -4,7 +4,6 @@
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
-#include <string>
 
 #include "bem/linear_algebra.hpp"
 

@@ -38,8 +38,6 @@
 // closed forms of a segment seen from a point (direction_segment_moments); near pairs:
 // the outer rule of near_outer with the point-segment moments inside; far pairs: the
 // tensor Gauss rule with far_field_points points (the poles of g are those of log|r|).
-#include <optional>
-
 #include "bem/geometry.hpp"
 #include "bem/kelvin.hpp"
 #include "bem/log_integrals.hpp"
