@@ -54,6 +54,38 @@ const GaussRule& gauss_legendre(int p);
 /// Returns 0 if more than `max_points` would be needed.
 int gauss_points_for(double distance, double length, int max_points);
 
+/// Outer integration over panel `outer` of f(s, w) (s the local coordinate, w the
+/// weight including the length) for an inner integral over `inner`: the panel is
+/// bisected until each piece is at least its own length away from `inner`, then each
+/// piece gets the Gauss rule that the distance/length ratio requires.
+template <class F>
+void near_outer(const Panel& outer, const Panel& inner, F&& f) {
+  struct Piece {
+    double s0, s1;
+    int depth;
+  };
+  Piece stack[128];
+  int top = 0;
+  stack[top++] = {0.0, outer.h, 0};
+  while (top > 0) {
+    const Piece piece = stack[--top];
+    const double len = piece.s1 - piece.s0;
+    const Panel sub = make_panel(outer.a + piece.s0 * outer.t, outer.a + piece.s1 * outer.t);
+    const double dist = distance(sub, inner);
+    if (dist < len && piece.depth < 60) {
+      const double mid = 0.5 * (piece.s0 + piece.s1);
+      stack[top++] = {piece.s0, mid, piece.depth + 1};
+      stack[top++] = {mid, piece.s1, piece.depth + 1};
+      continue;
+    }
+    int p = gauss_points_for(dist, len, kMaxGaussPoints);
+    if (p == 0) p = kMaxGaussPoints;
+    const GaussRule& g = gauss_legendre(p);
+    for (int q = 0; q < p; ++q)
+      f(piece.s0 + len * g.x[static_cast<std::size_t>(q)], len * g.w[static_cast<std::size_t>(q)]);
+  }
+}
+
 /// Analytic moments over the segment Y(t) = a + t e, t in [0, h] (|e| = 1), seen from
 /// the point p, with d = (p - a).nu for a unit normal nu of the segment:
 ///   log_m = int_0^h t^m log|p - Y(t)| dt          (m = 0, 1)
