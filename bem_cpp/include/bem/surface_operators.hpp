@@ -51,10 +51,11 @@ struct PairIntegrals {
 /// The geometric moments of a triangle pair (tau: x, sigma: y, r = x - y; basis index as in
 /// PairIntegrals) from which kernels built of 1/|r| and r r^T/|r|^3 are sums (the Kelvin
 /// matrix, lame_surface.hpp):
-///   G[a][b]       = 2 int int 1/(4 pi |r|) phi_a(x) phi_b(y)            (PairIntegrals::V)
+///   G[a][b]       = 2 int int 1/(4 pi |r|) phi_a(x) phi_b(y)   (PairIntegrals::V, to round-off)
 ///   R[k][l][a][b] = 2 int int r_k r_l / (4 pi |r|^3) phi_a(x) phi_b(y)   (R[k][l] = R[l][k])
 ///   K, Kt         as in PairIntegrals (zero between two triangles of one plane).
-/// On every point pair of the rule at once: G and R are the same sums over the same points.
+/// The kernels are evaluated once per point pair of the rule and summed against the monomials
+/// of both triangles (9 moments each), which give the entries of every pair of basis functions.
 struct PairMoments {
   double G[4][4];
   double R[3][3][4][4];
