@@ -1,6 +1,7 @@
 #include "bem/surface_operators.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <iterator>
 #include <stdexcept>
@@ -204,6 +205,135 @@ void accumulate_tensor(const Mapped& a, const Mapped& b, Vec3 na, Vec3 nb, const
     accumulate_tensor<false>(a, b, na, nb, r, acc);
 }
 
+/// A pair (tau, sigma) as it is evaluated: on (a, b) = (min, max) (`swap` if tau > sigma), the
+/// same points for both orders, each triangle mapped with the shared vertices first.
+struct Selection {
+  bool swap;
+  const Triangle *a, *b;
+  int shared;
+  Mapped ma, mb;
+};
+
+Selection select(const Surface& surface, Index tau, Index sigma) {
+  const bool swap = tau > sigma;
+  const Triangle& a = surface.triangle(swap ? sigma : tau);
+  const Triangle& b = surface.triangle(swap ? tau : sigma);
+  const Adjacency adj = adjacency(a, b);
+  int oa[3] = {0, 1, 2}, ob[3] = {0, 1, 2};
+  if (adj.shared == 1 || adj.shared == 2) {
+    for (int k = 0; k < adj.shared; ++k) {
+      oa[k] = adj.a[static_cast<std::size_t>(k)];
+      ob[k] = adj.b[static_cast<std::size_t>(k)];
+    }
+    complete(oa, adj.shared);
+    complete(ob, adj.shared);
+  }
+  return {swap, &a, &b, adj.shared, mapped(a, oa), mapped(b, ob)};
+}
+
+// PairMoments: the moment kernels at a point pair (d = x - y, g = w / (2 pi |d|), the rule's
+// weight w): 0: g; 1..6: g d_k d_l / |d|^2 for (k, l) = (0, 0), (1, 1), (2, 2), (0, 1),
+// (0, 2), (1, 2); with the double layer 7: g n_b . d / |d|^2, 8: -g n_a . d / |d|^2 (Kab and
+// Kba of Accumulated).
+constexpr int kMomentKernels = 9;
+constexpr int kMomentPairs[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
+
+/// The moment kernels c (0..6, with the double layer 0..8) at the point pairs d = (dx, dy, dz)[q]
+/// with weights w[q] (kInvTwoPi included), q < n, into k[c * n + q].
+template <bool kDoubleLayer>
+void moment_kernels(int n, const double* dx, const double* dy, const double* dz, const double* w, Vec3 na, Vec3 nb,
+                    double* k) {
+  double *k0 = k, *k1 = k + n, *k2 = k + 2 * n, *k3 = k + 3 * n, *k4 = k + 4 * n, *k5 = k + 5 * n, *k6 = k + 6 * n,
+         *k7 = k + 7 * n, *k8 = k + 8 * n;
+#pragma omp simd
+  for (int q = 0; q < n; ++q) {
+    const double x = dx[q], y = dy[q], z = dz[q];
+    const double r2 = x * x + y * y + z * z;
+    const double g = w[q] / std::sqrt(r2), h = g / r2;
+    k0[q] = g;
+    k1[q] = h * x * x;
+    k2[q] = h * y * y;
+    k3[q] = h * z * z;
+    k4[q] = h * x * y;
+    k5[q] = h * x * z;
+    k6[q] = h * y * z;
+    if constexpr (kDoubleLayer) {
+      k7[q] = h * (x * nb.x + y * nb.y + z * nb.z);
+      k8[q] = -h * (x * na.x + y * na.y + z * na.z);
+    }
+  }
+}
+
+/// Scratch of the moments of one thread (the largest pair rule has 7,776 points).
+std::vector<double>& moment_scratch(std::size_t size) {
+  thread_local std::vector<double> scratch;
+  if (scratch.size() < size) scratch.resize(size);
+  return scratch;
+}
+
+/// A pair rule: the kernels at every point pair, then each summed against the monomials
+/// (1, s1, t1) x (1, s2, t2): m[c][alpha * 3 + beta].
+template <bool kDoubleLayer>
+void pair_moments(const Mapped& a, const Mapped& b, Vec3 na, Vec3 nb, const PairRule& r, double m[][9]) {
+  constexpr int count = kDoubleLayer ? kMomentKernels : 7;
+  const int n = r.size();
+  const std::size_t un = static_cast<std::size_t>(n);
+  std::vector<double>& scratch = moment_scratch((4 + kMomentKernels) * un);
+  double *dx = scratch.data(), *dy = dx + n, *dz = dy + n, *w = dz + n, *k = w + n;
+  const double *s1 = r.s1.data(), *t1 = r.t1.data(), *s2 = r.s2.data(), *t2 = r.t2.data(), *rw = r.w.data();
+  const Vec3 d0 = a.q0 - b.q0;
+#pragma omp simd
+  for (int q = 0; q < n; ++q) {
+    dx[q] = d0.x + s1[q] * a.e1.x + t1[q] * a.e2.x - s2[q] * b.e1.x - t2[q] * b.e2.x;
+    dy[q] = d0.y + s1[q] * a.e1.y + t1[q] * a.e2.y - s2[q] * b.e1.y - t2[q] * b.e2.y;
+    dz[q] = d0.z + s1[q] * a.e1.z + t1[q] * a.e2.z - s2[q] * b.e1.z - t2[q] * b.e2.z;
+    w[q] = rw[q] * kInvTwoPi;
+  }
+  moment_kernels<kDoubleLayer>(n, dx, dy, dz, w, na, nb, k);
+  for (int c = 0; c < count; ++c) {
+    const double* f = k + c * n;
+    double v0 = 0, v1 = 0, v2 = 0, v3 = 0, v4 = 0, v5 = 0, v6 = 0, v7 = 0, v8 = 0;
+#pragma omp simd reduction(+ : v0, v1, v2, v3, v4, v5, v6, v7, v8)
+    for (int q = 0; q < n; ++q) {
+      const double g = f[q], gs = g * s1[q], gt = g * t1[q];
+      v0 += g;
+      v1 += g * s2[q];
+      v2 += g * t2[q];
+      v3 += gs;
+      v4 += gs * s2[q];
+      v5 += gs * t2[q];
+      v6 += gt;
+      v7 += gt * s2[q];
+      v8 += gt * t2[q];
+    }
+    const double v[9] = {v0, v1, v2, v3, v4, v5, v6, v7, v8};
+    for (int j = 0; j < 9; ++j) m[c][j] = v[j];
+  }
+}
+
+/// The tensor product of symmetric_rule(degree) with itself as a pair rule (the regular pairs'
+/// points of `integrate`, in one list for the moments' vectorised passes).
+const PairRule& tensor_rule(int degree) {
+  static const std::array<PairRule, 9> rules = [] {
+    std::array<PairRule, 9> out;
+    for (int d : kRegularDegrees) {
+      const TriangleRule& r = symmetric_rule(d);
+      PairRule& t = out[static_cast<std::size_t>(d)];
+      for (int i = 0; i < r.size(); ++i)
+        for (int j = 0; j < r.size(); ++j) {
+          const std::size_t u = static_cast<std::size_t>(i), v = static_cast<std::size_t>(j);
+          t.s1.push_back(r.s[u]);
+          t.t1.push_back(r.t[u]);
+          t.s2.push_back(r.s[v]);
+          t.t2.push_back(r.t[v]);
+          t.w.push_back(r.w[u] * r.w[v]);
+        }
+    }
+    return out;
+  }();
+  return rules[static_cast<std::size_t>(degree)];
+}
+
 }  // namespace
 
 Index dofs(const Surface& surface, Space space) { return space == Space::P1 ? surface.vertices() : surface.size(); }
@@ -228,29 +358,19 @@ int PairIntegrator::regular_rule(const Triangle& a, const Triangle& b) {
 }
 
 void PairIntegrator::integrate(Index tau, Index sigma, bool double_layer, PairIntegrals& out) const {
-  const bool swap = tau > sigma;  // evaluate on (min, max), the same points for both orders
-  const Triangle& a = surface_.triangle(swap ? sigma : tau);
-  const Triangle& b = surface_.triangle(swap ? tau : sigma);
-  const Adjacency adj = adjacency(a, b);
-  int oa[3] = {0, 1, 2}, ob[3] = {0, 1, 2};
-  if (adj.shared == 1 || adj.shared == 2) {
-    for (int k = 0; k < adj.shared; ++k) {
-      oa[k] = adj.a[static_cast<std::size_t>(k)];
-      ob[k] = adj.b[static_cast<std::size_t>(k)];
-    }
-    complete(oa, adj.shared);
-    complete(ob, adj.shared);
-  }
-  const Mapped ma = mapped(a, oa), mb = mapped(b, ob);
+  const Selection pair = select(surface_, tau, sigma);
+  const bool swap = pair.swap;
+  const Triangle &a = *pair.a, &b = *pair.b;
+  const Mapped &ma = pair.ma, &mb = pair.mb;
   Accumulated acc;
   // n . (x - y) vanishes between the points of one plane: K is zero on a triangle with
   // itself and between the triangles of one face of a polyhedron, where V alone is integrated
   const bool k = double_layer && planes_[static_cast<std::size_t>(tau)] != planes_[static_cast<std::size_t>(sigma)];
-  if (adj.shared > 0)
+  if (pair.shared > 0)
     if (k)
-      accumulate_pairs<true>(ma, mb, a.n, b.n, *singular_[adj.shared], acc);
+      accumulate_pairs<true>(ma, mb, a.n, b.n, *singular_[pair.shared], acc);
     else
-      accumulate_pairs<false>(ma, mb, a.n, b.n, *singular_[adj.shared], acc);
+      accumulate_pairs<false>(ma, mb, a.n, b.n, *singular_[pair.shared], acc);
   else
     accumulate_tensor(ma, mb, a.n, b.n, *regular_[regular_rule(a, b)], k, acc);
   const double jac = 4.0 * a.area * b.area;
@@ -261,6 +381,54 @@ void PairIntegrator::integrate(Index tau, Index sigma, bool double_layer, PairIn
       for (int j = 0; j < 3; ++j) {
         out.K[i][j] = jac * (swap ? acc.Kba[i][j] : acc.Kab[i][j]);
         out.Kt[i][j] = jac * (swap ? acc.Kab[i][j] : acc.Kba[i][j]);
+      }
+}
+
+void PairIntegrator::moments(Index tau, Index sigma, bool double_layer, PairMoments& out) const {
+  const Selection pair = select(surface_, tau, sigma);
+  const Triangle &a = *pair.a, &b = *pair.b;
+  // as in `integrate`: the double layer's kernel vanishes between the points of one plane
+  const bool k = double_layer && planes_[static_cast<std::size_t>(tau)] != planes_[static_cast<std::size_t>(sigma)];
+  double m[kMomentKernels][9];
+  // the regular pairs by the points of `integrate`'s tensor products
+  const PairRule& rule = pair.shared > 0 ? *singular_[pair.shared] : tensor_rule(regular_rule(a, b));
+  if (k)
+    pair_moments<true>(pair.ma, pair.mb, a.n, b.n, rule, m);
+  else
+    pair_moments<false>(pair.ma, pair.mb, a.n, b.n, rule, m);
+  double ca[4][3], cb[4][3];
+  basis_coefficients(pair.ma, ca);
+  basis_coefficients(pair.mb, cb);
+  // e[c][i][j]: the entry (i of a, j of b) of the kernel c = sum ca[i][al] m[c][al, be] cb[j][be],
+  // scaled by the Jacobians
+  const double jac = 4.0 * a.area * b.area;
+  const int count = k ? kMomentKernels : 7;
+  double e[kMomentKernels][4][4];
+  for (int c = 0; c < count; ++c) {
+    double t[3][4];
+    for (int al = 0; al < 3; ++al)
+      for (int j = 0; j < 4; ++j)
+        t[al][j] = jac * (m[c][al * 3] * cb[j][0] + m[c][al * 3 + 1] * cb[j][1] + m[c][al * 3 + 2] * cb[j][2]);
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j) e[c][i][j] = ca[i][0] * t[0][j] + ca[i][1] * t[1][j] + ca[i][2] * t[2][j];
+  }
+  // in the order (tau, sigma): tau's basis i is b's if swapped
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) {
+      const int ia = pair.swap ? j : i, jb = pair.swap ? i : j;
+      out.G[i][j] = e[0][ia][jb];
+      for (int c = 0; c < 6; ++c) {
+        const int kk = kMomentPairs[c][0], l = kMomentPairs[c][1];
+        out.R[kk][l][i][j] = out.R[l][kk][i][j] = e[1 + c][ia][jb];
+      }
+    }
+  if (double_layer)
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 3; ++j) {
+        // Kab (7): test a (i), trial b (j); Kba (8): test b (i), trial a (j)
+        const double kab = k ? e[7][i][j] : 0.0, kba = k ? e[8][j][i] : 0.0;
+        out.K[i][j] = pair.swap ? kba : kab;
+        out.Kt[i][j] = pair.swap ? kab : kba;
       }
 }
 

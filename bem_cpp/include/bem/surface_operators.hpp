@@ -48,12 +48,29 @@ struct PairIntegrals {
   double Kt[4][3];  ///< the same for the pair (sigma, tau): test sigma, trial tau
 };
 
+/// The geometric moments of a triangle pair (tau: x, sigma: y, r = x - y; basis index as in
+/// PairIntegrals) from which kernels built of 1/|r| and r r^T/|r|^3 are sums (the Kelvin
+/// matrix, lame_surface.hpp):
+///   G[a][b]       = 2 int int 1/(4 pi |r|) phi_a(x) phi_b(y)   (PairIntegrals::V, to round-off)
+///   R[k][l][a][b] = 2 int int r_k r_l / (4 pi |r|^3) phi_a(x) phi_b(y)   (R[k][l] = R[l][k])
+///   K, Kt         as in PairIntegrals (zero between two triangles of one plane).
+/// The kernels are evaluated once per point pair of the rule and summed against the monomials
+/// of both triangles (9 moments each), which give the entries of every pair of basis functions.
+struct PairMoments {
+  double G[4][4];
+  double R[3][3][4][4];
+  double K[4][3], Kt[4][3];
+};
+
 /// Integrates every triangle pair with the rule its adjacency and distance call for.
 class PairIntegrator {
  public:
   explicit PairIntegrator(const Surface& surface);
   /// `double_layer`: also K and Kt (otherwise they are left unset).
   void integrate(Index tau, Index sigma, bool double_layer, PairIntegrals& out) const;
+  /// The moments of the pair by the same rule as `integrate` (K and Kt only with
+  /// `double_layer`, otherwise left unset).
+  void moments(Index tau, Index sigma, bool double_layer, PairMoments& out) const;
   /// The degree of the symmetric_rule of a disjoint pair, from the distance of the balls
   /// about the centroids over the larger diameter, q: kRegularDegrees below q = 0.5, below
   /// 1.5 and beyond (8, 6 and kFarRuleDegree; docs/design/bem3d.md).
