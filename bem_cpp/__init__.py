@@ -1,4 +1,4 @@
-"""Galerkin BEM for the Laplace operator on a closed polygon (2D) or a closed triangulated
+"""Galerkin BEM for the Laplace and Lame operators on a closed polygon (2D) or a closed triangulated
 surface (3D: pass ``triangles=``, docs/method.md section 11, docs/design/bem3d.md).
 
 Operators follow the factor-2 convention of docs/method.md section 2 with
@@ -26,10 +26,20 @@ Gauss outer rule on pieces at least their own length away, distant pairs with te
 Gauss rules whose size follows from distance/length. Matrix entries agree with 30-digit
 mpmath references to better than 1e-12 relative (docs/design/quadrature.md).
 
+Linear elasticity: every operator, ``steklov_poincare``, ``exterior_flux`` and
+``exterior_potential`` take ``kernel=("lame", E, nu)`` (Young's modulus, Poisson ratio; plane
+strain in 2D) for the Lame operators of the exterior elastic medium, whose fundamental
+solution is Kelvin's (``kelvin_field``; docs/method.md section 12). Every node then carries d
+components, dof ``d * node + component`` (node-major, as DOLFINx numbers a vector space); the
+double layer and the hypersingular operator are integrated by parts (Gunter derivatives), so
+that only weakly singular kernels are integrated, by the Laplace operators' rules.
+``exterior_stress`` gives the stress of the medium at exterior points.
+
 Modules: ``checks`` (input validation), ``defaults`` (every default), ``operators``
 (dense Galerkin matrices), ``compressed`` (H-matrix operators and S_h), ``dense`` (a
 matrix held in single precision, applied in double), ``potentials``
-(the representation formula), ``surfaces`` (test surfaces in 3D), ``sparse`` (a
+(the representation formula), ``kelvin`` (the point-force field of elasticity),
+``surfaces`` (test surfaces in 3D), ``sparse`` (a
 supernodal sparse Cholesky factor, for the coarse problem of the FEM preconditioner);
 this module only re-exports their public names.
 """
@@ -54,7 +64,8 @@ from bem_cpp.defaults import (
     HMATRIX_SOLVER_TOL_FACTOR,
 )
 from bem_cpp.operators import double_layer, exterior_flux, hypersingular, mass, single_layer
-from bem_cpp.potentials import exterior_potential
+from bem_cpp.kelvin import kelvin_field
+from bem_cpp.potentials import exterior_potential, exterior_stress
 
 __all__ = [
     "boundary_operators",
@@ -62,6 +73,8 @@ __all__ = [
     "double_layer",
     "exterior_flux",
     "exterior_potential",
+    "exterior_stress",
+    "kelvin_field",
     "hypersingular",
     "mass",
     "single_layer",

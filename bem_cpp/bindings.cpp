@@ -9,6 +9,10 @@
 #include <memory>
 
 #include "bem/boundary_operators.hpp"
+#include "bem/kelvin.hpp"
+#include "bem/lame_polygon.hpp"
+#include "bem/lame_potentials.hpp"
+#include "bem/lame_surface.hpp"
 #include "bem/linear_algebra.hpp"
 #include "bem/operators.hpp"
 #include "bem/potential_operator.hpp"
@@ -155,6 +159,83 @@ PYBIND11_MODULE(_bem, m) {
       py::arg("vertices"), py::arg("triangles"), py::arg("dirichlet"), py::arg("flux_coefficients"), py::arg("points"),
       py::arg("a"), py::arg("flux"), py::arg("leaf_size"), py::arg("eta"), py::arg("tol"), py::arg("product_threads"),
       Release());
+  // Linear elasticity (Kelvin's kernel): the Lame twins of the Laplace functions, the medium after the geometry.
+  py::class_<bem::Lame>(m, "Lame")
+      .def_readonly("mu", &bem::Lame::mu)
+      .def_readonly("nu", &bem::Lame::nu)
+      .def_property_readonly("lame_lambda", &bem::Lame::lambda)
+      .def("__repr__",
+           [](const bem::Lame& l) { return "Lame(mu=" + std::to_string(l.mu) + ", nu=" + std::to_string(l.nu) + ")"; });
+  m.def("lame_from_young", &bem::lame_from_young, py::arg("E"), py::arg("nu"));
+  m.def(
+      "kelvin_field",
+      [](const bem::Lame& lame, const Eigen::Ref<const bem::Matrix>& points, VectorRef source, VectorRef force) {
+        bem::PointForceField f = bem::kelvin_field(lame, points, source, force);
+        return py::make_tuple(std::move(f.displacement), std::move(f.stress));
+      },
+      py::arg("lame"), py::arg("points"), py::arg("source"), py::arg("force"));
+  using LameRef = const bem::Lame&;
+  m.def(
+      "lame_critical_scale",
+      [](NodesRef nodes, LameRef lame, Space space) {
+        return bem::single_layer_critical_scale(bem::Polygon(nodes), lame, space);
+      },
+      py::arg("nodes"), py::arg("lame"), py::arg("space"), Release());
+  m.def("lame_single_layer", py::overload_cast<NodesRef, LameRef, Space>(&bem::single_layer), py::arg("nodes"),
+        py::arg("lame"), py::arg("space"), Release());
+  m.def("lame_double_layer", py::overload_cast<NodesRef, LameRef, Space>(&bem::double_layer), py::arg("nodes"),
+        py::arg("lame"), py::arg("space"), Release());
+  m.def("lame_hypersingular", py::overload_cast<NodesRef, LameRef>(&bem::hypersingular), py::arg("nodes"),
+        py::arg("lame"), Release());
+  m.def("lame_single_layer", py::overload_cast<VerticesRef, TrianglesRef, LameRef, Space>(&bem::single_layer),
+        py::arg("vertices"), py::arg("triangles"), py::arg("lame"), py::arg("space"), Release());
+  m.def("lame_double_layer", py::overload_cast<VerticesRef, TrianglesRef, LameRef, Space>(&bem::double_layer),
+        py::arg("vertices"), py::arg("triangles"), py::arg("lame"), py::arg("space"), Release());
+  m.def("lame_hypersingular", py::overload_cast<VerticesRef, TrianglesRef, LameRef>(&bem::hypersingular),
+        py::arg("vertices"), py::arg("triangles"), py::arg("lame"), Release());
+  using PointsRef3 = const Eigen::Ref<const bem::Vertices>&;
+  m.def("lame_exterior_displacement",
+        py::overload_cast<NodesRef, LameRef, VectorRef, VectorRef, NodesRef, VectorRef, Space>(
+            &bem::exterior_displacement),
+        py::arg("nodes"), py::arg("lame"), py::arg("dirichlet"), py::arg("traction"), py::arg("points"), py::arg("a"),
+        py::arg("traction_space"), Release());
+  m.def("lame_exterior_displacement",
+        py::overload_cast<VerticesRef, TrianglesRef, LameRef, VectorRef, VectorRef, PointsRef3, VectorRef, Space>(
+            &bem::exterior_displacement),
+        py::arg("vertices"), py::arg("triangles"), py::arg("lame"), py::arg("dirichlet"), py::arg("traction"),
+        py::arg("points"), py::arg("a"), py::arg("traction_space"), Release());
+  m.def("lame_exterior_stress",
+        py::overload_cast<NodesRef, LameRef, VectorRef, VectorRef, NodesRef, VectorRef, Space>(&bem::exterior_stress),
+        py::arg("nodes"), py::arg("lame"), py::arg("dirichlet"), py::arg("traction"), py::arg("points"), py::arg("a"),
+        py::arg("traction_space"), Release());
+  m.def("lame_exterior_stress",
+        py::overload_cast<VerticesRef, TrianglesRef, LameRef, VectorRef, VectorRef, PointsRef3, VectorRef, Space>(
+            &bem::exterior_stress),
+        py::arg("vertices"), py::arg("triangles"), py::arg("lame"), py::arg("dirichlet"), py::arg("traction"),
+        py::arg("points"), py::arg("a"), py::arg("traction_space"), Release());
+  m.def(
+      "lame_operators",
+      [](NodesRef nodes, LameRef lame, Space space) {
+        // V_h and K_h (rows in `space`) and W_h in one pass over the panel pairs
+        bem::Operators A;
+        {
+          py::gil_scoped_release release;
+          A = bem::assemble(bem::Polygon(nodes), lame, {space, space, true});
+        }
+        return py::make_tuple(std::move(A.single_layer), std::move(A.double_layer), std::move(A.hypersingular));
+      },
+      py::arg("nodes"), py::arg("lame"), py::arg("space"));
+  m.def(
+      "lame_operators",
+      [](VerticesRef vertices, TrianglesRef triangles, LameRef lame, Space space) {
+        bem::SurfaceMatrices A;
+        {
+          py::gil_scoped_release release;
+          A = bem::assemble(bem::Surface(vertices, triangles), lame, {space, space, true});
+        }
+        return py::make_tuple(std::move(A.single_layer), std::move(A.double_layer), std::move(A.hypersingular));
+      },
+      py::arg("vertices"), py::arg("triangles"), py::arg("lame"), py::arg("space"));
   py::class_<bem::SurfaceSteklovOperator>(m, "SurfaceSteklovOperator")
       .def(py::init([](VerticesRef vertices, TrianglesRef triangles, bem::Index leaf_size, double eta, double tol,
                        double solver_tol, int max_iterations, int product_threads, int rank, int size,

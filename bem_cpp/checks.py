@@ -10,6 +10,24 @@ from numpy.typing import ArrayLike, NDArray
 import bem_cpp._bem as _bem
 
 SPACES = {"p0": _bem.Space.P0, "p1": _bem.Space.P1}
+KERNEL_HINT = "'laplace' or ('lame', E, nu)"
+
+
+def kernel(value: str | tuple) -> _bem.Lame | None:
+    """The kernel of the boundary operators: None for Laplace's (``"laplace"``), the
+    compiled :class:`bem_cpp._bem.Lame` (shear modulus mu, Poisson ratio nu) for Kelvin's
+    (``("lame", E, nu)``: Young's modulus E > 0 and -1 < nu < 1/2)."""
+    if isinstance(value, str) and value == "laplace":
+        return None
+    if isinstance(value, (tuple, list)) and len(value) == 3 and value[0] == "lame":
+        return _bem.lame_from_young(scalar(value[1], "E"), scalar(value[2], "nu"))
+    raise ValueError(f"kernel must be {KERNEL_HINT}, got {value!r}")
+
+
+def components(lame: _bem.Lame | None, geometry: tuple) -> int:
+    """Components per node of the traces: 1 (Laplace) or the dimension d (Lame: d
+    components per node, node-major dofs d * node + component)."""
+    return 1 if lame is None else (2 if len(geometry) == 1 else 3)
 
 
 def space(value: str, name: str) -> _bem.Space:
@@ -94,6 +112,37 @@ def vector(value: ArrayLike, n: int, name: str) -> NDArray[np.float64]:
         raise ValueError(f"{name} must have shape ({n},) (one value per node), got {arr.shape}")
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"{name} contains non-finite values")
+    return arr
+
+
+def field(value: ArrayLike, n: int, d: int, name: str) -> NDArray[np.float64]:
+    """(n, d) finite float64 values, d components per node (a vector field's nodal values)."""
+    try:
+        arr = np.ascontiguousarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a real array of shape ({n}, {d})") from None
+    if arr.shape != (n, d):
+        raise ValueError(
+            f"{name} must have shape ({n}, {d}) ({d} components per node), got {arr.shape}"
+        )
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} contains non-finite values")
+    return arr
+
+
+def translation(value: ArrayLike, d: int) -> NDArray[np.float64]:
+    """The translation a at infinity of a vector field: d finite values (the scalar 0, the
+    default of the scalar problem, as the zero vector)."""
+    if np.ndim(value) == 0 and scalar(value, "a") == 0.0:
+        return np.zeros(d)
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"a must be {d} real numbers, got {value!r}") from None
+    if arr.shape != (d,):
+        raise ValueError(f"a must have {d} components (a translation), got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError("a contains non-finite values")
     return arr
 
 

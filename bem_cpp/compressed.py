@@ -15,6 +15,7 @@ import bem_cpp._bem as _bem
 from bem_cpp import checks, defaults
 from bem_cpp.collectives import mpi_collectives
 from bem_cpp.dense import SingleMatrix
+from bem_cpp.operators import cholesky, lame_cholesky
 
 
 class _CompiledOperator:
@@ -182,6 +183,7 @@ def steklov_poincare(
     timings: dict[str, float] | None = None,
     comm: Any = None,
     triangles: ArrayLike | None = None,
+    kernel: str | tuple = "laplace",
 ) -> NDArray[np.float64] | SteklovPoincareOperator:
     r"""Discrete Steklov-Poincare operator S_h of the exterior (docs/method.md (2.x), section 4).
 
@@ -224,6 +226,13 @@ def steklov_poincare(
         from ``HMATRIX_SURFACE_AUTO_DOFS`` vertices on); ``"hmatrix"`` needs the P1 flux
         and preconditions the V solves by M^{-1} (W + c c^T) M^{-1} (docs/design/bem3d.md);
         dense, V_h is factorised by Cholesky (scipy) and S_h symmetrised explicitly.
+    kernel : "laplace" or ("lame", E, nu)
+        Laplace's kernel, or Kelvin's of linear elasticity (Young's modulus E, Poisson ratio
+        nu; plane strain in 2D): S_h of the exterior elastic medium, (d n, d n) on the
+        node-major dofs ``d * node + component``, the same formula with the Lame V_h, K_h,
+        W_h (:func:`bem_cpp.single_layer` and the others with ``kernel``), dense
+        (``compression="none"``, or ``"auto"`` at any size); V_h is factorised by Cholesky
+        (scipy). Symmetric positive definite: the exterior fixes the rigid motions.
 
     Returns
     -------
@@ -236,8 +245,14 @@ def steklov_poincare(
     ValueError
         Invalid polygon, unknown compression, tol not in (0, 1), ``comm`` without
         ``"hmatrix"``, or V_h not positive definite (logarithmic capacity of Gamma >= 1;
-        rescale the geometry to diameter < 1).
+        rescale the geometry to diameter < 1; for the Lame kernel in 2D its own capacity
+        condition, docs/method.md section 12).
     """
+    lame = checks.kernel(kernel)
+    if lame is not None:
+        return _lame_steklov_poincare(
+            checks.boundary(nodes, triangles), flux, lame, compression, timings, comm
+        )
     if triangles is not None:
         return _surface_steklov_poincare(
             checks.surface(nodes, triangles), flux, compression, tol, timings, comm
@@ -334,17 +349,57 @@ def _compressed_operator(
     return op
 
 
+def _lame_steklov_poincare(
+    geometry: tuple,
+    flux: str,
+    lame: _bem.Lame,
+    compression: str,
+    timings: dict[str, float] | None,
+    comm: Any,
+) -> NDArray[np.float64]:
+    """:func:`steklov_poincare` with Kelvin's kernel ``lame`` (dense)."""
+    if compression not in defaults.SURFACE_COMPRESSIONS:
+        raise ValueError(
+            f"compression must be one of {defaults.SURFACE_COMPRESSIONS}, got {compression!r}"
+        )
+    if compression == "hmatrix" or comm is not None:
+        raise ValueError(
+            'the Lame kernel\'s S_h is dense only so far: use compression="none" without comm'
+        )
+    space = checks.space(flux, "flux")
+    d = checks.components(lame, geometry)
+    return _dense_steklov_poincare(
+        lambda: _bem.lame_operators(*geometry, lame, space),
+        lambda: np.kron(_bem.mass(*geometry, space), np.eye(d)),
+        timings,
+        lambda V: lame_cholesky(V, geometry, lame, space),
+    )
+
+
 def _dense_surface_steklov_poincare(
     geometry: tuple[NDArray[np.float64], NDArray[np.int64]],
     space: _bem.Space,
     timings: dict[str, float] | None,
 ) -> NDArray[np.float64]:
-    """S_h = 1/2 (W_h + Y^T Y), Y = L^{-1} (K_h - M_h), V_h = L L^T (dense)."""
+    """S_h of Laplace's kernel on a surface (dense)."""
+    return _dense_steklov_poincare(
+        lambda: _bem.surface_operators(*geometry, space),
+        lambda: _bem.mass(*geometry, space),
+        timings,
+        cholesky,
+    )
+
+
+def _dense_steklov_poincare(
+    operators: Any, mass: Any, timings: dict[str, float] | None, factor: Any
+) -> NDArray[np.float64]:
+    """S_h = 1/2 (W_h + Y^T Y), Y = L^{-1} (K_h - M_h), V_h = L L^T (dense), from
+    ``operators()`` = (V_h, K_h, W_h), ``mass()`` = M_h and ``factor(V_h)`` = L."""
     t0 = time.perf_counter()
-    V, K, W = _bem.surface_operators(*geometry, space)
-    B = K - _bem.mass(*geometry, space)
+    V, K, W = operators()
+    B = K - mass()
     t1 = time.perf_counter()
-    L = scipy.linalg.cholesky(V, lower=True)
+    L = factor(V)
     t2 = time.perf_counter()
     Y = scipy.linalg.solve_triangular(L, B, lower=True)
     t3 = time.perf_counter()

@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.linalg
+from typing import Callable
+
 from numpy.typing import ArrayLike, NDArray
 
 import bem_cpp._bem as _bem
@@ -21,7 +23,11 @@ from bem_cpp import checks
 
 
 def single_layer(
-    nodes: ArrayLike, space: str = "p1", *, triangles: ArrayLike | None = None
+    nodes: ArrayLike,
+    space: str = "p1",
+    *,
+    triangles: ArrayLike | None = None,
+    kernel: str | tuple = "laplace",
 ) -> NDArray[np.float64]:
     r"""Galerkin matrix of the single-layer operator V (docs/method.md section 2).
 
@@ -36,6 +42,11 @@ def single_layer(
         Flux space of rows and columns: P1 hats of the nodes or P0 indicators of panels.
     triangles : (m, 3) array_like of int, optional
         3D: the triangles of the surface whose vertices are ``nodes`` (n, 3).
+    kernel : "laplace" or ("lame", E, nu)
+        Laplace's kernel, or Kelvin's of linear elasticity with Young's modulus E and
+        Poisson ratio nu (plane strain in 2D; :mod:`bem_cpp` module docstring): then every
+        node carries d components, dof ``d * node + component``, and the matrix is
+        (d rows, d columns) times as large.
 
     Returns
     -------
@@ -50,11 +61,16 @@ def single_layer(
     ValueError
         Invalid polygon (see the module docstring) or space.
     """
-    return _bem.single_layer(*checks.boundary(nodes, triangles), checks.space(space, "space"))
+    geometry = checks.boundary(nodes, triangles)
+    return _compiled("single_layer", geometry, checks.kernel(kernel), checks.space(space, "space"))
 
 
 def double_layer(
-    nodes: ArrayLike, space: str = "p1", *, triangles: ArrayLike | None = None
+    nodes: ArrayLike,
+    space: str = "p1",
+    *,
+    triangles: ArrayLike | None = None,
+    kernel: str | tuple = "laplace",
 ) -> NDArray[np.float64]:
     r"""Galerkin matrix of the double-layer operator K (docs/method.md section 2).
 
@@ -70,6 +86,11 @@ def double_layer(
         Space of the rows (test functions psi_i); the columns are always the P1 hats v_j.
     triangles : (m, 3) array_like of int, optional
         3D: the triangles of the surface whose vertices are ``nodes`` (n, 3).
+    kernel : "laplace" or ("lame", E, nu)
+        Laplace's kernel, or Kelvin's of linear elasticity with Young's modulus E and
+        Poisson ratio nu (plane strain in 2D; :mod:`bem_cpp` module docstring): then every
+        node carries d components, dof ``d * node + component``, and the matrix is
+        (d rows, d columns) times as large.
 
     Returns
     -------
@@ -84,11 +105,16 @@ def double_layer(
     ValueError
         Invalid polygon (see the module docstring) or space.
     """
-    return _bem.double_layer(*checks.boundary(nodes, triangles), checks.space(space, "space"))
+    geometry = checks.boundary(nodes, triangles)
+    return _compiled("double_layer", geometry, checks.kernel(kernel), checks.space(space, "space"))
 
 
 def hypersingular(
-    nodes: ArrayLike, *, triangles: ArrayLike | None = None, block: ArrayLike | None = None
+    nodes: ArrayLike,
+    *,
+    triangles: ArrayLike | None = None,
+    block: ArrayLike | None = None,
+    kernel: str | tuple = "laplace",
 ) -> NDArray[np.float64]:
     r"""Galerkin matrix of the hypersingular operator W on P1 (docs/method.md sections 2, 9).
 
@@ -111,6 +137,12 @@ def hypersingular(
         injection of the hats of ``block``). In 3D it is integrated over the triangles
         that touch those nodes alone, at a cost set by their number, not the surface's
         (for the nodes inside a surface patch, the H~^{1/2} metric of the patch).
+        Lame: the d components of each of those nodes (sliced from the whole matrix).
+    kernel : "laplace" or ("lame", E, nu)
+        Laplace's kernel, or Kelvin's of linear elasticity with Young's modulus E and
+        Poisson ratio nu (plane strain in 2D; :mod:`bem_cpp` module docstring): then every
+        node carries d components, dof ``d * node + component``, and the matrix is
+        (d rows, d columns) times as large.
 
     Returns
     -------
@@ -126,16 +158,23 @@ def hypersingular(
         Invalid polygon (see the module docstring) or space.
     """
     geometry = checks.boundary(nodes, triangles)
+    lame = checks.kernel(kernel)
     if block is None:
-        return _bem.hypersingular(*geometry)
+        return _compiled("hypersingular", geometry, lame)
     rows = checks.indices(block, geometry[0].shape[0], "block")
-    if triangles is None:
-        return np.ascontiguousarray(_bem.hypersingular(*geometry)[np.ix_(rows, rows)])
-    return _bem.hypersingular_block(*geometry, rows)
+    if triangles is not None and lame is None:
+        return _bem.hypersingular_block(*geometry, rows)
+    d = checks.components(lame, geometry)
+    rows = (d * rows[:, None] + np.arange(d)).ravel()
+    return np.ascontiguousarray(_compiled("hypersingular", geometry, lame)[np.ix_(rows, rows)])
 
 
 def mass(
-    nodes: ArrayLike, space: str = "p1", *, triangles: ArrayLike | None = None
+    nodes: ArrayLike,
+    space: str = "p1",
+    *,
+    triangles: ArrayLike | None = None,
+    kernel: str | tuple = "laplace",
 ) -> NDArray[np.float64]:
     r"""Boundary mass matrix :math:`M_h[i, j] = \int_\Gamma v_j \psi_i\,ds`
     (docs/method.md section 4).
@@ -150,6 +189,11 @@ def mass(
         M[i, i] = M[i, i+1] = h_i/2.
     triangles : (m, 3) array_like of int, optional
         3D: the triangles of the surface whose vertices are ``nodes`` (n, 3).
+    kernel : "laplace" or ("lame", E, nu)
+        Laplace's kernel, or Kelvin's of linear elasticity with Young's modulus E and
+        Poisson ratio nu (plane strain in 2D; :mod:`bem_cpp` module docstring): then every
+        node carries d components, dof ``d * node + component``, and the matrix is
+        (d rows, d columns) times as large.
 
     Returns
     -------
@@ -160,7 +204,10 @@ def mass(
     ValueError
         Invalid polygon (see the module docstring) or space.
     """
-    return _bem.mass(*checks.boundary(nodes, triangles), checks.space(space, "space"))
+    geometry = checks.boundary(nodes, triangles)
+    d = checks.components(checks.kernel(kernel), geometry)
+    M = _bem.mass(*geometry, checks.space(space, "space"))
+    return M if d == 1 else np.kron(M, np.eye(d))
 
 
 def exterior_flux(
@@ -170,6 +217,7 @@ def exterior_flux(
     flux: str = "p1",
     *,
     triangles: ArrayLike | None = None,
+    kernel: str | tuple = "laplace",
 ) -> NDArray[np.float64]:
     r"""Neumann data of the exterior problem from its Dirichlet trace (docs/method.md section 2).
 
@@ -195,18 +243,73 @@ def exterior_flux(
     triangles : (m, 3) array_like of int, optional
         3D: the triangles of the surface whose vertices are ``nodes`` (n, 3); there
         u_e = a + O(1/|x|) at infinity and V_h is factorised by Cholesky (dense).
+    kernel : "laplace" or ("lame", E, nu)
+        Kelvin's kernel: u_e is the displacement of the exterior elastic medium (Young's
+        modulus E, Poisson ratio nu, plane strain in 2D), ``dirichlet`` (n, d) its nodal
+        values, ``a`` (d,) the translation at infinity, and psi_h its traction
+        sigma(u_e) n; in 2D u_e = a + U(x) F + O(1/|x|) with F the net force on Gamma
+        (docs/method.md section 12). V_h by Cholesky (dense).
 
     Returns
     -------
-    (n,) ndarray
-        Coefficients of psi_h. For a smooth u_e on a circle the L2(Gamma) error
-        converges at O(h^2) (p1) and O(h) (p0); tests/test_bem_exterior.py measures it.
+    (n,) ndarray, or (n, d) for the Lame kernel
+        Coefficients of psi_h (P0: one per panel or triangle). For a smooth u_e on a
+        circle the L2(Gamma) error converges at O(h^2) (p1) and O(h) (p0);
+        tests/test_bem_exterior.py measures it.
     """
     geometry = checks.boundary(nodes, triangles)
+    space, lame = checks.space(flux, "flux"), checks.kernel(kernel)
+    if lame is not None:
+        d = checks.components(lame, geometry)
+        v = checks.field(dirichlet, geometry[0].shape[0], d, "dirichlet")
+        a = checks.translation(a, d)
+        B = _compiled("double_layer", geometry, lame, space)
+        B -= np.kron(_bem.mass(*geometry, space), np.eye(d))
+        L = lame_cholesky(_compiled("single_layer", geometry, lame, space), geometry, lame, space)
+        return scipy.linalg.cho_solve((L, True), B @ (v - a).ravel()).reshape(-1, d)
     v = checks.vector(dirichlet, geometry[0].shape[0], "dirichlet")
-    a, space = checks.scalar(a, "a"), checks.space(flux, "flux")
+    a = checks.scalar(a, "a")
     if triangles is None:
         return _bem.exterior_flux(*geometry, v, a, space)
     V, K, _ = _bem.surface_operators(*geometry, space)
     rhs = (K - _bem.mass(*geometry, space)) @ (v - a)
     return scipy.linalg.cho_solve(scipy.linalg.cho_factor(V), rhs)
+
+
+def cholesky(
+    V: NDArray[np.float64], critical_scale: Callable[[], float] | None = None
+) -> NDArray[np.float64]:
+    """The lower Cholesky factor of the single-layer matrix V_h, or a one-line ``ValueError``
+    when V_h is not positive definite: in 2D the boundary is then too large for the
+    kernel's capacity condition (docs/method.md sections 2 and 12). ``critical_scale()``:
+    the factor s* below which the scaled boundary has a positive definite V_h (named in
+    the message)."""
+    try:
+        return scipy.linalg.cholesky(V, lower=True)
+    except np.linalg.LinAlgError:
+        fix = "scale the geometry down (diameter below 1)"
+        if critical_scale is not None:
+            fix = f"scale the geometry by a factor below {critical_scale():.4g}"
+        raise ValueError(
+            "the single-layer matrix V_h is not positive definite on this boundary: in 2D the"
+            f" boundary is too large for the kernel's capacity condition; {fix} and the data"
+            " with it"
+        ) from None
+
+
+def lame_cholesky(
+    V: NDArray[np.float64], geometry: tuple, lame: _bem.Lame, space: _bem.Space
+) -> NDArray[np.float64]:
+    """:func:`cholesky` of the Lame V_h, whose refusal on a plane boundary names the
+    critical scale (docs/method.md section 12)."""
+    if len(geometry) == 2:
+        return cholesky(V)
+    return cholesky(V, lambda: _bem.lame_critical_scale(*geometry, lame, space))
+
+
+def _compiled(name: str, geometry: tuple, lame: _bem.Lame | None, *args):
+    """The compiled function ``name`` on the checked ``geometry``: Laplace's (``lame`` None),
+    or its Lame twin ``lame_<name>`` with the medium after the geometry."""
+    if lame is None:
+        return getattr(_bem, name)(*geometry, *args)
+    return getattr(_bem, "lame_" + name)(*geometry, lame, *args)

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+#include <string>
 
 namespace bem {
 
@@ -86,6 +87,29 @@ Mat3 kelvin_traction(const Lame& m, int d, const double* r, const double* nx) {
   for (int k = 0; k < d; ++k)
     for (int l = 0; l < d; ++l) T[k][l] = dot(d, S[l][k].data(), nx);
   return T;
+}
+
+PointForceField kelvin_field(const Lame& m, const Eigen::Ref<const Matrix>& points, const Eigen::Ref<const Vector>& source,
+                         const Eigen::Ref<const Vector>& force) {
+  const Index k = points.rows(), d = points.cols();
+  if (d != 2 && d != 3) throw std::invalid_argument("points must have 2 or 3 columns, got " + std::to_string(d));
+  if (source.size() != d || force.size() != d)
+    throw std::invalid_argument("source and force must have " + std::to_string(d) + " components each");
+  PointForceField out{Matrix::Zero(k, d), Matrix::Zero(k, d * d)};
+  for (Index p = 0; p < k; ++p) {
+    double r[3] = {0.0, 0.0, 0.0};
+    for (Index j = 0; j < d; ++j) r[j] = points(p, j) - source(j);
+    if (dot(static_cast<int>(d), r, r) == 0.0)
+      throw std::invalid_argument("point " + std::to_string(p) + " is the source of the point force");
+    const Mat3 U = kelvin(m, static_cast<int>(d), r);
+    const std::array<Mat3, 3> S = kelvin_stress(m, static_cast<int>(d), r);
+    for (Index a = 0; a < d; ++a)
+      for (Index l = 0; l < d; ++l) {
+        out.displacement(p, a) += U[a][l] * force(l);
+        for (Index b = 0; b < d; ++b) out.stress(p, a * d + b) += S[l][a][b] * force(l);
+      }
+  }
+  return out;
 }
 
 }  // namespace bem

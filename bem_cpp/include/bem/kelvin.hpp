@@ -8,6 +8,8 @@
 // Both are regular at nu = 1/2 (the incompressible limit): only the stress needs lambda.
 #include <array>
 
+#include "bem/geometry.hpp"
+
 namespace bem {
 
 /// An isotropic linear elastic medium: shear modulus mu > 0 and Poisson ratio nu in
@@ -38,5 +40,14 @@ std::array<Mat3, 3> kelvin_stress(const Lame& m, int d, const double* r);
 /// T[k][l] = (sigma(U e_l)(x) nx)_k: the traction at x on the plane with unit normal nx of
 /// the field of a unit force e_l at y.
 Mat3 kelvin_traction(const Lame& m, int d, const double* r, const double* nx);
+
+/// The field of a point force F at x0, u(x) = U(x - x0) F, at k points: displacement (k, d)
+/// and stress (k, d * d, row-major d x d per point). Throws std::invalid_argument (one line)
+/// for d not 2 or 3, sizes that disagree, or a point at x0.
+struct PointForceField {
+  Matrix displacement, stress;
+};
+PointForceField kelvin_field(const Lame& m, const Eigen::Ref<const Matrix>& points, const Eigen::Ref<const Vector>& source,
+                         const Eigen::Ref<const Vector>& force);
 
 }  // namespace bem
