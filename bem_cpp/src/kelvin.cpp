@@ -89,8 +89,8 @@ Mat3 kelvin_traction(const Lame& m, int d, const double* r, const double* nx) {
   return T;
 }
 
-PointForceField kelvin_field(const Lame& m, const Eigen::Ref<const Matrix>& points, const Eigen::Ref<const Vector>& source,
-                         const Eigen::Ref<const Vector>& force) {
+PointForceField kelvin_field(const Lame& m, const Eigen::Ref<const Matrix>& points,
+                             const Eigen::Ref<const Vector>& source, const Eigen::Ref<const Vector>& force) {
   const Index k = points.rows(), d = points.cols();
   if (d != 2 && d != 3) throw std::invalid_argument("points must have 2 or 3 columns, got " + std::to_string(d));
   if (source.size() != d || force.size() != d)

@@ -47,7 +47,7 @@ Mat3 kelvin_traction(const Lame& m, int d, const double* r, const double* nx);
 struct PointForceField {
   Matrix displacement, stress;
 };
-PointForceField kelvin_field(const Lame& m, const Eigen::Ref<const Matrix>& points, const Eigen::Ref<const Vector>& source,
-                         const Eigen::Ref<const Vector>& force);
+PointForceField kelvin_field(const Lame& m, const Eigen::Ref<const Matrix>& points,
+                             const Eigen::Ref<const Vector>& source, const Eigen::Ref<const Vector>& force);
 
 }  // namespace bem
