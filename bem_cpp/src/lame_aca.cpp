@@ -3,36 +3,38 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <map>
 #include <stdexcept>
 
 namespace bem {
 
 namespace {
 
-/// The members of each group, and per index its group's members.
+/// The members of each group: index i's group is members_[start_[g], start_[g + 1]) with
+/// g = of_[i].
 class Groups {
  public:
   explicit Groups(const std::vector<Index>& group) : of_(group.size()) {
-    std::map<Index, std::size_t> id;
-    for (std::size_t i = 0; i < group.size(); ++i) {
-      auto it = id.emplace(group[i], members_.size()).first;
-      if (it->second == members_.size()) members_.emplace_back();
-      members_[it->second].push_back(static_cast<Index>(i));
-      of_[i] = it->second;
+    std::vector<std::pair<Index, Index>> order(group.size());  // (group, index)
+    for (std::size_t i = 0; i < group.size(); ++i) order[i] = {group[i], static_cast<Index>(i)};
+    std::sort(order.begin(), order.end());
+    for (std::size_t k = 0; k < order.size(); ++k) {
+      if (k == 0 || order[k].first != order[k - 1].first) start_.push_back(k);
+      members_.push_back(order[k].second);
+      of_[static_cast<std::size_t>(order[k].second)] = start_.size() - 1;
     }
+    start_.push_back(order.size());
   }
-  /// The members of i's group, i first.
-  std::vector<Index> with(Index i) const {
-    std::vector<Index> out{i};
-    for (Index k : members_[of_[static_cast<std::size_t>(i)]])
-      if (k != i) out.push_back(k);
-    return out;
+  /// The members of i's group, i first, into out.
+  void with(Index i, std::vector<Index>& out) const {
+    out.assign(1, i);
+    const std::size_t g = of_[static_cast<std::size_t>(i)];
+    for (std::size_t k = start_[g]; k < start_[g + 1]; ++k)
+      if (members_[k] != i) out.push_back(members_[k]);
   }
 
  private:
-  std::vector<std::vector<Index>> members_;
-  std::vector<std::size_t> of_;
+  std::vector<Index> members_;
+  std::vector<std::size_t> start_, of_;
 };
 
 /// x^T y and |x| as plain loops (Eigen's AVX-512 reductions draw GCC 12's false
@@ -124,6 +126,7 @@ LowRank grouped_aca(Index m, Index n, const std::vector<Index>& row_group, const
   Crosses x(m, n, std::min<Index>(max_rank, 32));
   std::vector<char> row_used(static_cast<std::size_t>(m), 0), col_used(static_cast<std::size_t>(n), 0);
   Eigen::VectorXd r(n), c(m);
+  std::vector<Index> group;
   std::uint64_t seed =
       0x9E3779B97F4A7C15ULL ^ (static_cast<std::uint64_t>(m) * 1315423911ULL + static_cast<std::uint64_t>(n));
   auto random_index = [&seed](Index size) {
@@ -165,7 +168,8 @@ LowRank grouped_aca(Index m, Index n, const std::vector<Index>& row_group, const
     if (i >= 0) {
       double group2 = 0.0;
       int added = 0;
-      for (Index k : rows.with(i)) {
+      rows.with(i, group);
+      for (Index k : group) {
         if (row_used[static_cast<std::size_t>(k)] || x.rank() >= max_rank) continue;
         const double uv = cross_of_row(k);
         if (uv < 0) continue;
@@ -188,14 +192,16 @@ LowRank grouped_aca(Index m, Index n, const std::vector<Index>& row_group, const
     // Confirm on a sampled group of columns, then of rows: a residual whose norm, scaled
     // to the block, fails the test gives the next cross.
     bool found = false;
-    for (Index j : cols.with(random_index(n))) {
+    cols.with(random_index(n), group);
+    for (Index j : group) {
       if (found || x.rank() >= max_rank) break;
       column(j, c.data());
       x.residual_column(j, c);
       if (!(norm(c) * std::sqrt(static_cast<double>(n)) > tol * x.norm())) continue;
       found = cross_of_column(j) >= 0;
     }
-    for (Index q : rows.with(random_index(m))) {
+    rows.with(random_index(m), group);
+    for (Index q : group) {
       if (found || x.rank() >= max_rank) break;
       row(q, r.data());
       x.residual_row(q, r);

@@ -5,7 +5,6 @@
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
-#include <unordered_map>
 
 #include "bem/far_field.hpp"
 #include "bem/lame_aca.hpp"
@@ -117,6 +116,36 @@ void far_moments_batch(const Panel& pi, const PanelArrays& panels, const Index* 
     for (int k = 0; k < m; ++k) out[s][js[k]] = acc[s][k];
 }
 
+/// far_field_points (far_field.hpp) with the thresholds y, vectorised over the panels.
+void far_points(const Panel& pi, const PanelArrays& panels, std::size_t n,
+                const std::array<double, kMaxGaussPoints + 1>& y, int* points) {
+  const double* mx = panels.mx.data();
+  const double* my = panels.my.data();
+  const double* h = panels.h.data();
+#pragma omp simd
+  for (std::size_t j = 0; j < n; ++j) {
+    const double dx = pi.m.x - mx[j], dy = pi.m.y - my[j];
+    const double d2 = dx * dx + dy * dy, half_sum = 0.5 * (pi.h + h[j]);
+    const double half_h = 0.5 * (pi.h > h[j] ? pi.h : h[j]);
+    int failed = 0;
+    for (int p = 1; p <= kMaxFarPoints; ++p) {
+      const double bound = half_sum + y[static_cast<std::size_t>(p)] * half_h;
+      failed += d2 < bound * bound ? 1 : 0;
+    }
+    points[j] = failed == kMaxFarPoints ? 0 : failed + 1;
+  }
+}
+
+/// gauss_thresholds() (log_integrals.hpp) for the quadrature tolerance q.
+std::array<double, kMaxGaussPoints + 1> thresholds(double q) {
+  std::array<double, kMaxGaussPoints + 1> t{};
+  for (int p = 1; p <= kMaxGaussPoints; ++p) {
+    const double rho = std::pow(q, -1.0 / (2.0 * p));
+    t[static_cast<std::size_t>(p)] = 0.5 * (rho - 1.0 / rho);
+  }
+  return t;
+}
+
 }  // namespace
 
 KelvinLike kelvin_like(const Lame& m, LameKernel kernel) {
@@ -143,7 +172,8 @@ LamePolygonEntries::LamePolygonEntries(const Polygon& polygon, const Lame& m, La
     throw std::invalid_argument("LamePolygonEntries: X0 of W_h has P0 rows and columns");
 }
 
-void LamePolygonEntries::node_blocks(const DofSet& R, const DofSet& C, double* out) const {
+void LamePolygonEntries::node_blocks(const DofSet& R, const DofSet& C, double* out,
+                                     const std::array<double, kMaxGaussPoints + 1>* y) const {
   const Index n = polygon_.size();
   const std::vector<Index>& P = R.panels;
   const std::vector<Index>& Q = C.panels;
@@ -172,7 +202,10 @@ void LamePolygonEntries::node_blocks(const DofSet& R, const DofSet& C, double* o
       far_moments_batch(po, arrays, queue[p], queued[p], p, rows);
       queued[p] = 0;
     };
-    far_field_points(po, arrays, 0, static_cast<Index>(ni), points.data());
+    if (y)
+      far_points(po, arrays, ni, *y, points.data());
+    else
+      far_field_points(po, arrays, 0, static_cast<Index>(ni), points.data());
     for (std::size_t ii = 0; ii < ni; ++ii) {
       const PairRelation rel = relation(outer[io], inner[ii], n);
       const int p = rel == PairRelation::Separated ? points[ii] : 0;
@@ -237,21 +270,29 @@ void LamePolygonEntries::block(const Index* I, Index m, const Index* J, Index k,
 
 namespace {
 
-/// The nodes (panels) of a set of vector dofs, in order of first appearance, and per dof
-/// its node's place and its component.
+/// The nodes (panels) of a set of vector dofs, each once, and per dof its node's place
+/// and its component.
 struct NodeMap {
   std::vector<Index> nodes, place;
   std::vector<int> component;
   NodeMap(const Index* dofs, Index m) : place(static_cast<std::size_t>(m)), component(static_cast<std::size_t>(m)) {
-    std::unordered_map<Index, Index> seen;
-    for (Index r = 0; r < m; ++r) {
-      const Index u = dofs[r] / 2;
-      auto it = seen.find(u);
-      if (it == seen.end()) {
-        it = seen.emplace(u, static_cast<Index>(nodes.size())).first;
-        nodes.push_back(u);
+    bool paired = m % 2 == 0;  // the clusters of an expanded tree: (2 u, 2 u + 1) in turn
+    for (Index r = 0; paired && r < m; r += 2) paired = dofs[r] % 2 == 0 && dofs[r + 1] == dofs[r] + 1;
+    if (paired) {
+      nodes.resize(static_cast<std::size_t>(m / 2));
+      for (Index r = 0; r < m; ++r) {
+        nodes[static_cast<std::size_t>(r / 2)] = dofs[r] / 2;
+        place[static_cast<std::size_t>(r)] = r / 2;
+        component[static_cast<std::size_t>(r)] = static_cast<int>(r % 2);
       }
-      place[static_cast<std::size_t>(r)] = it->second;
+      return;
+    }
+    std::vector<std::pair<Index, Index>> order(static_cast<std::size_t>(m));  // (node, dof position)
+    for (Index r = 0; r < m; ++r) order[static_cast<std::size_t>(r)] = {dofs[r] / 2, r};
+    std::sort(order.begin(), order.end());
+    for (const auto& [u, r] : order) {
+      if (nodes.empty() || nodes.back() != u) nodes.push_back(u);
+      place[static_cast<std::size_t>(r)] = static_cast<Index>(nodes.size()) - 1;
       component[static_cast<std::size_t>(r)] = static_cast<int>(dofs[r] % 2);
     }
   }
@@ -273,39 +314,17 @@ class LameBlock : public EntryBlock {
 
   void row(Index i, double* out) const override {
     const auto t0 = std::chrono::steady_clock::now();
-    const Index u = I_[i] / 2;
-    auto it = row_cache_.find(u);
-    if (it == row_cache_.end()) {  // both components of node u against all column nodes
-      e_.nodes_into(e_.row_space(), &u, 1, one_);
-      scratch_.resize(static_cast<std::size_t>(4 * cols_.size()));
-      e_.node_blocks(one_, cols_, scratch_.data());
-      std::vector<double> both(static_cast<std::size_t>(2 * k_));
-      for (int comp = 0; comp < 2; ++comp)
-        for (Index c = 0; c < k_; ++c)
-          both[static_cast<std::size_t>(comp * k_ + c)] = scratch_[static_cast<std::size_t>(
-              4 * cmap_.place[static_cast<std::size_t>(c)] + 2 * comp + cmap_.component[static_cast<std::size_t>(c)])];
-      it = row_cache_.emplace(u, std::move(both)).first;
-    }
-    std::copy_n(it->second.data() + (I_[i] % 2) * k_, k_, out);
+    const Index p = rmap_.place[static_cast<std::size_t>(i)];
+    const double* both = cached(rmap_, p, cols_, cmap_, k_, true, row_slot_, row_store_);
+    std::copy_n(both + rmap_.component[static_cast<std::size_t>(i)] * k_, k_, out);
     e_.count(false, elapsed(t0));
   }
 
   void column(Index j, double* out) const override {
     const auto t0 = std::chrono::steady_clock::now();
-    const Index u = J_[j] / 2;
-    auto it = col_cache_.find(u);
-    if (it == col_cache_.end()) {
-      e_.nodes_into(e_.col_space(), &u, 1, one_);
-      scratch_.resize(static_cast<std::size_t>(4 * rows_.size()));
-      e_.node_blocks(rows_, one_, scratch_.data());
-      std::vector<double> both(static_cast<std::size_t>(2 * m_));
-      for (int comp = 0; comp < 2; ++comp)
-        for (Index r = 0; r < m_; ++r)
-          both[static_cast<std::size_t>(comp * m_ + r)] = scratch_[static_cast<std::size_t>(
-              4 * rmap_.place[static_cast<std::size_t>(r)] + 2 * rmap_.component[static_cast<std::size_t>(r)] + comp)];
-      it = col_cache_.emplace(u, std::move(both)).first;
-    }
-    std::copy_n(it->second.data() + (J_[j] % 2) * m_, m_, out);
+    const Index p = cmap_.place[static_cast<std::size_t>(j)];
+    const double* both = cached(cmap_, p, rows_, rmap_, m_, false, col_slot_, col_store_);
+    std::copy_n(both + cmap_.component[static_cast<std::size_t>(j)] * m_, m_, out);
     e_.count(false, elapsed(t0));
   }
 
@@ -314,6 +333,7 @@ class LameBlock : public EntryBlock {
     std::vector<Index> rg(static_cast<std::size_t>(m_)), cg(static_cast<std::size_t>(k_));
     for (Index r = 0; r < m_; ++r) rg[static_cast<std::size_t>(r)] = I_[r] / 2;
     for (Index c = 0; c < k_; ++c) cg[static_cast<std::size_t>(c)] = J_[c] / 2;
+    far_rule_ = thresholds(std::max(kQuadratureTolerance, 1e-3 * tol));
     const Slice row = [this](Index i, double* o) { this->row(i, o); };
     const Slice column = [this](Index j, double* o) { this->column(j, o); };
     out = grouped_aca(m_, k_, rg, cg, row, column, tol, std::min(m_, k_));
@@ -340,6 +360,35 @@ class LameBlock : public EntryBlock {
     return static_cast<long>(
         std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count());
   }
+  /// Both components' rows (row: true) or columns of the node at place p of `own` against
+  /// all dofs of the other side (`other`, `omap`, `count` dofs), computed once:
+  /// out[c * count + q] for component c.
+  const double* cached(const NodeMap& own, Index p, const DofSet& other, const NodeMap& omap, Index count, bool row,
+                       std::vector<Index>& slot, std::vector<double>& store) const {
+    if (slot.empty()) slot.assign(static_cast<std::size_t>(own.size()), -1);
+    Index& s = slot[static_cast<std::size_t>(p)];
+    if (s < 0) {
+      const Index u = own.nodes[static_cast<std::size_t>(p)];
+      e_.nodes_into(row ? e_.row_space() : e_.col_space(), &u, 1, one_);
+      scratch_.resize(static_cast<std::size_t>(4 * other.size()));
+      const std::array<double, kMaxGaussPoints + 1>* y = far_rule_[1] > 0 ? &far_rule_ : nullptr;
+      if (row)
+        e_.node_blocks(one_, other, scratch_.data(), y);
+      else
+        e_.node_blocks(other, one_, scratch_.data(), y);
+      s = static_cast<Index>(store.size());
+      store.resize(store.size() + static_cast<std::size_t>(2 * count));
+      double* both = store.data() + s;
+      for (int comp = 0; comp < 2; ++comp)
+        for (Index q = 0; q < count; ++q) {
+          const Index at = omap.place[static_cast<std::size_t>(q)];
+          const int oc = omap.component[static_cast<std::size_t>(q)];
+          // node_blocks: [own node][other node][row component][column component]
+          both[comp * count + q] = scratch_[static_cast<std::size_t>(4 * at + (row ? 2 * comp + oc : 2 * oc + comp))];
+        }
+    }
+    return store.data() + s;
+  }
   const LamePolygonEntries& e_;
   const Index *I_, *J_;
   Index m_, k_;
@@ -347,8 +396,10 @@ class LameBlock : public EntryBlock {
   DofSet rows_, cols_;
   // one thread per block: the single-node set, the scratch and the computed rows / columns
   mutable DofSet one_;
-  mutable std::vector<double> scratch_;
-  mutable std::unordered_map<Index, std::vector<double>> row_cache_, col_cache_;
+  mutable std::vector<double> scratch_, row_store_, col_store_;
+  mutable std::vector<Index> row_slot_, col_slot_;
+  /// the thresholds of the far rule of ACA's rows and columns (zero: the dense assembly's)
+  mutable std::array<double, kMaxGaussPoints + 1> far_rule_{};
 };
 
 }  // namespace

@@ -266,9 +266,10 @@ TEST(LameSteklovOperator, IterationCountsStayBounded) {
 }
 
 TEST(LameSteklovOperator, DistributedOverThreadsEqualsTheSerialOperator) {
-  // 1 and 2 emulated ranks: the same blocks as the serial operator, so the products agree
-  // to the round-off of the sums in another order (measured <= 1e-15 relative), the CG takes
-  // the same iterations, and all ranks hold the same bits.
+  // 1 and 2 emulated ranks: the same blocks as the serial operator (products on one
+  // thread), so on 1 rank the same bits and on 2 the round-off of the sums in another order
+  // (measured 1.2e-15 ... 1.7e-15 relative, also on 3), the CG takes the same iterations,
+  // and all ranks hold the same bits.
   const double tol = 1e-10;
   for (const Points& X : {test::circle(700), l_shape(80)}) {
     for (Space flux : {Space::P1, Space::P0}) {
@@ -296,9 +297,13 @@ TEST(LameSteklovOperator, DistributedOverThreadsEqualsTheSerialOperator) {
             bytes[static_cast<std::size_t>(r)] = i.nbytes_v + i.nbytes_w + i.nbytes_k + i.nbytes_v0;
           });
         for (std::thread& t : ranks) t.join();
+        if (size == 1) {
+          EXPECT_EQ((out[0] - ref).cwiseAbs().maxCoeff(), 0.0);
+          EXPECT_EQ((fl[0] - ref_flux).cwiseAbs().maxCoeff(), 0.0);
+        }
         for (int r = 0; r < size; ++r) {
-          EXPECT_LT(relative(out[static_cast<std::size_t>(r)], ref), 1e-12);
-          EXPECT_LT(relative(fl[static_cast<std::size_t>(r)], ref_flux), 1e-12);
+          EXPECT_LT(relative(out[static_cast<std::size_t>(r)], ref), 1e-13);
+          EXPECT_LT(relative(fl[static_cast<std::size_t>(r)], ref_flux), 1e-13);
           EXPECT_EQ(its[static_cast<std::size_t>(r)], iterations);
           EXPECT_EQ((out[static_cast<std::size_t>(r)] - out[0]).cwiseAbs().maxCoeff(), 0.0);
           EXPECT_EQ((fl[static_cast<std::size_t>(r)] - fl[0]).cwiseAbs().maxCoeff(), 0.0);

@@ -19,7 +19,10 @@
 // Vector dofs are node-major (dof 2 u + k: component k of node or panel u); the entries of
 // a set of dofs come from the moments of the panels of their nodes: near pairs exactly as
 // the dense assembly (pair_blocks for L, direction_blocks for D), far pairs by the same
-// tensor Gauss rules (far_field_points points per panel) in vector batches over the panels.
+// tensor Gauss rules (far_field_points points per panel) in vector batches over the panels;
+// the rows and columns of ACA (the admissible blocks, approximated to tol anyway) by the
+// rules for the quadrature tolerance max(1e-16, 1e-3 tol) instead of 1e-16 (fewer points).
+#include <array>
 #include <atomic>
 #include <memory>
 #include <vector>
@@ -27,6 +30,7 @@
 #include "bem/cluster_tree.hpp"
 #include "bem/hmatrix.hpp"
 #include "bem/kelvin.hpp"
+#include "bem/log_integrals.hpp"
 #include "bem/operator_entries.hpp"
 
 namespace bem {
@@ -61,8 +65,11 @@ class LamePolygonEntries : public EntrySource {
   std::unique_ptr<EntryBlock> block(const Index* I, Index m, const Index* J, Index k) const override;
 
   /// The 2 x 2 blocks of all pairs of the nodes (panels) of `rows` and `cols`:
-  /// out[((r * cols.size() + c) * 2 + k) * 2 + l] = A(2 u_r + k, 2 u_c + l).
-  void node_blocks(const DofSet& rows, const DofSet& cols, double* out) const;
+  /// out[((r * cols.size() + c) * 2 + k) * 2 + l] = A(2 u_r + k, 2 u_c + l). Far pairs by
+  /// the tensor Gauss rule with the points of far_field_points for the thresholds y
+  /// (log_integrals.hpp; nullptr: gauss_thresholds(), the dense assembly's).
+  void node_blocks(const DofSet& rows, const DofSet& cols, double* out,
+                   const std::array<double, kMaxGaussPoints + 1>* y = nullptr) const;
   DofSet nodes(Space space, const Index* nodes, Index m) const { return scalar_.dofs(space, nodes, m); }
   void nodes_into(Space space, const Index* nodes, Index m, DofSet& d) const { scalar_.dofs_into(space, nodes, m, d); }
 
