@@ -56,12 +56,12 @@ class Crosses {
   Crosses(Index m, Index n, Index capacity)
       : U_(m, std::max<Index>(capacity, 1)), V_(n, std::max<Index>(capacity, 1)) {}
   Index rank() const { return k_; }
-  /// r := r - (U V^T)(i, :)
+  /// r := r - (U V^T)(i, :), c := c - (U V^T)(:, j) (column by column: axpy loops)
   void residual_row(Index i, Eigen::VectorXd& r) const {
-    if (k_ > 0) r.noalias() -= V_.leftCols(k_) * U_.row(i).head(k_).transpose();
+    for (Index l = 0; l < k_; ++l) r -= U_(i, l) * V_.col(l);
   }
   void residual_column(Index j, Eigen::VectorXd& c) const {
-    if (k_ > 0) c.noalias() -= U_.leftCols(k_) * V_.row(j).head(k_).transpose();
+    for (Index l = 0; l < k_; ++l) c -= V_(j, l) * U_.col(l);
   }
   /// Adds u v^T and updates |U V^T|_F^2; returns |u| |v|.
   double add(const Eigen::VectorXd& u, const Eigen::VectorXd& v) {
@@ -70,10 +70,7 @@ class Crosses {
       V_.conservativeResize(Eigen::NoChange, 2 * k_);
     }
     double cross = 0.0;
-    if (k_ > 0) {
-      const Eigen::VectorXd a = U_.leftCols(k_).transpose() * u, b = V_.leftCols(k_).transpose() * v;
-      cross = dot(a, b);
-    }
+    for (Index l = 0; l < k_; ++l) cross += dot(U_.col(l), u) * dot(V_.col(l), v);
     const double uv = std::sqrt(dot(u, u) * dot(v, v));
     norm2_ += uv * uv + 2.0 * cross;
     U_.col(k_) = u;

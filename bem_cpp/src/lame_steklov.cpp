@@ -237,7 +237,7 @@ LameSteklovParts lame_polygon_steklov_parts(const Polygon& polygon, const Lame& 
   parts.preconditioner = [calderon, s](const Eigen::MatrixXd& R) {
     const Eigen::MatrixXd S = split(R);
     Eigen::MatrixXd Z = calderon->apply(S);
-    for (Index j = 0; j < S.cols(); ++j) Z.col(j).array() -= S.col(j).sum();
+    for (Index j = 0; j < S.cols(); ++j) Z.col(j).array() -= dot(S.col(j), Eigen::VectorXd::Ones(S.rows()));
     return join(s * Z);
   };
   parts.deflation = deflation_basis(polygon, flux);

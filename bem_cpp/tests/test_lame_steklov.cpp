@@ -46,7 +46,17 @@ Eigen::MatrixXd kron2(const Eigen::MatrixXd& A) {
 double relative(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) { return (a - b).norm() / b.norm(); }
 
 /// The defaults of bem_cpp/defaults.py (products on one thread: a shared machine).
-SteklovOptions options(double tol) { return SteklovOptions{{48, 2.0, tol, false, 1}, 1e-4, 1e-3 * tol, 1000}; }
+SteklovOptions options(double tol) {
+  SteklovOptions o{};
+  o.hmatrix.leaf_size = 48;
+  o.hmatrix.eta = 2.0;
+  o.hmatrix.tol = tol;
+  o.hmatrix.product_threads = 1;
+  o.preconditioner_tol = 1e-4;
+  o.solver_tol = 1e-3 * tol;
+  o.max_iterations = 1000;
+  return o;
+}
 
 const Lame kSteel{1.0, 0.3};
 
