@@ -1,0 +1,215 @@
+#include "bem/lame_aca.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <stdexcept>
+
+namespace bem {
+
+namespace {
+
+/// The members of each group: index i's group is members_[start_[g], start_[g + 1]) with
+/// g = of_[i].
+class Groups {
+ public:
+  explicit Groups(const std::vector<Index>& group) : of_(group.size()) {
+    std::vector<std::pair<Index, Index>> order(group.size());  // (group, index)
+    for (std::size_t i = 0; i < group.size(); ++i) order[i] = {group[i], static_cast<Index>(i)};
+    std::sort(order.begin(), order.end());
+    for (std::size_t k = 0; k < order.size(); ++k) {
+      if (k == 0 || order[k].first != order[k - 1].first) start_.push_back(k);
+      members_.push_back(order[k].second);
+      of_[static_cast<std::size_t>(order[k].second)] = start_.size() - 1;
+    }
+    start_.push_back(order.size());
+  }
+  /// The members of i's group, i first, into out.
+  void with(Index i, std::vector<Index>& out) const {
+    out.assign(1, i);
+    const std::size_t g = of_[static_cast<std::size_t>(i)];
+    for (std::size_t k = start_[g]; k < start_[g + 1]; ++k)
+      if (members_[k] != i) out.push_back(members_[k]);
+  }
+
+ private:
+  std::vector<Index> members_;
+  std::vector<std::size_t> start_, of_;
+};
+
+/// x^T y and |x| as plain loops (Eigen's AVX-512 reductions draw GCC 12's false
+/// -Wmaybe-uninitialized warnings).
+template <class A, class B>
+double dot(const A& x, const B& y) {
+  double s = 0.0;
+  for (Index i = 0; i < x.size(); ++i) s += x(i) * y(i);
+  return s;
+}
+template <class A>
+double norm(const A& x) {
+  return std::sqrt(dot(x, x));
+}
+
+/// The crosses found so far, U V^T, and the residual rows and columns.
+class Crosses {
+ public:
+  Crosses(Index m, Index n, Index capacity)
+      : U_(m, std::max<Index>(capacity, 1)), V_(n, std::max<Index>(capacity, 1)) {}
+  Index rank() const { return k_; }
+  /// r := r - (U V^T)(i, :), c := c - (U V^T)(:, j) (column by column: axpy loops)
+  void residual_row(Index i, Eigen::VectorXd& r) const {
+    for (Index l = 0; l < k_; ++l) r -= U_(i, l) * V_.col(l);
+  }
+  void residual_column(Index j, Eigen::VectorXd& c) const {
+    for (Index l = 0; l < k_; ++l) c -= V_(j, l) * U_.col(l);
+  }
+  /// Adds u v^T and updates |U V^T|_F^2; returns |u| |v|.
+  double add(const Eigen::VectorXd& u, const Eigen::VectorXd& v) {
+    if (k_ == U_.cols()) {
+      U_.conservativeResize(Eigen::NoChange, 2 * k_);
+      V_.conservativeResize(Eigen::NoChange, 2 * k_);
+    }
+    double cross = 0.0;
+    for (Index l = 0; l < k_; ++l) cross += dot(U_.col(l), u) * dot(V_.col(l), v);
+    const double uv = std::sqrt(dot(u, u) * dot(v, v));
+    norm2_ += uv * uv + 2.0 * cross;
+    U_.col(k_) = u;
+    V_.col(k_) = v;
+    ++k_;
+    return uv;
+  }
+  double norm() const { return std::sqrt(std::max(norm2_, 0.0)); }
+  auto last_u() const { return U_.col(k_ - 1); }
+  LowRank result() const { return LowRank{U_.leftCols(k_), V_.leftCols(k_)}; }
+
+ private:
+  Eigen::MatrixXd U_, V_;
+  Index k_ = 0;
+  double norm2_ = 0.0;
+};
+
+/// argmax |x[i]| over the unused i (the first of equal ones); -1 if all are used.
+template <class X>
+Index unused_argmax(const X& x, const std::vector<char>& used) {
+  Index best = -1;
+  double top = -1.0;
+  for (Index i = 0; i < x.size(); ++i)
+    if (!used[static_cast<std::size_t>(i)] && std::abs(x(i)) > top) {
+      top = std::abs(x(i));
+      best = i;
+    }
+  return best;
+}
+
+Index next_unused(const std::vector<char>& used, Index from) {
+  const Index m = static_cast<Index>(used.size());
+  for (Index d = 0; d < m; ++d) {
+    const Index i = (from + d) % m;
+    if (!used[static_cast<std::size_t>(i)]) return i;
+  }
+  return -1;
+}
+
+constexpr int kZeroGroupTries = 3;  // consecutive groups without a cross before the samples decide
+
+}  // namespace
+
+LowRank grouped_aca(Index m, Index n, const std::vector<Index>& row_group, const std::vector<Index>& column_group,
+                    const Slice& row, const Slice& column, double tol, Index max_rank) {
+  if (static_cast<Index>(row_group.size()) != m || static_cast<Index>(column_group.size()) != n)
+    throw std::invalid_argument("grouped_aca: one group per row and per column");
+  max_rank = std::min({max_rank, m, n});
+  const Groups rows(row_group), cols(column_group);
+  Crosses x(m, n, std::min<Index>(max_rank, 32));
+  std::vector<char> row_used(static_cast<std::size_t>(m), 0), col_used(static_cast<std::size_t>(n), 0);
+  Eigen::VectorXd r(n), c(m);
+  std::vector<Index> group;
+  std::uint64_t seed =
+      0x9E3779B97F4A7C15ULL ^ (static_cast<std::uint64_t>(m) * 1315423911ULL + static_cast<std::uint64_t>(n));
+  auto random_index = [&seed](Index size) {
+    seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
+    return static_cast<Index>((seed >> 33) % static_cast<std::uint64_t>(size));
+  };
+  // The cross of residual row i with its largest unused entry's column (0 if none):
+  // returns |u| |v|, or -1 if the residual row is zero.
+  auto cross_of_row = [&](Index i) -> double {
+    row(i, r.data());
+    x.residual_row(i, r);
+    row_used[static_cast<std::size_t>(i)] = 1;
+    const Index j = unused_argmax(r, col_used);
+    if (j < 0 || r(j) == 0.0) return -1.0;
+    column(j, c.data());
+    x.residual_column(j, c);
+    col_used[static_cast<std::size_t>(j)] = 1;
+    return x.add(c, r / r(j));
+  };
+  // The same from column j (the pivot row is its largest entry's); -1 if it is zero.
+  auto cross_of_column = [&](Index j) -> double {
+    column(j, c.data());
+    x.residual_column(j, c);
+    const Index i = unused_argmax(c, row_used);
+    if (i < 0 || c(i) == 0.0) return -1.0;
+    row(i, r.data());
+    x.residual_row(i, r);
+    if (r(j) == 0.0) return -1.0;
+    row_used[static_cast<std::size_t>(i)] = 1;
+    col_used[static_cast<std::size_t>(j)] = 1;
+    const Eigen::VectorXd v = r / r(j);
+    return x.add(c, v);
+  };
+
+  Index i = m / 2;
+  int empty_groups = 0;
+  while (x.rank() < max_rank) {
+    bool stop = false;
+    if (i >= 0) {
+      double group2 = 0.0;
+      int added = 0;
+      rows.with(i, group);
+      for (Index k : group) {
+        if (row_used[static_cast<std::size_t>(k)] || x.rank() >= max_rank) continue;
+        const double uv = cross_of_row(k);
+        if (uv < 0) continue;
+        group2 += uv * uv;
+        ++added;
+      }
+      if (added == 0) {
+        i = ++empty_groups > kZeroGroupTries ? -1 : next_unused(row_used, i + m / 3 + 1);
+        stop = i < 0;
+      } else {
+        empty_groups = 0;
+        stop = std::sqrt(group2) <= tol * x.norm();
+        i = unused_argmax(x.last_u(), row_used);
+        if (i < 0) stop = true;
+      }
+    } else {
+      stop = true;
+    }
+    if (!stop || x.rank() >= max_rank) continue;
+    // Confirm on a sampled group of columns, then of rows: a residual whose norm, scaled
+    // to the block, fails the test gives the next cross.
+    bool found = false;
+    cols.with(random_index(n), group);
+    for (Index j : group) {
+      if (found || x.rank() >= max_rank) break;
+      column(j, c.data());
+      x.residual_column(j, c);
+      if (!(norm(c) * std::sqrt(static_cast<double>(n)) > tol * x.norm())) continue;
+      found = cross_of_column(j) >= 0;
+    }
+    rows.with(random_index(m), group);
+    for (Index q : group) {
+      if (found || x.rank() >= max_rank) break;
+      row(q, r.data());
+      x.residual_row(q, r);
+      if (!(norm(r) * std::sqrt(static_cast<double>(m)) > tol * x.norm())) continue;
+      found = cross_of_row(q) >= 0;
+    }
+    if (!found) break;
+    empty_groups = 0;
+    i = unused_argmax(x.last_u(), row_used);
+  }
+  return x.result();
+}
+
+}  // namespace bem
