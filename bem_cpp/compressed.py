@@ -251,7 +251,7 @@ def steklov_poincare(
     lame = checks.kernel(kernel)
     if lame is not None:
         return _lame_steklov_poincare(
-            checks.boundary(nodes, triangles), flux, lame, compression, timings, comm
+            checks.boundary(nodes, triangles), flux, lame, compression, tol, timings, comm
         )
     if triangles is not None:
         return _surface_steklov_poincare(
@@ -354,19 +354,37 @@ def _lame_steklov_poincare(
     flux: str,
     lame: _bem.Lame,
     compression: str,
+    tol: float,
     timings: dict[str, float] | None,
     comm: Any,
-) -> NDArray[np.float64]:
-    """:func:`steklov_poincare` with Kelvin's kernel ``lame`` (dense)."""
+) -> NDArray[np.float64] | SteklovPoincareOperator:
+    """:func:`steklov_poincare` with Kelvin's kernel ``lame``: dense, or H-matrices on a
+    polygon (``"auto"``: from ``HMATRIX_LAME_AUTO_NODES`` nodes on)."""
+    space = checks.space(flux, "flux")
     if compression not in defaults.SURFACE_COMPRESSIONS:
         raise ValueError(
             f"compression must be one of {defaults.SURFACE_COMPRESSIONS}, got {compression!r}"
         )
-    if compression == "hmatrix" or comm is not None:
-        raise ValueError(
-            'the Lame kernel\'s S_h is dense only so far: use compression="none" without comm'
+    if compression == "auto":
+        large = geometry[0].shape[0] >= defaults.HMATRIX_LAME_AUTO_NODES
+        compression = "hmatrix" if large else "none"
+    if comm is not None and compression != "hmatrix":
+        raise ValueError('comm needs compression="hmatrix"')
+    if compression == "hmatrix":
+        if len(geometry) == 2:
+            raise ValueError(
+                'the Lame kernel\'s S_h of a surface is dense only so far: use compression="none"'
+            )
+        return _compressed_operator(
+            _bem.LameSteklovOperator,
+            (*geometry, lame, space),
+            comm,
+            timings,
+            tol=checks.tolerance(tol),
+            leaf_size=defaults.HMATRIX_LEAF_SIZE,
+            eta=defaults.HMATRIX_ETA,
+            preconditioner_tol=defaults.HMATRIX_PRECONDITIONER_TOL,
         )
-    space = checks.space(flux, "flux")
     d = checks.components(lame, geometry)
     return _dense_steklov_poincare(
         lambda: _bem.lame_operators(*geometry, lame, space),
