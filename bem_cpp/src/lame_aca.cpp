@@ -115,7 +115,7 @@ constexpr int kZeroGroupTries = 3;  // consecutive groups without a cross before
 }  // namespace
 
 LowRank grouped_aca(Index m, Index n, const std::vector<Index>& row_group, const std::vector<Index>& column_group,
-                    const Slice& row, const Slice& column, double tol, Index max_rank) {
+                    const Slice& row, const Slice& column, double tol, Index max_rank, int samples) {
   if (static_cast<Index>(row_group.size()) != m || static_cast<Index>(column_group.size()) != n)
     throw std::invalid_argument("grouped_aca: one group per row and per column");
   max_rank = std::min({max_rank, m, n});
@@ -186,30 +186,66 @@ LowRank grouped_aca(Index m, Index n, const std::vector<Index>& row_group, const
       stop = true;
     }
     if (!stop || x.rank() >= max_rank) continue;
-    // Confirm on a sampled group of columns, then of rows: a residual whose norm, scaled
-    // to the block, fails the test gives the next cross.
+    // Confirm on `samples` sampled groups of columns and of rows, alternately: a residual
+    // whose norm, scaled to the block, fails the test gives the next cross.
     bool found = false;
-    cols.with(random_index(n), group);
-    for (Index j : group) {
-      if (found || x.rank() >= max_rank) break;
-      column(j, c.data());
-      x.residual_column(j, c);
-      if (!(norm(c) * std::sqrt(static_cast<double>(n)) > tol * x.norm())) continue;
-      found = cross_of_column(j) >= 0;
-    }
-    rows.with(random_index(m), group);
-    for (Index q : group) {
-      if (found || x.rank() >= max_rank) break;
-      row(q, r.data());
-      x.residual_row(q, r);
-      if (!(norm(r) * std::sqrt(static_cast<double>(m)) > tol * x.norm())) continue;
-      found = cross_of_row(q) >= 0;
+    for (int s = 0; s < samples && !found && x.rank() < max_rank; ++s) {
+      cols.with(random_index(n), group);
+      for (Index j : group) {
+        if (found || x.rank() >= max_rank) break;
+        column(j, c.data());
+        x.residual_column(j, c);
+        if (!(norm(c) * std::sqrt(static_cast<double>(n)) > tol * x.norm())) continue;
+        found = cross_of_column(j) >= 0;
+      }
+      rows.with(random_index(m), group);
+      for (Index q : group) {
+        if (found || x.rank() >= max_rank) break;
+        row(q, r.data());
+        x.residual_row(q, r);
+        if (!(norm(r) * std::sqrt(static_cast<double>(m)) > tol * x.norm())) continue;
+        found = cross_of_row(q) >= 0;
+      }
     }
     if (!found) break;
     empty_groups = 0;
     i = unused_argmax(x.last_u(), row_used);
   }
   return x.result();
+}
+
+namespace {
+
+class SampledAcaBlock : public EntryBlock {
+ public:
+  SampledAcaBlock(std::unique_ptr<EntryBlock> block, Index m, Index k, int samples)
+      : block_(std::move(block)), m_(m), k_(k), samples_(samples) {}
+  void row(Index i, double* out) const override { block_->row(i, out); }
+  void column(Index j, double* out) const override { block_->column(j, out); }
+  void all(double* out) const override { block_->all(out); }
+  bool all_and_transpose(double* out, double* transposed) const override {
+    return block_->all_and_transpose(out, transposed);
+  }
+  bool low_rank(double tol, LowRank& out) const override {
+    std::vector<Index> rg(static_cast<std::size_t>(m_)), cg(static_cast<std::size_t>(k_));
+    for (Index r = 0; r < m_; ++r) rg[static_cast<std::size_t>(r)] = r;
+    for (Index c = 0; c < k_; ++c) cg[static_cast<std::size_t>(c)] = c;
+    const Slice row = [this](Index i, double* o) { block_->row(i, o); };
+    const Slice column = [this](Index j, double* o) { block_->column(j, o); };
+    out = grouped_aca(m_, k_, rg, cg, row, column, tol, std::min(m_, k_), samples_);
+    return true;
+  }
+
+ private:
+  std::unique_ptr<EntryBlock> block_;
+  Index m_, k_;
+  int samples_;
+};
+
+}  // namespace
+
+std::unique_ptr<EntryBlock> SampledAcaEntries::block(const Index* I, Index m, const Index* J, Index k) const {
+  return std::make_unique<SampledAcaBlock>(source_.block(I, m, J, k), m, k, samples_);
 }
 
 }  // namespace bem
