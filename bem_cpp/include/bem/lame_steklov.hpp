@@ -41,11 +41,14 @@
 // them at tol, S_h's product error was 6e-10 at tol 1e-10, now 4e-11 ... 7e-11; the node
 // trees of the vector matrices have leaves of leaf_size / 2 nodes (leaf_size dofs).
 // Cost against SteklovPoincareOperator (same polygon, tol 1e-10, leaf 48, eta 2, one
-// thread, CPU seconds; circle / L-shape, n = 16,000):
-//   flux P1: set-up 3.8 / 4.5 s (Laplace 0.96 / 1.16), 416 / 496 MB (77 / 102), product
-//            0.19 / 0.39 s (0.056 / 0.104): 4.0 / 3.9, 5.4 / 4.9 and 3.3 / 3.8 times;
-//   flux P0: set-up 1.9 / 2.2 s, 170 / 207 MB, product 0.26 / 0.46 s (Laplace P0: 1.1 /
-//            1.3 s, 87 / 109 MB, 0.096 / 0.145 s): 1.7, 2.0 / 1.9 and 2.7 / 3.1 times.
+// thread, CPU seconds, a shared machine: +-10 %; circle / L-shape, n = 16,000):
+//   flux P1: set-up 3.9-4.6 / 4.4-4.7 s (Laplace 1.0-1.1 / 1.15-1.3), 416 / 496 MB (77 /
+//            102), product 0.16-0.19 / 0.35-0.39 s (0.054-0.062 / 0.095-0.11): about 4.0 /
+//            3.9, 5.4 / 4.9 and 3.0 / 3.7 times. Set-up (L-shape): V 0.9, X0 0.9, Y and K_L
+//            2.2, preconditioner 0.3 s; product: 23 x (V 9.7 + C 2.8 ms) + W 9.5 + K 21 +
+//            K^T 22 ms; bytes: V 113, X0 112, Y 216, K_L 43, preconditioner 12 MB;
+//   flux P0: set-up 2.2 / 2.3 s, 170 / 207 MB, product 0.25 / 0.46 s (Laplace P0: 1.1 /
+//            1.5 s, 87 / 109 MB, 0.083 / 0.127 s): 2.0 / 1.5, 2.0 / 1.9 and 2.9 / 3.6 times.
 // The P1 flux needs three vector matrices where the Laplace operator has two scalar ones
 // and a double layer that is nearly free on polygons; a vector block's rank is about twice
 // the scalar's (10.3 against 5.5) on twice the rows and columns, and Y is not symmetric.
