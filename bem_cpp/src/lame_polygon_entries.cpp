@@ -36,13 +36,6 @@ void check_medium(const Lame& m) {
   if (!msg.str().empty()) throw std::invalid_argument(msg.str());
 }
 
-PairRelation relation(Index p, Index q, Index n) {
-  if (p == q) return PairRelation::Coincident;
-  if (q == (p + 1) % n) return PairRelation::EndToStart;
-  if (q == (p + n - 1) % n) return PairRelation::StartToEnd;
-  return PairRelation::Separated;
-}
-
 /// The far pairs (pi, panel js[k]), k < m <= kFarBatch, by the tensor Gauss rule with p
 /// points per panel, vectorised over k: the 12 moments (shape a on pi, b on panel js[k])
 /// stored to out[slab][js[k]].
@@ -206,8 +199,13 @@ void LamePolygonEntries::node_blocks(const DofSet& R, const DofSet& C, double* o
       far_points(po, arrays, ni, *y, points.data());
     else
       far_field_points(po, arrays, 0, static_cast<Index>(ni), points.data());
+    const Index po_index = outer[io], po_next = (po_index + 1) % n, po_prev = (po_index + n - 1) % n;
     for (std::size_t ii = 0; ii < ni; ++ii) {
-      const PairRelation rel = relation(outer[io], inner[ii], n);
+      const Index q = inner[ii];
+      const PairRelation rel = q == po_index  ? PairRelation::Coincident
+                               : q == po_next ? PairRelation::EndToStart
+                               : q == po_prev ? PairRelation::StartToEnd
+                                              : PairRelation::Separated;
       const int p = rel == PairRelation::Separated ? points[ii] : 0;
       if (p > 0) {
         queue[p][queued[p]++] = static_cast<Index>(ii);
@@ -227,27 +225,37 @@ void LamePolygonEntries::node_blocks(const DofSet& R, const DofSet& C, double* o
     for (int p = 1; p <= kMaxFarPoints; ++p)
       if (queued[p] > 0) flush(p);
   }
-  auto at = [&](int moment, int a, int b, std::size_t ip, std::size_t iq) {
-    return swap ? table[(slab(moment, b, a) * no + iq) * ni + ip] : table[(slab(moment, a, b) * no + ip) * ni + iq];
-  };
+  // The sums over the shape terms of each pair of nodes: the table's strides for (row
+  // panel, column panel) and for the shapes (a on the row panel, b on the column panel).
+  const std::size_t plane = no * ni;
+  const std::size_t s_row = swap ? 1 : ni, s_col = swap ? ni : 1;
+  const std::size_t s_a = swap ? plane : 2 * plane, s_b = swap ? 2 * plane : plane;
+  const double* hp = R.arrays.h.data();
+  const double* hq = C.arrays.h.data();
   const Index m = R.size(), k = C.size();
   const double ca = coef_.a, cb = coef_.b;
   for (Index r = 0; r < m; ++r) {
-    const std::size_t ip[2] = {static_cast<std::size_t>(R.position[static_cast<std::size_t>(2 * r)]),
-                               static_cast<std::size_t>(R.position[static_cast<std::size_t>(2 * r + 1)])};
-    const int sr[2] = {R.shape[static_cast<std::size_t>(2 * r)], R.shape[static_cast<std::size_t>(2 * r + 1)]};
-    const double hr[2] = {polygon_.panel(P[ip[0]]).h, polygon_.panel(P[ip[1]]).h};
+    std::size_t base[2];
+    double hr[2];
+    for (int e = 0; e < 2; ++e) {
+      const std::size_t ip = static_cast<std::size_t>(R.position[static_cast<std::size_t>(2 * r + e)]);
+      base[e] = ip * s_row + static_cast<std::size_t>(R.shape[static_cast<std::size_t>(2 * r + e)]) * s_a;
+      hr[e] = 0.25 * hp[ip];
+    }
     for (Index c = 0; c < k; ++c) {
       double L = 0, X = 0, Y = 0, quarter = 0;
-      for (int e = 0; e < 2; ++e)
-        for (int f = 0; f < 2; ++f) {
-          const std::size_t iq = static_cast<std::size_t>(C.position[static_cast<std::size_t>(2 * c + f)]);
-          const int sc = C.shape[static_cast<std::size_t>(2 * c + f)];
-          L += at(kL, sr[e], sc, ip[e], iq);
-          X += at(kX, sr[e], sc, ip[e], iq);
-          Y += at(kY, sr[e], sc, ip[e], iq);
-          quarter += 0.25 * hr[e] * polygon_.panel(Q[iq]).h;
+      for (int f = 0; f < 2; ++f) {
+        const std::size_t iq = static_cast<std::size_t>(C.position[static_cast<std::size_t>(2 * c + f)]);
+        const std::size_t col =
+            iq * s_col + static_cast<std::size_t>(C.shape[static_cast<std::size_t>(2 * c + f)]) * s_b;
+        for (int e = 0; e < 2; ++e) {
+          const double* t = table.data() + base[e] + col;
+          L += t[slab(kL, 0, 0) * plane];
+          X += t[slab(kX, 0, 0) * plane];
+          Y += t[slab(kY, 0, 0) * plane];
+          quarter += hr[e] * hq[iq];
         }
+      }
       // a L I + b D, D = [[X, Y], [Y, quarter - X]]; rotated: times R = [[0, -1], [1, 0]]
       const double b00 = ca * L + cb * X, b01 = cb * Y, b11 = ca * L + cb * (quarter - X);
       double* o = out + 4 * (r * k + c);
@@ -299,6 +307,34 @@ struct NodeMap {
   Index size() const { return static_cast<Index>(nodes.size()); }
 };
 
+/// A vector from a pool of the calling thread, given back with its capacity on destruction:
+/// the row and column caches of every block would otherwise be fresh allocations whose
+/// pages fault in each time.
+template <class T>
+class Pooled {
+ public:
+  Pooled() {
+    std::vector<std::vector<T>>& p = pool();
+    if (!p.empty()) {
+      v_ = std::move(p.back());
+      p.pop_back();
+    }
+    v_.clear();
+  }
+  ~Pooled() { pool().push_back(std::move(v_)); }
+  Pooled(const Pooled&) = delete;
+  Pooled& operator=(const Pooled&) = delete;
+  std::vector<T>& operator*() { return v_; }
+  std::vector<T>* operator->() { return &v_; }
+
+ private:
+  static std::vector<std::vector<T>>& pool() {
+    thread_local std::vector<std::vector<T>> p;
+    return p;
+  }
+  std::vector<T> v_;
+};
+
 class LameBlock : public EntryBlock {
  public:
   LameBlock(const LamePolygonEntries& e, const Index* I, Index m, const Index* J, Index k)
@@ -315,7 +351,7 @@ class LameBlock : public EntryBlock {
   void row(Index i, double* out) const override {
     const auto t0 = std::chrono::steady_clock::now();
     const Index p = rmap_.place[static_cast<std::size_t>(i)];
-    const double* both = cached(rmap_, p, cols_, cmap_, k_, true, row_slot_, row_store_);
+    const double* both = cached(rmap_, p, cols_, cmap_, k_, true, *row_slot_, *row_store_);
     std::copy_n(both + rmap_.component[static_cast<std::size_t>(i)] * k_, k_, out);
     e_.count(false, elapsed(t0));
   }
@@ -323,7 +359,7 @@ class LameBlock : public EntryBlock {
   void column(Index j, double* out) const override {
     const auto t0 = std::chrono::steady_clock::now();
     const Index p = cmap_.place[static_cast<std::size_t>(j)];
-    const double* both = cached(cmap_, p, rows_, rmap_, m_, false, col_slot_, col_store_);
+    const double* both = cached(cmap_, p, rows_, rmap_, m_, false, *col_slot_, *col_store_);
     std::copy_n(both + cmap_.component[static_cast<std::size_t>(j)] * m_, m_, out);
     e_.count(false, elapsed(t0));
   }
@@ -343,14 +379,15 @@ class LameBlock : public EntryBlock {
   void all(double* out) const override {
     const auto t0 = std::chrono::steady_clock::now();
     const Index nr = rows_.size(), nc = cols_.size();
-    scratch_.resize(static_cast<std::size_t>(4 * nr * nc));
-    e_.node_blocks(rows_, cols_, scratch_.data());
+    scratch_->resize(static_cast<std::size_t>(4 * nr * nc));
+    e_.node_blocks(rows_, cols_, scratch_->data());
     for (Index c = 0; c < k_; ++c) {
       const Index pc = cmap_.place[static_cast<std::size_t>(c)];
       const int lc = cmap_.component[static_cast<std::size_t>(c)];
       for (Index r = 0; r < m_; ++r)
-        out[r + c * m_] = scratch_[static_cast<std::size_t>(4 * (rmap_.place[static_cast<std::size_t>(r)] * nc + pc) +
-                                                            2 * rmap_.component[static_cast<std::size_t>(r)] + lc)];
+        out[r + c * m_] =
+            (*scratch_)[static_cast<std::size_t>(4 * (rmap_.place[static_cast<std::size_t>(r)] * nc + pc) +
+                                                 2 * rmap_.component[static_cast<std::size_t>(r)] + lc)];
     }
     e_.count(true, elapsed(t0));
   }
@@ -370,12 +407,12 @@ class LameBlock : public EntryBlock {
     if (s < 0) {
       const Index u = own.nodes[static_cast<std::size_t>(p)];
       e_.nodes_into(row ? e_.row_space() : e_.col_space(), &u, 1, one_);
-      scratch_.resize(static_cast<std::size_t>(4 * other.size()));
+      scratch_->resize(static_cast<std::size_t>(4 * other.size()));
       const std::array<double, kMaxGaussPoints + 1>* y = far_rule_[1] > 0 ? &far_rule_ : nullptr;
       if (row)
-        e_.node_blocks(one_, other, scratch_.data(), y);
+        e_.node_blocks(one_, other, scratch_->data(), y);
       else
-        e_.node_blocks(other, one_, scratch_.data(), y);
+        e_.node_blocks(other, one_, scratch_->data(), y);
       s = static_cast<Index>(store.size());
       store.resize(store.size() + static_cast<std::size_t>(2 * count));
       double* both = store.data() + s;
@@ -384,7 +421,8 @@ class LameBlock : public EntryBlock {
           const Index at = omap.place[static_cast<std::size_t>(q)];
           const int oc = omap.component[static_cast<std::size_t>(q)];
           // node_blocks: [own node][other node][row component][column component]
-          both[comp * count + q] = scratch_[static_cast<std::size_t>(4 * at + (row ? 2 * comp + oc : 2 * oc + comp))];
+          both[comp * count + q] =
+              (*scratch_)[static_cast<std::size_t>(4 * at + (row ? 2 * comp + oc : 2 * oc + comp))];
         }
     }
     return store.data() + s;
@@ -396,8 +434,8 @@ class LameBlock : public EntryBlock {
   DofSet rows_, cols_;
   // one thread per block: the single-node set, the scratch and the computed rows / columns
   mutable DofSet one_;
-  mutable std::vector<double> scratch_, row_store_, col_store_;
-  mutable std::vector<Index> row_slot_, col_slot_;
+  mutable Pooled<double> scratch_, row_store_, col_store_;
+  mutable Pooled<Index> row_slot_, col_slot_;
   /// the thresholds of the far rule of ACA's rows and columns (zero: the dense assembly's)
   mutable std::array<double, kMaxGaussPoints + 1> far_rule_{};
 };

@@ -31,10 +31,27 @@
 // |Gamma|) is that on the sphere). The normal field n has V n -> 0 as nu -> 1/2 (the
 // pressure mode, lame_polygon.hpp): deflated with the rigid motions, cond(C V) stays at
 // 6-13 for nu = 0.49 (without: 60-70). Measured cond(C V) (dense, n = 200, nu = 0.3, circle /
-// square / L-shape): 4.1 / 4.1 / 4.5 with s as above (s/4 x 3: 3.3 / 3.7 / 4.8; x 5: 4.9 /
+// square / L-shape): 4.1 / 4.1 / 4.5 with s as above (3 s/4: 3.3 / 3.7 / 4.8; 5 s/4: 4.9 /
 // 4.8 / 4.7); the Lame W_h in place of s W_L kron I: 1.2 / 2.8 / 7.1, whose products cost as
-// much as V's in every iteration (W_L's: a scalar P0 matrix at the loose tolerance).
-// CG iteration counts (tests/test_lame_steklov.cpp) stay bounded as h -> 0.
+// much as V's in every iteration (W_L's: a scalar P0 matrix at the loose tolerance, held in
+// single precision). CG iteration counts (tests/test_lame_steklov.cpp) stay bounded as
+// h -> 0: circle 10, square 18-20, L-shape 21-23 for n = 256 ... 8,192 (P1 flux, nu = 0.3).
+// Accuracy: the vector H-matrices (and V0_L of flux P0) at tol / 10, because their errors
+// are amplified in S_h (by D_h^T ... D_h in W and K, about 8 times, and by V^{-1}): with
+// them at tol, S_h's product error was 6e-10 at tol 1e-10, now 4e-11 ... 7e-11; the node
+// trees of the vector matrices have leaves of leaf_size / 2 nodes (leaf_size dofs).
+// Cost against SteklovPoincareOperator (same polygon, tol 1e-10, leaf 48, eta 2, one
+// thread, CPU seconds, a shared machine: +-10 %; circle / L-shape, n = 16,000):
+//   flux P1: set-up 3.9-4.6 / 4.4-4.7 s (Laplace 1.0-1.1 / 1.15-1.3), 416 / 496 MB (77 /
+//            102), product 0.16-0.19 / 0.35-0.39 s (0.054-0.062 / 0.095-0.11): about 4.0 /
+//            3.9, 5.4 / 4.9 and 3.0 / 3.7 times. Set-up (L-shape): V 0.9, X0 0.9, Y and K_L
+//            2.2, preconditioner 0.3 s; product: 23 x (V 9.7 + C 2.8 ms) + W 9.5 + K 21 +
+//            K^T 22 ms; bytes: V 113, X0 112, Y 216, K_L 43, preconditioner 12 MB;
+//   flux P0: set-up 2.2 / 2.3 s, 170 / 207 MB, product 0.25 / 0.46 s (Laplace P0: 1.1 /
+//            1.5 s, 87 / 109 MB, 0.083 / 0.127 s): 2.0 / 1.5, 2.0 / 1.9 and 2.9 / 3.6 times.
+// The P1 flux needs three vector matrices where the Laplace operator has two scalar ones
+// and a double layer that is nearly free on polygons; a vector block's rank is about twice
+// the scalar's (10.3 against 5.5) on twice the rows and columns, and Y is not symmetric.
 // Distributed (options.hmatrix.comm): every H-matrix holds the rows of its rank and every
 // product returns the whole vector on every rank (hmatrix.hpp); the sparse and O(n) parts
 // are replicated, so CG runs on the same vectors everywhere and every rank gets the same
