@@ -161,7 +161,8 @@ def build_parser() -> argparse.ArgumentParser:
         help="the size of a run without running it",
         description="Validate CONFIG and print, without solving, the sizes of its problem: "
         "dofs, boundary_dofs, signorini_dofs, subdomains, h_min, h_max, dim (in closed form "
-        "for the structured square and L-shape and the box; otherwise the mesh is built) and "
+        "for the structured square and L-shape and the box; otherwise estimated before "
+        "meshing, and the mesh built and counted when it fits in memory) and "
         "memory_estimate_bytes, the estimated peak memory of `fembem solve`.",
     )
     info.add_argument("config", metavar="CONFIG.toml")
@@ -358,7 +359,7 @@ def _info(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
     how = "closed form"
     if size is None:
         size = _with_geometry_key(estimated_size, config)
-        how = "estimated from the area and h: the mesh would not fit in memory"
+        how = "estimated from the size of Omega and h: the mesh would not fit in memory"
         if (
             size is None
             or memory_estimate(
