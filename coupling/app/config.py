@@ -25,6 +25,7 @@ from coupling.options import (
     MaterialOptions,
     OutputOptions,
     RunConfig,
+    parse_slice,
     solver_options,
 )
 from fem_py.spec import PLANAR_ONLY, SOLID_SHAPES, GeometrySpec
@@ -115,6 +116,11 @@ def _check_value(section: str, key: str, value: Any) -> Any:
         raise ConfigError(f"{name} (rho_in of (3.6)) must lie in [0, 1), got {value!r}")
     if (section, key) == ("adapt", "theta") and not 0 < value <= 1:
         raise ConfigError(f"{name} (Doerfler's parameter) must lie in (0, 1], got {value!r}")
+    if (section, key) == ("output", "slice"):
+        try:
+            parse_slice(value)
+        except ValueError as err:
+            raise ConfigError(f"{name} {err}") from None
     if (section, key) == ("adapt", "steps") and value < 0:
         raise ConfigError(f"{name} must be >= 0 (0: no adaptive refinement), got {value!r}")
     return value
@@ -404,6 +410,11 @@ def check_data_and_material(config: RunConfig) -> None:
         raise ConfigError(str(geometry_error(err))) from None
     if dim == 3:
         _check_solid_options(config)
+    elif config.output.slice != "auto":
+        raise ConfigError(
+            "output.slice: the section slice.png is a figure of a body in R^3; drop "
+            "output.slice for a planar domain"
+        )
     cell = ufl.tetrahedron if dim == 3 else ufl.triangle
     domain = ufl.Mesh(ufl.VectorElement("Lagrange", cell, 1))
     values = spatial_variables(domain, boundary=True)

@@ -8,7 +8,9 @@
   wrong sign takes the colour beyond that end); the rim where a Signorini face meets
   another face, whose nodes carry no gap unknown, in grey;
 - ``surface.png``: u_h on Gamma from two opposite viewpoints;
-- ``slice.png``: the section z = z_c: u_h inside and u_e outside in one colour scale;
+- ``slice.png``: a section by a coordinate plane (``[output] slice``; by default through
+  the Signorini part): u_h inside and u_e outside in one colour scale, the section of
+  Gamma outlined;
 - ``history.png``: the convergence history, as for a planar run.
 """
 from __future__ import annotations
@@ -201,14 +203,32 @@ def _figure_slice(inputs: BodyFigureInputs):
         return None
     kwargs = dict(origin="lower", vmin=both.min(), vmax=both.max(), cmap="viridis")
     fig, ax = plt.subplots(figsize=(6.4, 5.4))
-    ax.imshow(ue, extent=s["ue_extent"], interpolation="bilinear", **kwargs)
+    # u_e beneath, its pixels inside the body filled from their nearest outside: u_h's
+    # pixels cover them, and no band of neither is left along Gamma between u_h's fine
+    # pixels and u_e's coarser ones
+    ax.imshow(_filled(s["ue"]), extent=s["ue_extent"], interpolation="bilinear", **kwargs)
     shown = ax.imshow(u, extent=s["u_extent"], **kwargs)
-    if u.count():  # the section of Gamma: the edge of the pixels inside
-        inside = np.isfinite(s["u"]).astype(float)
-        ax.contour(inside, levels=[0.5], colors="white", linewidths=1.0, extent=s["u_extent"])
+    # the section of Gamma itself (the triangles cut by the plane), not the pixels' edge
+    ax.add_collection(mcollections.LineCollection(s["outline"], colors="white", linewidths=1.0))
     fig.colorbar(shown, ax=ax, label=r"$u_h$ inside, $u_e$ outside")
-    ax.set(xlabel="$x$", ylabel="$y$", title=f"section z = {s['z']:.4g}")
+    first, second = s["names"]
+    title = f"section {s['axis']} = {s['value']:.4g}"
+    if not u.count():
+        title += " (the plane misses the body)"
+    ax.set(xlabel=f"${first}$", ylabel=f"${second}$", title=title)
     return fig
+
+
+def _filled(image: np.ndarray) -> np.ndarray:
+    """``image`` with each NaN pixel given its nearest finite pixel's value (all NaN:
+    unchanged)."""
+    from scipy.ndimage import distance_transform_edt
+
+    missing = ~np.isfinite(image)
+    if missing.all() or not missing.any():
+        return image
+    nearest = distance_transform_edt(missing, return_distances=False, return_indices=True)
+    return image[tuple(nearest)]
 
 
 def render_body(inputs: BodyFigureInputs, skip: Collection[str] = ()) -> dict[str, bytes]:

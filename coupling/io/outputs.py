@@ -143,8 +143,9 @@ class RunOutputs:
         The output folder.
     options
         The ``[output]`` section: write solution.xdmf/.h5 (``xdmf``), draw the figures
-        (``plots``), add the estimator's eta_T (given to :meth:`finish`) to fields.npz
-        (``indicators``: it is then written there rather than by :meth:`start`).
+        (``plots``; a body's slice.png by the plane ``slice``), add the estimator's eta_T
+        (given to :meth:`finish`) to fields.npz (``indicators``: it is then written there
+        rather than by :meth:`start`).
     tol
         The solver tolerance (drawn in history.png).
     worker
@@ -162,6 +163,7 @@ class RunOutputs:
     ):
         self.comm, self.out, self.tol = comm, Path(out), tol
         self.xdmf, self.plots, self.indicators = options.xdmf, options.plots, options.indicators
+        self.slice = options.slice  # the plane of a body's slice.png
         self.worker = worker if self.plots and comm.rank == 0 else None
         #: seconds spent in :meth:`start` and :meth:`finish` (summary.json's ``outputs``)
         self.seconds = 0.0
@@ -209,7 +211,7 @@ class RunOutputs:
                 history = history_arrays(result.history, result.stop_measure)
                 surface = surface_inputs(self._fields, history, tol=self.tol)
                 self._jobs["inputs"] = self._pool.submit(
-                    lambda: surface._replace(section=section(self._fields))
+                    lambda: surface._replace(section=section(self._fields, self.slice))
                 )
                 if self.worker is not None:  # sent from here at once: the figure
                     # process draws the figures on Gamma from them meanwhile
