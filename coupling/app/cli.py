@@ -322,7 +322,12 @@ def _solve_config(
             _say(f"warning: {line}")
         if monitor is not None:
             monitor.problem(problem, options, arc_lengths, facts)
-        run = run_solver(comm, config, domain, problem, timings, monitor, after_solve=outputs.start)
+        adaptive = config.adapt.steps > 0
+
+        def after_solve(problem: Any, solution: Any, levels: list[dict] | None) -> None:
+            outputs.start(problem, solution, levels=levels, adaptive=adaptive)
+
+        run = run_solver(comm, config, domain, problem, timings, monitor, after_solve=after_solve)
         result = run.solution
         if monitor is not None:
             monitor.finished(result)
@@ -332,19 +337,31 @@ def _solve_config(
             total=process_seconds,
             config=config,
             levels=run.levels,
-            adaptive=config.adapt.steps > 0,
+            adaptive=adaptive,
             estimator=run.estimator,
             error=run.error,
             indicators=run.indicators,
             facts=facts if run.problem.domain is domain else None,
         )
     if comm.rank == 0 and not args.quiet:
-        state = "converged" if result.converged else "did NOT converge"
-        print(
-            f"fembem: {state} after {result.iterations} iterations ({result.reason}); "
-            f"outputs in {out}"
-        )
+        print(f"fembem: {final_line(result, run.levels, adaptive)}; outputs in {out}")
     return EXIT_OK if result.converged else EXIT_NOT_CONVERGED
+
+
+def final_line(result: Any, levels: list[dict] | None, adaptive: bool) -> str:
+    """The last line of ``fembem solve``: whether the final solve converged, after how many
+    iterations, and, for a run over several levels (nested, or ``adaptive``), the
+    iterations of each level and their total."""
+    state = "converged" if result.converged else "did NOT converge"
+    if not levels or len(levels) < 2:
+        return f"{state} after {result.iterations} iterations ({result.reason})"
+    counts = [int(r["iterations"]) for r in levels]
+    kind = "adaptive" if adaptive else "nested"
+    return (
+        f"{state} after {result.iterations} iterations on the final level ({result.reason}); "
+        f"{sum(counts)} iterations in all over {len(counts)} {kind} levels "
+        f"({' + '.join(map(str, counts))})"
+    )
 
 
 def _info(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
