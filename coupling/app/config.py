@@ -286,7 +286,8 @@ GENERATED_KEYS = (
 
 def _check_mesh_keys(geometry: dict[str, Any], given: dict[str, Any]) -> None:
     """``mesh`` excludes the keys of a generated shape; ``subdomains = "physical"`` needs
-    ``mesh``; a mesh file takes names of physical curve groups as ``signorini``."""
+    ``mesh``; a mesh file takes names of physical groups as ``signorini`` (curve groups
+    of a 2D mesh, surface groups of a 3D one)."""
     if not geometry["mesh"]:
         if geometry["subdomains"] != "auto":
             raise ConfigError(
@@ -303,8 +304,9 @@ def _check_mesh_keys(geometry: dict[str, Any], given: dict[str, Any]) -> None:
     signorini = geometry["signorini"]
     if signorini != "all" and any(not isinstance(s, str) for s in signorini):
         raise ConfigError(
-            "geometry.signorini: with geometry.mesh give names of physical curve groups "
-            '(["contact", ...]) or "all", not coordinate arcs'
+            "geometry.signorini: with geometry.mesh give names of physical groups (curve "
+            'groups of a 2D mesh, surface groups of a 3D one: ["contact", ...]) or "all", not '
+            "coordinate arcs"
         )
 
 
