@@ -9,6 +9,7 @@ message names the key and says what to do.
 from __future__ import annotations
 
 import copy
+import difflib
 import math
 import re
 import tomllib
@@ -243,14 +244,17 @@ def _checked(raw: dict[str, Any]) -> dict[str, dict[str, Any]]:
     for section, table in raw.items():
         if section not in DEFAULTS:
             known = ", ".join(f"[{s}]" for s in DEFAULTS)
-            raise ConfigError(f"unknown section [{section}]; the sections are {known}")
+            guess = _closest(section, list(DEFAULTS))
+            hint = f"did you mean [{guess}]? " if guess else ""
+            raise ConfigError(f"unknown section [{section}]; {hint}the sections are {known}")
         if not isinstance(table, dict):
             raise ConfigError(f"[{section}] must be a table of keys")
         for key, value in table.items():
             if key not in DEFAULTS[section]:
                 known = ", ".join(DEFAULTS[section])
                 raise ConfigError(
-                    f"unknown key {section}.{key}; the keys of [{section}] " f"are {known}"
+                    f"unknown key {section}.{key}; {_key_hint(section, key)}the keys of "
+                    f"[{section}] are {known}"
                 )
             config[section][key] = _check_value(section, key, value)
     solver = config["solver"]
@@ -269,6 +273,26 @@ def _checked(raw: dict[str, Any]) -> dict[str, dict[str, Any]]:
             'counter-clockwise order when geometry.shape = "polygon"'
         )
     return config
+
+
+def _closest(word: str, choices: list[str]) -> str | None:
+    """The choice closest to a misspelt ``word`` (difflib's ratio at least 0.6), or None."""
+    found = difflib.get_close_matches(word, choices, n=1)
+    if not found:  # a case slip or a word in the wrong case ("TOL", "Solver")
+        found = [c for c in choices if c.lower() == word.lower()]
+    return found[0] if found else None
+
+
+def _key_hint(section: str, key: str) -> str:
+    """ "did you mean ...? " for an unknown ``section.key``: the key of that section it is
+    closest to, or the same key in the section it belongs to; "" when none is close."""
+    guess = _closest(key, list(DEFAULTS[section]))
+    if guess:
+        return f"did you mean {section}.{guess}? "
+    elsewhere = [s for s, table in DEFAULTS.items() if key in table]
+    if elsewhere:
+        return f"did you mean {elsewhere[0]}.{key} (a key of [{elsewhere[0]}])? "
+    return ""
 
 
 #: The [geometry] keys of a generated shape, which a mesh file sets itself.
