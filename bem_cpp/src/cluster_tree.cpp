@@ -111,6 +111,20 @@ ClusterTree ClusterTree::for_space(const Polygon& polygon, Space space, Index le
   return ClusterTree(points, supports, leaf_size);
 }
 
+ClusterTree ClusterTree::expanded(int d) const {
+  if (d < 1) throw std::invalid_argument("ClusterTree::expanded: need d >= 1");
+  ClusterTree out;
+  out.clusters_ = clusters_;
+  for (Cluster& c : out.clusters_) {
+    c.begin *= d;
+    c.end *= d;
+  }
+  out.permutation_.resize(permutation_.size() * static_cast<std::size_t>(d));
+  for (std::size_t k = 0; k < permutation_.size(); ++k)
+    for (int c = 0; c < d; ++c) out.permutation_[d * k + static_cast<std::size_t>(c)] = d * permutation_[k] + c;
+  return out;
+}
+
 std::vector<int> ClusterTree::leaves() const {
   std::vector<int> out, stack{0};
   while (!stack.empty()) {

@@ -44,6 +44,12 @@ class ClusterTree {
   ClusterTree(const Eigen::Ref<const Matrix>& points, const std::vector<Box>& supports, Index leaf_size);
   /// The tree of the P1 (nodes) or P0 (panels) space of a polygon.
   static ClusterTree for_space(const Polygon& polygon, Space space, Index leaf_size);
+  /// The same tree on d dofs per point (vector fields, node-major: dof d i + c is the
+  /// component c of point i): the cluster of the positions [b, e) becomes [d b, d e) with
+  /// the same box and children, and position d k + c holds dof d permutation()[k] + c, so
+  /// that the d dofs of a point stay together (the block tree, admissibility and
+  /// partitions of the points carry over). d >= 1.
+  ClusterTree expanded(int d) const;
 
   Index size() const { return static_cast<Index>(permutation_.size()); }
   const Cluster& cluster(int c) const { return clusters_[static_cast<std::size_t>(c)]; }
@@ -61,6 +67,7 @@ class ClusterTree {
   std::vector<Index> partition(int parts, const std::vector<double>& cost) const;
 
  private:
+  ClusterTree() = default;
   int build(Index begin, Index end, const Eigen::Ref<const Matrix>& points, const std::vector<Box>& supports,
             Index leaf_size);
   std::vector<Cluster> clusters_;
