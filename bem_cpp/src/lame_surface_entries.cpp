@@ -109,6 +109,13 @@ double thread_seconds() {
   return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 
+/// The row points summed at once by the far pass of the dense blocks (LameBlock::accumulate).
+constexpr int kWidth = 8;
+
+/// A vector block's rank against the point ACA's rank of g (the choice between the cross
+/// approximation and the dense sum of an admissible block, LameBlock::far_factors).
+constexpr Index kRankRatio = 3;
+
 /// argmax |x[i]| over unused i (the first of equal ones), -1 if none.
 Index unused_argmax(const double* x, Index n, const std::vector<char>& used) {
   Index best = -1;
@@ -714,8 +721,8 @@ class LameBlock : public EntryBlock {
 
   /// The dense blocks: V_h and Z (with_vz), Y (with_y) and the mirrored Y(s, t) (with_yt):
   /// the far pairs by the far rule, summed in one pass over the point pairs, then the near
-  /// field added.
-  void dense(bool with_vz, bool with_y, bool with_yt) const {
+  /// field added. Returns the thread's seconds spent.
+  double dense(bool with_vz, bool with_y, bool with_yt) const {
     const double t0 = thread_seconds();
     with_yt = with_yt && I_ != J_;
     if (with_vz) {
@@ -745,7 +752,9 @@ class LameBlock : public EntryBlock {
     if (with_yt) add_near(near.double_layer(), J_, k_, rows, Yt_);
     if (I_ == J_ && with_y) Yt_ = Y_;
     dense_done_ = true;
-    d_.dense_ns += static_cast<long>(1e9 * (thread_seconds() - t0));
+    const double seconds = thread_seconds() - t0;
+    d_.dense_ns += static_cast<long>(1e9 * seconds);
+    return seconds;
   }
 
   /// The far pairs' part of the dense blocks: per column triangle b, the seven kernels (g and
@@ -757,27 +766,28 @@ class LameBlock : public EntryBlock {
     const TriangleRule& rule = far_rule();
     const Eigen::Matrix<double, Eigen::Dynamic, 4>& L = d_.L;
     const FarPoints rp(d_.s, row_parts_, mn_, false, rule), cp(d_.s, col_parts_, kn_, false, rule);
-    const Index P = rp.size();
-    Eigen::Matrix<double, Eigen::Dynamic, 28> AL(P, 28);
+    // the row points padded to a multiple of the vector width (weight 0, far away)
+    const Index P = rp.size(), P8 = (P + kWidth - 1) / kWidth * kWidth;
+    std::vector<double> rx(static_cast<std::size_t>(P8), 1e30), ry(rx), rz(rx), rw(static_cast<std::size_t>(P8), 0.0);
+    std::copy(rp.x.begin(), rp.x.end(), rx.begin());
+    std::copy(rp.y.begin(), rp.y.end(), ry.begin());
+    std::copy(rp.z.begin(), rp.z.end(), rz.begin());
+    std::copy(rp.w.begin(), rp.w.end(), rw.begin());
+    Eigen::MatrixXd AL(P8, 21);
     const PairBlocks blocks{d_.c};
     std::vector<Curls> row_curls;
     row_curls.reserve(row_parts_.size());
     for (const Part& a : row_parts_) row_curls.emplace_back(d_.s.triangle(a.triangle));
     Eigen::Matrix<double, 4, n> La;
-    Eigen::Matrix<double, 4, 28> Mab;
-    auto moment = [&Mab](int ch, int a, int b) { return Mab(a, 4 * ch + b); };
+    Eigen::Matrix<double, 4, 21> Mab;
+    double M[7][4][4];  // [channel][test basis, 3: 1][trial basis, 3: 1] of the pair
+    auto moment = [&M](int ch, int a, int b) { return M[ch][a][b]; };
     Block B, A33, T;
     for (std::size_t b = 0; b < col_parts_.size(); ++b) {
       const Part& cb = col_parts_[b];
       const Triangle& tb = d_.s.triangle(cb.triangle);
       const Curls curls_b(tb);
-      AL.setZero();
-      for (int q = 0; q < n; ++q) {
-        double l[4];
-        for (int j = 0; j < 3; ++j) l[j] = j < cb.count ? L(q, cb.basis[j]) : 0.0;
-        l[3] = 1.0;
-        accumulate(rp, cp, static_cast<Index>(b) * n + q, l, AL);
-      }
+      accumulate(rx.data(), ry.data(), rz.data(), rw.data(), P8, cp, static_cast<Index>(b) * n, L, AL.data());
       for (std::size_t a = 0; a < row_parts_.size(); ++a) {
         const Part& ra = row_parts_[a];
         if (!PairIntegrator::far(d_.s.triangle(ra.triangle), tb)) continue;
@@ -785,6 +795,12 @@ class LameBlock : public EntryBlock {
           for (int q = 0; q < n; ++q) La(i, q) = i < ra.count ? L(q, ra.basis[i]) : 0.0;
         La.row(3).setOnes();
         Mab.noalias() = La * AL.middleRows(static_cast<Index>(a) * n, n);
+        // the trial side's hats in the block and its constant (the sum of its three barycentrics)
+        for (int ch = 0; ch < 7; ++ch)
+          for (int i = 0; i < 4; ++i) {
+            for (int j = 0; j < cb.count; ++j) M[ch][i][j] = Mab(i, 3 * ch + cb.basis[j]);
+            M[ch][i][3] = Mab(i, 3 * ch) + Mab(i, 3 * ch + 1) + Mab(i, 3 * ch + 2);
+          }
         const Curls& curls_a = row_curls[a];
         if (with_vz) {
           blocks.companion(moment, 3, 3, A33);
@@ -793,7 +809,7 @@ class LameBlock : public EntryBlock {
               blocks.single_layer(moment, i, j, B);
               add(V_, ra.position[i], cb.position[j], B);
               const int ia = ra.basis[i], jb = cb.basis[j];
-              blocks.hypersingular(Mab(3, 3), A33, curls_a.c[ia], curls_b.c[jb], curls_a.A[ia], curls_b.A[jb], B);
+              blocks.hypersingular(M[0][3][3], A33, curls_a.c[ia], curls_b.c[jb], curls_a.A[ia], curls_b.A[jb], B);
               add(Z_, ra.position[i], cb.position[j], B);
             }
         }
@@ -820,34 +836,42 @@ class LameBlock : public EntryBlock {
     for (int k = 0; k < 3; ++k)
       for (int l = 0; l < 3; ++l) A(3 * p + k, 3 * q + l) += B[k][l];
   }
-  /// AL(p, 4 c + j) += K_c(p, q) l[j] for every row point p (weights included; K_0 = g,
-  /// K_1..6 = R_kl).
-  static void accumulate(const FarPoints& r, const FarPoints& c, Index q, const double* l,
-                         Eigen::Matrix<double, Eigen::Dynamic, 28>& AL) {
-    const std::size_t j = static_cast<std::size_t>(q);
-    const double x = c.x[j], y = c.y[j], z = c.z[j], w = kInvTwoPi * c.w[j];
-    const double l0 = l[0], l1 = l[1], l2 = l[2];
-    const double *rx = r.x.data(), *ry = r.y.data(), *rz = r.z.data(), *rw = r.w.data();
-    const Index P = r.size();
-    double* a = AL.data();
+  /// AL(p, 3 c + beta) = sum over the points q of the column triangle (its n points from q0)
+  /// of K_c(p, q) lambda_beta(q), for the P8 (padded) row points p (weights included; K_0 = g,
+  /// K_1..6 = R_kl): kWidth row points at a time, their 21 sums kept in registers over q.
+  static void accumulate(const double* rx, const double* ry, const double* rz, const double* rw, Index P8,
+                         const FarPoints& c, Index q0, const Eigen::Matrix<double, Eigen::Dynamic, 4>& L, double* AL) {
+    constexpr int n = kFarRulePoints;
+    for (Index p0 = 0; p0 < P8; p0 += kWidth) {
+      double acc[21][kWidth] = {};
+      for (int q = 0; q < n; ++q) {
+        const std::size_t j = static_cast<std::size_t>(q0 + q);
+        const double x = c.x[j], y = c.y[j], z = c.z[j], w = kInvTwoPi * c.w[j];
+        const double l0 = L(q, 0), l1 = L(q, 1), l2 = L(q, 2);
 #pragma omp simd
-    for (Index p = 0; p < P; ++p) {
-      const double dx = rx[p] - x, dy = ry[p] - y, dz = rz[p] - z;
-      const double s = 1.0 / std::sqrt(dx * dx + dy * dy + dz * dz);
-      const double g = w * rw[p] * s, h = g * s * s;
-      const double kv[7] = {g, h * dx * dx, h * dy * dy, h * dz * dz, h * dx * dy, h * dx * dz, h * dy * dz};
-      for (int ch = 0; ch < 7; ++ch) {
-        double* col = a + 4 * ch * P;
-        col[p] += kv[ch] * l0;
-        col[P + p] += kv[ch] * l1;
-        col[2 * P + p] += kv[ch] * l2;
-        col[3 * P + p] += kv[ch];
+        for (int v = 0; v < kWidth; ++v) {
+          const Index p = p0 + v;
+          const double dx = rx[p] - x, dy = ry[p] - y, dz = rz[p] - z;
+          const double s = 1.0 / std::sqrt(dx * dx + dy * dy + dz * dz);
+          const double g = w * rw[p] * s, h = g * s * s;
+          const double k[7] = {g, h * dx * dx, h * dy * dy, h * dz * dz, h * dx * dy, h * dx * dz, h * dy * dz};
+          for (int ch = 0; ch < 7; ++ch) {
+            acc[3 * ch][v] += k[ch] * l0;
+            acc[3 * ch + 1][v] += k[ch] * l1;
+            acc[3 * ch + 2][v] += k[ch] * l2;
+          }
+        }
       }
+      for (int col = 0; col < 21; ++col)
+        for (int v = 0; v < kWidth; ++v) AL[col * P8 + p0 + v] = acc[col][v];
     }
   }
 
-  /// The admissible block's factors: V_h (with_v; and Z) or Y and Y(s, t), from ACA of the
-  /// point kernels A (grouped) and g (with_v).
+  /// The admissible block's factors: V_h and Z (with_v) and Y, Y(s, t), from ACA of the point
+  /// kernels g and A (grouped). A block whose ranks would not pay (A's rank, about 3 times g's,
+  /// at least m k / (m + k): held dense after the recompression anyway) is summed densely
+  /// instead, by the far pass of the dense blocks (cheaper than the cross approximation there),
+  /// and handed over as D = D I (recompressed by HMatrix::fill as any factors).
   void far_factors(double tol, bool with_v) const {
     const double t0 = thread_seconds();
     constexpr int n = kFarRulePoints;
@@ -856,6 +880,28 @@ class LameBlock : public EntryBlock {
     const double point_tol = LameSurfaceEntries::kPointTolerance * tol;
     const Index Pr = rp.size(), Pc = cp.size();
     const double a1 = d_.c.a1, a0 = d_.c.a0, mu = d_.c.mu;
+    const PointKernel kernel{rp, cp, PointKernelKind::SingleLayer};
+    const Slice row = [&kernel](Index i, double* o) { kernel.row(i, o); };
+    const Slice column = [&kernel](Index j, double* o) { kernel.column(j, o); };
+    const LowRank G = aca(Pr, Pc, row, column, point_tol, std::min(Pr, Pc));
+    if (static_cast<double>(kRankRatio * G.rank() * (m_ + k_)) >= static_cast<double>(m_) * static_cast<double>(k_)) {
+      const double summed = dense(with_v, true, true);
+      auto identity = [](const Eigen::MatrixXd& D) {
+        LowRank f;
+        f.U = D;
+        f.V = Eigen::MatrixXd::Identity(D.cols(), D.cols());
+        return f;
+      };
+      if (with_v) {
+        Vf_ = identity(V_);
+        Zf_ = identity(Z_);
+      }
+      Yf_ = identity(Y_);
+      Ytf_ = identity(Yt_);
+      factors_done_ = true;
+      d_.low_rank_ns += static_cast<long>(1e9 * (thread_seconds() - t0 - summed));
+      return;
+    }
     // A's rows of point p: out[(3 k + l) Pc + q]; its columns of point q: out[(3 l + k) Pr + p]
     // (A(p, q) is symmetric, so both are the same loop over the other side's points)
     auto group = [a1, a0](const FarPoints& here, Index i, const FarPoints& there, double* out) {
@@ -893,10 +939,6 @@ class LameBlock : public EntryBlock {
     Ytf_.U = QAc;
     Ytf_.V = CAr;
     if (with_v) {
-      const PointKernel kernel{rp, cp, PointKernelKind::SingleLayer};
-      const Slice row = [&kernel](Index i, double* o) { kernel.row(i, o); };
-      const Slice column = [&kernel](Index j, double* o) { kernel.column(j, o); };
-      const LowRank G = aca(Pr, Pc, row, column, point_tol, std::min(Pr, Pc));
       const Index rg = G.rank();
       Eigen::MatrixXd Qgr = Eigen::MatrixXd::Zero(mn_, rg), Qgc = Eigen::MatrixXd::Zero(kn_, rg);
       add_values_transpose_product(row_parts_, rule, G.U, Qgr);
@@ -940,23 +982,7 @@ LameSurfaceTimes LameSurfaceEntries::times() const {
 }
 
 ClusterTree lame_surface_cluster_tree(const Surface& s, Index leaf_size) {
-  // the vertices' tree on the points repeated three times: the bisections see the same points
-  // (the three copies of a vertex never part: a cluster of one vertex is a leaf), and the
-  // stable partition keeps each vertex's dofs 3 i, 3 i + 1, 3 i + 2 consecutive and in order
-  const Index n = s.vertices();
-  Matrix points(3 * n, 3);
-  std::vector<Box> supports(static_cast<std::size_t>(3 * n));
-  for (Index i = 0; i < n; ++i) {
-    Box b;
-    for (Index t : s.star(i))
-      for (const Vec3& p : s.triangle(t).p) b.add(p);
-    const Vec3 v = s.vertex(i);
-    for (int c = 0; c < 3; ++c) {
-      points.row(3 * i + c) << v.x, v.y, v.z;
-      supports[static_cast<std::size_t>(3 * i + c)] = b;
-    }
-  }
-  return ClusterTree(points, supports, 3 * leaf_size);
+  return surface_cluster_tree(s, Space::P1, leaf_size).expanded(3);
 }
 
 }  // namespace bem

@@ -108,8 +108,8 @@ class LameSurfaceEntries : public EntrySource {
   std::shared_ptr<Data> data_;
 };
 
-/// The tree of the vector P1 dofs: surface_cluster_tree(surface, P1, leaf_size) with each
-/// vertex's three dofs together (positions 3 k + c: dof 3 permutation[k] + c).
+/// The tree of the vector P1 dofs: surface_cluster_tree(surface, P1, leaf_size) expanded to
+/// each vertex's three dofs (ClusterTree::expanded).
 ClusterTree lame_surface_cluster_tree(const Surface& surface, Index leaf_size);
 
 /// Adaptive cross approximation of a point kernel of 3 x 3 blocks (rows 3 p + k, columns

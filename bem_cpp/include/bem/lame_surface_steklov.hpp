@@ -11,11 +11,25 @@
 // one cross approximation of each of the two point kernels g = 1 / (2 pi r) and
 // A = (r r^T / (2 pi r^3) + (1 - 2 nu) g I) / (2 (1 - nu)). Near pairs: the dense assembly's
 // entries (sparse near fields, the Lame and the Laplace one).
+//
+// lame_surface_steklov_parts gives them to LameSteklovOperator (lame_steklov.hpp) with
+//   M_h = (P1 Gram matrix) kron I_3,
+//   C0 = s (M^{-1} W_L M^{-1}) kron I_3,  s = 6 mu (1 - nu) / (3.5 - 4 nu) = 1.5 / (cu (3.5 - 4 nu)),
+//   Q = the six rigid motions and the normal field at the vertices (deflated: C = C0 + Q (Q^T V Q)^{-1} Q^T),
+// C0 the Laplace operator preconditioner of surface_steklov.hpp on each component (W_L is
+// K_h's and W_h's own: no matrix more), scaled to the isotropic part of V_h: on a surface the
+// near field's r r^T / r^2 averages to about (I - n n^T) / 2, so V_h ~ cu (3.5 - 4 nu) V_L kron I,
+// and s is 1.5 times its inverse (measured, dense: cond(C V) = 2.9 on the sphere of 642
+// vertices, 3.9 and 4.9 on the cube and Fichera's corner of 218, nu = 0.3; factors 1 and 2
+// gave 3.4 / 4.7 / 5.8 and 3.2 / 3.6 / 4.5; without the normal field in Q: 5.7 on the sphere;
+// nu = 0.49: 4.2 on the sphere, 13.6 on Fichera's corner).
 #include <memory>
 
 #include "bem/hmatrix.hpp"
 #include "bem/kelvin.hpp"
+#include "bem/lame_steklov.hpp"
 #include "bem/surface.hpp"
+#include "bem/surface_operators.hpp"
 
 namespace bem {
 
@@ -56,6 +70,18 @@ class LameSurfaceOperators {
   std::shared_ptr<const HMatrix> V_, Z_, Y_, KL_, WL_;
   LameSurfaceInfo info_;
 };
+
+/// The parts of the Lame S_h on a closed surface (d = 3; flux P1 only: P0 throws
+/// std::invalid_argument). options.hmatrix as for LameSurfaceOperators; preconditioner_tol is
+/// not used (C0 reuses W_L). Throws std::invalid_argument for an invalid medium.
+LameSteklovParts lame_surface_steklov_parts(const Surface& surface, const Lame& m, Space flux,
+                                            const SteklovOptions& options);
+
+/// The operator on raw arrays (validated by the Surface constructor), info().setup_seconds the
+/// whole set-up.
+std::unique_ptr<LameSteklovOperator> lame_surface_steklov_operator(VerticesRef vertices, TrianglesRef triangles,
+                                                                   const Lame& m, Space flux,
+                                                                   const SteklovOptions& options);
 
 /// (A kron I_3) X for a scalar n x n H-matrix A and X (3 n, k) node-major (transpose: A^T).
 Eigen::MatrixXd kron3_apply(const HMatrix& A, const Eigen::Ref<const Eigen::MatrixXd>& X, bool transpose = false);
