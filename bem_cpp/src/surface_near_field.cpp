@@ -10,11 +10,7 @@
 
 namespace bem {
 
-namespace {
-
-/// For each triangle, the triangles sigma >= tau of its near pairs (sorted), found in a
-/// grid of cells as wide as the largest near distance (far_distance): centroids closer than
-/// ra + rb + 2 kFarSeparation max(ra, rb).
+// centroids closer than ra + rb + 2 kFarSeparation max(ra, rb)
 std::vector<std::vector<Index>> near_pairs(const Surface& s) {
   const Index m = s.size();
   Box box;
@@ -51,6 +47,8 @@ std::vector<std::vector<Index>> near_pairs(const Surface& s) {
   }
   return out;
 }
+
+namespace {
 
 /// A CSR pattern (row pointers and sorted column indices) with the position of an entry.
 struct Pattern {

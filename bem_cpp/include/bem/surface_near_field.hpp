@@ -13,6 +13,12 @@ namespace bem {
 
 using RowSparse = Eigen::SparseMatrix<double, Eigen::RowMajor, Index>;
 
+/// For each triangle tau, the triangles sigma >= tau of its near pairs (PairIntegrator::far
+/// false), sorted: found in a grid of cells as wide as the largest near distance
+/// (far_distance). The pairs of SurfaceNearField (and of the Lame near field,
+/// lame_surface_entries.hpp).
+std::vector<std::vector<Index>> near_pairs(const Surface& s);
+
 class SurfaceNearField {
  public:
   /// with_p0: also the P0 single layer (the P1 operators of S_h do not need it).

@@ -1,0 +1,330 @@
+// The 3D Lame S_h as H-matrices (lame_surface_entries.hpp, lame_surface_steklov.hpp): the
+// grouped point ACA, the H-matrix products of V_h, K_h, W_h against the dense lame_surface
+// matrices, S_h against the dense S_h, the CG iteration counts under refinement, and 1
+// against 2 emulated ranks.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <condition_variable>
+#include <map>
+#include <mutex>
+#include <thread>
+
+#include "bem/lame_surface.hpp"
+#include "bem/lame_surface_entries.hpp"
+#include "bem/lame_surface_steklov.hpp"
+#include "test_surfaces.hpp"
+
+using namespace bem;
+
+namespace {
+
+const Lame kSteel{1.0, 0.3};
+
+double relative(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) { return (a - b).norm() / b.norm(); }
+
+/// The surfaces of the tests: the sphere |x| = 0.5, the cube and Fichera's corner of side 1.
+test::Mesh mesh(int shape, int level) {
+  if (shape == 0) return test::icosphere(level, 0.5);
+  const int N = 1 << level;
+  return shape == 1 ? test::cube(N, 1.0 / N) : test::fichera(N, 1.0 / N);
+}
+const char* kShapes[3] = {"sphere", "cube", "Fichera"};
+
+SteklovOptions options(double tol, Index leaf = 16) {
+  SteklovOptions o{};
+  o.hmatrix.leaf_size = leaf;
+  o.hmatrix.eta = 4.0;
+  o.hmatrix.tol = tol;
+  o.hmatrix.product_threads = 1;
+  o.preconditioner_tol = 1e-4;
+  o.solver_tol = 1e-3 * tol;
+  o.max_iterations = 1000;
+  return o;
+}
+
+/// Scalar matrix kron I_3 (node-major vector dofs).
+Eigen::MatrixXd kron3(const Eigen::MatrixXd& A) {
+  Eigen::MatrixXd B = Eigen::MatrixXd::Zero(3 * A.rows(), 3 * A.cols());
+  for (Index r = 0; r < A.rows(); ++r)
+    for (Index c = 0; c < A.cols(); ++c)
+      for (int k = 0; k < 3; ++k) B(3 * r + k, 3 * c + k) = A(r, c);
+  return B;
+}
+
+/// The dense V_h, K_h, W_h (lame_surface.hpp) of mesh(shape, level), assembled once for the
+/// tests that compare with them.
+const SurfaceMatrices& dense(int shape, int level) {
+  static std::map<std::pair<int, int>, SurfaceMatrices> cache;
+  const auto key = std::make_pair(shape, level);
+  auto it = cache.find(key);
+  if (it == cache.end()) {
+    const test::Mesh m = mesh(shape, level);
+    SurfaceRequest request;
+    request.single_layer = Space::P1;
+    request.double_layer = Space::P1;
+    request.hypersingular = true;
+    it = cache.emplace(key, assemble(Surface(m.vertices, m.triangles), kSteel, request)).first;
+  }
+  return it->second;
+}
+
+/// The collectives of `size` threads (each thread one rank), as tests/test_distributed.cpp.
+class ThreadGroup {
+ public:
+  explicit ThreadGroup(int size) : size_(size), slots_(static_cast<std::size_t>(size)) {}
+
+  std::shared_ptr<const Communicator> communicator(int rank) {
+    auto c = std::make_shared<Communicator>();
+    c->rank = rank;
+    c->size = size_;
+    c->allgather = [this, rank](const Eigen::MatrixXd& local, const std::vector<Index>& counts) {
+      slots_[static_cast<std::size_t>(rank)] = local;
+      barrier();
+      Index n = 0;
+      for (Index c : counts) n += c;
+      Eigen::MatrixXd out(n, local.cols());
+      Index r0 = 0;
+      for (int r = 0; r < size_; ++r) {
+        out.middleRows(r0, counts[static_cast<std::size_t>(r)]) = slots_[static_cast<std::size_t>(r)];
+        r0 += counts[static_cast<std::size_t>(r)];
+      }
+      barrier();
+      return out;
+    };
+    c->allreduce = [this, rank](const Eigen::MatrixXd& partial, const std::vector<Index>&) {
+      slots_[static_cast<std::size_t>(rank)] = partial;
+      barrier();
+      Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(partial.rows(), partial.cols());
+      for (int r = 0; r < size_; ++r) sum += slots_[static_cast<std::size_t>(r)];  // rank order
+      barrier();
+      return sum;
+    };
+    return c;
+  }
+
+ private:
+  void barrier() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    const long generation = generation_;
+    if (++waiting_ == size_) {
+      waiting_ = 0;
+      ++generation_;
+      cv_.notify_all();
+    } else {
+      cv_.wait(lock, [&] { return generation_ != generation; });
+    }
+  }
+  int size_;
+  std::vector<Eigen::MatrixXd> slots_;
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  int waiting_ = 0;
+  long generation_ = 0;
+};
+
+}  // namespace
+
+TEST(LameSurfaceAca, GroupedPointAcaSeesEveryComponentOfCoplanarPoints) {
+  // Two point sets in the plane z = 0: A's normal component decouples (A_xz = A_yz = 0), so
+  // the block is [[A_t, 0], [0, a0 g]] in the tangential and normal rows; the grouped ACA sees
+  // both parts (each pivot row brings its point's normal row along).
+  const Index P = 150;
+  Eigen::MatrixXd X = Eigen::MatrixXd::Random(P, 2), Y = Eigen::MatrixXd::Random(P, 2);
+  Y.col(0).array() += 5.0;
+  auto block = [&](Index p, Index q, int k, int l) {
+    const double r[3] = {X(p, 0) - Y(q, 0), X(p, 1) - Y(q, 1), 0.0};
+    const double d = std::sqrt(r[0] * r[0] + r[1] * r[1]);
+    return r[k] * r[l] / (d * d * d) + (k == l ? 0.4 / d : 0.0);
+  };
+  Eigen::MatrixXd A(3 * P, 3 * P);
+  for (Index p = 0; p < P; ++p)
+    for (Index q = 0; q < P; ++q)
+      for (int k = 0; k < 3; ++k)
+        for (int l = 0; l < 3; ++l) A(3 * p + k, 3 * q + l) = block(p, q, k, l);
+  const auto rows = [&](Index p, double* out) {
+    for (Index q = 0; q < P; ++q)
+      for (int k = 0; k < 3; ++k)
+        for (int l = 0; l < 3; ++l) out[(3 * k + l) * P + q] = A(3 * p + k, 3 * q + l);
+  };
+  const auto columns = [&](Index q, double* out) {
+    for (Index p = 0; p < P; ++p)
+      for (int k = 0; k < 3; ++k)
+        for (int l = 0; l < 3; ++l) out[(3 * l + k) * P + p] = A(3 * p + k, 3 * q + l);
+  };
+  for (double tol : {1e-4, 1e-8}) {
+    const LowRank F = grouped_point_aca(P, P, rows, columns, tol, 3 * P);
+    const Eigen::MatrixXd E = A - F.U * F.V.transpose();
+    EXPECT_LT(E.norm(), 10 * tol * A.norm()) << tol;
+    // the normal rows and columns alone (a sixth of the norm)
+    Eigen::MatrixXd En(P, P), An(P, P);
+    for (Index p = 0; p < P; ++p)
+      for (Index q = 0; q < P; ++q) {
+        En(p, q) = E(3 * p + 2, 3 * q + 2);
+        An(p, q) = A(3 * p + 2, 3 * q + 2);
+      }
+    EXPECT_LT(En.norm(), 10 * tol * A.norm()) << tol;
+    EXPECT_GT(An.norm(), 0.1 * A.norm());
+  }
+}
+
+TEST(LameSurfaceSteklov, HMatricesMatchTheDenseOperators) {
+  // V_h, K_h, K_h^T, W_h at tol 1e-10 against lame_surface.hpp's dense matrices (leaves of 16
+  // vertices; at this tol and size most admissible blocks are summed densely, their ranks not
+  // paying). Measured relative product errors: sphere (642 vertices) 1.3e-11, 5.6e-12, 5.5e-12,
+  // 6.3e-12; cube (386) ...; Fichera's corner (...) ...
+  const double tol = 1e-10;
+  for (int shape = 0; shape < 3; ++shape) {
+    const test::Mesh m = mesh(shape, 3);
+    const Surface s(m.vertices, m.triangles);
+    const SurfaceMatrices& D = dense(shape, 3);
+    const LameSurfaceOperators H(s, kSteel, options(tol).hmatrix);
+    const Eigen::MatrixXd X = Eigen::MatrixXd::Random(3 * s.vertices(), 3);
+    SCOPED_TRACE(kShapes[shape]);
+    const double e[4] = {relative(H.single_layer()->apply(X), D.single_layer * X),
+                         relative(H.double_layer(X), D.double_layer * X),
+                         relative(H.double_layer(X, true), D.double_layer.transpose() * X),
+                         relative(H.hypersingular(X), D.hypersingular * X)};
+    std::printf("%s n=%ld: %.2e %.2e %.2e %.2e\n", kShapes[shape], (long)s.vertices(), e[0], e[1], e[2], e[3]);
+    for (double x : e) EXPECT_LT(x, 1e-8);
+    EXPECT_TRUE(H.single_layer()->symmetric());
+    EXPECT_EQ(H.nbytes(), H.info().nbytes_v + H.info().nbytes_k + H.info().nbytes_w);
+  }
+}
+
+TEST(LameSurfaceSteklov, CompressedBlocksAtAModerateTolerance) {
+  // At tol 1e-6 and leaves of 8 vertices the far blocks are held low-rank, from the point ACA
+  // (not the dense fallback): flat faces (the cube: between coplanar points the normal
+  // component decouples) as well as the sphere. Measured relative product errors (V, K, K^T,
+  // W): ...
+  const double tol = 1e-6;
+  for (int shape = 0; shape < 2; ++shape) {
+    const test::Mesh m = shape == 0 ? mesh(0, 3) : test::cube(10, 0.1);
+    const Surface s(m.vertices, m.triangles);
+    SurfaceRequest request;
+    request.single_layer = Space::P1;
+    request.double_layer = Space::P1;
+    request.hypersingular = true;
+    const SurfaceMatrices cube = shape == 0 ? SurfaceMatrices{} : assemble(s, kSteel, request);
+    const SurfaceMatrices& D = shape == 0 ? dense(0, 3) : cube;
+    const LameSurfaceOperators H(s, kSteel, options(tol, 8).hmatrix);
+    const Eigen::MatrixXd X = Eigen::MatrixXd::Random(3 * s.vertices(), 3);
+    SCOPED_TRACE(kShapes[shape]);
+    for (const HMatrix* A : {H.single_layer().get(), &H.y(), &H.z()}) EXPECT_GT(A->max_rank(), 0);
+    const double e[4] = {relative(H.single_layer()->apply(X), D.single_layer * X),
+                         relative(H.double_layer(X), D.double_layer * X),
+                         relative(H.double_layer(X, true), D.double_layer.transpose() * X),
+                         relative(H.hypersingular(X), D.hypersingular * X)};
+    std::printf("%s n=%ld: %.2e %.2e %.2e %.2e ranks %ld %ld %ld\n", kShapes[shape], (long)s.vertices(), e[0], e[1],
+                e[2], e[3], (long)H.single_layer()->max_rank(), (long)H.y().max_rank(), (long)H.z().max_rank());
+    for (double x : e) EXPECT_LT(x, 2 * tol);
+  }
+}
+
+TEST(LameSurfaceSteklov, OperatorMatchesTheDenseOperator) {
+  // S_h against 1/2 (W + (K - M)^T V^{-1} (K - M)) from the dense matrices, tol 1e-8.
+  const double tol = 1e-8;
+  for (int shape : {0, 2}) {
+    const test::Mesh m = mesh(shape, 3);
+    const Surface s(m.vertices, m.triangles);
+    const SurfaceMatrices& D = dense(shape, 3);
+    const Eigen::MatrixXd A = Eigen::MatrixXd(D.double_layer) - kron3(mass(s, Space::P1));
+    const Eigen::LLT<Eigen::MatrixXd> V(Eigen::MatrixXd(D.single_layer));
+    const Eigen::MatrixXd flux = V.solve(A);
+    const Eigen::MatrixXd S_dense = 0.5 * (Eigen::MatrixXd(D.hypersingular) + A.transpose() * flux);
+    const auto S = lame_surface_steklov_operator(m.vertices, m.triangles, kSteel, Space::P1, options(tol, 8));
+    ASSERT_EQ(S->size(), 3 * s.vertices());
+    EXPECT_EQ(S->dimension(), 3);
+    const Eigen::MatrixXd Y = Eigen::MatrixXd::Random(S->size(), 4), ref = S_dense * Y;
+    SCOPED_TRACE(kShapes[shape]);
+    const double e = relative(S->apply(Y), ref), f = relative(S->flux(Y), flux * Y);
+    std::printf("%s n=%ld: S %.2e flux %.2e its %d\n", kShapes[shape], (long)s.vertices(), e, f, S->last_iterations());
+    EXPECT_LT(e, 10 * tol);
+    EXPECT_GT(S->last_iterations(), 0);
+    EXPECT_LT(f, 100 * tol);
+    const int own = S->last_iterations();
+    const Eigen::MatrixXd loose = S->apply(Y, 1e-6);
+    EXPECT_LT(S->last_iterations(), own);
+    EXPECT_LT(relative(loose, ref), 1e-4);
+    EXPECT_EQ(S->apply(Eigen::MatrixXd::Zero(S->size(), 2)).norm(), 0.0);
+    const LameSteklovInfo& i = S->info();
+    EXPECT_EQ(S->nbytes(), i.nbytes_v + i.nbytes_v0 + i.nbytes_k + i.nbytes_w + i.nbytes_preconditioner);
+    EXPECT_GT(i.setup_seconds, 0.0);
+  }
+}
+
+TEST(LameSurfaceSteklov, IterationCountsStayBounded) {
+  for (int shape : {0, 2}) {
+    std::vector<int> counts;
+    for (int level = 1; level <= 3; ++level) {
+      const test::Mesh m = mesh(shape, level);
+      SteklovOptions o = options(1e-6);
+      o.solver_tol = 1e-9;
+      const auto S = lame_surface_steklov_operator(m.vertices, m.triangles, kSteel, Space::P1, o);
+      S->flux(Eigen::MatrixXd::Random(S->size(), 1));
+      counts.push_back(S->last_iterations());
+    }
+    std::printf("%s: %d %d %d\n", kShapes[shape], counts[0], counts[1], counts[2]);
+  }
+}
+
+TEST(LameSurfaceSteklov, DistributedOverThreadsEqualsTheSerialOperator) {
+  const double tol = 1e-8;
+  const test::Mesh m = mesh(2, 3);
+  const SteklovOptions serial_options = options(tol, 8);
+  const auto serial = lame_surface_steklov_operator(m.vertices, m.triangles, kSteel, Space::P1, serial_options);
+  const Eigen::MatrixXd Y = Eigen::MatrixXd::Random(serial->size(), 2);
+  const Eigen::MatrixXd ref = serial->apply(Y), ref_flux = serial->flux(Y);
+  const int iterations = serial->last_iterations();
+  for (int size : {1, 2}) {
+    ThreadGroup group(size);
+    std::vector<Eigen::MatrixXd> out(static_cast<std::size_t>(size)), fl(out);
+    std::vector<int> its(out.size());
+    std::vector<std::size_t> bytes(out.size());
+    std::vector<std::thread> ranks;
+    for (int r = 0; r < size; ++r)
+      ranks.emplace_back([&, r] {
+        SteklovOptions o = serial_options;
+        o.hmatrix.comm = group.communicator(r);
+        const auto S = lame_surface_steklov_operator(m.vertices, m.triangles, kSteel, Space::P1, o);
+        out[static_cast<std::size_t>(r)] = S->apply(Y);
+        fl[static_cast<std::size_t>(r)] = S->flux(Y);
+        its[static_cast<std::size_t>(r)] = S->last_iterations();
+        const LameSteklovInfo& i = S->info();
+        bytes[static_cast<std::size_t>(r)] = i.nbytes_v + i.nbytes_w + i.nbytes_k;
+      });
+    for (std::thread& t : ranks) t.join();
+    if (size == 1) {
+      EXPECT_EQ((out[0] - ref).cwiseAbs().maxCoeff(), 0.0);
+      EXPECT_EQ((fl[0] - ref_flux).cwiseAbs().maxCoeff(), 0.0);
+    }
+    for (int r = 0; r < size; ++r) {
+      std::printf("size %d rank %d: %.2e %.2e its %d bytes %.3f\n", size, r,
+                  relative(out[static_cast<std::size_t>(r)], ref), relative(fl[static_cast<std::size_t>(r)], ref_flux),
+                  its[static_cast<std::size_t>(r)],
+                  double(bytes[static_cast<std::size_t>(r)]) /
+                      double(serial->info().nbytes_v + serial->info().nbytes_w + serial->info().nbytes_k));
+      EXPECT_LT(relative(out[static_cast<std::size_t>(r)], ref), 1e-13);
+      EXPECT_LT(relative(fl[static_cast<std::size_t>(r)], ref_flux), 1e-13);
+      EXPECT_EQ(its[static_cast<std::size_t>(r)], iterations);
+      EXPECT_EQ((out[static_cast<std::size_t>(r)] - out[0]).cwiseAbs().maxCoeff(), 0.0);
+      EXPECT_EQ((fl[static_cast<std::size_t>(r)] - fl[0]).cwiseAbs().maxCoeff(), 0.0);
+    }
+  }
+}
+
+TEST(LameSurfaceSteklov, Refusals) {
+  const test::Mesh m = mesh(1, 1);
+  EXPECT_THROW(lame_surface_steklov_operator(m.vertices, m.triangles, Lame{-1.0, 0.3}, Space::P1, options(1e-8)),
+               std::invalid_argument);
+  EXPECT_THROW(lame_surface_steklov_operator(m.vertices, m.triangles, Lame{1.0, 0.5}, Space::P1, options(1e-8)),
+               std::invalid_argument);
+  EXPECT_THROW(lame_surface_steklov_operator(m.vertices, m.triangles, kSteel, Space::P0, options(1e-8)),
+               std::invalid_argument);
+  SteklovOptions bad = options(1e-8);
+  bad.solver_tol = 0.0;
+  EXPECT_THROW(lame_surface_steklov_operator(m.vertices, m.triangles, kSteel, Space::P1, bad), std::invalid_argument);
+  const auto S = lame_surface_steklov_operator(m.vertices, m.triangles, kSteel, Space::P1, options(1e-8));
+  EXPECT_EQ(S->size(), 3 * m.vertices.rows());
+  EXPECT_THROW(S->apply(Eigen::MatrixXd::Ones(5, 1)), std::invalid_argument);
+}
