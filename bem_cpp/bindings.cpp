@@ -14,6 +14,7 @@
 #include "bem/lame_potentials.hpp"
 #include "bem/lame_steklov.hpp"
 #include "bem/lame_surface.hpp"
+#include "bem/lame_surface_steklov.hpp"
 #include "bem/linear_algebra.hpp"
 #include "bem/operators.hpp"
 #include "bem/potential_operator.hpp"
@@ -106,6 +107,21 @@ PYBIND11_MODULE(_bem, m) {
            }),
            py::arg("nodes"), py::arg("lame"), py::arg("flux"), py::arg("leaf_size"), py::arg("eta"), py::arg("tol"),
            py::arg("preconditioner_tol"), py::arg("solver_tol"), py::arg("max_iterations"), py::arg("product_threads"),
+           py::arg("rank"), py::arg("size"), py::arg("allgather"), py::arg("allreduce"), Release())
+      .def(py::init([](VerticesRef vertices, TrianglesRef triangles, const bem::Lame& lame, Space flux,
+                       bem::Index leaf_size, double eta, double tol, double solver_tol, int max_iterations,
+                       int product_threads, int rank, int size, Collective allgather, Collective allreduce) {
+             std::shared_ptr<const bem::Communicator> comm;
+             if (allgather)
+               comm = std::make_shared<const bem::Communicator>(
+                   bem::Communicator{rank, size, std::move(allgather), std::move(allreduce)});
+             return bem::lame_surface_steklov_operator(
+                 vertices, triangles, lame, flux,
+                 bem::SteklovOptions{
+                     {leaf_size, eta, tol, false, product_threads, comm}, tol, solver_tol, max_iterations});
+           }),
+           py::arg("vertices"), py::arg("triangles"), py::arg("lame"), py::arg("flux"), py::arg("leaf_size"),
+           py::arg("eta"), py::arg("tol"), py::arg("solver_tol"), py::arg("max_iterations"), py::arg("product_threads"),
            py::arg("rank"), py::arg("size"), py::arg("allgather"), py::arg("allreduce"), Release())
       .def("apply", &bem::LameSteklovOperator::apply, py::arg("x"), py::arg("solver_tol") = 0.0, Release())
       .def("flux", &bem::LameSteklovOperator::flux, py::arg("x"), py::arg("solver_tol") = 0.0, Release())

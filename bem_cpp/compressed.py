@@ -358,22 +358,31 @@ def _lame_steklov_poincare(
     timings: dict[str, float] | None,
     comm: Any,
 ) -> NDArray[np.float64] | SteklovPoincareOperator:
-    """:func:`steklov_poincare` with Kelvin's kernel ``lame``: dense, or H-matrices on a
-    polygon (``"auto"``: from ``HMATRIX_LAME_AUTO_NODES`` nodes on)."""
+    """:func:`steklov_poincare` with Kelvin's kernel ``lame``: dense, or H-matrices
+    (``"auto"``: from ``HMATRIX_LAME_AUTO_NODES`` nodes of a polygon on, from
+    ``HMATRIX_SURFACE_AUTO_DOFS`` vertices of a surface, as for Laplace's kernel)."""
     space = checks.space(flux, "flux")
     if compression not in defaults.SURFACE_COMPRESSIONS:
         raise ValueError(
             f"compression must be one of {defaults.SURFACE_COMPRESSIONS}, got {compression!r}"
         )
+    surface = len(geometry) == 2
     if compression == "auto":
-        large = geometry[0].shape[0] >= defaults.HMATRIX_LAME_AUTO_NODES
-        compression = "hmatrix" if large else "none"
+        auto = defaults.HMATRIX_SURFACE_AUTO_DOFS if surface else defaults.HMATRIX_LAME_AUTO_NODES
+        compression = "hmatrix" if geometry[0].shape[0] >= auto else "none"
     if comm is not None and compression != "hmatrix":
         raise ValueError('comm needs compression="hmatrix"')
     if compression == "hmatrix":
-        if len(geometry) == 2:
-            raise ValueError(
-                'the Lame kernel\'s S_h of a surface is dense only so far: use compression="none"'
+        if surface and flux != "p1":
+            raise ValueError('compression="hmatrix" on a surface needs flux="p1"')
+        layout = dict(
+            leaf_size=defaults.HMATRIX_SURFACE_LEAF_SIZE, eta=defaults.HMATRIX_SURFACE_ETA
+        )
+        if not surface:
+            layout = dict(
+                leaf_size=defaults.HMATRIX_LEAF_SIZE,
+                eta=defaults.HMATRIX_ETA,
+                preconditioner_tol=defaults.HMATRIX_PRECONDITIONER_TOL,
             )
         return _compressed_operator(
             _bem.LameSteklovOperator,
@@ -381,9 +390,7 @@ def _lame_steklov_poincare(
             comm,
             timings,
             tol=checks.tolerance(tol),
-            leaf_size=defaults.HMATRIX_LEAF_SIZE,
-            eta=defaults.HMATRIX_ETA,
-            preconditioner_tol=defaults.HMATRIX_PRECONDITIONER_TOL,
+            **layout,
         )
     d = checks.components(lame, geometry)
     return _dense_steklov_poincare(

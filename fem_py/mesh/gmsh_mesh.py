@@ -11,6 +11,8 @@ mesh is conforming and every fine cell carries its subdomain id.
 """
 from __future__ import annotations
 
+import signal
+
 from contextlib import contextmanager
 from typing import Any, Iterator
 
@@ -22,6 +24,22 @@ from fem_py.signals import kept_signal_actions
 __all__ = ["gmsh_session", "mesh_with_gmsh"]
 
 
+def _import_gmsh() -> Any:
+    """The gmsh module, imported without its change of the SIGINT action: its first lines
+    set SIGINT to the default action (``oldsig = signal.signal(SIGINT, SIG_DFL)``), and a
+    Ctrl-C during the import, which takes seconds on a loaded machine, went to whichever
+    thread of the process took it (MPI's among them) and killed the process without a
+    word. While gmsh is imported, ``signal.signal`` answers the current handler and
+    changes nothing (Python looks the function up at the call)."""
+    real = signal.signal
+    signal.signal = lambda signum, handler: signal.getsignal(signum)
+    try:
+        import gmsh
+    finally:
+        signal.signal = real
+    return gmsh
+
+
 @contextmanager
 def gmsh_session() -> Iterator[Any]:
     """``with gmsh_session() as gmsh:`` gmsh initialised (no configuration files, silent)
@@ -31,8 +49,7 @@ def gmsh_session() -> Iterator[Any]:
     back a plain Python handler. Kept, a Ctrl-C while gmsh meshes meets the command
     line's handler (``coupling.app.cli``: one line, exit 130, nothing left; the watchdog
     ends the run if gmsh does not return to Python within seconds)."""
-    with kept_signal_actions():
-        import gmsh
+    gmsh = _import_gmsh()
     gmsh.initialize(readConfigFiles=False)
     try:
         gmsh.option.setNumber("General.Terminal", 0)
