@@ -87,26 +87,45 @@ class RowBlocks:
         return out
 
 
-def boundary_operator_kind(choice: str, n: int, dim: int = 2) -> str:
+def boundary_operator_kind(
+    choice: str, n: int, dim: int = 2, *, kernel: str | tuple = "laplace"
+) -> str:
     """``"dense"`` or ``"hmatrix"``: the S_h of ``[solver] boundary_operator = choice`` for
-    n boundary dofs of a ``dim``-dimensional body (``"auto"``: the H-matrix from
+    n boundary nodes of a ``dim``-dimensional body (``"auto"``: the H-matrix from
     :data:`coupling.options.HMATRIX_CROSSOVER` boundary dofs on, in 3D from
-    :data:`coupling.options.HMATRIX_CROSSOVER_3D`)."""
+    :data:`coupling.options.HMATRIX_CROSSOVER_3D`; with Kelvin's ``kernel`` from bem_cpp's
+    measured crossovers of the Lame S_h, ``HMATRIX_LAME_AUTO_NODES`` nodes of a polygon and
+    ``HMATRIX_SURFACE_AUTO_DOFS`` vertices of a surface)."""
     allowed = CHOICES["solver", "boundary_operator"]
     if choice not in allowed:
         raise ValueError(f"boundary_operator must be one of {allowed}, got {choice!r}")
     if choice == "auto":
-        crossover = HMATRIX_CROSSOVER_3D if dim == 3 else HMATRIX_CROSSOVER
+        if kernel == "laplace":
+            crossover = HMATRIX_CROSSOVER_3D if dim == 3 else HMATRIX_CROSSOVER
+        else:
+            crossover = (
+                bem_cpp.defaults.HMATRIX_SURFACE_AUTO_DOFS
+                if dim == 3
+                else bem_cpp.defaults.HMATRIX_LAME_AUTO_NODES
+            )
         return "hmatrix" if n >= crossover else "dense"
     return choice
 
 
 def steklov_poincare(
-    comm: MPI.Comm, nodes: np.ndarray, flux: str, choice: str, triangles: np.ndarray | None = None
+    comm: MPI.Comm,
+    nodes: np.ndarray,
+    flux: str,
+    choice: str,
+    triangles: np.ndarray | None = None,
+    *,
+    kernel: str | tuple = "laplace",
 ) -> Any:
     """S_h of the boundary ``nodes`` (replicated, (n, 2)) for ``[solver] boundary_operator
     = choice`` (collective); in 3D ``nodes`` (n, 3) are the vertices of the surface
-    ``triangles`` (m, 3) (docs/method.md section 11, the same S_h formula).
+    ``triangles`` (m, 3) (docs/method.md section 11, the same S_h formula); with Kelvin's
+    ``kernel`` (``("lame", E, nu)``, docs/method.md section 12) the elastic S_h on the
+    node-major boundary vectors (d n).
 
     Dense: the matrix (serial) or :class:`RowBlocks` (computed on rank 0 with every core,
     held by rows). H-matrix: ``bem_cpp.SteklovPoincareOperator`` to the relative accuracy
@@ -121,18 +140,19 @@ def steklov_poincare(
     """
     nodes = np.asarray(nodes, dtype=float)
     surface = {} if triangles is None else {"triangles": np.asarray(triangles)}
-    if boundary_operator_kind(choice, *nodes.shape) == "hmatrix":
+    if boundary_operator_kind(choice, *nodes.shape, kernel=kernel) == "hmatrix":
         return bem_cpp.steklov_poincare(
             nodes,
             flux=flux,
             compression="hmatrix",
             tol=hmatrix_tol(nodes),
             comm=comm if comm.size > 1 else None,
+            kernel=kernel,
             **surface,
         )
 
     def dense() -> np.ndarray:
-        return bem_cpp.steklov_poincare(nodes, flux=flux, **surface)
+        return bem_cpp.steklov_poincare(nodes, flux=flux, kernel=kernel, **surface)
 
     return dense() if comm.size == 1 else RowBlocks.from_root(comm, dense)
 

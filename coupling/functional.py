@@ -5,7 +5,8 @@
     grad_phi J  = E^T (S_h z - m_t - s_0)
 
 u lives in a distributed PETSc vector (the DOLFINx P1 layout, owned entries then
-ghosts), phi and the boundary block z are small and replicated on every rank, S_h is
+ghosts), phi (for elasticity the gap unknowns g, z = T u + E g with the E of
+``fem_py.boundary.blocked``) and the boundary block z are small and replicated on every rank, S_h is
 dense: replicated in serial, held by rows under MPI (``coupling.distributed.RowBlocks``,
 whose product returns the replicated S_h z). The trace T and its transpose
 (``fem_py.boundary.BoundaryMap``) are index operations on the owned boundary dofs plus one
@@ -17,6 +18,8 @@ from typing import Any
 
 import numpy as np
 from petsc4py import PETSc
+
+from fem_py.boundary.blocked import GapMap, scalar_gap_map
 
 __all__ = ["CoupledFunctional"]
 
@@ -37,6 +40,9 @@ class CoupledFunctional:
         b_f (PETSc vector in the layout of u).
     boundary_load
         m_t + s_0 in boundary order (n_gamma,), replicated.
+    gap
+        E (``fem_py.boundary.blocked.GapMap``): the gap unknowns' directions in the boundary
+        vectors; default the scalar equation's, phi at the boundary's ``signorini`` nodes.
     """
 
     def __init__(
@@ -46,10 +52,11 @@ class CoupledFunctional:
         steklov_poincare: np.ndarray,
         load: PETSc.Vec,
         boundary_load: np.ndarray,
+        gap: GapMap | None = None,
     ):
         self.forms = forms
         self.boundary = boundary
-        self.signorini = np.asarray(boundary.signorini, dtype=np.int64)
+        self.gap = scalar_gap_map(boundary) if gap is None else gap
         self.S = steklov_poincare
         self.load = load
         self.boundary_load = np.asarray(boundary_load, dtype=float)
@@ -59,8 +66,7 @@ class CoupledFunctional:
     def boundary_block(self, u: PETSc.Vec, phi: np.ndarray) -> np.ndarray:
         """z = T u + E phi."""
         z = self.boundary.gather(u)
-        z[self.signorini] += phi
-        return z
+        return self.gap.extend(z, phi)
 
     # -- J_h and its derivatives --------------------------------------------------
     def _boundary_terms(self, u: PETSc.Vec, phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -81,7 +87,7 @@ class CoupledFunctional:
         self.forms.assemble_residual(u_function, grad_u)
         grad_u.axpy(-1.0, self.load)
         self.boundary.scatter_add(y, grad_u, refresh_ghosts=False)
-        return y[self.signorini].copy()
+        return self.gap.restrict(y)
 
     def value(self, u_function, phi: np.ndarray) -> float:
         """J_h(u, phi) (collective)."""
@@ -121,4 +127,4 @@ class CoupledFunctional:
         )
         jacobian.mult(e_u, out_u)
         self.boundary.scatter_add(y, out_u, refresh_ghosts=False)
-        return y[self.signorini].copy()
+        return self.gap.restrict(y)

@@ -80,6 +80,10 @@ DEFAULTS: dict[str, dict[str, Any]] = {
     "adapt": {"steps": 0, "theta": 0.5, "max_dofs": 200000},
 }
 
+#: The tangential condition of the elastic problem on Gamma_s (docs/method.md section 12):
+#: "slip" (frictionless) or "stick" (no slip).
+DEFAULT_TANGENTIAL = "slip"
+
 #: Keys whose value must be one of a fixed set of strings.
 CHOICES: dict[tuple[str, str], tuple[str, ...]] = {
     ("geometry", "shape"): ("square", "lshape", "polygon", "disk", "ellipse", "box", "ball"),

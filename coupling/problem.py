@@ -26,9 +26,11 @@ from typing import Any, Mapping
 import numpy as np
 
 import bem_cpp
+from fem_py.forms.elasticity import lame_parameters
 from coupling.distributed import boundary_operator_kind, steklov_poincare
 from coupling.functional import CoupledFunctional
-from coupling.options import DEFAULTS, hmatrix_tol
+from coupling.options import DEFAULT_TANGENTIAL, DEFAULTS, hmatrix_tol
+from fem_py.boundary.blocked import BlockedBoundary, elastic_gap_map, scalar_gap_map
 from fem_py.parallel import array_from_root
 
 __all__ = ["SignoriniProblem"]
@@ -87,7 +89,9 @@ class SignoriniProblem:
         f: Any = "0",
         u0: Any = "0",
         t0: Any = "0",
-        a: float = 0.0,
+        a: Any = 0.0,
+        exterior: tuple[float, float] | None = None,
+        tangential: str = DEFAULT_TANGENTIAL,
         flux_space: str = DEFAULTS["solver"]["flux_space"],
         jacobian: str = DEFAULTS["solver"]["jacobian"],
         boundary_operator: str = DEFAULTS["solver"]["boundary_operator"],
@@ -96,30 +100,45 @@ class SignoriniProblem:
         from fem_py.dofs import p1_space
         from fem_py.forms import InteriorForms
 
-        self.domain, self.material, self.a = domain, material, float(a)
+        d = material.components
+        self.equation = "scalar" if d == 1 else "elasticity"
+        self.kernel = _exterior_kernel(self.equation, exterior)
+        self.domain, self.material, self.tangential = domain, material, tangential
+        self.a = float(a) if d == 1 else _translation(a, d)
         self.flux_space, self.jacobian = flux_space, jacobian
         self.comm = domain.mesh.comm
         timings: dict[str, float] = {}
         tic = time.perf_counter()
-        self.V = p1_space(domain.mesh)
+        self.V = p1_space(domain.mesh, d)
         self.forms = InteriorForms(self.V, material, f, jacobian=jacobian)
-        self.boundary = boundary_map(self.V, domain)
+        nodal = boundary_map(self.V, domain)
+        self.boundary = nodal if d == 1 else BlockedBoundary(nodal, d)
+        self.gap = (
+            scalar_gap_map(nodal) if d == 1 else elastic_gap_map(self.boundary, tangential)
+        )
         timings["forms"] = time.perf_counter() - tic
 
         tic = time.perf_counter()
         nodes = self.boundary.nodes
-        self.boundary_operator = boundary_operator_kind(boundary_operator, *nodes.shape)
+        self.boundary_operator = boundary_operator_kind(
+            boundary_operator, *nodes.shape, kernel=self.kernel
+        )
         self.S = steklov_poincare(
-            self.comm, nodes, flux_space, self.boundary_operator, **self._surface
+            self.comm, nodes, flux_space, self.boundary_operator, kernel=self.kernel, **self._surface
         )
         timings["steklov_poincare"] = time.perf_counter() - tic
 
         tic = time.perf_counter()
         self.u0 = self.boundary.interpolate_boundary(u0)
         m_t = self.forms.boundary_load(t0, self.boundary)
-        s_0 = self.S @ (self.a + self.u0)
+        s_0 = self.S @ (self.a_trace + self.u0)
         self.functional = CoupledFunctional(
-            self.forms, self.boundary, self.S, self.forms.assemble_load(), m_t + s_0
+            self.forms,
+            self.boundary,
+            self.S,
+            self.forms.assemble_load(),
+            m_t + s_0,
+            gap=self.gap,
         )
         timings["loads"] = time.perf_counter() - tic
         self.timings: Mapping[str, float] = MappingProxyType(timings)
@@ -142,23 +161,39 @@ class SignoriniProblem:
 
     @property
     def n_signorini(self) -> int:
-        """n_s, the number of phi unknowns."""
-        return int(self.boundary.signorini.size)
+        """The number of gap unknowns: n_s (phi, or the elastic normal gaps of "stick"), or
+        d n_s (the elastic gaps of "slip", :mod:`fem_py.boundary.blocked`)."""
+        return self.gap.size
+
+    @property
+    def components(self) -> int:
+        """Unknowns per node: 1, or d for elasticity."""
+        return self.material.components
+
+    @property
+    def a_trace(self) -> float | np.ndarray:
+        """a as a boundary vector: the number a, or the translation a repeated at every node
+        (node-major, elasticity)."""
+        if self.components == 1:
+            return self.a
+        return np.tile(self.a, self.boundary.n_nodes)
 
     def exterior_flux(self, ue: np.ndarray) -> np.ndarray:
         """Coefficients of psi_h ~ du_e/dn from the trace ``ue`` (boundary order,
         replicated): V_h psi_h = (K_h - M_h)(ue - a) (docs/method.md section 2), by the dense
         Cholesky solve on rank 0 or by the H-matrix operator's CG solve (collective)."""
         if self.boundary_operator == "hmatrix":
-            return self.S.flux(np.asarray(ue, dtype=float) - self.a)
-        nodes = self.boundary.nodes
-        return array_from_root(
+            return self.S.flux(np.asarray(ue, dtype=float) - self.a_trace)
+        nodes, d = self.boundary.nodes, self.components
+        trace = ue if d == 1 else np.reshape(ue, (-1, d))
+        flux = array_from_root(
             self.comm,
             lambda: bem_cpp.exterior_flux(
-                nodes, ue, a=self.a, flux=self.flux_space, **self._surface
+                nodes, trace, a=self.a, flux=self.flux_space, kernel=self.kernel, **self._surface
             ),
             all_cores=True,
         )
+        return flux.ravel()
 
     def exterior(self, solution: Any, points: np.ndarray) -> np.ndarray:
         """u_e at exterior points (m, 2) ((m, 3) in 3D) by the representation formula
@@ -176,3 +211,31 @@ class SignoriniProblem:
             tol=hmatrix_tol(self.boundary.nodes),
             **self._surface,
         )
+
+
+def _exterior_kernel(equation: str, exterior: tuple[float, float] | None) -> str | tuple:
+    """The kernel of the boundary operators: Laplace's for the scalar equation, Kelvin's of
+    the medium ``exterior`` = (E, nu) for elasticity; a one-line ``ValueError`` when one is
+    given without the other."""
+    if equation == "scalar":
+        if exterior is not None:
+            raise ValueError(
+                "exterior (E, nu) is for elasticity; the scalar equation's exterior is Laplace's"
+            )
+        return "laplace"
+    if exterior is None:
+        raise ValueError("elasticity needs the exterior medium: exterior=(E, nu)")
+    E, nu = exterior
+    lame_parameters(E, nu)  # the one-line refusal of a bad medium
+    return ("lame", float(E), float(nu))
+
+
+def _translation(a: Any, d: int) -> np.ndarray:
+    """The translation at infinity as a (d,) array: d numbers, or one number for every
+    component."""
+    values = np.atleast_1d(np.asarray(a, dtype=float))
+    if values.shape == (1,):
+        values = np.repeat(values, d)
+    if values.shape != (d,) or not np.all(np.isfinite(values)):
+        raise ValueError(f"a, the translation at infinity, needs {d} finite components, got {a!r}")
+    return values

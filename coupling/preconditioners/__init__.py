@@ -71,18 +71,21 @@ def coarse_space(domain: Any, choice: str) -> str:
     return "galerkin" if domain.partition == "cells" else "graph"
 
 
-def preconditioner_kind(choice: str, dim: int) -> str:
+def preconditioner_kind(choice: str, dim: int, components: int = 1) -> str:
     """The preconditioner of ``[solver] preconditioner = choice`` for a ``dim``-dimensional
     domain: ``"auto"`` is :data:`coupling.options.AUTO_PRECONDITIONER` (substructuring in
-    2D, amg in 3D), any other choice itself."""
-    return AUTO_PRECONDITIONER[dim] if choice == "auto" else choice
+    2D, amg in 3D; amg for elasticity, ``components`` > 1, in both), any other choice
+    itself."""
+    if choice != "auto":
+        return choice
+    return "amg" if components > 1 else AUTO_PRECONDITIONER[dim]
 
 
 def create_matrix(problem: Any, options: SolverOptions) -> P1Matrix | PETSc.Mat:
     """The P1 matrix :func:`build_preconditioner` assembles in, which the solvers' Jacobians
     then reuse (the caller destroys it): a PETSc Mat for the amg preconditioner, which
     copies its nonzero structure, else a :class:`fem_py.forms.p1_matrix.P1Matrix`."""
-    kind = preconditioner_kind(options.preconditioner, problem.domain.dim)
+    kind = preconditioner_kind(options.preconditioner, problem.domain.dim, problem.components)
     return problem.forms.create_matrix() if kind == "amg" else problem.forms.create_p1_matrix()
 
 
@@ -105,20 +108,29 @@ def build_preconditioner(
     a P1 matrix afterwards (the solvers' Jacobian) saves creating one. B keeps no
     reference to it.
     """
-    kind = preconditioner_kind(options.preconditioner, problem.domain.dim)
+    elastic = problem.components > 1
+    kind = preconditioner_kind(options.preconditioner, problem.domain.dim, problem.components)
     comm, V = problem.comm, problem.V
-    n_owned = V.dofmap.index_map.size_local
+    n_owned = V.dofmap.index_map.size_local * problem.components
     if kind == "identity":
         return IdentityPreconditioner(n_owned, problem.n_signorini)
     if kind == "amg":  # distributed as it is: no gathering
         return MultigridPreconditioner(
             V,
             constant_mode_weight(V, problem.S),
-            signorini_hypersingular(comm, problem.boundary, problem.S),
-            lattice=problem.domain.lattice,
+            signorini_hypersingular(
+                comm, problem.boundary, problem.S, gap=problem.gap, kernel=problem.kernel
+            ),
+            lattice=None if elastic else problem.domain.lattice,
             rtol=AMG_RTOL,
             max_iterations=AMG_MAX_ITERATIONS,
             pattern=matrix if isinstance(matrix, PETSc.Mat) else None,
+            stiffness=problem.material.stiffness_integrand if elastic else None,
+        )
+    if elastic:
+        raise ValueError(
+            f"preconditioner: {kind} is a preconditioner of the scalar equation; for elasticity"
+            ' set [solver] preconditioner = "amg" (the default) or "identity"'
         )
     domain = problem.domain
     if kind == "substructuring" and domain.dim == 3:

@@ -32,7 +32,7 @@ tolerance), else integrated over the triangles of Gamma_s alone
 """
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 import ufl
@@ -44,6 +44,7 @@ import bem_cpp
 from coupling.options import AMG_OPTIONS
 from coupling.preconditioners.base import DenseSignoriniBlock
 from coupling.preconditioners.lattice_multigrid import LatticeHierarchy, lattice_levels
+from fem_py.forms.elasticity import rigid_body_modes
 from fem_py.forms.interior import compile_form
 from fem_py.mesh.box import BoxLattice
 from fem_py.parallel import array_from_root
@@ -52,29 +53,43 @@ __all__ = ["MultigridPreconditioner", "constant_mode_weight", "signorini_hypersi
 
 
 def constant_mode_weight(V: fem.FunctionSpace, S: Any) -> float:
-    """c = <S_h 1, 1> / |Gamma| (collective)."""
-    one = np.ones(S.shape[0])
+    """c = <S_h 1, 1> / |Gamma| (collective); for the d components of elasticity the mean
+    over the d translations e_k, sum_k <S_h e_k, e_k> / (d |Gamma|)."""
+    d = V.dofmap.index_map_bs
+    translations = np.kron(np.ones(S.shape[0] // d), np.eye(d))  # (d, d n)
     area_form = fem.form(fem.Constant(V.mesh, PETSc.ScalarType(1.0)) * ufl.ds(domain=V.mesh))
     area = V.mesh.comm.allreduce(fem.assemble_scalar(area_form), op=MPI.SUM)
-    return float(one @ (S @ one)) / float(area)
+    value = sum(float(e @ (S @ e)) for e in translations)
+    return value / (d * float(area))
 
 
-def signorini_hypersingular(comm: MPI.Comm, boundary: Any, S: Any = None) -> np.ndarray:
+def signorini_hypersingular(
+    comm: MPI.Comm, boundary: Any, S: Any = None, *, gap: Any = None, kernel: Any = "laplace"
+) -> np.ndarray:
     """M_s = E^T W_h E (n_s x n_s) on every rank (collective): read from the H-matrix of
-    W_h that S_h holds, when it does (``S.holds_hypersingular``), else integrated on rank 0."""
+    W_h that S_h holds, when it does (``S.holds_hypersingular``), else integrated on rank 0.
+    With Kelvin's ``kernel`` (elasticity) the Lame W_h on the d components of the Signorini
+    nodes, and E the ``gap`` map's directions there (``fem_py.boundary.blocked.GapMap``)."""
     if boundary.signorini.size == 0:
         return np.zeros((0, 0))
-    if getattr(S, "holds_hypersingular", False):
+    if kernel == "laplace" and getattr(S, "holds_hypersingular", False):
         return S.hypersingular_block(boundary.signorini)
-    return array_from_root(
+    W = array_from_root(
         comm,
         lambda: bem_cpp.hypersingular(
             boundary.nodes,
             triangles=getattr(boundary, "triangles", None),  # None: a polygon (2D)
             block=boundary.signorini,
+            kernel=kernel,
         ),
         all_cores=True,
     )
+    if kernel == "laplace":
+        return W
+    d = boundary.components
+    rows = (d * np.asarray(boundary.signorini)[:, None] + np.arange(d)).ravel()
+    E = gap.matrix[rows].toarray()  # the directions of the gap unknowns at those entries
+    return E.T @ W @ E
 
 
 #: The options prefix of the inner solve's KSP (its options live in PETSc's database only
@@ -122,6 +137,11 @@ class MultigridPreconditioner(DenseSignoriniBlock):
         matrix copies (its own values; the boundary mass adds no entries to P1's cell
         pattern) instead of building the pattern again (a few seconds at 2e6 dofs).
         Not referenced afterwards.
+    stiffness
+        The integrand (w, v) -> UFL of K (default grad w . grad v); for elasticity the
+        linear elastic stiffness of the material's tangent at 0
+        (``ElasticMaterial.stiffness_integrand``). On a vector space V GAMG gets the rigid
+        motions as its near-nullspace.
     """
 
     def __init__(
@@ -134,17 +154,24 @@ class MultigridPreconditioner(DenseSignoriniBlock):
         rtol: float,
         max_iterations: int,
         pattern: PETSc.Mat | None = None,
+        stiffness: Callable[[Any, Any], Any] | None = None,
     ):
         comm = V.mesh.comm
         w, v = ufl.TrialFunction(V), ufl.TestFunction(V)
         c = fem.Constant(V.mesh, PETSc.ScalarType(weight))
-        form = compile_form(ufl.inner(ufl.grad(w), ufl.grad(v)) * ufl.dx + c * w * v * ufl.ds)
+        K = ufl.inner(ufl.grad(w), ufl.grad(v)) if stiffness is None else stiffness(w, v)
+        form = compile_form(K * ufl.dx + c * ufl.inner(w, v) * ufl.ds)
         if pattern is None:
             self._matrix = fem.petsc.assemble_matrix(form)
         else:
             self._matrix = pattern.duplicate(copy=False)
             fem.petsc.assemble_matrix(self._matrix, form)
         self._matrix.assemble()
+        self._near_nullspace = None
+        if V.dofmap.index_map_bs > 1:  # elasticity: GAMG's aggregates carry the rigid motions
+            self._modes = rigid_body_modes(V)
+            self._near_nullspace = PETSc.NullSpace().create(vectors=self._modes, comm=comm)
+            self._matrix.setNearNullSpace(self._near_nullspace)
         self._ksp = PETSc.KSP().create(comm)
         self._ksp.setOperators(self._matrix)
         self._ksp.setType(PETSc.KSP.Type.CG)
@@ -164,7 +191,7 @@ class MultigridPreconditioner(DenseSignoriniBlock):
             _set_up(self._ksp, AMG_OPTIONS_PREFIX, options)
         self._x, self._b = self._matrix.createVecs()
         self.iterations: list[int] = []  # inner CG iterations per application
-        self.n_omega = V.dofmap.index_map.size_local
+        self.n_omega = V.dofmap.index_map.size_local * V.dofmap.index_map_bs
         super().__init__(signorini_metric)
 
     def apply_omega(self, g: np.ndarray) -> np.ndarray:
@@ -198,5 +225,9 @@ class MultigridPreconditioner(DenseSignoriniBlock):
     def destroy(self) -> None:
         for obj in (self._ksp, self._matrix, self._x, self._b):
             obj.destroy()
+        if self._near_nullspace is not None:
+            self._near_nullspace.destroy()
+            for mode in self._modes:
+                mode.destroy()
         if self._hierarchy is not None:
             self._hierarchy.destroy()

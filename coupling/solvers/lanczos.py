@@ -34,7 +34,8 @@ def estimate_extremes(
     # the same start vector for any number of ranks: drawn in the input numbering
     V = functional.forms.V
     rng = np.random.default_rng(seed)
-    p_u = rng.standard_normal(work.getSize())[input_indices(V)[: V.dofmap.index_map.size_local]]
+    bs, nodes = V.dofmap.index_map_bs, input_indices(V)[: V.dofmap.index_map.size_local]
+    p_u = rng.standard_normal(work.getSize())[(bs * nodes[:, None] + np.arange(bs)).ravel()]
     p_phi = rng.standard_normal(n_phi)
     q_u, q_phi = preconditioner.apply_omega(p_u), preconditioner.apply_signorini(p_phi)
     norm = np.sqrt(global_dot(comm, q_u, p_u) + q_phi @ p_phi)

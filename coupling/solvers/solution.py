@@ -260,7 +260,7 @@ def solve(
         phi0 = np.zeros(problem.n_signorini)
         if initial is not None:
             u_start, phi_start = initial
-            n_owned = problem.V.dofmap.index_map.size_local
+            n_owned = problem.V.dofmap.index_map.size_local * problem.components
             u_values = (
                 u_start.x.array[:n_owned]
                 if hasattr(u_start, "x")
@@ -303,11 +303,8 @@ def solve(
         if own_matrix and matrix is not None:
             matrix.destroy()
 
-    boundary = problem.boundary
-    boundary_u = boundary.gather(u.vector)
-    gap = np.zeros_like(boundary_u)
-    gap[boundary.signorini] = run.phi
-    ue = boundary_u + gap - problem.u0
+    boundary_u = problem.boundary.gather(u.vector)
+    ue = problem.gap.extend(boundary_u.copy(), run.phi) - problem.u0
     flux = None
     if exterior_flux:
         tic = time.perf_counter()

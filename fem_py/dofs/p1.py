@@ -49,15 +49,20 @@ def quiet_jit() -> Iterator[None]:
             h.setLevel(lvl)
 
 
-def p1_space(mesh: Any) -> fem.FunctionSpace:
-    """The continuous P1 space V_h(Omega) on ``mesh`` (the single place it is created).
+def p1_space(mesh: Any, components: int = 1) -> fem.FunctionSpace:
+    """The continuous P1 space V_h(Omega) on ``mesh`` (the single place it is created), or
+    with ``components`` = d its vector twin V_h(Omega)^d (elasticity, docs/method.md
+    section 12): blocked, the dof of component c at node k is d k + c.
 
     The dofmap construction is deterministic, so every call on the same mesh gives the
     same global dof numbering (CoarseStructure and BoundaryMap rely on this; checked
-    in parallel by tests/test_fem_mpi.py).
+    in parallel by tests/test_fem_mpi.py); the vector space's nodes are numbered as the
+    scalar space's dofs (tests/test_elastic_forms.py), so that one boundary map serves both.
     """
     with quiet_jit():
-        return fem.FunctionSpace(mesh, ("Lagrange", 1))
+        if components == 1:
+            return fem.FunctionSpace(mesh, ("Lagrange", 1))
+        return fem.VectorFunctionSpace(mesh, ("Lagrange", 1), dim=components)
 
 
 @dataclass

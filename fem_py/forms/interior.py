@@ -31,6 +31,7 @@ from petsc4py import PETSc
 
 from fem_py.dofs.p1 import quiet_jit
 from fem_py.forms.expressions import parse_expression
+from fem_py.forms.elasticity import ElasticMaterial
 from fem_py.forms.materials import Material
 from fem_py.forms.p1_matrix import P1Matrix
 
@@ -88,13 +89,18 @@ def spatial_variables(mesh: Any, *, boundary: bool = False) -> dict[str, Any]:
 
 
 def as_ufl_data(value: Any, mesh: Any, *, boundary: bool = False, what: str = "data") -> Any:
-    """Turn data given as text (x, y[, nx, ny]), a number or a UFL expression into UFL."""
+    """Turn data given as text (x, y[, nx, ny]), a number or a UFL expression into UFL; a
+    list of them (the components of a vector, e.g. f = ["0", "-1"]) into a UFL vector."""
     if isinstance(value, str):
         return parse_expression(value, spatial_variables(mesh, boundary=boundary), backend="ufl")
     if isinstance(value, (int, float, np.floating, np.integer)) and not isinstance(value, bool):
         return ufl.as_ufl(float(value))
     if isinstance(value, ufl.core.expr.Expr):
         return value
+    if isinstance(value, (list, tuple)) and value:
+        return ufl.as_vector(
+            [as_ufl_data(c, mesh, boundary=boundary, what=f"{what}[{k}]") for k, c in enumerate(value)]
+        )
     raise ValueError(
         f"{what} must be a string expression, a number or a UFL expression, "
         f"got {type(value).__name__}"
@@ -141,10 +147,16 @@ class InteriorForms:
     ):
         if jacobian not in JACOBIANS:
             raise ValueError(f"jacobian must be one of {JACOBIANS}, got {jacobian!r}")
-        if not isinstance(material, Material):
+        if not isinstance(material, (Material, ElasticMaterial)):
             raise ValueError(
-                f"material must be a fem_py.forms.Material, got {type(material).__name__}; "
-                "use make_material"
+                "material must be a fem_py.forms.Material or ElasticMaterial, got "
+                f"{type(material).__name__}; use make_material, linear_elastic or hencky"
+            )
+        components = V.dofmap.index_map_bs
+        if components != material.components:
+            raise ValueError(
+                f"material {material.name!r} has {material.components} component(s) per node, "
+                f"the space {components}"
             )
         self.V = V
         self.mesh = V.mesh
@@ -154,17 +166,15 @@ class InteriorForms:
         self._jit = dict(jit_params or {})
         self._u = fem.Function(V, name="u_state")
         u, v, w = self._u, ufl.TestFunction(V), ufl.TrialFunction(V)
-        grad_u = ufl.grad(u)
         dx = ufl.dx(metadata=P1_EXACT)
-        energy = material.energy_density_sq(ufl.inner(grad_u, grad_u)) * dx
+        energy = material.energy_integrand(u) * dx
         residual = ufl.derivative(energy, u, v)
         self._ufl = {
             "energy": energy,
             "residual": residual,
             "ufl": ufl.derivative(residual, u, w),
-            "handwritten": ufl.inner(ufl.dot(material.tangent(grad_u), ufl.grad(w)), ufl.grad(v))
-            * dx,
-            "stiffness": ufl.inner(ufl.grad(w), ufl.grad(v)) * dx,
+            "handwritten": material.jacobian_integrand(u, w, v) * dx,
+            "stiffness": material.stiffness_integrand(w, v) * dx,
         }
         if f is not None:
             self._ufl["load"] = ufl.inner(as_ufl_data(f, self.mesh, what="f"), v) * ufl.dx(

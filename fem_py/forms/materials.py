@@ -58,7 +58,7 @@ import numpy as np
 
 from fem_py.forms.expressions import Expression, from_sympy
 
-__all__ = ["Material", "make_material", "BUILTIN_MATERIALS", "S0", "check_grid"]
+__all__ = ["Material", "make_material", "constant_material", "BUILTIN_MATERIALS", "S0", "check_grid"]
 
 #: Threshold on s = |grad u|^2 below which the quadratic branch is used (see module docstring).
 S0 = 1e-40
@@ -186,14 +186,22 @@ class Material:
         g2 = _evaluate(self._g2_term, {"s": s}, "ufl")
         return ufl.conditional(ufl.gt(s, S0), g2, 0.5 * self.rho0 * s)
 
+    def tangent_coefficients(self, s: Any) -> tuple[Any, Any]:
+        """UFL (c1, c2) = (rho(t), rho'(t)/t) at t = sqrt(s), s = |x|^2, and (rho(0), 0) at
+        s = 0: the tangent of x -> rho(|x|) x is c1 I + c2 x x^T, for a vector x or (the
+        deviator of an elastic strain, :mod:`fem_py.forms.elasticity`) a tensor."""
+        import ufl
+
+        t = ufl.sqrt(s)
+        c1 = ufl.conditional(ufl.gt(s, S0), self.rho(t), self.rho0)
+        c2 = ufl.conditional(ufl.gt(s, S0), self.drho(t) / t, 0.0)
+        return c1, c2
+
     def tangent(self, x: Any) -> Any:
         """UFL 2x2 tangent rho^(x) = rho(|x|) I + rho'(|x|) x x^T / |x| (4.1); rho(0) I at x = 0."""
         import ufl
 
-        s = ufl.inner(x, x)
-        t = ufl.sqrt(s)
-        c1 = ufl.conditional(ufl.gt(s, S0), self.rho(t), self.rho0)
-        c2 = ufl.conditional(ufl.gt(s, S0), self.drho(t) / t, 0.0)
+        c1, c2 = self.tangent_coefficients(ufl.inner(x, x))
         return c1 * ufl.Identity(ufl.shape(x)[0]) + c2 * ufl.outer(x, x)
 
     def flux(self, x: Any) -> Any:
@@ -202,6 +210,30 @@ class Material:
 
         s = ufl.inner(x, x)
         return ufl.conditional(ufl.gt(s, S0), self.rho(ufl.sqrt(s)), self.rho0) * x
+
+    # ------------------------------------------------------ the scalar equation's forms
+    #: unknowns per node: u is a scalar
+    components = 1
+
+    def energy_integrand(self, u: Any) -> Any:
+        """UFL g(|grad u|) (2.1), the integrand of G(u)."""
+        import ufl
+
+        grad_u = ufl.grad(u)
+        return self.energy_density_sq(ufl.inner(grad_u, grad_u))
+
+    def jacobian_integrand(self, u: Any, w: Any, v: Any) -> Any:
+        """UFL (rho^(grad u) grad w) . grad v, the hand-written D^2 G(u)(w, v) (4.1)."""
+        import ufl
+
+        return ufl.inner(ufl.dot(self.tangent(ufl.grad(u)), ufl.grad(w)), ufl.grad(v))
+
+    @staticmethod
+    def stiffness_integrand(w: Any, v: Any) -> Any:
+        """UFL grad w . grad v: the Laplace stiffness A_lap of the preconditioners (4.2)."""
+        import ufl
+
+        return ufl.inner(ufl.grad(w), ufl.grad(v))
 
 
 def _check_structure(
@@ -293,6 +325,12 @@ def _build(name: str, rho: Any) -> Material:
         beta=beta,
         _g2_term=g2,
     )
+
+
+def constant_material(value: float) -> Material:
+    """The linear material rho = ``value`` > 0 (g = value t^2 / 2), without sympy."""
+    c = repr(float(value))
+    return _builtin(f"constant({c})", c, f"{c}*t^2/2", "0", f"{c}*s/2")
 
 
 def make_material(
