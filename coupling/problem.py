@@ -111,11 +111,10 @@ class SignoriniProblem:
         tic = time.perf_counter()
         self.V = p1_space(domain.mesh, d)
         self.forms = InteriorForms(self.V, material, f, jacobian=jacobian)
-        nodal = boundary_map(self.V, domain)
+        # the nodes' map from the scalar space, whose dofs number the vector space's nodes
+        nodal = boundary_map(self.V if d == 1 else p1_space(domain.mesh), domain)
         self.boundary = nodal if d == 1 else BlockedBoundary(nodal, d)
-        self.gap = (
-            scalar_gap_map(nodal) if d == 1 else elastic_gap_map(self.boundary, tangential)
-        )
+        self.gap = scalar_gap_map(nodal) if d == 1 else elastic_gap_map(self.boundary, tangential)
         timings["forms"] = time.perf_counter() - tic
 
         tic = time.perf_counter()
@@ -124,7 +123,12 @@ class SignoriniProblem:
             boundary_operator, *nodes.shape, kernel=self.kernel
         )
         self.S = steklov_poincare(
-            self.comm, nodes, flux_space, self.boundary_operator, kernel=self.kernel, **self._surface
+            self.comm,
+            nodes,
+            flux_space,
+            self.boundary_operator,
+            kernel=self.kernel,
+            **self._surface,
         )
         timings["steklov_poincare"] = time.perf_counter() - tic
 

@@ -72,7 +72,7 @@ def apgpm(
     mu = strong_convexity
     grad = u_function.vector.duplicate()
     u_k = u_function.vector.array_r.copy()
-    phi_k = np.maximum(np.asarray(phi0, dtype=float), 0.0)
+    phi_k = projection.feasible(np.asarray(phi0, dtype=float))
     energy, g_phi = functional.value_and_gradient(u_function, phi_k, grad)
     g_u, gradient_at_xi_k = grad.array_r.copy(), True
     b_u = preconditioner.matvec_omega(u_k)  # carried along, as in PGPM

@@ -97,6 +97,7 @@ class Loop:
     ):
         self.tol, self.max_iterations, self.rule = context.tol, context.max_iterations, rule
         self.history = History(context.monitor)
+        self.bounded = context.projection.bounded  # the entries whose 0 is contact
         self.history.extend(history or [])
         self.first = first
         self.iterations = first - 1
@@ -131,7 +132,7 @@ class Loop:
         when it is at most ``tol`` and ``settled``; ``counts`` are the inner iteration
         fields of the record. Returns the relative step."""
         relative = relative_step(step2, norm2)
-        self.history.step(k, energy, relative, phi, tau, **counts)
+        self.history.step(k, energy, relative, phi[self.bounded], tau, **counts)
         if relative <= self.tol and settled:
             self.stop(self.rule, k)
         return relative

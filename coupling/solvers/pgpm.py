@@ -54,7 +54,7 @@ def pgpm(context: IterationContext, phi0: np.ndarray, *, tau: float) -> RunResul
     comm, u_function = context.comm, context.u
     grad = u_function.vector.duplicate()
     u_k = u_function.vector.array_r.copy()
-    phi_k = np.maximum(np.asarray(phi0, dtype=float), 0.0)
+    phi_k = projection.feasible(np.asarray(phi0, dtype=float))
     energy, g_phi = functional.value_and_gradient(u_function, phi_k, grad)
     g_u = grad.array_r.copy()
     b_u = preconditioner.matvec_omega(u_k)

@@ -91,6 +91,9 @@ class SignoriniProjection:
         A function returning M_s^{-1}, when the caller computes it once for both (the
         preconditioner's, :class:`coupling.preconditioners.base.DenseSignoriniBlock`);
         else the exact projection computes its own from the factor when it first needs it.
+    bounded
+        (n_s,) bool: the entries constrained to be >= 0; the others are free (the
+        tangential slips of elasticity, ``fem_py.boundary.blocked``). Default: all.
     """
 
     def __init__(
@@ -103,6 +106,7 @@ class SignoriniProjection:
         lambda_max: float | Callable[[], float] | None = None,
         factor: Callable[[], tuple[np.ndarray, bool]] | None = None,
         inverse: Callable[[], np.ndarray] | None = None,
+        bounded: np.ndarray | None = None,
     ):
         if method not in ("inexact", "exact"):
             raise ValueError(f'projection must be "inexact" or "exact", got {method!r}')
@@ -111,6 +115,7 @@ class SignoriniProjection:
         self.rho_in = rho_in
         self.max_iterations = max_iterations
         n = self.M.shape[0]
+        self.bounded = np.ones(n, dtype=bool) if bounded is None else np.asarray(bounded, bool)
         self._lambda_max = lambda_max
         self._theta: float | None = None if n > 0 else 0.0
         if factor is None and inverse is None:
@@ -127,9 +132,19 @@ class SignoriniProjection:
         self._inverse_of = inverse or (lambda: inverse_from_cholesky(self._cholesky()))
 
     @classmethod
-    def exact(cls, metric: np.ndarray) -> "SignoriniProjection":
+    def exact(cls, metric: np.ndarray, bounded: np.ndarray | None = None) -> "SignoriniProjection":
         """The exact projection (it has no tolerance or cap)."""
-        return cls(metric, "exact", rho_in=0.0, max_iterations=0)
+        return cls(metric, "exact", rho_in=0.0, max_iterations=0, bounded=bounded)
+
+    def feasible(self, phi: np.ndarray) -> np.ndarray:
+        """phi with its bounded entries clipped at 0: the pointwise projection onto K in the
+        Euclidean metric (a new array)."""
+        return np.where(self.bounded, np.maximum(phi, 0.0), phi)
+
+    def in_contact(self, phi: np.ndarray) -> np.ndarray:
+        """The bounded entries of phi that are 0 (the discrete contact set), one per entry
+        of ``phi[bounded]``."""
+        return phi[self.bounded] <= 0.0
 
     def as_exact(self) -> "SignoriniProjection":
         """The exact projection in the same metric: this one when it is exact, else one that
@@ -143,6 +158,7 @@ class SignoriniProjection:
             max_iterations=0,
             factor=self._cholesky if self._factor_of is not None else None,
             inverse=self._inverse_matrix,
+            bounded=self.bounded,
         )
 
     @property
@@ -251,9 +267,9 @@ class SignoriniProjection:
         q_start = (start - target) @ residual
         phi = start
         for i in range(1, self.max_iterations + 1):
-            phi = np.maximum(0.0, phi - self.theta * residual)
+            phi = self.feasible(phi - self.theta * residual)
             residual = self.M @ phi - M_target
-            lam = np.maximum(0.0, 2.0 * residual)
+            lam = np.where(self.bounded, np.maximum(0.0, 2.0 * residual), 0.0)
             m_inv_lam = self._solve(lam)
             q_lower = -lam @ target - 0.25 * lam @ m_inv_lam
             if (phi - target) @ residual <= (
@@ -325,26 +341,32 @@ class SignoriniProjection:
         """Primal-dual active set on min 1/2 psi^T M psi - b^T psi over psi >= 0 (b = M phi~):
         psi_A = 0, M_II psi_I = b_I, lam = M psi - b, from the last projection's active set
         (the first one from {b <= 0}, exact for a diagonal M)."""
-        M, n = self.M, b.size
+        M, n, bounded = self.M, b.size, self.bounded
         c = float(np.mean(M.diagonal()))
-        active = self._active.copy() if self._active is not None else b <= 0.0
+        active = self._active.copy() if self._active is not None else (b <= 0.0) & bounded
         for iteration in range(1, 4 * n + 10):
             free = ~active
             psi = self._solve_free(b, free)
             lam = M @ psi - b
             lam[free] = 0.0
-            new_active = lam - c * psi > 0
+            new_active = (lam - c * psi > 0) & bounded
             if np.array_equal(new_active, active):
                 self._active = active
-                return ProjectionResult(np.maximum(psi, 0.0), iteration)
+                return ProjectionResult(self.feasible(psi), iteration)
             active = new_active
         # The active-set iteration cycled (possible for matrices that are not M-matrices):
-        # min ||L^T psi - L^{-1} b|| over psi >= 0, M = L L^T
+        # min ||L^T psi - L^{-1} b|| over psi >= 0, M = L L^T, a free entry the difference
+        # of two nonnegative ones
         L = scipy.linalg.cholesky(np.asarray(M), lower=True)
-        psi, _ = scipy.optimize.nnls(
-            L.T, scipy.linalg.solve_triangular(L, b, lower=True), maxiter=50 * n
+        free_columns = L.T[:, ~bounded]
+        split, _ = scipy.optimize.nnls(
+            np.hstack([L.T, -free_columns]),
+            scipy.linalg.solve_triangular(L, b, lower=True),
+            maxiter=50 * n,
         )
-        self._active = psi <= 0
+        psi = split[:n]
+        psi[~bounded] -= split[n:]
+        self._active = (psi <= 0) & bounded
         return ProjectionResult(psi, iteration)
 
 

@@ -90,7 +90,9 @@ class Solution:
     stop_measure: float | None = None
 
 
-def build_projection(preconditioner: Preconditioner, options: SolverOptions) -> SignoriniProjection:
+def build_projection(
+    preconditioner: Preconditioner, options: SolverOptions, bounded: np.ndarray | None = None
+) -> SignoriniProjection:
     """P_s of ``options`` in the metric M_s of ``preconditioner`` (3.19)-(3.20), sharing
     its Cholesky factor of M_s and M_s^{-1} when it has them (a dense M_s's), each made when
     first needed; lambda_max(M_s) is computed only when the inexact projection first
@@ -106,6 +108,7 @@ def build_projection(preconditioner: Preconditioner, options: SolverOptions) -> 
         lambda_max=lambda: preconditioner.lambda_max_signorini,
         factor=(lambda: preconditioner.signorini_factor) if dense else None,
         inverse=(lambda: preconditioner.signorini_inverse) if dense else None,
+        bounded=bounded,
     )
 
 
@@ -123,7 +126,8 @@ def iteration_context(
     ``max_iterations`` and projection, :func:`build_projection`) on J_h = ``functional``
     (the problem's, or one that wraps it, as the baselines' budget does) from the
     iterate in ``u``; ``matrix``: a P1 Mat of the caller's for the Jacobians."""
-    projection = build_projection(preconditioner, options)
+    gap = getattr(functional, "gap", None)  # a wrapper of J_h (the baselines') has none
+    projection = build_projection(preconditioner, options, None if gap is None else gap.bounded)
     stop = dict(tol=options.tol, max_iterations=options.max_iterations)
     extra = dict(monitor=monitor, forms=forms, matrix=matrix)
     return IterationContext(functional, preconditioner, projection, u, **stop, **extra)
@@ -312,7 +316,7 @@ def solve(
         timings["exterior_flux"] = time.perf_counter() - tic
     return Solution(
         u=u,
-        contact=run.phi <= 0.0,
+        contact=run.phi[problem.gap.bounded] <= 0.0,
         boundary_u=boundary_u,
         ue=ue,
         flux=flux,

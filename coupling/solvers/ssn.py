@@ -318,7 +318,7 @@ def line_search(
     step = 1.0
     for _ in range(30):
         set_owned(u_function, u_old + step * d_u)
-        trial_phi = np.maximum(0.0, phi + step * d_phi)
+        trial_phi = context.projection.feasible(phi + step * d_phi)
         trial_energy, trial_g_phi = functional.value_and_gradient(u_function, trial_phi, grad)
         if not energy_increased(energy, trial_energy):
             break
@@ -377,7 +377,7 @@ def semismooth_newton(
         )
     else:  # Newton from xi_0 itself (a warm start): no PGPM run of no steps, whose set-up
         # would evaluate J_h and its gradient at xi_0 once more than below
-        phi, first, history, increases = np.maximum(np.asarray(phi0, dtype=float), 0.0), 1, [], 0
+        phi, first, history, increases = projection.feasible(np.asarray(phi0, float)), 1, [], 0
     grad = u_function.vector.duplicate()
     hessian = Hessian(context)
     energy, g_phi = functional.value_and_gradient(u_function, phi, grad)
@@ -398,7 +398,7 @@ def semismooth_newton(
     for k in loop.steps():
         g_u = grad.array_r.copy()
         predicted, residual = _predict(preconditioner, predictor, comm, g_u, g_phi, phi, tau)
-        new_active = predicted <= 0.0
+        new_active = (predicted <= 0.0) & projection.bounded
         active_changed = not np.array_equal(new_active, active)
         if norm2 is not None and not active_changed and tau * residual <= tol * np.sqrt(norm2):
             # the PGPM step from xi_k (B-norm tau r) meets the PGPM rule: no further step

@@ -86,9 +86,7 @@ class ElasticMaterial:
         import ufl
 
         trace, dev = self._parts(u)
-        return 0.5 * self.bulk * trace**2 + self.deviatoric.energy_density_sq(
-            ufl.inner(dev, dev)
-        )
+        return 0.5 * self.bulk * trace**2 + self.deviatoric.energy_density_sq(ufl.inner(dev, dev))
 
     def stress(self, u: Any) -> Any:
         """UFL sigma(u) = kappa tr(eps) I + 2 mu(|dev eps|) dev eps."""
@@ -141,15 +139,15 @@ def hencky(bulk: float, shear: float | str, dim: int) -> ElasticMaterial:
             raise ValueError(f"shear = {shear:g}: the shear modulus must be positive")
         return ElasticMaterial("hencky", bulk, constant_material(2.0 * float(shear)), dim)
     if not isinstance(shear, str) or not shear.strip():
-        raise ValueError("shear must be a positive number or an expression in s, e.g. 1 + 1/(1 + s)")
+        raise ValueError(
+            "shear must be a positive number or an expression in s, e.g. 1 + 1/(1 + s)"
+        )
     if re.search(r"\bt\b", shear):
         raise ValueError(f"shear = {shear!r}: the shear law is written in s = |dev eps|, not t")
     try:
         deviatoric = make_material("2*(" + re.sub(r"\bs\b", "t", shear) + ")")
     except ValueError as err:
-        raise ValueError(
-            f"shear = {shear!r} (rho(t) = 2 mu(t) below, t = s): {err}"
-        ) from None
+        raise ValueError(f"shear = {shear!r} (rho(t) = 2 mu(t) below, t = s): {err}") from None
     return ElasticMaterial("hencky", bulk, deviatoric, dim)
 
 

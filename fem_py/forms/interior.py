@@ -39,6 +39,7 @@ __all__ = [
     "spatial_variables",
     "as_ufl_data",
     "compile_form",
+    "matching_data",
     "InteriorForms",
     "assemble_boundary_load",
     "JACOBIANS",
@@ -99,12 +100,29 @@ def as_ufl_data(value: Any, mesh: Any, *, boundary: bool = False, what: str = "d
         return value
     if isinstance(value, (list, tuple)) and value:
         return ufl.as_vector(
-            [as_ufl_data(c, mesh, boundary=boundary, what=f"{what}[{k}]") for k, c in enumerate(value)]
+            [
+                as_ufl_data(c, mesh, boundary=boundary, what=f"{what}[{k}]")
+                for k, c in enumerate(value)
+            ]
         )
     raise ValueError(
         f"{what} must be a string expression, a number or a UFL expression, "
         f"got {type(value).__name__}"
     )
+
+
+def matching_data(value: Any, V: fem.FunctionSpace, what: str) -> Any:
+    """The UFL data ``value`` when it has the unknown's shape on ``V`` (a scalar, or d
+    components for elasticity), else a one-line ``ValueError`` naming ``what``."""
+    have, want = ufl.shape(value), V.ufl_element().value_shape()
+    if have != want:
+        n, m = (shape[0] if shape else 1 for shape in (have, want))
+        hint = f"a list of {m} expressions" if m > 1 else "one expression"
+        raise ValueError(
+            f"{what} has {n} component{'s' if n != 1 else ''}, the unknown {m}: give {what} as"
+            f" {hint}"
+        )
+    return value
 
 
 def compile_form(form: Any, jit_params: dict | None = None) -> fem.FormMetaClass:
@@ -177,7 +195,8 @@ class InteriorForms:
             "stiffness": material.stiffness_integrand(w, v) * dx,
         }
         if f is not None:
-            self._ufl["load"] = ufl.inner(as_ufl_data(f, self.mesh, what="f"), v) * ufl.dx(
+            f = matching_data(as_ufl_data(f, self.mesh, what="f"), V, "f")
+            self._ufl["load"] = ufl.inner(f, v) * ufl.dx(
                 domain=self.mesh, metadata=VOLUME_DATA_QUADRATURE
             )
         self._compiled: dict[str, Any] = {}
@@ -353,7 +372,6 @@ def assemble_boundary_load(
     boundary-order values are ``BoundaryMap.gather(m_t)``.
     """
     mesh = V.mesh
-    form = ufl.inner(as_ufl_data(t0, mesh, boundary=True, what="t0"), ufl.TestFunction(V)) * ufl.ds(
-        domain=mesh, metadata=DATA_QUADRATURE
-    )
+    t0 = matching_data(as_ufl_data(t0, mesh, boundary=True, what="t0"), V, "t0")
+    form = ufl.inner(t0, ufl.TestFunction(V)) * ufl.ds(domain=mesh, metadata=DATA_QUADRATURE)
     return assemble_linear_form(V, form, jit_params)

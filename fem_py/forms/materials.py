@@ -58,7 +58,14 @@ import numpy as np
 
 from fem_py.forms.expressions import Expression, from_sympy
 
-__all__ = ["Material", "make_material", "constant_material", "BUILTIN_MATERIALS", "S0", "check_grid"]
+__all__ = [
+    "Material",
+    "make_material",
+    "constant_material",
+    "BUILTIN_MATERIALS",
+    "S0",
+    "check_grid",
+]
 
 #: Threshold on s = |grad u|^2 below which the quadratic branch is used (see module docstring).
 S0 = 1e-40
