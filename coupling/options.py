@@ -30,6 +30,8 @@ __all__ = [
     "SolverOptions",
     "solver_options",
     "MaterialOptions",
+    "ProblemOptions",
+    "ExteriorOptions",
     "DataOptions",
     "AdaptOptions",
     "OutputOptions",
@@ -46,11 +48,26 @@ def _toml(value: Any) -> Any:
 
 #: Every key of the schema with its default value.
 DEFAULTS: dict[str, dict[str, Any]] = {
+    # the equation: the paper's scalar one, or elasticity (docs/method.md section 12)
+    "problem": {"equation": "scalar", "tangential": "slip"},
     # the fields of GeometrySpec, but its dimension (derived from the shape or mesh file)
     "geometry": {
         f.name: _toml(f.default) for f in dataclasses.fields(GeometrySpec) if f.name != "dim"
     },
-    "material": {"rho": "linear", "p": 2.0, "eps": 1.0},
+    # rho, p, eps: the scalar equation's; the others elasticity's (shear: a number or an
+    # expression in s = |dev eps|)
+    "material": {
+        "rho": "linear",
+        "p": 2.0,
+        "eps": 1.0,
+        "model": "linear-elastic",
+        "E": 1.0,
+        "nu": 0.3,
+        "bulk": 1.0,
+        "shear": 1.0,
+    },
+    # the exterior elastic medium (elasticity)
+    "exterior": {"E": 1.0, "nu": 0.3},
     "data": {"f": "0", "u0": "0", "t0": "0", "a": 0.0, "exact": ""},
     "solver": {
         "method": "ssn",
@@ -82,10 +99,19 @@ DEFAULTS: dict[str, dict[str, Any]] = {
 
 #: The tangential condition of the elastic problem on Gamma_s (docs/method.md section 12):
 #: "slip" (frictionless) or "stick" (no slip).
-DEFAULT_TANGENTIAL = "slip"
+DEFAULT_TANGENTIAL = DEFAULTS["problem"]["tangential"]
+#: The keys of [material] that belong to the scalar equation and to elasticity.
+SCALAR_MATERIAL_KEYS = ("rho", "p", "eps")
+ELASTIC_MATERIAL_KEYS = {
+    "linear-elastic": ("model", "E", "nu"),
+    "hencky": ("model", "bulk", "shear"),
+}
 
 #: Keys whose value must be one of a fixed set of strings.
 CHOICES: dict[tuple[str, str], tuple[str, ...]] = {
+    ("problem", "equation"): ("scalar", "elasticity"),
+    ("problem", "tangential"): ("slip", "stick"),
+    ("material", "model"): ("linear-elastic", "hencky"),
     ("geometry", "shape"): ("square", "lshape", "polygon", "disk", "ellipse", "box", "ball"),
     ("geometry", "subdomains"): ("auto", "physical"),
     ("solver", "method"): ("pgpm", "apgpm", "ssn"),
@@ -319,27 +345,54 @@ def _section(name: str) -> Any:
     return make
 
 
+@_section("problem")
+class ProblemOptions:
+    """The ``[problem]`` section: the ``equation`` (``"scalar"``, the paper's, or
+    ``"elasticity"``, docs/method.md section 12) and, for elasticity, the ``tangential``
+    condition on Gamma_s (``"slip"``: frictionless; ``"stick"``: no slip)."""
+
+    equation: str
+    tangential: str
+
+
 @_section("material")
 class MaterialOptions:
-    """The ``[material]`` section: the built-in material ``rho`` (``linear``,
-    ``carstensen``, ``power`` or an expression in t) and the power law's ``p`` and
-    ``eps`` (``fem_py.forms.make_material``)."""
+    """The ``[material]`` section: the scalar equation's built-in material ``rho``
+    (``linear``, ``carstensen``, ``power`` or an expression in t) and the power law's ``p``
+    and ``eps`` (``fem_py.forms.make_material``); elasticity's ``model``
+    (``"linear-elastic"`` with ``E``, ``nu``; ``"hencky"`` with ``bulk`` and ``shear``, a
+    number or an expression in s; ``fem_py.forms.elasticity``)."""
 
     rho: str
     p: float
     eps: float
+    model: str
+    E: float
+    nu: float
+    bulk: float
+    shear: float | str
+
+
+@_section("exterior")
+class ExteriorOptions:
+    """The ``[exterior]`` section: Young's modulus ``E`` and Poisson's ratio ``nu`` of the
+    unbounded elastic medium (elasticity)."""
+
+    E: float
+    nu: float
 
 
 @_section("data")
 class DataOptions:
     """The ``[data]`` section: the expressions f, u0, t0 (:data:`DATA_VARIABLES`), the
     constant ``a`` of the exterior solution and the exact interior solution ``exact``
-    ("" when none is known)."""
+    ("" when none is known). For elasticity f, u0, t0 and a are vectors: tuples of d
+    expressions (numbers for a), the defaults zero vectors."""
 
-    f: str
-    u0: str
-    t0: str
-    a: float
+    f: str | tuple[str, ...]
+    u0: str | tuple[str, ...]
+    t0: str | tuple[str, ...]
+    a: float | tuple[float, ...]
     exact: str
 
 
@@ -390,8 +443,10 @@ class RunConfig:
     the library below the application takes the sections it needs, never the whole.
     """
 
+    problem: ProblemOptions = field(default_factory=ProblemOptions)
     geometry: GeometrySpec = field(default_factory=GeometrySpec)
     material: MaterialOptions = field(default_factory=MaterialOptions)
+    exterior: ExteriorOptions = field(default_factory=ExteriorOptions)
     data: DataOptions = field(default_factory=DataOptions)
     solver: SolverOptions = field(default_factory=SolverOptions)
     adapt: AdaptOptions = field(default_factory=AdaptOptions)

@@ -46,13 +46,23 @@ class SignoriniProblem:
         ``fem_py.mesh.SolidDomain`` (3D: the boundary map is the ``SurfaceMap``, S_h the
         3D operator of bem_cpp on its triangles, docs/method.md section 11).
     material
-        ``fem_py.forms.materials.Material`` (rho).
+        ``fem_py.forms.materials.Material`` (rho), or for elasticity an
+        ``fem_py.forms.elasticity.ElasticMaterial`` (docs/method.md section 12): u is then
+        the displacement (d components per node) and the problem's ``equation``
+        ``"elasticity"``.
     f, u0, t0
         Data as expression strings (fem_py parser, in x, y (z); u0 and t0 may use nx,
         ny (nz)), UFL
-        expressions, or (u0) a callable of boundary coordinates.
+        expressions, or (u0) a callable of boundary coordinates; for elasticity lists of
+        d of them (the components). None (the default): zero.
     a
-        The constant of (1.3).
+        The constant of (1.3); for elasticity the translation at infinity (d numbers).
+    exterior
+        Elasticity: (E, nu) of the exterior medium (Kelvin's kernel of the boundary
+        operators); None for the scalar equation.
+    tangential
+        Elasticity: ``"slip"`` (frictionless) or ``"stick"`` on Gamma_s
+        (``fem_py.boundary.blocked``).
     flux_space
         The space of the exterior normal derivative: ``"p1"`` or ``"p0"`` (bem_cpp).
     jacobian
@@ -74,7 +84,13 @@ class SignoriniProblem:
     boundary_operator
         The S_h chosen: ``"dense"`` or ``"hmatrix"``.
     u0
-        u0 at the boundary nodes (boundary order).
+        u0 at the boundary nodes (boundary order; node-major, d n, for elasticity).
+    equation, kernel
+        ``"scalar"`` or ``"elasticity"``; the boundary operators' kernel (``"laplace"`` or
+        ``("lame", E, nu)``).
+    gap
+        E of the gap unknowns (``fem_py.boundary.blocked.GapMap``): phi at the Signorini
+        nodes, or the elastic gaps in the nodal normal frame.
     functional
         J_h (:class:`coupling.functional.CoupledFunctional`).
     timings
@@ -86,9 +102,9 @@ class SignoriniProblem:
         domain: Any,
         material: Any,
         *,
-        f: Any = "0",
-        u0: Any = "0",
-        t0: Any = "0",
+        f: Any = None,
+        u0: Any = None,
+        t0: Any = None,
         a: Any = 0.0,
         exterior: tuple[float, float] | None = None,
         tangential: str = DEFAULT_TANGENTIAL,
@@ -133,8 +149,9 @@ class SignoriniProblem:
         timings["steklov_poincare"] = time.perf_counter() - tic
 
         tic = time.perf_counter()
-        self.u0 = self.boundary.interpolate_boundary(u0)
-        m_t = self.forms.boundary_load(t0, self.boundary)
+        zero = np.zeros(self.boundary.n_gamma)
+        self.u0 = zero if u0 is None else self.boundary.interpolate_boundary(u0)
+        m_t = zero if t0 is None else self.forms.boundary_load(t0, self.boundary)
         s_0 = self.S @ (self.a_trace + self.u0)
         self.functional = CoupledFunctional(
             self.forms,
@@ -168,6 +185,11 @@ class SignoriniProblem:
         """The number of gap unknowns: n_s (phi, or the elastic normal gaps of "stick"), or
         d n_s (the elastic gaps of "slip", :mod:`fem_py.boundary.blocked`)."""
         return self.gap.size
+
+    @property
+    def n_dofs(self) -> int:
+        """The global number of unknowns of u: N nodes, times d for elasticity."""
+        return int(self.V.dofmap.index_map.size_global * self.components)
 
     @property
     def components(self) -> int:

@@ -398,7 +398,7 @@ def test_configuration_reference_documents_every_key_with_its_default():
     rows = {
         m.group(1): (tomllib.loads(f"v = {m.group(2)}")["v"], m.group(3))
         for m in re.finditer(
-            r"^\| `([a-z_0-9]+\.[a-z_0-9]+)` \| `([^`]*)` \|.*\| ((?:[^|\\]|\\.)*) \|$",
+            r"^\| `([a-z_0-9]+\.[A-Za-z_0-9]+)` \| `([^`]*)` \|.*\| ((?:[^|\\]|\\.)*) \|$",
             page,
             re.M,
         )

@@ -72,13 +72,14 @@ class Estimate:
 
 def contact_pressure(problem: Any, u: Any) -> np.ndarray:
     """lambda_h at the boundary nodes: (A(u_h) - b_f)_i / m_i with the lumped boundary mass
-    m_i (as coupling.io.quantities.boundary_flux; collective)."""
+    m_i (as coupling.io.quantities.boundary_flux; collective); for elasticity the traction
+    sigma(u_h) n, node-major (d n,)."""
     residual = problem.functional.load.duplicate()
     problem.forms.assemble_residual(u, residual)
     residual.axpy(-1.0, problem.functional.load)
     r = problem.boundary.gather(residual)
     residual.destroy()
-    return r / problem.boundary.lumped_mass
+    return r / np.repeat(problem.boundary.lumped_mass, problem.components)
 
 
 def _bisected(nodes: np.ndarray) -> np.ndarray:

@@ -49,7 +49,7 @@ class Level:
         cells = p.V.mesh.topology.index_map(2).size_global
         return {
             "level": self.level,
-            "dofs": int(p.V.dofmap.index_map.size_global),
+            "dofs": p.n_dofs,
             "boundary_dofs": int(p.boundary.n_gamma),
             "signorini_dofs": int(p.n_signorini),
             "cells": int(cells),

@@ -21,9 +21,13 @@ from coupling.options import (
     DATA_VARIABLES,
     DATA_VARIABLES_3D,
     DEFAULTS,
+    ELASTIC_MATERIAL_KEYS,
+    SCALAR_MATERIAL_KEYS,
     AdaptOptions,
     DataOptions,
+    ExteriorOptions,
     MaterialOptions,
+    ProblemOptions,
     OutputOptions,
     RunConfig,
     parse_slice,
@@ -55,6 +59,10 @@ _POSITIVE = {
     ("solver", "projection_max_iterations"),
     ("solver", "signorini_weight"),
     ("material", "eps"),
+    ("material", "E"),
+    ("material", "bulk"),
+    ("material", "shear"),
+    ("exterior", "E"),
     ("adapt", "max_dofs"),
 }
 
@@ -86,6 +94,12 @@ def _check_value(section: str, key: str, value: Any) -> Any:
         raise ConfigError(f'{name} must be "auto" or a positive number, got {value!r}')
     if (section, key) == ("geometry", "signorini"):
         return _check_signorini(value)
+    if section == "data" and key in VECTOR_DATA and isinstance(value, list):
+        return _vector(name, value, key == "a")
+    if (section, key) == ("material", "shear") and isinstance(value, str):
+        if not value.strip():
+            raise ConfigError(f"{name} must be a positive number or an expression in s")
+        return value
     if isinstance(default, bool):
         if not isinstance(value, bool):
             raise ConfigError(f"{name} must be true or false, got {value!r}")
@@ -113,6 +127,8 @@ def _check_value(section: str, key: str, value: Any) -> Any:
         value = _semi_axes(name, value)
     if (section, key) == ("geometry", "vertices"):
         value = [_point(f"{name}[{i}]", v) for i, v in enumerate(value)]
+    if key == "nu" and not -1.0 < value < 0.5:
+        raise ConfigError(f"{name} (Poisson's ratio) must lie in (-1, 1/2), got {value!r}")
     if (section, key) == ("solver", "projection_tol") and not 0 <= value < 1:
         raise ConfigError(f"{name} (rho_in of (3.6)) must lie in [0, 1), got {value!r}")
     if (section, key) == ("adapt", "theta") and not 0 < value <= 1:
@@ -125,6 +141,25 @@ def _check_value(section: str, key: str, value: Any) -> Any:
     if (section, key) == ("adapt", "steps") and value < 0:
         raise ConfigError(f"{name} must be >= 0 (0: no adaptive refinement), got {value!r}")
     return value
+
+
+#: The [data] keys that are vectors for elasticity (lists of d expressions; of numbers for a).
+VECTOR_DATA = ("f", "u0", "t0", "a")
+
+
+def _vector(name: str, value: list, numbers: bool) -> list:
+    """A vector of [data] (elasticity): 2 or 3 expressions, or numbers for ``a``."""
+    kind = "numbers" if numbers else "expressions (strings)"
+    valid = (
+        (lambda c: isinstance(c, (int, float)) and not isinstance(c, bool) and math.isfinite(c))
+        if numbers
+        else (lambda c: isinstance(c, str) and c.strip() != "")
+    )
+    if len(value) not in (2, 3) or not all(valid(c) for c in value):
+        raise ConfigError(
+            f"{name} must be a vector of 2 or 3 {kind}, one per component, got {value!r}"
+        )
+    return [float(c) for c in value] if numbers else list(value)
 
 
 def _point(name: str, value: Any, sizes: tuple[int, ...] = (2,)) -> list[float]:
@@ -228,10 +263,13 @@ def _typed(config: dict[str, dict[str, Any]]) -> RunConfig:
         "semi_axes": tuple(g["semi_axes"]),
         "signorini": signorini if signorini == "all" else tuple(signorini),
     }
+    data = {k: tuple(v) if isinstance(v, list) else v for k, v in config["data"].items()}
     return RunConfig(
+        problem=ProblemOptions(**config["problem"]),
         geometry=GeometrySpec(**geometry),
         material=MaterialOptions(**config["material"]),
-        data=DataOptions(**config["data"]),
+        exterior=ExteriorOptions(**config["exterior"]),
+        data=DataOptions(**data),
         solver=solver_options(config["solver"]),
         adapt=AdaptOptions(**config["adapt"]),
         output=OutputOptions(**config["output"]),
@@ -263,6 +301,7 @@ def _checked(raw: dict[str, Any]) -> dict[str, dict[str, Any]]:
             'solver.preconditioner = "exact" factors the dense S_h; set solver.boundary_operator '
             '= "dense" (or "auto" for small boundaries) or use another preconditioner'
         )
+    _check_equation_keys(config, raw)
     if config["adapt"]["steps"] > 0 and raw.get("solver", {}).get("nested") is not True:
         solver["nested"] = False  # the default (true) applies to plain solves only
     geometry = config["geometry"]
@@ -273,6 +312,67 @@ def _checked(raw: dict[str, Any]) -> dict[str, dict[str, Any]]:
             'counter-clockwise order when geometry.shape = "polygon"'
         )
     return config
+
+
+def _check_equation_keys(config: dict[str, dict[str, Any]], raw: dict[str, Any]) -> None:
+    """The keys of one equation refused with the other (each in one line): the elastic
+    material keys, [exterior], problem.tangential and vector data with the scalar equation;
+    the scalar material keys, scalar data (f, u0, t0, a given as one value), the exact
+    solution, adaptivity, the estimator and the scalar preconditioners with elasticity; an
+    elastic model's keys with the other model."""
+    given = {section: set(table) for section, table in raw.items() if isinstance(table, dict)}
+    material, data = given.get("material", set()), given.get("data", set())
+    if config["problem"]["equation"] == "scalar":
+        elastic = sorted(material - set(SCALAR_MATERIAL_KEYS))
+        wrong = [f"material.{elastic[0]} is a key"] if elastic else []
+        wrong += ["[exterior] is a section"] if "exterior" in given else []
+        if "tangential" in given.get("problem", set()):
+            wrong += ["problem.tangential is a key"]
+        vectors = [k for k in VECTOR_DATA if isinstance(config["data"][k], list)]
+        wrong += [f"data.{k} is a vector: a value" for k in vectors]
+        if wrong:
+            raise ConfigError(
+                f'{wrong[0]} of elasticity; set problem.equation = "elasticity" or drop it'
+            )
+        return
+    scalar = [k for k in SCALAR_MATERIAL_KEYS if k in material]
+    if scalar:
+        raise ConfigError(
+            f"material.{scalar[0]} belongs to the scalar equation; elasticity takes "
+            'material.model = "linear-elastic" (E, nu) or "hencky" (bulk, shear)'
+        )
+    model = config["material"]["model"]
+    other = sorted(material - set(ELASTIC_MATERIAL_KEYS[model]))
+    if other:
+        keys = ", ".join(ELASTIC_MATERIAL_KEYS[model][1:])
+        raise ConfigError(
+            f'material.{other[0]} is not a key of model "{model}", which takes {keys}; drop it'
+            " or change material.model"
+        )
+    for key in VECTOR_DATA:
+        if key in data and not isinstance(config["data"][key], list):
+            example = "[0.0, 0.0]" if key == "a" else '["0", "-1"]'
+            raise ConfigError(
+                f"data.{key} must be a vector for elasticity, one entry per component (e.g. "
+                f"{example}), got {config['data'][key]!r}"
+            )
+    refused = {
+        ("data", "exact"): "the exact solution is compared for the scalar equation only; drop"
+        " data.exact",
+        ("adapt", "steps"): "adaptivity is for the scalar equation so far; set adapt.steps = 0",
+        ("output", "estimator"): "the a posteriori estimator is for the scalar equation so"
+        " far; set output.estimator = false",
+        ("output", "indicators"): "the a posteriori estimator is for the scalar equation so"
+        " far; set output.indicators = false",
+    }
+    for (section, key), why in refused.items():
+        if config[section][key] != DEFAULTS[section][key]:
+            raise ConfigError(f"{section}.{key}: {why}")
+    if config["solver"]["preconditioner"] in ("substructuring", "exact"):
+        raise ConfigError(
+            f'solver.preconditioner = "{config["solver"]["preconditioner"]}" is a preconditioner'
+            ' of the scalar equation; for elasticity use "auto" or "amg"'
+        )
 
 
 def _closest(word: str, choices: list[str]) -> str | None:
@@ -380,7 +480,8 @@ def apply_override(raw: dict[str, Any], assignment: str) -> None:
         isinstance(DEFAULTS.get(section, {}).get(key), str)
         and not isinstance(value, str)
         and (section, key) != ("solver", "step")
-    ):  # step: "auto" or a number
+        and not (section == "data" and key in VECTOR_DATA and isinstance(value, list))
+    ):  # step: "auto" or a number; a vector of data: a list
         value = rhs.strip()
     raw.setdefault(section, {})
     if not isinstance(raw[section], dict):
@@ -444,6 +545,9 @@ def check_data_and_material(config: RunConfig) -> None:
     cell = ufl.tetrahedron if dim == 3 else ufl.triangle
     domain = ufl.Mesh(ufl.VectorElement("Lagrange", cell, 1))
     values = spatial_variables(domain, boundary=True)
+    if config.problem.equation == "elasticity":
+        _check_elastic_data_and_material(config, dim, values)
+        return
     for key, names in (DATA_VARIABLES_3D if dim == 3 else DATA_VARIABLES).items():
         text = getattr(config.data, key)
         if key == "exact" and not text:
@@ -462,6 +566,37 @@ def check_data_and_material(config: RunConfig) -> None:
             "rho",
         )
         raise ConfigError(f"material.{key}: {err}") from None
+
+
+def _check_elastic_data_and_material(config: RunConfig, dim: int, values: dict) -> None:
+    """:func:`check_data_and_material` for elasticity: d components of every vector of
+    [data] (given vectors; the defaults are zero vectors), each expression parsed, and the
+    elastic material and the exterior medium built."""
+    from fem_py.forms import parse_expression
+    from fem_py.forms.elasticity import hencky, linear_elastic
+
+    table = DATA_VARIABLES_3D if dim == 3 else DATA_VARIABLES
+    for key in VECTOR_DATA:
+        value = getattr(config.data, key)
+        if isinstance(value, tuple) and len(value) != dim:
+            raise ConfigError(
+                f"data.{key} has {len(value)} components; a {dim}D displacement has {dim}"
+            )
+        if key == "a" or isinstance(value, str):
+            continue
+        for k, text in enumerate(value):
+            try:
+                parse_expression(text, {name: values[name] for name in table[key]})
+            except ValueError as err:
+                raise ConfigError(f"data.{key}[{k}]: {err}") from None
+    m = config.material
+    try:  # the messages start with the key: "bulk = 0: ...", "shear = '...': ..."
+        if m.model == "hencky":
+            hencky(m.bulk, m.shear, dim)
+        else:
+            linear_elastic(m.E, m.nu, dim)
+    except ValueError as err:
+        raise ConfigError(f"material.{err}") from None
 
 
 def _check_solid_options(config: RunConfig) -> None:

@@ -122,12 +122,26 @@ def coarser_configs(
     return levels[::-1]
 
 
-def material_from_config(config: RunConfig) -> Any:
-    """The ``fem_py.forms.Material`` of a validated configuration."""
+def material_from_config(config: RunConfig, dim: int = 2) -> Any:
+    """The ``fem_py.forms.Material`` of a validated configuration, or for elasticity the
+    ``fem_py.forms.elasticity.ElasticMaterial`` of a ``dim``-dimensional body."""
     from fem_py.forms import make_material
+    from fem_py.forms.elasticity import hencky, linear_elastic
 
     m = config.material
+    if config.problem.equation == "elasticity":
+        if m.model == "hencky":
+            return hencky(m.bulk, m.shear, dim)
+        return linear_elastic(m.E, m.nu, dim)
     return make_material(m.rho, p=m.p, eps=m.eps)
+
+
+def _data(value: Any, components: int) -> Any:
+    """A [data] value for ``components`` unknowns per node: a vector as a list; a
+    default (one "0" or 0.0) repeated for every component of elasticity."""
+    if isinstance(value, tuple):
+        return list(value)
+    return value if components == 1 else [value] * components
 
 
 def problem_on_domain(
@@ -136,13 +150,18 @@ def problem_on_domain(
     """The assembled problem on ``domain``, the solver options and the problem's stage
     timings, for a validated configuration (collective)."""
     data, options = config.data, config.solver
+    material = material_from_config(config, domain.dim)
+    d = material.components
+    elastic = d > 1
     problem = SignoriniProblem(
         domain,
-        material_from_config(config),
-        f=data.f,
-        u0=data.u0,
-        t0=data.t0,
-        a=data.a,
+        material,
+        f=_data(data.f, d),
+        u0=_data(data.u0, d),
+        t0=_data(data.t0, d),
+        a=_data(data.a, d),
+        exterior=(config.exterior.E, config.exterior.nu) if elastic else None,
+        tangential=config.problem.tangential,
         flux_space=options.flux_space,
         jacobian=options.jacobian,
         boundary_operator=options.boundary_operator,

@@ -49,7 +49,7 @@ class ProgressMonitor:
             else ""
         )
         self.stage(
-            f"{problem.V.dofmap.index_map.size_global} dofs, {problem.boundary.n_gamma} on "
+            f"{problem.n_dofs} dofs, {problem.boundary.n_gamma} on "
             f"Gamma, {problem.n_signorini} Signorini unknowns, {partition}h from "
             f"{facts['h_min']:.4g} to {facts['h_max']:.4g}"
         )

@@ -72,7 +72,7 @@ def run_solver(
     data, settings, options = config.data, config.adapt, config.solver
     exact = data.exact
     if settings.steps > 0:
-        dofs = problem.V.dofmap.index_map.size_global
+        dofs = problem.n_dofs
         if dofs > settings.max_dofs:
             raise ConfigError(
                 f"adapt.max_dofs = {settings.max_dofs} is below the starting "
@@ -109,7 +109,7 @@ def run_solver(
             last.error,
         )
     records = None
-    dofs = problem.V.dofmap.index_map.size_global
+    dofs = problem.n_dofs
     levels = coarser_configs(config, dofs) if options.nested else []
     coarser = [_level_builder(comm, c) for c in levels]
     if coarser:  # a nested solve needs a coarser level (none for small or imported meshes)

@@ -43,7 +43,13 @@ from coupling.io.plots import (
     write_pngs,
 )
 from coupling.io.xdmf import gather_xdmf_inputs, owned_cell_tags, write_solution_xdmf
-from coupling.io.quantities import boundary_flux, complementarity, far_field_coefficient
+from coupling.io.quantities import (
+    boundary_flux,
+    complementarity,
+    elastic_boundary_fields,
+    far_field_coefficient,
+    net_force,
+)
 from coupling.options import OutputOptions, RunConfig
 from fem_py.dofs import gather_cells, gather_p1, gather_p1_and_cells
 from fem_py.mesh import mesh_facts
@@ -69,20 +75,28 @@ def summary(problem, result, timings: Mapping[str, float], pressure: np.ndarray)
     """The contents of summary.json (without ``config`` and ``files``); ``pressure`` is
     :func:`coupling.io.quantities.boundary_flux` (boundary order). The far field's leading
     coefficient is ``b`` (of log|x|) in 2D, ``c`` (of 1/|x|) in 3D."""
-    far_name, far_value = far_field_coefficient(problem, result)
+    if problem.components > 1:
+        on_gamma = elastic_boundary_fields(problem, result, pressure)
+        signorini = problem.boundary.signorini
+        far_name, far_value = "force", net_force(problem, result)
+        contact = complementarity(on_gamma["phi"][signorini], on_gamma["pressure"][signorini])
+    else:
+        far_name, far_value = far_field_coefficient(problem, result)
+        contact = complementarity(result.phi, pressure[problem.boundary.signorini])
     return {
+        "equation": problem.equation,
         "converged": bool(result.converged),
         "reason": result.reason,
         "iterations": int(result.iterations),
         "energy": float(result.energy),
-        "dofs": int(problem.V.dofmap.index_map.size_global),
+        "dofs": problem.n_dofs,
         "boundary_dofs": int(problem.boundary.dofs.size),
         "signorini_dofs": int(problem.n_signorini),
         "contact_nodes": int(np.count_nonzero(result.contact)),
         "tau": float(result.tau),
         "C0_estimate": float(result.C0),
         "energy_increases": int(result.energy_increases),
-        "complementarity": complementarity(result.phi, pressure[problem.boundary.signorini]),
+        "complementarity": contact,
         far_name: far_value,
         "mpi_ranks": int(problem.comm.size),
         "timings": {k: float(v) for k, v in timings.items()},
@@ -100,12 +114,19 @@ def boundary_fields(problem, result, pressure: np.ndarray) -> dict[str, np.ndarr
     Gamma_s).
     """
     boundary = problem.boundary
+    surface = getattr(boundary, "triangles", None)  # 3D: Gamma_h's triangles
+    if problem.components > 1:
+        return dict(
+            **({} if surface is None else {"boundary_triangles": surface}),
+            boundary_x=boundary.nodes,
+            dn_ue=np.asarray(result.flux).reshape(-1, problem.components),
+            **elastic_boundary_fields(problem, result, pressure),
+        )
     n = boundary.n_gamma
     phi, active, signorini = np.zeros(n), np.zeros(n, bool), np.zeros(n, bool)
     phi[boundary.signorini] = result.phi
     active[boundary.signorini] = result.contact
     signorini[boundary.signorini] = True
-    surface = getattr(boundary, "triangles", None)  # 3D: Gamma_h's triangles
     return dict(
         **({} if surface is None else {"boundary_triangles": surface}),
         boundary_x=boundary.nodes,
@@ -184,6 +205,14 @@ class RunOutputs:
         release_free_memory()  # the solve's freed memory, before the outputs' (fem_py.memory)
         self._problem, self._result = problem, result
         solid = problem.domain.dim == 3
+        if problem.components > 1 and self.plots:  # the elastic figures are not drawn yet
+            self.plots = False
+            if self.comm.rank == 0:
+                print(
+                    "fembem: note: the figures of the elastic problem are not drawn yet; "
+                    "writing summary.json, fields.npz and solution.xdmf",
+                    file=sys.stderr,
+                )
         self._pressure = boundary_flux(problem, result)
         if self.comm.rank == 0:
             on_gamma = dict(
@@ -319,7 +348,7 @@ class RunOutputs:
             if levels is not None:  # a nested or adaptive solve: one record per level
                 record["levels"] = levels
             if config is not None:
-                record["preconditioner"] = _preconditioner_run(config, problem.domain.dim)
+                record["preconditioner"] = _preconditioner_run(config, problem)
                 record["config"] = config.as_dict()
             record["files"] = sorted(names + ["summary.json"])
             # last, so that a summary.json names a complete set of files
@@ -364,13 +393,13 @@ def _with_samples(inputs: FigureInputs, samples: Future) -> FigureInputs:
     return inputs._replace(exterior_points=points, exterior_ue=ue)
 
 
-def _preconditioner_run(config: RunConfig, dim: int) -> str:
+def _preconditioner_run(config: RunConfig, problem) -> str:
     """The preconditioner the run used: ``[solver] preconditioner`` with ``"auto"``
-    resolved for Omega's dimension ``dim`` (substructuring in 2D, amg in 3D;
-    :func:`coupling.preconditioners.preconditioner_kind`)."""
+    resolved for Omega's dimension and the equation (substructuring in 2D, amg in 3D and
+    for elasticity; :func:`coupling.preconditioners.preconditioner_kind`)."""
     from coupling.preconditioners import preconditioner_kind
 
-    return preconditioner_kind(config.solver.preconditioner, dim)
+    return preconditioner_kind(config.solver.preconditioner, problem.domain.dim, problem.components)
 
 
 def _write_fields(out: Path, fields: dict) -> None:

@@ -10,7 +10,14 @@ import numpy as np
 
 from coupling.adapt.estimator import contact_pressure
 
-__all__ = ["boundary_flux", "complementarity", "log_coefficient", "far_field_coefficient"]
+__all__ = [
+    "boundary_flux",
+    "complementarity",
+    "log_coefficient",
+    "far_field_coefficient",
+    "net_force",
+    "elastic_boundary_fields",
+]
 
 
 def boundary_flux(problem: Any, solution: Any) -> np.ndarray:
@@ -62,6 +69,51 @@ def far_field_coefficient(problem: Any, solution: Any) -> tuple[str, float]:
     flux = np.asarray(solution.flux, dtype=float)
     weights = boundary.triangle_areas if problem.flux_space == "p0" else boundary.lumped_mass
     return "c", float(-(flux @ weights) / (4.0 * np.pi))
+
+
+def _flux_weights(problem: Any) -> np.ndarray:
+    """The integrals of the flux space's basis functions over Gamma: the lumped P1 mass, or
+    the panels' lengths (2D) and the triangles' areas (3D) of P0."""
+    boundary = problem.boundary
+    if problem.flux_space == "p1":
+        return boundary.lumped_mass
+    return boundary.panel_lengths if problem.domain.dim == 2 else boundary.triangle_areas
+
+
+def net_force(problem: Any, solution: Any) -> list[float]:
+    """F = -int_Gamma sigma_e(u_e) n ds (n out of Omega; elasticity): the net force the body
+    exerts on the medium through Gamma, the force of the far field u_e = a + U(x) F + ...
+    (docs/method.md section 12), from the traction's coefficients integrated exactly in
+    their space."""
+    d = problem.components
+    flux = np.asarray(solution.flux, dtype=float).reshape(-1, d)
+    return [float(-v) + 0.0 for v in flux.T @ _flux_weights(problem)]
+
+
+def elastic_boundary_fields(problem: Any, solution: Any, traction: np.ndarray) -> dict:
+    """The boundary arrays of an elastic run (boundary order; n nodes, d components):
+    ``traction`` sigma(u_h) n (n, d) from :func:`boundary_flux`, ``pressure`` its normal
+    component n.sigma n (n,), the jump ``jump`` = u_e + u0 - u (n, d) and its normal
+    component ``phi`` (n,), ``ue`` (n, d), ``active`` (Signorini nodes in contact) and
+    ``signorini`` (nodes with a gap unknown), with the nodal normals of the gap map."""
+    boundary, d = problem.boundary, problem.components
+    n = boundary.n_nodes
+    normals = boundary.node_normals
+    traction = np.asarray(traction, dtype=float).reshape(n, d)
+    jump = problem.gap.extend(np.zeros(n * d), solution.phi).reshape(n, d)
+    active, signorini = np.zeros(n, bool), np.zeros(n, bool)
+    active[boundary.signorini] = solution.contact
+    signorini[boundary.signorini] = True
+    return dict(
+        boundary_u=solution.boundary_u.reshape(n, d),
+        traction=traction,
+        pressure=np.einsum("ij,ij->i", traction, normals),
+        jump=jump,
+        phi=np.einsum("ij,ij->i", jump, normals),
+        ue=np.asarray(solution.ue).reshape(n, d),
+        active=active,
+        signorini=signorini,
+    )
 
 
 def log_coefficient(problem: Any, solution: Any) -> float:

@@ -92,7 +92,8 @@ def gather_xdmf_inputs(
         # the facets' nodes (the C++ mesh's geometry) in the input numbering
         nodes = entities_to_geometry(msh._mesh, tags.dim, tags.indices[owned], False)
         tagged = (input_node_numbers(msh)[nodes], tags.values[owned])
-    positions, local = problem.boundary.owned(V.dofmap.index_map.local_range)
+    nodal = getattr(problem.boundary, "nodal", problem.boundary)  # elasticity: its nodes
+    positions, local = nodal.owned(V.dofmap.index_map.local_range)
     parts = gather_to_root(comm, (tagged, (positions, input_indices(V)[local])))
     if comm.rank != 0:
         return None
@@ -104,7 +105,7 @@ def gather_xdmf_inputs(
     else:  # all cells tagged (the subdomains cover the domain): no copy of the cells
         order = slice(None) if (cell_tags >= 0).all() else np.flatnonzero(cell_tags >= 0)
         entities, values, name = cells, cell_tags, "subdomains"
-    gamma_nodes = np.empty(problem.boundary.n_gamma, dtype=np.int64)
+    gamma_nodes = np.empty(nodal.n_gamma, dtype=np.int64)
     for _, (where, numbers) in parts:
         gamma_nodes[where] = numbers
     values = values[order].astype(np.int32, copy=False)
@@ -129,10 +130,14 @@ def write_solution_xdmf(
     cells = fields["cells"] if "cells" in fields else fields["triangles"]
     tmp = Path(out) / ".xdmf-tmp"
     tmp.mkdir(exist_ok=True)
-    names = ["u", *BOUNDARY_FIELDS]
+    gamma = len(tags.gamma_nodes)
+    widths = {"u": _columns(u, len(x)).shape[1]}
+    widths.update(
+        {name: _columns(on_gamma[key], gamma).shape[1] for name, key in BOUNDARY_FIELDS.items()}
+    )
     try:
         _write_h5(tmp / "solution.h5", x, cells, tags, u, on_gamma)
-        (tmp / "solution.xdmf").write_text(_xdmf_text(x.shape, cells.shape, tags, names))
+        (tmp / "solution.xdmf").write_text(_xdmf_text(x.shape, cells.shape, tags, widths))
         # the .h5 first: a solution.xdmf under its final name always has its data
         for name in ("solution.h5", "solution.xdmf"):
             os.replace(tmp / name, Path(out) / name)
@@ -167,34 +172,46 @@ def _write_h5(
         f["/Mesh/mesh/topology"] = np.asarray(cells, dtype=np.int64)
         f[f"/MeshTags/{tags.name}/topology"] = tags.entities
         f[f"/MeshTags/{tags.name}/Values"] = tags.values.reshape(-1, 1)
-        f["/Function/u/0"] = np.asarray(u, dtype=float).reshape(-1, 1)
+        f["/Function/u/0"] = _columns(u, n_nodes)
         for name, key in BOUNDARY_FIELDS.items():
-            values = np.asarray(on_gamma[key], dtype=float)[order]
+            values = _columns(on_gamma[key], len(order))[order]
             _sparse_column(f, f"/Function/{name}/0", n_nodes, rows, values)
 
 
+def _columns(values: np.ndarray, n: int) -> np.ndarray:
+    """Nodal values as XDMF reads them: (n, 1) for a scalar, (n, 3) for a vector (a plane
+    vector padded with a zero z component, as DOLFINx writes it, so that ParaView's "Warp
+    By Vector" reads it)."""
+    values = np.asarray(values, dtype=float).reshape(n, -1)
+    if values.shape[1] == 2:
+        values = np.hstack([values, np.zeros((n, 1))])
+    return values
+
+
 def _sparse_column(f, name: str, n_rows: int, rows: np.ndarray, values: np.ndarray) -> None:
-    """The dataset ``name`` (n_rows, 1) of the open file ``f``: ``values`` at the sorted
-    ``rows``, 0 elsewhere (chunks without one of ``rows`` not stored)."""
+    """The dataset ``name`` (n_rows, k) of the open file ``f``: ``values`` (m, k) at the
+    sorted ``rows``, 0 elsewhere (chunks without one of ``rows`` not stored)."""
+    width = values.shape[1]
     chunk = max(1, min(CHUNK_ROWS, n_rows))
     dataset = f.create_dataset(
-        name, shape=(n_rows, 1), dtype="f8", chunks=(chunk, 1), fillvalue=0.0
+        name, shape=(n_rows, width), dtype="f8", chunks=(chunk, width), fillvalue=0.0
     )
     block_of = rows // chunk
     starts = np.flatnonzero(np.r_[True, block_of[1:] != block_of[:-1]]) if len(rows) else []
-    block = np.zeros((chunk, 1))
+    block = np.zeros((chunk, width))
     for start, end in zip(starts, [*starts[1:], len(rows)]):
         low = int(block_of[start]) * chunk
         high = min(low + chunk, n_rows)
         block[:] = 0.0
-        block[rows[start:end] - low, 0] = values[start:end]
+        block[rows[start:end] - low] = values[start:end]
         dataset[low:high] = block[: high - low]
 
 
 def _xdmf_text(
-    x_shape: tuple[int, ...], cells_shape: tuple[int, ...], tags: XdmfTags, functions: list[str]
+    x_shape: tuple[int, ...], cells_shape: tuple[int, ...], tags: XdmfTags, functions: dict
 ) -> str:
-    """The XML of solution.xdmf, as DOLFINx 0.5's XDMFFile writes it."""
+    """The XML of solution.xdmf, as DOLFINx 0.5's XDMFFile writes it; ``functions``: name ->
+    its number of columns (1: a scalar, 3: a vector)."""
     (n_nodes, gdim), (n_cells, per_cell) = x_shape, cells_shape
     cell_type, facet_type = _TOPOLOGY[per_cell]
     n_tagged, per_entity = tags.entities.shape
@@ -233,15 +250,16 @@ def _xdmf_text(
         "      </Attribute>",
         "    </Grid>",
     ]
-    for name in functions:
+    for name, width in functions.items():
+        kind = "Vector" if width == 3 else "Scalar"
         lines += [
             f'    <Grid Name="{name}" GridType="Collection" CollectionType="Temporal">',
             f'      <Grid Name="{name}" GridType="Uniform">',
             "        <xi:include xpointer=\"xpointer(/Xdmf/Domain/Grid[@GridType='Uniform'][1]"
             '/*[self::Topology or self::Geometry])" />',
             '        <Time Value="0" />',
-            f'        <Attribute Name="{name}" AttributeType="Scalar" Center="Node">',
-            f'          <DataItem Dimensions="{n_nodes} 1" Format="HDF">'
+            f'        <Attribute Name="{name}" AttributeType="{kind}" Center="Node">',
+            f'          <DataItem Dimensions="{n_nodes} {width}" Format="HDF">'
             f"{h5}:/Function/{name}/0</DataItem>",
             "        </Attribute>",
             "      </Grid>",

@@ -45,36 +45,46 @@ class LevelRecord:
 
 
 def prolong(coarse: Any, coarse_solution: Solution, fine: Any) -> tuple[np.ndarray, np.ndarray]:
-    """(u on the owned fine dofs, phi on the fine Signorini nodes) from a coarse solution
-    (collective: every rank evaluates the gathered coarse field at its own nodes)."""
+    """(u on the owned fine dofs, the gaps of the fine Signorini nodes) from a coarse
+    solution (collective: every rank evaluates the gathered coarse field at its own nodes).
+    For elasticity every component of u and of the jump is carried over, and the fine gaps
+    are the jump's components in the fine nodes' frames (``GapMap.restrict``)."""
     comm = fine.comm
     gathered = gather_p1(coarse_solution.u)
     x, values, cells = comm.bcast(gathered, root=0) if comm.size > 1 else gathered
     n_owned = fine.V.dofmap.index_map.size_local
-    dim = x.shape[1]
+    dim, d = x.shape[1], fine.components
+    values = values.reshape(len(x), d)
     points = fine.V.tabulate_dof_coordinates()[:n_owned, :dim]
     # an n-fold uniform refinement has n^dim times the cells: its nodes are matched by
     # sorting
     fine_cells = fine.V.mesh.topology.index_map(dim).size_global
     divisions = max(1, round((fine_cells / len(cells)) ** (1.0 / dim)))
-    if dim == 3:
-        u = interpolate_p1_tetrahedra(x, cells, values, points, divisions=divisions)
-    else:
-        u = interpolate_p1(x, cells, values, points, divisions=divisions)
-    lost = np.isnan(u)  # on the coarse boundary up to round-off (or outside a coarse
-    if lost.any():  # curved surface): the nearest coarse node
+    interpolate = interpolate_p1_tetrahedra if dim == 3 else interpolate_p1
+    u = np.stack(
+        [interpolate(x, cells, values[:, k], points, divisions=divisions) for k in range(d)],
+        axis=1,
+    )
+    lost = np.isnan(u).any(axis=1)  # on the coarse boundary up to round-off (or outside a
+    if lost.any():  # coarse curved surface): the nearest coarse node
         u[lost] = values[cKDTree(x).query(points[lost])[1]]
     b_coarse, b_fine = coarse.boundary, fine.boundary
-    gap = np.zeros(b_coarse.n_gamma)
-    gap[b_coarse.signorini] = coarse_solution.phi
+    jump = coarse.gap.extend(np.zeros(b_coarse.n_gamma), coarse_solution.phi)
+    jump = jump.reshape(-1, d)  # (n, d): the jump at every coarse node of Gamma
+    coarse_nodes = b_coarse.nodes
     targets = b_fine.nodes[b_fine.signorini]
     if dim == 3:
-        phi = _surface_gap(b_coarse, gap, targets)
+        at_targets = np.stack(
+            [_surface_gap(b_coarse, jump[:, k], targets) for k in range(d)], axis=1
+        )
     else:
-        _, seg, t = closest_on_polygon(targets, b_coarse.nodes)
-        nxt = (seg + 1) % b_coarse.n_gamma
-        phi = (1.0 - t) * gap[seg] + t * gap[nxt]
-    return u, np.maximum(phi, 0.0)
+        _, seg, t = closest_on_polygon(targets, coarse_nodes)
+        nxt = (seg + 1) % len(coarse_nodes)
+        at_targets = (1.0 - t)[:, None] * jump[seg] + t[:, None] * jump[nxt]
+    fine_jump = np.zeros((len(b_fine.nodes), d))
+    fine_jump[b_fine.signorini] = at_targets
+    gaps = fine.gap.restrict(fine_jump.ravel())
+    return u.ravel(), np.where(fine.gap.bounded, np.maximum(gaps, 0.0), gaps)
 
 
 def _surface_gap(coarse_boundary: Any, gap: np.ndarray, points: np.ndarray) -> np.ndarray:
@@ -137,7 +147,7 @@ def solve_nested(
         )
         levels.append(
             LevelRecord(
-                dofs=int(level.V.dofmap.index_map.size_global),
+                dofs=level.n_dofs,
                 boundary_dofs=int(level.boundary.n_gamma),
                 iterations=solution.iterations,
                 cg_iterations=int(sum(r.cg_iterations for r in solution.history)),

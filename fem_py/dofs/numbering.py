@@ -138,7 +138,8 @@ def gather_p1(u) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     """Gather a P1 Function to rank 0 in the input numbering of the mesh nodes
     (:mod:`fem_py.dofs.numbering`), the same for any number of ranks.
 
-    Returns (x (N, 2), values (N,), triangles (n_cells, 3)) on rank 0, None elsewhere;
+    Returns (x (N, 2), values (N,) (or (N, d) on a vector space), triangles (n_cells, 3))
+    on rank 0, None elsewhere;
     the triangles (counter-clockwise as in the mesh) are sorted by their node numbers.
     On a tetrahedral mesh: x (N, 3) and the tetrahedra (n_cells, 4).
     """
@@ -160,7 +161,9 @@ def gather_p1_and_cells(
     numbers = _input_indices(V, cell_nodes)[:n_owned]
     gdim = V.mesh.topology.dim
     x = gather_by_input(comm, numbers, _dof_coordinates(V, gdim)[:n_owned], n_global)
-    values = gather_by_input(comm, numbers, u.x.array[:n_owned].real, n_global)
+    bs = V.dofmap.index_map_bs  # d components per node for elasticity: values (N, d)
+    owned = u.x.array[: n_owned * bs].real
+    values = gather_by_input(comm, numbers, owned if bs == 1 else owned.reshape(-1, bs), n_global)
     parts = gather_to_root(comm, (_owned_triangles(V, cell_nodes), cell_values))
     if comm.rank != 0:
         return None

@@ -68,6 +68,17 @@ class ElasticMaterial:
         return self.dim
 
     @property
+    def alpha(self) -> float:
+        """The structure constant alpha of the shear law: the smallest difference quotient
+        of 2 t mu(t) (:attr:`Material.alpha` of the deviatoric part)."""
+        return self.deviatoric.alpha
+
+    @property
+    def beta(self) -> float:
+        """The largest difference quotient of 2 t mu(t)."""
+        return self.deviatoric.beta
+
+    @property
     def shear0(self) -> float:
         """mu(0), the shear modulus of the tangent at eps = 0."""
         return 0.5 * self.deviatoric.rho0
