@@ -79,10 +79,13 @@ def summary(problem, result, timings: Mapping[str, float], pressure: np.ndarray)
         on_gamma = elastic_boundary_fields(problem, result, pressure)
         signorini = problem.boundary.signorini
         far_name, far_value = "force", net_force(problem, result)
-        contact = complementarity(on_gamma["phi"][signorini], on_gamma["pressure"][signorini])
+        normal = on_gamma["pressure"]
+        scale = float(np.abs(normal).max(initial=0.0))
+        contact = complementarity(on_gamma["phi"][signorini], normal[signorini], scale)
     else:
         far_name, far_value = far_field_coefficient(problem, result)
-        contact = complementarity(result.phi, pressure[problem.boundary.signorini])
+        scale = float(np.abs(pressure).max(initial=0.0))
+        contact = complementarity(result.phi, pressure[problem.boundary.signorini], scale)
     return {
         "equation": problem.equation,
         "converged": bool(result.converged),

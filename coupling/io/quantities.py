@@ -41,15 +41,19 @@ def boundary_flux(problem: Any, solution: Any) -> np.ndarray:
     return contact_pressure(problem, solution.u)
 
 
-def complementarity(phi: np.ndarray, sigma_s: np.ndarray) -> float:
+def complementarity(
+    phi: np.ndarray, sigma_s: np.ndarray, sigma_scale: float | None = None
+) -> float:
     """The largest violation of phi >= 0, sigma <= 0 and phi sigma = 0 on Gamma_s (1.5),
-    scale-free: max(-phi) / |phi|_inf, max(sigma) / |sigma|_inf and
-    max |phi sigma| / (|phi|_inf |sigma|_inf) (a zero scale counts as 1); 0 without
-    Signorini nodes."""
+    scale-free: max(-phi) / |phi|_inf, max(sigma) / s and max |phi sigma| / (|phi|_inf s)
+    with s = max(|sigma_s|_inf, ``sigma_scale``) (a zero scale counts as 1); 0 without
+    Signorini nodes. ``sigma_scale``: the flux's (traction's) scale on all of Gamma, so
+    that on a Gamma_s wholly open, where sigma_s is round-off, the round-off is measured
+    against the flux's size and not against itself."""
     if phi.size == 0:
         return 0.0
     p_scale = float(np.abs(phi).max()) or 1.0
-    s_scale = float(np.abs(sigma_s).max()) or 1.0
+    s_scale = max(float(np.abs(sigma_s).max()), sigma_scale or 0.0) or 1.0
     worst = max(
         np.max(-phi, initial=0.0) / p_scale,
         np.max(sigma_s, initial=0.0) / s_scale,

@@ -1,0 +1,145 @@
+"""``fembem solve`` of the elastic problem (docs/guide/elasticity.md): summary.json (the
+equation, the net force, the complementarity of the normal gap and traction), fields.npz
+with vector fields, solution.xdmf with u_h as a vector, the same on 1 and 2 ranks, the
+plane and the box; bad elastic input refused in one line (exit 2, nothing written)."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from conftest import run_cli, run_mpi
+
+SQUARE = """[problem]
+equation = "elasticity"
+
+[geometry]
+shape = "square"
+h = 0.0625
+subdomain_size = 0.125
+signorini = ["bottom"]
+
+[material]
+model = "hencky"
+bulk = 2.0
+shear = "1 + 1/(1 + s)"
+
+[exterior]
+E = 1.5
+nu = 0.3
+
+[data]
+f = ["1", "0"]
+u0 = ["0", "0.05*x"]
+a = [0.0, -0.01]
+"""
+
+BOX = """[problem]
+equation = "elasticity"
+tangential = "stick"
+
+[geometry]
+shape = "box"
+width = 0.5
+h = 0.125
+signorini = ["bottom"]
+
+[material]
+model = "linear-elastic"
+E = 2.5
+nu = 0.25
+
+[data]
+f = ["1", "0", "0"]
+u0 = ["0", "0", "0.05*x"]
+"""
+
+
+def _solve(tmp_path, name, text, ranks=1, *extra):
+    config = tmp_path / f"{name}.toml"
+    config.write_text(text)
+    out = tmp_path / name
+    args = ("solve", str(config), "--out", str(out), "--quiet", *extra)
+    if ranks == 1:
+        return run_cli(*args), out
+    return run_mpi(ranks, "-m", "coupling.app.cli", *args, check=False), out
+
+
+def _load(out):
+    with np.load(out / "fields.npz") as data:
+        return json.loads((out / "summary.json").read_text()), {k: data[k] for k in data.files}
+
+
+@pytest.mark.mpi
+@pytest.mark.parametrize("text, d", [(SQUARE, 2), (BOX, 3)])
+def test_elastic_solve_writes_vector_fields_the_same_on_two_ranks(tmp_path, text, d):
+    proc, out = _solve(tmp_path, "one", text)
+    assert proc.returncode == 0, proc.stderr
+    summary, f = _load(out)
+    assert summary["equation"] == "elasticity" and summary["converged"]
+    assert summary["preconditioner"] == "amg"
+    n, m = f["x"].shape[0], f["boundary_x"].shape[0]
+    assert f["u"].shape == f["x"].shape == (n, d) and summary["dofs"] == d * n
+    for key in ("ue", "jump", "traction", "boundary_u", "dn_ue"):
+        assert f[key].shape == (m, d), key
+    for key in ("phi", "pressure", "active", "signorini"):
+        assert f[key].shape == (m,), key
+    s = f["signorini"]
+    assert 0 < f["active"].sum() < s.sum()  # the bottom partly open (u0 tilts it)
+    assert summary["contact_nodes"] == int(f["active"].sum())
+    assert summary["complementarity"] <= 1e-6
+    assert np.all(f["phi"][s] >= 0)  # and the pressure <= 0 as complementarity measures
+    # the net force on the medium balances the body's load: f = e_1 on a body of volume
+    # 1/4 (square) or 1/8 (box), no t0. The balance is K_h r = -M_h r for the translations
+    # r: round-off in 2D, the Sauter-Schwab rules' accuracy in 3D (the sum of K_h r + M_h r
+    # is 2.2e-6 of that of M_h r on this box; the force is off by 1.0e-6 relative)
+    load = np.zeros(d)
+    load[0] = 0.25 if d == 2 else 0.125
+    assert np.allclose(summary["force"], load, rtol=0, atol=(1e-9 if d == 2 else 3e-6) * load[0])
+    xdmf = (out / "solution.xdmf").read_text()
+    assert f'<Attribute Name="u" AttributeType="Vector" Center="Node">' in xdmf
+    assert f'Dimensions="{n} 3"' in xdmf
+    proc, two = _solve(tmp_path, "two", text, 2)
+    assert proc.returncode == 0, proc.stderr
+    summary2, f2 = _load(two)
+    assert summary2["iterations"] == summary["iterations"]
+    for key in ("u", "ue", "phi", "pressure"):
+        assert np.allclose(f2[key], f[key], rtol=0, atol=1e-9 * np.abs(f[key]).max()), key
+
+
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        ('data.f=["0", "-1", "2"]', "data.f has 3 components; a 2D displacement has 2"),
+        ('data.u0=["0"]', "data.u0 must be a vector of 2 or 3 expressions"),
+        ("data.f=1", "data.f must be a vector for elasticity"),
+        ("material.rho=carstensen", "material.rho belongs to the scalar equation"),
+        ("material.E=2", 'material.E is not a key of model "hencky"'),
+        ("material.bulk=0", "material.bulk must be positive"),
+        ("material.shear=1/(1 + s)^3", "not strictly increasing"),
+        ("exterior.nu=0.5", "exterior.nu (Poisson's ratio) must lie in (-1, 1/2)"),
+        ("problem.tangential=glue", 'problem.tangential must be one of "slip", "stick"'),
+        ("solver.preconditioner=substructuring", "a preconditioner of the scalar equation"),
+        ("adapt.steps=2", "adaptivity is for the scalar equation so far"),
+        ("problem.equation=scalar", "of elasticity; set problem.equation"),
+    ],
+)
+def test_bad_elastic_input_is_refused_in_one_line(tmp_path, change, message):
+    proc, out = _solve(tmp_path, "bad", SQUARE, 1, "--set", change)
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and message in lines[0], proc.stderr
+    assert not out.exists()
+
+
+def test_a_plane_boundary_too_large_for_the_elastic_single_layer_is_refused(tmp_path):
+    """In 2D the elastic V_h is definite only on a small enough boundary (docs/method.md
+    section 12): a square of side 8 is refused with the factor to scale it by."""
+    text = SQUARE.replace("h = 0.0625", "h = 1.0\nwidth = 8.0\nallow_large = true").replace(
+        "subdomain_size = 0.125", "subdomain_size = 2.0"
+    )
+    proc, out = _solve(tmp_path, "large", text)
+    assert proc.returncode == 2, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert "not positive definite" in lines[-1] and "scale the geometry by a factor" in lines[-1]
