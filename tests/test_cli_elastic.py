@@ -98,7 +98,7 @@ def test_elastic_solve_writes_vector_fields_the_same_on_two_ranks(tmp_path, text
     load[0] = 0.25 if d == 2 else 0.125
     assert np.allclose(summary["force"], load, rtol=0, atol=(1e-9 if d == 2 else 3e-6) * load[0])
     xdmf = (out / "solution.xdmf").read_text()
-    assert f'<Attribute Name="u" AttributeType="Vector" Center="Node">' in xdmf
+    assert '<Attribute Name="u" AttributeType="Vector" Center="Node">' in xdmf
     assert f'Dimensions="{n} 3"' in xdmf
     proc, two = _solve(tmp_path, "two", text, 2)
     assert proc.returncode == 0, proc.stderr
