@@ -485,7 +485,7 @@ def _check_jacobian(args: argparse.Namespace, interrupts: InterruptHandler) -> i
     comm = MPI.COMM_WORLD
     config = _problem_inputs(args)
     domain = _with_geometry_key(domain_from_config, comm, config)
-    report = check_jacobian(domain, material_from_config(config))
+    report = check_jacobian(domain, material_from_config(config, domain.dim))
     if comm.rank == 0:
         if args.json:
             print(json.dumps(report, indent=2, default=float))

@@ -4,7 +4,8 @@ For several smooth random states u (random combinations of sin/cos modes, interp
 into V_h) this compares
 
 - the UFL Jacobian (``ufl.derivative`` of the residual) with the hand-written tangent
-  rho^(grad u) of docs/method.md section 6: relative Frobenius norm
+  rho^(grad u) of docs/method.md section 6 (for elasticity D sigma(eps(u)) of
+  :mod:`fem_py.forms.elasticity`): relative Frobenius norm
   ||A_ufl - A_hand||_F / ||A_ufl||_F;
 - a Taylor test of the residual F(u) = DG(u, .) in a smooth random direction du:
   r1(eps) = ||F(u + eps du) - F(u)||              ~ eps^1
@@ -38,19 +39,27 @@ _EXACT_RATIO = 1e-10
 
 def _random_mode_function(V: Any, rng: np.random.Generator, n_modes: int = 4) -> Any:
     """A smooth random function sum a_k sin(w_k . x + c_k) of unit-size gradients (x in
-    R^2 or R^3, the mesh's dimension)."""
+    R^2 or R^3, the mesh's dimension); on a vector space (elasticity) one such function per
+    component."""
     from dolfinx import fem
 
     dim = V.mesh.geometry.dim
-    a = rng.normal(size=n_modes)
-    w = rng.normal(scale=4.0, size=(n_modes, dim))
-    c = rng.uniform(0.0, 2 * np.pi, size=n_modes)
-    f = fem.Function(V)
-    f.interpolate(
-        lambda x: sum(
-            a[k] * np.sin(sum(w[k, d] * x[d] for d in range(dim)) + c[k]) for k in range(n_modes)
+    components = V.dofmap.index_map_bs
+    a = rng.normal(size=(components, n_modes))
+    w = rng.normal(scale=4.0, size=(components, n_modes, dim))
+    c = rng.uniform(0.0, 2 * np.pi, size=(components, n_modes))
+
+    def modes(x: np.ndarray, i: int) -> np.ndarray:
+        return sum(
+            a[i, k] * np.sin(sum(w[i, k, d] * x[d] for d in range(dim)) + c[i, k])
+            for k in range(n_modes)
         )
-    )
+
+    f = fem.Function(V)
+    if components == 1:
+        f.interpolate(lambda x: modes(x, 0))
+    else:
+        f.interpolate(lambda x: np.stack([modes(x, i) for i in range(components)]))
     return f
 
 
@@ -67,7 +76,8 @@ def check_jacobian(domain: Any, material: Material, *, n_states: int = 3, seed: 
         A :class:`fem_py.mesh.Domain` or :class:`fem_py.mesh.SolidDomain` (anything with
         a ``mesh``, of triangles or tetrahedra).
     material
-        The material to check.
+        The material to check: a scalar ``Material`` or, for elasticity, an
+        ``ElasticMaterial`` (its hand-written tangent D sigma, vector P1).
     n_states
         Number of random smooth states.
     seed
@@ -83,7 +93,7 @@ def check_jacobian(domain: Any, material: Material, *, n_states: int = 3, seed: 
     """
     if n_states < 1:
         raise ValueError(f"n_states must be >= 1, got {n_states}")
-    V = p1_space(domain.mesh)
+    V = p1_space(domain.mesh, material.components)
     forms = InteriorForms(V, material, None, jacobian="ufl")
     rng = np.random.default_rng(seed)
     A1, A2 = forms.create_matrix(), forms.create_matrix()
@@ -122,7 +132,7 @@ def check_jacobian(domain: Any, material: Material, *, n_states: int = 3, seed: 
     taylor_ok = exact or all(abs(s - 2.0) <= SLOPE_TOL for s in s2)
     return {
         "material": material.name,
-        "n_dofs": V.dofmap.index_map.size_global,
+        "n_dofs": V.dofmap.index_map.size_global * material.components,
         "norm": "frobenius",
         "matrix_rel_diff": float(max(rel)),
         "slope1": s1,
