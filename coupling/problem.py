@@ -30,7 +30,12 @@ from fem_py.forms.elasticity import lame_parameters
 from coupling.distributed import boundary_operator_kind, steklov_poincare
 from coupling.functional import CoupledFunctional
 from coupling.options import DEFAULT_TANGENTIAL, DEFAULTS, hmatrix_tol
-from fem_py.boundary.blocked import BlockedBoundary, elastic_gap_map, scalar_gap_map
+from fem_py.boundary.blocked import (
+    BlockedBoundary,
+    elastic_gap_map,
+    free_rigid_motion,
+    scalar_gap_map,
+)
 from fem_py.parallel import array_from_root
 
 __all__ = ["SignoriniProblem"]
@@ -131,6 +136,12 @@ class SignoriniProblem:
         nodal = boundary_map(self.V if d == 1 else p1_space(domain.mesh), domain)
         self.boundary = nodal if d == 1 else BlockedBoundary(nodal, d)
         self.gap = scalar_gap_map(nodal) if d == 1 else elastic_gap_map(self.boundary, tangential)
+        if d > 1 and free_rigid_motion(self.boundary, tangential):
+            raise ValueError(
+                'tangential = "slip" on the whole boundary leaves a rigid motion of the body '
+                "free to slide along it (the rotation of a disk or a ball): the solution is "
+                'not unique; use "stick", or bond a part of the boundary'
+            )
         timings["forms"] = time.perf_counter() - tic
 
         tic = time.perf_counter()

@@ -212,3 +212,18 @@ def test_an_exception_on_one_rank_ends_a_demo_on_every_rank(tmp_path):
     proc = run_mpi(2, str(script), timeout=120, check=False)
     assert proc.returncode != 0
     assert "raised on rank 1 only" in proc.stderr
+
+
+@pytest.mark.mpi
+def test_shrink_fit_demo_meets_lames_pressure_the_same_on_two_ranks(tmp_path):
+    """The contact pressure of the shrink fit against Lame's closed form: relative errors
+    6.2e-3, 1.8e-3, 4.5e-4 at b/h = 4, 8, 16 (rates 1.77, 1.99), the whole circle in
+    contact; the same on two ranks."""
+    serial, _ = run_demo("demo_shrink_fit", tmp_path / "one", "--cells", "16")
+    parallel, _ = run_demo("demo_shrink_fit", tmp_path / "two", "--cells", "16", nprocs=2)
+    for one, two in zip(serial["rows"], parallel["rows"]):
+        assert one["converged"] and one["contact_nodes"] == one["nodes_on_gamma"]
+        assert two["iterations"] == one["iterations"]
+        assert two["pressure_error"] == pytest.approx(one["pressure_error"], rel=1e-6)
+    assert serial["rows"][-1]["pressure_error"] <= 1e-3
+    assert serial["rates"][-1] >= 1.8

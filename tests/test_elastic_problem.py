@@ -208,3 +208,14 @@ def test_scalar_equation_refuses_an_exterior_medium():
 
     with pytest.raises(ValueError, match="for elasticity"):
         SignoriniProblem(_domain(2, 4), make_material("linear"), exterior=(1.0, 0.3))
+
+
+def test_slip_on_a_whole_circle_is_refused_as_not_unique():
+    """The rotation of a disk changes u and the tangential gaps and not J_h: refused in one
+    line; "stick" on the same circle is unique."""
+    domain = build_domain(COMM, GeometrySpec("disk", radius=0.25, h=0.0625, signorini="all"))
+    data = dict(exterior=(1.5, 0.3), boundary_operator="dense")
+    with pytest.raises(ValueError, match="not unique") as error:
+        SignoriniProblem(domain, _material("linear", 2), tangential="slip", **data)
+    assert "\n" not in str(error.value)
+    SignoriniProblem(domain, _material("linear", 2), tangential="stick", **data)

@@ -120,6 +120,47 @@ def elastic_gap_map(boundary: "BlockedBoundary", tangential: str) -> GapMap:
     return _gap_map(boundary.n_gamma, positions, weights, bounded, owner)
 
 
+#: A rigid motion whose normal component on Gamma is below this fraction of its size is
+#: one that "slip" on all of Gamma leaves free (:func:`free_rigid_motion`). The fraction
+#: is 0 for a polygon inscribed in a circle, 0.015-0.020 for gmsh's ball at h = R/2 and
+#: 0.010 at R/4 (its nodal normals are not quite radial), 0.048 for an ellipse of
+#: semi-axes 0.3 and 0.28, 0.27 for the ellipse 0.3 x 0.2, 0.40 for the square, 0.26 for
+#: the box (measured).
+SLIDING_TOLERANCE = 0.03
+
+
+def rigid_motions_at(points: np.ndarray) -> np.ndarray:
+    """The rigid motions of R^d at ``points`` (n, d): (m, n, d), m = 3 in 2D (two
+    translations, the rotation about the origin), 6 in 3D."""
+    n, d = points.shape
+    modes = [np.broadcast_to(np.eye(d)[k], (n, d)) for k in range(d)]
+    for i, j in [(0, 1)] if d == 2 else [(0, 1), (1, 2), (2, 0)]:
+        mode = np.zeros((n, d))
+        mode[:, i], mode[:, j] = -points[:, j], points[:, i]
+        modes.append(mode)
+    return np.stack(modes)
+
+
+def free_rigid_motion(boundary: "BlockedBoundary", tangential: str) -> bool:
+    """Whether a rigid motion of the body slides along all of Gamma: with ``"slip"`` on the
+    whole boundary (no bonded node), a rigid motion r with r.n = 0 on Gamma (the rotation of
+    a disk or a ball, the rotation of a body of revolution about its axis) changes u by r
+    and the tangential gaps by -r, and J_h not at all: the solution is not unique. Found
+    as a singular value of the normal components of the rigid motions at the nodes below
+    :data:`SLIDING_TOLERANCE` of the largest (relative to the motions' sizes)."""
+    if tangential != "slip" or len(boundary.signorini) < boundary.n_nodes:
+        return False
+    centred = boundary.nodes - boundary.nodes.mean(axis=0)
+    motions = rigid_motions_at(centred)  # (m, n, d)
+    m = motions.shape[0]
+    # min over c of |normal part of sum c_j r_j| / |sum c_j r_j|: sigma_min(N R^-1) with
+    # the QR factor R of the motions' columns
+    _, R = np.linalg.qr(motions.reshape(m, -1).T)
+    normal = np.einsum("mnd,nd->nm", motions, boundary.node_normals)
+    fraction = np.linalg.svd(np.linalg.solve(R.T, normal.T).T, compute_uv=False)[-1]
+    return bool(fraction < SLIDING_TOLERANCE)
+
+
 class BlockedBoundary(BoundaryVectors):
     """The boundary map of V_h^d from the nodal map of the same mesh (``BoundaryMap`` in
     2D, ``SurfaceMap`` in 3D): T, T^T, ``gather`` and ``scatter_add`` on node-major boundary

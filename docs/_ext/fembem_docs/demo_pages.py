@@ -34,6 +34,7 @@ SMALL: dict[str, tuple[list[str], int | None]] = {
     "demo_own_mesh": (["--cells", "16"], None),
     "demo_contact_box": (["--cells", "16"], None),
     "demo_own_body": (["--cells", "6"], None),
+    "demo_shrink_fit": (["--cells", "16"], None),
     "demo_adaptive_lshape": (
         ["--cells", "8", "--steps", "12", "--max-dofs", "13000"],
         None,
