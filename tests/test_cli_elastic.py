@@ -168,3 +168,33 @@ def test_check_jacobian_compares_the_elastic_jacobians(tmp_path, text):
     assert report["matrix_rel_diff"] <= 1e-13
     assert all(abs(s - 2.0) <= 0.1 for s in report["slope2"])
     assert all(abs(s - 1.0) <= 0.01 for s in report["slope1"])
+
+
+def test_evaluate_and_exterior_give_the_displacement_components(tmp_path):
+    """``fembem evaluate`` of an elastic run: u_x, u_y inside and on Gamma, the trace of u_e
+    on Gamma (u_e = u - u0 on Gamma_t) and outside by Somigliana's identity, which tends to
+    the trace as the point nears Gamma; ``fembem exterior``: u_e and the medium's stress."""
+    proc, out = _solve(tmp_path, "run", SQUARE)
+    assert proc.returncode == 0, proc.stderr
+    points = tmp_path / "points.csv"
+    points.write_text("x,y\n0,0\n0.25,0.1\n0.2501,0.1\n0.6,0.3\n")
+    proc = run_cli("evaluate", str(out), "--points", str(points))
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stdout.strip().splitlines()
+    assert lines[0] == "x,y,where,u_x,u_y,ue_x,ue_y"
+    rows = [line.split(",") for line in lines[1:]]
+    assert [r[2] for r in rows] == ["inside", "boundary", "outside", "outside"]
+    assert rows[0][5:] == ["", ""] and rows[2][3:5] == ["", ""]
+    u, ue = np.array(rows[1][3:5], float), np.array(rows[1][5:7], float)
+    assert np.allclose(ue, u - [0.0, 0.05 * 0.25], atol=1e-12)  # u0 = (0, 0.05 x) on Gamma_t
+    near = np.array(rows[2][5:7], float)
+    assert np.abs(near - ue).max() <= 1e-2 * np.abs(ue).max()  # 1e-4 outside the trace
+    outside = tmp_path / "outside.csv"
+    outside.write_text("0.6,0.3\n-0.5,0.2\n")
+    proc = run_cli("exterior", str(out), "--points", str(outside))
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stdout.strip().splitlines()
+    assert lines[0] == "x,y,ue_x,ue_y,sigma_xx,sigma_yy,sigma_xy"
+    first = np.array(lines[1].split(",")[2:4], float)
+    assert np.allclose(first, np.array(rows[3][5:7], float), rtol=1e-12)
+    assert all(np.isfinite(np.array(line.split(","), float)).all() for line in lines[1:])

@@ -185,7 +185,9 @@ def build_parser() -> argparse.ArgumentParser:
         "u_e at exterior points from a finished run",
         "Evaluate the exterior solution u_e at the points of a CSV file (two columns x, y; "
         "three, x, y, z, for a 3D run; an optional header line) by the representation "
-        "formula, from the fields.npz of RESULT_DIR.",
+        "formula, from the fields.npz of RESULT_DIR. An elastic run: the displacement "
+        "ue_x,ue_y(,ue_z) and the stress sigma_xx,sigma_yy,sigma_xy (3D: xx,yy,zz,xy,yz,zx) "
+        "of the medium.",
         "write x,y,ue (x,y,z,ue) here",
     )
     result_reader(
@@ -195,7 +197,8 @@ def build_parser() -> argparse.ArgumentParser:
         "3D run; an optional header line) from the fields.npz of RESULT_DIR: each row "
         "x,y(,z),where,u,ue with "
         "where = inside (u = u_h), boundary (u_h and the trace u_e) or outside (u_e by the "
-        "representation formula); a value that does not apply is empty. A point closer to "
+        "representation formula); a value that does not apply is empty; an elastic run's "
+        "u and ue have d columns, u_x,u_y(,u_z). A point closer to "
         "Gamma than 1e-11 times the diameter of its bounding box is on Gamma (boundary); "
         "x,y are echoed as given.",
         "write the table here",
@@ -435,16 +438,43 @@ def _result_points(args: argparse.Namespace) -> tuple[dict, np.ndarray, list[str
     return fields, points, given, "x,y,z"[: 2 * dim - 1]
 
 
+#: The stress components of the exterior table of an elastic run, by the dimension.
+STRESS_COMPONENTS = {2: ("xx", "yy", "xy"), 3: ("xx", "yy", "zz", "xy", "yz", "zx")}
+
+
+def _names(name: str, values: np.ndarray) -> list[str]:
+    """The CSV columns of ``values`` (m,) or (m, d): ``name``, or name_x, name_y(, name_z)."""
+    return [name] if values.ndim == 1 else [f"{name}_{c}" for c in "xyz"[: values.shape[1]]]
+
+
+def _number(v: float) -> str:
+    """A CSV cell: empty for NaN (a value that does not apply), else 17 digits."""
+    return "" if np.isnan(v) else f"{v:.17g}"
+
+
+def _rows(given: list[str], *columns: np.ndarray) -> str:
+    """The CSV rows: each point as given, then the values of ``columns`` ((m,) or (m, k))."""
+    blocks = [np.asarray(c, dtype=float).reshape(len(given), -1) for c in columns]
+    table = np.hstack(blocks) if blocks else np.zeros((len(given), 0))
+    return "".join(",".join([xy, *map(_number, row)]) + "\n" for xy, row in zip(given, table))
+
+
 def _exterior(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
-    from coupling.io.evaluation import exterior_from_fields
+    from coupling.io.evaluation import exterior_from_fields, exterior_stress_from_fields
 
     fields, points, given, header = _result_points(args)
     try:
         ue = exterior_from_fields(fields, points)
+        columns, names = [ue], _names("ue", ue)
+        if "exterior" in fields:  # elasticity: the medium's stress too
+            d = points.shape[1]
+            sigma = exterior_stress_from_fields(fields, points)
+            pairs = [("xyz".index(c[0]), "xyz".index(c[1])) for c in STRESS_COMPONENTS[d]]
+            columns.append(np.stack([sigma[:, i, j] for i, j in pairs], axis=1))
+            names += [f"sigma_{c}" for c in STRESS_COMPONENTS[d]]
     except ValueError as err:  # a point inside Omega or on Gamma
         raise ValueError(f"--points {args.points}: {err}") from None
-    table = f"{header},ue\n" + "".join(f"{xy},{v:.17g}\n" for xy, v in zip(given, ue))
-    _write_table(table, args.out)
+    _write_table(",".join([header, *names]) + "\n" + _rows(given, *columns), args.out)
     return EXIT_OK
 
 
@@ -464,15 +494,10 @@ def _evaluate(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
 
     fields, points, given, header = _result_points(args)
     values = evaluate(fields, points)
-
-    def number(v: float) -> str:
-        return "" if np.isnan(v) else f"{v:.17g}"
-
-    rows = zip(given, values["where"], values["u"], values["ue"])
-    table = f"{header},where,u,ue\n" + "".join(
-        f"{xy},{w},{number(u)},{number(ue)}\n" for xy, w, u, ue in rows
-    )
-    _write_table(table, args.out)
+    u, ue = values["u"], values["ue"]
+    names = ",".join([header, "where", *_names("u", u), *_names("ue", ue)])
+    where = [f"{xy},{w}" for xy, w in zip(given, values["where"])]
+    _write_table(names + "\n" + _rows(where, u, ue), args.out)
     return EXIT_OK
 
 

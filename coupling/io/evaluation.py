@@ -28,11 +28,21 @@ from fem_py.mesh import interpolate_p1
 from fem_py.mesh.location3d import interpolate_p1_tetrahedra, on_surface
 from fem_py.polyline import closest_on_polygon, inside_polygon
 
-__all__ = ["evaluate", "exterior_from_fields", "ON_GAMMA"]
+__all__ = ["evaluate", "exterior_from_fields", "exterior_stress_from_fields", "ON_GAMMA"]
 
 #: points closer to Gamma than this times its bounding-box diameter count as on Gamma
 #: (10 times the distance below which the representation formula refuses a point)
 ON_GAMMA = 1e-11
+
+
+def _kernel(fields: dict) -> dict:
+    """The keywords of bem_cpp's potentials for the run of ``fields``: its surface, and for
+    elasticity Kelvin's kernel of the medium and the translation a (d,)."""
+    surface = fields.get("boundary_triangles")
+    out = {} if surface is None else {"triangles": surface}
+    if "exterior" in fields:  # elasticity
+        return dict(out, kernel=("lame", *map(float, fields["exterior"])), a=fields["a"])
+    return dict(out, a=float(fields["a"]))
 
 
 def exterior_from_fields(fields: dict, points: np.ndarray, tol: float | None = None) -> np.ndarray:
@@ -41,18 +51,31 @@ def exterior_from_fields(fields: dict, points: np.ndarray, tol: float | None = N
     ``a``, ``flux_space``; in 3D (m, 3) points and ``boundary_triangles``), compressed
     above bem_cpp's measured crossover to the relative accuracy ``tol`` (default: the
     solver's, :func:`coupling.options.hmatrix_tol`); bem_cpp's ValueError for a point
-    inside Omega or on Gamma. bem_cpp releases the GIL while it evaluates."""
-    surface = fields.get("boundary_triangles")
+    inside Omega or on Gamma. bem_cpp releases the GIL while it evaluates. Elasticity
+    (``exterior`` in the fields: the medium's E, nu): the displacement (m, d), by direct
+    sums (section 12)."""
     return bem_cpp.exterior_potential(
         fields["boundary_x"],
         fields["ue"],
         fields["dn_ue"],
         points,
-        a=float(fields["a"]),
         flux=str(fields["flux_space"]),
         compression="auto",
         tol=hmatrix_tol(fields["boundary_x"]) if tol is None else tol,
-        **({} if surface is None else {"triangles": surface}),
+        **_kernel(fields),
+    )
+
+
+def exterior_stress_from_fields(fields: dict, points: np.ndarray) -> np.ndarray:
+    """The stress sigma(u_e) (m, d, d) of the exterior medium at exterior ``points`` from
+    the fields of an elastic run (``bem_cpp.exterior_stress``, docs/method.md section 12)."""
+    return bem_cpp.exterior_stress(
+        fields["boundary_x"],
+        fields["ue"],
+        fields["dn_ue"],
+        points,
+        flux=str(fields["flux_space"]),
+        **_kernel(fields),
     )
 
 
@@ -73,16 +96,36 @@ def evaluate(fields: dict, points: np.ndarray) -> dict[str, np.ndarray]:
     # 2^-30 of its extent, which would take a point just outside for one inside
     inside = inside_polygon(points, nodes) & ~on
     outside = ~inside & ~on
-    u_h = interpolate_p1(fields["x"], fields["triangles"], fields["u"], points[inside])
-    u, ue = np.full(len(points), np.nan), np.full(len(points), np.nan)
-    u[inside] = u_h
+    values = _columns(fields["u"])
+    u_h = [interpolate_p1(fields["x"], fields["triangles"], c, points[inside]) for c in values.T]
+    u, ue = _empty(len(points), fields)
+    u[inside] = np.stack(u_h, axis=1)
     nxt = (seg[on] + 1) % len(nodes)
+    weight = t[on][:, None]
     for out, key in ((u, "boundary_u"), (ue, "ue")):
-        out[on] = (1.0 - t[on]) * fields[key][seg[on]] + t[on] * fields[key][nxt]
+        trace = _columns(fields[key])
+        out[on] = (1.0 - weight) * trace[seg[on]] + weight * trace[nxt]
     if outside.any():
-        ue[outside] = exterior_from_fields(fields, points[outside])
+        ue[outside] = _columns(exterior_from_fields(fields, points[outside]))
     where = np.where(inside, "inside", np.where(on, "boundary", "outside"))
-    return {"where": where, "u": u, "ue": ue}
+    return {"where": where, "u": _squeezed(u), "ue": _squeezed(ue)}
+
+
+def _columns(values: np.ndarray) -> np.ndarray:
+    """Nodal values as (n, k) columns: k = 1 for a scalar, d for a displacement."""
+    values = np.asarray(values, dtype=float)
+    return values.reshape(len(values), -1)
+
+
+def _empty(m: int, fields: dict) -> tuple[np.ndarray, np.ndarray]:
+    """(u, ue) at m points, NaN where they do not apply: (m, 1), or (m, d) for elasticity."""
+    k = _columns(fields["u"]).shape[1]
+    return np.full((m, k), np.nan), np.full((m, k), np.nan)
+
+
+def _squeezed(values: np.ndarray) -> np.ndarray:
+    """(m,) for a scalar, (m, d) for a displacement."""
+    return values[:, 0] if values.shape[1] == 1 else values
 
 
 def _evaluate_in_body(fields: dict, points: np.ndarray) -> dict[str, np.ndarray]:
@@ -92,15 +135,19 @@ def _evaluate_in_body(fields: dict, points: np.ndarray) -> dict[str, np.ndarray]
     diameter = float(np.linalg.norm(nodes.max(axis=0) - nodes.min(axis=0)))
     triangle, bary = on_surface(nodes, surface, points, ON_GAMMA * diameter)
     on = triangle >= 0
-    u = interpolate_p1_tetrahedra(fields["x"], fields["cells"], fields["u"], points)
-    inside = np.isfinite(u) & ~on
+    values = _columns(fields["u"])
+    u = np.stack(
+        [interpolate_p1_tetrahedra(fields["x"], fields["cells"], c, points) for c in values.T],
+        axis=1,
+    )
+    inside = np.isfinite(u).all(axis=1) & ~on
     outside = ~inside & ~on
     u[outside] = np.nan
-    ue = np.full(len(points), np.nan)
+    ue = np.full(u.shape, np.nan)
     corners = surface[triangle[on]]
     for out, key in ((u, "boundary_u"), (ue, "ue")):
-        out[on] = np.einsum("ij,ij->i", bary[on], fields[key][corners])
+        out[on] = np.einsum("ij,ijk->ik", bary[on], _columns(fields[key])[corners])
     if outside.any():
-        ue[outside] = exterior_from_fields(fields, points[outside])
+        ue[outside] = _columns(exterior_from_fields(fields, points[outside]))
     where = np.where(inside, "inside", np.where(on, "boundary", "outside"))
-    return {"where": where, "u": u, "ue": ue}
+    return {"where": where, "u": _squeezed(u), "ue": _squeezed(ue)}

@@ -222,6 +222,8 @@ class RunOutputs:
                 boundary_fields(problem, result, self._pressure),
                 a=np.array(problem.a),
                 flux_space=np.array(problem.flux_space),
+                # elasticity: the medium (E, nu) of the exterior field's kernel
+                **({"exterior": np.array(problem.kernel[1:])} if problem.components > 1 else {}),
             )
             if self.plots and not solid:  # u_e's samples and, in the figure process,
                 # boundary.png and history.png while u_h is gathered and rasterised here
