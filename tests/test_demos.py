@@ -227,3 +227,20 @@ def test_shrink_fit_demo_meets_lames_pressure_the_same_on_two_ranks(tmp_path):
         assert two["pressure_error"] == pytest.approx(one["pressure_error"], rel=1e-6)
     assert serial["rows"][-1]["pressure_error"] <= 1e-3
     assert serial["rates"][-1] >= 1.8
+
+
+@pytest.mark.mpi
+def test_elastic_footing_demo_lifts_part_of_its_base_the_same_on_two_ranks(tmp_path):
+    """The footing from gmsh: part of the base in contact, the contact conditions met to the
+    solver's tolerance, the net force on the medium its load (the translations' identity
+    K_h r = -M_h r holds to the Sauter-Schwab rules' accuracy in 3D: 1e-6 relative); the same
+    on two ranks."""
+    serial, _ = run_demo("demo_elastic_footing", tmp_path / "one", "--cells", "2")
+    parallel, _ = run_demo("demo_elastic_footing", tmp_path / "two", "--cells", "2", nprocs=2)
+    assert serial["converged"] and 0 < serial["contact_nodes"] < serial["base_nodes"]
+    assert serial["complementarity"] <= 1e-6
+    assert serial["force_error"] <= 1e-5 * abs(serial["force"][0])
+    for key in ("dofs", "boundary_dofs", "base_nodes", "iterations", "contact_nodes"):
+        assert parallel[key] == serial[key], key
+    assert parallel["energy"] == pytest.approx(serial["energy"], rel=1e-10)
+    assert (tmp_path / "one" / "footing.msh").is_file()
