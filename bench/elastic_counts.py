@@ -38,11 +38,7 @@ def run(dim: int, n: int) -> dict:
     problem = SignoriniProblem(
         domain,
         material,
-        f=case.f,
-        u0=case.u0,
-        t0=case.t0,
-        a=case.a,
-        exterior=case.exterior,
+        **case.data,
         tangential="slip",
     )
     row = {"dim": dim, "n": n, "dofs": problem.V.dofmap.index_map.size_global * dim}

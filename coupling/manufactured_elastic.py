@@ -91,6 +91,12 @@ class ElasticContact:
     a: np.ndarray
     exterior: tuple[float, float]
 
+    @property
+    def data(self) -> dict[str, Any]:
+        """The data keywords of :class:`coupling.problem.SignoriniProblem`: f, u0, t0, a and
+        the exterior medium."""
+        return dict(f=self.f, u0=self.u0, t0=self.t0, a=self.a, exterior=self.exterior)
+
     def u(self, points: np.ndarray) -> np.ndarray:
         """The exact u at points (k, d): (k, d)."""
         return np.stack(_interior(tuple(np.asarray(points, float).T), np), axis=1)

@@ -44,11 +44,7 @@ def _problem(dim, n, kind="linear", tangential="slip", **options):
     problem = SignoriniProblem(
         domain,
         material,
-        f=case.f,
-        u0=case.u0,
-        t0=case.t0,
-        a=case.a,
-        exterior=case.exterior,
+        **case.data,
         tangential=tangential,
         boundary_operator="dense",
         **options,

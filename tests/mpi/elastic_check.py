@@ -28,11 +28,7 @@ case = elastic_contact(domain.mesh, material)
 problem = SignoriniProblem(
     domain,
     material,
-    f=case.f,
-    u0=case.u0,
-    t0=case.t0,
-    a=case.a,
-    exterior=case.exterior,
+    **case.data,
     boundary_operator=sys.argv[3],
 )
 solution = solve(problem, SolverOptions(tol=1e-10))
