@@ -89,6 +89,11 @@ class OracleProjection:
                 return ProjectionResult(phi, i)
         return ProjectionResult(phi, self.cap)
 
+    def __getattr__(self, name: str) -> Any:
+        """The rest of the projection's interface (its bounded entries, ``feasible``) is the
+        exact projection's."""
+        return getattr(self.exact, name)
+
 
 def run_pgpm(case: Case, projection: Projection) -> tuple[RunResult, np.ndarray, float]:
     """PGPM (Algorithm 3.1) on ``case`` from xi_0 = 0 with ``projection``; returns the

@@ -3,9 +3,9 @@ no module grows past the size one can read in a sitting.
 
 Layers, lowest first (a module may import its own layer and the layers below):
 fem_py and bem_cpp -> coupling.options -> coupling.{distributed, functional, timing} ->
-coupling.{problem, manufactured} -> coupling.preconditioners -> coupling.solvers ->
-coupling.io -> coupling.app. The research code beside the library (study/ and bench/,
-not installed) reads the library and is never imported by it.
+coupling.{problem, manufactured, manufactured_elastic} -> coupling.preconditioners ->
+coupling.solvers -> coupling.io -> coupling.app. The research code beside the library
+(study/ and bench/, not installed) reads the library and is never imported by it.
 
 Inside a package the subpackages are layered too (``INNER_LAYERS``, one entry per
 package), with no exception for imports inside functions; and no module of any package
@@ -42,7 +42,7 @@ LAYERS = [
     ("fem_py", "bem_cpp"),
     ("coupling.options",),
     ("coupling.distributed", "coupling.functional", "coupling.timing"),
-    ("coupling.problem", "coupling.manufactured"),
+    ("coupling.problem", "coupling.manufactured", "coupling.manufactured_elastic"),
     ("coupling.preconditioners",),
     ("coupling.solvers",),
     ("coupling.adapt",),

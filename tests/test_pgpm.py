@@ -105,7 +105,9 @@ def test_pgpm_minimiser_equals_tao_bqnls(carstensen):
     problem = manufactured_problem(COMM, solution, carstensen, cells=16)
     result = solve(problem, SolverOptions(tol=1e-12, max_iterations=5000, projection="exact"))
     assert result.converged and result.contact.any() and not result.contact.all()
-    u_tao, phi_tao = solve_tao(problem, tol=1e-11)
+    # BQNLS's gradient stalls between 1e-11 and 3e-11 on some machines (20,000 iterations
+    # on an AVX-512 one); from 3e-11 the two minimisers agree to 2e-11 (u) and 3e-10 (phi)
+    u_tao, phi_tao = solve_tao(problem, tol=3e-11)
     u = result.u.x.array
     assert np.linalg.norm(u - u_tao) <= 1e-7 * np.linalg.norm(u)
     assert np.linalg.norm(result.phi - phi_tao) <= 1e-7 * np.linalg.norm(result.phi)
