@@ -198,3 +198,18 @@ def test_evaluate_and_exterior_give_the_displacement_components(tmp_path):
     first = np.array(lines[1].split(",")[2:4], float)
     assert np.allclose(first, np.array(rows[3][5:7], float), rtol=1e-12)
     assert all(np.isfinite(np.array(line.split(","), float)).all() for line in lines[1:])
+
+
+def test_info_counts_the_elastic_unknowns_as_the_run_does(tmp_path):
+    """``fembem info``: d dofs per node, d gap unknowns per Signorini node with "slip", the
+    amg preconditioner; the counts of the run itself."""
+    config = tmp_path / "c.toml"
+    config.write_text(SQUARE)
+    proc = run_cli("info", str(config), "--json")
+    assert proc.returncode == 0, proc.stderr
+    report = json.loads(proc.stdout)
+    proc, out = _solve(tmp_path, "run", SQUARE)
+    summary = json.loads((out / "summary.json").read_text())
+    assert report["equation"] == "elasticity" and report["preconditioner"] == "amg"
+    for key in ("dofs", "boundary_dofs", "signorini_dofs"):
+        assert report[key] == summary[key], key

@@ -251,7 +251,7 @@ def _solve(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
     comm = MPI.COMM_WORLD
     config = _problem_inputs(args)
     from coupling.app.from_config import estimated_size, planned_size
-    from coupling.app.sizing import check_memory
+    from coupling.app.sizing import check_memory, equation_size
     from coupling.io.figure_worker import FigureWorker
 
     # the geometry and the size refused before anything is built: checks alike on every
@@ -262,7 +262,7 @@ def _solve(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
     rough = size if size is not None else _with_geometry_key(estimated_size, config)
     if rough is not None:
         check_memory(
-            rough,
+            equation_size(rough, config),
             comm.size,
             plots=config.output.plots,
             boundary_operator=config.solver.boundary_operator,
@@ -293,7 +293,7 @@ def _solve_config(
     from coupling.app.from_config import domain_from_config, problem_on_domain
     from coupling.app.progress import ProgressMonitor
     from coupling.app.run import run_solver
-    from coupling.app.sizing import check_memory, size_of_domain
+    from coupling.app.sizing import check_memory, equation_size, size_of_domain
     from fem_py.mesh import mesh_facts
     from coupling.io.atomic import staged_output_dir
     from coupling.io.outputs import RunOutputs
@@ -313,7 +313,12 @@ def _solve_config(
         domain = _with_geometry_key(domain_from_config, comm, config)
         mesh_time = time.perf_counter() - tic
         if size is None:  # a gmsh mesh: refuse before the boundary matrices are formed
-            check_memory(size_of_domain(domain), comm.size, plots=plots, boundary_operator=kind)
+            check_memory(
+                equation_size(size_of_domain(domain), config),
+                comm.size,
+                plots=plots,
+                boundary_operator=kind,
+            )
         problem, options, timings = problem_on_domain(domain, config)
         timings = {"mesh": mesh_time, **timings}
         facts = mesh_facts(domain)  # collective

@@ -28,15 +28,22 @@ def info_report(comm: Any, config: RunConfig, *, size: Any, how: str) -> dict[st
     """Every field of ``fembem info`` for a validated ``config`` whose domain has the sizes
     ``size`` (``how``: how they were found), on ``comm.size`` ranks."""
     from coupling.app.from_config import coarser_configs
-    from coupling.app.sizing import memory_available, memory_estimate
+    from coupling.app.sizing import equation_size, memory_available, memory_estimate
     from coupling.distributed import boundary_operator_kind
     from coupling.preconditioners import preconditioner_kind
 
     solver, dim = config.solver, size.dim
-    operator = boundary_operator_kind(solver.boundary_operator, size.boundary_dofs, dim)
+    elastic = config.problem.equation == "elasticity"
+    kernel = ("lame", config.exterior.E, config.exterior.nu) if elastic else "laplace"
+    components = dim if elastic else 1
+    operator = boundary_operator_kind(
+        solver.boundary_operator, size.boundary_dofs, dim, kernel=kernel
+    )
     adaptive = config.adapt.steps > 0
+    size = equation_size(size, config)
     levels = coarser_configs(config, size.dofs) if solver.nested and not adaptive else []
     return {
+        "equation": config.problem.equation,
         **dataclasses.asdict(size),
         "memory_estimate_bytes": memory_estimate(
             size, comm.size, plots=config.output.plots, boundary_operator=solver.boundary_operator
@@ -46,7 +53,7 @@ def info_report(comm: Any, config: RunConfig, *, size: Any, how: str) -> dict[st
         "sizes": how,
         "domain": config.geometry.mesh or config.geometry.shape,
         "method": solver.method,
-        "preconditioner": preconditioner_kind(solver.preconditioner, dim),
+        "preconditioner": preconditioner_kind(solver.preconditioner, dim, components),
         "boundary_operator": operator,
         "hmatrix_tol": _hmatrix_tol(size.boundary_dofs, dim) if operator == "hmatrix" else None,
         "nested_levels": [float(c.geometry.h) for c in levels],
@@ -67,6 +74,15 @@ def _bytes(n: float) -> str:
     return f"{n / 1e9:.3g} GB" if n >= 1e9 else f"{n / 1e6:.3g} MB"
 
 
+def _lame_crossover(dim: int) -> int:
+    """The boundary nodes from which ``boundary_operator = "auto"`` takes the H-matrix Lame
+    S_h (``coupling.distributed.boundary_operator_kind``)."""
+    import bem_cpp
+
+    defaults = bem_cpp.defaults
+    return defaults.HMATRIX_SURFACE_AUTO_DOFS if dim == 3 else defaults.HMATRIX_LAME_AUTO_NODES
+
+
 def info_lines(report: dict[str, Any], config: RunConfig) -> list[str]:
     """The report of :func:`info_report` as lines for a reader: counts with thousands
     separators, memory in MB or GB, the lines that apply to this domain and run."""
@@ -75,9 +91,13 @@ def info_lines(report: dict[str, Any], config: RunConfig) -> list[str]:
     how = report["sizes"]
     how = f"in {how}" if how == "closed form" else how
     lines = [f"domain          {report['domain']} ({where}); sizes {how}"]
+    if report["equation"] == "elasticity":
+        lines.append(f"equation        elasticity: {dim} displacement components per node")
     lines.append(
         f"unknowns        {report['dofs']:,} dofs, {report['boundary_dofs']:,} on Gamma, "
-        f"{report['signorini_dofs']:,} with a gap unknown (Signorini)"
+        f"{report['signorini_dofs']:,} "
+        + ("gap unknowns" if report["equation"] == "elasticity" else "with a gap unknown")
+        + " (Signorini)"
     )
     if dim == 2:
         lines.append(f"subdomains      {report['subdomains']:,}")
@@ -88,9 +108,12 @@ def info_lines(report: dict[str, Any], config: RunConfig) -> list[str]:
     lines.append(
         f"solver          {report['method']}, preconditioner {report['preconditioner']}{auto}"
     )
-    crossover = HMATRIX_CROSSOVER_3D if dim == 3 else HMATRIX_CROSSOVER
+    if report["equation"] == "elasticity":  # bem_cpp's measured crossovers of the Lame S_h
+        crossover, unit = _lame_crossover(dim), "boundary nodes"
+    else:
+        crossover, unit = HMATRIX_CROSSOVER_3D if dim == 3 else HMATRIX_CROSSOVER, "boundary dofs"
     why = (
-        f"auto: the H-matrix from {crossover:,} boundary dofs on"
+        f"auto: the H-matrix from {crossover:,} {unit} on"
         if config.solver.boundary_operator == "auto"
         else "as set"
     )

@@ -29,13 +29,15 @@ cubes) and library runs (12^3 .. 24^3; docs/design/memory.md, "Bodies in R^3").
 """
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
-
 from coupling.distributed import boundary_operator_kind
+from coupling.options import RunConfig
 from fem_py.mesh import DomainSize
 
 __all__ = [
+    "equation_size",
     "PLOT_PROCESS_BYTES",
     "PLOT_DOF_BYTES",
     "PROCESS_BYTES",
@@ -105,6 +107,22 @@ def memory_available() -> int:
 
 def _gb(n: float) -> str:
     return f"{n / 1e9:.3g} GB"
+
+
+def equation_size(size: DomainSize, config: RunConfig) -> DomainSize:
+    """The unknowns of ``config``'s equation on a domain of ``size`` (P1 node counts): the
+    same for the scalar equation; for elasticity d per node, and d gap unknowns per
+    Signorini node with ``"slip"`` (the normal gap and the slips), one with ``"stick"``."""
+    if config.problem.equation == "scalar":
+        return size
+    d = size.dim
+    gaps = d if config.problem.tangential == "slip" else 1
+    return dataclasses.replace(
+        size,
+        dofs=d * size.dofs,
+        boundary_dofs=d * size.boundary_dofs,
+        signorini_dofs=gaps * size.signorini_dofs,
+    )
 
 
 def check_memory(
