@@ -90,6 +90,9 @@ bench: setup
 	$(PY) bench/outputs.py
 	$(PY) bench/speed.py
 	$(PY) bench/solid.py
+	$(PY) bench/elastic_counts.py
+	$(PY) bench/elastic.py --dim 2
+	$(PY) bench/elastic.py --dim 3
 
 # the 1.6e7-dof run of bench/speed.py (nested, the compact data; ~10 min, ~18 GB)
 bench-large: setup
