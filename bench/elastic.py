@@ -25,28 +25,15 @@ import argparse
 import json
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 if __package__ in (None, ""):  # run as a script: the repository's root on the path
     sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from bench.speed import _measured, run_solve  # noqa: E402
+from bench.solid import STAGES  # noqa: E402
+from bench.speed import _measured, linear_pipeline, run_solve  # noqa: E402
 
 DEFAULT_SIZES = {2: (64, 128, 256), 3: (8, 16, 32)}
-STAGES = (
-    "mesh",
-    "forms",
-    "steklov_poincare",
-    "loads",
-    "coarse_levels",
-    "prolongation",
-    "preconditioner",
-    "step_estimate",
-    "solve",
-    "exterior_flux",
-    "outputs",
-)
 
 
 def write_config(folder: Path, n: int, dim: int) -> Path:
@@ -79,71 +66,28 @@ def write_config(folder: Path, n: int, dim: int) -> Path:
 
 def elasticity_pipeline(cells: int, dim: int) -> dict:
     """Linear elasticity (E = 2.5, nu = 0.25) in the square or the box [-1/4, 1/4]^d under a
-    unit body force, clamped on the boundary: mesh, vector P1 assembly, CG + GAMG with the
-    rigid-body modes to rtol 1e-8; the seconds of each part."""
-    tic = time.perf_counter()
-    import dolfinx.fem.petsc  # noqa: F401 - fem.petsc
-    import numpy as np
-    import ufl
-    from dolfinx import fem, mesh
-    from mpi4py import MPI
-    from petsc4py import PETSc
+    unit body force e_1, clamped on the boundary: mesh, vector P1 assembly, CG + GAMG with
+    the rigid-body modes to rtol 1e-8 (``bench.speed.linear_pipeline``); the seconds of each
+    part."""
 
-    from fem_py.forms.elasticity import lame_parameters, rigid_body_modes
+    def forms(domain):
+        import numpy as np
+        import ufl
+        from dolfinx import fem
+        from petsc4py import PETSc
 
-    times = {"imports": time.perf_counter() - tic}
-    comm = MPI.COMM_WORLD
-    tic = time.perf_counter()
-    corners = [np.full(dim, -0.25), np.full(dim, 0.25)]
-    if dim == 2:
-        domain = mesh.create_rectangle(comm, corners, [cells, cells])
-    else:
-        domain = mesh.create_box(comm, corners, [cells] * 3, mesh.CellType.tetrahedron)
-    times["mesh"] = time.perf_counter() - tic
-    tic = time.perf_counter()
-    V = fem.VectorFunctionSpace(domain, ("Lagrange", 1))
-    lam, mu = lame_parameters(2.5, 0.25)
-    w, v = ufl.TrialFunction(V), ufl.TestFunction(V)
+        from fem_py.forms.elasticity import lame_parameters, rigid_body_modes
 
-    def sigma(u):
-        eps = ufl.sym(ufl.grad(u))
-        return lam * ufl.tr(eps) * ufl.Identity(dim) + 2 * mu * eps
+        V = fem.VectorFunctionSpace(domain, ("Lagrange", 1))
+        lam, mu = lame_parameters(2.5, 0.25)
+        w, v = ufl.TrialFunction(V), ufl.TestFunction(V)
+        eps = ufl.sym(ufl.grad(w))
+        sigma = lam * ufl.tr(eps) * ufl.Identity(dim) + 2 * mu * eps
+        load = fem.Constant(domain, np.eye(dim)[0].astype(PETSc.ScalarType))
+        a = ufl.inner(sigma, ufl.sym(ufl.grad(v))) * ufl.dx
+        return V, a, ufl.inner(load, v) * ufl.dx, rigid_body_modes
 
-    a = fem.form(ufl.inner(sigma(w), ufl.sym(ufl.grad(v))) * ufl.dx)
-    load = fem.Constant(domain, np.eye(dim)[0].astype(PETSc.ScalarType))
-    L = fem.form(ufl.inner(load, v) * ufl.dx)
-    domain.topology.create_connectivity(dim - 1, dim)
-    facets = mesh.exterior_facet_indices(domain.topology)
-    zero = np.zeros(dim, dtype=PETSc.ScalarType)
-    bc = fem.dirichletbc(zero, fem.locate_dofs_topological(V, dim - 1, facets), V)
-    times["forms"] = time.perf_counter() - tic
-    tic = time.perf_counter()
-    A = fem.petsc.assemble_matrix(a, bcs=[bc])
-    A.assemble()
-    b = fem.petsc.assemble_vector(L)
-    fem.petsc.apply_lifting(b, [a], [[bc]])
-    b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-    fem.petsc.set_bc(b, [bc])
-    times["assembly"] = time.perf_counter() - tic
-    tic = time.perf_counter()
-    modes = rigid_body_modes(V)
-    A.setNearNullSpace(PETSc.NullSpace().create(vectors=modes, comm=comm))
-    ksp = PETSc.KSP().create(comm)
-    ksp.setOperators(A)
-    ksp.setType("cg")
-    ksp.getPC().setType("gamg")
-    ksp.setTolerances(rtol=1e-8)
-    ksp.setUp()
-    times["gamg_setup"] = time.perf_counter() - tic
-    tic = time.perf_counter()
-    x = A.createVecRight()
-    ksp.solve(b, x)
-    times["cg"] = time.perf_counter() - tic
-    times["cg_iterations"] = ksp.getIterationNumber()
-    times["converged"] = ksp.getConvergedReason() > 0
-    times["dofs"] = V.dofmap.index_map.size_global * dim
-    times["solve"] = times["assembly"] + times["gamg_setup"] + times["cg"]
-    return times
+    return linear_pipeline(cells, dim, forms)
 
 
 def run_pipeline(cells: int, dim: int) -> dict:
