@@ -658,14 +658,20 @@ class LameBlock : public EntryBlock {
     if (d_.kind == LameSurfaceEntries::Kind::DoubleLayer) {
       if (d_.cache && d_.cache->take_low_rank(key(false), out)) return true;
       far_factors(tol, false);
+      recompress(Yf_, tol);  // as the cached blocks (the same factors with or without the cache)
       out = std::move(Yf_);
       return true;
     }
     far_factors(tol, true);
     out = std::move(Vf_);
     if (d_.cache) {
+      // kept recompressed (as Y's H-matrix will hold them): the cache then holds no more than Y
+      recompress(Yf_, tol);
       d_.cache->put_low_rank(key(false), std::move(Yf_));
-      if (I_ != J_) d_.cache->put_low_rank(key(true), std::move(Ytf_));
+      if (I_ != J_) {
+        recompress(Ytf_, tol);
+        d_.cache->put_low_rank(key(true), std::move(Ytf_));
+      }
     }
     return true;
   }
