@@ -112,6 +112,10 @@ double thread_seconds() {
 /// The row points summed at once by the far pass of the dense blocks (LameBlock::accumulate).
 constexpr int kWidth = 8;
 
+/// The scalar parts of V_h's and Z's far factors (V_L, D^T g D) are recompressed to this fraction
+/// of the blocks' tol before they join A's (LameBlock::far_factors).
+constexpr double kPartTolerance = 0.1;
+
 /// A vector block's rank against the point ACA's rank of g (the choice between the cross
 /// approximation and the dense sum of an admissible block, LameBlock::far_factors).
 constexpr Index kRankRatio = 3;
@@ -966,15 +970,20 @@ class LameBlock : public EntryBlock {
     Ytf_.U = QAc;
     Ytf_.V = CAr;
     if (with_v) {
+      // V_L's and D^T g D's factors at the dofs recompressed first (to tol / 10 of their own
+      // norms): V_L kron I then adds three times the rank the dofs need, not the points'
       const Index rg = G.rank();
-      Eigen::MatrixXd Qgr = Eigen::MatrixXd::Zero(mn_, rg), Qgc = Eigen::MatrixXd::Zero(kn_, rg);
-      add_values_transpose_product(row_parts_, rule, G.U, Qgr);
-      add_values_transpose_product(col_parts_, rule, G.V, Qgc);
-      Vf_.U = beside(kron3(Qgr), QAr) / (2.0 * mu);
-      Vf_.V = beside(kron3(Qgc), QAc);
+      LowRank VL{Eigen::MatrixXd::Zero(mn_, rg), Eigen::MatrixXd::Zero(kn_, rg)};
+      add_values_transpose_product(row_parts_, rule, G.U, VL.U);
+      add_values_transpose_product(col_parts_, rule, G.V, VL.V);
+      recompress(VL, kPartTolerance * tol);
+      Vf_.U = beside(kron3(VL.U), QAr) / (2.0 * mu);
+      Vf_.V = beside(kron3(VL.V), QAc);
       const Eigen::MatrixXd Sgr = sum_over_parts(G.U, n), Sgc = sum_over_parts(G.V, n);
-      Zf_.U = beside(-mu * divergence_map(d_.s, row_parts_, mn_, Sgr), -2.0 * mu * CAr);
-      Zf_.V = beside(divergence_map(d_.s, col_parts_, kn_, Sgc), CAc);
+      LowRank DL{divergence_map(d_.s, row_parts_, mn_, Sgr), divergence_map(d_.s, col_parts_, kn_, Sgc)};
+      recompress(DL, kPartTolerance * tol);
+      Zf_.U = beside(-mu * DL.U, -2.0 * mu * CAr);
+      Zf_.V = beside(DL.V, CAc);
     }
     factors_done_ = true;
     d_.low_rank_ns += static_cast<long>(1e9 * (thread_seconds() - t0));
