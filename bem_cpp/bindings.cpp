@@ -12,7 +12,9 @@
 #include "bem/kelvin.hpp"
 #include "bem/lame_polygon.hpp"
 #include "bem/lame_potentials.hpp"
+#include "bem/lame_steklov.hpp"
 #include "bem/lame_surface.hpp"
+#include "bem/lame_surface_steklov.hpp"
 #include "bem/linear_algebra.hpp"
 #include "bem/operators.hpp"
 #include "bem/potential_operator.hpp"
@@ -83,6 +85,50 @@ PYBIND11_MODULE(_bem, m) {
       .def_property_readonly("nbytes", &bem::SteklovPoincareOperator::nbytes)
       .def_property_readonly("info", &bem::SteklovPoincareOperator::info)
       .def_property_readonly("last_iterations", &bem::SteklovPoincareOperator::last_iterations);
+
+  py::class_<bem::LameSteklovInfo, bem::SteklovInfo>(m, "LameSteklovInfo")
+      .def_readonly("hypersingular_seconds", &bem::LameSteklovInfo::hypersingular_seconds)
+      .def_readonly("preconditioner_seconds", &bem::LameSteklovInfo::preconditioner_seconds)
+      .def_readonly("far_field_cpu_seconds", &bem::LameSteklovInfo::far_field_cpu_seconds);
+  py::class_<bem::LameSteklovOperator>(m, "LameSteklovOperator")
+      .def(py::init([](NodesRef nodes, const bem::Lame& lame, Space flux, bem::Index leaf_size, double eta, double tol,
+                       double preconditioner_tol, double solver_tol, int max_iterations, int product_threads, int rank,
+                       int size, Collective allgather, Collective allreduce) {
+             std::shared_ptr<const bem::Communicator> comm;
+             if (allgather)
+               comm = std::make_shared<const bem::Communicator>(
+                   bem::Communicator{rank, size, std::move(allgather), std::move(allreduce)});
+             return std::make_unique<bem::LameSteklovOperator>(
+                 nodes, lame, flux,
+                 bem::SteklovOptions{{leaf_size, eta, tol, false, product_threads, comm},
+                                     preconditioner_tol,
+                                     solver_tol,
+                                     max_iterations});
+           }),
+           py::arg("nodes"), py::arg("lame"), py::arg("flux"), py::arg("leaf_size"), py::arg("eta"), py::arg("tol"),
+           py::arg("preconditioner_tol"), py::arg("solver_tol"), py::arg("max_iterations"), py::arg("product_threads"),
+           py::arg("rank"), py::arg("size"), py::arg("allgather"), py::arg("allreduce"), Release())
+      .def(py::init([](VerticesRef vertices, TrianglesRef triangles, const bem::Lame& lame, Space flux,
+                       bem::Index leaf_size, double eta, double tol, double solver_tol, int max_iterations,
+                       int product_threads, int rank, int size, Collective allgather, Collective allreduce) {
+             std::shared_ptr<const bem::Communicator> comm;
+             if (allgather)
+               comm = std::make_shared<const bem::Communicator>(
+                   bem::Communicator{rank, size, std::move(allgather), std::move(allreduce)});
+             return bem::lame_surface_steklov_operator(
+                 vertices, triangles, lame, flux,
+                 bem::SteklovOptions{
+                     {leaf_size, eta, tol, false, product_threads, comm}, tol, solver_tol, max_iterations});
+           }),
+           py::arg("vertices"), py::arg("triangles"), py::arg("lame"), py::arg("flux"), py::arg("leaf_size"),
+           py::arg("eta"), py::arg("tol"), py::arg("solver_tol"), py::arg("max_iterations"), py::arg("product_threads"),
+           py::arg("rank"), py::arg("size"), py::arg("allgather"), py::arg("allreduce"), Release())
+      .def("apply", &bem::LameSteklovOperator::apply, py::arg("x"), py::arg("solver_tol") = 0.0, Release())
+      .def("flux", &bem::LameSteklovOperator::flux, py::arg("x"), py::arg("solver_tol") = 0.0, Release())
+      .def_property_readonly("size", &bem::LameSteklovOperator::size)
+      .def_property_readonly("nbytes", &bem::LameSteklovOperator::nbytes)
+      .def_property_readonly("info", &bem::LameSteklovOperator::info)
+      .def_property_readonly("last_iterations", &bem::LameSteklovOperator::last_iterations);
 
   py::class_<bem::BoundaryOperators>(m, "BoundaryOperators")
       .def(py::init([](NodesRef nodes, Space space, bem::Index leaf_size, double eta, double tol, int product_threads) {

@@ -104,27 +104,27 @@ def indices(value: ArrayLike, n: int, name: str) -> NDArray[np.int64]:
 
 
 def vector(value: ArrayLike, n: int, name: str) -> NDArray[np.float64]:
-    try:
-        arr = np.ascontiguousarray(value, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a real array of shape ({n},)") from None
-    if arr.shape != (n,):
-        raise ValueError(f"{name} must have shape ({n},) (one value per node), got {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name} contains non-finite values")
-    return arr
+    """(n,) finite float64 values, one per node."""
+    return _finite(value, (n,), name, "one value per node")
 
 
 def field(value: ArrayLike, n: int, d: int, name: str) -> NDArray[np.float64]:
     """(n, d) finite float64 values, d components per node (a vector field's nodal values)."""
+    return _finite(value, (n, d), name, f"{d} components per node")
+
+
+def _finite(
+    value: ArrayLike, shape: tuple[int, ...], name: str, meaning: str
+) -> NDArray[np.float64]:
+    """``value`` as a C-contiguous finite float64 array of ``shape``; else a one-line
+    ``ValueError`` naming ``name`` and what the shape means."""
+    text = f"({', '.join(map(str, shape))}{',' if len(shape) == 1 else ''})"
     try:
         arr = np.ascontiguousarray(value, dtype=np.float64)
     except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a real array of shape ({n}, {d})") from None
-    if arr.shape != (n, d):
-        raise ValueError(
-            f"{name} must have shape ({n}, {d}) ({d} components per node), got {arr.shape}"
-        )
+        raise ValueError(f"{name} must be a real array of shape {text}") from None
+    if arr.shape != shape:
+        raise ValueError(f"{name} must have shape {text} ({meaning}), got {arr.shape}")
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"{name} contains non-finite values")
     return arr

@@ -251,7 +251,7 @@ def steklov_poincare(
     lame = checks.kernel(kernel)
     if lame is not None:
         return _lame_steklov_poincare(
-            checks.boundary(nodes, triangles), flux, lame, compression, timings, comm
+            checks.boundary(nodes, triangles), flux, lame, compression, tol, timings, comm
         )
     if triangles is not None:
         return _surface_steklov_poincare(
@@ -354,19 +354,44 @@ def _lame_steklov_poincare(
     flux: str,
     lame: _bem.Lame,
     compression: str,
+    tol: float,
     timings: dict[str, float] | None,
     comm: Any,
-) -> NDArray[np.float64]:
-    """:func:`steklov_poincare` with Kelvin's kernel ``lame`` (dense)."""
+) -> NDArray[np.float64] | SteklovPoincareOperator:
+    """:func:`steklov_poincare` with Kelvin's kernel ``lame``: dense, or H-matrices
+    (``"auto"``: from ``HMATRIX_LAME_AUTO_NODES`` nodes of a polygon on, from
+    ``HMATRIX_SURFACE_AUTO_DOFS`` vertices of a surface, as for Laplace's kernel)."""
+    space = checks.space(flux, "flux")
     if compression not in defaults.SURFACE_COMPRESSIONS:
         raise ValueError(
             f"compression must be one of {defaults.SURFACE_COMPRESSIONS}, got {compression!r}"
         )
-    if compression == "hmatrix" or comm is not None:
-        raise ValueError(
-            'the Lame kernel\'s S_h is dense only so far: use compression="none" without comm'
+    surface = len(geometry) == 2
+    if compression == "auto":
+        auto = defaults.HMATRIX_SURFACE_AUTO_DOFS if surface else defaults.HMATRIX_LAME_AUTO_NODES
+        compression = "hmatrix" if geometry[0].shape[0] >= auto else "none"
+    if comm is not None and compression != "hmatrix":
+        raise ValueError('comm needs compression="hmatrix"')
+    if compression == "hmatrix":
+        if surface and flux != "p1":
+            raise ValueError('compression="hmatrix" on a surface needs flux="p1"')
+        layout = dict(
+            leaf_size=defaults.HMATRIX_SURFACE_LEAF_SIZE, eta=defaults.HMATRIX_SURFACE_ETA
         )
-    space = checks.space(flux, "flux")
+        if not surface:
+            layout = dict(
+                leaf_size=defaults.HMATRIX_LEAF_SIZE,
+                eta=defaults.HMATRIX_ETA,
+                preconditioner_tol=defaults.HMATRIX_PRECONDITIONER_TOL,
+            )
+        return _compressed_operator(
+            _bem.LameSteklovOperator,
+            (*geometry, lame, space),
+            comm,
+            timings,
+            tol=checks.tolerance(tol),
+            **layout,
+        )
     d = checks.components(lame, geometry)
     return _dense_steklov_poincare(
         lambda: _bem.lame_operators(*geometry, lame, space),

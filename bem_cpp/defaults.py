@@ -31,6 +31,10 @@ HMATRIX_SURFACE_POTENTIAL_LEAF_SIZE = 128
 HMATRIX_SURFACE_POTENTIAL_ETA = 2.0
 HMATRIX_SURFACE_POTENTIAL_VERTICES = 2000
 HMATRIX_SURFACE_POTENTIAL_POINTS = 500
+# The Lame kernel's S_h (kernel=("lame", E, nu)): compression="auto" takes the H-matrix
+# operator from this many boundary nodes on (2D: at 1,000 nodes its set-up took 0.2-0.5 s
+# against 1.3 s for the dense S_h; docs/design/lame_bem.md).
+HMATRIX_LAME_AUTO_NODES = 1000
 COMPRESSIONS = ("none", "hmatrix")
 SURFACE_COMPRESSIONS = ("none", "hmatrix", "auto")
 POTENTIAL_COMPRESSIONS = ("none", "hmatrix", "auto")

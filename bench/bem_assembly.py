@@ -26,10 +26,18 @@ its peak resident memory is its own: set-up wall time and its split (near field;
 W_h from one ACA per block; K_h), peak memory, one product, CG iterations, and the log-log
 slope of the set-up between the two largest sizes.
 
+A fourth table is elastic (issue 63, docs/design/lame_bem.md): the plane-strain Lame S_h
+(``kernel=("lame", E, nu)``, 2 n dofs) as H-matrices at tol 1e-10 on the circle and the
+L-shape for --lame-sizes, beside the Laplace S_h on the same polygon at the same tol in the
+same run: set-up, memory, one product, CG iterations, the three ratios Lame / Laplace (the
+target: each within 4x at 16,000 nodes), and the dense Lame S_h's set-up for n <=
+--lame-dense-max (where compression="auto" should switch).
+
 Run: .venv/bin/python bench/bem_assembly.py [--sizes 512 1024 2048 4096] [--repeat 2]
      [--hmatrix-sizes 1000 2000 4000 8000 16000 32000 64000] [--shapes circle l-shape]
      [--dense-max 8000] [--error-max 4000] [--skip-dense-table]
      [--surface-levels 3 4 5 6] [--surface-tols 1e-6 1e-8] [--surface-only]
+     [--lame-sizes 1000 2000 4000 8000 16000] [--lame-dense-max 4000] [--lame-only]
 """
 from __future__ import annotations
 
@@ -57,6 +65,9 @@ TARGET_SETUP_64000 = 10.0  # s
 TARGET_ERROR = 10 * TOL
 # product time O(n log n): fitted exponent of t against n log n over n >= 4,000
 PRODUCT_EXPONENT_MAX = 1.2
+# issue 63: the Lame S_h within this factor of the Laplace one (set-up, memory, product)
+LAME_TARGET_RATIO = 4.0
+LAME = ("lame", 2.0, 0.3)
 
 
 SHAPES = {"circle": circle, "l-shape": l_shape}
@@ -117,6 +128,52 @@ def hmatrix_table(shape: str, sizes: list[int], args: argparse.Namespace) -> dic
         )
         del S_h
     return rows
+
+
+def lame_table(shape: str, sizes: list[int], args: argparse.Namespace) -> None:
+    """One row per n: the Lame S_h (H-matrices) against the Laplace S_h of the same run."""
+    header = (
+        f"{'n':>6} {'Lame set-up [s]':>15} {'MB':>7} {'product [ms]':>12} {'CG':>3}"
+        f" {'Laplace set-up':>14} {'MB':>6} {'product':>8} {'CG':>3}"
+        f" {'set-up x':>8} {'MB x':>5} {'product x':>9} {'dense [s]':>9} {'load':>5}"
+    )
+    print(f"\nLame S_h (plane strain, E = 2, nu = 0.3), {shape}, P1 flux, tol {TOL:g}")
+    print(header)
+    print("-" * len(header))
+    rng = np.random.default_rng(0)
+    for n in sizes:
+        X = SHAPES[shape](n)
+        n = len(X)
+        ops, row = {}, {}
+        for name, kernel in (("lame", LAME), ("laplace", "laplace")):
+            t, op = best_of(
+                args.hmatrix_repeat,
+                lambda k=kernel: bem_cpp.steklov_poincare(
+                    X, "p1", compression="hmatrix", tol=TOL, kernel=k
+                ),
+            )
+            x = rng.standard_normal(op.shape[0])
+            t_p, _ = best_of(args.repeat, lambda o=op, v=x: o @ v)
+            row[name] = (t, op.nbytes, t_p, op.last_iterations)
+            ops[name] = op
+        dense = np.nan
+        if n <= args.lame_dense_max:
+            dense, _ = best_of(1, lambda: bem_cpp.steklov_poincare(X, "p1", kernel=LAME))
+        (t, b, p, cg), (t0, b0, p0, cg0) = row["lame"], row["laplace"]
+        print(
+            f"{n:>6} {t:>15.3f} {b / 1e6:>7.1f} {1e3 * p:>12.2f} {cg:>3}"
+            f" {t0:>14.3f} {b0 / 1e6:>6.1f} {1e3 * p0:>8.2f} {cg0:>3}"
+            f" {t / t0:>8.2f} {b / b0:>5.2f} {p / p0:>9.2f} {dense:>9.3f}"
+            f" {os.getloadavg()[0]:>5.1f}",
+            flush=True,
+        )
+        if abs(n - 16000) <= 800:
+            ok = max(t / t0, b / b0, p / p0) <= LAME_TARGET_RATIO
+            print(
+                f"  target at n = {n}: set-up, memory and a product within"
+                f" {LAME_TARGET_RATIO:g}x the Laplace S_h ({verdict(ok)})"
+            )
+        del ops
 
 
 def nearest(rows: dict[int, dict], n: int) -> int | None:
@@ -194,6 +251,13 @@ def main() -> None:
         "dofs, coupling.options.hmatrix_tol) and 1e-8",
     )
     parser.add_argument("--surface-only", action="store_true", help="only the 3D table")
+    parser.add_argument(
+        "--lame-sizes", type=int, nargs="+", default=[1000, 2000, 4000, 8000, 16000]
+    )
+    parser.add_argument(
+        "--lame-dense-max", type=int, default=4000, help="largest n with a dense Lame S_h"
+    )
+    parser.add_argument("--lame-only", action="store_true", help="only the elastic table")
     parser.add_argument("--surface-one", type=int, help=argparse.SUPPRESS)  # child process
     parser.add_argument("--surface-tol", type=float, help=argparse.SUPPRESS)
     args = parser.parse_args()
@@ -209,6 +273,10 @@ def main() -> None:
         f"bem_cpp {bem_cpp.version()}, {os.cpu_count()} cores, OMP_NUM_THREADS {threads},"
         f" load average {load:.2f}"
     )
+    if args.lame_only:
+        for shape in args.shapes:
+            lame_table(shape, args.lame_sizes, args)
+        return
     if not args.surface_only:
         if not args.skip_dense_table:
             dense_table(args)
@@ -216,6 +284,9 @@ def main() -> None:
             rows = hmatrix_table(shape, args.hmatrix_sizes, args)
             print_targets(shape, rows)
     surface_table(args.surface_levels, args.surface_tols)
+    if not args.surface_only:
+        for shape in args.shapes:
+            lame_table(shape, args.lame_sizes, args)
     print(f"load average at the end {os.getloadavg()[0]:.2f}")
 
 

@@ -14,6 +14,7 @@ so no default is written twice.
 from __future__ import annotations
 
 import dataclasses
+import re
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -34,6 +35,7 @@ __all__ = [
     "OutputOptions",
     "RunConfig",
     "hmatrix_tol",
+    "parse_slice",
 ]
 
 
@@ -73,6 +75,7 @@ DEFAULTS: dict[str, dict[str, Any]] = {
         "plots": True,
         "estimator": False,
         "indicators": False,
+        "slice": "auto",
     },
     "adapt": {"steps": 0, "theta": 0.5, "max_dofs": 200000},
 }
@@ -359,13 +362,15 @@ class OutputOptions:
     """The ``[output]`` section: the folder ``dir``, and whether to write solution.xdmf
     and the figures (``coupling.io.outputs.RunOutputs``), to compute the a posteriori
     estimator of a plain or nested solve (adaptive runs always do) and to write its
-    per-cell indicators (which implies it)."""
+    per-cell indicators (which implies it); for a body, the plane of slice.png (``slice``:
+    ``"auto"``, through the Signorini part, or ``"x = c"``, ``"y = c"``, ``"z = c"``)."""
 
     dir: str
     xdmf: bool
     plots: bool
     estimator: bool
     indicators: bool
+    slice: str
 
     @property
     def estimates(self) -> bool:
@@ -402,3 +407,24 @@ class RunConfig:
             section: {key: _toml(getattr(getattr(self, section), key)) for key in keys}
             for section, keys in DEFAULTS.items()
         }
+
+
+#: ``[output] slice``: a coordinate plane "x = c", "y = c" or "z = c"
+_PLANE = re.compile(r"^\s*([xyz])\s*=\s*([-+0-9.eE]+)\s*$")
+
+
+def parse_slice(text: str) -> tuple[int, float] | None:
+    """``[output] slice`` as (the axis across the plane, 0-2; its coordinate), or None for
+    ``"auto"``; a ``ValueError`` for anything else."""
+    if text == "auto":
+        return None
+    match = _PLANE.match(text)
+    try:
+        value = float(match.group(2)) if match else np.nan
+    except ValueError:
+        value = np.nan
+    if not np.isfinite(value):
+        raise ValueError(
+            f'must be "auto" or a coordinate plane "x = c", "y = c" or "z = c", got {text!r}'
+        )
+    return "xyz".index(match.group(1)), value

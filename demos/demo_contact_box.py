@@ -118,7 +118,8 @@ for key, values in rates.items():
 # solution.xdmf (u_h, the named faces and the boundary fields: open it in ParaView), and
 # the figures: signorini.png (the gap with the contact set outlined and the pressure on
 # the bottom face), surface.png (u_h on Gamma from two sides), slice.png (u_h inside and
-# u_e outside on the plane z = 0) and history.png.
+# u_e outside on the plane y = 0 through the bottom face, `[output] slice`'s default) and
+# history.png.
 
 # %%
 out = args.out

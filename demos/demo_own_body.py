@@ -26,12 +26,14 @@ from mpi4py import MPI
 
 from common import OUTPUTS_HELP, demo_parser, outcome, start_demo, write_results
 from common import write_solve_outputs
+from coupling.app.sizing import check_memory
 from coupling.io.quantities import boundary_flux, complementarity, far_field_coefficient
 from coupling.options import SolverOptions
 from coupling.problem import SignoriniProblem
 from coupling.solvers import solve
 from fem_py.forms import make_material
 from fem_py.mesh import GeometrySpec, build_domain
+from fem_py.mesh.size_estimate import gmsh_model_size
 
 description = "A block with a hole from a gmsh OpenCASCADE model, Signorini on a named face."
 parser = demo_parser(
@@ -49,7 +51,9 @@ msh_file = args.out / "block.msh"
 # `occ.cut` drills the hole; the faces of the result are told apart by their centres of
 # mass (the bottom's at z = 0, the wall's on the cylinder's axis, at the block's
 # centre). Every surface and the volume carry a physical group (untagged entities are
-# not read).
+# not read). Before gmsh meshes, `gmsh_model_size` estimates the mesh from the model's
+# volume and areas and `check_memory` refuses, in one line, a mesh size h whose run
+# could not fit in memory (a 3D mesh of too small an h takes gmsh minutes to hours).
 
 # %%
 if comm.rank == 0:
@@ -72,6 +76,7 @@ if comm.rank == 0:
     for number, (name, tags) in enumerate(groups.items(), start=1):
         gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, tags, number), name)
     gmsh.model.setPhysicalName(3, gmsh.model.addPhysicalGroup(3, [body[1]], 10), "body")
+    check_memory(gmsh_model_size(h, signorini=["bottom"]), comm.size, plots=True)
     gmsh.option.setNumber("Mesh.MeshSizeMax", h)
     gmsh.option.setNumber("General.NumThreads", 1)  # the same mesh on every run
     gmsh.model.mesh.generate(3)

@@ -413,3 +413,22 @@ def test_configuration_reference_documents_every_key_with_its_default():
         default, meaning = rows[key]
         assert default == value and type(default) is type(value), key
         assert meaning.strip(), key
+
+
+def test_configuration_reference_speaks_of_bodies_too():
+    """Issue 66, item 8: the reference said the expressions were in x, y (nx, ny) and
+    that geometry.mesh names physical curve groups; a body takes z (nz) and surface
+    groups."""
+    reference = _docs_reference()
+    rows = {
+        m.group(1): m.group(0)
+        for section in ("geometry", "data")
+        for m in re.finditer(r"^\| `([a-z_0-9.]+)` \|.*$", reference.config_markdown(section), re.M)
+    }
+    for key in ("data.f", "data.exact"):
+        assert "`z`" in rows[key] and "(x, y, z)" in rows[key], rows[key]
+    for key in ("data.u0", "data.t0"):
+        assert "`nz`" in rows[key] and "nz)" in rows[key], rows[key]
+    assert "surface groups" in rows["geometry.mesh"]
+    page = (ROOT / "docs" / "guide" / "configuration.md").read_text()
+    assert "also `z`, and `nz`" in page

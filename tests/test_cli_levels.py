@@ -132,3 +132,53 @@ def test_bad_level_settings_are_refused(config, tmp_path, sets, fragment):
     assert proc.returncode == 2
     (line,) = proc.stderr.strip().splitlines()
     assert fragment in line and not out.exists()
+
+
+def test_an_adaptive_run_reports_every_level(config, tmp_path):
+    """Issue 66, item 7: the final line spoke of the last level only ("converged after 2
+    iterations"); it now gives the iterations of every level and their total."""
+    out = tmp_path / "out"
+    proc = run_cli("solve", str(config), "--out", str(out), "--set", "adapt.steps=2")
+    assert proc.returncode == 0, proc.stderr
+    counts = [lv["iterations"] for lv in json.loads((out / "summary.json").read_text())["levels"]]
+    last = proc.stdout.strip().splitlines()[-1]
+    assert last.startswith(f"fembem: converged after {counts[-1]} iterations on the final level")
+    total = (
+        f"{sum(counts)} iterations in all over 3 adaptive levels ({' + '.join(map(str, counts))})"
+    )
+    assert total in last, last
+
+
+def test_history_figure_shows_the_levels():
+    """history.png of a run over several levels: the final level's convergence with
+    integer ticks and a legend entry for each curve drawn, and each level's iterations
+    with their total beneath."""
+    from types import SimpleNamespace
+
+    import matplotlib.pyplot as plt
+
+    from coupling.io.history_figure import figure_history
+    from coupling.io.plots import history_arrays
+
+    records = [  # two iterations, J_h at its lowest from the second on
+        SimpleNamespace(iteration=k, energy=e, step_norm=s, contact=c)
+        for k, e, s, c in ((1, -0.5, 1e-3, 4), (2, -0.6, 1e-9, 4))
+    ]
+    levels = [{"dofs": n, "iterations": k} for n, k in ((65, 10), (105, 3), (179, 2))]
+    fig = figure_history(history_arrays(records, 1e-9, levels, adaptive=True), 1e-8)
+    try:
+        top, contact, per_level = fig.axes
+        assert "15 iterations in all over 3 adaptive levels" in top.get_title()
+        labels = [t.get_text() for t in top.get_legend().get_texts()]
+        assert len(labels) == len(top.get_lines())  # every entry is a curve drawn
+        fig.canvas.draw()
+        for axis in (contact.xaxis, contact.yaxis):
+            ticks = [t for t in axis.get_ticklocs() if t == t]
+            assert all(float(t).is_integer() for t in ticks), ticks
+        assert [p.get_height() for p in per_level.patches] == [10, 3, 2]
+        assert [t.get_text() for t in per_level.get_xticklabels()] == ["65", "105", "179"]
+    finally:
+        plt.close(fig)
+    plain = figure_history(history_arrays(records, 1e-9), 1e-8)
+    assert len(plain.axes) == 2 and plain.axes[0].get_title() == "Convergence (2 iterations)"
+    plt.close(plain)

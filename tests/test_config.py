@@ -31,6 +31,11 @@ def test_values_are_converted_and_overrides_applied(tmp_path):
     [
         ({"mesh": {}}, r"unknown section \[mesh\]"),
         ({"geometry": {"hh": 1}}, "unknown key geometry.hh"),
+        # did you mean ...? (issue 66, item 12): the closest key, a key of another section
+        ({"solver": {"tols": 1e-6}}, r"unknown key solver.tols; did you mean solver.tol\? "),
+        ({"solver": {"Method": "pgpm"}}, r"did you mean solver.method\? the keys of"),
+        ({"geometry": {"tol": 1e-6}}, r"did you mean solver.tol \(a key of \[solver\]\)\?"),
+        ({"solvr": {}}, r"unknown section \[solvr\]; did you mean \[solver\]\? the sections"),
         ({"geometry": {"h": "small"}}, "geometry.h must be a finite number"),
         ({"geometry": {"h": -0.1}}, "geometry.h must be positive"),
         ({"geometry": {"shape": "circle"}}, "geometry.shape must be one of"),

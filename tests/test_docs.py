@@ -221,3 +221,30 @@ def test_page_renders_in_chromium(site, name):
         assert report["mathjax"], "MathJax did not load (offline copy missing?)"
         assert report["typeset"] >= report["rawMath"], report
         assert not report["mathErrors"], report["mathErrors"]
+
+
+def test_a_demo_page_s_contents_box_holds_its_contents(tmp_path):
+    """Issue 66, item 12: the box titled "On this page" held a note on how the page was
+    run; it now links the page's sections, the note under its own title. (The page's
+    text, without building the site.)"""
+    sys.path.insert(0, str(DOCS / "_ext"))
+    try:
+        from fembem_docs.demo_pages import _page
+    finally:
+        sys.path.pop(0)
+    demo = ROOT / "demos" / "demo_own_body.py"
+    run = tmp_path / "run"
+    (run / "out").mkdir(parents=True)
+    (run / "stdout.txt").write_text("")
+    text, _ = _page(demo, run, tmp_path / "figures", "_figures")
+    box = text.index("```{admonition} On this page")
+    note = text.index("```{admonition} How this page was run")
+    entries = text[box:note].splitlines()[3:-2]
+    assert entries == [
+        "- {ref}`Build and mesh the body with gmsh (rank 0) <demo_own_body-section-1>`",
+        "- {ref}`Read, solve, check <demo_own_body-section-2>`",
+        "- {ref}`Outputs <demo_own_body-section-3>`",
+        "- {ref}`The script <demo_own_body-source>`",
+    ]
+    assert "(demo_own_body-section-2)=\n## Read, solve, check" in text
+    assert note < text.index("## Build and mesh the body") and text.count("On this page") == 1

@@ -213,3 +213,36 @@ def test_memory_estimate_of_a_body_uses_the_3d_constants():
     assert held == pytest.approx(base + HMATRIX_BOUNDARY_BYTES_3D * 3_458, rel=1e-12)
     # auto: the H-matrix from coupling.options.HMATRIX_CROSSOVER_3D = 1000 boundary dofs
     assert memory_estimate(size, 1, plots=False) == held
+
+
+BOX = '[geometry]\nshape = "box"\nwidth = 0.5\nh = {h}\nsignorini = ["bottom"]\n'
+
+
+def test_info_reads_well_and_names_the_choices_of_the_run(tmp_path):
+    """Issue 66, item 10: `info` printed `subdomains: 0` for a body, memory in bytes and
+    nothing on the solver, the preconditioner or S_h. Now: units, only the lines that
+    apply, and what "auto" settles to (closed form for the box: no mesh is built)."""
+    config = tmp_path / "box.toml"
+    config.write_text(BOX.format(h=0.015625))  # 32 cubes per side: 6,146 boundary dofs
+    proc = run_cli("info", str(config))
+    assert proc.returncode == 0, proc.stderr
+    text = proc.stdout
+    assert "subdomains" not in text and "_bytes" not in text
+    assert "35,937 dofs, 6,146 on Gamma, 961 with a gap unknown" in text
+    assert "solver          ssn, preconditioner amg (auto)" in text
+    assert "S_h             hierarchical matrix, tolerance 4.1e-05" in text
+    assert "nested          first on 1 coarser mesh (h = 0.03125)" in text
+    assert " MB at its peak on 1 rank (" in text and " GB available)" in text
+    report = json.loads(run_cli("info", str(config), "--json").stdout)
+    fields = {"dofs", "boundary_dofs", "signorini_dofs", "subdomains", "h_min", "h_max", "dim"}
+    fields |= {"memory_estimate_bytes", "memory_available_bytes", "mpi_ranks", "sizes"}
+    assert fields <= set(report)  # --json keeps every field
+    assert report["preconditioner"] == "amg" and report["boundary_operator"] == "hmatrix"
+    assert report["hmatrix_tol"] == pytest.approx(0.25 / 6146)
+    assert report["nested_levels"] == [0.03125] and report["subdomains"] == 0
+    # a square: its subdomains, a dense S_h, the substructuring preconditioner
+    square = tmp_path / "square.toml"
+    square.write_text("[geometry]\nh = 0.03125\nsubdomain_size = 0.125\n")
+    text = run_cli("info", str(square), "--set", "solver.method=pgpm").stdout
+    assert "subdomains      16" in text and "pgpm, preconditioner substructuring" in text
+    assert "S_h             dense 64^2 matrix" in text and "nested" not in text

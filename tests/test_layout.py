@@ -57,7 +57,14 @@ LAZY_UPWARDS: set[tuple[str, str]] = set()
 #: subdomain partitions -> the meshes of Omega -> the forms -> the boundary map.
 INNER_LAYERS = {
     "fem_py": [
-        ("fem_py.parallel", "fem_py.polyline", "fem_py.tags", "fem_py.spec", "fem_py.memory"),
+        (
+            "fem_py.parallel",
+            "fem_py.polyline",
+            "fem_py.tags",
+            "fem_py.spec",
+            "fem_py.memory",
+            "fem_py.signals",
+        ),
         ("fem_py.dofs",),
         ("fem_py.partition",),
         ("fem_py.mesh",),

@@ -18,14 +18,22 @@ def _relative(a: np.ndarray, b: np.ndarray) -> float:
 
 @pytest.mark.mpi
 @pytest.mark.parametrize(
-    "ranks,shape,flux",
-    [(2, "circle", "p1"), (2, "lshape", "p1"), (2, "lshape", "p0"), (3, "lshape", "p1")],
+    "ranks,shape,flux,kernel",
+    [
+        (2, "circle", "p1", "laplace"),
+        (2, "lshape", "p1", "laplace"),
+        (2, "lshape", "p0", "laplace"),
+        (3, "lshape", "p1", "laplace"),
+        (2, "lshape", "p1", "lame"),
+        (2, "circle", "p0", "lame"),
+    ],
 )
-def test_distributed_operator_equals_the_serial_one(tmp_path, ranks, shape, flux):
+def test_distributed_operator_equals_the_serial_one(tmp_path, ranks, shape, flux, kernel):
     """2 ranks: the sums by MPI_Allreduce; 3: by Reduce_scatter and Allgatherv
-    (bem_cpp.collectives)."""
+    (bem_cpp.collectives). The Lame kernel's S_h (2 dofs per node) the same way."""
     out = tmp_path / "s.npz"
-    run_mpi(ranks, SCRIPT, str(out), "2000", shape, flux)
+    n = 2000 if kernel == "laplace" else 1000
+    run_mpi(ranks, SCRIPT, str(out), str(n), shape, flux, kernel)
     d = np.load(out)
     assert tuple(d["shape"]) == (2000, 2000)
     # Each rank holds the serial operator's blocks (symmetric storage of V, V0) cut to its

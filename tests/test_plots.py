@@ -346,3 +346,44 @@ def test_surface_figure_draws_the_nearer_of_two_overlapping_triangles_last(elev,
     image = plt.imread(io.BytesIO(buffer.getvalue()))
     centre = image[image.shape[0] // 2, image.shape[1] // 2, :3]
     np.testing.assert_allclose(centre, to_rgba(nearer)[:3], atol=0.02)
+
+
+def test_the_open_gap_is_drawn_as_the_captions_say():
+    """Issue 66, item 6: README and the docs said "red: computed contact, blue: open gap"
+    while the open part was drawn white on a black edge, panel by panel (a dashed band,
+    half clipped by the axes' frame). Each part is now one line in its colour, white far
+    from the colormap's (tests/test_user_defects_small.py), drawn over the frame; the
+    captions say white."""
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import LineCollection
+    from matplotlib.colors import to_rgba
+
+    from coupling.io.figures import _draw_boundary
+
+    t = np.linspace(0.0, 1.0, 9)[:-1]
+    nodes = np.concatenate(
+        [np.column_stack([t, 0 * t]), np.column_stack([1 + 0 * t, t])]
+        + [np.column_stack([1 - t, 1 + 0 * t]), np.column_stack([0 * t, 1 - t])]
+    )
+    signorini = np.zeros(len(nodes), bool)
+    signorini[1:8] = True  # the bottom side's inner nodes: its 8 panels are Gamma_s
+    phi = np.where(signorini & (nodes[:, 0] > 0.55), 0.1, 0.0)  # open on the right half
+    fields = dict(boundary_x=nodes, signorini=signorini, phi=phi, active=signorini & (phi == 0))
+    fig, ax = plt.subplots()
+    try:
+        _draw_boundary(ax, fields)
+        parts = {c.get_label(): c for c in ax.collections if isinstance(c, LineCollection)}
+        contact = parts[r"$\Gamma_s$ in contact ($\phi_h = 0$)"]
+        open_gap = parts[r"$\Gamma_s$ open ($\phi_h > 0$)"]
+        assert tuple(contact.get_colors()[0]) == to_rgba("tab:red")
+        assert tuple(open_gap.get_colors()[0]) == to_rgba("white")
+        for part, (x0, x1) in ((contact, (0.0, 0.5)), (open_gap, (0.5, 1.0))):
+            (line,) = part.get_paths()  # one line along the run, not one per panel
+            assert line.vertices[:, 0].min() == x0 and line.vertices[:, 0].max() == x1
+            assert not part.get_clip_on()  # Gamma_s on the axes' frame is drawn whole
+    finally:
+        plt.close(fig)
+    for page in ("README.md", "docs/getting-started.md", "docs/guide/outputs.md"):
+        text = " ".join((ROOT / page).read_text().split())
+        assert "white" in text and "blue: open" not in text and "blue where open" not in text
+        assert "blue those with an open gap" not in text, page

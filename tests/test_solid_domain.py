@@ -49,7 +49,8 @@ def test_ball_and_mesh_file_domains(tmp_path):
     spec = GeometrySpec(mesh=str(path), signorini=["bottom"])
     assert spec.dim == 0 and spec_dimension(spec) == 3 == spec_dimension(spec, COMM)
     domain = build_domain(COMM, spec)
-    assert (domain.shape, domain.names, domain.signorini) == ("mesh", {"bottom": 1}, (1,))
+    # every surface group is tagged (issue 66, item 9), the Signorini ones first
+    assert (domain.shape, domain.names, domain.signorini) == ("mesh", {"bottom": 1, "7": 2}, (1,))
     boundary = boundary_map(p1_space(domain.mesh), domain)
     assert boundary.area == pytest.approx(6.0, rel=1e-13)  # the unit cube, round-off
     with pytest.raises(ValueError, match="signorini: .*'omega' .*volume"):

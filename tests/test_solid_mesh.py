@@ -33,6 +33,13 @@ def test_group_tags(cube):
         group_tags(overlapping)
     with pytest.raises(ValueError, match="no physical surface group 'x'"):
         group_tags(cube, ["x"])
+    # the Signorini groups first, then the file's others that overlap none before them
+    _, values, names = group_tags(cube, ["7"], others=True)
+    assert names == {"7": 1, "bottom": 2} and len(values) == len(facets) + len(
+        cube.surfaces["bottom"]
+    )
+    _, values, names = group_tags(overlapping, ["again"], others=True)
+    assert names == {"again": 1, "7": 3}  # "bottom" overlaps "again": left out whole
 
 
 def test_solid_mesh_and_surface(cube):

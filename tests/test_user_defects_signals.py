@@ -99,3 +99,60 @@ def test_a_run_stuck_in_native_code_ends_on_a_signal(tmp_path, signum):
     lines = [ln for ln in stderr.splitlines() if ln.strip()]
     assert lines == [f"fembem: interrupted by {signum.name}; no output of this run was kept"]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["c.toml"]  # no staging folder left
+
+
+# Issue 66, item 2: gmsh's Python module sets SIGINT to the default action on import, so a
+# Ctrl-C while gmsh meshed killed the run with no message and left its staging folder.
+
+BALL = '[geometry]\nshape = "ball"\nradius = 0.25\nh = 0.008\nsignorini = ["bottom"]\n'
+
+
+def test_a_gmsh_session_keeps_the_sigint_action():
+    from fem_py.mesh.gmsh_mesh import gmsh_session
+    from fem_py.signals import sigaction
+
+    def handler(signum, frame):
+        pass
+
+    previous = signal.signal(signal.SIGINT, handler)
+    try:
+        action = sigaction(signal.SIGINT)
+        action.flags |= 0x80000000  # SA_RESETHAND, as the watchdog sets it
+        sigaction(signal.SIGINT, action)
+        for _ in range(2):  # gmsh's import (once per process) and its finalize
+            with gmsh_session() as gmsh:
+                assert signal.getsignal(signal.SIGINT) is handler
+                gmsh.model.add("empty")
+            assert signal.getsignal(signal.SIGINT) is handler
+            kept = sigaction(signal.SIGINT)
+            assert (kept.handler, kept.flags) == (action.handler, action.flags)
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def test_ctrl_c_while_gmsh_meshes_ends_in_one_line(tmp_path):
+    import time
+
+    config = tmp_path / "ball.toml"
+    config.write_text(BALL)  # gmsh meshes it for 15-25 s
+    out = tmp_path / "out"
+    proc = subprocess.Popen(
+        [FEMBEM, "solve", str(config), "--out", str(out)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=ROOT,
+    )
+    for line in proc.stdout:
+        if line.startswith("fembem: building the mesh"):
+            time.sleep(2.0)  # gmsh is meshing now
+            proc.send_signal(signal.SIGINT)
+            break
+    stdout, stderr = proc.communicate(timeout=60)
+    # gmsh does not return to Python while it meshes: the watchdog ends the run by the
+    # signal 3 s later (exit status 130 as a shell sees it), after its one line
+    assert proc.returncode in (-signal.SIGINT, 130), stderr
+    lines = [ln for ln in stderr.splitlines() if ln.strip()]
+    assert lines == ["fembem: interrupted by SIGINT; no output of this run was kept"]
+    assert "  it " not in stdout, "the signal came after the mesh"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["ball.toml"]

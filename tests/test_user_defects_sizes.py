@@ -98,3 +98,93 @@ def test_a_run_that_cannot_fit_is_refused_before_it_is_built(tmp_path, structure
     assert report["memory_estimate_bytes"] > report["memory_available_bytes"]
     assert report["dofs"] > 2e9  # (0.5 / 1e-5)^2 nodes and more
     assert report["sizes"].startswith("closed form" if structured == "true" else "estimated")
+
+
+# Issue 66, item 1: the ball (a gmsh mesh in 3D) and a user's OpenCASCADE model are
+# estimated from their volume, surface and h before gmsh meshes them.
+
+BALL = """\
+[geometry]
+shape = "ball"
+radius = 0.25
+h = {h}
+signorini = ["bottom"]
+"""
+
+
+def test_ball_size_estimate_is_close_below_the_mesh():
+    spec = GeometrySpec("ball", radius=0.25, h=0.035, signorini=["bottom"])
+    built = size_of_domain(build_domain(MPI.COMM_SELF, spec))
+    guess = mesh_size_estimate(spec)
+    # measured 0.85-0.94 of the mesh's dofs at h = r/5 .. r/28
+    assert 0.8 * built.dofs <= guess.dofs <= built.dofs
+    assert guess.boundary_dofs == pytest.approx(built.boundary_dofs, rel=0.15)
+    assert guess.signorini_dofs == pytest.approx(built.signorini_dofs, rel=0.15)
+    assert guess.dim == 3
+    tracemalloc.start()
+    mesh_size_estimate(GeometrySpec("ball", radius=0.25, h=1e-6))
+    assert tracemalloc.get_traced_memory()[1] < 1e6
+    tracemalloc.stop()
+
+
+def _block_with_a_hole(gmsh):
+    """demos/demo_own_body.py's block 0.6 x 0.4 x 0.3 with a hole of radius 0.08, its
+    bottom face the physical group "bottom" (2) and the other faces "rest" (3)."""
+    occ = gmsh.model.occ
+    block = occ.addBox(0.0, 0.0, 0.0, 0.6, 0.4, 0.3)
+    drill = occ.addCylinder(0.3, -0.1, 0.15, 0.0, 0.6, 0.0, 0.08)
+    (body,), _ = occ.cut([(3, block)], [(3, drill)])
+    occ.synchronize()
+    faces = [tag for _, tag in gmsh.model.getEntities(2)]
+    bottom = [t for t in faces if abs(occ.getCenterOfMass(2, t)[2]) < 1e-9]
+    rest = [t for t in faces if t not in bottom]
+    gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, bottom, 2), "bottom")
+    gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, rest, 3), "rest")
+    gmsh.model.addPhysicalGroup(3, [body[1]], 10)
+    return bottom
+
+
+def test_gmsh_model_size_of_an_occ_body_before_meshing():
+    import gmsh
+
+    from fem_py.mesh.size_estimate import gmsh_model_size
+
+    gmsh.initialize(readConfigFiles=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        bottom = _block_with_a_hole(gmsh)
+        guess = gmsh_model_size(0.03, signorini=["bottom"])
+        assert gmsh_model_size(0.03, signorini=[2]) == guess  # a group by its number
+        everything = gmsh_model_size(0.03)
+        gmsh.option.setNumber("Mesh.MeshSizeMax", 0.03)
+        gmsh.option.setNumber("General.NumThreads", 1)
+        gmsh.model.mesh.generate(3)
+        nodes = len(gmsh.model.mesh.getNodes()[0])
+        surface = {
+            n for _, t in gmsh.model.getEntities(2) for n in gmsh.model.mesh.getNodes(2, t, True)[0]
+        }
+        contact = set(gmsh.model.mesh.getNodes(2, bottom[0], True)[0])
+    finally:
+        gmsh.finalize()
+    # measured 1.01 of the mesh's nodes, 0.92 of its surface nodes, 0.84 of the bottom's
+    assert guess.dim == 3 and 0.8 * nodes <= guess.dofs <= 1.1 * nodes
+    assert guess.boundary_dofs == pytest.approx(len(surface), rel=0.15)
+    assert guess.signorini_dofs == pytest.approx(len(contact), rel=0.25)
+    assert everything.signorini_dofs == everything.boundary_dofs
+
+
+def test_a_ball_that_cannot_fit_is_refused_before_it_is_meshed(tmp_path):
+    # 0.55 (4/3 pi 0.25^3) / h^3 = 2.9e8 dofs: gmsh would mesh it for hours
+    config = tmp_path / "c.toml"
+    config.write_text(BALL.format(h=5e-4))
+    proc = run_cli("solve", str(config), "--out", str(tmp_path / "out"), timeout=60)
+    assert proc.returncode == 2, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and "needs about" in lines[0] and "geometry.h" in lines[0], lines
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["c.toml"]
+    info = run_cli("info", str(config), "--json", timeout=60)
+    assert info.returncode == 0, info.stderr
+    report = json.loads(info.stdout)
+    assert report["memory_estimate_bytes"] > report["memory_available_bytes"]
+    assert report["dofs"] > 2e8 and report["dim"] == 3
+    assert report["sizes"].startswith("estimated")

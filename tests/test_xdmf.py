@@ -132,3 +132,33 @@ def test_box_xdmf_holds_the_run_and_is_the_same_on_two_ranks(tmp_path):
         assert np.count_nonzero(np.ptp(corners, axis=0) < 1e-15) == 1, tag  # a plane x_i = c
         assert np.all(np.abs(corners).max(axis=1) == pytest.approx(0.25)), tag
     _check_ranks(data, runs[2][0])
+
+
+def test_a_mesh_file_body_tags_every_named_surface_group(tmp_path):
+    """Issue 66, item 9: solution.xdmf of a body from a mesh file tagged its Signorini
+    groups only; every surface group is there now, named (XDMF Information), and DOLFINx
+    reads the file back."""
+    from mpi4py import MPI
+
+    from dolfinx import io as dio
+    from solid_files import solid_msh
+
+    solid_msh(tmp_path / "cube.msh", h=0.25)  # groups "bottom" and 7 (unnamed: the rest)
+    text = (
+        '[geometry]\nmesh = "cube.msh"\nsignorini = ["bottom"]\n'
+        '[data]\nf = "1"\nt0 = "-1"\n[output]\nplots = false\n'
+    )
+    data, items, fields = _read(_solve(tmp_path, "cube", text, 1))
+    faces, tags = data["/MeshTags/faces/topology"], data["/MeshTags/faces/Values"][:, 0]
+    assert len(faces) == len(fields["boundary_triangles"])  # every boundary triangle
+    x = data["/Mesh/mesh/geometry"]
+    bottom = np.isclose(x[faces][:, :, 2], 0.0).all(axis=1)
+    assert set(tags[bottom]) == {1} and set(tags[~bottom]) == {2}
+    root = ET.parse(tmp_path / "cube-1" / "solution.xdmf").getroot()
+    named = {i.get("Name"): int(i.get("Value")) for i in root.iter("Information")}
+    assert named == {"bottom": 1, "7": 2}
+    with dio.XDMFFile(MPI.COMM_SELF, str(tmp_path / "cube-1" / "solution.xdmf"), "r") as f:
+        msh = f.read_mesh(name="mesh")
+        msh.topology.create_connectivity(2, 0)
+        read = f.read_meshtags(msh, name="faces")
+    assert sorted(np.unique(read.values)) == [1, 2] and len(read.values) == len(faces)

@@ -32,23 +32,6 @@ Matrix zeros(Index N) {
   return A;
 }
 
-/// Calls f(i) for every panel i, in parallel, such that panels processed at the same time
-/// never share a node (even panels, odd panels, then the last one if n is odd): f(i) may
-/// write the rows of the nodes i and i + 1 freely.
-template <class F>
-void for_each_panel_coloured(Index n, F&& f) {
-  const Index half = n / 2;
-#pragma omp parallel
-  {
-#pragma omp for schedule(dynamic, 1)
-    for (Index k = 0; k < half; ++k) f(2 * k);
-#pragma omp for schedule(dynamic, 1)
-    for (Index k = 0; k < half; ++k) f(2 * k + 1);
-#pragma omp single
-    if (n % 2 == 1) f(n - 1);
-  }
-}
-
 /// A := A + A^T, tile by tile in parallel (tiles (I, J) and (J, I) belong to one thread);
 /// the result is exactly symmetric.
 void symmetrise(Matrix& A) {

@@ -34,25 +34,6 @@ void add_shifted(double* row, const double* start, const double* end, Index j0, 
   if (j0 > 0) row[0] += end[n - 1];
 }
 
-/// Calls f(i) for every panel i, in parallel, such that panels processed at the same
-/// time never share a node: even panels, then odd panels, then the last panel if n is
-/// odd (it shares node 0 with panel 0). f(i) may then write rows i and i+1 freely.
-template <class F>
-void for_each_panel_coloured(Index n, F&& f) {
-  const Index n_even = n / 2;  // even panels, without panel n - 1 when n is odd
-  const Index n_odd = n / 2;
-#pragma omp parallel
-  {
-    // Panel i carries n - i pairs: dynamic scheduling balances the triangle.
-#pragma omp for schedule(dynamic, 1)
-    for (Index k = 0; k < n_even; ++k) f(2 * k);
-#pragma omp for schedule(dynamic, 1)
-    for (Index k = 0; k < n_odd; ++k) f(2 * k + 1);
-#pragma omp single
-    if (n % 2 == 1) f(n - 1);
-  }
-}
-
 /// Applies f(r, c) to all r < c, tile by tile, in parallel; tiles (I, J) and (J, I)
 /// belong to one thread, so f may touch (r, c) and (c, r).
 template <class F>

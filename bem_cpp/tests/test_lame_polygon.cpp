@@ -11,53 +11,11 @@
 #include "test_helpers.hpp"
 
 using namespace bem;
+using bem::test::dart;
+using bem::test::kron2;
+using bem::test::l_shape;
 
 namespace {
-
-/// L-shape: the square [-s, s]^2 without its upper right quarter, k panels per length s.
-Points l_shape(Index k, double s = 0.3) {
-  const double c[6][2] = {{-s, -s}, {s, -s}, {s, 0}, {0, 0}, {0, s}, {-s, s}};
-  const Index per[6] = {2 * k, k, k, k, k, 2 * k};
-  Points X(8 * k, 2);
-  Index row = 0;
-  for (int side = 0; side < 6; ++side)
-    for (Index j = 0; j < per[side]; ++j) {
-      const double w = static_cast<double>(j) / static_cast<double>(per[side]);
-      const int e = (side + 1) % 6;
-      X(row, 0) = (1 - w) * c[side][0] + w * c[e][0];
-      X(row, 1) = (1 - w) * c[side][1] + w * c[e][1];
-      ++row;
-    }
-  return X;
-}
-
-/// A thin triangle with a 10 degree angle at the origin and its two long sides graded
-/// quadratically towards it (neighbouring lengths up to 1:3, 1:20 across the apex): sharp
-/// adjacent pairs, unequal lengths and near pairs of the quadrature. k panels per long side.
-Points dart(Index k) {
-  const double L = 0.6, a = 5.0 * M_PI / 180.0;
-  const Vec2 B{L * std::cos(a), -L * std::sin(a)}, C{L * std::cos(a), L * std::sin(a)};
-  Points X(2 * k + 1, 2);
-  Index row = 0;
-  for (Index j = 0; j < k; ++j) {  // origin -> B
-    const double w = std::pow(static_cast<double>(j) / static_cast<double>(k), 2);
-    X.row(row++) << w * B.x, w * B.y;
-  }
-  X.row(row++) << B.x, B.y;
-  for (Index j = 0; j < k; ++j) {  // C -> origin (the base B -> C is one panel)
-    const double w = std::pow(1.0 - static_cast<double>(j) / static_cast<double>(k), 2);
-    X.row(row++) << w * C.x, w * C.y;
-  }
-  return X;
-}
-
-/// Scalar matrix kron I_2 (node-major vector dofs).
-Matrix kron2(const Matrix& A) {
-  Matrix B = Matrix::Zero(2 * A.rows(), 2 * A.cols());
-  for (Index r = 0; r < A.rows(); ++r)
-    for (Index c = 0; c < A.cols(); ++c) B(2 * r, 2 * c) = B(2 * r + 1, 2 * c + 1) = A(r, c);
-  return B;
-}
 
 /// The three rigid motions at the nodes: e_x, e_y, x -> (-y, x).
 Matrix rigid_motions(const Polygon& poly) {

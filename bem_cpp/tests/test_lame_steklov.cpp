@@ -13,54 +13,15 @@
 #include "bem/lame_steklov.hpp"
 #include "bem/operators.hpp"
 #include "test_helpers.hpp"
+#include "test_ranks.hpp"
 
 using namespace bem;
+using bem::test::dart;
+using bem::test::kron2;
+using bem::test::l_shape;
+using bem::test::ThreadGroup;
 
 namespace {
-
-/// L-shape: the square [-s, s]^2 without its upper right quarter, k panels per length s.
-Points l_shape(Index k, double s = 0.3) {
-  const double c[6][2] = {{-s, -s}, {s, -s}, {s, 0}, {0, 0}, {0, s}, {-s, s}};
-  const Index per[6] = {2 * k, k, k, k, k, 2 * k};
-  Points X(8 * k, 2);
-  Index row = 0;
-  for (int side = 0; side < 6; ++side)
-    for (Index j = 0; j < per[side]; ++j) {
-      const double w = static_cast<double>(j) / static_cast<double>(per[side]);
-      const int e = (side + 1) % 6;
-      X(row, 0) = (1 - w) * c[side][0] + w * c[e][0];
-      X(row, 1) = (1 - w) * c[side][1] + w * c[e][1];
-      ++row;
-    }
-  return X;
-}
-
-/// The thin triangle of tests/test_lame_polygon.cpp: a 10 degree angle at the origin, the
-/// two long sides graded quadratically towards it, k panels each.
-Points dart(Index k) {
-  const double L = 0.6, a = 5.0 * M_PI / 180.0;
-  const Vec2 B{L * std::cos(a), -L * std::sin(a)}, C{L * std::cos(a), L * std::sin(a)};
-  Points X(2 * k + 1, 2);
-  Index row = 0;
-  for (Index j = 0; j < k; ++j) {
-    const double w = std::pow(static_cast<double>(j) / static_cast<double>(k), 2);
-    X.row(row++) << w * B.x, w * B.y;
-  }
-  X.row(row++) << B.x, B.y;
-  for (Index j = 0; j < k; ++j) {
-    const double w = std::pow(1.0 - static_cast<double>(j) / static_cast<double>(k), 2);
-    X.row(row++) << w * C.x, w * C.y;
-  }
-  return X;
-}
-
-/// Scalar matrix kron I_2 (node-major vector dofs).
-Eigen::MatrixXd kron2(const Eigen::MatrixXd& A) {
-  Eigen::MatrixXd B = Eigen::MatrixXd::Zero(2 * A.rows(), 2 * A.cols());
-  for (Index r = 0; r < A.rows(); ++r)
-    for (Index c = 0; c < A.cols(); ++c) B(2 * r, 2 * c) = B(2 * r + 1, 2 * c + 1) = A(r, c);
-  return B;
-}
 
 double relative(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) { return (a - b).norm() / b.norm(); }
 
@@ -78,60 +39,6 @@ SteklovOptions options(double tol) {
 }
 
 const Lame kSteel{1.0, 0.3};
-
-/// The collectives of `size` threads (each thread one rank), as tests/test_distributed.cpp.
-class ThreadGroup {
- public:
-  explicit ThreadGroup(int size) : size_(size), slots_(static_cast<std::size_t>(size)) {}
-
-  std::shared_ptr<const Communicator> communicator(int rank) {
-    auto c = std::make_shared<Communicator>();
-    c->rank = rank;
-    c->size = size_;
-    c->allgather = [this, rank](const Eigen::MatrixXd& local, const std::vector<Index>& counts) {
-      slots_[static_cast<std::size_t>(rank)] = local;
-      barrier();
-      Index n = 0;
-      for (Index c : counts) n += c;
-      Eigen::MatrixXd out(n, local.cols());
-      Index r0 = 0;
-      for (int r = 0; r < size_; ++r) {
-        out.middleRows(r0, counts[static_cast<std::size_t>(r)]) = slots_[static_cast<std::size_t>(r)];
-        r0 += counts[static_cast<std::size_t>(r)];
-      }
-      barrier();
-      return out;
-    };
-    c->allreduce = [this, rank](const Eigen::MatrixXd& partial, const std::vector<Index>&) {
-      slots_[static_cast<std::size_t>(rank)] = partial;
-      barrier();
-      Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(partial.rows(), partial.cols());
-      for (int r = 0; r < size_; ++r) sum += slots_[static_cast<std::size_t>(r)];  // rank order
-      barrier();
-      return sum;
-    };
-    return c;
-  }
-
- private:
-  void barrier() {
-    std::unique_lock<std::mutex> lock(mutex_);
-    const long generation = generation_;
-    if (++waiting_ == size_) {
-      waiting_ = 0;
-      ++generation_;
-      cv_.notify_all();
-    } else {
-      cv_.wait(lock, [&] { return generation_ != generation; });
-    }
-  }
-  int size_;
-  std::vector<Eigen::MatrixXd> slots_;
-  std::mutex mutex_;
-  std::condition_variable cv_;
-  int waiting_ = 0;
-  long generation_ = 0;
-};
 
 }  // namespace
 

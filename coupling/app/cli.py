@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import dataclasses
 import json
 import os
 import signal
@@ -159,10 +158,16 @@ def build_parser() -> argparse.ArgumentParser:
     info = sub.add_parser(
         "info",
         help="the size of a run without running it",
-        description="Validate CONFIG and print, without solving, the sizes of its problem: "
-        "dofs, boundary_dofs, signorini_dofs, subdomains, h_min, h_max, dim (in closed form "
-        "for the structured square and L-shape and the box; otherwise the mesh is built) and "
-        "memory_estimate_bytes, the estimated peak memory of `fembem solve`.",
+        description="Validate CONFIG and print, without solving, the sizes of its problem "
+        "(dofs, on Gamma, Signorini unknowns, subdomains of a planar domain, the mesh size; "
+        "in closed form for the structured square and L-shape and the box, otherwise "
+        "estimated before meshing and the mesh built and counted when it fits in memory), "
+        "the choices the run will make (solver, preconditioner, S_h dense or a hierarchical "
+        "matrix with its tolerance, the coarser levels of a nested solve) and the estimated "
+        "peak memory of `fembem solve`. --json prints every field: dofs, boundary_dofs, "
+        "signorini_dofs, subdomains, h_min, h_max, dim, memory_estimate_bytes, "
+        "memory_available_bytes, mpi_ranks, sizes, domain, method, preconditioner, "
+        "boundary_operator, hmatrix_tol, nested_levels (their h), adaptive_steps.",
     )
     info.add_argument("config", metavar="CONFIG.toml")
     info.add_argument("--json", action="store_true", help="print the report as JSON")
@@ -321,7 +326,12 @@ def _solve_config(
             _say(f"warning: {line}")
         if monitor is not None:
             monitor.problem(problem, options, arc_lengths, facts)
-        run = run_solver(comm, config, domain, problem, timings, monitor, after_solve=outputs.start)
+        adaptive = config.adapt.steps > 0
+
+        def after_solve(problem: Any, solution: Any, levels: list[dict] | None) -> None:
+            outputs.start(problem, solution, levels=levels, adaptive=adaptive)
+
+        run = run_solver(comm, config, domain, problem, timings, monitor, after_solve=after_solve)
         result = run.solution
         if monitor is not None:
             monitor.finished(result)
@@ -331,25 +341,38 @@ def _solve_config(
             total=process_seconds,
             config=config,
             levels=run.levels,
-            adaptive=config.adapt.steps > 0,
+            adaptive=adaptive,
             estimator=run.estimator,
             error=run.error,
             indicators=run.indicators,
             facts=facts if run.problem.domain is domain else None,
         )
     if comm.rank == 0 and not args.quiet:
-        state = "converged" if result.converged else "did NOT converge"
-        print(
-            f"fembem: {state} after {result.iterations} iterations ({result.reason}); "
-            f"outputs in {out}"
-        )
+        print(f"fembem: {final_line(result, run.levels, adaptive)}; outputs in {out}")
     return EXIT_OK if result.converged else EXIT_NOT_CONVERGED
+
+
+def final_line(result: Any, levels: list[dict] | None, adaptive: bool) -> str:
+    """The last line of ``fembem solve``: whether the final solve converged, after how many
+    iterations, and, for a run over several levels (nested, or ``adaptive``), the
+    iterations of each level and their total."""
+    state = "converged" if result.converged else "did NOT converge"
+    if not levels or len(levels) < 2:
+        return f"{state} after {result.iterations} iterations ({result.reason})"
+    counts = [int(r["iterations"]) for r in levels]
+    kind = "adaptive" if adaptive else "nested"
+    return (
+        f"{state} after {result.iterations} iterations on the final level ({result.reason}); "
+        f"{sum(counts)} iterations in all over {len(counts)} {kind} levels "
+        f"({' + '.join(map(str, counts))})"
+    )
 
 
 def _info(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
     from mpi4py import MPI
 
     from coupling.app.from_config import domain_from_config, estimated_size, planned_size
+    from coupling.app.info import info_lines, info_report
     from coupling.app.sizing import memory_available, memory_estimate, size_of_domain
 
     comm = MPI.COMM_WORLD
@@ -358,7 +381,7 @@ def _info(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
     how = "closed form"
     if size is None:
         size = _with_geometry_key(estimated_size, config)
-        how = "estimated from the area and h: the mesh would not fit in memory"
+        how = "estimated from the size of Omega and h: the mesh would not fit in memory"
         if (
             size is None
             or memory_estimate(
@@ -371,24 +394,12 @@ def _info(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
         ):  # a mesh that cannot fit is not built to be counted
             size = size_of_domain(_with_geometry_key(domain_from_config, comm, config))
             how = "from the mesh"
-    report = {
-        **dataclasses.asdict(size),
-        "memory_estimate_bytes": memory_estimate(
-            size,
-            comm.size,
-            plots=config.output.plots,
-            boundary_operator=config.solver.boundary_operator,
-        ),
-        "memory_available_bytes": memory_available(),
-        "mpi_ranks": comm.size,
-        "sizes": how,
-    }
+    report = info_report(comm, config, size=size, how=how)
     if comm.rank == 0:
         if args.json:
             print(json.dumps(report, indent=2))
         else:
-            for key, value in report.items():
-                print(f"{key}: {value:.6g}" if isinstance(value, float) else f"{key}: {value}")
+            print("\n".join(info_lines(report, config)))
     return EXIT_OK
 
 

@@ -9,6 +9,7 @@ message names the key and says what to do.
 from __future__ import annotations
 
 import copy
+import difflib
 import math
 import re
 import tomllib
@@ -25,6 +26,7 @@ from coupling.options import (
     MaterialOptions,
     OutputOptions,
     RunConfig,
+    parse_slice,
     solver_options,
 )
 from fem_py.spec import PLANAR_ONLY, SOLID_SHAPES, GeometrySpec
@@ -115,6 +117,11 @@ def _check_value(section: str, key: str, value: Any) -> Any:
         raise ConfigError(f"{name} (rho_in of (3.6)) must lie in [0, 1), got {value!r}")
     if (section, key) == ("adapt", "theta") and not 0 < value <= 1:
         raise ConfigError(f"{name} (Doerfler's parameter) must lie in (0, 1], got {value!r}")
+    if (section, key) == ("output", "slice"):
+        try:
+            parse_slice(value)
+        except ValueError as err:
+            raise ConfigError(f"{name} {err}") from None
     if (section, key) == ("adapt", "steps") and value < 0:
         raise ConfigError(f"{name} must be >= 0 (0: no adaptive refinement), got {value!r}")
     return value
@@ -237,14 +244,17 @@ def _checked(raw: dict[str, Any]) -> dict[str, dict[str, Any]]:
     for section, table in raw.items():
         if section not in DEFAULTS:
             known = ", ".join(f"[{s}]" for s in DEFAULTS)
-            raise ConfigError(f"unknown section [{section}]; the sections are {known}")
+            guess = _closest(section, list(DEFAULTS))
+            hint = f"did you mean [{guess}]? " if guess else ""
+            raise ConfigError(f"unknown section [{section}]; {hint}the sections are {known}")
         if not isinstance(table, dict):
             raise ConfigError(f"[{section}] must be a table of keys")
         for key, value in table.items():
             if key not in DEFAULTS[section]:
                 known = ", ".join(DEFAULTS[section])
                 raise ConfigError(
-                    f"unknown key {section}.{key}; the keys of [{section}] " f"are {known}"
+                    f"unknown key {section}.{key}; {_key_hint(section, key)}the keys of "
+                    f"[{section}] are {known}"
                 )
             config[section][key] = _check_value(section, key, value)
     solver = config["solver"]
@@ -265,6 +275,26 @@ def _checked(raw: dict[str, Any]) -> dict[str, dict[str, Any]]:
     return config
 
 
+def _closest(word: str, choices: list[str]) -> str | None:
+    """The choice closest to a misspelt ``word`` (difflib's ratio at least 0.6), or None."""
+    found = difflib.get_close_matches(word, choices, n=1)
+    if not found:  # a case slip or a word in the wrong case ("TOL", "Solver")
+        found = [c for c in choices if c.lower() == word.lower()]
+    return found[0] if found else None
+
+
+def _key_hint(section: str, key: str) -> str:
+    """ "did you mean ...? " for an unknown ``section.key``: the key of that section it is
+    closest to, or the same key in the section it belongs to; "" when none is close."""
+    guess = _closest(key, list(DEFAULTS[section]))
+    if guess:
+        return f"did you mean {section}.{guess}? "
+    elsewhere = [s for s, table in DEFAULTS.items() if key in table]
+    if elsewhere:
+        return f"did you mean {elsewhere[0]}.{key} (a key of [{elsewhere[0]}])? "
+    return ""
+
+
 #: The [geometry] keys of a generated shape, which a mesh file sets itself.
 GENERATED_KEYS = (
     "shape",
@@ -280,7 +310,8 @@ GENERATED_KEYS = (
 
 def _check_mesh_keys(geometry: dict[str, Any], given: dict[str, Any]) -> None:
     """``mesh`` excludes the keys of a generated shape; ``subdomains = "physical"`` needs
-    ``mesh``; a mesh file takes names of physical curve groups as ``signorini``."""
+    ``mesh``; a mesh file takes names of physical groups as ``signorini`` (curve groups
+    of a 2D mesh, surface groups of a 3D one)."""
     if not geometry["mesh"]:
         if geometry["subdomains"] != "auto":
             raise ConfigError(
@@ -297,8 +328,9 @@ def _check_mesh_keys(geometry: dict[str, Any], given: dict[str, Any]) -> None:
     signorini = geometry["signorini"]
     if signorini != "all" and any(not isinstance(s, str) for s in signorini):
         raise ConfigError(
-            "geometry.signorini: with geometry.mesh give names of physical curve groups "
-            '(["contact", ...]) or "all", not coordinate arcs'
+            "geometry.signorini: with geometry.mesh give names of physical groups (curve "
+            'groups of a 2D mesh, surface groups of a 3D one: ["contact", ...]) or "all", not '
+            "coordinate arcs"
         )
 
 
@@ -404,6 +436,11 @@ def check_data_and_material(config: RunConfig) -> None:
         raise ConfigError(str(geometry_error(err))) from None
     if dim == 3:
         _check_solid_options(config)
+    elif config.output.slice != "auto":
+        raise ConfigError(
+            "output.slice: the section slice.png is a figure of a body in R^3; drop "
+            "output.slice for a planar domain"
+        )
     cell = ufl.tetrahedron if dim == 3 else ufl.triangle
     domain = ufl.Mesh(ufl.VectorElement("Lagrange", cell, 1))
     values = spatial_variables(domain, boundary=True)

@@ -53,11 +53,11 @@ def planned_size(config: RunConfig) -> Any:
 
 def estimated_size(config: RunConfig) -> Any:
     """The ``fem_py.mesh.DomainSize`` of a generated gmsh mesh estimated before meshing
-    (``fem_py.mesh.size_estimate.mesh_size_estimate``: from the area and h), or None for a
-    mesh file (it is the size it is) and for a body in 3D (not estimated yet)."""
+    (``fem_py.mesh.size_estimate.mesh_size_estimate``: from the area and h, the ball from
+    its volume, its surface and h), or None for a mesh file (it is the size it is)."""
     from fem_py.mesh.size_estimate import mesh_size_estimate
 
-    if config.geometry.mesh or config.geometry.dim == 3:
+    if config.geometry.mesh:
         return None
     return mesh_size_estimate(config.geometry)
 

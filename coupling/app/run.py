@@ -48,7 +48,7 @@ def run_solver(
     problem: Any,
     timings: dict[str, float],
     monitor: Any = None,
-    after_solve: Callable[[Any, Any], None] | None = None,
+    after_solve: Callable[[Any, Any, list[dict] | None], None] | None = None,
 ) -> Run:
     """Solve the assembled ``problem`` on ``domain`` as ``config`` asks (collective): with
     ``config.solver``, adaptively as ``config.adapt`` says or nested over coarser levels of
@@ -58,8 +58,9 @@ def run_solver(
         :func:`coupling.solvers.solve`), ``coarse_levels`` and ``prolongation`` for a nested
         solve, ``adaptive_loop`` (every level: assembly, solves, estimates, errors,
         refinement) for an adaptive one, and ``estimator``. ``after_solve(problem,
-        solution)``, when given, is called with the final problem and its solution as soon
-        as they are known: before the estimator of a plain or nested solve, after the
+        solution, levels)``, when given, is called with the final problem, its solution and
+        the records of the levels (nested or adaptive; None for a plain solve) as soon as
+        they are known: before the estimator of a plain or nested solve, after the
         adaptive loop (e.g. :meth:`coupling.io.outputs.RunOutputs.start`, whose work then
         runs beside the estimator); its time is in none of the stages.
     """
@@ -95,14 +96,14 @@ def run_solver(
             on_level=monitor.adapt_level if monitor is not None else None,
             exact=exact,
         )
-        last = levels[-1]
+        last, records = levels[-1], [level.record() for level in levels]
         if after_solve is not None:
-            after_solve(last.problem, last.solution)
+            after_solve(last.problem, last.solution, records)
         return Run(
             last.problem,
             last.solution,
             {**timings, "adaptive_loop": time.perf_counter() - tic},
-            [level.record() for level in levels],
+            records,
             float(last.estimate.total),
             last.estimate.cells,
             last.error,
@@ -123,7 +124,7 @@ def run_solver(
     else:
         solution = solve(problem, options, monitor=monitor)
     if after_solve is not None:
-        after_solve(problem, solution)
+        after_solve(problem, solution, records)
     error = energy_error(problem, solution.u, exact) if exact else None
     stages = {**timings, **solution.timings}
     # the residual estimator is planar (docs/design/estimator.md), off unless asked

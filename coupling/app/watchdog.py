@@ -18,7 +18,6 @@ over a second pipe; the helper ends when that pipe closes (the run has ended).
 """
 from __future__ import annotations
 
-import ctypes
 import os
 import select
 import shutil
@@ -28,6 +27,8 @@ import sys
 import time
 from pathlib import Path
 
+from fem_py.signals import sigaction
+
 __all__ = ["SignalWatchdog", "WATCHDOG_GRACE_SECONDS"]
 
 #: seconds a run has to end by itself after SIGINT/SIGTERM before the helper ends it
@@ -35,33 +36,18 @@ WATCHDOG_GRACE_SECONDS = 3.0
 _SA_RESETHAND = 0x80000000
 
 
-class _SigAction(ctypes.Structure):
-    """glibc's struct sigaction (Linux): handler, mask (1024 bits), flags, restorer."""
-
-    _fields_ = [
-        ("handler", ctypes.c_void_p),
-        ("mask", ctypes.c_ulong * 16),
-        ("flags", ctypes.c_int),
-        ("restorer", ctypes.c_void_p),
-    ]
-
-
 def _reset_after_first(signums: tuple[int, ...]) -> bool:
     """Add SA_RESETHAND to the installed action of each signal (the kernel restores the
     default action once the handler has been entered); False where libc does not allow
     it (the helper then kills with SIGKILL)."""
-    try:
-        libc = ctypes.CDLL(None, use_errno=True)
-        for s in signums:
-            act = _SigAction()
-            if libc.sigaction(s, None, ctypes.byref(act)) != 0:
-                return False
-            act.flags |= _SA_RESETHAND
-            if libc.sigaction(s, ctypes.byref(act), None) != 0:
-                return False
-        return True
-    except (OSError, AttributeError):
-        return False
+    for s in signums:
+        act = sigaction(s)
+        if act is None:
+            return False
+        act.flags |= _SA_RESETHAND
+        if sigaction(s, act) is None:
+            return False
+    return True
 
 
 class SignalWatchdog:

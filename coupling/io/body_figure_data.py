@@ -2,10 +2,13 @@
 
 From the arrays of fields.npz and the iteration history, :func:`surface_inputs` collects
 the surface triangulation of Gamma with u_h, the gap, the pressure and the contact set at
-its nodes, and :func:`section` a section of the body by the plane z = z_c through its
-centre (the middle of its bounding box): u_h at the pixel centres inside the body
-(point location in the tetrahedra) and u_e by the representation formula outside
-(docs/method.md section 11). NumPy and bem_cpp only: no matplotlib, no MPI.
+its nodes, and :func:`section` a section of the body by a coordinate plane (``[output]
+slice``: ``"x = c"``, ``"y = c"``, ``"z = c"``, or ``"auto"``, the plane through the
+Signorini part that crosses it along its longest extent, :func:`slice_plane`): u_h at the
+pixel centres inside the body (point location in the tetrahedra), u_e by the
+representation formula outside (docs/method.md section 11), and the section of Gamma
+itself, the triangles cut by the plane, as the outline. NumPy and bem_cpp only: no
+matplotlib, no MPI.
 """
 from __future__ import annotations
 
@@ -14,12 +17,14 @@ from typing import NamedTuple
 import numpy as np
 
 from coupling.io.evaluation import exterior_from_fields
+from coupling.options import parse_slice
 from fem_py.mesh.location3d import interpolate_p1_tetrahedra
 
 __all__ = [
     "BODY_PLOT_FILES",
     "BodyFigureInputs",
     "section",
+    "slice_plane",
     "surface_inputs",
     "SLICE_PIXELS",
 ]
@@ -65,40 +70,89 @@ def surface_inputs(fields: dict, history: dict, *, tol: float) -> BodyFigureInpu
     return BodyFigureInputs(nodes, triangles, boundary, None, history, float(tol))
 
 
-def section(fields: dict) -> dict:
-    """The section of slice.png: z, the images of u_h and u_e (NaN where they do not apply)
-    and their extents, from ``fields`` (module docstring): the point location in the
+def slice_plane(fields: dict, text: str = "auto") -> tuple[int, float]:
+    """The plane of slice.png as (the axis across it, its coordinate): ``[output] slice``
+    as given, or for ``"auto"`` the plane through the centroid of the Signorini nodes
+    across the axis along which they extend least among the two that span their face (so
+    it cuts the Signorini part along its longest extent, and an L-shaped bracket's foot
+    through the foot); without Signorini nodes the plane z = z_c through the middle of
+    the bounding box."""
+    given = parse_slice(text)
+    if given is not None:
+        return given
+    nodes, on = fields["boundary_x"], fields["signorini"]
+    if not on.any():
+        return 2, float(0.5 * (nodes[:, 2].min() + nodes[:, 2].max()))
+    part = nodes[on]
+    spread = np.ptp(part, axis=0)
+    across = int(np.argmin(spread))  # the face's normal, for a flat part
+    k = min((a for a in range(3) if a != across), key=lambda a: (spread[a], -a))
+    return k, float(part[:, k].mean())
+
+
+def section(fields: dict, plane: str = "auto") -> dict:
+    """The section of slice.png by the plane ``plane`` (``[output] slice``,
+    :func:`slice_plane`): the axis across it and its coordinate, the names of the two
+    in-plane axes, the images of u_h and u_e (NaN where they do not apply) and their
+    extents, and the section of Gamma (``outline``, (m, 2, 2) segments in the plane's
+    coordinates), from ``fields`` (module docstring): the point location in the
     tetrahedra and the representation formula, the figures' costly part."""
     nodes = fields["boundary_x"]
+    k, value = slice_plane(fields, plane)
+    i, j = (a for a in range(3) if a != k)
     lo, hi = nodes.min(axis=0), nodes.max(axis=0)
-    centre, half = 0.5 * (lo + hi), 0.5 * float((hi - lo)[:2].max())
+    centre, half = 0.5 * (lo + hi), 0.5 * float(max(hi[i] - lo[i], hi[j] - lo[j]))
+    centre = centre[[i, j]]
     g = np.linspace(-2.0, 2.0, SLICE_PIXELS) * half  # the body and its surroundings
     # shifted by a third of a pixel: no pixel centre on a face at a round coordinate
     g = g + (g[1] - g[0]) / 3.0
     X, Y = np.meshgrid(centre[0] + g, centre[1] + g)
-    points = np.column_stack([X.ravel(), Y.ravel(), np.full(X.size, centre[2])])
+    points = np.empty((X.size, 3))
+    points[:, i], points[:, j], points[:, k] = X.ravel(), Y.ravel(), value
     u = interpolate_p1_tetrahedra(fields["x"], fields["cells"], fields["u"], points)
     # outside: u_e by the representation formula (accurate close to Gamma) on the coarser
     # grid of every SLICE_EXTERIOR_STRIDE-th pixel; should a pixel centre lie on Gamma to
     # round-off (refused by the formula), those within a pixel of a boundary node are
     # left out
-    k = SLICE_EXTERIOR_STRIDE
-    coarse = points.reshape(X.shape + (3,))[::k, ::k].reshape(-1, 3)
-    outside = ~np.isfinite(u.reshape(X.shape)[::k, ::k].ravel())
+    s = SLICE_EXTERIOR_STRIDE
+    coarse = points.reshape(X.shape + (3,))[::s, ::s].reshape(-1, 3)
+    outside = ~np.isfinite(u.reshape(X.shape)[::s, ::s].ravel())
     ue = np.full(len(coarse), np.nan)
     if outside.any():
         try:
             ue[outside] = exterior_from_fields(fields, coarse[outside], SLICE_POTENTIAL_TOL)
         except ValueError:
-            outside[outside] = ~_close_to(nodes, coarse[outside], float(g[k] - g[0]))
+            outside[outside] = ~_close_to(nodes, coarse[outside], float(g[s] - g[0]))
             ue[outside] = exterior_from_fields(fields, coarse[outside], SLICE_POTENTIAL_TOL)
     return dict(
-        z=float(centre[2]),
+        axis="xyz"[k],
+        value=value,
+        names=("xyz"[i], "xyz"[j]),
         u=u.reshape(X.shape),
         u_extent=_extent(centre, g),
-        ue=ue.reshape(X[::k, ::k].shape),
-        ue_extent=_extent(centre, g[::k]),
+        ue=ue.reshape(X[::s, ::s].shape),
+        ue_extent=_extent(centre, g[::s]),
+        outline=plane_section(nodes, fields["boundary_triangles"], k, value)[:, :, [i, j]],
     )
+
+
+def plane_section(nodes: np.ndarray, triangles: np.ndarray, k: int, value: float) -> np.ndarray:
+    """The segments (m, 2, 3) where the triangles cross the plane x_k = value: the section
+    of the surface, exact for flat triangles (a triangle lying in the plane, or touching
+    it at a corner only, gives none; one with an edge in the plane gives that edge)."""
+    d = nodes[triangles][:, :, k] - value  # (t, 3) signed distances of the corners
+    below, above = (d < 0).sum(axis=1), (d > 0).sum(axis=1)
+    crossing = (below > 0) & (above > 0) | (((below > 0) | (above > 0)) & ((d == 0).sum(1) == 2))
+    segments = []
+    for tri, dist in zip(triangles[crossing], d[crossing]):
+        ends = [nodes[tri[a]] for a in range(3) if dist[a] == 0]
+        for a, b in ((0, 1), (1, 2), (2, 0)):
+            if dist[a] * dist[b] < 0:
+                t = dist[a] / (dist[a] - dist[b])
+                ends.append(nodes[tri[a]] + t * (nodes[tri[b]] - nodes[tri[a]]))
+        if len(ends) == 2:
+            segments.append(ends)
+    return np.asarray(segments, dtype=float).reshape(-1, 2, 3)
 
 
 def _extent(centre: np.ndarray, g: np.ndarray) -> tuple[float, float, float, float]:

@@ -1,11 +1,16 @@
 """The PNG figures of a body in R^3, drawn with matplotlib (Agg) from a
 :class:`coupling.io.body_figure_data.BodyFigureInputs`:
 
-- ``signorini.png``: the Signorini faces seen from outside, flattened onto their best
-  plane (principal axes): the gap phi_h coloured with the contact set outlined (phi_h = 0
-  nodes), and the contact pressure rho du_h/dn beside it;
+- ``signorini.png``: the Signorini faces flattened onto their best plane (principal axes;
+  the real coordinates when the plane is across a coordinate axis): the gap phi_h >= 0 with
+  the contact set outlined, and the contact pressure sigma = rho du_h/dn <= 0 beside it, each
+  coloured from the nodes with a gap unknown on a map that ends at 0 (a value of the
+  wrong sign takes the colour beyond that end); the rim where a Signorini face meets
+  another face, whose nodes carry no gap unknown, in grey;
 - ``surface.png``: u_h on Gamma from two opposite viewpoints;
-- ``slice.png``: the section z = z_c: u_h inside and u_e outside in one colour scale;
+- ``slice.png``: a section by a coordinate plane (``[output] slice``; by default through
+  the Signorini part): u_h inside and u_e outside in one colour scale, the section of
+  Gamma outlined;
 - ``history.png``: the convergence history, as for a planar run.
 """
 from __future__ import annotations
@@ -14,6 +19,7 @@ import io
 from typing import Collection
 
 import matplotlib
+import matplotlib.patches
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -30,51 +36,97 @@ _DPI = 110
 _PNG = {"compress_level": 1}
 
 
+#: A pressure above 0 by less than this share of the largest |pressure| on the Signorini
+#: nodes is drawn as 0 (less than a colour level of 256: the solver's round-off, not a
+#: broken sign condition)
+_SIGN_SLACK = 1e-3
+#: The colour of the rim of the Signorini faces (triangles at a node without a gap
+#: unknown: where a Signorini face meets another face) and of a broken sign condition
+_RIM_COLOUR, _WRONG_SIGN_COLOUR = "0.85", "tab:cyan"
+#: A plane whose normal is this close to a coordinate axis (cos 0.8 degrees) is drawn in
+#: the other two coordinates (a hemisphere of the ball's mesh is not exactly symmetric)
+_ALIGNED = 1.0 - 1e-4
+
+
 def _figure_signorini(inputs: BodyFigureInputs):
     f, tri = inputs.fields, inputs.triangles
-    patch = tri[f["signorini"][tri].any(axis=1)]  # triangles at a phi unknown
-    if not len(patch):
+    gap = f["signorini"]  # the nodes with a gap unknown
+    touching = tri[gap[tri].any(axis=1)]
+    inner = touching[gap[touching].all(axis=1)]  # the triangles of the gap unknowns
+    rim = touching[~gap[touching].all(axis=1)]
+    if not len(inner):
         return None
-    used = np.unique(patch)
-    points = inputs.nodes[used]
-    centred = points - points.mean(axis=0)
-    axes, names = _plane_axes(np.linalg.svd(centred, full_matrices=False)[2][2])
-    flat = np.zeros((len(inputs.nodes), 2))
-    flat[used] = centred @ axes.T
-    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.6))
-    for ax, key, title, cmap in (
-        (left, "phi", r"gap $\phi_h$ (contact set outlined)", "viridis"),
-        (right, "pressure", r"pressure $\rho\,\partial u_h/\partial n$ on $\Gamma_s$", "magma"),
-    ):
-        shown = ax.tripcolor(flat[:, 0], flat[:, 1], patch, f[key], shading="gouraud", cmap=cmap)
-        fig.colorbar(shown, ax=ax, shrink=0.85)
-        ax.set(aspect="equal", title=title, xlabel=names[0], ylabel=names[1])
-    contact = f["active"].astype(float)
-    if 0 < contact[used].sum() < len(used):
-        left.tricontour(flat[:, 0], flat[:, 1], patch, contact, levels=[0.5], colors="tab:red")
+    used = np.unique(touching)  # numbered 0 .. len(used) - 1 below
+    inner, rim = np.searchsorted(used, inner), np.searchsorted(used, rim)
+    f = {key: f[key][used] for key in ("phi", "pressure", "active", "signorini")}
+    gap, points = f["signorini"], inputs.nodes[used]
+    normal = np.linalg.svd(points - points.mean(axis=0), full_matrices=False)[2][2]
+    axes, names, seen = _plane_axes(normal)
+    x, y = (points @ axes.T).T  # real coordinates along the plane's axes
+    phi, sigma = f["phi"][gap], f["pressure"][gap]
+    slack = _SIGN_SLACK * max(float(np.abs(sigma).max()), np.finfo(float).tiny)
+    pressure = np.where((f["pressure"] > 0) & (f["pressure"] <= slack), 0.0, f["pressure"])
+    fig, (left, right) = plt.subplots(1, 2, figsize=(12, 4.8), gridspec_kw={"wspace": 0.4})
+    panels = (
+        # the gap phi_h >= 0 on a map starting at 0, the pressure <= 0 on one ending at 0:
+        # a value of the wrong sign would take the colour beyond the scale's end
+        (left, f["phi"], (0.0, max(float(phi.max()), slack)), "viridis", "min", r"$\phi_h < 0$"),
+        (right, pressure, (min(float(sigma.min()), -slack), 0.0), "magma", "max", r"$\sigma > 0$"),
+    )
+    for ax, values, (lo, hi), cmap, end, wrong in panels:
+        over = {"min": "under", "max": "over"}[end]
+        colours = plt.get_cmap(cmap).with_extremes(**{over: _WRONG_SIGN_COLOUR})
+        shown = ax.tripcolor(x, y, inner, values, shading="gouraud", cmap=colours, vmin=lo, vmax=hi)
+        bar = fig.colorbar(shown, ax=ax, shrink=0.85, extend=end)
+        bar.set_label(f"{_WRONG_SIGN_COLOUR[4:]}: {wrong}, the wrong sign", fontsize=8)
+        if len(rim):
+            ax.tripcolor(x, y, rim, facecolors=np.zeros(len(rim)), cmap=_grey(), vmin=0, vmax=1)
+        ax.set(aspect="equal", xlabel=names[0], ylabel=names[1])
+    left.set_title(r"gap $\phi_h \geq 0$")
+    right.set_title(r"pressure $\sigma = \rho\,\partial u_h/\partial n \leq 0$")
     on = f["active"]
-    left.plot(flat[on, 0], flat[on, 1], ".", color="tab:red", ms=2, label="in contact")
-    left.legend(fontsize=8, loc="upper right")
-    counts = f"{int(on.sum())} of {int(f['signorini'].sum())}"
-    fig.suptitle(f"Signorini faces, seen along their normal: {counts} nodes in contact")
+    if 0 < on[gap].sum() < gap.sum():
+        for ax in (left, right):
+            ax.tricontour(x, y, inner, on.astype(float), levels=[0.5], colors="tab:red")
+    left.plot(x[on], y[on], ".", color="tab:red", ms=2)
+    handles = [
+        plt.Line2D([], [], color="tab:red", marker=".", label="contact set (nodes, outline)"),
+        matplotlib.patches.Patch(color=_RIM_COLOUR, label="rim: nodes without a gap unknown"),
+    ]
+    fig.legend(handles=handles[: 1 + bool(len(rim))], loc="lower center", ncol=2, fontsize=9)
+    counts = f"{int(on.sum())} of {int(gap.sum())}"
+    fig.suptitle(f"Signorini faces, seen {seen}: {counts} nodes in contact")
     return fig
 
 
-def _plane_axes(normal: np.ndarray) -> tuple[np.ndarray, tuple[str, str]]:
-    """Two orthonormal axes of the plane of ``normal`` (2, 3), the first along the
-    coordinate axis closest to the plane, and their names (the coordinate's, when the
-    axis is one: the box's faces)."""
+def _grey():
+    """A colour map of one colour: the rim's."""
+    from matplotlib.colors import ListedColormap
+
+    return ListedColormap([_RIM_COLOUR])
+
+
+def _plane_axes(normal: np.ndarray) -> tuple[np.ndarray, tuple[str, str], str]:
+    """Two orthonormal axes (2, 3) of the plane of ``normal``, their names and the
+    direction the plane is seen from. A plane across a coordinate axis (the box's faces,
+    the ball's hemispheres) takes the other two coordinate axes in their order, so that
+    the figure shows the real coordinates; another plane the coordinate axis closest to
+    it, projected, and the axis across both."""
     normal = normal / np.linalg.norm(normal)
+    k = int(np.argmax(np.abs(normal)))
+    if abs(normal[k]) > _ALIGNED:
+        i, j = (m for m in range(3) if m != k)
+        return np.eye(3)[[i, j]], ("xyz"[i], "xyz"[j]), f"along {'xyz'[k]}"
     k = int(np.argmin(np.abs(normal)))
     first = np.eye(3)[k] - normal[k] * normal
     first /= np.linalg.norm(first)
     second = np.cross(normal, first)
-    names = []
-    for axis in (first, second):
-        j = int(np.argmax(np.abs(axis)))
-        exact = abs(abs(axis[j]) - 1.0) < 1e-9
-        names.append(("-" if axis[j] < 0 else "") + "xyz"[j] if exact else "in the plane")
-    return np.stack([first, second]), (names[0], names[1])
+    names = tuple("along ({:.2f}, {:.2f}, {:.2f})".format(*a) for a in (first, second))
+    return (
+        np.stack([first, second]),
+        names,
+        "along their normal ({:.2f}, {:.2f}, {:.2f})".format(*normal),
+    )
 
 
 class _GouraudSurface(mcollections.Collection):
@@ -151,14 +203,32 @@ def _figure_slice(inputs: BodyFigureInputs):
         return None
     kwargs = dict(origin="lower", vmin=both.min(), vmax=both.max(), cmap="viridis")
     fig, ax = plt.subplots(figsize=(6.4, 5.4))
-    ax.imshow(ue, extent=s["ue_extent"], interpolation="bilinear", **kwargs)
+    # u_e beneath, its pixels inside the body filled from their nearest outside: u_h's
+    # pixels cover them, and no band of neither is left along Gamma between u_h's fine
+    # pixels and u_e's coarser ones
+    ax.imshow(_filled(s["ue"]), extent=s["ue_extent"], interpolation="bilinear", **kwargs)
     shown = ax.imshow(u, extent=s["u_extent"], **kwargs)
-    if u.count():  # the section of Gamma: the edge of the pixels inside
-        inside = np.isfinite(s["u"]).astype(float)
-        ax.contour(inside, levels=[0.5], colors="white", linewidths=1.0, extent=s["u_extent"])
+    # the section of Gamma itself (the triangles cut by the plane), not the pixels' edge
+    ax.add_collection(mcollections.LineCollection(s["outline"], colors="white", linewidths=1.0))
     fig.colorbar(shown, ax=ax, label=r"$u_h$ inside, $u_e$ outside")
-    ax.set(xlabel="$x$", ylabel="$y$", title=f"section z = {s['z']:.4g}")
+    first, second = s["names"]
+    title = f"section {s['axis']} = {s['value']:.4g}"
+    if not u.count():
+        title += " (the plane misses the body)"
+    ax.set(xlabel=f"${first}$", ylabel=f"${second}$", title=title)
     return fig
+
+
+def _filled(image: np.ndarray) -> np.ndarray:
+    """``image`` with each NaN pixel given its nearest finite pixel's value (all NaN:
+    unchanged)."""
+    from scipy.ndimage import distance_transform_edt
+
+    missing = ~np.isfinite(image)
+    if missing.all() or not missing.any():
+        return image
+    nearest = distance_transform_edt(missing, return_distances=False, return_indices=True)
+    return image[tuple(nearest)]
 
 
 def render_body(inputs: BodyFigureInputs, skip: Collection[str] = ()) -> dict[str, bytes]:

@@ -62,9 +62,10 @@ _PNG = {"compress_level": 1}
 
 _CONTACT = dict(ls="none", marker="o", ms=3.5, color="tab:red")
 _OPEN = dict(ls="none", marker="o", ms=3.5, mfc="white", mec="tab:blue", mew=1.0)
-#: the open part of Gamma_s over u_h: white on a black edge, seen on every colour of the
-#: colormap (blue would vanish in viridis' blues)
+#: the open part of Gamma_s over u_h: white on a black edge, far from every colour of
+#: the colormap (blue would vanish in viridis' blues)
 _OPEN_LINE = "white"
+_OPEN_EDGE = [patheffects.Stroke(linewidth=5.0, foreground="black"), patheffects.Normal()]
 #: inches between the bottom of the axes and the legend under them (tick labels and the
 #: x label take about 0.4)
 _LEGEND_DROP = 0.5
@@ -104,33 +105,37 @@ def true_runs(mask: np.ndarray) -> list[tuple[int, int]]:
 
 def _draw_boundary(ax, fields: dict) -> None:
     """Gamma (thin black) and Gamma_s (thick): red where in contact (phi_h = 0 at both
-    ends of a panel), white on a black edge where the gap is open; the Signorini nodes
-    as dots when there are few enough to tell apart."""
+    ends of a panel), white on a black edge where the gap is open; each run of panels one
+    line, so no stroke of the edge ends between its panels (drawn panel by panel, the
+    open part looked like a dashed band), and drawn over the axes' frame, which Gamma_s
+    may lie on; the Signorini nodes as dots when there are few enough to tell apart."""
     nodes = fields["boundary_x"]
     closed = _closed(nodes)
-    ax.plot(closed[:, 0], closed[:, 1], "k-", lw=0.8, zorder=4)
+    ax.plot(closed[:, 0], closed[:, 1], "k-", lw=0.8, zorder=4, clip_on=False)
     panels = _signorini_panels(fields)
     if not panels.any():
         return
     shut = fields["phi"] == 0.0
     contact = panels & shut & np.roll(shut, -1)
-    segments = np.stack([nodes, np.roll(nodes, -1, axis=0)], axis=1)
-    edged = [patheffects.Stroke(linewidth=4.6, foreground="k"), patheffects.Normal()]
+    n = len(nodes)
     handles = []
     for mask, color, label in (
         (contact, "tab:red", r"$\Gamma_s$ in contact ($\phi_h = 0$)"),
         (panels & ~contact, _OPEN_LINE, r"$\Gamma_s$ open ($\phi_h > 0$)"),
     ):
-        effects = edged if color == _OPEN_LINE else None
+        effects = _OPEN_EDGE if color == _OPEN_LINE else None
+        lines = [nodes[np.arange(i, j + 1) % n] for i, j in true_runs(mask)]
         ax.add_collection(
             LineCollection(
-                segments[mask],
+                lines,
                 colors=color,
                 linewidths=3.0,
                 capstyle="butt",
+                joinstyle="round",
                 label=label,
                 zorder=5,
                 path_effects=effects,
+                clip_on=False,
             )
         )
         handles.append(Line2D([], [], color=color, lw=3.0, label=label, path_effects=effects))

@@ -143,8 +143,9 @@ class RunOutputs:
         The output folder.
     options
         The ``[output]`` section: write solution.xdmf/.h5 (``xdmf``), draw the figures
-        (``plots``), add the estimator's eta_T (given to :meth:`finish`) to fields.npz
-        (``indicators``: it is then written there rather than by :meth:`start`).
+        (``plots``; a body's slice.png by the plane ``slice``), add the estimator's eta_T
+        (given to :meth:`finish`) to fields.npz (``indicators``: it is then written there
+        rather than by :meth:`start`).
     tol
         The solver tolerance (drawn in history.png).
     worker
@@ -162,6 +163,7 @@ class RunOutputs:
     ):
         self.comm, self.out, self.tol = comm, Path(out), tol
         self.xdmf, self.plots, self.indicators = options.xdmf, options.plots, options.indicators
+        self.slice = options.slice  # the plane of a body's slice.png
         self.worker = worker if self.plots and comm.rank == 0 else None
         #: seconds spent in :meth:`start` and :meth:`finish` (summary.json's ``outputs``)
         self.seconds = 0.0
@@ -171,8 +173,13 @@ class RunOutputs:
         self._pool = ThreadPoolExecutor(max_workers=6) if comm.rank == 0 else None
         self._jobs: dict[str, Future] = {}
 
-    def start(self, problem, result) -> None:
-        """Gather the run's result and start the background work (collective)."""
+    def start(
+        self, problem, result, levels: list[dict] | None = None, adaptive: bool = False
+    ) -> None:
+        """Gather the run's result and start the background work (collective). ``levels``:
+        the records of a run over several levels (nested, or ``adaptive``), coarsest first
+        (``result`` the final level's), drawn in history.png."""
+        runs = dict(levels=levels, adaptive=adaptive)
         tic = time.perf_counter()
         release_free_memory()  # the solve's freed memory, before the outputs' (fem_py.memory)
         self._problem, self._result = problem, result
@@ -189,7 +196,11 @@ class RunOutputs:
                 samples = self._pool.submit(exterior_samples, on_gamma)
                 if self.worker is not None:
                     early = boundary_figure_inputs(
-                        on_gamma, result.history, tol=self.tol, stop_measure=result.stop_measure
+                        on_gamma,
+                        result.history,
+                        tol=self.tol,
+                        stop_measure=result.stop_measure,
+                        **runs,
                     )
                     self._jobs["early"] = self._pool.submit(self.worker.send, early)
         cell_tags = owned_cell_tags(problem.domain) if self.xdmf else None
@@ -206,10 +217,10 @@ class RunOutputs:
                 self._jobs["data"] = self._pool.submit(_write_fields, self.out, self._fields)
             if self.plots and solid:  # the section's u_e and u_h in a thread, while the
                 # figure process draws those on Gamma and the history
-                history = history_arrays(result.history, result.stop_measure)
+                history = history_arrays(result.history, result.stop_measure, **runs)
                 surface = surface_inputs(self._fields, history, tol=self.tol)
                 self._jobs["inputs"] = self._pool.submit(
-                    lambda: surface._replace(section=section(self._fields))
+                    lambda: surface._replace(section=section(self._fields, self.slice))
                 )
                 if self.worker is not None:  # sent from here at once: the figure
                     # process draws the figures on Gamma from them meanwhile
@@ -219,7 +230,11 @@ class RunOutputs:
                     )
             elif self.plots:
                 inputs = figure_inputs(
-                    self._fields, result.history, tol=self.tol, stop_measure=result.stop_measure
+                    self._fields,
+                    result.history,
+                    tol=self.tol,
+                    stop_measure=result.stop_measure,
+                    **runs,
                 )
                 self._jobs["inputs"] = self._pool.submit(_with_samples, inputs, samples)
                 if self.worker is not None:  # sent from here at once, as a body's surface

@@ -84,6 +84,8 @@ def figure_inputs(
     tol: float,
     exterior: ExteriorSamples | None = None,
     stop_measure: float | None = None,
+    levels: Sequence[dict] | None = None,
+    adaptive: bool = False,
 ) -> FigureInputs:
     """What the figures are drawn from: u_h of ``fields`` (``x``, ``triangles``, ``u``)
     rasterised on a grid of :data:`coupling.io.figure_data.RASTER_PIXELS` pixels along
@@ -91,11 +93,15 @@ def figure_inputs(
     iteration records of ``history`` (``iteration``, ``energy``, ``step_norm``,
     ``contact``) as arrays, with ``stop_measure`` (the quantity the stopping rule tested
     last, when not the last ``step_norm``: ``coupling.solvers.records.RunResult``) as
-    ``stop``. Without ``exterior`` there are no samples yet (None; to be set with
-    ``_replace``): no whole_plane.png from these inputs."""
+    ``stop``, and the ``levels`` of a run over several (:func:`history_arrays`). Without
+    ``exterior`` there are no samples yet (None; to be set with ``_replace``): no
+    whole_plane.png from these inputs."""
     x, u = fields["x"], fields["u"]
     grid = PixelGrid.covering(x.min(axis=0), x.max(axis=0))
-    return boundary_figure_inputs(fields, history, tol=tol, stop_measure=stop_measure)._replace(
+    early = boundary_figure_inputs(
+        fields, history, tol=tol, stop_measure=stop_measure, levels=levels, adaptive=adaptive
+    )
+    return early._replace(
         image=rasterise(x, fields["triangles"], u, grid),
         grid=grid,
         u_range=(float(u.min()), float(u.max())),
@@ -105,7 +111,13 @@ def figure_inputs(
 
 
 def boundary_figure_inputs(
-    boundary: dict, history: Sequence, *, tol: float, stop_measure: float | None = None
+    boundary: dict,
+    history: Sequence,
+    *,
+    tol: float,
+    stop_measure: float | None = None,
+    levels: Sequence[dict] | None = None,
+    adaptive: bool = False,
 ) -> FigureInputs:
     """The inputs of the figures drawn from the boundary arrays (``boundary``: those of
     fields.npz) and the iteration records alone, boundary.png and history.png: no image of
@@ -118,18 +130,33 @@ def boundary_figure_inputs(
         boundary={k: boundary[k] for k in _BOUNDARY_FIELDS},
         exterior_points=None,
         exterior_ue=None,
-        history=history_arrays(history, stop_measure),
+        history=history_arrays(history, stop_measure, levels, adaptive),
         tol=float(tol),
     )
 
 
-def history_arrays(history: Sequence, stop_measure: float | None = None) -> dict:
+def history_arrays(
+    history: Sequence,
+    stop_measure: float | None = None,
+    levels: Sequence[dict] | None = None,
+    adaptive: bool = False,
+) -> dict:
     """The iteration records of ``history`` (``iteration``, ``energy``, ``step_norm``,
-    ``contact``) as arrays, with ``stop_measure`` as ``stop`` (history.png's data)."""
+    ``contact``) as arrays, with ``stop_measure`` as ``stop`` (history.png's data); of a
+    run over several levels (``levels``: the records of summary.json's ``levels``, coarsest
+    first, ``history`` the final level's) also each level's ``dofs`` and ``iterations``
+    (``level_dofs``, ``level_iterations``) and whether they are ``adaptive`` or nested
+    (``level_kind``)."""
+    levels = levels or []
     return {
         key: np.array([getattr(r, key) for r in history], dtype=float)
         for key in ("iteration", "energy", "step_norm", "contact")
-    } | {"stop": np.array([] if stop_measure is None else [stop_measure], dtype=float)}
+    } | {
+        "stop": np.array([] if stop_measure is None else [stop_measure], dtype=float),
+        "level_dofs": np.array([r["dofs"] for r in levels], dtype=float),
+        "level_iterations": np.array([r["iterations"] for r in levels], dtype=float),
+        "level_kind": np.array("adaptive" if adaptive else "nested"),
+    }
 
 
 def write_pngs(out: Path, pngs: dict[str, bytes]) -> list[str]:

@@ -59,6 +59,19 @@ def _input_indices(V: Any, cell_nodes: np.ndarray) -> np.ndarray:
     return out
 
 
+def _dof_coordinates(V: Any, gdim: int) -> np.ndarray:
+    """The coordinates of the local P1 dofs (owned, then ghosts): the mesh's geometry nodes,
+    copies of the input with the same bits on any partition and any machine, not
+    ``tabulate_dof_coordinates``, which maps reference points through basix's tabulated
+    basis and so rounds in the last bit differently with the machine's BLAS (the box's
+    corner at -0.25 came out as -0.24999999999999997 on an AVX-512 machine, unlike the
+    boundary nodes)."""
+    index_map = V.dofmap.index_map
+    out = np.empty((index_map.size_local + index_map.num_ghosts, gdim))
+    out[V.dofmap.list.array] = V.mesh.geometry.x[V.mesh.geometry.dofmap.array, :gdim]
+    return out
+
+
 def gather_by_input(
     comm: Any, input_owned: np.ndarray, values: np.ndarray, n_global: int
 ) -> np.ndarray | None:
@@ -145,9 +158,8 @@ def gather_p1_and_cells(
     n_owned, n_global = index_map.size_local, index_map.size_global
     cell_nodes = _cell_nodes(V)
     numbers = _input_indices(V, cell_nodes)[:n_owned]
-    # the dof coordinates, not geometry.x: the two differ in the last bit
     gdim = V.mesh.topology.dim
-    x = gather_by_input(comm, numbers, V.tabulate_dof_coordinates()[:n_owned, :gdim], n_global)
+    x = gather_by_input(comm, numbers, _dof_coordinates(V, gdim)[:n_owned], n_global)
     values = gather_by_input(comm, numbers, u.x.array[:n_owned].real, n_global)
     parts = gather_to_root(comm, (_owned_triangles(V, cell_nodes), cell_values))
     if comm.rank != 0:

@@ -21,6 +21,7 @@ from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
 from fem_py.mesh.args3d import checked_point, checked_positive
+from fem_py.mesh.gmsh_mesh import gmsh_session
 from fem_py.parallel import run_on_root
 
 __all__ = ["BALL_FACES", "EQUATOR_TAG", "VOLUME_TAG", "ball_mesh", "check_ball"]
@@ -65,18 +66,13 @@ def ball_mesh(
     names : dict
         Boundary name -> facet tag (:data:`BALL_FACES`).
     """
-    import gmsh
-    from dolfinx.io import gmshio
-
     c, radius, h = check_ball(center, radius, h)
-    gmsh.initialize(readConfigFiles=False)
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
+    with gmsh_session() as gmsh:
+        from dolfinx.io import gmshio  # imports gmsh: after gmsh_session has, to keep SIGINT
+
         # an error of gmsh on rank 0 is raised on every rank (no rank left in model_to_mesh)
         run_on_root(comm, lambda: _mesh_ball(gmsh, c, radius, h), error_prefix="ball mesh")
         msh, _, facet_tags = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=3)
-    finally:
-        gmsh.finalize()
     return msh, facet_tags, dict(BALL_FACES)
 
 

@@ -20,6 +20,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from fem_py.mesh.domain import domain_from_prepared
+from fem_py.mesh.gmsh_mesh import gmsh_session
 from fem_py.mesh.own_mesh import mesh_of_model, prepare_mesh
 from fem_py.mesh.shapes import checked_center
 from fem_py.spec import GeometrySpec
@@ -108,8 +109,6 @@ def conic_mesh(center: tuple[float, float], axes: tuple[float, float], h: float,
     """The ellipse of semi-axes ``axes`` (a circle when they are equal) meshed at size h by
     gmsh (one session) as a ``fem_py.mesh.own_mesh.MeshFile`` with the curve groups ``arc0``,
     ``arc1``, ... (``arcs`` from :func:`conic_arcs`; with ``"all"`` the group ``all``)."""
-    import gmsh
-
     cuts = set()
     if arcs != "all":
         cuts = {t for a in arcs for t in a}
@@ -126,9 +125,7 @@ def conic_mesh(center: tuple[float, float], axes: tuple[float, float], h: float,
         full.extend(t + span * j / pieces for j in range(pieces))
     ends = full[1:] + [full[0] + 2 * math.pi]
     mids = [0.5 * (t0 + t1) for t0, t1 in zip(full, ends)]  # of the pieces
-    gmsh.initialize(readConfigFiles=False)
-    gmsh.option.setNumber("General.Terminal", 0)
-    try:
+    with gmsh_session() as gmsh:
         gmsh.model.add("fembem_conic")
         geo = gmsh.model.geo
         c = geo.addPoint(cx, cy, 0.0, h)
@@ -151,8 +148,6 @@ def conic_mesh(center: tuple[float, float], axes: tuple[float, float], h: float,
         gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
         gmsh.model.mesh.generate(2)
         return mesh_of_model("the disk" if a == b else "the ellipse")
-    finally:
-        gmsh.finalize()
 
 
 def _quadrant_cuts(cuts: list[float], delta: float) -> list[float]:

@@ -1,5 +1,6 @@
 """gmsh meshing, on one rank (docs/method.md section 6): the coarse triangles of a polygon and
-the unstructured fine mesh of a coarse partition.
+the unstructured fine mesh of a coarse partition; :func:`gmsh_session`, the one way the
+library starts and ends gmsh.
 
 :func:`mesh_with_gmsh` runs one gmsh session (it initialises and finalises gmsh
 itself) and returns plain arrays; ``fem_py.mesh.build_domain`` calls it on rank 0
@@ -10,11 +11,53 @@ mesh is conforming and every fine cell carries its subdomain id.
 """
 from __future__ import annotations
 
+import signal
+
+from contextlib import contextmanager
+from typing import Any, Iterator
+
 import numpy as np
 
 from fem_py.mesh.shapes import Arc, BoundaryCurve, edge_tag
+from fem_py.signals import kept_signal_actions
 
-__all__ = ["mesh_with_gmsh"]
+__all__ = ["gmsh_session", "mesh_with_gmsh"]
+
+
+def _import_gmsh() -> Any:
+    """The gmsh module, imported without its change of the SIGINT action: its first lines
+    set SIGINT to the default action (``oldsig = signal.signal(SIGINT, SIG_DFL)``), and a
+    Ctrl-C during the import, which takes seconds on a loaded machine, went to whichever
+    thread of the process took it (MPI's among them) and killed the process without a
+    word. While gmsh is imported, ``signal.signal`` answers the current handler and
+    changes nothing (Python looks the function up at the call)."""
+    real = signal.signal
+    signal.signal = lambda signum, handler: signal.getsignal(signum)
+    try:
+        import gmsh
+    finally:
+        signal.signal = real
+    return gmsh
+
+
+@contextmanager
+def gmsh_session() -> Iterator[Any]:
+    """``with gmsh_session() as gmsh:`` gmsh initialised (no configuration files, silent)
+    and finalised on leaving, with the process's SIGINT action kept as it was: gmsh's
+    Python module sets SIGINT to the default action on import (a Ctrl-C then killed the
+    process with no message, leaving its staging folder), and ``gmsh.finalize`` puts
+    back a plain Python handler. Kept, a Ctrl-C while gmsh meshes meets the command
+    line's handler (``coupling.app.cli``: one line, exit 130, nothing left; the watchdog
+    ends the run if gmsh does not return to Python within seconds)."""
+    gmsh = _import_gmsh()
+    gmsh.initialize(readConfigFiles=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        yield gmsh
+    finally:
+        with kept_signal_actions():
+            gmsh.finalize()
+
 
 #: The fine mesh as arrays: (x (n, 2), cells (n_c, 3), subdomain id of every cell,
 #: boundary facets (n_f, 2), facet tags), node numbers 0 .. n-1.
@@ -59,12 +102,8 @@ def mesh_with_gmsh(
     arrays : MeshArrays or None
         The fine mesh (see ``MeshArrays``), None unless ``fine``.
     """
-    import gmsh
-
-    gmsh.initialize(readConfigFiles=False)
-    gmsh.option.setNumber("General.Terminal", 0)
     arrays = None
-    try:
+    with gmsh_session() as gmsh:
         if coarse is None:
             gmsh.model.add("fembem_coarse")
             coarse = _polygon_partition(boundary.P, ends, d, boundary.tol)
@@ -72,8 +111,6 @@ def mesh_with_gmsh(
         if fine:
             gmsh.model.add("fembem_domain")
             arrays = _fine_mesh(coarse[0], coarse[1], h, boundary, arcs)
-    finally:
-        gmsh.finalize()
     return coarse[0], coarse[1], arrays
 
 

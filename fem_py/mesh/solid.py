@@ -87,9 +87,10 @@ def solid_domain(comm: Any, spec: GeometrySpec) -> SolidDomain:
     """
     if spec.mesh:
         solid = run_on_root(comm, lambda: _checked_file(spec))
-        # the Signorini groups only get tags (other groups may overlap them)
+        # the Signorini groups first (they must not overlap), then every other surface
+        # group that overlaps none of those before it (solution.xdmf names them all)
         groups = [] if spec.signorini == "all" else [str(s) for s in _items(spec.signorini)]
-        msh, facet_tags, names = solid_mesh(comm, solid, groups)
+        msh, facet_tags, names = solid_mesh(comm, solid, groups, others=True)
         shape, h, lattice = "mesh", 0.0, None
     elif spec.shape == "box":
         c, width, h = check_box(spec.center, spec.width, spec.h)

@@ -5,7 +5,9 @@ section 11): the ``geometry.mesh`` counterpart of ``box_mesh`` and ``ball_mesh``
 Surface group k (in the order given, by default the file's) gets the facet tag k + 1,
 on its boundary triangles; ``names`` maps the group key (its name, or its number as
 text) to that tag. A boundary triangle in two of the groups is refused (one facet, one
-tag): give the groups that matter (for example the Signorini ones) as ``groups``.
+tag): give the groups that matter (for example the Signorini ones) as ``groups``; with
+``others`` the file's other surface groups follow them, each tagged unless it shares a
+boundary triangle with a group tagged before it (then it is left out whole).
 """
 from __future__ import annotations
 
@@ -25,9 +27,10 @@ __all__ = ["group_tags", "solid_mesh"]
 
 
 def group_tags(
-    solid: SolidFile, groups: Sequence[str] | None = None
+    solid: SolidFile, groups: Sequence[str] | None = None, others: bool = False
 ) -> tuple[np.ndarray, np.ndarray, dict[str, int]]:
-    """The tagged boundary triangles of ``solid`` (pure).
+    """The tagged boundary triangles of ``solid`` (pure): the ``groups`` (default: all of
+    the file's), then with ``others`` the file's other groups that overlap none before.
 
     Returns
     -------
@@ -44,6 +47,9 @@ def group_tags(
         ``mesh: ...`` for an unknown group or a boundary triangle in two groups.
     """
     keys = list(solid.surfaces) if groups is None else [str(g) for g in groups]
+    required = len(keys)
+    if others:
+        keys += [k for k in solid.surfaces if k not in keys]
     unknown = [k for k in keys if k not in solid.surfaces]
     if unknown:
         raise ValueError(f"mesh: {solid.source} has no physical surface group {unknown[0]!r}")
@@ -57,6 +63,8 @@ def group_tags(
         on = np.isin(boundary_code, codes[offset : offset + len(surfaces[k])])
         offset += len(surfaces[k])
         clash = on & (owner >= 0)
+        if clash.any() and k >= required:
+            continue  # another group of the file, overlapping one tagged already
         if clash.any():
             other = keys[int(owner[clash][0])]
             raise ValueError(
@@ -70,10 +78,14 @@ def group_tags(
 
 
 def solid_mesh(
-    comm: MPI.Comm, solid: SolidFile | None, groups: Sequence[str] | None = None
+    comm: MPI.Comm,
+    solid: SolidFile | None,
+    groups: Sequence[str] | None = None,
+    others: bool = False,
 ) -> tuple[dmesh.Mesh, Any, dict[str, int]]:
     """The distributed tetrahedral mesh of ``solid`` and its named facet tags
-    (collective; ``solid`` is read on rank 0, None elsewhere).
+    (collective; ``solid`` is read on rank 0, None elsewhere; ``groups``, ``others``: as
+    :func:`group_tags`).
 
     Returns
     -------
@@ -83,7 +95,7 @@ def solid_mesh(
     names : dict
         Group key -> facet tag (:func:`group_tags`).
     """
-    tagged = run_on_root(comm, lambda: group_tags(solid, groups))
+    tagged = run_on_root(comm, lambda: group_tags(solid, groups, others))
     if comm.rank == 0:
         cells = np.asarray(solid.cells, dtype=np.int64)
         x = np.asarray(solid.x, dtype=float)

@@ -18,6 +18,7 @@ from typing import Any, Iterator
 
 import numpy as np
 
+from fem_py.mesh.gmsh_mesh import gmsh_session
 from fem_py.mesh.tet_checks import (
     BodyFacts,
     ElementKind,
@@ -100,8 +101,6 @@ def opened_msh(path: str | Path) -> Iterator[Any]:
     """``with opened_msh(path) as gmsh:`` a gmsh session with the mesh file ``path`` open
     (one rank; finalised on leaving), or a one-line ``mesh: ...`` error for a missing or
     unreadable file. For any reader of gmsh files, 2D or 3D."""
-    import gmsh
-
     path = Path(path)
     name = str(path)
     if not path.is_file():
@@ -109,16 +108,12 @@ def opened_msh(path: str | Path) -> Iterator[Any]:
             f"mesh: file {name!r} not found; give the path of a gmsh .msh file (relative "
             "to the configuration file's folder)"
         )
-    gmsh.initialize(readConfigFiles=False)
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
+    with gmsh_session() as gmsh:
         try:
             gmsh.open(name)
         except Exception as err:  # noqa: BLE001 - gmsh raises a bare Exception
             raise ValueError(_unreadable(path, str(err).splitlines()[0])) from None
         yield gmsh
-    finally:
-        gmsh.finalize()
 
 
 def _kinds_and_nodes(gmsh: Any) -> tuple[list[ElementKind], np.ndarray, np.ndarray]:

@@ -71,6 +71,25 @@ class Polygon {
   double area_ = 0.0;
 };
 
+/// Calls f(i) for every panel i of a closed polygon with n panels, in parallel, such that
+/// panels processed at the same time never share a node: even panels, then odd panels, then
+/// the last panel if n is odd (it shares node 0 with panel 0). f(i) may then write the rows
+/// of the nodes i and i + 1 freely (the assemblies over panel pairs; dynamic scheduling
+/// balances panels that carry different numbers of pairs).
+template <class F>
+void for_each_panel_coloured(Index n, F&& f) {
+  const Index half = n / 2;
+#pragma omp parallel
+  {
+#pragma omp for schedule(dynamic, 1)
+    for (Index k = 0; k < half; ++k) f(2 * k);
+#pragma omp for schedule(dynamic, 1)
+    for (Index k = 0; k < half; ++k) f(2 * k + 1);
+#pragma omp single
+    if (n % 2 == 1) f(n - 1);
+  }
+}
+
 enum class Location { Exterior, OnBoundary, Interior };
 
 /// Location of z relative to Gamma. Points closer than `on_tolerance` to Gamma are

@@ -120,12 +120,17 @@ def _page(demo: Path, folder: Path, figures_dir: Path, rel_figures: str) -> tupl
         command = f"mpirun -n {nprocs} {command}"
     lines: list[str] = []
     shown: list[str] = []
-    for index, (kind, source) in enumerate(run_cells.cells(demo.read_text())):
+    cells = run_cells.cells(demo.read_text())
+    sections = _sections(demo.stem, cells)
+    for index, (kind, source) in enumerate(cells):
         if kind == "markdown":
-            lines += [_markdown(source), ""]
-            if index == 0:
+            lines += [_labelled(_markdown(source), sections), ""]
+            if index == 0:  # the page's sections, then how it was made
+                lines += ["```{admonition} On this page", ":class: tip", ""]
+                lines += [f"- {{ref}}`{title} <{label}>`" for title, label in sections.items()]
+                lines += [f"- {{ref}}`The script <{demo.stem}-source>`", "```", ""]
                 lines += [
-                    "```{admonition} On this page",
+                    "```{admonition} How this page was run",
                     f"The script {{ref}}`demos/{demo.name} <{demo.stem}-source>`, run for this "
                     f"page at a small size, `{command}`: the numbers printed below are "
                     "those of that run (the text quotes the default size).",
@@ -147,6 +152,30 @@ def _page(demo: Path, folder: Path, figures_dir: Path, rel_figures: str) -> tupl
     lines += [f"({demo.stem}-source)=", "## The script", ""]
     lines += [f"```{{literalinclude}} ../../demos/{demo.name}", ":language: python", "```", ""]
     return "\n".join(lines), shown
+
+
+_SECTION = re.compile(r"^## (.+)$", re.M)
+
+
+def _sections(stem: str, cells: list[tuple[str, str]]) -> dict[str, str]:
+    """The titles of the page's sections (the Markdown cells' ``## `` headings, their
+    inline code marks dropped) -> the label each gets (unique in the site)."""
+    titles = [
+        m.group(1).replace("`", "").strip()
+        for kind, source in cells
+        if kind == "markdown"
+        for m in _SECTION.finditer(_markdown(source))
+    ]
+    return {title: f"{stem}-section-{k}" for k, title in enumerate(titles, start=1)}
+
+
+def _labelled(text: str, sections: dict[str, str]) -> str:
+    """``text`` with the label of :func:`_sections` before each ``## `` heading."""
+
+    def label(m: re.Match) -> str:
+        return f"({sections[m.group(1).replace('`', '').strip()]})=\n{m.group(0)}"
+
+    return _SECTION.sub(label, text)
 
 
 def _title(demo: Path) -> str:

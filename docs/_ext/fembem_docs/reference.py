@@ -62,12 +62,14 @@ def constraint(section: str, key: str) -> str:
 
 
 def _kind(section: str, key: str, default: Any) -> str:
-    from coupling.options import CHOICES, DATA_VARIABLES
+    from coupling.options import CHOICES, DATA_VARIABLES, DATA_VARIABLES_3D
 
     if (section, key) in CHOICES:
         return "one of " + ", ".join(f'`"{c}"`' for c in CHOICES[section, key])
     if section == "data" and key in DATA_VARIABLES:
-        return "expression in " + ", ".join(f"`{v}`" for v in DATA_VARIABLES[key])
+        planar = ", ".join(f"`{v}`" for v in DATA_VARIABLES[key])
+        solid = ", ".join(f"`{v}`" for v in DATA_VARIABLES_3D[key])
+        return f"expression in {planar}; for a body in R^3 in {solid}"
     return {bool: "boolean", int: "integer", float: "number", str: "string", list: "list"}[
         type(default)
     ]
