@@ -31,13 +31,18 @@ A fourth table is elastic (issue 63, docs/design/lame_bem.md): the plane-strain 
 L-shape for --lame-sizes, beside the Laplace S_h on the same polygon at the same tol in the
 same run: set-up, memory, one product, CG iterations, the three ratios Lame / Laplace (the
 target: each within 4x at 16,000 nodes), and the dense Lame S_h's set-up for n <=
---lame-dense-max (where compression="auto" should switch).
+--lame-dense-max (where compression="auto" should switch). Its 3D rows (--lame-surface-levels,
+default 5: the icosphere of 10,242 vertices, 30,726 dofs) set the Lame S_h on the sphere
+beside the Laplace S_h at the same tol (--lame-surface-tol, default 1e-8: both in double
+precision), each in a fresh process: set-up wall time and its stages, peak and held memory,
+one product, and the three ratios (the target: each within 4x).
 
 Run: .venv/bin/python bench/bem_assembly.py [--sizes 512 1024 2048 4096] [--repeat 2]
      [--hmatrix-sizes 1000 2000 4000 8000 16000 32000 64000] [--shapes circle l-shape]
      [--dense-max 8000] [--error-max 4000] [--skip-dense-table]
      [--surface-levels 3 4 5 6] [--surface-tols 1e-6 1e-8] [--surface-only]
      [--lame-sizes 1000 2000 4000 8000 16000] [--lame-dense-max 4000] [--lame-only]
+     [--lame-surface-levels 5] [--lame-surface-tol 1e-8]
 """
 from __future__ import annotations
 
@@ -258,11 +263,15 @@ def main() -> None:
         "--lame-dense-max", type=int, default=4000, help="largest n with a dense Lame S_h"
     )
     parser.add_argument("--lame-only", action="store_true", help="only the elastic table")
+    parser.add_argument("--lame-surface-levels", type=int, nargs="*", default=[5])
+    parser.add_argument("--lame-surface-tol", type=float, default=1e-8)
     parser.add_argument("--surface-one", type=int, help=argparse.SUPPRESS)  # child process
     parser.add_argument("--surface-tol", type=float, help=argparse.SUPPRESS)
+    parser.add_argument("--surface-kernel", default="laplace", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.surface_one is not None:
-        print(json.dumps(surface_run(args.surface_one, args.surface_tol)))
+        kernel = LAME if args.surface_kernel == "lame" else "laplace"
+        print(json.dumps(surface_run(args.surface_one, args.surface_tol, kernel)))
         return
     if min(args.sizes + args.hmatrix_sizes) < 3 or args.repeat < 1 or args.hmatrix_repeat < 1:
         parser.exit(2, "bem_assembly.py: sizes must be >= 3 and repeats >= 1\n")
@@ -276,6 +285,7 @@ def main() -> None:
     if args.lame_only:
         for shape in args.shapes:
             lame_table(shape, args.lame_sizes, args)
+        lame_surface_table(args.lame_surface_levels, args.lame_surface_tol)
         return
     if not args.surface_only:
         if not args.skip_dense_table:
@@ -287,6 +297,7 @@ def main() -> None:
     if not args.surface_only:
         for shape in args.shapes:
             lame_table(shape, args.lame_sizes, args)
+        lame_surface_table(args.lame_surface_levels, args.lame_surface_tol)
     print(f"load average at the end {os.getloadavg()[0]:.2f}")
 
 
@@ -344,21 +355,43 @@ TARGET_SURFACE = {
 TARGET_SURFACE_SLOPE = 1.3
 
 
-def surface_run(level: int, tol: float) -> dict:
-    """One H-matrix S_h on the icosphere of ``level`` (run in a child process)."""
+def peak_resident_bytes() -> int:
+    """This process's peak resident memory since its exec (VmHWM: unlike ru_maxrss, which
+    Linux carries over an exec, it excludes the parent's pages at the fork)."""
+    with open("/proc/self/status") as f:
+        for line in f:
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1]) * 1024
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+
+
+def surface_run(level: int, tol: float, kernel="laplace") -> dict:
+    """One H-matrix S_h of ``kernel`` on the icosphere of ``level`` (run in a child process)."""
     from bem_cpp.surfaces import icosphere
 
     X, T = icosphere(level, 0.8)
-    t0 = time.perf_counter()
-    op = bem_cpp.steklov_poincare(X, triangles=T, compression="hmatrix", tol=tol)
-    setup = time.perf_counter() - t0
+    t0, c0 = time.perf_counter(), time.process_time()
+    op = bem_cpp.steklov_poincare(X, triangles=T, compression="hmatrix", tol=tol, kernel=kernel)
+    setup, setup_cpu = time.perf_counter() - t0, time.process_time() - c0
     x = np.sin(3 * X[:, 0]) + X[:, 2]
+    x = np.repeat(x, op.shape[0] // len(X)) * np.resize([1.0, -0.5, 0.25], op.shape[0])
     product, _ = best_of(2, lambda: op @ x)
+    c0 = time.process_time()
+    op @ x
+    product_cpu = time.process_time() - c0
     info = op.info
     return {
         "n": len(X),
+        "setup_cpu": setup_cpu,
+        "product_cpu": product_cpu,
+        "dofs": op.shape[0],
+        "hypersingular": getattr(info, "hypersingular_seconds", 0.0),
+        "preconditioner": getattr(info, "preconditioner_seconds", 0.0),
+        "nbytes_v": info.nbytes_v,
+        "nbytes_k": info.nbytes_k,
+        "nbytes_w": info.nbytes_w,
         "setup": setup,
-        "peak": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024,
+        "peak": peak_resident_bytes(),
         "nbytes": op.nbytes,
         "product": product,
         "iterations": op.last_iterations,
@@ -421,6 +454,52 @@ def surface_tol_table(levels: list[int], tol: float) -> None:
         slope = np.log(b["setup"] / a["setup"]) / np.log(b["n"] / a["n"])
         ok = slope <= TARGET_SURFACE_SLOPE
         print(f"set-up log-log slope between the two largest: {slope:.2f} ({verdict(ok)})")
+
+
+def lame_surface_table(levels: list[int], tol: float) -> None:
+    """The 3D elastic rows: the Lame S_h (H-matrices, 3 n dofs) on the icosphere of each
+    level against the Laplace S_h on the same surface at the same tol, each in a child
+    process (its peak memory its own)."""
+    if not levels:
+        return
+    header = (
+        f"{'n':>6} {'dofs':>6} {'kernel':>7} {'set-up [s]':>10} {'near':>6} {'V(,Z)':>6}"
+        f" {'K':>6} {'W_L':>5} {'peak [MB]':>9} {'held [MB]':>9} {'V/K/W [MB]':>14}"
+        f" {'S x [s]':>7} {'CG':>3} {'rank':>4} {'CPU: set-up':>11} {'S x':>6}"
+    )
+    print(f"\nLame S_h (E = 2, nu = 0.3) on the icosphere |x| = 0.8, P1, tol {tol:g}")
+    print(header)
+    print("-" * len(header))
+    for level in levels:
+        rows = {}
+        for name in ("laplace", "lame"):
+            out = subprocess.run(
+                [sys.executable, __file__, "--surface-one", str(level), "--surface-tol", str(tol)]
+                + ["--surface-kernel", name],
+                check=True,
+                capture_output=True,
+                text=True,
+            )
+            r = rows[name] = json.loads(out.stdout.strip().splitlines()[-1])
+            parts = "/".join(f"{r[k] / 1e6:.0f}" for k in ("nbytes_v", "nbytes_k", "nbytes_w"))
+            print(
+                f"{r['n']:>6} {r['dofs']:>6} {name:>7} {r['setup']:>10.2f} {r['near']:>6.1f}"
+                f" {r['single']:>6.1f} {r['double']:>6.1f} {r['hypersingular']:>5.1f}"
+                f" {r['peak'] / 1e6:>9.0f} {r['nbytes'] / 1e6:>9.0f} {parts:>14}"
+                f" {r['product']:>7.3f} {r['iterations']:>3} {r['max_rank']:>4}"
+                f" {r['setup_cpu']:>11.2f} {r['product_cpu']:>6.3f}",
+                flush=True,
+            )
+        a, b = rows["lame"], rows["laplace"]
+        keys = ("setup", "setup_cpu", "peak", "nbytes", "product", "product_cpu")
+        x = {k: a[k] / b[k] for k in keys}
+        ok = max(x["setup"], x["peak"], x["product"]) <= LAME_TARGET_RATIO
+        print(
+            f"  Lame / Laplace: set-up {x['setup']:.1f}x (CPU {x['setup_cpu']:.1f}x), peak"
+            f" memory {x['peak']:.1f}x (held {x['nbytes']:.1f}x), product {x['product']:.1f}x"
+            f" (CPU {x['product_cpu']:.1f}x); target each within {LAME_TARGET_RATIO:g}x"
+            f" ({verdict(ok)})"
+        )
 
 
 if __name__ == "__main__":

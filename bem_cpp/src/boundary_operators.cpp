@@ -2,7 +2,17 @@
 
 #include <stdexcept>
 
+#include "bem/grouped_aca.hpp"
+
 namespace bem {
+
+namespace {
+
+/// Sampled rows and columns confirming the stop of K_h's ACA (SampledAcaEntries: the double
+/// layer's [[0, A], [B, 0]] blocks on polygons with straight sides, grouped_aca.hpp).
+constexpr int kDoubleLayerSamples = 8;
+
+}  // namespace
 
 std::shared_ptr<const HMatrix> layer_hmatrix(const Polygon& polygon, Kernel kernel, Space rows,
                                              std::shared_ptr<const ClusterTree> row_tree,
@@ -10,6 +20,9 @@ std::shared_ptr<const HMatrix> layer_hmatrix(const Polygon& polygon, Kernel kern
   const OperatorEntries entries(polygon, kernel, rows, kernel == Kernel::SingleLayer ? rows : Space::P1);
   HMatrixOptions options = o;
   options.symmetric = kernel == Kernel::SingleLayer;  // V_h = V_h^T: half the blocks
+  if (kernel == Kernel::DoubleLayer)
+    return std::make_shared<const HMatrix>(std::move(row_tree), std::move(col_tree),
+                                           SampledAcaEntries(entries, kDoubleLayerSamples), options);
   return std::make_shared<const HMatrix>(std::move(row_tree), std::move(col_tree), entries, options);
 }
 

@@ -7,7 +7,7 @@
 #include <stdexcept>
 
 #include "bem/far_field.hpp"
-#include "bem/lame_aca.hpp"
+#include "bem/grouped_aca.hpp"
 #include "bem/lame_polygon.hpp"
 #include "bem/log_integrals.hpp"
 
@@ -364,7 +364,7 @@ class LameBlock : public EntryBlock {
     e_.count(false, elapsed(t0));
   }
 
-  /// ACA with the components of a node as a group (lame_aca.hpp).
+  /// ACA with the components of a node as a group (grouped_aca.hpp).
   bool low_rank(double tol, LowRank& out) const override {
     std::vector<Index> rg(static_cast<std::size_t>(m_)), cg(static_cast<std::size_t>(k_));
     for (Index r = 0; r < m_; ++r) rg[static_cast<std::size_t>(r)] = I_[r] / 2;

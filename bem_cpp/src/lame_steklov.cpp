@@ -8,7 +8,6 @@
 
 #include "bem/boundary_operators.hpp"
 #include "bem/calderon_preconditioner.hpp"
-#include "bem/lame_aca.hpp"
 #include "bem/lame_polygon_entries.hpp"
 #include "bem/linear_algebra.hpp"
 
@@ -17,7 +16,6 @@ namespace bem {
 namespace {
 
 constexpr double kDifferencedTolFactor = 0.1;
-constexpr int kDoubleLayerSamples = 8;
 constexpr double kSinglePrecisionMinTol = 1e-6;  // as the surfaces' (bem_cpp/defaults.py)
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
@@ -174,12 +172,8 @@ LameSteklovParts lame_polygon_steklov_parts(const Polygon& polygon, const Lame& 
   info.single_layer_seconds = seconds_since(t0);
 
   t0 = std::chrono::steady_clock::now();
-  // K_L with the stop of ACA confirmed on kDoubleLayerSamples rows and columns (lame_aca.hpp)
-  const OperatorEntries kl_entries(polygon, Kernel::DoubleLayer, flux, Space::P1);
-  HMatrixOptions kl_options = o;
-  kl_options.symmetric = false;
-  const std::shared_ptr<const HMatrix> KL =
-      std::make_shared<const HMatrix>(tree_flux, tree1, SampledAcaEntries(kl_entries, kDoubleLayerSamples), kl_options);
+  // K_L with the stop of ACA confirmed on sampled rows and columns (layer_hmatrix)
+  const std::shared_ptr<const HMatrix> KL = layer_hmatrix(polygon, Kernel::DoubleLayer, flux, tree_flux, tree1, o);
   if (flux == Space::P1) {
     const std::shared_ptr<const HMatrix> Y =
         lame_hmatrix(polygon, m, LameKernel::DoubleLayer, Space::P1, vec1, vec0, tight, &ty);

@@ -112,6 +112,10 @@ double thread_seconds() {
 /// The row points summed at once by the far pass of the dense blocks (LameBlock::accumulate).
 constexpr int kWidth = 8;
 
+/// The scalar parts of V_h's and Z's far factors (V_L, D^T g D) are recompressed to this fraction
+/// of the blocks' tol before they join A's (LameBlock::far_factors).
+constexpr double kPartTolerance = 0.1;
+
 /// A vector block's rank against the point ACA's rank of g (the choice between the cross
 /// approximation and the dense sum of an admissible block, LameBlock::far_factors).
 constexpr Index kRankRatio = 3;
@@ -309,32 +313,34 @@ LowRank grouped_point_aca(Index points_r, Index points_c, const std::function<vo
   max_rank = std::min({max_rank, M, N});
   Index capacity = std::max<Index>(std::min<Index>(max_rank, 96), 1);
   Eigen::MatrixXd U(M, capacity), V(N, capacity);
-  // R: the residual rows of the current row point (N x 3), C: the residual columns of the
-  // column point cq (M x 3); GR = V_k^T R and GC = U_k^T C (the cross terms of |U V^T|_F)
-  Eigen::MatrixXd R(N, 3), C(M, 3), GR(capacity, 3), GC(capacity, 3);
-  Index k = 0, cq = -1;
+  // R: the residual rows of the current row point (N x 3) and GR = V_k^T R; C: residual columns
+  // (M x s) and GC = U_k^T C (the cross terms of |U V^T|_F)
+  Eigen::MatrixXd R(N, 3), GR(capacity, 3), C(M, 3), GC(capacity, 3);
+  Index k = 0;
   double norm2 = 0.0;
   std::vector<char> point_used(static_cast<std::size_t>(Pr), 0), col_used(static_cast<std::size_t>(N), 0);
+  std::vector<double> buffer(static_cast<std::size_t>(9 * Pr));
   std::uint64_t seed =
       0x9E3779B97F4A7C15ULL ^ (static_cast<std::uint64_t>(M) * 1315423911ULL + static_cast<std::uint64_t>(N));
   auto random_index = [&seed](Index size) {
     seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
     return static_cast<Index>((seed >> 33) % static_cast<std::uint64_t>(size));
   };
-  // Y (rows x 3) -= F_k W with W(t, c) = G(c stride + i, t), and GY = F_k^T Y afterwards, chunk
-  // by chunk of rows (F_k read once for both; a product with three columns as Eigen's gemm
-  // would pack F_k first, which costs as much)
-  auto subtract = [&k](Eigen::MatrixXd& Y, Eigen::MatrixXd& GY, const Eigen::MatrixXd& F, const Eigen::MatrixXd& G,
-                       Index i, Index stride) {
+  // Y (rows x s) -= F_k W with W(t, c) = G(index[c], t), and GY = F_k^T Y afterwards, chunk by
+  // chunk of rows (F_k read once for both; a product with a few columns as Eigen's gemm would
+  // pack F_k first, which costs as much)
+  auto subtract = [&k](Eigen::MatrixXd& Y, Index s, Eigen::MatrixXd& GY, const Eigen::MatrixXd& F,
+                       const Eigen::MatrixXd& G, const Index* index) {
     constexpr Index kChunk = 128;
     const Index rows = Y.rows();
-    GY.topRows(k).setZero();
+    GY.topLeftCorner(k, 3).setZero();
     for (Index r0 = 0; r0 < rows; r0 += kChunk) {
       const Index len = std::min(kChunk, rows - r0);
+      // unused columns (s < 3) are computed on scratch columns of Y and ignored
       double *y0 = Y.col(0).data() + r0, *y1 = Y.col(1).data() + r0, *y2 = Y.col(2).data() + r0;
       for (Index t = 0; t < k; ++t) {
         const double* f = F.col(t).data() + r0;
-        const double w0 = G(i, t), w1 = G(stride + i, t), w2 = G(2 * stride + i, t);
+        const double w0 = G(index[0], t), w1 = s > 1 ? G(index[1], t) : 0.0, w2 = s > 2 ? G(index[2], t) : 0.0;
 #pragma omp simd
         for (Index c = 0; c < len; ++c) {
           y0[c] -= f[c] * w0;
@@ -359,41 +365,22 @@ LowRank grouped_point_aca(Index points_r, Index points_c, const std::function<vo
   };
   auto residual_rows = [&](Index p) {
     row_group(p, R.data());  // R(l Pc + q, kk): out[kk * N + l Pc + q]
-    subtract(R, GR, V, U, p, Pr);
+    const Index rows[3] = {p, Pr + p, 2 * Pr + p};
+    subtract(R, 3, GR, V, U, rows);
   };
-  auto residual_columns = [&](Index q) {
-    column_group(q, C.data());
-    subtract(C, GC, U, V, q, Pc);
-    cq = q;
-  };
-  // adds the cross of the residual row kk of point p and column j (its column point q)
-  auto add = [&](Index p, int kk, Index j) {
-    const Index q = j % Pc, jc = j / Pc;
-    if (q != cq) residual_columns(q);
-    const double pivot = R(j, kk);
-    if (k == U.cols()) {
-      U.conservativeResize(Eigen::NoChange, 2 * k);
-      V.conservativeResize(Eigen::NoChange, 2 * k);
-      GR.conservativeResize(2 * k, Eigen::NoChange);
-      GC.conservativeResize(2 * k, Eigen::NoChange);
+  // the residual columns `cols` (s <= 3 of them) before the crosses of the current group
+  auto residual_columns = [&](const Index* cols, Index s) {
+    Index evaluated = -1;
+    for (Index t = 0; t < s; ++t) {
+      const Index q = cols[t] % Pc, l = cols[t] / Pc;
+      if (q != evaluated) {
+        column_group(q, buffer.data());  // [(3 l + k) Pr + p]: column l Pc + q at row k Pr + p
+        evaluated = q;
+      }
+      C.col(t) = Eigen::Map<const Eigen::VectorXd>(buffer.data() + l * M, M);
     }
-    U.col(k) = C.col(jc);
-    V.col(k) = R.col(kk) / pivot;
-    const auto u = U.col(k);
-    const auto v = V.col(k);
-    // U_k^T u and V_k^T v from the Gram columns
-    const Eigen::VectorXd gu = GC.col(jc).head(k), gv = GR.col(kk).head(k) / pivot;
-    norm2 += u.squaredNorm() * v.squaredNorm() + 2.0 * gu.dot(gv);
-    const Eigen::RowVector3d up(u(p), u(Pr + p), u(2 * Pr + p)), vq(v(q), v(Pc + q), v(2 * Pc + q));
-    R.noalias() -= v * up;
-    C.noalias() -= u * vq;
-    GR.topRows(k).noalias() -= gv * up;
-    GC.topRows(k).noalias() -= gu * vq;
-    GR.row(k) = v.transpose() * R;
-    GC.row(k) = u.transpose() * C;
-    ++k;
-    col_used[static_cast<std::size_t>(j)] = 1;
-    return u.norm() * v.norm();
+    for (Index t = s; t < 3; ++t) C.col(t).setZero();
+    subtract(C, s, GC, U, V, cols);
   };
   auto next_point = [&]() {  // the unused point of the largest entry of the last u
     Index best = -1;
@@ -416,6 +403,7 @@ LowRank grouped_point_aca(Index points_r, Index points_c, const std::function<vo
     }
     return Index{-1};
   };
+  Eigen::MatrixXd Vg(N, 3), gv(capacity, 3);  // the group's v and V_k^T v
   Index p = Pr / 2;
   int zero_groups = 0;
   while (k < max_rank) {
@@ -423,20 +411,56 @@ LowRank grouped_point_aca(Index points_r, Index points_c, const std::function<vo
     if (p >= 0) {
       residual_rows(p);
       point_used[static_cast<std::size_t>(p)] = 1;
-      int added = 0;
-      bool small = true;
-      for (int kk = 0; kk < 3 && k < max_rank; ++kk) {
+      // the group's pivots on its residual rows alone (each cross's u at the rows of p is the
+      // residual row's entry at the pivot column), their residual columns in one pass below
+      Index cols[3], s = 0;
+      if (gv.rows() < U.cols()) gv.resize(U.cols(), 3);
+      for (int kk = 0; kk < 3 && k + s < max_rank; ++kk) {
         const Index j = unused_argmax(R.col(kk).data(), N, col_used);
         if (j < 0 || R(j, kk) == 0.0) continue;
-        const double size = add(p, kk, j);
-        ++added;
-        if (size > tol * std::sqrt(std::max(norm2, 0.0))) small = false;
+        const double pivot = R(j, kk);
+        Vg.col(s) = R.col(kk) / pivot;
+        if (k > 0) gv.col(s) = GR.col(kk).head(k) / pivot;  // V_k^T v
+        const Eigen::RowVector3d up = R.row(j);
+        R.noalias() -= Vg.col(s) * up;
+        if (k > 0) GR.topRows(k).noalias() -= gv.col(s).head(k) * up;
+        col_used[static_cast<std::size_t>(j)] = 1;
+        cols[s++] = j;
       }
-      if (added == 0) {
+      if (s == 0) {
         p = ++zero_groups > 3 ? -1 : next_unused(p + Pr / 3 + 1);
         stop = p < 0;
       } else {
         zero_groups = 0;
+        residual_columns(cols, s);
+        // u_t = the residual column after the group's crosses before t, and U_k^T u_t
+        for (Index t = 1; t < s; ++t)
+          for (Index t0 = 0; t0 < t; ++t0) {
+            const double w = Vg(cols[t], t0);
+            C.col(t).noalias() -= w * C.col(t0);
+            if (k > 0) GC.col(t).head(k).noalias() -= w * GC.col(t0).head(k);
+          }
+        if (k + s > U.cols()) {
+          const Index grown = std::max(2 * U.cols(), k + s);
+          U.conservativeResize(Eigen::NoChange, grown);
+          V.conservativeResize(Eigen::NoChange, grown);
+          GR.conservativeResize(grown, Eigen::NoChange);
+          GC.conservativeResize(grown, Eigen::NoChange);
+          gv.conservativeResize(grown, Eigen::NoChange);
+        }
+        bool small = true;
+        for (Index t = 0; t < s; ++t) {
+          const auto u = C.col(t);
+          const auto v = Vg.col(t);
+          // |S + u v^T|^2 = |S|^2 + 2 u^T S v + |u|^2 |v|^2, S = the crosses so far
+          double cross = k > 0 ? GC.col(t).head(k).dot(gv.col(t).head(k)) : 0.0;
+          for (Index t0 = 0; t0 < t; ++t0) cross += C.col(t0).dot(u) * Vg.col(t0).dot(v);
+          norm2 += u.squaredNorm() * v.squaredNorm() + 2.0 * cross;
+          if (u.norm() * v.norm() > tol * std::sqrt(std::max(norm2, 0.0))) small = false;
+        }
+        U.middleCols(k, s) = C.leftCols(s);
+        V.middleCols(k, s) = Vg.leftCols(s);
+        k += s;
         stop = small;
         p = next_point();
         if (p < 0) stop = true;
@@ -448,7 +472,8 @@ LowRank grouped_point_aca(Index points_r, Index points_c, const std::function<vo
     // confirm on a sampled column group and row group
     const double norm = std::sqrt(std::max(norm2, 0.0));
     bool found = false;
-    residual_columns(random_index(Pc));
+    const Index q = random_index(Pc), sample[3] = {q, Pc + q, 2 * Pc + q};
+    residual_columns(sample, 3);
     for (int l = 0; l < 3 && !found; ++l) {
       const auto c = C.col(l);
       if (c.norm() * std::sqrt(static_cast<double>(N)) > tol * norm && c.cwiseAbs().maxCoeff() > 0) {
@@ -461,13 +486,13 @@ LowRank grouped_point_aca(Index points_r, Index points_c, const std::function<vo
       }
     }
     if (!found) {
-      const Index q = next_unused(random_index(Pr));
-      if (q >= 0) {
-        residual_rows(q);
+      const Index pr = next_unused(random_index(Pr));
+      if (pr >= 0) {
+        residual_rows(pr);
         for (int kk = 0; kk < 3 && !found; ++kk)
           if (R.col(kk).norm() * std::sqrt(static_cast<double>(M)) > tol * norm &&
               R.col(kk).cwiseAbs().maxCoeff() > 0) {
-            p = q;
+            p = pr;
             found = true;
           }
       }
@@ -658,14 +683,20 @@ class LameBlock : public EntryBlock {
     if (d_.kind == LameSurfaceEntries::Kind::DoubleLayer) {
       if (d_.cache && d_.cache->take_low_rank(key(false), out)) return true;
       far_factors(tol, false);
+      recompress(Yf_, tol);  // as the cached blocks (the same factors with or without the cache)
       out = std::move(Yf_);
       return true;
     }
     far_factors(tol, true);
     out = std::move(Vf_);
     if (d_.cache) {
+      // kept recompressed (as Y's H-matrix will hold them): the cache then holds no more than Y
+      recompress(Yf_, tol);
       d_.cache->put_low_rank(key(false), std::move(Yf_));
-      if (I_ != J_) d_.cache->put_low_rank(key(true), std::move(Ytf_));
+      if (I_ != J_) {
+        recompress(Ytf_, tol);
+        d_.cache->put_low_rank(key(true), std::move(Ytf_));
+      }
     }
     return true;
   }
@@ -939,15 +970,20 @@ class LameBlock : public EntryBlock {
     Ytf_.U = QAc;
     Ytf_.V = CAr;
     if (with_v) {
+      // V_L's and D^T g D's factors at the dofs recompressed first (to tol / 10 of their own
+      // norms): V_L kron I then adds three times the rank the dofs need, not the points'
       const Index rg = G.rank();
-      Eigen::MatrixXd Qgr = Eigen::MatrixXd::Zero(mn_, rg), Qgc = Eigen::MatrixXd::Zero(kn_, rg);
-      add_values_transpose_product(row_parts_, rule, G.U, Qgr);
-      add_values_transpose_product(col_parts_, rule, G.V, Qgc);
-      Vf_.U = beside(kron3(Qgr), QAr) / (2.0 * mu);
-      Vf_.V = beside(kron3(Qgc), QAc);
+      LowRank VL{Eigen::MatrixXd::Zero(mn_, rg), Eigen::MatrixXd::Zero(kn_, rg)};
+      add_values_transpose_product(row_parts_, rule, G.U, VL.U);
+      add_values_transpose_product(col_parts_, rule, G.V, VL.V);
+      recompress(VL, kPartTolerance * tol);
+      Vf_.U = beside(kron3(VL.U), QAr) / (2.0 * mu);
+      Vf_.V = beside(kron3(VL.V), QAc);
       const Eigen::MatrixXd Sgr = sum_over_parts(G.U, n), Sgc = sum_over_parts(G.V, n);
-      Zf_.U = beside(-mu * divergence_map(d_.s, row_parts_, mn_, Sgr), -2.0 * mu * CAr);
-      Zf_.V = beside(divergence_map(d_.s, col_parts_, kn_, Sgc), CAc);
+      LowRank DL{divergence_map(d_.s, row_parts_, mn_, Sgr), divergence_map(d_.s, col_parts_, kn_, Sgc)};
+      recompress(DL, kPartTolerance * tol);
+      Zf_.U = beside(-mu * DL.U, -2.0 * mu * CAr);
+      Zf_.V = beside(DL.V, CAc);
     }
     factors_done_ = true;
     d_.low_rank_ns += static_cast<long>(1e9 * (thread_seconds() - t0));

@@ -7,7 +7,7 @@
 #include <mutex>
 #include <thread>
 
-#include "bem/lame_aca.hpp"
+#include "bem/grouped_aca.hpp"
 #include "bem/lame_polygon.hpp"
 #include "bem/lame_polygon_entries.hpp"
 #include "bem/lame_steklov.hpp"
@@ -144,8 +144,9 @@ TEST(LameHMatrix, ThinPolygonWithStraightSides) {
   // The Laplace double layer vanishes between panels on one line: on the thin triangle the
   // blocks of K_L whose clusters hold nodes of both long sides are [[0, A], [B, 0]], and
   // aca() with one sampled row and column lost half of many of them (K_h's H-matrix 1.6e-2
-  // relative, S_h 1.9e-3 at n = 801, graded; the Laplace S_h of steklov_operator.hpp 2.0e-3).
-  // K_L's ACA confirms its stop on 8 rows and columns (SampledAcaEntries): measured K_h
+  // relative, S_h 1.9e-3 at n = 801, graded; the Laplace S_h 2.0e-3 before layer_hmatrix
+  // confirmed its K_h's stop the same way).
+  // K_L's ACA confirms its stop on 8 rows and columns (layer_hmatrix): measured K_h
   // 1.0e-10 (P1) and 4.7e-10 (P0), S_h 1.3e-10 and 2.3e-10.
   const Points X = dart(400);
   const Polygon poly(X);

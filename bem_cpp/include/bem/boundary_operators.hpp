@@ -13,7 +13,9 @@ namespace bem {
 
 /// The H-matrix of V_h (rows and columns in `rows`) or K_h (rows in `rows`, columns P1)
 /// on `polygon`, on the given cluster trees; V_h is built symmetric (serial: half the
-/// blocks; distributed: the rows of the rank, see hmatrix.hpp).
+/// blocks; distributed: the rows of the rank, see hmatrix.hpp), K_h's ACA confirms its stop
+/// on 8 sampled rows and columns (SampledAcaEntries, grouped_aca.hpp: the double-layer
+/// kernel vanishes between panels on one line).
 std::shared_ptr<const HMatrix> layer_hmatrix(const Polygon& polygon, Kernel kernel, Space rows,
                                              std::shared_ptr<const ClusterTree> row_tree,
                                              std::shared_ptr<const ClusterTree> col_tree,

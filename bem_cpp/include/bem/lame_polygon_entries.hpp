@@ -22,7 +22,7 @@
 // tensor Gauss rules (far_field_points points per panel) in vector batches over the panels;
 // the rows and columns of ACA (the admissible blocks, approximated to tol anyway) by the
 // rules for the quadrature tolerance max(1e-16, 1e-3 tol) instead of 1e-16 (fewer points).
-// An admissible block is approximated by grouped_aca (lame_aca.hpp), the two components of
+// An admissible block is approximated by grouped_aca (grouped_aca.hpp), the two components of
 // a node a group; a row or column computes both components' (one set of moments) and keeps
 // the other for later.
 #include <array>

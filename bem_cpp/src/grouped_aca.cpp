@@ -1,4 +1,4 @@
-#include "bem/lame_aca.hpp"
+#include "bem/grouped_aca.hpp"
 
 #include <algorithm>
 #include <cmath>

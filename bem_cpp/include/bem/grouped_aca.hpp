@@ -1,7 +1,8 @@
 #pragma once
-// Adaptive cross approximation of a block of a vector kernel (the Lame operators: d dofs
-// per node, lame_polygon_entries.hpp), whose rows and columns come in groups (the d
-// components of a node).
+// Adaptive cross approximation of a block whose rows and columns come in groups (the d
+// components of a node of the Lame operators, lame_polygon_entries.hpp), and the EntrySource
+// that approximates every admissible block so with its stop confirmed on several samples (the
+// double layer of a polygon, boundary_operators.hpp).
 //
 // Why not aca.hpp as it is: the blocks of two clusters on one straight line (the sides of
 // a polygon) are block-diagonal in the components there (g = t t^T has g_xy = 0 when t is
@@ -31,14 +32,15 @@ LowRank grouped_aca(Index m, Index n, const std::vector<Index>& row_group, const
 
 /// An EntrySource whose admissible blocks are approximated by grouped_aca with every row
 /// and column its own group and `samples` confirmations, the rest as `source`'s (which must
-/// outlive it). For the Laplace double layer K_L of a polygon with straight sides: its
+/// outlive it). For the Laplace double layer K_h of a polygon with straight sides
+/// (layer_hmatrix, boundary_operators.hpp; the Lame operator's K_L, lame_steklov.hpp): its
 /// kernel vanishes between two panels on one line, so the block of two clusters that both
 /// hold nodes of two nearly parallel sides (a thin polygon) is [[0, A], [B, 0]] in those
 /// rows and columns, and aca()'s partial pivoting stays in one half while its single sampled
-/// row and column miss the other with probability about 1/4: on the thin triangle of
-/// tests/test_lame_polygon.cpp (801 nodes) many blocks lost half their norm (relative error
-/// 1/sqrt(2)), K_L's H-matrix 2.5 % and the Laplace S_h 0.2 % (steklov_operator.hpp, as it
-/// stands). With 8 samples of each: 1e-11 (lame_steklov.hpp uses this for K_L).
+/// row and column miss the other with probability about 1/4: on the thin 10 degree triangle
+/// (test::dart, 801 and 2,001 nodes) many blocks lost half their norm (relative error
+/// 1/sqrt(2)), K_h's H-matrix 2.8e-2 and the Laplace S_h 2.1e-3 and 1.4e-3 off. With 8
+/// samples of each, as the tests' tol of 1e-10 asks (docs/design/lame_bem.md).
 class SampledAcaEntries : public EntrySource {
  public:
   SampledAcaEntries(const EntrySource& source, int samples) : source_(source), samples_(samples) {}
