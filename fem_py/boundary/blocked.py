@@ -9,11 +9,10 @@ dofs d dofs[k] + c.
 
 The gap unknowns g (what phi is for the scalar equation) sit at the Signorini nodes, in the
 frame of the nodal normal n_k (the map's ``node_normals``) and, for ``"slip"``, tangents
-t_k orthonormal to it:
+t_k orthonormal to it (n_s unknowns for "stick", d n_s for "slip")::
 
-    "stick":  j_k = g_k n_k,                              g_k >= 0           (n_s unknowns)
+    "stick":  j_k = g_k n_k,                              g_k >= 0
     "slip":   j_k = g_k n_k + sum_i g_{k,i} t_{k,i},      g_k >= 0, the g_{k,i} free
-                                                                    (d n_s unknowns)
 
 so that z = T u + E g with E the sparse matrix of :class:`GapMap`; the constraint set is a
 product of half-lines and lines, and its projection in a diagonal metric is pointwise. The
