@@ -35,24 +35,33 @@ __all__ = ["evaluate", "exterior_from_fields", "ON_GAMMA"]
 ON_GAMMA = 1e-11
 
 
-def exterior_from_fields(fields: dict, points: np.ndarray, tol: float | None = None) -> np.ndarray:
+def exterior_from_fields(
+    fields: dict, points: np.ndarray, tol: float | None = None, kernel: str | tuple = "laplace"
+) -> np.ndarray:
     """u_e at exterior ``points`` (m, 2) by the representation formula (docs/method.md section
     2) from the boundary arrays of a run's fields (``boundary_x``, ``ue``, ``dn_ue``,
     ``a``, ``flux_space``; in 3D (m, 3) points and ``boundary_triangles``), compressed
     above bem_cpp's measured crossover to the relative accuracy ``tol`` (default: the
     solver's, :func:`coupling.options.hmatrix_tol`); bem_cpp's ValueError for a point
-    inside Omega or on Gamma. bem_cpp releases the GIL while it evaluates."""
+    inside Omega or on Gamma. bem_cpp releases the GIL while it evaluates.
+
+    ``kernel``: the problem's (``SignoriniProblem.kernel``); for Kelvin's,
+    ``("lame", E, nu)``, the fields are those of an elastic run (``ue`` and ``dn_ue``
+    (n, d), ``a`` (d,)) and u_e is (m, d), by direct sums (docs/method.md section 12).
+    """
     surface = fields.get("boundary_triangles")
+    laplace = isinstance(kernel, str) and kernel == "laplace"
     return bem_cpp.exterior_potential(
         fields["boundary_x"],
         fields["ue"],
         fields["dn_ue"],
         points,
-        a=float(fields["a"]),
+        a=float(fields["a"]) if laplace else np.asarray(fields["a"], dtype=float),
         flux=str(fields["flux_space"]),
         compression="auto",
         tol=hmatrix_tol(fields["boundary_x"]) if tol is None else tol,
         **({} if surface is None else {"triangles": surface}),
+        **({} if laplace else {"kernel": kernel}),
     )
 
 

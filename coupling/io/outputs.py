@@ -34,6 +34,7 @@ from coupling.io.levels import LEVEL_FILES, write_levels
 from coupling.io.figure_data import FigureInputs
 from coupling.io.figure_worker import FigureWorker, FigureWorkerError
 from coupling.io.body_figure_data import BODY_PLOT_FILES, section, surface_inputs
+from coupling.io.elastic_figure_data import ELASTIC_PLOT_FILES, elastic_inputs, exterior_section
 from coupling.io.plots import (
     PLOT_FILES,
     boundary_figure_inputs,
@@ -207,15 +208,7 @@ class RunOutputs:
         tic = time.perf_counter()
         release_free_memory()  # the solve's freed memory, before the outputs' (fem_py.memory)
         self._problem, self._result = problem, result
-        solid = problem.domain.dim == 3
-        if problem.components > 1 and self.plots:  # the elastic figures are not drawn yet
-            self.plots = False
-            if self.comm.rank == 0:
-                print(
-                    "fembem: note: the figures of the elastic problem are not drawn yet; "
-                    "writing summary.json, fields.npz and solution.xdmf",
-                    file=sys.stderr,
-                )
+        solid, elastic = problem.domain.dim == 3, problem.components > 1
         self._pressure = boundary_flux(problem, result)
         if self.comm.rank == 0:
             on_gamma = dict(
@@ -223,7 +216,9 @@ class RunOutputs:
                 a=np.array(problem.a),
                 flux_space=np.array(problem.flux_space),
             )
-            if self.plots and not solid:  # u_e's samples and, in the figure process,
+            if (
+                self.plots and not solid and not elastic
+            ):  # u_e's samples and, in the figure process,
                 # boundary.png and history.png while u_h is gathered and rasterised here
                 samples = self._pool.submit(exterior_samples, on_gamma)
                 if self.worker is not None:
@@ -247,7 +242,19 @@ class RunOutputs:
             self._fields = dict(x=x, u=u, **{"cells" if solid else "triangles": cells}, **on_gamma)
             if not self.indicators:
                 self._jobs["data"] = self._pool.submit(_write_fields, self.out, self._fields)
-            if self.plots and solid:  # the section's u_e and u_h in a thread, while the
+            if self.plots and elastic:  # the figure process draws the deformed body,
+                # Gamma_s and the history while u_e's samples are computed in a thread
+                history = history_arrays(result.history, result.stop_measure, **runs)
+                early = elastic_inputs(self._fields, problem.material, history, tol=self.tol)
+                self._jobs["inputs"] = self._pool.submit(
+                    lambda: early._replace(exterior=exterior_section(self._fields, problem.kernel))
+                )
+                if self.worker is not None:
+                    self.worker.send(early)
+                    self._jobs["pngs"] = self._pool.submit(
+                        self.worker.render_rest, self._jobs["inputs"].result
+                    )
+            elif self.plots and solid:  # the section's u_e and u_h in a thread, while the
                 # figure process draws those on Gamma and the history
                 history = history_arrays(result.history, result.stop_measure, **runs)
                 surface = surface_inputs(self._fields, history, tol=self.tol)
@@ -360,7 +367,8 @@ class RunOutputs:
                 lambda p: p.write_text(json.dumps(record, indent=2, default=str)),
             )
             names.append("summary.json")
-            for name in set(DATA_FILES + PLOT_FILES + BODY_PLOT_FILES + LEVEL_FILES) - set(names):
+            every = DATA_FILES + PLOT_FILES + BODY_PLOT_FILES + ELASTIC_PLOT_FILES + LEVEL_FILES
+            for name in set(every) - set(names):
                 (out / name).unlink(missing_ok=True)
             return names
 
