@@ -132,3 +132,28 @@ def test_kelvins_representation_formula_tends_to_the_trace(square):
     ue = exterior_from_fields(square, points, kernel=("lame", 1.5, 0.3))
     assert ue.shape == (1, 2)
     assert np.linalg.norm(ue[0] - square["ue"][i]) <= 1e-2 * np.linalg.norm(square["ue"][i])
+
+
+def test_plane_elastic_figures_are_drawn_without_mpi(square, tmp_path):
+    """The figure process of a plane elastic run unpickles its inputs and draws them
+    without importing MPI (under mpirun a process importing it would try to join the job),
+    the exterior samples included."""
+    import pickle
+    import subprocess
+    import sys
+
+    from coupling.io.elastic_figure_data import elastic_inputs, exterior_section
+    from fem_py.forms.elasticity import hencky
+
+    inputs = elastic_inputs(square, hencky(2.0, "1 + 1/(1 + s)", 2), HISTORY, tol=1e-8)
+    inputs = inputs._replace(exterior=exterior_section(square, ("lame", 1.5, 0.3)))
+    pickled = tmp_path / "inputs.pkl"
+    pickled.write_bytes(pickle.dumps(inputs))
+    code = (
+        "import pickle, sys; from coupling.io import figures; "
+        f"pngs = figures.render(pickle.loads(open({str(pickled)!r}, 'rb').read())); "
+        "assert set(pngs) == {'deformed.png', 'signorini.png', 'exterior.png'}, set(pngs); "
+        "sys.exit(3 if 'mpi4py' in sys.modules else 0)"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr

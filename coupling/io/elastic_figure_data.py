@@ -15,8 +15,10 @@ iteration history, on rank 0:
   the body left blank (the costly part: direct sums, computed in a thread while the
   figure process draws the rest).
 
-NumPy and bem_cpp only (and, for a body in R^3, the point location of
-:mod:`fem_py.mesh.location3d` and scipy's k-d tree): no matplotlib, no MPI.
+The module imports NumPy alone, so that the figure process unpickles its inputs without
+MPI; :func:`exterior_section` imports bem_cpp and the point location of
+:mod:`fem_py.mesh.location3d` (the run's side), :func:`surface_cells` scipy's k-d tree.
+No matplotlib.
 """
 from __future__ import annotations
 
@@ -24,7 +26,6 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from coupling.io.evaluation import exterior_from_fields
 from coupling.io.figure_data import PixelGrid, rasterise
 
 __all__ = [
@@ -210,6 +211,8 @@ def exterior_section(fields: dict, kernel: Any) -> dict:
     body's box (``ue`` (k, k, 3) on the pixel centres of ``extent``, NaN inside the body
     (``inside``) and next to a boundary node, and the section of Gamma, ``outline``
     (m, 2, 2))."""
+    from coupling.io.evaluation import exterior_from_fields  # bem_cpp, the mesh libraries
+
     if fields["x"].shape[1] == 2:
         from coupling.io.plots import exterior_samples
 
