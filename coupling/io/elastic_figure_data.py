@@ -60,12 +60,12 @@ class ElasticFigureInputs(NamedTuple):
     ``deformed`` what deformed.png draws (2D: ``image``, the von Mises stress rasterised
     on ``grid`` over the deformed body; 3D: ``corners`` (t, 3, 3) of the deformed
     surface triangles and ``stress`` (t,) per triangle; both: ``range``, the stress's
-    (min, max) over the cells); ``boundary`` the boundary arrays of fields.npz that
-    signorini.png draws (``boundary_x``, ``boundary_u``, ``pressure`` = n.sigma n,
-    ``phi`` = jump.n, ``active``, ``signorini``, the trace ``ue``; 3D also
-    ``boundary_triangles``);
-    ``exterior`` exterior.png's |u_e| (:func:`exterior_section`; None: not computed yet,
-    no exterior.png from these inputs); ``history`` and ``tol`` those of history.png.
+    (min, max) over the cells, and the ``largest`` |u_h| at a node); ``boundary`` the
+    boundary arrays of fields.npz that signorini.png draws (``boundary_x``,
+    ``boundary_u``, ``pressure`` = n.sigma n, ``phi`` = jump.n, ``active``,
+    ``signorini``, the trace ``ue``; 3D also ``boundary_triangles``); ``exterior``
+    exterior.png's |u_e| (:func:`exterior_section`; None: not computed yet, no
+    exterior.png from these inputs); ``history`` and ``tol`` those of history.png.
     """
 
     dim: int
@@ -198,6 +198,7 @@ def elastic_inputs(
         stress = von_mises(cell_gradients(x, cells[under], u), material)
         moved = fields["boundary_x"] + factor * fields["boundary_u"]
         deformed = dict(corners=moved[triangles], stress=stress)
+    deformed["largest"] = float(np.sqrt(np.einsum("ij,ij->i", u, u)).max(initial=0.0))
     deformed["range"] = (float(stress.min()), float(stress.max())) if len(stress) else (0.0, 0.0)
     return ElasticFigureInputs(d, factor, deformed, boundary, None, history, float(tol))
 

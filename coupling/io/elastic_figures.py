@@ -64,8 +64,10 @@ _EXTERIOR_PIXELS = 400
 _SHADE = dict(color="tab:red", alpha=0.12, lw=0)
 
 
-def _title_factor(factor: float) -> str:
-    return f"displacement magnified {factor:g}" + ("" if factor != 1.0 else " (not magnified)")
+def _title_factor(inputs: ElasticFigureInputs) -> str:
+    """The magnification and the largest displacement, for a title."""
+    largest = inputs.deformed["largest"]
+    return f"displacement drawn $\\times${inputs.factor:g} (largest $|u_h|$ = {largest:.3g})"
 
 
 def _stress_norm(inputs: ElasticFigureInputs):
@@ -114,7 +116,7 @@ def _figure_deformed_plane(inputs: ElasticFigureInputs):
         ylim=(lo[1] - pad, hi[1] + pad),
     )
     ax.set_title(
-        f"Deformed body, {_title_factor(inputs.factor)}\n"
+        f"Deformed body, {_title_factor(inputs)}\n"
         "(dashed: undeformed outline), coloured by the von Mises stress",
         fontsize=10,
     )
@@ -176,27 +178,34 @@ def _figure_deformed_body(inputs: ElasticFigureInputs):
         label=r"von Mises stress of $\sigma(u_h)$",
     )
     fig.suptitle(
-        f"Deformed body, {_title_factor(inputs.factor)}, coloured by the von Mises stress\n"
+        f"Deformed body, {_title_factor(inputs)}, coloured by the von Mises stress\n"
         "of the tetrahedron under each surface triangle; grey lines: the undeformed edges",
         fontsize=11,
     )
     return fig
 
 
-def _range(values: np.ndarray) -> tuple[float, float]:
-    """Axis limits holding ``values`` and 0, with a 5 % margin."""
+def _range(values: np.ndarray, scale: float) -> tuple[float, float]:
+    """Axis limits holding ``values`` and 0, with a 5 % margin; [-0.05, 1] ``scale`` when
+    all are 0 (an arc wholly in contact has no opening)."""
     lo = min(float(values.min(initial=0.0)), 0.0)
     hi = max(float(values.max(initial=0.0)), 0.0)
-    pad = 0.05 * (hi - lo) if hi > lo else 1.0
+    if not hi > lo:
+        lo, hi = 0.0, scale
+    pad = 0.05 * (hi - lo)
     return lo - pad, hi + pad
 
 
-def _contact_spans(s: np.ndarray, on: np.ndarray) -> list[tuple[float, float]]:
+def _contact_spans(s: np.ndarray, on: np.ndarray, inner: np.ndarray) -> list[tuple[float, float]]:
     """The stretches of arc length of the contact set: each node in contact (``on``, at
-    ``s``) owns the arc from the midpoint before it to the midpoint after it (from the arc's
-    end at its ends), consecutive ones merged."""
+    ``s``) owns the arc from the midpoint before it to the midpoint after it, consecutive
+    ones merged; an arc's end node (bonded: not ``inner``) next to one in contact joins
+    it (the jump is 0 at both)."""
+    shut = on.copy()
+    shut[1:] |= ~inner[1:] & on[:-1]
+    shut[:-1] |= ~inner[:-1] & on[1:]
     middle = np.concatenate([s[:1], 0.5 * (s[1:] + s[:-1]), s[-1:]])
-    return [(middle[i], middle[j]) for i, j in _runs(on)]
+    return [(middle[i], middle[j]) for i, j in _runs(shut)]
 
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
@@ -217,7 +226,12 @@ def _figure_signorini_plane(inputs: ElasticFigureInputs):
     fig, axes = plt.subplots(
         2, cols, figsize=(max(7.0, 4.2 * cols), 6.2), sharex="col", squeeze=False
     )
-    limits = (_range(pressure[sig]), _range(opening[sig]))
+    # a scale for values all 0: a thousandth of the body's size, of its largest stress
+    size = float(np.ptp(nodes, axis=0).max())
+    limits = (
+        _range(pressure[sig], max(inputs.deformed["range"][1], np.finfo(float).tiny)),
+        _range(opening[sig], 1e-3 * size),
+    )
     for col, (i, j) in enumerate(runs):
         idx = np.arange(i, j + 1) % n
         s = arc_length(nodes[idx])
@@ -229,7 +243,7 @@ def _figure_signorini_plane(inputs: ElasticFigureInputs):
             )
         ):
             ax = axes[row, col]
-            for a, c in _contact_spans(s, on):
+            for a, c in _contact_spans(s, on, inner):
                 ax.axvspan(a, c, **_SHADE)
             v = values[idx]
             ax.plot(s, v, "-", lw=1, color="tab:purple" if row == 0 else "tab:blue", zorder=2)
