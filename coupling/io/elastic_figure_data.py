@@ -203,15 +203,17 @@ def elastic_inputs(
     return ElasticFigureInputs(d, factor, deformed, boundary, None, history, float(tol))
 
 
-def exterior_section(fields: dict, kernel: Any) -> dict:
+def exterior_section(fields: dict, kernel: Any, plane: str = "auto") -> dict:
     """|u_e| of the medium for exterior.png by the representation formula with the
     problem's ``kernel`` (Kelvin's, ``("lame", E, nu)``) from the boundary arrays of
     ``fields``: in 2D at the samples of :func:`coupling.io.plots.exterior_samples`
     (``points`` (m, 2), ``ue`` (m, 2)) on the square twice the body's box, the trace
-    ``ue`` on Gamma beside them; in 3D on the section z = z_c through the middle of the
-    body's box (``ue`` (k, k, 3) on the pixel centres of ``extent``, NaN inside the body
-    (``inside``) and next to a boundary node, and the section of Gamma, ``outline``
-    (m, 2, 2))."""
+    ``ue`` on Gamma beside them; in 3D on the section by ``plane`` (``[output] slice``:
+    ``"x = c"``, ``"y = c"``, ``"z = c"``, or ``"auto"``, the plane z = z_c through the
+    middle of the body's box): the ``axis`` across it, its coordinate ``value``, the
+    ``names`` of the two in-plane axes, ``ue`` (k, k, 3) at the pixel centres of
+    ``extent``, NaN inside the body (``inside``) and next to a boundary node, and the
+    section of Gamma, ``outline`` (m, 2, 2) in the plane's coordinates."""
     from coupling.io.evaluation import exterior_from_fields  # bem_cpp, the mesh libraries
 
     if fields["x"].shape[1] == 2:
@@ -219,38 +221,45 @@ def exterior_section(fields: dict, kernel: Any) -> dict:
 
         samples = exterior_samples(fields, EXTERIOR_SAMPLES_2D, kernel=kernel)
         return dict(points=samples.points, ue=samples.ue)
+    from scipy.spatial import cKDTree
+
     from coupling.io.body_figure_data import plane_section
+    from coupling.options import parse_slice
     from fem_py.mesh.location3d import interpolate_p1_tetrahedra
 
     nodes = fields["boundary_x"]
     lo, hi = nodes.min(axis=0), nodes.max(axis=0)
-    centre, half = 0.5 * (lo + hi), 0.5 * float(max(hi[0] - lo[0], hi[1] - lo[1]))
+    k, value = parse_slice(plane) or (2, float(0.5 * (lo[2] + hi[2])))
+    i, j = (a for a in range(3) if a != k)
+    centre = 0.5 * (lo + hi)
+    half = 0.5 * float(max(hi[i] - lo[i], hi[j] - lo[j]))
     g = np.linspace(-2.0, 2.0, EXTERIOR_SAMPLES_3D) * half
     g = g + (g[1] - g[0]) / 3.0  # no sample on a face at a round coordinate
-    X, Y = np.meshgrid(centre[0] + g, centre[1] + g)
-    points = np.column_stack([X.ravel(), Y.ravel(), np.full(X.size, centre[2])])
+    X, Y = np.meshgrid(centre[i] + g, centre[j] + g)
+    points = np.empty((X.size, 3))
+    points[:, i], points[:, j], points[:, k] = X.ravel(), Y.ravel(), value
     inside = np.isfinite(
         interpolate_p1_tetrahedra(fields["x"], fields["cells"], np.zeros(len(fields["x"])), points)
     )
-    # samples within a pixel of a boundary node are left out: the formula refuses a point
-    # on Gamma, and a sample that close shows nothing the trace does not
-    from scipy.spatial import cKDTree
-
+    # samples within half a pixel of a boundary node are left out: the formula refuses a
+    # point on Gamma, and a sample that close shows nothing the trace does not
     step = float(g[1] - g[0])
     outside = ~inside & (cKDTree(nodes).query(points)[0] > 0.5 * step)
     ue = np.full((len(points), 3), np.nan)
     if outside.any():
         ue[outside] = exterior_from_fields(fields, points[outside], kernel=kernel)
     extent = (
-        centre[0] + g[0] - step / 2,
-        centre[0] + g[-1] + step / 2,
-        centre[1] + g[0] - step / 2,
-        centre[1] + g[-1] + step / 2,
+        centre[i] + g[0] - step / 2,
+        centre[i] + g[-1] + step / 2,
+        centre[j] + g[0] - step / 2,
+        centre[j] + g[-1] + step / 2,
     )
     return dict(
+        axis="xyz"[k],
+        value=float(value),
+        names=("xyz"[i], "xyz"[j]),
         ue=ue.reshape(X.shape + (3,)),
         inside=inside.reshape(X.shape),
         extent=extent,
-        value=float(centre[2]),
-        outline=plane_section(nodes, fields["boundary_triangles"], 2, float(centre[2]))[:, :, :2],
+        outline=plane_section(nodes, fields["boundary_triangles"], k, float(value))[:, :, [i, j]],
     )

@@ -348,13 +348,14 @@ def _figure_exterior_body(inputs: ElasticFigureInputs):
     )
     ax.add_collection(LineCollection(ex["outline"], colors="black", linewidths=1.0))
     fig.colorbar(shown, ax=ax, label=r"$|u_e|$")
-    ax.set(
-        aspect="equal",
-        xlabel="$x$",
-        ylabel="$y$",
-        title=f"Exterior medium: $|u_e|$ on the section z = {ex['value']:.4g}\n"
-        "(representation formula, Kelvin's kernel); the body blank",
+    first, second = ex["names"]
+    title = f"Exterior medium: $|u_e|$ on the section {ex['axis']} = {ex['value']:.4g}\n"
+    title += (
+        "(representation formula, Kelvin's kernel); the body blank"
+        if ex["inside"].any()
+        else "(the plane misses the body)"
     )
+    ax.set(aspect="equal", xlabel=f"${first}$", ylabel=f"${second}$", title=title)
     ax.title.set_fontsize(10)
     return fig
 

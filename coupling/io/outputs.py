@@ -12,6 +12,10 @@ panel values for "p0", panel i = [node i, node i+1]); and the scalars ``a`` and
 (n_cells,), the estimator's eta_T per cell in the order of ``triangles`` (sum of squares
 eta^2, coupling.adapt.estimator).
 
+An elastic run's fields are vectors (docs/guide/elasticity.md) and its figures those of
+:mod:`coupling.io.elastic_figures` (deformed.png, signorini.png, exterior.png,
+history.png).
+
 Every file is written atomically (:mod:`coupling.io.atomic`), so an interrupted run
 never leaves a half-written file under its final name. Rank 0 writes every file, from
 what is gathered there (:mod:`coupling.io.xdmf` for solution.xdmf/.h5).
@@ -152,7 +156,9 @@ class RunOutputs:
     hands the rest to background work on rank 0: fields.npz and solution.xdmf/.h5 (file
     writes), the samples of u_e (bem_cpp), all in threads, and the figures, drawn by
     the figure process ``worker`` (:class:`coupling.io.figure_worker.FigureWorker`) when
-    one is given, from u_h rasterised here. :meth:`finish` waits for the background
+    one is given, from u_h rasterised here (an elastic run: the deformed body's stress
+    rasterised here, the samples of u_e in a thread,
+    :mod:`coupling.io.elastic_figure_data`). :meth:`finish` waits for the background
     work, writes the figures and, last, summary.json. Without a worker the figures are
     drawn in :meth:`finish`, in this process; so they are too, with a warning, if the
     worker fails.
@@ -247,7 +253,9 @@ class RunOutputs:
                 history = history_arrays(result.history, result.stop_measure, **runs)
                 early = elastic_inputs(self._fields, problem.material, history, tol=self.tol)
                 self._jobs["inputs"] = self._pool.submit(
-                    lambda: early._replace(exterior=exterior_section(self._fields, problem.kernel))
+                    lambda: early._replace(
+                        exterior=exterior_section(self._fields, problem.kernel, self.slice)
+                    )
                 )
                 if self.worker is not None:
                     self.worker.send(early)
