@@ -157,3 +157,48 @@ def test_plane_elastic_figures_are_drawn_without_mpi(square, tmp_path):
     )
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
+
+
+def test_cell_gradients_of_an_affine_field_are_exact():
+    from coupling.io.elastic_figure_data import cell_gradients
+
+    rng = np.random.default_rng(1)
+    for d in (2, 3):
+        x = rng.random((40, d))
+        cells = np.array([rng.choice(40, d + 1, replace=False) for _ in range(25)])
+        A, b = rng.random((d, d)), rng.random(d)
+        assert np.abs(cell_gradients(x, cells, x @ A.T + b) - A).max() < 1e-9
+
+
+def test_write_outputs_draws_the_elastic_figures_in_this_process(tmp_path):
+    """Without a figure process the figures are drawn in the run's process; and the
+    problem's exterior evaluation uses Kelvin's kernel, as the figures' samples do."""
+    from mpi4py import MPI
+
+    from coupling.io.evaluation import exterior_from_fields
+    from coupling.io.outputs import load_fields, write_outputs
+    from coupling.options import SolverOptions
+    from coupling.problem import SignoriniProblem
+    from coupling.solvers import solve
+    from fem_py.forms.elasticity import linear_elastic
+    from fem_py.mesh import GeometrySpec, build_domain
+
+    spec = GeometrySpec("square", h=1 / 16, subdomain_size=0.125, signorini=["bottom"])
+    domain = build_domain(MPI.COMM_WORLD, spec)
+    problem = SignoriniProblem(
+        domain,
+        linear_elastic(2.5, 0.25, 2),
+        f=["1", "0"],
+        u0=["0", "0.05*x"],
+        exterior=(1.5, 0.3),
+        boundary_operator="dense",
+    )
+    result = solve(problem, SolverOptions())
+    names = write_outputs(
+        MPI.COMM_WORLD, tmp_path, problem, result, tol=1e-8, xdmf=False, plots=True, timings={}
+    )
+    assert {"deformed.png", "signorini.png", "exterior.png", "history.png"} <= set(names)
+    fields = load_fields(tmp_path)
+    points = np.array([[0.6, 0.1], [-0.4, -0.7]])
+    direct = exterior_from_fields(fields, points, kernel=problem.kernel)
+    assert problem.exterior(result, points) == pytest.approx(direct, rel=1e-12, abs=1e-15)

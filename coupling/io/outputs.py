@@ -200,7 +200,9 @@ class RunOutputs:
         self.seconds = 0.0
         # a thread for each job that may run at once: fields.npz, solution.xdmf/.h5, u_e's
         # samples, the early figures' send, the figures' inputs and the figure process's
-        # answer (with three, the answer waited in the queue for fields.npz to be written)
+        # answer (with three, the answer waited in the queue for fields.npz to be written);
+        # for an elastic run the early figures' inputs and send, u_e's samples, the
+        # figures' inputs and the answer, beside fields.npz and solution.xdmf/.h5
         self._pool = ThreadPoolExecutor(max_workers=6) if comm.rank == 0 else None
         self._jobs: dict[str, Future] = {}
 
@@ -248,17 +250,18 @@ class RunOutputs:
             self._fields = dict(x=x, u=u, **{"cells" if solid else "triangles": cells}, **on_gamma)
             if not self.indicators:
                 self._jobs["data"] = self._pool.submit(_write_fields, self.out, self._fields)
-            if self.plots and elastic:  # the figure process draws the deformed body,
-                # Gamma_s and the history while u_e's samples are computed in a thread
+            if self.plots and elastic:  # in threads: the stress of the deformed body,
+                # sent to the figure process, which draws it, Gamma_s and the history while
+                # u_e's samples are computed (bem_cpp releases the GIL)
                 history = history_arrays(result.history, result.stop_measure, **runs)
-                early = elastic_inputs(self._fields, problem.material, history, tol=self.tol)
+                early = self._pool.submit(self._elastic_early, problem.material, history)
+                exterior = self._pool.submit(
+                    exterior_section, self._fields, problem.kernel, self.slice
+                )
                 self._jobs["inputs"] = self._pool.submit(
-                    lambda: early._replace(
-                        exterior=exterior_section(self._fields, problem.kernel, self.slice)
-                    )
+                    lambda: early.result()._replace(exterior=exterior.result())
                 )
                 if self.worker is not None:
-                    self.worker.send(early)
                     self._jobs["pngs"] = self._pool.submit(
                         self.worker.render_rest, self._jobs["inputs"].result
                     )
@@ -381,6 +384,15 @@ class RunOutputs:
             return names
 
         return broadcast_from_root(self.comm, write_gathered)  # a write error ends every rank
+
+    def _elastic_early(self, material, history: dict):
+        """The inputs of an elastic run's figures but exterior.png
+        (:func:`coupling.io.elastic_figure_data.elastic_inputs`), sent to the figure
+        process when there is one (rank 0, in a thread)."""
+        early = elastic_inputs(self._fields, material, history, tol=self.tol)
+        if self.worker is not None:
+            self.worker.send(early)
+        return early
 
     def _pngs(self) -> dict[str, bytes]:
         """The figures: the worker's, or drawn here (also when the worker failed)."""
