@@ -120,6 +120,7 @@ def test_elastic_solve_writes_vector_fields_the_same_on_two_ranks(tmp_path, text
     load[0] = 0.25 if d == 2 else 0.125
     assert np.allclose(summary["force"], load, rtol=0, atol=(1e-9 if d == 2 else 3e-6) * load[0])
     _check_figures(out, summary)
+    assert "figure process failed" not in proc.stderr  # drawn by the figure process
     xdmf = (out / "solution.xdmf").read_text()
     assert '<Attribute Name="u" AttributeType="Vector" Center="Node">' in xdmf
     assert f'Dimensions="{n} 3"' in xdmf
@@ -127,6 +128,7 @@ def test_elastic_solve_writes_vector_fields_the_same_on_two_ranks(tmp_path, text
     assert proc.returncode == 0, proc.stderr
     summary2, f2 = _load(two)
     _check_figures(two, summary2)
+    assert "figure process failed" not in proc.stderr
     assert summary2["iterations"] == summary["iterations"]
     for key in ("u", "ue", "phi", "pressure"):
         assert np.allclose(f2[key], f[key], rtol=0, atol=1e-9 * np.abs(f[key]).max()), key

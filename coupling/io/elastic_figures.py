@@ -38,6 +38,7 @@ from matplotlib.path import Path as PolygonPath  # noqa: E402
 
 from coupling.io.elastic_figure_data import (  # noqa: E402
     ELASTIC_PLOT_FILES,
+    EXTERIOR_SAMPLES_2D,
     ElasticFigureInputs,
 )
 from coupling.io.figure_data import PixelGrid, plane_square, rasterise  # noqa: E402
@@ -60,6 +61,8 @@ _CMAP = "viridis"
 _FEATURE_ANGLE = 30.0
 #: Pixels along the side of exterior.png's square (2D).
 _EXTERIOR_PIXELS = 400
+#: exterior.png draws u_e as an arrow at every this-th sample along each axis (2D).
+_ARROW_STRIDE = 8
 #: The shading of the contact set in signorini.png.
 _SHADE = dict(color="tab:red", alpha=0.12, lw=0)
 
@@ -314,6 +317,19 @@ def _figure_exterior_plane(inputs: ElasticFigureInputs):
     fig.colorbar(shown, ax=ax, shrink=0.85, label=r"$|u_e|$")
     ax.fill(*nodes.T, color="white", zorder=2)
     _draw_boundary(ax, _contact_fields(b, nodes))
+    # the direction of u_e: arrows at every _ARROW_STRIDE-th sample of the grid
+    step = 2.0 * half / (EXTERIOR_SAMPLES_2D - 1)
+    lattice = np.rint((ex["points"] - (centre - half)) / step).astype(np.int64)
+    some = np.all(lattice % _ARROW_STRIDE == _ARROW_STRIDE // 2, axis=1)
+    if some.any():
+        ax.quiver(
+            *ex["points"][some].T,
+            *ex["ue"][some].T,
+            color="white",
+            alpha=0.8,
+            width=0.004,
+            zorder=3,
+        )
     ax.set(
         aspect="equal",
         xlabel="$x$",
@@ -322,8 +338,8 @@ def _figure_exterior_plane(inputs: ElasticFigureInputs):
         ylim=(centre[1] - half, centre[1] + half),
     )
     ax.set_title(
-        "Exterior medium: $|u_e|$ (representation formula, Kelvin's kernel);\n"
-        "the body blank, undeformed",
+        "Exterior medium: $|u_e|$ (representation formula, Kelvin's kernel),\n"
+        "arrows: the direction and relative size of $u_e$; the body blank, undeformed",
         fontsize=10,
     )
     return fig
