@@ -44,8 +44,13 @@ ELASTIC_PLOT_FILES = ("deformed.png", "signorini.png", "exterior.png", "history.
 #: The largest displacement drawn, as a share of the body's size (deformed.png).
 DISPLACEMENT_SHARE = 0.1
 #: Samples of u_e along each side of exterior.png's square (2D; direct sums of Kelvin's
-#: kernel: points times panels) and of its section (3D: points times triangles).
+#: kernel: points times panels) and at most along each side of its section (3D: points
+#: times triangles).
 EXTERIOR_SAMPLES_2D, EXTERIOR_SAMPLES_3D = 81, 49
+#: The section's samples (3D) are fewer on a fine surface: at most this many sample-
+#: triangle pairs (2 s measured at 49 x 49 samples and 3,072 triangles), but at least
+#: 25 samples along a side (8 s at 64^3 cubes).
+EXTERIOR_PAIRS_3D, EXTERIOR_SAMPLES_3D_MIN = 49 * 49 * 3072, 25
 #: Cells whose gradients are computed at once (bounds the scratch memory).
 _CHUNK = 1 << 18
 #: The boundary arrays that signorini.png draws.
@@ -248,7 +253,10 @@ def exterior_section(fields: dict, kernel: Any, plane: str = "auto") -> dict:
     i, j = (a for a in range(3) if a != k)
     centre = 0.5 * (lo + hi)
     half = 0.5 * float(max(hi[i] - lo[i], hi[j] - lo[j]))
-    g = np.linspace(-2.0, 2.0, EXTERIOR_SAMPLES_3D) * half
+    triangles = len(fields["boundary_triangles"])
+    k_side = int(np.sqrt(EXTERIOR_PAIRS_3D / max(triangles, 1)))
+    k_side = min(max(k_side, EXTERIOR_SAMPLES_3D_MIN), EXTERIOR_SAMPLES_3D)
+    g = np.linspace(-2.0, 2.0, k_side) * half
     g = g + (g[1] - g[0]) / 3.0  # no sample on a face at a round coordinate
     X, Y = np.meshgrid(centre[i] + g, centre[j] + g)
     points = np.empty((X.size, 3))
