@@ -175,8 +175,10 @@ def surface_cells(
     keys = _row_keys(faces)
     order = np.argsort(keys, kind="stable")
     wanted = _row_keys(np.sort(index[triangles], axis=1))
+    if len(keys) == 0:
+        raise ValueError("no tetrahedron has a face on the surface")
     at = np.minimum(np.searchsorted(keys[order], wanted), len(keys) - 1)
-    if len(keys) == 0 or np.any(keys[order][at] != wanted):
+    if np.any(keys[order][at] != wanted):
         raise ValueError("a surface triangle is no face of the mesh's tetrahedra")
     return owner[order][at]
 
