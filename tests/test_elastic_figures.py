@@ -202,3 +202,34 @@ def test_write_outputs_draws_the_elastic_figures_in_this_process(tmp_path):
     points = np.array([[0.6, 0.1], [-0.4, -0.7]])
     direct = exterior_from_fields(fields, points, kernel=problem.kernel)
     assert problem.exterior(result, points) == pytest.approx(direct, rel=1e-12, abs=1e-15)
+
+
+def test_the_medium_s_stress_is_that_of_its_displacement(square):
+    """exterior.png's stress: the von Mises stress of sigma(u_e) by the representation
+    formula equals that of the plane-strain stress of u_e's central differences."""
+    from coupling.io.elastic_figure_data import equivalent_stress, exterior_von_mises
+    from coupling.io.evaluation import exterior_from_fields
+    from fem_py.forms.elasticity import lame_parameters
+
+    kernel = ("lame", 1.5, 0.3)
+    lam, mu = lame_parameters(1.5, 0.3)
+    points = np.array([[0.45, 0.1], [-0.1, -0.42], [0.3, 0.3]])
+    eps = 1e-5
+    grad = np.stack(
+        [
+            (
+                exterior_from_fields(square, points + eps * e, kernel=kernel)
+                - exterior_from_fields(square, points - eps * e, kernel=kernel)
+            )
+            / (2 * eps)
+            for e in np.eye(2)
+        ],
+        axis=2,
+    )  # [m, i, j] = du_i/dx_j
+    strain = 0.5 * (grad + grad.transpose(0, 2, 1))
+    trace = np.trace(strain, axis1=1, axis2=2)
+    sigma = np.zeros((len(points), 3, 3))
+    sigma[:, :2, :2] = lam * trace[:, None, None] * np.eye(2) + 2 * mu * strain
+    sigma[:, 2, 2] = lam * trace
+    expected = equivalent_stress(sigma)
+    assert exterior_von_mises(square, points, kernel) == pytest.approx(expected, rel=1e-5)

@@ -10,8 +10,9 @@ iteration history, on rank 0:
   deformed body (a size independent of the mesh), in 3D on the surface triangles (the
   stress of the tetrahedron under each); the boundary arrays of signorini.png; the
   history arrays of history.png;
-- :func:`exterior_section`: |u_e| of the medium on the plane around the body (2D) or on
-  the section z = centre (3D), by the representation formula with Kelvin's kernel,
+- :func:`exterior_section`: u_e and the von Mises stress of sigma(u_e) of the medium on
+  the plane around the body (2D) or on a section (3D), by the representation formula
+  with Kelvin's kernel,
   the body left blank (the costly part: direct sums, computed in a thread while the
   figure process draws the rest).
 
@@ -33,7 +34,9 @@ __all__ = [
     "ElasticFigureInputs",
     "cell_gradients",
     "elastic_inputs",
+    "equivalent_stress",
     "exterior_section",
+    "exterior_von_mises",
     "magnification",
     "surface_cells",
     "von_mises",
@@ -136,9 +139,41 @@ def von_mises(gradients: np.ndarray, material: Any) -> np.ndarray:
     sigma[:, :d, :d] = (material.bulk * trace)[:, None, None] * eye + rho[:, None, None] * dev
     if d == 2:
         sigma[:, 2, 2] = (material.bulk - 0.5 * rho) * trace
+    return equivalent_stress(sigma)
+
+
+def equivalent_stress(sigma: np.ndarray) -> np.ndarray:
+    """The von Mises stress sqrt(3/2 dev sigma : dev sigma) (m,) of the stress tensors
+    ``sigma`` (m, 3, 3), dev the 3D deviator."""
     mean = np.trace(sigma, axis1=1, axis2=2) / 3.0
     deviator = sigma - mean[:, None, None] * np.eye(3)
     return np.sqrt(1.5 * np.einsum("mij,mij->m", deviator, deviator))
+
+
+def exterior_von_mises(fields: dict, points: np.ndarray, kernel: Any) -> np.ndarray:
+    """The von Mises stress (m,) of sigma(u_e), the medium's stress by the representation
+    formula (``bem_cpp.exterior_stress``, Kelvin's kernel ``("lame", E, nu)``), at
+    exterior ``points`` (m, d), from the boundary arrays of ``fields``; in 2D (plane
+    strain) with sigma_zz = nu (sigma_xx + sigma_yy)."""
+    import bem_cpp
+
+    surface = fields.get("boundary_triangles")
+    stress = bem_cpp.exterior_stress(
+        fields["boundary_x"],
+        fields["ue"],
+        fields["dn_ue"],
+        np.asarray(points, dtype=float),
+        a=np.asarray(fields["a"], dtype=float),
+        flux=str(fields["flux_space"]),
+        kernel=kernel,
+        **({} if surface is None else {"triangles": surface}),
+    )
+    d = stress.shape[-1]
+    sigma = np.zeros((len(stress), 3, 3))
+    sigma[:, :d, :d] = stress
+    if d == 2:
+        sigma[:, 2, 2] = float(kernel[2]) * (stress[:, 0, 0] + stress[:, 1, 1])
+    return equivalent_stress(sigma)
 
 
 def magnification(x: np.ndarray, u: np.ndarray, share: float = DISPLACEMENT_SHARE) -> float:
@@ -230,19 +265,24 @@ def exterior_section(fields: dict, kernel: Any, plane: str = "auto") -> dict:
     problem's ``kernel`` (Kelvin's, ``("lame", E, nu)``) from the boundary arrays of
     ``fields``: in 2D at the samples of :func:`coupling.io.plots.exterior_samples`
     (``points`` (m, 2), ``ue`` (m, 2)) on the square twice the body's box, the trace
-    ``ue`` on Gamma beside them; in 3D on the section by ``plane`` (``[output] slice``:
+    ``ue`` on Gamma beside them, and the von Mises stress of sigma(u_e) there (``stress``
+    (m,), :func:`exterior_von_mises`); in 3D on the section by ``plane`` (``[output] slice``:
     ``"x = c"``, ``"y = c"``, ``"z = c"``, or ``"auto"``, the plane z = z_c through the
     middle of the body's box): the ``axis`` across it, its coordinate ``value``, the
     ``names`` of the two in-plane axes, ``ue`` (k, k, 3) at the pixel centres of
-    ``extent``, NaN inside the body (``inside``) and next to a boundary node, and the
-    section of Gamma, ``outline`` (m, 2, 2) in the plane's coordinates."""
+    ``extent``, NaN inside the body (``inside``) and next to a boundary node, the von
+    Mises stress of sigma(u_e) on every other of those samples (``stress``, NaN where
+    u_e is and closer to a boundary node than their spacing, on the pixels of
+    ``stress_extent``, twice as large), and the section of
+    Gamma, ``outline`` (m, 2, 2) in the plane's coordinates."""
     from coupling.io.evaluation import exterior_from_fields  # bem_cpp, the mesh libraries
 
     if fields["x"].shape[1] == 2:
         from coupling.io.plots import exterior_samples
 
         samples = exterior_samples(fields, EXTERIOR_SAMPLES_2D, kernel=kernel)
-        return dict(points=samples.points, ue=samples.ue)
+        stress = exterior_von_mises(fields, samples.points, kernel)
+        return dict(points=samples.points, ue=samples.ue, stress=stress)
     from scipy.spatial import cKDTree
 
     from coupling.io.body_figure_data import plane_section
@@ -269,10 +309,20 @@ def exterior_section(fields: dict, kernel: Any, plane: str = "auto") -> dict:
     # samples within half a pixel of a boundary node are left out: the formula refuses a
     # point on Gamma, and a sample that close shows nothing the trace does not
     step = float(g[1] - g[0])
-    outside = ~inside & (cKDTree(nodes).query(points)[0] > 0.5 * step)
+    distance = cKDTree(nodes).query(points)[0]  # to the nearest boundary node
+    outside = ~inside & (distance > 0.5 * step)
     ue = np.full((len(points), 3), np.nan)
     if outside.any():
         ue[outside] = exterior_from_fields(fields, points[outside], kernel=kernel)
+    # the stress on every other sample along each axis (its kernel costs about three
+    # times the displacement's), farther from Gamma than their spacing: closer, the
+    # data's error is amplified like h / distance (bem_cpp.exterior_stress)
+    coarse = np.zeros(X.shape, bool)
+    coarse[::2, ::2] = True
+    coarse = coarse.ravel() & outside & (distance > 2.0 * step)
+    stress = np.full(len(points), np.nan)
+    if coarse.any():
+        stress[coarse] = exterior_von_mises(fields, points[coarse], kernel)
     extent = (
         centre[i] + g[0] - step / 2,
         centre[i] + g[-1] + step / 2,
@@ -284,6 +334,13 @@ def exterior_section(fields: dict, kernel: Any, plane: str = "auto") -> dict:
         value=float(value),
         names=("xyz"[i], "xyz"[j]),
         ue=ue.reshape(X.shape + (3,)),
+        stress=stress.reshape(X.shape)[::2, ::2],
+        stress_extent=(  # pixels of side 2 step centred on every other sample
+            centre[i] + g[0] - step,
+            centre[i] + g[0] + (2 * len(g[::2]) - 1) * step,
+            centre[j] + g[0] - step,
+            centre[j] + g[0] + (2 * len(g[::2]) - 1) * step,
+        ),
         inside=inside.reshape(X.shape),
         extent=extent,
         outline=plane_section(nodes, fields["boundary_triangles"], k, float(value))[:, :, [i, j]],

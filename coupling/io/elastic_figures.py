@@ -13,9 +13,11 @@
   the contact set shaded, both scales set by the nodes that carry a gap unknown (the
   arc's end nodes, bonded, drawn grey); 3D, the Signorini faces seen along their normal,
   the opening and the pressure (:func:`coupling.io.body_figures._figure_signorini`).
-- ``exterior.png``: |u_e|, the displacement of the medium by the representation formula
-  with Kelvin's kernel, on the square twice the body's box (2D) or on the section
-  z = z_c (3D), the body blank.
+- ``exterior.png``: |u_e| and the von Mises stress of sigma(u_e), the medium's
+  displacement and stress by the representation formula with Kelvin's kernel, on the
+  square twice the body's box (2D; arrows of u_e) or on a section (3D, ``[output]
+  slice``, by default z = z_c), the body blank, the stress blank within a sample spacing
+  of Gamma.
 - ``history.png``: the convergence history, as for a scalar run.
 
 The problem is dimensionless, so the axes carry no units. Planar figures import neither
@@ -298,31 +300,70 @@ def _figure_signorini_body(inputs: ElasticFigureInputs):
     return _figure_signorini(body, elastic=True)
 
 
+def _stress_scale(stress: np.ndarray) -> tuple[float, float, str]:
+    """(vmin, vmax, extend) of the medium's stress: up to its 99th percentile, so that the
+    peaks at the body's corners (a singularity of the stress) leave the rest readable."""
+    finite = stress[np.isfinite(stress)]
+    if not len(finite):
+        return 0.0, 1.0, "neither"
+    top = float(np.percentile(finite, 99.0))
+    top = top if top > 0.0 else max(float(finite.max()), 1.0)
+    return 0.0, top, "max" if finite.max() > top else "neither"
+
+
+#: The second panel of exterior.png: its label and title.
+_STRESS_LABEL = r"von Mises stress of $\sigma(u_e)$"
+
+
 def _figure_exterior_plane(inputs: ElasticFigureInputs):
     b, ex = inputs.boundary, inputs.exterior
     nodes = b["boundary_x"]
     centre, half = plane_square(nodes)
     points, triangles = exterior_triangulation(ex["points"], nodes)
-    size = np.linalg.norm(np.vstack([ex["ue"], b["ue"]]), axis=1)
     grid = PixelGrid.covering(centre - half, centre + half, pixels=_EXTERIOR_PIXELS)
-    image = rasterise(points, triangles, size, grid)
     xc, yc = grid.centres()
     X, Y = np.meshgrid(xc, yc)
     body = PolygonPath(nodes).contains_points(np.column_stack([X.ravel(), Y.ravel()]))
-    image = np.ma.masked_where(body.reshape(image.shape) | np.ma.getmaskarray(image), image)
-    fig, ax = plt.subplots(figsize=(6.2, 5.6))
-    shown = ax.imshow(
-        image, origin="lower", extent=grid.extent, cmap=_CMAP, interpolation="nearest"
-    )
-    fig.colorbar(shown, ax=ax, shrink=0.85, label=r"$|u_e|$")
-    ax.fill(*nodes.T, color="white", zorder=2)
-    _draw_boundary(ax, _contact_fields(b, nodes))
+    body = body.reshape(grid.ny, grid.nx)
+
+    def image(values: np.ndarray) -> np.ma.MaskedArray:  # at the samples, then the nodes
+        shown = rasterise(points, triangles, values, grid)
+        return np.ma.masked_where(body | np.ma.getmaskarray(shown) | ~np.isfinite(shown), shown)
+
+    size = np.linalg.norm(np.vstack([ex["ue"], b["ue"]]), axis=1)
+    # the stress is not known on Gamma: the triangles at a boundary node are left blank
+    stress = np.concatenate([ex["stress"], np.full(len(nodes), np.nan)])
+    lo, hi, extend = _stress_scale(ex["stress"])
+    fig, (left, right) = plt.subplots(1, 2, figsize=(12.8, 5.6), gridspec_kw={"wspace": 0.35})
+    for ax, values, label, scale in (
+        (left, size, r"$|u_e|$", {}),
+        (right, stress, _STRESS_LABEL, dict(vmin=lo, vmax=hi)),
+    ):
+        shown = ax.imshow(
+            image(values),
+            origin="lower",
+            extent=grid.extent,
+            cmap=_CMAP,
+            interpolation="nearest",
+            **scale,
+        )
+        bar = dict(extend=extend) if scale else {}
+        fig.colorbar(shown, ax=ax, shrink=0.85, label=label, **bar)
+        ax.fill(*nodes.T, color="white", zorder=2)
+        _draw_boundary(ax, _contact_fields(b, nodes))
+        ax.set(
+            aspect="equal",
+            xlabel="$x$",
+            ylabel="$y$",
+            xlim=(centre[0] - half, centre[0] + half),
+            ylim=(centre[1] - half, centre[1] + half),
+        )
     # the direction of u_e: arrows at every _ARROW_STRIDE-th sample of the grid
     step = 2.0 * half / (EXTERIOR_SAMPLES_2D - 1)
     lattice = np.rint((ex["points"] - (centre - half)) / step).astype(np.int64)
     some = np.all(lattice % _ARROW_STRIDE == _ARROW_STRIDE // 2, axis=1)
     if some.any():
-        ax.quiver(
+        left.quiver(
             *ex["points"][some].T,
             *ex["ue"][some].T,
             color="white",
@@ -330,17 +371,15 @@ def _figure_exterior_plane(inputs: ElasticFigureInputs):
             width=0.004,
             zorder=3,
         )
-    ax.set(
-        aspect="equal",
-        xlabel="$x$",
-        ylabel="$y$",
-        xlim=(centre[0] - half, centre[0] + half),
-        ylim=(centre[1] - half, centre[1] + half),
-    )
-    ax.set_title(
-        "Exterior medium: $|u_e|$ (representation formula, Kelvin's kernel),\n"
-        "arrows: the direction and relative size of $u_e$; the body blank, undeformed",
+    left.set_title(r"$|u_e|$; arrows: the direction and relative size of $u_e$", fontsize=10)
+    right.set_title(
+        _STRESS_LABEL + " (plane strain;\nblank within a sample spacing of $\\Gamma$)",
         fontsize=10,
+    )
+    fig.suptitle(
+        "Exterior medium by the representation formula (Kelvin's kernel); "
+        "the body blank, undeformed",
+        fontsize=11,
     )
     return fig
 
@@ -354,25 +393,40 @@ def _figure_exterior_body(inputs: ElasticFigureInputs):
         return None
     # the samples left out next to a boundary node take their nearest neighbour's value
     size = np.where(ex["inside"], np.nan, _filled(size))
-    fig, ax = plt.subplots(figsize=(6.4, 5.4))
-    shown = ax.imshow(
-        np.ma.masked_invalid(size),
-        origin="lower",
-        extent=ex["extent"],
-        cmap=_CMAP,
-        interpolation="nearest",
+    stress = ex["stress"]  # NaN inside and within a sample spacing of Gamma
+    lo, hi, extend = _stress_scale(stress)
+    fig, (left, right) = plt.subplots(1, 2, figsize=(12.8, 5.4), gridspec_kw={"wspace": 0.35})
+    for ax, values, extent, label, scale in (
+        (left, size, ex["extent"], r"$|u_e|$", {}),
+        (right, stress, ex["stress_extent"], _STRESS_LABEL, dict(vmin=lo, vmax=hi)),
+    ):
+        shown = ax.imshow(
+            np.ma.masked_invalid(values),
+            origin="lower",
+            extent=extent,
+            cmap=_CMAP,
+            interpolation="nearest",
+            **scale,
+        )
+        ax.add_collection(LineCollection(ex["outline"], colors="black", linewidths=1.0))
+        bar = dict(extend=extend) if scale else {}
+        fig.colorbar(shown, ax=ax, shrink=0.85, label=label, **bar)
+        first, second = ex["names"]
+        ax.set(aspect="equal", xlabel=f"${first}$", ylabel=f"${second}$")
+        ax.set_xlim(ex["extent"][:2])
+        ax.set_ylim(ex["extent"][2:])
+    left.set_title(r"$|u_e|$", fontsize=10)
+    right.set_title(
+        _STRESS_LABEL + " (every other sample;\nblank within a sample spacing of $\\Gamma$)",
+        fontsize=10,
     )
-    ax.add_collection(LineCollection(ex["outline"], colors="black", linewidths=1.0))
-    fig.colorbar(shown, ax=ax, label=r"$|u_e|$")
-    first, second = ex["names"]
-    title = f"Exterior medium: $|u_e|$ on the section {ex['axis']} = {ex['value']:.4g}\n"
+    title = f"Exterior medium on the section {ex['axis']} = {ex['value']:.4g}, "
     title += (
-        "(representation formula, Kelvin's kernel); the body blank"
+        "by the representation formula (Kelvin's kernel); the body blank"
         if ex["inside"].any()
         else "(the plane misses the body)"
     )
-    ax.set(aspect="equal", xlabel=f"${first}$", ylabel=f"${second}$", title=title)
-    ax.title.set_fontsize(10)
+    fig.suptitle(title, fontsize=11)
     return fig
 
 
