@@ -236,17 +236,24 @@ class SignoriniProblem:
         """u_e at exterior points (m, 2) ((m, 3) in 3D) by the representation formula
         (docs/method.md section 2), by direct panel sums or, above the measured crossover
         (``bem_cpp``'s ``HMATRIX_POTENTIAL_CROSSOVER_*``), by the rectangular H-matrices of the
-        potentials (``compression="auto"``, tol ``coupling.options.hmatrix_tol``)."""
+        potentials (``compression="auto"``, tol ``coupling.options.hmatrix_tol``). For
+        elasticity the displacement of the medium, (m, d), with Kelvin's kernel
+        (Somigliana's identity, docs/method.md section 12), by direct sums."""
+        d = self.components
+        trace, flux = solution.ue, solution.flux
+        if d > 1:
+            trace, flux = np.reshape(trace, (-1, d)), np.reshape(flux, (-1, d))
         return bem_cpp.exterior_potential(
             self.boundary.nodes,
-            solution.ue,
-            solution.flux,
+            trace,
+            flux,
             np.asarray(points, dtype=float),
             a=self.a,
             flux=self.flux_space,
             compression="auto",
             tol=hmatrix_tol(self.boundary.nodes),
             **self._surface,
+            **({} if d == 1 else {"kernel": self.kernel}),
         )
 
 

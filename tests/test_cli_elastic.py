@@ -1,7 +1,8 @@
 """``fembem solve`` of the elastic problem (docs/guide/elasticity.md): summary.json (the
 equation, the net force, the complementarity of the normal gap and traction), fields.npz
-with vector fields, solution.xdmf with u_h as a vector, the same on 1 and 2 ranks, the
-plane and the box; bad elastic input refused in one line (exit 2, nothing written)."""
+with vector fields, solution.xdmf with u_h as a vector, the figures (deformed.png,
+signorini.png, exterior.png, history.png), the same on 1 and 2 ranks, the plane and the
+box; bad elastic input refused in one line (exit 2, nothing written)."""
 from __future__ import annotations
 
 import json
@@ -66,6 +67,27 @@ def _solve(tmp_path, name, text, ranks=1, *extra):
     return run_mpi(ranks, "-m", "coupling.app.cli", *args, check=False), out
 
 
+#: The figures of an elastic run (coupling.io.elastic_figure_data.ELASTIC_PLOT_FILES).
+FIGURES = ("deformed.png", "signorini.png", "exterior.png", "history.png")
+
+
+def _png_size(path) -> tuple[int, int]:
+    """(width, height) in pixels of a PNG file, from its IHDR chunk."""
+    head = path.read_bytes()[:24]
+    assert head[:8] == b"\x89PNG\r\n\x1a\n" and head[12:16] == b"IHDR", path.name
+    return int.from_bytes(head[16:20], "big"), int.from_bytes(head[20:24], "big")
+
+
+def _check_figures(out, summary):
+    """The four figures are listed in summary.json, written, and of a sane size."""
+    assert set(FIGURES) <= set(summary["files"])
+    for name in FIGURES:
+        size = (out / name).stat().st_size
+        assert 10_000 < size < 2_000_000, (name, size)
+        width, height = _png_size(out / name)
+        assert 400 <= width <= 2000 and 300 <= height <= 1500, (name, width, height)
+
+
 def _load(out):
     with np.load(out / "fields.npz") as data:
         return json.loads((out / "summary.json").read_text()), {k: data[k] for k in data.files}
@@ -97,15 +119,30 @@ def test_elastic_solve_writes_vector_fields_the_same_on_two_ranks(tmp_path, text
     load = np.zeros(d)
     load[0] = 0.25 if d == 2 else 0.125
     assert np.allclose(summary["force"], load, rtol=0, atol=(1e-9 if d == 2 else 3e-6) * load[0])
+    _check_figures(out, summary)
+    assert "figure process failed" not in proc.stderr  # drawn by the figure process
     xdmf = (out / "solution.xdmf").read_text()
     assert '<Attribute Name="u" AttributeType="Vector" Center="Node">' in xdmf
     assert f'Dimensions="{n} 3"' in xdmf
     proc, two = _solve(tmp_path, "two", text, 2)
     assert proc.returncode == 0, proc.stderr
     summary2, f2 = _load(two)
+    _check_figures(two, summary2)
+    assert "figure process failed" not in proc.stderr
     assert summary2["iterations"] == summary["iterations"]
     for key in ("u", "ue", "phi", "pressure"):
         assert np.allclose(f2[key], f[key], rtol=0, atol=1e-9 * np.abs(f[key]).max()), key
+
+
+def test_a_rerun_without_plots_removes_the_elastic_figures(tmp_path):
+    proc, out = _solve(tmp_path, "run", SQUARE)
+    assert proc.returncode == 0, proc.stderr
+    assert all((out / name).is_file() for name in FIGURES)
+    proc, out = _solve(tmp_path, "run", SQUARE, 1, "--force", "--set", "output.plots=false")
+    assert proc.returncode == 0, proc.stderr
+    summary, _ = _load(out)
+    assert not any((out / name).exists() for name in FIGURES)
+    assert not any(name.endswith(".png") for name in summary["files"])
 
 
 @pytest.mark.parametrize(

@@ -48,7 +48,10 @@ _RIM_COLOUR, _WRONG_SIGN_COLOUR = "0.85", "tab:cyan"
 _ALIGNED = 1.0 - 1e-4
 
 
-def _figure_signorini(inputs: BodyFigureInputs):
+def _figure_signorini(inputs: BodyFigureInputs, elastic: bool = False):
+    """signorini.png (module docstring); ``elastic``: the fields of an elastic run, the gap
+    being the opening jump.n and the pressure drawn as p = -n.sigma n >= 0 (compression
+    positive), on a map that starts at 0."""
     f, tri = inputs.fields, inputs.triangles
     gap = f["signorini"]  # the nodes with a gap unknown
     touching = tri[gap[tri].any(axis=1)]
@@ -63,15 +66,29 @@ def _figure_signorini(inputs: BodyFigureInputs):
     normal = np.linalg.svd(points - points.mean(axis=0), full_matrices=False)[2][2]
     axes, names, seen = _plane_axes(normal)
     x, y = (points @ axes.T).T  # real coordinates along the plane's axes
-    phi, sigma = f["phi"][gap], f["pressure"][gap]
+    sign = -1.0 if elastic else 1.0  # the elastic pressure drawn compression positive
+    phi, sigma = f["phi"][gap], sign * f["pressure"][gap]
     slack = _SIGN_SLACK * max(float(np.abs(sigma).max()), np.finfo(float).tiny)
-    pressure = np.where((f["pressure"] > 0) & (f["pressure"] <= slack), 0.0, f["pressure"])
+    pressure = sign * f["pressure"]
+    pressure = np.where((sign * pressure > 0) & (sign * pressure <= slack), 0.0, pressure)
     fig, (left, right) = plt.subplots(1, 2, figsize=(12, 4.8), gridspec_kw={"wspace": 0.4})
     panels = (
-        # the gap phi_h >= 0 on a map starting at 0, the pressure <= 0 on one ending at 0:
-        # a value of the wrong sign would take the colour beyond the scale's end
+        # the gap phi_h >= 0 on a map starting at 0, the pressure <= 0 on one ending at 0
+        # (elastic: p >= 0 on one starting at 0): a value of the wrong sign would take the
+        # colour beyond the scale's end
         (left, f["phi"], (0.0, max(float(phi.max()), slack)), "viridis", "min", r"$\phi_h < 0$"),
-        (right, pressure, (min(float(sigma.min()), -slack), 0.0), "magma", "max", r"$\sigma > 0$"),
+        (
+            (right, pressure, (0.0, max(float(sigma.max()), slack)), "magma", "min", "$p < 0$")
+            if elastic
+            else (
+                right,
+                pressure,
+                (min(float(sigma.min()), -slack), 0.0),
+                "magma",
+                "max",
+                r"$\sigma > 0$",
+            )
+        ),
     )
     for ax, values, (lo, hi), cmap, end, wrong in panels:
         over = {"min": "under", "max": "over"}[end]
@@ -82,8 +99,12 @@ def _figure_signorini(inputs: BodyFigureInputs):
         if len(rim):
             ax.tripcolor(x, y, rim, facecolors=np.zeros(len(rim)), cmap=_grey(), vmin=0, vmax=1)
         ax.set(aspect="equal", xlabel=names[0], ylabel=names[1])
-    left.set_title(r"gap $\phi_h \geq 0$")
-    right.set_title(r"pressure $\sigma = \rho\,\partial u_h/\partial n \leq 0$")
+    if elastic:
+        left.set_title(r"opening $\phi_h = j_h \cdot n \geq 0$")
+        right.set_title(r"contact pressure $p = -n \cdot \sigma(u_h)\, n \geq 0$")
+    else:
+        left.set_title(r"gap $\phi_h \geq 0$")
+        right.set_title(r"pressure $\sigma = \rho\,\partial u_h/\partial n \leq 0$")
     on = f["active"]
     if 0 < on[gap].sum() < gap.sum():
         for ax in (left, right):

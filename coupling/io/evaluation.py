@@ -35,25 +35,38 @@ __all__ = ["evaluate", "exterior_from_fields", "exterior_stress_from_fields", "O
 ON_GAMMA = 1e-11
 
 
-def _kernel(fields: dict) -> dict:
+def _kernel(fields: dict, kernel: str | tuple | None = None) -> dict:
     """The keywords of bem_cpp's potentials for the run of ``fields``: its surface, and for
-    elasticity Kelvin's kernel of the medium and the translation a (d,)."""
+    elasticity Kelvin's kernel of the medium and the translation a (d,). ``kernel``: the
+    problem's (``SignoriniProblem.kernel``), else read from the fields (``exterior``: the
+    medium's E, nu, written by an elastic run)."""
     surface = fields.get("boundary_triangles")
     out = {} if surface is None else {"triangles": surface}
-    if "exterior" in fields:  # elasticity
-        return dict(out, kernel=("lame", *map(float, fields["exterior"])), a=fields["a"])
-    return dict(out, a=float(fields["a"]))
+    if kernel is None and "exterior" in fields:
+        kernel = ("lame", *map(float, fields["exterior"]))
+    if kernel is None or (isinstance(kernel, str) and kernel == "laplace"):
+        return dict(out, a=float(fields["a"]))
+    return dict(out, kernel=tuple(kernel), a=np.asarray(fields["a"], dtype=float))
 
 
-def exterior_from_fields(fields: dict, points: np.ndarray, tol: float | None = None) -> np.ndarray:
+def exterior_from_fields(
+    fields: dict,
+    points: np.ndarray,
+    tol: float | None = None,
+    kernel: str | tuple | None = None,
+) -> np.ndarray:
     """u_e at exterior ``points`` (m, 2) by the representation formula (docs/method.md section
     2) from the boundary arrays of a run's fields (``boundary_x``, ``ue``, ``dn_ue``,
     ``a``, ``flux_space``; in 3D (m, 3) points and ``boundary_triangles``), compressed
     above bem_cpp's measured crossover to the relative accuracy ``tol`` (default: the
     solver's, :func:`coupling.options.hmatrix_tol`); bem_cpp's ValueError for a point
-    inside Omega or on Gamma. bem_cpp releases the GIL while it evaluates. Elasticity
-    (``exterior`` in the fields: the medium's E, nu): the displacement (m, d), by direct
-    sums (section 12)."""
+    inside Omega or on Gamma. bem_cpp releases the GIL while it evaluates.
+
+    ``kernel``: the problem's (``SignoriniProblem.kernel``; default: the fields', Kelvin's
+    when they hold the medium ``exterior``). For Kelvin's, ``("lame", E, nu)``, the fields
+    are those of an elastic run (``ue`` and ``dn_ue`` (n, d), ``a`` (d,)) and u_e is (m, d),
+    by direct sums (docs/method.md section 12).
+    """
     return bem_cpp.exterior_potential(
         fields["boundary_x"],
         fields["ue"],
@@ -62,7 +75,7 @@ def exterior_from_fields(fields: dict, points: np.ndarray, tol: float | None = N
         flux=str(fields["flux_space"]),
         compression="auto",
         tol=hmatrix_tol(fields["boundary_x"]) if tol is None else tol,
-        **_kernel(fields),
+        **_kernel(fields, kernel),
     )
 
 

@@ -13,7 +13,9 @@ first right after the solve, and the worker draws each figure as soon as its inp
 in: planar, boundary.png and history.png from the boundary arrays while the run gathers
 and rasterises u_h, then u.png and whole_plane.png (u_e's samples); a body, the figures
 on Gamma and the history while the run computes the section of slice.png (point
-location and the representation formula, seconds at 64^3 cubes). The run writes
+location and the representation formula, seconds at 64^3 cubes); an elastic run,
+deformed.png, signorini.png and history.png while the run computes the samples of u_e
+of exterior.png (:mod:`coupling.io.elastic_figures`). The run writes
 the files itself (atomically, into its staged output folder). For planar figures the
 worker imports neither MPI nor the mesh libraries; a body's figure modules import the
 mesh libraries, and with them MPI: the worker starts without the variables of the run's

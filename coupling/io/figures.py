@@ -35,6 +35,7 @@ from matplotlib.path import Path as PolygonPath  # noqa: E402
 from matplotlib.transforms import Bbox, ScaledTranslation  # noqa: E402
 from matplotlib.tri import Triangulation  # noqa: E402
 
+from coupling.io.elastic_figure_data import ElasticFigureInputs  # noqa: E402
 from coupling.io.figure_data import (  # noqa: E402
     PLOT_FILES,
     FigureInputs,
@@ -46,7 +47,7 @@ from coupling.io.figure_data import (  # noqa: E402
 from coupling.io.history_figure import figure_history  # noqa: E402
 from fem_py.polyline import CORNER_ANGLE, arc_length, polygon_corners  # noqa: E402
 
-__all__ = ["render", "true_runs", "warm_up"]
+__all__ = ["exterior_triangulation", "render", "true_runs", "warm_up"]
 
 #: The figures laid out by fig.tight_layout() when they are built: saved as they are
 #: (bbox_inches="tight" would draw them once more to find their extent); the others
@@ -255,17 +256,8 @@ def _figure_whole_plane(inputs: FigureInputs):
     fields = inputs.boundary
     nodes = fields["boundary_x"]
     centre, half = plane_square(nodes)
-    grid = inputs.exterior_points
-    points = np.vstack([grid, nodes])
+    points, exterior = exterior_triangulation(inputs.exterior_points, nodes)
     ue = np.concatenate([inputs.exterior_ue, fields["ue"]])
-    ext = Triangulation(points[:, 0], points[:, 1])
-    # Omega is covered by the triangles of boundary nodes alone whose centroid is inside;
-    # a triangle with a grid vertex is exterior even where it cuts a corner of Omega
-    # (u_h is drawn over it)
-    interior = np.all(ext.triangles >= len(grid), axis=1)
-    centroids = points[ext.triangles[interior]].mean(axis=1)
-    interior[interior] = PolygonPath(nodes).contains_points(centroids)
-    exterior = ext.triangles[~interior]
 
     pixels, inner = coarsen(inputs.image, inputs.grid, centre - half, centre + half)
     outer = np.ma.masked_where(~inner.mask, rasterise(points, exterior, ue, pixels))
@@ -305,6 +297,21 @@ def _figure_whole_plane(inputs: FigureInputs):
     return fig
 
 
+def exterior_triangulation(samples: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The points (the exterior ``samples`` (m, 2), then the boundary ``nodes`` (n, 2)) and
+    the triangles (k, 3) of their Delaunay triangulation outside Omega, on which values
+    at the samples and the trace on Gamma are interpolated up to Gamma with no band.
+    Omega is covered by the triangles of boundary nodes alone whose centroid is inside
+    (left out); a triangle with a sample vertex is exterior even where it cuts a corner of
+    Omega (what is drawn inside Omega covers it)."""
+    points = np.vstack([samples, nodes])
+    ext = Triangulation(points[:, 0], points[:, 1])
+    interior = np.all(ext.triangles >= len(samples), axis=1)
+    centroids = points[ext.triangles[interior]].mean(axis=1)
+    interior[interior] = PolygonPath(nodes).contains_points(centroids)
+    return points, ext.triangles[~interior]
+
+
 def _tight_extent(fig) -> Bbox:
     """The extent (inches) that ``savefig(bbox_inches="tight")`` crops ``fig`` to: its
     tight bounding box, padded by ``savefig.pad_inches``, found with the renderer of the
@@ -317,8 +324,13 @@ def _tight_extent(fig) -> Bbox:
 def render(inputs: FigureInputs, skip: Collection[str] = ()) -> dict[str, bytes]:
     """The PNG files of :data:`PLOT_FILES` drawn from ``inputs``, as {name: bytes} in
     that order (no history.png without history); those of
-    :func:`coupling.io.body_figures.render_body` for the inputs of a body in R^3; but
+    :func:`coupling.io.body_figures.render_body` for the inputs of a body in R^3, of
+    :func:`coupling.io.elastic_figures.render_elastic` for those of an elastic run; but
     those named in ``skip``."""
+    if isinstance(inputs, ElasticFigureInputs):  # an elastic run's (2D or 3D)
+        from coupling.io.elastic_figures import render_elastic
+
+        return render_elastic(inputs, skip)
     if not isinstance(inputs, FigureInputs):  # a body's (BodyFigureInputs): its modules
         # import the mesh libraries, and with them MPI, which planar figures never need
         from coupling.io.body_figures import render_body

@@ -12,6 +12,10 @@ panel values for "p0", panel i = [node i, node i+1]); and the scalars ``a`` and
 (n_cells,), the estimator's eta_T per cell in the order of ``triangles`` (sum of squares
 eta^2, coupling.adapt.estimator).
 
+An elastic run's fields are vectors (docs/guide/elasticity.md) and its figures those of
+:mod:`coupling.io.elastic_figures` (deformed.png, signorini.png, exterior.png,
+history.png).
+
 Every file is written atomically (:mod:`coupling.io.atomic`), so an interrupted run
 never leaves a half-written file under its final name. Rank 0 writes every file, from
 what is gathered there (:mod:`coupling.io.xdmf` for solution.xdmf/.h5).
@@ -34,6 +38,7 @@ from coupling.io.levels import LEVEL_FILES, write_levels
 from coupling.io.figure_data import FigureInputs
 from coupling.io.figure_worker import FigureWorker, FigureWorkerError
 from coupling.io.body_figure_data import BODY_PLOT_FILES, section, surface_inputs
+from coupling.io.elastic_figure_data import ELASTIC_PLOT_FILES, elastic_inputs, exterior_section
 from coupling.io.plots import (
     PLOT_FILES,
     boundary_figure_inputs,
@@ -151,7 +156,9 @@ class RunOutputs:
     hands the rest to background work on rank 0: fields.npz and solution.xdmf/.h5 (file
     writes), the samples of u_e (bem_cpp), all in threads, and the figures, drawn by
     the figure process ``worker`` (:class:`coupling.io.figure_worker.FigureWorker`) when
-    one is given, from u_h rasterised here. :meth:`finish` waits for the background
+    one is given, from u_h rasterised here (an elastic run: the deformed body's stress
+    rasterised here, the samples of u_e in a thread,
+    :mod:`coupling.io.elastic_figure_data`). :meth:`finish` waits for the background
     work, writes the figures and, last, summary.json. Without a worker the figures are
     drawn in :meth:`finish`, in this process; so they are too, with a warning, if the
     worker fails.
@@ -193,7 +200,9 @@ class RunOutputs:
         self.seconds = 0.0
         # a thread for each job that may run at once: fields.npz, solution.xdmf/.h5, u_e's
         # samples, the early figures' send, the figures' inputs and the figure process's
-        # answer (with three, the answer waited in the queue for fields.npz to be written)
+        # answer (with three, the answer waited in the queue for fields.npz to be written);
+        # for an elastic run the early figures' inputs and send, u_e's samples, the
+        # figures' inputs and the answer, beside fields.npz and solution.xdmf/.h5
         self._pool = ThreadPoolExecutor(max_workers=6) if comm.rank == 0 else None
         self._jobs: dict[str, Future] = {}
 
@@ -207,15 +216,7 @@ class RunOutputs:
         tic = time.perf_counter()
         release_free_memory()  # the solve's freed memory, before the outputs' (fem_py.memory)
         self._problem, self._result = problem, result
-        solid = problem.domain.dim == 3
-        if problem.components > 1 and self.plots:  # the elastic figures are not drawn yet
-            self.plots = False
-            if self.comm.rank == 0:
-                print(
-                    "fembem: note: the figures of the elastic problem are not drawn yet; "
-                    "writing summary.json, fields.npz and solution.xdmf",
-                    file=sys.stderr,
-                )
+        solid, elastic = problem.domain.dim == 3, problem.components > 1
         self._pressure = boundary_flux(problem, result)
         if self.comm.rank == 0:
             on_gamma = dict(
@@ -225,7 +226,9 @@ class RunOutputs:
                 # elasticity: the medium (E, nu) of the exterior field's kernel
                 **({"exterior": np.array(problem.kernel[1:])} if problem.components > 1 else {}),
             )
-            if self.plots and not solid:  # u_e's samples and, in the figure process,
+            if (
+                self.plots and not solid and not elastic
+            ):  # u_e's samples and, in the figure process,
                 # boundary.png and history.png while u_h is gathered and rasterised here
                 samples = self._pool.submit(exterior_samples, on_gamma)
                 if self.worker is not None:
@@ -249,7 +252,22 @@ class RunOutputs:
             self._fields = dict(x=x, u=u, **{"cells" if solid else "triangles": cells}, **on_gamma)
             if not self.indicators:
                 self._jobs["data"] = self._pool.submit(_write_fields, self.out, self._fields)
-            if self.plots and solid:  # the section's u_e and u_h in a thread, while the
+            if self.plots and elastic:  # in threads: the stress of the deformed body,
+                # sent to the figure process, which draws it, Gamma_s and the history while
+                # u_e's samples are computed (bem_cpp releases the GIL)
+                history = history_arrays(result.history, result.stop_measure, **runs)
+                early = self._pool.submit(self._elastic_early, problem.material, history)
+                exterior = self._pool.submit(
+                    exterior_section, self._fields, problem.kernel, self.slice
+                )
+                self._jobs["inputs"] = self._pool.submit(
+                    lambda: early.result()._replace(exterior=exterior.result())
+                )
+                if self.worker is not None:
+                    self._jobs["pngs"] = self._pool.submit(
+                        self.worker.render_rest, self._jobs["inputs"].result
+                    )
+            elif self.plots and solid:  # the section's u_e and u_h in a thread, while the
                 # figure process draws those on Gamma and the history
                 history = history_arrays(result.history, result.stop_measure, **runs)
                 surface = surface_inputs(self._fields, history, tol=self.tol)
@@ -362,11 +380,21 @@ class RunOutputs:
                 lambda p: p.write_text(json.dumps(record, indent=2, default=str)),
             )
             names.append("summary.json")
-            for name in set(DATA_FILES + PLOT_FILES + BODY_PLOT_FILES + LEVEL_FILES) - set(names):
+            every = DATA_FILES + PLOT_FILES + BODY_PLOT_FILES + ELASTIC_PLOT_FILES + LEVEL_FILES
+            for name in set(every) - set(names):
                 (out / name).unlink(missing_ok=True)
             return names
 
         return broadcast_from_root(self.comm, write_gathered)  # a write error ends every rank
+
+    def _elastic_early(self, material, history: dict):
+        """The inputs of an elastic run's figures but exterior.png
+        (:func:`coupling.io.elastic_figure_data.elastic_inputs`), sent to the figure
+        process when there is one (rank 0, in a thread)."""
+        early = elastic_inputs(self._fields, material, history, tol=self.tol)
+        if self.worker is not None:
+            self.worker.send(early)
+        return early
 
     def _pngs(self) -> dict[str, bytes]:
         """The figures: the worker's, or drawn here (also when the worker failed)."""

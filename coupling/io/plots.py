@@ -50,14 +50,18 @@ class ExteriorSamples(NamedTuple):
     """u_e at the points of the whole-plane grid outside Omega (:func:`exterior_samples`)."""
 
     points: np.ndarray  # (m, 2)
-    ue: np.ndarray  # (m,)
+    ue: np.ndarray  # (m,), or (m, 2) for an elastic run
 
 
-def exterior_samples(fields: dict, resolution: int = 121) -> ExteriorSamples:
+def exterior_samples(
+    fields: dict, resolution: int = 121, kernel: str | tuple = "laplace"
+) -> ExteriorSamples:
     """u_e (the representation formula, docs/method.md section 2) on the ``resolution`` x
     ``resolution`` grid of whole_plane.png, at its points outside Omega farther than
     h/20 from Gamma, from the boundary arrays of ``fields`` (``boundary_x``, ``ue``,
-    ``dn_ue``, ``a``, ``flux_space``). bem_cpp releases the GIL while it evaluates, so
+    ``dn_ue``, ``a``, ``flux_space``; ``kernel``: that of
+    :func:`coupling.io.evaluation.exterior_from_fields`, Kelvin's for an elastic run,
+    whose u_e is (m, 2)). bem_cpp releases the GIL while it evaluates, so
     :mod:`coupling.io.outputs` runs this in a thread."""
     from matplotlib.path import Path as PolygonPath
 
@@ -74,7 +78,7 @@ def exterior_samples(fields: dict, resolution: int = 121) -> ExteriorSamples:
     outside = ~PolygonPath(corners).contains_points(grid)
     outside[outside] = closest_on_polygon(grid[outside], corners)[0] > h / 20
     grid = grid[outside]
-    return ExteriorSamples(grid, exterior_from_fields(fields, grid))
+    return ExteriorSamples(grid, exterior_from_fields(fields, grid, kernel=kernel))
 
 
 def figure_inputs(
