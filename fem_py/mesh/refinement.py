@@ -20,7 +20,11 @@ which refinement does not change:
   surface is refined by the same Plaza bisections, conforming), so the named faces and
   Gamma_s follow exactly. A body has no cell tags and no coarse structure; the box's
   vertex lattice is dropped (the refined mesh is no lattice: the ``amg`` preconditioner
-  then takes PETSc's algebraic multigrid).
+  then takes PETSc's algebraic multigrid). The new nodes' input numbers depend on the
+  partition, so the refined body's boundary nodes are ordered by their coordinates
+  (``SolidDomain.node_order``): the 3D quadrature of S_h depends on the order of a
+  triangle's vertices (1e-5 relative in S_h 1 measured), which must not change with
+  the number of ranks.
 
 New nodes are edge midpoints and old nodes stay, so a P1 function is transferred
 exactly by evaluating it at the new nodes (:func:`transfer_p1`): old values at old
@@ -208,7 +212,13 @@ def refine_domain(domain: Any, cells: np.ndarray) -> Any:
 
         h_min, h_max = edge_range(new)
         return dataclasses.replace(
-            domain, mesh=new, facet_tags=ft, h_min=h_min, h_max=h_max, lattice=None
+            domain,
+            mesh=new,
+            facet_tags=ft,
+            h_min=h_min,
+            h_max=h_max,
+            lattice=None,
+            node_order="coordinates",  # the new nodes' input numbers follow the partition
         )
 
     # cell tags: the parent (old cell containing the midpoint)
