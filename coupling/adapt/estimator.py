@@ -41,7 +41,7 @@ import scipy.sparse.linalg as spla
 from scipy.spatial import cKDTree
 
 import bem_cpp
-from coupling.options import HMATRIX_TOL
+from coupling.options import ESTIMATOR_HMATRIX_NODES_3D, ESTIMATOR_HMATRIX_TOL_3D, HMATRIX_TOL
 from fem_py.forms import as_ufl_data, compile_form
 from fem_py.forms.interior import VOLUME_DATA_QUADRATURE
 from fem_py.parallel import array_from_root
@@ -205,6 +205,8 @@ def surface_bie_residual(
     flux: np.ndarray,
     a: float,
     space: str,
+    *,
+    compression: str = "auto",
 ) -> np.ndarray:
     """The 3D :func:`bie_residual`: h_E ||grad_Gamma R_h||^2_E per triangle E (m,) of the
     surface ``nodes`` (n, 3), ``triangles`` (m, 3), h_E = |E|^(1/2).
@@ -214,7 +216,10 @@ def surface_bie_residual(
     (v_h and psi_h prolonged exactly) and L2-projected onto that space; ``"p1"``:
     h_E ||grad_Gamma R_h||^2 of the projection summed over the four children; ``"p0"``:
     the inverse-estimate equivalent h_E^-1 ||R_h||^2. V_h and K_h on the split surface are
-    bem_cpp's dense Galerkin matrices (O(n^2) memory and time; docs/design/estimator.md).
+    bem_cpp's dense Galerkin matrices (``compression="none"``; O(n^2) memory and time) or
+    H-matrices applied once (``"hmatrix"``, P1 only, blocks to
+    :data:`coupling.options.ESTIMATOR_HMATRIX_TOL_3D`); ``"auto"``: the H-matrices for the
+    P1 flux from :data:`coupling.options.ESTIMATOR_HMATRIX_NODES_3D` split-surface nodes on.
     """
     nodes, triangles = np.asarray(nodes, dtype=float), np.asarray(triangles, dtype=np.int64)
     fine, children, edges = _split_triangles(nodes, triangles)
@@ -225,10 +230,20 @@ def surface_bie_residual(
         psi = np.concatenate([flux, 0.5 * (flux[edges[:, 0]] + flux[edges[:, 1]])])
     else:
         psi = np.repeat(flux, 4)
-    K = bem_cpp.double_layer(fine, space, triangles=children)
-    V = bem_cpp.single_layer(fine, space, triangles=children)
-    r = K @ (v - a) - _surface_mass(fine, children, space) @ (v - a) - V @ psi
-    del K, V
+    if compression == "auto":
+        large = space == "p1" and len(fine) >= ESTIMATOR_HMATRIX_NODES_3D
+        compression = "hmatrix" if large else "none"
+    if compression == "hmatrix":
+        layers = bem_cpp.boundary_operators(
+            fine, space, tol=ESTIMATOR_HMATRIX_TOL_3D, triangles=children
+        )
+        r = layers.double_layer(v - a) - layers.single_layer(psi)
+    else:
+        K = bem_cpp.double_layer(fine, space, triangles=children)
+        V = bem_cpp.single_layer(fine, space, triangles=children)
+        r = K @ (v - a) - V @ psi
+        del K, V
+    r -= _surface_mass(fine, children, space) @ (v - a)
     h = np.sqrt(_areas(nodes, triangles))
     fine_area = _areas(fine, children)
     if space == "p1":
