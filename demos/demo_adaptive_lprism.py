@@ -143,5 +143,37 @@ for name, theta in (("adaptive", 0.5), ("uniform", 1.0)):
         f"{results[name]['estimator_slope']}; efficiency index {min(index):.2f} .. "
         f"{max(index):.2f}"
     )
+
+# %% [markdown]
+# ## The rates
+#
+# Error and eta against N, log-log, with the reference slopes -1/3 (optimal for P1 in
+# 3D) and -2/9 (uniform refinement at the edge singularity).
+
+# %%
+if comm.rank == 0:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6.5, 5))
+    for name, style in (("adaptive", "o-"), ("uniform", "s--")):
+        rows = results[name]["rows"]
+        n = np.array([r["dofs"] for r in rows], dtype=float)
+        ax.loglog(n, [r["error"] for r in rows], style, label=f"{name}: error")
+        ax.loglog(n, [r["estimator"] for r in rows], style, mfc="none", label=f"{name}: eta")
+    n0 = results["adaptive"]["rows"][0]["dofs"]
+    e0 = results["adaptive"]["rows"][0]["error"]
+    ref = np.array([n0, 10 * n0], dtype=float)
+    ax.loglog(ref, 0.8 * e0 * (ref / n0) ** (-1 / 3), "k:", label="$N^{-1/3}$")
+    ax.loglog(ref, 1.25 * e0 * (ref / n0) ** (-2 / 9), "k-.", label="$N^{-2/9}$")
+    ax.set(xlabel="dofs N", ylabel="energy error, eta")
+    ax.legend(fontsize=8)
+    ax.set_title("L-shaped prism, re-entrant edge")
+    fig.tight_layout()
+    args.out.mkdir(parents=True, exist_ok=True)
+    fig.savefig(args.out / "rates.png", dpi=120)
+    plt.close(fig)
 path = write_results(comm, args.out, results)
-say(f"\nresults: {path}")
+say(f"\nresults: {path}, figure: {args.out / 'rates.png'}")
