@@ -135,16 +135,17 @@ def test_surface_layers_as_hmatrices_agree_with_the_dense_matrices():
 
 def test_surface_bie_residual_by_hmatrices_agrees_with_the_dense_one():
     """The residual is a difference of products much larger than itself: with blocks to
-    ESTIMATOR_HMATRIX_TOL_3D = 1e-8 the per-triangle values agree to 1e-6 of the largest
-    (measured 1e-8 here, 1.8e-7 at 2,562 split nodes; the sums 1e-9 and 2e-8)."""
+    ESTIMATOR_HMATRIX_TOL_3D = 1e-6 the per-triangle values agree to 1e-4 of the largest
+    and the sums to 1e-5 (measured against blocks to 1e-8, which agree with the dense
+    values to 1e-8 here: 1.3e-6 and 2.9e-7; at 2,562 split nodes 1.7e-5 and 3.6e-7)."""
     nodes, triangles = icosphere(2, 0.3)
     ue = nodes[:, 0] / np.linalg.norm(nodes, axis=1) ** 3 + 0.2 * np.sin(7 * nodes[:, 2])
     flux = bem_cpp.exterior_flux(nodes, ue, a=0.0, flux="p1", triangles=triangles)
     args = (nodes, triangles, ue, flux, 0.0, "p1")
     dense = surface_bie_residual(*args, compression="none")
     compressed = surface_bie_residual(*args, compression="hmatrix")
-    assert np.abs(compressed - dense).max() <= 1e-6 * dense.max()
-    assert compressed.sum() == pytest.approx(dense.sum(), rel=1e-7)
+    assert np.abs(compressed - dense).max() <= 1e-4 * dense.max()
+    assert compressed.sum() == pytest.approx(dense.sum(), rel=1e-5)
 
 
 def test_contact_terms_vanish_without_contact(box):
