@@ -215,6 +215,7 @@ def test_an_exception_on_one_rank_ends_a_demo_on_every_rank(tmp_path):
     assert "raised on rank 1 only" in proc.stderr
 
 
+@pytest.mark.slow
 def test_adaptive_lprism_demo_beats_uniform_refinement(tmp_path):
     """The re-entrant edge of the L-shaped prism, up to 2,500 dofs (the full run's
     numbers: docs/design/estimator.md, "The re-entrant edge")."""
