@@ -99,7 +99,7 @@ def _surface_triangles(tetrahedra: np.ndarray) -> np.ndarray:
 
 def _plot_mesh(path: Path, x: np.ndarray, cells: np.ndarray) -> None:
     """The final mesh of an adaptive run: every edge once, thin, rasterised; of a body
-    (tetrahedra) the edges of its surface triangles, in an oblique 3D view."""
+    (tetrahedra) its surface triangles, opaque with their edges, in an oblique 3D view."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -112,11 +112,14 @@ def _plot_mesh(path: Path, x: np.ndarray, cells: np.ndarray) -> None:
     edges = np.unique(edges, axis=0)
     lw = float(np.clip(40.0 / np.sqrt(len(triangles)), 0.05, 0.8))
     if body:
-        from mpl_toolkits.mplot3d.art3d import Line3DCollection
+        from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
         fig = plt.figure(figsize=(6, 6))
         ax = fig.add_subplot(projection="3d")
-        ax.add_collection3d(Line3DCollection(x[edges], colors="k", linewidths=lw))
+        faces = Poly3DCollection(
+            x[triangles], facecolors="0.9", edgecolors="k", linewidths=lw, rasterized=True
+        )
+        ax.add_collection3d(faces)
         lo, hi = x.min(axis=0), x.max(axis=0)
         ax.set(xlim=(lo[0], hi[0]), ylim=(lo[1], hi[1]), zlim=(lo[2], hi[2]))
         ax.set_box_aspect(hi - lo)
