@@ -300,6 +300,8 @@ PYBIND11_MODULE(_bem, m) {
            py::arg("size"), py::arg("allgather"), py::arg("allreduce"), py::arg("single_precision") = false, Release())
       .def("apply", &bem::SurfaceSteklovOperator::apply, py::arg("x"), py::arg("solver_tol") = 0.0, Release())
       .def("flux", &bem::SurfaceSteklovOperator::flux, py::arg("x"), py::arg("solver_tol") = 0.0, Release())
+      .def("single_layer", &bem::SurfaceSteklovOperator::single_layer, py::arg("x"), Release())
+      .def("double_layer", &bem::SurfaceSteklovOperator::double_layer, py::arg("x"), Release())
       .def("hypersingular", &bem::SurfaceSteklovOperator::hypersingular, py::arg("x"), Release())
       .def("hypersingular_block", &bem::SurfaceSteklovOperator::hypersingular_block, py::arg("indices"), Release())
       .def("hypersingular_block_single", &bem::SurfaceSteklovOperator::hypersingular_block_single, py::arg("indices"),

@@ -55,17 +55,45 @@ class BoundaryOperators(_CompiledOperator):
 
 
 def boundary_operators(
-    nodes: ArrayLike, space: str = "p1", *, tol: float = 1e-10
+    nodes: ArrayLike,
+    space: str = "p1",
+    *,
+    tol: float = 1e-10,
+    triangles: ArrayLike | None = None,
 ) -> BoundaryOperators:
     """V_h and K_h of the closed polygon ``nodes`` (counter-clockwise) as H-matrices
     (:class:`BoundaryOperators`): products agree with ``single_layer(nodes, space) @ x``
     and ``double_layer(nodes, space) @ x`` to a few times ``tol``, in O(n log n) memory.
+    3D (``triangles`` given, ``space="p1"`` only): those of the surface's H-matrix S_h
+    (``steklov_poincare(..., compression="hmatrix")``, its V_h and K_h held alone; its set-up
+    also builds W_h and the V solve's preconditioner).
 
     Raises
     ------
     ValueError
-        Bad ``nodes``, ``space`` or ``tol``.
+        Bad ``nodes``, ``triangles``, ``space`` or ``tol``.
     """
+    if triangles is not None:
+        geometry = checks.boundary(nodes, triangles)
+        checks.space(space, "space")
+        if space != "p1":
+            raise ValueError('boundary_operators on a surface needs space="p1"')
+        tol = checks.tolerance(tol)
+        return BoundaryOperators(
+            _bem.SurfaceSteklovOperator(
+                *geometry,
+                leaf_size=defaults.HMATRIX_SURFACE_LEAF_SIZE,
+                eta=defaults.HMATRIX_SURFACE_ETA,
+                tol=tol,
+                solver_tol=defaults.HMATRIX_SOLVER_TOL_FACTOR * tol,
+                max_iterations=defaults.HMATRIX_MAX_ITERATIONS,
+                product_threads=defaults.HMATRIX_PRODUCT_THREADS,
+                rank=0,
+                size=1,
+                allgather=None,
+                allreduce=None,
+            )
+        )
     X = checks.nodes(nodes)
     tol = checks.tolerance(tol)
     return BoundaryOperators(

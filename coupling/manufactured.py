@@ -126,7 +126,7 @@ class ManufacturedSolution:
 
     @property
     def dim(self) -> int:
-        return 3 if self.shape in ("box", "ball") else 2
+        return 3 if self.shape in ("box", "ball") or len(self.center) == 3 else 2
 
     @property
     def variables(self) -> tuple[str, ...]:

@@ -144,9 +144,6 @@ def test_bad_3d_files_are_one_line(tmp_path, kind, order, signorini, message):
     "extra, message",
     [
         ('[solver]\npreconditioner = "substructuring"\n', "solver.preconditioner"),
-        ("[adapt]\nsteps = 2\n", "adapt.steps: adaptivity is planar"),
-        ("[output]\nindicators = true\n", "output.indicators"),
-        ("[output]\nestimator = true\n", "output.estimator: the a posteriori estimator is planar"),
     ],
 )
 def test_planar_options_of_a_body_are_one_line(tmp_path, extra, message):
@@ -174,3 +171,26 @@ def test_nested_solve_of_a_box_writes_its_levels(tmp_path):
     assert [level["dofs"] for level in summary["levels"]] == [11**3, 21**3]
     assert summary["converged"] and "levels.csv" in summary["files"]
     assert summary["iterations"] <= 5  # from the prolonged coarse solution
+
+
+def test_adaptive_solve_of_a_box_writes_its_levels_and_indicators(tmp_path):
+    """[adapt] and [output] indicators for a body (refused before issue 67): adapt.csv,
+    adapt.png, mesh.png, and eta_T per tetrahedron in fields.npz."""
+    extra = "[adapt]\nsteps = 1\ntheta = 0.3\n\n[output]\nindicators = true\n"
+    proc, out = _solve(tmp_path, "adapt", BOX + extra)
+    assert proc.returncode == 0, proc.stderr
+    summary, fields = _load(out)
+    assert {"adapt.csv", "adapt.png", "mesh.png"} <= set(summary["files"])
+    levels = summary["levels"]
+    assert len(levels) == 2 and levels[1]["dofs"] > levels[0]["dofs"] == 125
+    assert summary["estimator"] == levels[-1]["estimator"] > 0
+    assert fields["indicators"].shape == (len(fields["cells"]),) == (levels[-1]["cells"],)
+    assert np.sum(fields["indicators"] ** 2) == pytest.approx(summary["estimator"] ** 2, rel=1e-12)
+    assert (out / "adapt.csv").read_text().count("\n") == 3
+
+
+def test_estimator_of_a_plain_box_solve(tmp_path):
+    proc, out = _solve(tmp_path, "estimate", BOX + "[output]\nestimator = true\n")
+    assert proc.returncode == 0, proc.stderr
+    summary, _ = _load(out)
+    assert summary["estimator"] > 0 and "levels" not in summary

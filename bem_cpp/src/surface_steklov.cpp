@@ -91,6 +91,20 @@ Eigen::MatrixXd SurfaceSteklovOperator::precondition(const Eigen::MatrixXd& R) c
   return mass_factor_.solve(Z);
 }
 
+Eigen::MatrixXd SurfaceSteklovOperator::single_layer(const Eigen::Ref<const Eigen::MatrixXd>& X) const {
+  if (X.rows() != size())
+    throw std::invalid_argument("SurfaceSteklovOperator: X has " + std::to_string(X.rows()) + " rows, expected " +
+                                std::to_string(size()));
+  return V_->apply(X);
+}
+
+Eigen::MatrixXd SurfaceSteklovOperator::double_layer(const Eigen::Ref<const Eigen::MatrixXd>& X) const {
+  if (X.rows() != size())
+    throw std::invalid_argument("SurfaceSteklovOperator: X has " + std::to_string(X.rows()) + " rows, expected " +
+                                std::to_string(size()));
+  return K_->apply(X);
+}
+
 Eigen::MatrixXd SurfaceSteklovOperator::flux(const Eigen::Ref<const Eigen::MatrixXd>& X, double solver_tol) const {
   if (X.rows() != size())
     throw std::invalid_argument("SurfaceSteklovOperator: X has " + std::to_string(X.rows()) + " rows, expected " +

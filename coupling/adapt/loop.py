@@ -5,9 +5,11 @@ Each level is a new :class:`coupling.problem.SignoriniProblem` on the refined
 :func:`coupling.solvers.solve` from the previous solution transferred to it
 (:mod:`coupling.adapt.transfer`), estimated (:mod:`coupling.adapt.estimator`) and
 marked by Doerfler's rule (:mod:`coupling.adapt.marking`); the marked cells are
-refined (:func:`fem_py.mesh.refinement.refine_domain`) and the subdomains the refinement has
-graded are split (:func:`fem_py.mesh.grading.split_graded_subdomains`, bound
-``coupling.options.GRADING_SPLIT_FACTOR``), so that H/h stays bounded.
+refined (:func:`fem_py.mesh.refinement.refine_domain`) and, in 2D, the subdomains the
+refinement has graded are split (:func:`fem_py.mesh.grading.split_graded_subdomains`, bound
+``coupling.options.GRADING_SPLIT_FACTOR``), so that H/h stays bounded. The same loop
+refines a body in R^3 (a :class:`fem_py.mesh.SolidDomain`: tetrahedra, S_h rebuilt on the
+refined surface by the problem builder; no subdomains to split).
 """
 from __future__ import annotations
 
@@ -46,14 +48,16 @@ class Level:
         sol, p = self.solution, self.problem
         history = sol.history
         newton = [r for r in history if r.line_search is not None]
-        cells = p.V.mesh.topology.index_map(2).size_global
+        tdim = p.V.mesh.topology.dim
+        cells = p.V.mesh.topology.index_map(tdim).size_global
+        coarse = getattr(self.domain, "coarse", None)  # a body has no subdomains
         return {
             "level": self.level,
             "dofs": p.n_dofs,
             "boundary_dofs": int(p.boundary.n_gamma),
             "signorini_dofs": int(p.n_signorini),
             "cells": int(cells),
-            "subdomains": int(self.domain.coarse.n_subdomains),
+            "subdomains": int(coarse.n_subdomains) if coarse is not None else 0,
             "estimator": self.estimate.total,
             "terms": dict(self.estimate.terms),
             "iterations": int(sol.iterations),
@@ -109,6 +113,7 @@ def adapt(
         keep the first partition, every subdomain graded inside).
     """
     levels: list[Level] = []
+    split = split and domain.dim == 2  # a body (3D) has no coarse partition
     max_ratio = GRADING_SPLIT_FACTOR * float(subdomain_grading(domain).max()) if split else 0.0
     start = None
     previous = None

@@ -437,8 +437,8 @@ def check_data_and_material(config: RunConfig) -> None:
     condition of docs/method.md section 1 fails at once. The expressions are evaluated
     symbolically with UFL on an abstract triangle (tetrahedron in 3D) domain, the code
     path of ``fem_py.forms``, so constant sub-expressions that cannot be evaluated
-    (``1/0``, ``log(-1)``) are caught too. A body in R^3 refuses what is planar so far:
-    the substructuring preconditioner, adaptivity and the estimator's indicators.
+    (``1/0``, ``log(-1)``) are caught too. A body in R^3 refuses what is planar: the
+    substructuring preconditioner.
 
     Raises
     ------
@@ -496,17 +496,6 @@ def _check_solid_options(config: RunConfig) -> None:
             'solver.preconditioner = "substructuring" is the planar preconditioner (docs/method.md '
             'section 6); for a 3D body use "auto" or "amg" (section 11)'
         )
-    if config.adapt.steps > 0:
-        raise ConfigError(
-            "adapt.steps: adaptivity is planar so far (its residual estimator is 2D); set "
-            "adapt.steps = 0 for a 3D body"
-        )
-    for key in ("estimator", "indicators"):
-        if getattr(config.output, key):
-            raise ConfigError(
-                f"output.{key}: the a posteriori estimator is planar so far; set "
-                f"output.{key} = false for a 3D body"
-            )
 
 
 def geometry_error(err: ValueError) -> ValueError:

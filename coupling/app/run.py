@@ -23,7 +23,7 @@ class Run:
     """What the outputs of a run need: the (finest) problem and its solution, the stage
     timings, one record per level (nested or adaptive runs), the global estimator, the
     per-cell eta_T^2 of the owned cells of the final mesh (``indicators``, in the local
-    cell order; both None for a body in R^3: the estimator is planar) and the energy
+    cell order; triangles, or tetrahedra for a body in R^3) and the energy
     error |u_h - u|_1 (None without ``[data] exact``). A plain or nested solve has an
     estimator only with ``[output] estimator`` or ``indicators``."""
 
@@ -127,8 +127,8 @@ def run_solver(
         after_solve(problem, solution, records)
     error = energy_error(problem, solution.u, exact) if exact else None
     stages = {**timings, **solution.timings}
-    # the residual estimator is planar (docs/design/estimator.md), off unless asked
-    if domain.dim == 3 or not config.output.estimates:
+    # the residual estimator (docs/design/estimator.md, 2D and 3D), off unless asked
+    if not config.output.estimates:
         return Run(problem, solution, stages, records, None, None, error)
     tic = time.perf_counter()
     est = estimate(problem, solution, f=data.f, t0=data.t0)

@@ -89,22 +89,48 @@ def _plot(path: Path, levels: list[dict]) -> None:
     plt.close(fig)
 
 
-def _plot_mesh(path: Path, x: np.ndarray, triangles: np.ndarray) -> None:
-    """The final mesh of an adaptive run: every edge once, thin, rasterised."""
+def _surface_triangles(tetrahedra: np.ndarray) -> np.ndarray:
+    """The boundary triangles of a tetrahedral mesh: the faces in one cell only."""
+    faces = tetrahedra[:, [[1, 2, 3], [0, 2, 3], [0, 1, 3], [0, 1, 2]]].reshape(-1, 3)
+    key = np.sort(faces, axis=1)
+    _, first, count = np.unique(key, axis=0, return_index=True, return_counts=True)
+    return faces[first[count == 1]]
+
+
+def _plot_mesh(path: Path, x: np.ndarray, cells: np.ndarray) -> None:
+    """The final mesh of an adaptive run: every edge once, thin, rasterised; of a body
+    (tetrahedra) its surface triangles, opaque with their edges, in an oblique 3D view."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.collections import LineCollection
 
+    body = cells.shape[1] == 4
+    triangles = _surface_triangles(cells) if body else cells
     edges = np.sort(triangles[:, [[0, 1], [1, 2], [2, 0]]].reshape(-1, 2), axis=1)
     edges = np.unique(edges, axis=0)
-    fig, ax = plt.subplots(figsize=(6, 6))
     lw = float(np.clip(40.0 / np.sqrt(len(triangles)), 0.05, 0.8))
-    ax.add_collection(LineCollection(x[edges][:, :, :2], colors="k", linewidths=lw))
-    ax.autoscale()
-    ax.set(aspect="equal", xlabel="$x$", ylabel="$y$")
-    ax.set_title(f"Adapted mesh ({len(triangles)} cells, {len(x)} nodes)")
+    if body:
+        from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+        fig = plt.figure(figsize=(6, 6))
+        ax = fig.add_subplot(projection="3d")
+        faces = Poly3DCollection(
+            x[triangles], facecolors="0.9", edgecolors="k", linewidths=lw, rasterized=True
+        )
+        ax.add_collection3d(faces)
+        lo, hi = x.min(axis=0), x.max(axis=0)
+        ax.set(xlim=(lo[0], hi[0]), ylim=(lo[1], hi[1]), zlim=(lo[2], hi[2]))
+        ax.set_box_aspect(hi - lo)
+        ax.set(xlabel="$x$", ylabel="$y$", zlabel="$z$")
+        ax.set_title(f"Adapted mesh ({len(cells)} cells, {len(x)} nodes; its surface)")
+    else:
+        fig, ax = plt.subplots(figsize=(6, 6))
+        ax.add_collection(LineCollection(x[edges][:, :, :2], colors="k", linewidths=lw))
+        ax.autoscale()
+        ax.set(aspect="equal", xlabel="$x$", ylabel="$y$")
+        ax.set_title(f"Adapted mesh ({len(triangles)} cells, {len(x)} nodes)")
     fig.tight_layout()
     atomic_write(path, lambda p: fig.savefig(p, dpi=150, format="png"))
     plt.close(fig)
@@ -120,7 +146,8 @@ def write_levels(
 ) -> list[str]:
     """Write the levels' table (one row per level; the columns every level has):
     adapt.csv and, with ``plot``, adapt.png and mesh.png (``mesh``: the final mesh's
-    node coordinates and triangles) for an adaptive run, levels.csv for a nested one.
+    node coordinates and triangles, or tetrahedra for a body) for an adaptive run,
+    levels.csv for a nested one.
     Returns the names written (rank 0 only)."""
     columns = [c for c in _COLUMNS if all(c in level for level in levels)]
     table = io.StringIO()

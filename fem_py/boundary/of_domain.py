@@ -14,5 +14,5 @@ __all__ = ["boundary_map"]
 def boundary_map(V: Any, domain: Any) -> BoundaryMap | SurfaceMap:
     """The boundary map of ``domain`` on its P1 space ``V`` (collective)."""
     if domain.dim == 3:
-        return SurfaceMap(V, domain.facet_tags, domain.signorini)
+        return SurfaceMap(V, domain.facet_tags, domain.signorini, order=domain.node_order)
     return BoundaryMap(V, domain)

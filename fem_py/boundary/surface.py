@@ -47,9 +47,12 @@ __all__ = ["SurfaceMap", "surface_arrays"]
 class SurfaceMap(BoundaryVectors):
     """The oriented surface triangulation of Gamma, its nodes and T, E (module docstring).
 
-    ``SurfaceMap(V, facet_tags, signorini=())`` (collective) with ``V`` the P1 space of a
-    tetrahedral mesh, its facet tags (MeshTags of dimension 2; untagged facets count as
-    tag 0) and ``signorini``: the facet tags of Gamma_s, or ``"all"``.
+    ``SurfaceMap(V, facet_tags, signorini=(), order="input")`` (collective) with ``V``
+    the P1 space of a tetrahedral mesh, its facet tags (MeshTags of dimension 2; untagged
+    facets count as tag 0), ``signorini``: the facet tags of Gamma_s, or ``"all"``, and
+    ``order``: the nodes sorted by input node number, or (``"coordinates"``)
+    lexicographically by their coordinates, for meshes whose input numbers depend on
+    the partition (a mesh refined on the ranks, ``fem_py.mesh.refinement``).
 
     Attributes
     ----------
@@ -92,7 +95,16 @@ class SurfaceMap(BoundaryVectors):
     euler_characteristic: int
     n_dofs: int
 
-    def __init__(self, V: fem.FunctionSpace, facet_tags: Any, signorini: Any = ()):
+    def __init__(
+        self,
+        V: fem.FunctionSpace,
+        facet_tags: Any,
+        signorini: Any = (),
+        *,
+        order: str = "input",
+    ):
+        if order not in ("input", "coordinates"):
+            raise ValueError(f"order must be 'input' or 'coordinates', got {order!r}")
         wanted = _signorini_tags(signorini)
         msh = V.mesh
         if msh.topology.cell_type != dmesh.CellType.tetrahedron:
@@ -109,7 +121,12 @@ class SurfaceMap(BoundaryVectors):
         # tag) is raised as it is on every rank
         arrays = broadcast_from_root(
             msh.comm,
-            lambda: surface_arrays(*(np.concatenate(a) for a in zip(*parts)), wanted, n_dofs),
+            lambda: surface_arrays(
+                *(np.concatenate(a) for a in zip(*parts)),
+                wanted,
+                n_dofs,
+                by_coordinates=order == "coordinates",
+            ),
         )
         for key, value in arrays.items():
             setattr(self, key, value)
@@ -188,6 +205,8 @@ def surface_arrays(
     tags: np.ndarray,
     signorini: tuple[int, ...] | None,
     n_dofs: int,
+    *,
+    by_coordinates: bool = False,
 ) -> dict[str, Any]:
     """The arrays of a :class:`SurfaceMap` from its oriented triangles (pure; rank 0).
 
@@ -207,6 +226,8 @@ def surface_arrays(
         The facet tags of Gamma_s, or None for Gamma_s = Gamma.
     n_dofs
         The global number of P1 dofs.
+    by_coordinates
+        Sort the nodes lexicographically by their coordinates instead of by ``ids``.
 
     Raises
     ------
@@ -219,6 +240,9 @@ def surface_arrays(
     if m == 0:
         raise ValueError("the mesh has no boundary triangles")
     ids = np.asarray(ids, dtype=np.int64).reshape(-1, 3)
+    if by_coordinates:  # the rank of each vertex's coordinates (x, then y, then z)
+        points = np.asarray(coords, dtype=float).reshape(-1, 3)
+        ids = np.unique(points, axis=0, return_inverse=True)[1].reshape(-1, 3).astype(np.int64)
     unique, first, inverse = np.unique(ids.ravel(), return_index=True, return_inverse=True)
     node_dofs = dofs.ravel()[first]
     if len(np.unique(node_dofs)) != len(unique):

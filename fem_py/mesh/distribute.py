@@ -309,6 +309,7 @@ def reghost(msh: Any) -> Any:
     """``msh`` (refined by DOLFINx without redistribution) created again from its owned
     cells, each owned by the same rank and ghosted once on every other rank owning one of
     its facet neighbours (DOLFINx's shared-facet mode; collective). In serial ``msh``.
+    Triangles or tetrahedra (facets: edges or triangles).
 
     DOLFINx 0.5.2's ``refine(..., redistribute=False)`` ghosts a cell once per facet it
     shares with another rank, so a cell with two such facets arrives twice, and the
@@ -317,28 +318,31 @@ def reghost(msh: Any) -> Any:
     if comm.size == 1:
         return msh
     topology = msh.topology
-    topology.create_connectivity(2, 0)
-    topology.create_connectivity(1, 2)
-    topology.create_connectivity(2, 1)
-    cells, vertices = topology.index_map(2), topology.index_map(0)
+    tdim = topology.dim
+    k = tdim + 1  # vertices and facets of a simplex
+    topology.create_connectivity(tdim, 0)
+    topology.create_connectivity(tdim - 1, tdim)
+    topology.create_connectivity(tdim, tdim - 1)
+    cells, vertices = topology.index_map(tdim), topology.index_map(0)
     n_own = cells.size_local
-    c2v = topology.connectivity(2, 0).array.reshape(-1, 3)
+    c2v = topology.connectivity(tdim, 0).array.reshape(-1, k)
     node_of_vertex = np.empty(vertices.size_local + vertices.num_ghosts, dtype=np.int64)
-    node_of_vertex[c2v] = msh.geometry.dofmap.array.reshape(-1, 3)
-    x = msh.geometry.x[node_of_vertex[: vertices.size_local], :2]
+    node_of_vertex[c2v] = msh.geometry.dofmap.array.reshape(-1, k)
+    x = msh.geometry.x[node_of_vertex[: vertices.size_local], :tdim]
     own = c2v[:n_own]
-    glob = vertices.local_to_global(own.ravel().astype(np.int32)).reshape(-1, 3)
+    glob = vertices.local_to_global(own.ravel().astype(np.int32)).reshape(-1, k)
     # the other ranks ghosting each owned cell: owners of the ghost cells across its facets
     owner = np.concatenate([np.full(n_own, comm.rank), np.asarray(cells.owners)])
-    f2c = topology.connectivity(1, 2)
-    c2f = topology.connectivity(2, 1).array.reshape(-1, 3)[:n_own]
+    f2c = topology.connectivity(tdim - 1, tdim)
+    c2f = topology.connectivity(tdim, tdim - 1).array.reshape(-1, k)[:n_own]
     # every (owned cell, cell across one of its facets) pair, itself included (a facet may
     # have more than two cells here: the doubled ghosts)
     facet = c2f.ravel()
     count = np.diff(f2c.offsets)[facet]
     start = np.repeat(f2c.offsets[facet] - np.cumsum(count) + count, count)
     other = f2c.array[start + np.arange(count.sum())]
-    cell = np.repeat(np.repeat(np.arange(n_own), 3), count)
+    cell = np.repeat(np.repeat(np.arange(n_own), k), count)
     away = owner[other] != comm.rank
     links = np.unique(np.stack([cell[away], owner[other][away]], axis=1), axis=0)
-    return mesh_of_placed_cells(comm, "triangle", glob, x, links)
+    name = "tetrahedron" if tdim == 3 else "triangle"
+    return mesh_of_placed_cells(comm, name, glob, x, links)

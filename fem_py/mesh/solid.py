@@ -51,6 +51,10 @@ class SolidDomain:
         The shortest and the longest edge of the mesh.
     lattice : BoxLattice or None
         The box's vertex lattice (``None`` for other shapes).
+    node_order : str
+        The order of the boundary nodes (``SurfaceMap``'s ``order``): ``"input"`` (input
+        node numbers), ``"coordinates"`` after a local refinement, whose new nodes'
+        numbers depend on the partition (``fem_py.mesh.refinement``).
     """
 
     mesh: Any
@@ -62,6 +66,7 @@ class SolidDomain:
     h_min: float
     h_max: float
     lattice: BoxLattice | None = None
+    node_order: str = "input"
 
     #: Omega's dimension (``Domain.dim`` is 2).
     dim = 3

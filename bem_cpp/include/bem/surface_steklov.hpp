@@ -34,6 +34,10 @@ class SurfaceSteklovOperator {
   Eigen::MatrixXd apply(const Eigen::Ref<const Eigen::MatrixXd>& X, double solver_tol = 0.0) const;
   /// Psi = V_h^{-1} (K_h - M_h) X (the exterior Neumann data of the traces X, a = 0).
   Eigen::MatrixXd flux(const Eigen::Ref<const Eigen::MatrixXd>& X, double solver_tol = 0.0) const;
+  /// V_h X and K_h X (the operator's H-matrices of the P1 single and double layer, alone:
+  /// e.g. the residual of the boundary integral equation in an a posteriori estimator).
+  Eigen::MatrixXd single_layer(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
+  Eigen::MatrixXd double_layer(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
   /// W_h X (the H-matrix of Nedelec's identity).
   Eigen::MatrixXd hypersingular(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
   /// The principal submatrix of W_h on the vertices `indices` (m, m), from its H-matrix

@@ -40,6 +40,7 @@ SMALL: dict[str, tuple[list[str], int | None]] = {
         ["--cells", "8", "--steps", "12", "--max-dofs", "13000"],
         None,
     ),
+    "demo_adaptive_lprism": (["--cells", "4", "--max-dofs", "2500"], None),
 }
 TIMEOUT = 600  # seconds per demo
 
