@@ -50,9 +50,9 @@ def _inputs(fields):
 def test_signorini_figure_shows_the_real_coordinates(box_fields):
     import matplotlib.pyplot as plt
 
-    from coupling.io.body_figures import _figure_signorini
+    from coupling.io.body_figures import figure_signorini
 
-    fig = _figure_signorini(_inputs(box_fields))
+    fig = figure_signorini(_inputs(box_fields))
     try:
         for ax in fig.axes[:2]:  # the two panels (then their colour bars)
             assert (ax.get_xlabel(), ax.get_ylabel()) == ("x", "y")
@@ -67,14 +67,14 @@ def test_signorini_figure_shows_the_real_coordinates(box_fields):
 def test_signorini_figure_colours_from_the_gap_unknowns(box_fields):
     import matplotlib.pyplot as plt
 
-    from coupling.io.body_figures import _figure_signorini
+    from coupling.io.body_figures import figure_signorini
 
     f = box_fields
     gap, pressure = f["signorini"], f["pressure"]
     bottom = np.isclose(f["boundary_x"][:, 2], -0.3)
     rim = bottom & ~gap
     assert pressure[rim].max() > 0.1  # the rim's flux, no contact pressure
-    fig = _figure_signorini(_inputs(f))
+    fig = figure_signorini(_inputs(f))
     try:
         left, right = fig.axes[:2]
         gap_colours, pressure_colours = left.collections[0], right.collections[0]

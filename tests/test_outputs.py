@@ -14,7 +14,7 @@ import pytest
 from mpi4py import MPI
 
 from coupling.io.atomic import atomic_write, prepare_output_dir
-from coupling.io.figures import true_runs
+from coupling.io.gamma_drawing import true_runs
 from coupling.io.plots import PLOT_FILES, write_plots
 from fem_py.polyline import arc_length
 

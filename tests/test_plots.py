@@ -147,12 +147,12 @@ def test_surface_figure_turns_the_normals_of_a_closed_surface_outward():
     """surface.png draws the triangles facing the eye only: their normals must point out
     of the body whatever the triangles' orientation (here the cube, both ways round)."""
     from bem_cpp.surfaces import cube
-    from coupling.io.body_figures import _outward_normals
+    from coupling.io.body_figures import outward_normals
 
     X, T = cube(4)
     for tri in (T, T[:, ::-1]):
         corners = X[tri]
-        normals = _outward_normals(corners)
+        normals = outward_normals(corners)
         centroids = corners.mean(axis=1)
         assert (np.einsum("ij,ij->i", normals, centroids) > 0).all()  # the cube's centre: 0
 
@@ -329,14 +329,14 @@ def test_surface_figure_draws_the_nearer_of_two_overlapping_triangles_last(elev,
     import matplotlib.pyplot as plt
     from matplotlib.colors import to_rgba
 
-    from coupling.io.body_figures import _GouraudSurface
+    from coupling.io.body_figures import GouraudSurface
 
     square = np.array([[-1.0, -1.0], [1.0, -1.0], [0.0, 1.0]])
     corners = np.stack([np.column_stack([square, np.full(3, z)]) for z in (0.0, 1.0)])
     colours = np.array([[to_rgba("red")] * 3, [to_rgba("blue")] * 3])
     fig = plt.figure(figsize=(2, 2), dpi=50)
     ax = fig.add_subplot(projection="3d")
-    ax.add_collection(_GouraudSurface(corners, colours), autolim=False)
+    ax.add_collection(GouraudSurface(corners, colours), autolim=False)
     ax.set(xlim=(-1, 1), ylim=(-1, 1), zlim=(0, 1))
     ax.set_axis_off()
     ax.view_init(elev=elev, azim=-90)
@@ -358,7 +358,7 @@ def test_the_open_gap_is_drawn_as_the_captions_say():
     from matplotlib.collections import LineCollection
     from matplotlib.colors import to_rgba
 
-    from coupling.io.figures import _draw_boundary
+    from coupling.io.gamma_drawing import draw_boundary
 
     t = np.linspace(0.0, 1.0, 9)[:-1]
     nodes = np.concatenate(
@@ -371,7 +371,7 @@ def test_the_open_gap_is_drawn_as_the_captions_say():
     fields = dict(boundary_x=nodes, signorini=signorini, phi=phi, active=signorini & (phi == 0))
     fig, ax = plt.subplots()
     try:
-        _draw_boundary(ax, fields)
+        draw_boundary(ax, fields)
         parts = {c.get_label(): c for c in ax.collections if isinstance(c, LineCollection)}
         contact = parts[r"$\Gamma_s$ in contact ($\phi_h = 0$)"]
         open_gap = parts[r"$\Gamma_s$ open ($\phi_h > 0$)"]

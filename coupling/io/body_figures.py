@@ -48,7 +48,7 @@ _RIM_COLOUR, _WRONG_SIGN_COLOUR = "0.85", "tab:cyan"
 _ALIGNED = 1.0 - 1e-4
 
 
-def _figure_signorini(inputs: BodyFigureInputs, elastic: bool = False):
+def figure_signorini(inputs: BodyFigureInputs, elastic: bool = False):
     """signorini.png (module docstring); ``elastic``: the fields of an elastic run, the gap
     being the opening jump.n and the pressure drawn as p = -n.sigma n >= 0 (compression
     positive), on a map that starts at 0."""
@@ -150,7 +150,7 @@ def _plane_axes(normal: np.ndarray) -> tuple[np.ndarray, tuple[str, str], str]:
     )
 
 
-class _GouraudSurface(mcollections.Collection):
+class GouraudSurface(mcollections.Collection):
     """Triangles in a 3D axes with a colour per corner, drawn farthest first in one call
     of the renderer's Gouraud triangles: what mplot3d's Poly3DCollection does (project,
     sort by mean depth, draw) with one numpy pass instead of a Path per polygon (3 s for
@@ -187,7 +187,7 @@ def _figure_surface(inputs: BodyFigureInputs):
     colours = plt.get_cmap("viridis")(norm(u))[tri]  # (t, 3, 4): a colour per corner
     lo, hi = nodes.min(axis=0), nodes.max(axis=0)
     corners = nodes[tri]
-    outward = _outward_normals(corners)
+    outward = outward_normals(corners)
     fig = plt.figure(figsize=(11, 5))
     for k, (elev, azim) in enumerate(((25, -60), (-25, 120))):
         ax = fig.add_subplot(1, 2, k + 1, projection="3d")
@@ -196,7 +196,7 @@ def _figure_surface(inputs: BodyFigureInputs):
         e, a = np.radians(elev), np.radians(azim)
         eye = np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])
         front = outward @ eye > 0.0
-        ax.add_collection(_GouraudSurface(corners[front], colours[front]), autolim=False)
+        ax.add_collection(GouraudSurface(corners[front], colours[front]), autolim=False)
         ax.set(xlim=(lo[0], hi[0]), ylim=(lo[1], hi[1]), zlim=(lo[2], hi[2]))
         ax.set(xlabel="$x$", ylabel="$y$", zlabel="$z$")
         ax.set_box_aspect(hi - lo)
@@ -207,7 +207,7 @@ def _figure_surface(inputs: BodyFigureInputs):
     return fig
 
 
-def _outward_normals(corners: np.ndarray) -> np.ndarray:
+def outward_normals(corners: np.ndarray) -> np.ndarray:
     """The normals (t, 3) of a closed surface's triangles ``corners`` (t, 3, 3), turned
     outward: the orientation whose enclosed (signed) volume is positive."""
     normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
@@ -227,7 +227,7 @@ def _figure_slice(inputs: BodyFigureInputs):
     # u_e beneath, its pixels inside the body filled from their nearest outside: u_h's
     # pixels cover them, and no band of neither is left along Gamma between u_h's fine
     # pixels and u_e's coarser ones
-    ax.imshow(_filled(s["ue"]), extent=s["ue_extent"], interpolation="bilinear", **kwargs)
+    ax.imshow(filled_image(s["ue"]), extent=s["ue_extent"], interpolation="bilinear", **kwargs)
     shown = ax.imshow(u, extent=s["u_extent"], **kwargs)
     # the section of Gamma itself (the triangles cut by the plane), not the pixels' edge
     ax.add_collection(mcollections.LineCollection(s["outline"], colors="white", linewidths=1.0))
@@ -240,7 +240,7 @@ def _figure_slice(inputs: BodyFigureInputs):
     return fig
 
 
-def _filled(image: np.ndarray) -> np.ndarray:
+def filled_image(image: np.ndarray) -> np.ndarray:
     """``image`` with each NaN pixel given its nearest finite pixel's value (all NaN:
     unchanged)."""
     from scipy.ndimage import distance_transform_edt
@@ -257,7 +257,7 @@ def render_body(inputs: BodyFigureInputs, skip: Collection[str] = ()) -> dict[st
     but those named in ``skip`` (no signorini.png without Signorini nodes, no slice.png
     without the section, no history.png without history)."""
     figures = {
-        "signorini.png": lambda: _figure_signorini(inputs),
+        "signorini.png": lambda: figure_signorini(inputs),
         "surface.png": lambda: _figure_surface(inputs),
         "slice.png": lambda: None if inputs.section is None else _figure_slice(inputs),
         "history.png": lambda: (

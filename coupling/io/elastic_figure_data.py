@@ -263,7 +263,7 @@ def elastic_inputs(
 def exterior_section(fields: dict, kernel: Any, plane: str = "auto") -> dict:
     """|u_e| of the medium for exterior.png by the representation formula with the
     problem's ``kernel`` (Kelvin's, ``("lame", E, nu)``) from the boundary arrays of
-    ``fields``: in 2D at the samples of :func:`coupling.io.plots.exterior_samples`
+    ``fields``: in 2D at the samples of :func:`coupling.io.evaluation.exterior_samples`
     (``points`` (m, 2), ``ue`` (m, 2)) on the square twice the body's box, the trace
     ``ue`` on Gamma beside them, and the von Mises stress of sigma(u_e) there (``stress``
     (m,), :func:`exterior_von_mises`); in 3D on the section by ``plane`` (``[output] slice``:
@@ -278,7 +278,7 @@ def exterior_section(fields: dict, kernel: Any, plane: str = "auto") -> dict:
     from coupling.io.evaluation import exterior_from_fields  # bem_cpp, the mesh libraries
 
     if fields["x"].shape[1] == 2:
-        from coupling.io.plots import exterior_samples
+        from coupling.io.evaluation import exterior_samples
 
         samples = exterior_samples(fields, EXTERIOR_SAMPLES_2D, kernel=kernel)
         stress = exterior_von_mises(fields, samples.points, kernel)

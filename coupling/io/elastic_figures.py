@@ -12,7 +12,7 @@
   pressure p = -n.sigma(u_h) n (compression positive) and the opening phi_h = j_h.n,
   the contact set shaded, both scales set by the nodes that carry a gap unknown (the
   arc's end nodes, bonded, drawn grey); 3D, the Signorini faces seen along their normal,
-  the opening and the pressure (:func:`coupling.io.body_figures._figure_signorini`).
+  the opening and the pressure (:func:`coupling.io.body_figures.figure_signorini`).
 - ``exterior.png``: |u_e| and the von Mises stress of sigma(u_e), the medium's
   displacement and stress by the representation formula with Kelvin's kernel, on the
   square twice the body's box (2D; arrows of u_e) or on a section (3D, ``[output]
@@ -44,10 +44,10 @@ from coupling.io.elastic_figure_data import (  # noqa: E402
     ElasticFigureInputs,
 )
 from coupling.io.figure_data import PixelGrid, plane_square, rasterise  # noqa: E402
-from coupling.io.figures import (  # noqa: E402
-    _draw_boundary,
-    _signorini_panels,
+from coupling.io.gamma_drawing import (  # noqa: E402
+    draw_boundary,
     exterior_triangulation,
+    signorini_panels,
     true_runs,
 )
 from coupling.io.history_figure import figure_history  # noqa: E402
@@ -81,7 +81,7 @@ def _stress_norm(inputs: ElasticFigureInputs):
 
 
 def _contact_fields(boundary: dict, nodes: np.ndarray) -> dict:
-    """The arrays :func:`coupling.io.figures._draw_boundary` draws Gamma_s from, at
+    """The arrays :func:`coupling.io.figures.draw_boundary` draws Gamma_s from, at
     ``nodes``: the contact set as phi = 0 (the opening is phi_h = j_h.n, 0 up to round-off
     at a node in contact)."""
     sig, active = boundary["signorini"], boundary["active"]
@@ -109,7 +109,7 @@ def _figure_deformed_plane(inputs: ElasticFigureInputs):
     fig.colorbar(shown, ax=ax, shrink=0.85, label=r"von Mises stress of $\sigma(u_h)$")
     closed = np.vstack([nodes, nodes[:1]])
     ax.plot(*closed.T, color="0.35", lw=0.7, ls="--", zorder=3)
-    _draw_boundary(ax, _contact_fields(b, moved))
+    draw_boundary(ax, _contact_fields(b, moved))
     lo = np.minimum(moved.min(axis=0), nodes.min(axis=0))
     hi = np.maximum(moved.max(axis=0), nodes.max(axis=0))
     pad = 0.04 * float((hi - lo).max())
@@ -151,7 +151,7 @@ def _feature_edges(nodes: np.ndarray, triangles: np.ndarray) -> np.ndarray:
 def _figure_deformed_body(inputs: ElasticFigureInputs):
     from mpl_toolkits.mplot3d.art3d import Line3DCollection
 
-    from coupling.io.body_figures import _GouraudSurface, _outward_normals
+    from coupling.io.body_figures import GouraudSurface, outward_normals
 
     d, b = inputs.deformed, inputs.boundary
     corners, nodes = d["corners"], b["boundary_x"]
@@ -160,14 +160,14 @@ def _figure_deformed_body(inputs: ElasticFigureInputs):
     outline = _feature_edges(nodes, b["boundary_triangles"])
     both = np.vstack([corners.reshape(-1, 3), nodes])
     lo, hi = both.min(axis=0), both.max(axis=0)
-    outward = _outward_normals(corners)
+    outward = outward_normals(corners)
     fig = plt.figure(figsize=(11, 5.2))
     for k, (elev, azim) in enumerate(((25, -60), (-25, 120))):
         ax = fig.add_subplot(1, 2, k + 1, projection="3d")
         e, a = np.radians(elev), np.radians(azim)
         eye = np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])
         front = outward @ eye > 0.0  # a closed surface: those facing away are hidden
-        ax.add_collection(_GouraudSurface(corners[front], colours[front]), autolim=False)
+        ax.add_collection(GouraudSurface(corners[front], colours[front]), autolim=False)
         if len(outline):
             ax.add_collection3d(Line3DCollection(outline, colors="0.3", linewidths=0.6))
         ax.set(xlim=(lo[0], hi[0]), ylim=(lo[1], hi[1]), zlim=(lo[2], hi[2]))
@@ -222,7 +222,7 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
 def _figure_signorini_plane(inputs: ElasticFigureInputs):
     b = inputs.boundary
     nodes, sig, active = b["boundary_x"], b["signorini"], b["active"]
-    runs = true_runs(_signorini_panels(b))
+    runs = true_runs(signorini_panels(b))
     if not sig.any() or not runs:
         return None
     n = len(nodes)
@@ -286,7 +286,7 @@ def _figure_signorini_plane(inputs: ElasticFigureInputs):
 
 def _figure_signorini_body(inputs: ElasticFigureInputs):
     from coupling.io.body_figure_data import BodyFigureInputs
-    from coupling.io.body_figures import _figure_signorini
+    from coupling.io.body_figures import figure_signorini
 
     b = inputs.boundary
     body = BodyFigureInputs(
@@ -297,7 +297,7 @@ def _figure_signorini_body(inputs: ElasticFigureInputs):
         inputs.history,
         inputs.tol,
     )
-    return _figure_signorini(body, elastic=True)
+    return figure_signorini(body, elastic=True)
 
 
 def _stress_scale(stress: np.ndarray) -> tuple[float, float, str]:
@@ -350,7 +350,7 @@ def _figure_exterior_plane(inputs: ElasticFigureInputs):
         bar = dict(extend=extend) if scale else {}
         fig.colorbar(shown, ax=ax, shrink=0.85, label=label, **bar)
         ax.fill(*nodes.T, color="white", zorder=2)
-        _draw_boundary(ax, _contact_fields(b, nodes))
+        draw_boundary(ax, _contact_fields(b, nodes))
         ax.set(
             aspect="equal",
             xlabel="$x$",
@@ -385,14 +385,14 @@ def _figure_exterior_plane(inputs: ElasticFigureInputs):
 
 
 def _figure_exterior_body(inputs: ElasticFigureInputs):
-    from coupling.io.body_figures import _filled
+    from coupling.io.body_figures import filled_image
 
     ex = inputs.exterior
     size = np.linalg.norm(ex["ue"], axis=2)  # NaN inside the body and next to a node
     if not np.isfinite(size).any():
         return None
     # the samples left out next to a boundary node take their nearest neighbour's value
-    size = np.where(ex["inside"], np.nan, _filled(size))
+    size = np.where(ex["inside"], np.nan, filled_image(size))
     stress = ex["stress"]  # NaN inside and within a sample spacing of Gamma
     lo, hi, extend = _stress_scale(stress)
     fig, (left, right) = plt.subplots(1, 2, figsize=(12.8, 5.4), gridspec_kw={"wspace": 0.35})

@@ -20,15 +20,25 @@ formula on Gamma's triangles gives u_e (docs/method.md section 11).
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 import bem_cpp
 from coupling.options import hmatrix_tol
 from fem_py.mesh import interpolate_p1
 from fem_py.mesh.location3d import interpolate_p1_tetrahedra, on_surface
-from fem_py.polyline import closest_on_polygon, inside_polygon
+from coupling.io.figure_data import plane_square
+from fem_py.polyline import closest_on_polygon, inside_polygon, polygon_corners, segment_lengths
 
-__all__ = ["evaluate", "exterior_from_fields", "exterior_stress_from_fields", "ON_GAMMA"]
+__all__ = [
+    "evaluate",
+    "exterior_from_fields",
+    "exterior_stress_from_fields",
+    "ExteriorSamples",
+    "exterior_samples",
+    "ON_GAMMA",
+]
 
 #: points closer to Gamma than this times its bounding-box diameter count as on Gamma
 #: (10 times the distance below which the representation formula refuses a point)
@@ -90,6 +100,41 @@ def exterior_stress_from_fields(fields: dict, points: np.ndarray) -> np.ndarray:
         flux=str(fields["flux_space"]),
         **_kernel(fields),
     )
+
+
+class ExteriorSamples(NamedTuple):
+    """u_e at the points of the whole-plane grid outside Omega (:func:`exterior_samples`)."""
+
+    points: np.ndarray  # (m, 2)
+    ue: np.ndarray  # (m,), or (m, 2) for an elastic run
+
+
+def exterior_samples(
+    fields: dict, resolution: int = 121, kernel: str | tuple = "laplace"
+) -> ExteriorSamples:
+    """u_e (the representation formula, docs/method.md section 2) on the ``resolution`` x
+    ``resolution`` grid of whole_plane.png, at its points outside Omega farther than
+    h/20 from Gamma, from the boundary arrays of ``fields`` (``boundary_x``, ``ue``,
+    ``dn_ue``, ``a``, ``flux_space``; ``kernel``: that of
+    :func:`coupling.io.evaluation.exterior_from_fields`, Kelvin's for an elastic run,
+    whose u_e is (m, 2)). bem_cpp releases the GIL while it evaluates, so
+    :mod:`coupling.io.outputs` runs this in a thread."""
+    from matplotlib.path import Path as PolygonPath
+
+    nodes = fields["boundary_x"]
+    centre, half = plane_square(nodes)
+    g = np.linspace(-1, 1, resolution) * half
+    X, Y = np.meshgrid(centre[0] + g, centre[1] + g)
+    grid = np.column_stack([X.ravel(), Y.ravel()])
+    h = segment_lengths(np.concatenate([nodes, nodes[:1]])).max()
+    # Gamma is the polygon of its corners (the other nodes lie on its sides): tested
+    # against it, not against all n nodes (O(n) per point); points on Gamma, on either
+    # side of the test, are dropped with the others closer than h/20
+    corners = nodes[polygon_corners(nodes)]
+    outside = ~PolygonPath(corners).contains_points(grid)
+    outside[outside] = closest_on_polygon(grid[outside], corners)[0] > h / 20
+    grid = grid[outside]
+    return ExteriorSamples(grid, exterior_from_fields(fields, grid, kernel=kernel))
 
 
 def evaluate(fields: dict, points: np.ndarray) -> dict[str, np.ndarray]:

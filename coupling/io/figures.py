@@ -28,12 +28,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from matplotlib import patheffects  # noqa: E402
-from matplotlib.collections import LineCollection  # noqa: E402
-from matplotlib.lines import Line2D  # noqa: E402
-from matplotlib.path import Path as PolygonPath  # noqa: E402
-from matplotlib.transforms import Bbox, ScaledTranslation  # noqa: E402
-from matplotlib.tri import Triangulation  # noqa: E402
+from matplotlib.transforms import Bbox  # noqa: E402
 
 from coupling.io.elastic_figure_data import ElasticFigureInputs  # noqa: E402
 from coupling.io.figure_data import (  # noqa: E402
@@ -43,6 +38,15 @@ from coupling.io.figure_data import (  # noqa: E402
     coarsen,
     plane_square,
     rasterise,
+)
+from coupling.io.gamma_drawing import (  # noqa: E402
+    CONTACT_MARKER,
+    OPEN_MARKER,
+    closed,
+    draw_boundary,
+    exterior_triangulation,
+    signorini_panels,
+    true_runs,
 )
 from coupling.io.history_figure import figure_history  # noqa: E402
 from fem_py.polyline import CORNER_ANGLE, arc_length, polygon_corners  # noqa: E402
@@ -61,100 +65,10 @@ _DPI = 110
 _PNG = {"compress_level": 1}
 
 
-_CONTACT = dict(ls="none", marker="o", ms=3.5, color="tab:red")
-_OPEN = dict(ls="none", marker="o", ms=3.5, mfc="white", mec="tab:blue", mew=1.0)
-#: the open part of Gamma_s over u_h: white on a black edge, far from every colour of
-#: the colormap (blue would vanish in viridis' blues)
-_OPEN_LINE = "white"
-_OPEN_EDGE = [patheffects.Stroke(linewidth=5.0, foreground="black"), patheffects.Normal()]
-#: inches between the bottom of the axes and the legend under them (tick labels and the
-#: x label take about 0.4)
-_LEGEND_DROP = 0.5
 #: the share of |Gamma| on either side of a corner whose pressure is left out of the
 #: pressure axis' range: the flux is singular at corners, and its P1 spikes (a few
 #: nodes wide on a locally refined mesh) would flatten the rest
 _CORNER_SHARE = 0.03
-
-
-def _closed(a: np.ndarray) -> np.ndarray:
-    return np.concatenate([a, a[:1]])
-
-
-def _signorini_panels(fields: dict) -> np.ndarray:
-    """Panel i = [node i, node i+1] lies on Gamma_s when one of its nodes carries phi
-    (every arc has interior nodes: d >= 2h)."""
-    s = fields["signorini"]
-    return s | np.roll(s, -1)
-
-
-def true_runs(mask: np.ndarray) -> list[tuple[int, int]]:
-    """Maximal runs [i, j) of True in a cyclic boolean array (panels along Gamma)."""
-    n = len(mask)
-    if mask.all():
-        return [(0, n)]
-    start = int(np.flatnonzero(~mask)[0])  # begin the scan on a panel off the runs
-    runs, i = [], None
-    for k in range(start + 1, start + n + 1):
-        on = mask[k % n]
-        if on and i is None:
-            i = k
-        elif not on and i is not None:
-            runs.append((i, k))
-            i = None
-    return runs
-
-
-def _draw_boundary(ax, fields: dict) -> None:
-    """Gamma (thin black) and Gamma_s (thick): red where in contact (phi_h = 0 at both
-    ends of a panel), white on a black edge where the gap is open; each run of panels one
-    line, so no stroke of the edge ends between its panels (drawn panel by panel, the
-    open part looked like a dashed band), and drawn over the axes' frame, which Gamma_s
-    may lie on; the Signorini nodes as dots when there are few enough to tell apart."""
-    nodes = fields["boundary_x"]
-    closed = _closed(nodes)
-    ax.plot(closed[:, 0], closed[:, 1], "k-", lw=0.8, zorder=4, clip_on=False)
-    panels = _signorini_panels(fields)
-    if not panels.any():
-        return
-    shut = fields["phi"] == 0.0
-    contact = panels & shut & np.roll(shut, -1)
-    n = len(nodes)
-    handles = []
-    for mask, color, label in (
-        (contact, "tab:red", r"$\Gamma_s$ in contact ($\phi_h = 0$)"),
-        (panels & ~contact, _OPEN_LINE, r"$\Gamma_s$ open ($\phi_h > 0$)"),
-    ):
-        effects = _OPEN_EDGE if color == _OPEN_LINE else None
-        lines = [nodes[np.arange(i, j + 1) % n] for i, j in true_runs(mask)]
-        ax.add_collection(
-            LineCollection(
-                lines,
-                colors=color,
-                linewidths=3.0,
-                capstyle="butt",
-                joinstyle="round",
-                label=label,
-                zorder=5,
-                path_effects=effects,
-                clip_on=False,
-            )
-        )
-        handles.append(Line2D([], [], color=color, lw=3.0, label=label, path_effects=effects))
-    sig, active = fields["signorini"], fields["active"]
-    if sig.sum() <= 64:
-        ax.plot(*nodes[sig & active].T, zorder=6, **_CONTACT)
-        ax.plot(*nodes[sig & ~active].T, zorder=6, **_OPEN)
-    # below the tick labels and the x label, whatever the height of the axes (Omega's shape)
-    below = ax.transAxes + ScaledTranslation(0.0, -_LEGEND_DROP, ax.figure.dpi_scale_trans)
-    ax.legend(
-        handles=handles,
-        loc="upper center",
-        bbox_to_anchor=(0.5, 0.0),
-        bbox_transform=below,
-        ncol=2,
-        fontsize=8,
-        frameon=False,
-    )
 
 
 def _pressure_range(
@@ -187,7 +101,7 @@ def _figure_u(fields: dict, image: np.ma.MaskedArray, grid: PixelGrid):
     fig, ax = plt.subplots(figsize=(5.6, 5.2))
     im = _image(ax, image, grid)
     fig.colorbar(im, ax=ax, shrink=0.85, label="$u_h$")
-    _draw_boundary(ax, fields)
+    draw_boundary(ax, fields)
     ax.set(aspect="equal", xlabel="$x$", ylabel="$y$", title=r"$u_h$ in $\Omega$")
     return fig
 
@@ -195,14 +109,14 @@ def _figure_u(fields: dict, image: np.ma.MaskedArray, grid: PixelGrid):
 def _figure_boundary(fields: dict):
     nodes = fields["boundary_x"]
     n = len(nodes)
-    s = arc_length(_closed(nodes))
+    s = arc_length(closed(nodes))
     fig, axes = plt.subplots(
         4, 1, figsize=(7.5, 8.5), sharex=True, gridspec_kw=dict(height_ratios=[3, 3, 3, 1.3])
     )
     # a run of Signorini panels may wrap past node 0: shade its pieces on either side
     spans = [
         (s[a], s[b])
-        for i, j in true_runs(_signorini_panels(fields))
+        for i, j in true_runs(signorini_panels(fields))
         for a, b in ((i, min(j, n)), (max(i, n) - n, j - n))
         if b > a
     ]
@@ -214,9 +128,9 @@ def _figure_boundary(fields: dict):
         for c in polygon_corners(nodes, CORNER_ANGLE):  # not every node of a curve
             ax.axvline(s[c], color="0.6", lw=0.6, ls=":")
         ax.grid(alpha=0.3, lw=0.5)
-    axes[0].plot(s, _closed(fields["phi"]), ".-", ms=3, lw=1)
+    axes[0].plot(s, closed(fields["phi"]), ".-", ms=3, lw=1)
     axes[0].set_ylabel(r"gap $\phi_h$")
-    axes[1].plot(s, _closed(fields["pressure"]), ".-", ms=3, lw=1, color="tab:purple")
+    axes[1].plot(s, closed(fields["pressure"]), ".-", ms=3, lw=1, color="tab:purple")
     axes[1].axhline(0.0, color="0.3", lw=0.6)
     axes[1].set_ylim(_pressure_range(fields["pressure"], s, polygon_corners(nodes, CORNER_ANGLE)))
     axes[1].set_ylabel(r"$\rho\, \partial u_h / \partial n$" "\n(pressure on $\\Gamma_s$)")
@@ -224,11 +138,11 @@ def _figure_boundary(fields: dict):
     if str(fields["flux_space"]) == "p0":
         axes[2].stairs(flux, s, color="tab:green", lw=1)
     else:
-        axes[2].plot(s, _closed(flux), ".-", ms=3, lw=1, color="tab:green")
+        axes[2].plot(s, closed(flux), ".-", ms=3, lw=1, color="tab:green")
     axes[2].set_ylabel(r"$\partial u_e / \partial n$")
     sig, active = fields["signorini"], fields["active"]
-    axes[3].plot(s[:-1][sig & active], np.ones(np.count_nonzero(sig & active)), **_CONTACT)
-    axes[3].plot(s[:-1][sig & ~active], np.zeros(np.count_nonzero(sig & ~active)), **_OPEN)
+    axes[3].plot(s[:-1][sig & active], np.ones(np.count_nonzero(sig & active)), **CONTACT_MARKER)
+    axes[3].plot(s[:-1][sig & ~active], np.zeros(np.count_nonzero(sig & ~active)), **OPEN_MARKER)
     axes[3].set(yticks=[0, 1], yticklabels=["open", "contact"], ylim=(-0.5, 1.5))
     x0, y0 = nodes[0]
     axes[3].set_xlabel(
@@ -280,7 +194,7 @@ def _figure_whole_plane(inputs: FigureInputs):
                 zorder=1,
             )
     fig.colorbar(im, ax=ax, shrink=0.85, label=r"$u_h$ in $\Omega$, $u_e$ outside")
-    _draw_boundary(ax, fields)
+    draw_boundary(ax, fields)
     ax.set(
         aspect="equal",
         xlabel="$x$",
@@ -295,21 +209,6 @@ def _figure_whole_plane(inputs: FigureInputs):
         fontsize=10,
     )
     return fig
-
-
-def exterior_triangulation(samples: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The points (the exterior ``samples`` (m, 2), then the boundary ``nodes`` (n, 2)) and
-    the triangles (k, 3) of their Delaunay triangulation outside Omega, on which values
-    at the samples and the trace on Gamma are interpolated up to Gamma with no band.
-    Omega is covered by the triangles of boundary nodes alone whose centroid is inside
-    (left out); a triangle with a sample vertex is exterior even where it cuts a corner of
-    Omega (what is drawn inside Omega covers it)."""
-    points = np.vstack([samples, nodes])
-    ext = Triangulation(points[:, 0], points[:, 1])
-    interior = np.all(ext.triangles >= len(samples), axis=1)
-    centroids = points[ext.triangles[interior]].mean(axis=1)
-    interior[interior] = PolygonPath(nodes).contains_points(centroids)
-    return points, ext.triangles[~interior]
 
 
 def _tight_extent(fig) -> Bbox:
