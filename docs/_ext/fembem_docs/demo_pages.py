@@ -36,6 +36,7 @@ SMALL: dict[str, tuple[list[str], int | None]] = {
     "demo_own_body": (["--cells", "6"], None),
     "demo_shrink_fit": (["--cells", "16"], None),
     "demo_elastic_footing": (["--cells", "2"], None),
+    "demo_elastic_contact": (["--cells", "32"], None),
     "demo_adaptive_lshape": (
         ["--cells", "8", "--steps", "12", "--max-dofs", "13000"],
         None,
