@@ -15,7 +15,6 @@
 """
 from __future__ import annotations
 
-import io
 from typing import Collection
 
 import matplotlib
@@ -29,11 +28,9 @@ from mpl_toolkits.mplot3d import proj3d  # noqa: E402
 
 from coupling.io.body_figure_data import BODY_PLOT_FILES, BodyFigureInputs  # noqa: E402
 from coupling.io.history_figure import figure_history  # noqa: E402
+from coupling.io.png import draw_pngs  # noqa: E402
 
 __all__ = ["render_body"]
-
-_DPI = 110
-_PNG = {"compress_level": 1}
 
 
 #: A pressure above 0 by less than this share of the largest |pressure| on the Signorini
@@ -264,14 +261,4 @@ def render_body(inputs: BodyFigureInputs, skip: Collection[str] = ()) -> dict[st
             figure_history(inputs.history, inputs.tol) if len(inputs.history["iteration"]) else None
         ),
     }
-    pngs = {}
-    for name in (n for n in BODY_PLOT_FILES if n not in skip):
-        with plt.rc_context({"figure.dpi": _DPI}):
-            fig = figures[name]()
-        if fig is None:
-            continue
-        buffer = io.BytesIO()
-        fig.savefig(buffer, dpi=_DPI, bbox_inches="tight", format="png", pil_kwargs=_PNG)
-        plt.close(fig)
-        pngs[name] = buffer.getvalue()
-    return pngs
+    return draw_pngs(figures, BODY_PLOT_FILES, skip)

@@ -26,7 +26,6 @@ process of a 3D run has it imported already).
 """
 from __future__ import annotations
 
-import io
 from typing import Collection
 
 import matplotlib
@@ -51,12 +50,11 @@ from coupling.io.gamma_drawing import (  # noqa: E402
     true_runs,
 )
 from coupling.io.history_figure import figure_history  # noqa: E402
+from coupling.io.png import draw_pngs  # noqa: E402
 from fem_py.polyline import arc_length  # noqa: E402
 
 __all__ = ["render_elastic"]
 
-_DPI = 110
-_PNG = {"compress_level": 1}
 #: The colour map of the stress and of |u_e|.
 _CMAP = "viridis"
 #: Surface edges turning by more than this (degrees) are the undeformed outline of a body.
@@ -447,14 +445,5 @@ def render_elastic(inputs: ElasticFigureInputs, skip: Collection[str] = ()) -> d
             figure_history(i.history, i.tol) if len(i.history["iteration"]) else None
         ),
     }
-    pngs = {}
-    for name in (n for n in ELASTIC_PLOT_FILES if n not in skip):
-        with plt.rc_context({"figure.dpi": _DPI}):
-            fig = figures[name](inputs)
-        if fig is None:
-            continue
-        buffer = io.BytesIO()
-        fig.savefig(buffer, dpi=_DPI, bbox_inches="tight", format="png", pil_kwargs=_PNG)
-        plt.close(fig)
-        pngs[name] = buffer.getvalue()
-    return pngs
+    builders = {name: (lambda draw=draw: draw(inputs)) for name, draw in figures.items()}
+    return draw_pngs(builders, ELASTIC_PLOT_FILES, skip)

@@ -20,7 +20,6 @@ The problem is dimensionless, so the axes carry no units.
 """
 from __future__ import annotations
 
-import io
 from typing import Callable, Collection
 
 import matplotlib
@@ -49,6 +48,7 @@ from coupling.io.gamma_drawing import (  # noqa: E402
     true_runs,
 )
 from coupling.io.history_figure import figure_history  # noqa: E402
+from coupling.io.png import draw_pngs  # noqa: E402
 from fem_py.polyline import CORNER_ANGLE, arc_length, polygon_corners  # noqa: E402
 
 __all__ = ["exterior_triangulation", "render", "true_runs", "warm_up"]
@@ -57,12 +57,6 @@ __all__ = ["exterior_triangulation", "render", "true_runs", "warm_up"]
 #: (bbox_inches="tight" would draw them once more to find their extent); the others
 #: are cropped to the extent "tight" gives (:func:`_tight_extent`).
 _LAID_OUT = ("boundary.png", "history.png")
-
-#: The resolution of the figures.
-_DPI = 110
-#: PNG encoding: zlib level 1 (the same pixels as the default 6 in half the time, files
-#: ~25% larger; docs/design/speed.md, "Outputs (helper, 2026-12-02)").
-_PNG = {"compress_level": 1}
 
 
 #: the share of |Gamma| on either side of a corner whose pressure is left out of the
@@ -215,7 +209,8 @@ def _tight_extent(fig) -> Bbox:
     """The extent (inches) that ``savefig(bbox_inches="tight")`` crops ``fig`` to: its
     tight bounding box, padded by ``savefig.pad_inches``, found with the renderer of the
     figure itself. Given to ``savefig`` it saves the same PNG without the layout draw
-    that ``"tight"`` makes first (the figure is built at the saving dpi, :data:`_DPI`)."""
+    that ``"tight"`` makes first (the figure is built at the saving dpi,
+    :data:`coupling.io.png.DPI`)."""
     box = fig.get_tightbbox(fig.canvas.get_renderer())
     return box.padded(plt.rcParams["savefig.pad_inches"])
 
@@ -249,17 +244,13 @@ def render(inputs: FigureInputs, skip: Collection[str] = ()) -> dict[str, bytes]
             figure_history(inputs.history, inputs.tol) if len(inputs.history["iteration"]) else None
         ),
     }
-    pngs = {}
-    for name in (n for n in PLOT_FILES if n not in skip):
-        with plt.rc_context({"figure.dpi": _DPI}):
-            fig = figures[name]()
-        if fig is None:
-            continue
-        bbox = None if name in _LAID_OUT else _tight_extent(fig)  # no second layout draw
-        buffer = io.BytesIO()
-        fig.savefig(buffer, dpi=_DPI, bbox_inches=bbox, format="png", pil_kwargs=_PNG)
-        plt.close(fig)
-        pngs[name] = buffer.getvalue()
+    # no second layout draw: the laid-out figures as they are, the others to their extent
+    pngs = draw_pngs(
+        figures,
+        PLOT_FILES,
+        skip,
+        bbox=lambda name, fig: None if name in _LAID_OUT else _tight_extent(fig),
+    )
     return pngs
 
 
