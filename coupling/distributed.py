@@ -24,6 +24,7 @@ from fem_py.parallel import gather_to_root, run_on_root
 __all__ = [
     "RowBlocks",
     "boundary_operator_kind",
+    "hmatrix_crossover",
     "steklov_poincare",
     "dense_matrix",
     "gather_matrix",
@@ -100,16 +101,17 @@ def boundary_operator_kind(
     if choice not in allowed:
         raise ValueError(f"boundary_operator must be one of {allowed}, got {choice!r}")
     if choice == "auto":
-        if kernel == "laplace":
-            crossover = HMATRIX_CROSSOVER_3D if dim == 3 else HMATRIX_CROSSOVER
-        else:
-            crossover = (
-                bem_cpp.defaults.HMATRIX_SURFACE_AUTO_DOFS
-                if dim == 3
-                else bem_cpp.defaults.HMATRIX_LAME_AUTO_NODES
-            )
-        return "hmatrix" if n >= crossover else "dense"
+        return "hmatrix" if n >= hmatrix_crossover(dim, kernel) else "dense"
     return choice
+
+
+def hmatrix_crossover(dim: int, kernel: str | tuple = "laplace") -> int:
+    """The boundary nodes from which ``boundary_operator = "auto"`` takes the H-matrix S_h
+    (:func:`boundary_operator_kind`)."""
+    if kernel == "laplace":
+        return HMATRIX_CROSSOVER_3D if dim == 3 else HMATRIX_CROSSOVER
+    defaults = bem_cpp.defaults
+    return defaults.HMATRIX_SURFACE_AUTO_DOFS if dim == 3 else defaults.HMATRIX_LAME_AUTO_NODES
 
 
 def steklov_poincare(

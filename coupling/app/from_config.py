@@ -24,6 +24,7 @@ __all__ = [
     "planned_size",
     "estimated_size",
     "coarser_configs",
+    "kernel_of",
     "material_from_config",
     "problem_on_domain",
     "problem_from_config",
@@ -120,6 +121,14 @@ def coarser_configs(
         if factor != factors[0]:  # the smaller step ends the hierarchy
             break
     return levels[::-1]
+
+
+def kernel_of(config: RunConfig) -> str | tuple:
+    """The kernel of the boundary operators of a validated configuration: Laplace's, or
+    Kelvin's of its ``[exterior]`` medium for elasticity."""
+    if config.problem.equation == "elasticity":
+        return ("lame", config.exterior.E, config.exterior.nu)
+    return "laplace"
 
 
 def material_from_config(config: RunConfig, dim: int = 2) -> Any:

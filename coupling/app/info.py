@@ -13,8 +13,6 @@ import dataclasses
 from typing import Any
 
 from coupling.options import (
-    HMATRIX_CROSSOVER,
-    HMATRIX_CROSSOVER_3D,
     HMATRIX_TOL,
     HMATRIX_TOL_3D_MAX,
     HMATRIX_TOL_3D_SCALE,
@@ -27,14 +25,14 @@ __all__ = ["info_report", "info_lines"]
 def info_report(comm: Any, config: RunConfig, *, size: Any, how: str) -> dict[str, Any]:
     """Every field of ``fembem info`` for a validated ``config`` whose domain has the sizes
     ``size`` (``how``: how they were found), on ``comm.size`` ranks."""
-    from coupling.app.from_config import coarser_configs
+    from coupling.app.from_config import coarser_configs, kernel_of
     from coupling.app.sizing import equation_size, memory_available, memory_estimate
     from coupling.distributed import boundary_operator_kind
     from coupling.preconditioners import preconditioner_kind
 
     solver, dim = config.solver, size.dim
     elastic = config.problem.equation == "elasticity"
-    kernel = ("lame", config.exterior.E, config.exterior.nu) if elastic else "laplace"
+    kernel = kernel_of(config)
     components = dim if elastic else 1
     operator = boundary_operator_kind(
         solver.boundary_operator, size.boundary_dofs, dim, kernel=kernel
@@ -74,18 +72,12 @@ def _bytes(n: float) -> str:
     return f"{n / 1e9:.3g} GB" if n >= 1e9 else f"{n / 1e6:.3g} MB"
 
 
-def _lame_crossover(dim: int) -> int:
-    """The boundary nodes from which ``boundary_operator = "auto"`` takes the H-matrix Lame
-    S_h (``coupling.distributed.boundary_operator_kind``)."""
-    import bem_cpp
-
-    defaults = bem_cpp.defaults
-    return defaults.HMATRIX_SURFACE_AUTO_DOFS if dim == 3 else defaults.HMATRIX_LAME_AUTO_NODES
-
-
 def info_lines(report: dict[str, Any], config: RunConfig) -> list[str]:
     """The report of :func:`info_report` as lines for a reader: counts with thousands
     separators, memory in MB or GB, the lines that apply to this domain and run."""
+    from coupling.app.from_config import kernel_of
+    from coupling.distributed import hmatrix_crossover
+
     dim = report["dim"]
     where = "a body in R^3" if dim == 3 else "a planar domain"
     how = report["sizes"]
@@ -108,10 +100,9 @@ def info_lines(report: dict[str, Any], config: RunConfig) -> list[str]:
     lines.append(
         f"solver          {report['method']}, preconditioner {report['preconditioner']}{auto}"
     )
-    if report["equation"] == "elasticity":  # bem_cpp's measured crossovers of the Lame S_h
-        crossover, unit = _lame_crossover(dim), "boundary nodes"
-    else:
-        crossover, unit = HMATRIX_CROSSOVER_3D if dim == 3 else HMATRIX_CROSSOVER, "boundary dofs"
+    elastic = report["equation"] == "elasticity"
+    crossover = hmatrix_crossover(dim, kernel_of(config))
+    unit = "boundary nodes" if elastic else "boundary dofs"
     why = (
         f"auto: the H-matrix from {crossover:,} {unit} on"
         if config.solver.boundary_operator == "auto"
