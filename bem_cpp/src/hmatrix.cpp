@@ -151,6 +151,22 @@ void check_rows(Index got, Index expected, const char* what) {
 
 }  // namespace
 
+std::vector<Index> distributed_row_bounds(const ClusterTree& rows, const ClusterTree& cols,
+                                          const HMatrixOptions& options, int parts) {
+  // Rows balanced by the bytes each will hold, ranks modelled as log10(1 / tol)
+  // (docs/design/hmatrix.md, "Under MPI").
+  std::vector<HMatrix::Block> all;
+  collect(rows, cols, 0, 0, options.eta, options.min_distance, options.symmetric, 0, rows.size(), all);
+  const double r = std::max(1.0, -std::log10(options.tol));
+  std::vector<double> cost(static_cast<std::size_t>(rows.size()), 0.0);
+  for (const HMatrix::Block& b : all) {
+    const double per_row =
+        b.low_rank ? r * (1.0 + static_cast<double>(b.k) / static_cast<double>(b.m)) : static_cast<double>(b.k);
+    for (Index i = b.r0; i < b.r0 + b.m; ++i) cost[static_cast<std::size_t>(i)] += per_row;
+  }
+  return rows.partition(parts, cost);
+}
+
 HMatrix::HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const ClusterTree> cols,
                  const EntrySource& entries, const HMatrixOptions& options)
     : HMatrix(std::move(rows), std::move(cols), options, Unfilled{}) {
@@ -168,18 +184,7 @@ HMatrix::HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const 
   if (comm_) {
     if (comm_->size < 1 || comm_->rank < 0 || comm_->rank >= comm_->size || !comm_->allgather || !comm_->allreduce)
       throw std::invalid_argument("HMatrix: the communicator needs 0 <= rank < size and both collectives");
-    // Rows balanced by the bytes each will hold, ranks modelled as log10(1 / tol)
-    // (docs/design/hmatrix.md, "Under MPI").
-    std::vector<Block> all;
-    collect(*rows_, *cols_, 0, 0, options.eta, options.min_distance, options.symmetric, 0, rows_->size(), all);
-    const double r = std::max(1.0, -std::log10(options.tol));
-    std::vector<double> cost(static_cast<std::size_t>(rows_->size()), 0.0);
-    for (const Block& b : all) {
-      const double per_row =
-          b.low_rank ? r * (1.0 + static_cast<double>(b.k) / static_cast<double>(b.m)) : static_cast<double>(b.k);
-      for (Index i = b.r0; i < b.r0 + b.m; ++i) cost[static_cast<std::size_t>(i)] += per_row;
-    }
-    const std::vector<Index> bounds = rows_->partition(comm_->size, cost);
+    const std::vector<Index> bounds = distributed_row_bounds(*rows_, *cols_, options, comm_->size);
     row_begin_ = bounds[static_cast<std::size_t>(comm_->rank)];
     row_end_ = bounds[static_cast<std::size_t>(comm_->rank) + 1];
     row_counts_ = counts(bounds);

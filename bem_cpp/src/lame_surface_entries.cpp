@@ -139,12 +139,12 @@ Index unused_argmax(const double* x, Index n, const std::vector<char>& used) {
 // ---------------------------------------------------------------------------------------
 // Near field
 
-LameSurfaceNearField::LameSurfaceNearField(const Surface& s, const Lame& lame) {
+LameSurfaceNearField::LameSurfaceNearField(const Surface& s, const Lame& lame, const std::vector<char>& triangles) {
   check(lame);
   const Coefficients c(lame);
   const PairBlocks blocks{c};
   const Index n = s.vertices();
-  const std::vector<std::vector<Index>> near = near_pairs(s);
+  const std::vector<std::vector<Index>> near = near_pairs(s, triangles);
   // the vertex pairs of the upper parts (rows: tau's vertices, columns: sigma's, tau <= sigma)
   std::vector<std::vector<Index>> lists(static_cast<std::size_t>(n));
 #pragma omp parallel for schedule(dynamic, 64)

@@ -36,13 +36,17 @@ Eigen::MatrixXd kron3_apply(const HMatrix& A, const Eigen::Ref<const Eigen::Matr
 LameSurfaceOperators::LameSurfaceOperators(const Surface& s, const Lame& m, const HMatrixOptions& options) : mu_(m.mu) {
   HMatrixOptions o = options;
   o.min_distance = far_distance(s);
-  auto t0 = std::chrono::steady_clock::now();
-  const auto near = std::make_shared<const LameSurfaceNearField>(s, m);
-  const auto laplace_near = std::make_shared<const SurfaceNearField>(s, false);
-  info_.near_field_seconds = seconds_since(t0);
-  info_.nbytes_near = near->nbytes();
   auto tree1 = std::make_shared<const ClusterTree>(surface_cluster_tree(s, Space::P1, o.leaf_size));
   auto tree3 = std::make_shared<const ClusterTree>(lame_surface_cluster_tree(s, o.leaf_size));
+  // distributed: the near pairs of this rank's rows alone (V_h, Z symmetric, Y on the
+  // vector tree; K_L, and W_L symmetric, on the scalar one)
+  const std::vector<char> mine =
+      rank_triangles(s, o, {{tree3.get(), true}, {tree3.get(), false}, {tree1.get(), false}, {tree1.get(), true}});
+  auto t0 = std::chrono::steady_clock::now();
+  const auto near = std::make_shared<const LameSurfaceNearField>(s, m, mine);
+  const auto laplace_near = std::make_shared<const SurfaceNearField>(s, false, mine);
+  info_.near_field_seconds = seconds_since(t0);
+  info_.nbytes_near = near->nbytes();
   const auto cache = std::make_shared<LameSurfaceBlockCache>();
 
   t0 = std::chrono::steady_clock::now();

@@ -11,7 +11,7 @@
 namespace bem {
 
 // centroids closer than ra + rb + 2 kFarSeparation max(ra, rb)
-std::vector<std::vector<Index>> near_pairs(const Surface& s) {
+std::vector<std::vector<Index>> near_pairs(const Surface& s, const std::vector<char>& triangles) {
   const Index m = s.size();
   Box box;
   for (const Triangle& T : s.triangles()) box.add(T.c);
@@ -29,6 +29,7 @@ std::vector<std::vector<Index>> near_pairs(const Surface& s) {
     cells[code(c[0], c[1], c[2])].push_back(t);
   }
   std::vector<std::vector<Index>> out(static_cast<std::size_t>(m));
+  const bool all = triangles.empty();
 #pragma omp parallel for schedule(dynamic, 64)
   for (Index t = 0; t < m; ++t) {
     const Triangle& a = s.triangle(t);
@@ -41,11 +42,32 @@ std::vector<std::vector<Index>> near_pairs(const Surface& s) {
           const auto it = cells.find(code(i, j, k));
           if (it == cells.end()) continue;
           for (Index u : it->second)
-            if (u >= t && !PairIntegrator::far(a, s.triangle(u))) list.push_back(u);
+            if (u >= t && (all || triangles[static_cast<std::size_t>(t)] || triangles[static_cast<std::size_t>(u)]) &&
+                !PairIntegrator::far(a, s.triangle(u)))
+              list.push_back(u);
         }
     std::sort(list.begin(), list.end());
   }
   return out;
+}
+
+std::vector<char> rank_triangles(const Surface& s, const HMatrixOptions& options,
+                                 const std::vector<std::pair<const ClusterTree*, bool>>& matrices) {
+  if (!options.comm || options.comm->size == 1) return {};
+  std::vector<char> vertices(static_cast<std::size_t>(s.vertices()), 0);
+  const auto rank = static_cast<std::size_t>(options.comm->rank);
+  for (const auto& [tree, symmetric] : matrices) {
+    HMatrixOptions o = options;
+    o.symmetric = symmetric;
+    const std::vector<Index> bounds = distributed_row_bounds(*tree, *tree, o, options.comm->size);
+    const Index dofs = tree->size() / s.vertices();
+    for (Index k = bounds[rank]; k < bounds[rank + 1]; ++k)
+      vertices[static_cast<std::size_t>(tree->permutation()[static_cast<std::size_t>(k)] / dofs)] = 1;
+  }
+  std::vector<char> triangles(static_cast<std::size_t>(s.size()), 0);
+  for (Index t = 0; t < s.size(); ++t)
+    for (Index v : s.triangle(t).v) triangles[static_cast<std::size_t>(t)] |= vertices[static_cast<std::size_t>(v)];
+  return triangles;
 }
 
 namespace {
@@ -89,12 +111,12 @@ Pattern pattern(Index rows, const std::function<void(Index, std::vector<Index>&)
 
 }  // namespace
 
-SurfaceNearField::SurfaceNearField(const Surface& s, bool with_p0) {
+SurfaceNearField::SurfaceNearField(const Surface& s, bool with_p0, const std::vector<char>& triangles) {
   // As the dense assembly (surface_operators.cpp): each unordered pair (tau <= sigma) once,
   // into the rows of tau (V0) and of tau's vertices (V1, K, and K of the pair (sigma, tau)
   // transposed), the upper parts completed as H + H^T; threads own the rows by colouring.
   const Index m = s.size(), n = s.vertices();
-  const std::vector<std::vector<Index>> near = near_pairs(s);
+  const std::vector<std::vector<Index>> near = near_pairs(s, triangles);
   const Pattern p0 =
       pattern(with_p0 ? m : 0, [&](Index t, std::vector<Index>& l) { l = near[static_cast<std::size_t>(t)]; });
   const Pattern p1 = pattern(n, [&](Index i, std::vector<Index>& l) {

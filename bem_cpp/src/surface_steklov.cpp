@@ -18,9 +18,11 @@ SurfaceSteklovOperator::SurfaceSteklovOperator(VerticesRef vertices, TrianglesRe
   HMatrixOptions o = options.hmatrix;
   o.min_distance = far_distance(surface_);
   auto tree1 = std::make_shared<const ClusterTree>(surface_cluster_tree(surface_, Space::P1, o.leaf_size));
-  // the near pairs integrated once for the three matrices
+  // the near pairs integrated once for the three matrices (distributed: those of this
+  // rank's rows of V_h, W_h (symmetric) and K_h alone)
   const auto t1 = std::chrono::steady_clock::now();
-  const auto near = std::make_shared<const SurfaceNearField>(surface_, false);
+  const auto near = std::make_shared<const SurfaceNearField>(
+      surface_, false, rank_triangles(surface_, o, {{tree1.get(), true}, {tree1.get(), false}}));
   info_.near_field_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
   o.symmetric = true;
   // V and W from one ACA of the single-layer kernel per block

@@ -92,6 +92,14 @@ class EntrySource {
   virtual std::unique_ptr<EntryBlock> block(const Index* I, Index m, const Index* J, Index k) const = 0;
 };
 
+/// The bounds b_0 = 0 <= b_1 <= ... <= b_parts = rows.size() of the ranges of the permuted
+/// row order that the `parts` ranks of a distributed HMatrix on these trees and options
+/// hold (ClusterTree::partition balanced by the bytes of the blocks of each row), known
+/// before any entry is computed: what a rank's entries need (e.g. the near field of its
+/// rows alone, surface_near_field.hpp).
+std::vector<Index> distributed_row_bounds(const ClusterTree& rows, const ClusterTree& cols,
+                                          const HMatrixOptions& options, int parts);
+
 class HMatrix {
  public:
   struct Block {

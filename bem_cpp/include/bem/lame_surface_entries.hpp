@@ -70,7 +70,8 @@ namespace bem {
 /// dense assembly of lame_surface.hpp.
 class LameSurfaceNearField {
  public:
-  LameSurfaceNearField(const Surface& surface, const Lame& m);
+  /// triangles: only the pairs of these (near_pairs; rank_triangles), empty: all.
+  LameSurfaceNearField(const Surface& surface, const Lame& m, const std::vector<char>& triangles = {});
   const RowSparse& single_layer() const { return v_; }
   const RowSparse& double_layer() const { return y_; }   ///< of Y = K_h - K_L kron I
   const RowSparse& hypersingular() const { return z_; }  ///< of Z = W_h - 2 mu W_L kron I
