@@ -168,7 +168,9 @@ class MultigridPreconditioner(DenseSignoriniBlock):
             fem.petsc.assemble_matrix(self._matrix, form)
         self._matrix.assemble()
         self._near_nullspace = None
-        if V.dofmap.index_map_bs > 1:  # elasticity: GAMG's aggregates carry the rigid motions
+        levels = lattice_levels(lattice.n) if lattice is not None else None
+        if levels is None and V.dofmap.index_map_bs > 1:
+            # elasticity on GAMG: its aggregates carry the rigid motions
             self._modes = rigid_body_modes(V)
             self._near_nullspace = PETSc.NullSpace().create(vectors=self._modes, comm=comm)
             self._matrix.setNearNullSpace(self._near_nullspace)
@@ -178,7 +180,6 @@ class MultigridPreconditioner(DenseSignoriniBlock):
         self._ksp.setOptionsPrefix(AMG_OPTIONS_PREFIX)  # before PCMG names its levels' KSPs
         self._ksp.setTolerances(rtol=rtol, atol=0.0, max_it=max_iterations)
         self._ksp.setInitialGuessNonzero(False)
-        levels = lattice_levels(lattice.n) if lattice is not None else None
         self._hierarchy = None
         if levels is None:
             self._ksp.getPC().setType(PETSc.PC.Type.GAMG)
@@ -186,7 +187,8 @@ class MultigridPreconditioner(DenseSignoriniBlock):
         else:
             owned = V.dofmap.index_map.size_local
             points = lattice.indices(V.tabulate_dof_coordinates()[:owned])
-            self._hierarchy = LatticeHierarchy(self._matrix, points, levels)
+            bs = V.dofmap.index_map_bs  # d components per node for elasticity
+            self._hierarchy = LatticeHierarchy(self._matrix, points, levels, block_size=bs)
             options = self._hierarchy.configure(self._ksp.getPC())
             _set_up(self._ksp, AMG_OPTIONS_PREFIX, options)
         self._x, self._b = self._matrix.createVecs()
