@@ -1,7 +1,8 @@
-"""The geometric multigrid of the box's vertex lattice (coupling/preconditioners/
-lattice_multigrid.py): its levels, the trilinear prolongation, and one V-cycle as a fixed
+"""The geometric multigrid of a vertex lattice, the box's or the structured square's
+(coupling/preconditioners/lattice_multigrid.py): its levels, the bilinear / trilinear
+prolongation and its Kronecker product with I_d for elasticity, and one V-cycle as a fixed
 symmetric positive definite operator, spectrally close to B_Omega^{-1} and the same on 1, 2
-and 3 ranks."""
+and 3 ranks, for the scalar problem and elasticity."""
 from __future__ import annotations
 
 import numpy as np
@@ -11,13 +12,17 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from conftest import ROOT, run_mpi
-from coupling.options import AMG_MAX_ITERATIONS, AMG_RTOL
+from coupling.options import AMG_MAX_ITERATIONS, AMG_RTOL, SolverOptions
+from coupling.preconditioners import build_preconditioner
 from coupling.preconditioners.lattice_multigrid import (
     gershgorin_bound,
     lattice_levels,
     multilinear_prolongation,
 )
 from coupling.preconditioners.multigrid import MultigridPreconditioner
+from coupling.problem import SignoriniProblem
+from coupling.solvers import solve
+from fem_py.forms import make_material
 from fem_py.forms.elasticity import linear_elastic
 from fem_py.mesh import GeometrySpec, build_domain
 
@@ -216,9 +221,7 @@ def test_the_elastic_cycle_is_symmetric_positive_definite(spec, levels, lowest):
 
 
 @pytest.mark.mpi
-@pytest.mark.parametrize(
-    "n, case", [("16", "box"), ("32", "elastic-square"), ("8", "elastic-box")]
-)
+@pytest.mark.parametrize("n, case", [("16", "box"), ("32", "elastic-square"), ("8", "elastic-box")])
 def test_the_cycle_is_the_same_on_any_number_of_ranks(tmp_path, n, case):
     runs = {}
     script = str(ROOT / "tests" / "mpi" / "lattice_multigrid_check.py")
@@ -231,3 +234,23 @@ def test_the_cycle_is_the_same_on_any_number_of_ranks(tmp_path, n, case):
         # the sums of the distributed products are ordered differently: round-off
         assert np.linalg.norm(runs[ranks]["cycle"] - one) <= 1e-13 * np.linalg.norm(one)
         assert np.allclose(runs[ranks]["bounds"], runs[1]["bounds"], rtol=1e-14, atol=0)
+
+
+def test_the_scalar_square_with_amg_solves_on_the_lattice():
+    """The scalar problem on the structured square with ``preconditioner = "amg"``: the
+    lattice's multigrid (bilinear P, 32 to 4 cells per side), the same minimiser as with
+    the default substructuring preconditioner."""
+    spec = GeometrySpec("square", h=0.5 / 32, subdomain_size=0.125, signorini=["bottom"])
+    domain = build_domain(COMM, spec)
+    assert domain.lattice.dim == 2 and domain.lattice.n == 32
+    problem = SignoriniProblem(
+        domain, make_material("carstensen"), f="1", t0="-1", u0="0.02*x", boundary_operator="dense"
+    )
+    B = build_preconditioner(problem, SolverOptions(preconditioner="amg"))
+    assert B._ksp.getPC().getType() == "mg" and B._ksp.getPC().getMGLevels() == 4
+    B.destroy()
+    reference = solve(problem, SolverOptions(nested=False))  # substructuring
+    run = solve(problem, SolverOptions(preconditioner="amg", nested=False))
+    assert reference.converged and run.converged
+    assert np.array_equal(run.contact, reference.contact)
+    assert np.abs(run.phi - reference.phi).max() <= 1e-4 * np.abs(reference.phi).max()
