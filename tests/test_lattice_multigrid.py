@@ -242,7 +242,13 @@ def test_the_scalar_square_with_amg_solves_on_the_lattice():
     the default substructuring preconditioner."""
     spec = GeometrySpec("square", h=0.5 / 32, subdomain_size=0.125, signorini=["bottom"])
     domain = build_domain(COMM, spec)
-    assert domain.lattice.dim == 2 and domain.lattice.n == 32
+    lattice = domain.lattice
+    assert lattice.dim == 2 and lattice.n == 32
+    # every node is a lattice point: lower + spacing (i, j), 0 <= i, j <= n
+    x = domain.mesh.geometry.x[:, :2]
+    indices = lattice.indices(x)
+    assert indices.min() >= 0 and indices.max() <= lattice.n
+    assert np.abs(lattice.lower + lattice.spacing * indices - x).max() <= 1e-12
     problem = SignoriniProblem(
         domain, make_material("carstensen"), f="1", t0="-1", u0="0.02*x", boundary_operator="dense"
     )
