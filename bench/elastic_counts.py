@@ -4,7 +4,9 @@ The manufactured case of coupling/manufactured_elastic.py (a Hencky body, "slip"
 bottom face, a Kelvin point force and a translation outside) on the square with 8 to 64
 cells per side and on the box with 4 to 16 cubes per side: ssn's Newton steps and CG
 iterations per Newton step, pgpm's and apgpm's iterations (tol 1e-8, the amg
-preconditioner: GAMG with the rigid-body modes, M_s = E^T W_L E), and the nodal error.
+preconditioner: the lattice's geometric multigrid on the square and on the box from 8 cubes
+per side, GAMG with the rigid-body modes on the 4^3 box; M_s = E^T W_L E), and the nodal
+error.
 
     .venv/bin/python bench/elastic_counts.py [--dims 2 3] [--max-2d 64] [--max-3d 16]
 """

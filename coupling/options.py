@@ -190,7 +190,8 @@ AMG_MAX_ITERATIONS = 500
 #: read: squared, the set-up halves but a solve takes 28 iterations, 0.60 s at 64^3;
 #: docs/design/three_dimensions.md, "The amg preconditioner's multigrid").
 AMG_OPTIONS = {"pc_gamg_square_graph": 0, "mg_levels_ksp_max_it": 1}
-#: The amg preconditioner on the box: a geometric multigrid on its vertex lattice in place of
+#: The amg preconditioner on the box and the structured square (the scalar problem and
+#: elasticity): a geometric multigrid on their vertex lattice in place of
 #: GAMG (``coupling.preconditioners.lattice_multigrid``): Chebyshev smoothing steps per
 #: level, the lower end of the Chebyshev interval as a fraction of the Gershgorin bound, and
 #: the most cubes per side of the coarsest lattice (factored by Cholesky; a box whose halved

@@ -178,6 +178,9 @@ def test_refinement_keeps_subdomains_arcs_and_the_coarse_structure(square):
     near = np.flatnonzero(np.linalg.norm(mid[:, :2] - [-0.25, -0.25], axis=1) < 0.15)
     refined = refine_domain(square, near)
     assert refined.mesh.topology.index_map(2).size_local > n_cells
+    # the square's nodes are a lattice (the amg preconditioner's multigrid), the refined
+    # mesh's are not
+    assert square.lattice.dim == 2 and square.lattice.n == 8 and refined.lattice is None
     before, after = _areas(square), _areas(refined)
     assert before.keys() == after.keys()
     for key in before:

@@ -121,7 +121,7 @@ def build_preconditioner(
             signorini_hypersingular(
                 comm, problem.boundary, problem.S, gap=problem.gap, kernel=problem.kernel
             ),
-            lattice=None if elastic else problem.domain.lattice,
+            lattice=problem.domain.lattice,
             rtol=AMG_RTOL,
             max_iterations=AMG_MAX_ITERATIONS,
             pattern=matrix if isinstance(matrix, PETSc.Mat) else None,

@@ -1,16 +1,30 @@
-"""A geometric multigrid for B_Omega on the box's vertex lattice (docs/method.md section 11,
-"Preconditioning"; docs/design/three_dimensions.md, "A geometric multigrid on the box").
+"""A geometric multigrid for B_Omega on a vertex lattice: the box's or the structured
+square's (docs/method.md section 11, "Preconditioning"; docs/design/three_dimensions.md,
+"A geometric multigrid on the box"; docs/design/elasticity.md, "Speed against a linear
+elasticity solve").
 
-The box's P1 dofs are the lattice points lower + spacing (i, j, k), 0 <= i, j, k <= n
-(``fem_py.mesh.box.BoxLattice``). Halving n while it is even gives the coarser lattices
-n/2, n/4, ..., m (the coarsest, at most ``LATTICE_MG_COARSEST`` cubes per side). From
-each lattice to the next finer one the prolongation P is trilinear interpolation (a fine
-point's value is the mean of the coarse points around it: 1, 2, 4 or 8 of them, weights
-1, 1/2, 1/4, 1/8); the coarse operators are Galerkin's, A_c = P^T A P, so that no coarser
-mesh is built. The V-cycle smooths by ``LATTICE_MG_SMOOTHING_STEPS`` Chebyshev steps with
-Jacobi's diagonal on [f g, g], g the Gershgorin bound max_i sum_j |a_ij| / a_ii >=
-lambda_max(D^{-1} A) (2 on every level of the box) and f = ``LATTICE_MG_EIGENVALUE_FRACTION``,
-and solves the coarsest level by a Cholesky factor on every rank.
+The P1 nodes are the lattice points lower + spacing (i, j[, k]), 0 <= i, j, k <= n
+(``fem_py.mesh.box.BoxLattice``; its dimension, 2 or 3, is the one of this code path).
+Halving n while it is even gives the coarser lattices n/2, n/4, ..., m (the coarsest, at
+most ``LATTICE_MG_COARSEST`` cells per side). From each lattice to the next finer one the
+prolongation P is bilinear (2D) or trilinear (3D) interpolation (a fine point's value is
+the mean of the coarse points around it: 1, 2, 4 or 8 of them, weights 1, 1/2, 1/4, 1/8);
+for d components per node (elasticity: dof = node d + component, DOLFINx's blocked
+numbering) it is that P Kronecker I_d, a matrix of block size d. The interpolation is
+exact on (multi)linear fields, so the coarse spaces keep the rigid motions. The coarse
+operators are Galerkin's, A_c = P^T A P, so that no coarser mesh is built. The V-cycle
+smooths by ``LATTICE_MG_SMOOTHING_STEPS`` Chebyshev steps with Jacobi's diagonal on
+[f g, g], g the Gershgorin bound max_i sum_j |a_ij| / a_ii >= lambda_max(D^{-1} A) and
+f = ``LATTICE_MG_EIGENVALUE_FRACTION``, and solves the coarsest level by a Cholesky factor
+on every rank. For the scalar box g = 2 on every level. For elasticity g is larger than
+lambda_max (measured by power iteration: 1.00 lambda_max on the finest level of the Hencky
+square, 1.5 on its Galerkin levels; 1.5-1.7 on every level of the linear elastic box,
+E = 2.5, nu = 0.25), so the smoothers damp less of the spectrum: one cycle's spectrum
+against B_Omega is [0.40, 1] at 16^3 cubes and [0.55, 1] on the square at 32^2 cells
+(the scalar box: [0.85, 1]). Kept: the bound is exact and rank-independent, and the
+alternatives save little there (CG to 1e-10 on the 16^3 box: 15 cycles; 12 with a power
+estimate of lambda_max times 1.1 on [0.53, 1], 12 with a third Chebyshev step, [0.55, 1],
+each cycle half as dear again).
 
 Everything in it is independent of the number of ranks (up to the order of floating-point
 sums): the coarse lattices are numbered lexicographically and split into contiguous ranges,
@@ -36,7 +50,7 @@ from coupling.options import (
 
 __all__ = [
     "lattice_levels",
-    "trilinear_prolongation",
+    "multilinear_prolongation",
     "gershgorin_bound",
     "lattice_multigrid_options",
     "LatticeHierarchy",
@@ -44,9 +58,9 @@ __all__ = [
 
 
 def lattice_levels(n: int, coarsest: int = LATTICE_MG_COARSEST) -> list[int] | None:
-    """Cubes per side of the lattices from the finest ``n`` down: halved while even and above
-    4; ``None`` when that leaves no coarser lattice or a coarsest one of more than
-    ``coarsest`` cubes per side (its Cholesky factor would cost too much)."""
+    """Cells (cubes) per side of the lattices from the finest ``n`` down: halved while even
+    and above 4; ``None`` when that leaves no coarser lattice or a coarsest one of more than
+    ``coarsest`` cells per side (its Cholesky factor would cost too much)."""
     levels = [int(n)]
     while levels[-1] % 2 == 0 and levels[-1] > 4:
         levels.append(levels[-1] // 2)
@@ -56,46 +70,51 @@ def lattice_levels(n: int, coarsest: int = LATTICE_MG_COARSEST) -> list[int] | N
 
 
 def _owned_range(comm: MPI.Comm, size: int) -> tuple[int, int]:
-    """The contiguous range of lexicographic lattice indices rank ``comm.rank`` owns."""
+    """The contiguous range of lexicographic lattice nodes rank ``comm.rank`` owns."""
     return size * comm.rank // comm.size, size * (comm.rank + 1) // comm.size
 
 
-def _lexicographic_points(start: int, stop: int, m: int) -> np.ndarray:
-    """The lattice indices (k, 3) of the lexicographic numbers start..stop-1 on the lattice
-    of ``m`` cubes per side (i fastest)."""
+def _lexicographic_points(start: int, stop: int, m: int, dim: int) -> np.ndarray:
+    """The lattice indices (k, dim) of the lexicographic numbers start..stop-1 on the
+    ``dim``-dimensional lattice of ``m`` cells per side (the first index fastest)."""
     g = np.arange(start, stop, dtype=np.int64)
     side = m + 1
-    return np.stack([g % side, (g // side) % side, g // side**2], axis=1)
+    return np.stack([(g // side**axis) % side for axis in range(dim)], axis=1)
 
 
-def trilinear_prolongation(
-    comm: MPI.Comm, fine_points: np.ndarray, fine_size: int, m: int
+def multilinear_prolongation(
+    comm: MPI.Comm, fine_points: np.ndarray, fine_size: int, m: int, block_size: int = 1
 ) -> PETSc.Mat:
-    """P from the lattice of ``m`` cubes per side to the one of 2m (collective).
+    """P from the lattice of ``m`` cells per side to the one of 2m (collective): bilinear
+    (``fine_points`` of 2 columns) or trilinear (3) interpolation, Kronecker the identity of
+    ``block_size`` components (dof = node * block_size + component, DOLFINx's blocked
+    numbering; the matrix carries that block size).
 
     Parameters
     ----------
     fine_points
-        (k, 3) lattice indices (of the 2m lattice) of this rank's rows, in the order of its
-        rows of the fine operator.
+        (k, dim) lattice indices (of the 2m lattice) of this rank's nodes, in the order of
+        its rows (blocks of ``block_size`` rows) of the fine operator.
     fine_size
-        The fine level's global number of rows.
+        The fine level's global number of rows (nodes times ``block_size``).
     m
-        The coarse lattice; its columns are numbered lexicographically, split into
-        contiguous ranges over the ranks.
+        The coarse lattice; its nodes are numbered lexicographically, split into
+        contiguous ranges over the ranks, their ``block_size`` components consecutive.
+    block_size
+        Components per node: 1 for the scalar problem, d for elasticity.
     """
-    side = m + 1
     fine_points = np.asarray(fine_points, dtype=np.int64)
-    k = fine_points.shape[0]
+    k, dim = fine_points.shape
+    side, bs = m + 1, int(block_size)
+    strides = side ** np.arange(dim, dtype=np.int64)
     odd = fine_points % 2 == 1
     lower = fine_points // 2
     columns, weights = [], []
-    for corner in np.ndindex(2, 2, 2):
+    for corner in np.ndindex(*(2,) * dim):
         step = np.asarray(corner)
         # a corner above an even coordinate is the same point: weight 0, dropped below
         weight = np.prod(np.where(odd, 0.5, np.where(step == 0, 1.0, 0.0)), axis=1)
-        q = lower + step * odd
-        columns.append(q[:, 0] + side * (q[:, 1] + side * q[:, 2]))
+        columns.append((lower + step * odd) @ strides)
         weights.append(weight)
     columns_array, weights_array = np.stack(columns, axis=1), np.stack(weights, axis=1)
     kept = weights_array > 0
@@ -103,10 +122,18 @@ def trilinear_prolongation(
     columns_array = np.take_along_axis(columns_array, order, axis=1)
     weights_array = np.take_along_axis(weights_array, order, axis=1)
     kept = np.take_along_axis(kept, order, axis=1)
-    indptr = np.concatenate([[0], np.cumsum(kept.sum(axis=1))]).astype(PETSc.IntType)
-    start, stop = _owned_range(comm, side**3)
+    # Kronecker I_bs: row node * bs + c has the node's columns * bs + c, the same weights
+    component = np.arange(bs, dtype=np.int64)[None, :, None]
+    columns_array = columns_array[:, None, :] * bs + component  # (k, bs, corners)
+    weights_array = np.broadcast_to(weights_array[:, None, :], columns_array.shape)
+    kept = np.broadcast_to(kept[:, None, :], columns_array.shape)
+    counts = np.repeat(kept[:, 0, :].sum(axis=1), bs)
+    indptr = np.concatenate([[0], np.cumsum(counts)]).astype(PETSc.IntType)
+    nodes = side**dim
+    start, stop = _owned_range(comm, nodes)
     prolongation = PETSc.Mat().createAIJ(
-        size=((k, fine_size), (stop - start, side**3)),
+        size=((k * bs, fine_size), ((stop - start) * bs, nodes * bs)),
+        bsize=bs,
         csr=(indptr, columns_array[kept].astype(PETSc.IntType), weights_array[kept]),
         comm=comm,
     )
@@ -133,11 +160,15 @@ class LatticeHierarchy:
     Parameters
     ----------
     matrix
-        B_Omega on the finest lattice, rows in the P1 space's owned order.
+        B_Omega on the finest lattice, rows in the P1 space's owned order (``block_size``
+        rows per node, node-major).
     owned_points
-        (n_owned, 3) lattice indices of those rows.
+        (n_owned, dim) lattice indices of the owned nodes (dim 2: the square's lattice,
+        3: the box's).
     levels
-        Cubes per side, finest first (:func:`lattice_levels`).
+        Cells per side, finest first (:func:`lattice_levels`).
+    block_size
+        Components per node (1: the scalar problem, d: elasticity).
 
     Attributes
     ----------
@@ -147,16 +178,24 @@ class LatticeHierarchy:
         The Galerkin operators, coarsest first; the finest is ``matrix`` (not owned).
     """
 
-    def __init__(self, matrix: PETSc.Mat, owned_points: np.ndarray, levels: Sequence[int]):
+    def __init__(
+        self,
+        matrix: PETSc.Mat,
+        owned_points: np.ndarray,
+        levels: Sequence[int],
+        block_size: int = 1,
+    ):
         comm = matrix.getComm().tompi4py()
+        dim = np.asarray(owned_points).shape[1]
         prolongations, operators = [], [matrix]
         points, size = owned_points, matrix.getSize()[0]
         for m in levels[1:]:
-            p = trilinear_prolongation(comm, points, size, m)
+            p = multilinear_prolongation(comm, points, size, m, block_size)
             prolongations.append(p)
             operators.append(operators[-1].PtAP(p))
-            start, stop = _owned_range(comm, (m + 1) ** 3)
-            points, size = _lexicographic_points(start, stop, m), (m + 1) ** 3
+            start, stop = _owned_range(comm, (m + 1) ** dim)
+            points = _lexicographic_points(start, stop, m, dim)
+            size = (m + 1) ** dim * block_size
         self.prolongations = prolongations[::-1]
         self.operators = operators[::-1]
 

@@ -19,12 +19,15 @@ the diagonal blocks of the Hessian D^2 J_h:
 B_Omega^{-1} is applied by conjugate gradients preconditioned by one multigrid V-cycle, to
 the relative tolerance ``rtol`` (the iterations read B_Omega u and B_Omega^{-1} g as
 inverses of each other, so the inner solve is tight, not one cycle); its cost per
-application grows like N, its count stays bounded as h -> 0. On the box the V-cycle is
-the geometric multigrid of its vertex lattice (``coupling.preconditioners.lattice_multigrid``),
-the same operator on any number of ranks, so that one cycle alone (``cycle_omega``) may
-precondition the Newton steps' CG; on other bodies it is PETSc's GAMG with one smoothing
-step per level (``coupling.options.AMG_OPTIONS``), whose aggregates follow the partition,
-and ``cycle_omega`` is the tight solve. M_s is dense
+application grows like N, its count stays bounded as h -> 0. On the box and on the
+structured square the V-cycle is the geometric multigrid of their vertex lattice
+(``coupling.preconditioners.lattice_multigrid``; for elasticity on the d components of
+every node, the prolongation Kronecker I_d), the same operator on any number of ranks,
+so that one cycle alone (``cycle_omega``) may precondition the Newton steps' CG; on
+other domains it is PETSc's GAMG with one smoothing step per level
+(``coupling.options.AMG_OPTIONS``; for elasticity with the rigid motions as its
+near-nullspace), whose aggregates follow the partition, and ``cycle_omega`` is the
+tight solve. M_s is dense
 (n_s x n_s, the projection (3.19) and the Newton steps read it), and factored on every
 rank; with the H-matrix S_h it is read from the H-matrix of W_h that S_h holds (to its
 tolerance), else integrated over the triangles of Gamma_s alone
@@ -121,14 +124,16 @@ class MultigridPreconditioner(DenseSignoriniBlock):
     Parameters
     ----------
     V
-        The P1 space of the tetrahedral mesh (its owned dofs are the entries of u).
+        The P1 space (vector P1 for elasticity; its owned dofs are the entries of u).
     weight
         c of the boundary mass term.
     signorini_metric
         M_s, (n_s, n_s), the same on every rank.
     lattice
-        The box's vertex lattice (``fem_py.mesh.box.BoxLattice``): the geometric multigrid
-        on it when it can be coarsened (``lattice_levels``), else (and for ``None``) GAMG.
+        The vertex lattice of the box or of the structured square
+        (``fem_py.mesh.box.BoxLattice``): the geometric multigrid on it, with V's block
+        size (d components per node for elasticity), when it can be coarsened
+        (``lattice_levels``), else (and for ``None``) GAMG.
     rtol, max_iterations
         Of the inner CG + multigrid solve of B_Omega (a solve that stops short raises on every
         rank: B would not be the fixed operator the iterations need).
@@ -141,7 +146,7 @@ class MultigridPreconditioner(DenseSignoriniBlock):
         The integrand (w, v) -> UFL of K (default grad w . grad v); for elasticity the
         linear elastic stiffness of the material's tangent at 0
         (``ElasticMaterial.stiffness_integrand``). On a vector space V GAMG gets the rigid
-        motions as its near-nullspace.
+        motions as its near-nullspace (the lattice's interpolation reproduces them).
     """
 
     def __init__(
@@ -168,7 +173,9 @@ class MultigridPreconditioner(DenseSignoriniBlock):
             fem.petsc.assemble_matrix(self._matrix, form)
         self._matrix.assemble()
         self._near_nullspace = None
-        if V.dofmap.index_map_bs > 1:  # elasticity: GAMG's aggregates carry the rigid motions
+        levels = lattice_levels(lattice.n) if lattice is not None else None
+        if levels is None and V.dofmap.index_map_bs > 1:
+            # elasticity on GAMG: its aggregates carry the rigid motions
             self._modes = rigid_body_modes(V)
             self._near_nullspace = PETSc.NullSpace().create(vectors=self._modes, comm=comm)
             self._matrix.setNearNullSpace(self._near_nullspace)
@@ -178,7 +185,6 @@ class MultigridPreconditioner(DenseSignoriniBlock):
         self._ksp.setOptionsPrefix(AMG_OPTIONS_PREFIX)  # before PCMG names its levels' KSPs
         self._ksp.setTolerances(rtol=rtol, atol=0.0, max_it=max_iterations)
         self._ksp.setInitialGuessNonzero(False)
-        levels = lattice_levels(lattice.n) if lattice is not None else None
         self._hierarchy = None
         if levels is None:
             self._ksp.getPC().setType(PETSc.PC.Type.GAMG)
@@ -186,7 +192,8 @@ class MultigridPreconditioner(DenseSignoriniBlock):
         else:
             owned = V.dofmap.index_map.size_local
             points = lattice.indices(V.tabulate_dof_coordinates()[:owned])
-            self._hierarchy = LatticeHierarchy(self._matrix, points, levels)
+            bs = V.dofmap.index_map_bs  # d components per node for elasticity
+            self._hierarchy = LatticeHierarchy(self._matrix, points, levels, block_size=bs)
             options = self._hierarchy.configure(self._ksp.getPC())
             _set_up(self._ksp, AMG_OPTIONS_PREFIX, options)
         self._x, self._b = self._matrix.createVecs()
@@ -209,8 +216,8 @@ class MultigridPreconditioner(DenseSignoriniBlock):
     def cycle_omega(self, g: np.ndarray) -> np.ndarray:
         """A fixed symmetric positive definite approximation of B_Omega^{-1} g, the same on
         any number of ranks, for preconditioning a Krylov solve: one V-cycle of the lattice
-        multigrid (condition number about 1.2 against B_Omega on the box), else (GAMG) the
-        tight solve ``apply_omega``."""
+        multigrid (condition number about 1.2 against B_Omega on the scalar box, 1.5-2.5
+        for elasticity), else (GAMG) the tight solve ``apply_omega``."""
         if self._hierarchy is None:
             return self.apply_omega(g)
         self._b.array[:] = g

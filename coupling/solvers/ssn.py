@@ -45,9 +45,10 @@ rtol, need only a few digits (relaxed inexact Krylov methods: Simoncini and Szyl
 J. Sci. Comput. 25, 2003; van den Eshof and Sleijpen, SIAM J. Matrix Anal. Appl. 26,
 2004). The products then differ from the exact ones by far less than the step's own
 tolerance, which leaves the CG's iterations as they were. Where the amg preconditioner
-has GAMG (bodies other than the box) its inner CG + GAMG keeps its own tolerance inside
-the CG as well: GAMG's hierarchy depends on the number of ranks, and only a solve far
-below the step's accuracy keeps the iterates independent of it.
+has GAMG (domains other than the box and the structured square) its inner CG + GAMG
+keeps its own tolerance inside the CG as well: GAMG's hierarchy depends on the number of
+ranks, and only a solve far below the step's accuracy keeps the iterates independent of
+it.
 
 The active set is predicted in the metric M_s, by the M_s projection of
 phi - tau M_s^{-1} grad_phi J (the active set of a PGPM step), not by the

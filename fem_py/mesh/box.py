@@ -76,27 +76,35 @@ class BoxCounts:
 
 @dataclass(frozen=True, eq=False)
 class BoxLattice:
-    """The box's vertices as the lattice ``lower + spacing * (i, j, k)``, 0 <= i, j, k <= n
-    (the geometric multigrid of the amg preconditioner coarsens it,
+    """The vertices of the box (or of the structured square, ``fem_py.mesh.polygon``) as
+    the lattice ``lower + spacing * (i, j[, k])``, 0 <= i, j, k <= n (the geometric
+    multigrid of the amg preconditioner coarsens it,
     ``coupling.preconditioners.lattice_multigrid``).
 
     Attributes
     ----------
-    lower : (3,) array
-        The corner c - w/2.
+    lower : (dim,) array
+        The corner c - w/2 (dim = 3: the box, 2: the square).
     spacing : float
-        w / n, the cubes' side.
+        w / n, the cells' side.
     n : int
-        Cubes per side.
+        Cells per side.
     """
 
     lower: np.ndarray
     spacing: float
     n: int
 
+    @property
+    def dim(self) -> int:
+        """The lattice's dimension, ``len(lower)``."""
+        return int(np.asarray(self.lower).size)
+
     def indices(self, x: np.ndarray) -> np.ndarray:
-        """The lattice indices (m, 3) of points ``x`` (m, 3) that are vertices of the box."""
-        return np.rint((np.asarray(x)[:, :3] - self.lower) / self.spacing).astype(np.int64)
+        """The lattice indices (m, dim) of points ``x`` (m, >= dim) that are vertices of
+        the lattice."""
+        dim = self.dim
+        return np.rint((np.asarray(x)[:, :dim] - self.lower) / self.spacing).astype(np.int64)
 
 
 def cubes_per_side(width: float, h: float) -> int:

@@ -66,6 +66,10 @@ class Domain:
     h_max : float
         Longest fine facet.
     partition : "grid" (a generated coarse grid) or "cells" (groups of a mesh's cells)
+    lattice : fem_py.mesh.box.BoxLattice or None
+        The structured square's vertex lattice (its nodes are lower + spacing (i, j),
+        0 <= i, j <= n), for the geometric multigrid of the amg preconditioner; ``None``
+        for every other domain (``fem_py.mesh.solid.SolidDomain.lattice``: the box's).
     """
 
     mesh: Any
@@ -82,11 +86,10 @@ class Domain:
     coarse_size: float
     h_max: float
     partition: str = "grid"
+    lattice: Any = None
 
     #: Omega's dimension (``fem_py.mesh.solid.SolidDomain.dim`` is 3).
     dim = 2
-    #: No vertex lattice (``fem_py.mesh.solid.SolidDomain.lattice``: the box's).
-    lattice = None
 
     @property
     def comm(self) -> Any:

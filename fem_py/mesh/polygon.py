@@ -63,6 +63,7 @@ from typing import Any
 import numpy as np
 
 from fem_py.dofs import p1_space
+from fem_py.mesh.box import BoxLattice
 from fem_py.mesh.distribute import distribute_mesh, distribute_structured
 from fem_py.mesh.domain import (
     CORNER_ANGLE,
@@ -266,11 +267,14 @@ def polygon_domain(comm: Any, spec: GeometrySpec) -> Domain:
             csize = float(np.mean(np.concatenate([segment_lengths(cV[c]) for c in loops])))
         if meshed is not None:
             arrays = meshed[2]
-    coarse = h_max = None
+    coarse = h_max = lattice = None
     if structured:  # every rank writes down its own part of the refinement
         n = max(2, int(round((d if shape == "polygon" else csize) / h)))
         if shape != "polygon":  # the diagonal of the grid's right triangles (polygon_size)
             h_max = math.sqrt(2.0) * csize / n
+        if shape == "square":  # its nodes: a lattice of nc n cells per side
+            cells = int(round(float(spec.width) / csize)) * n
+            lattice = BoxLattice(P.min(axis=0), csize / n, cells)  # P[0]: lower left
         ref = refine(cV, ccells, n)
         tags = ref.edge_tags(lambda a, b: edge_tag(cV, a, b, B, arcs))
         msh, ct0, ft = distribute_structured(comm, ref, tags)
@@ -292,6 +296,7 @@ def polygon_domain(comm: Any, spec: GeometrySpec) -> Domain:
         signorini_is_whole_boundary=whole,
         structured=bool(structured),
         coarse_size=float(csize),
+        lattice=lattice,
     )
 
 

@@ -241,6 +241,7 @@ def refine_domain(domain: Any, cells: np.ndarray) -> Any:
         coarse=compute_coarse_structure(new, ct, ft, corner_angle=_corner_angle(domain)),
         structured=False,
         h_max=max_facet_length(new),
+        lattice=None,  # the refined mesh is no lattice
     )
 
 
