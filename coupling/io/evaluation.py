@@ -27,7 +27,7 @@ import numpy as np
 import bem_cpp
 from coupling.options import hmatrix_tol
 from fem_py.mesh import interpolate_p1
-from fem_py.mesh.location3d import interpolate_p1_tetrahedra, on_surface
+from fem_py.mesh.location3d import on_surface
 from coupling.io.figure_data import plane_square
 from fem_py.polyline import closest_on_polygon, inside_polygon, polygon_corners, segment_lengths
 
@@ -195,7 +195,7 @@ def _evaluate_in_body(fields: dict, points: np.ndarray) -> dict[str, np.ndarray]
     on = triangle >= 0
     values = _columns(fields["u"])
     u = np.stack(
-        [interpolate_p1_tetrahedra(fields["x"], fields["cells"], c, points) for c in values.T],
+        [interpolate_p1(fields["x"], fields["cells"], c, points) for c in values.T],
         axis=1,
     )
     inside = np.isfinite(u).all(axis=1) & ~on
