@@ -46,6 +46,7 @@ from coupling.io.figure_data import PixelGrid, plane_square, rasterise  # noqa: 
 from coupling.io.gamma_drawing import (  # noqa: E402
     draw_boundary,
     exterior_triangulation,
+    frame_plane,
     signorini_panels,
     true_runs,
 )
@@ -111,13 +112,7 @@ def _figure_deformed_plane(inputs: ElasticFigureInputs):
     lo = np.minimum(moved.min(axis=0), nodes.min(axis=0))
     hi = np.maximum(moved.max(axis=0), nodes.max(axis=0))
     pad = 0.04 * float((hi - lo).max())
-    ax.set(
-        aspect="equal",
-        xlabel="$x$",
-        ylabel="$y$",
-        xlim=(lo[0] - pad, hi[0] + pad),
-        ylim=(lo[1] - pad, hi[1] + pad),
-    )
+    frame_plane(ax, lo - pad, hi + pad)
     ax.set_title(
         f"Deformed body, {_title_factor(inputs)}\n"
         "(dashed: undeformed outline), coloured by the von Mises stress",
@@ -349,13 +344,7 @@ def _figure_exterior_plane(inputs: ElasticFigureInputs):
         fig.colorbar(shown, ax=ax, shrink=0.85, label=label, **bar)
         ax.fill(*nodes.T, color="white", zorder=2)
         draw_boundary(ax, _contact_fields(b, nodes))
-        ax.set(
-            aspect="equal",
-            xlabel="$x$",
-            ylabel="$y$",
-            xlim=(centre[0] - half, centre[0] + half),
-            ylim=(centre[1] - half, centre[1] + half),
-        )
+        frame_plane(ax, centre - half, centre + half)
     # the direction of u_e: arrows at every _ARROW_STRIDE-th sample of the grid
     step = 2.0 * half / (EXTERIOR_SAMPLES_2D - 1)
     lattice = np.rint((ex["points"] - (centre - half)) / step).astype(np.int64)
