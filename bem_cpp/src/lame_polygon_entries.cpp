@@ -27,15 +27,6 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr int kL = 0, kX = 1, kY = 2, kMoments = 12;
 constexpr int slab(int moment, int a, int b) { return 4 * moment + 2 * a + b; }
 
-void check_medium(const Lame& m) {
-  std::ostringstream msg;
-  if (!(std::isfinite(m.mu) && m.mu > 0.0))
-    msg << "Lame: the shear modulus mu = " << m.mu << " must be positive: give mu > 0";
-  else if (!(std::isfinite(m.nu) && m.nu > -1.0 && m.nu < 0.5))
-    msg << "Lame: Poisson's ratio nu = " << m.nu << " must lie in (-1, 1/2): give -1 < nu < 0.5";
-  if (!msg.str().empty()) throw std::invalid_argument(msg.str());
-}
-
 /// The far pairs (pi, panel js[k]), k < m <= kFarBatch, by the tensor Gauss rule with p
 /// points per panel, vectorised over k: the 12 moments (shape a on pi, b on panel js[k])
 /// stored to out[slab][js[k]].
