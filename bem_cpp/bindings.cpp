@@ -39,6 +39,19 @@ using bem::VerticesRef;
 using Release = py::call_guard<py::gil_scoped_release>;
 using Collective = std::function<Eigen::MatrixXd(const Eigen::MatrixXd&, const std::vector<bem::Index>&)>;
 
+namespace {
+
+/// The operators' communicator: none (serial) when allgather is None, otherwise the
+/// collectives of the ranks (mpi4py, called back with the GIL held by pybind11's function
+/// wrapper).
+std::shared_ptr<const bem::Communicator> communicator(int rank, int size, Collective allgather, Collective allreduce) {
+  if (!allgather) return nullptr;
+  return std::make_shared<const bem::Communicator>(
+      bem::Communicator{rank, size, std::move(allgather), std::move(allreduce)});
+}
+
+}  // namespace
+
 PYBIND11_MODULE(_bem, m) {
   m.doc() = "Compiled core of bem_cpp; use the documented wrappers in bem_cpp.";
   py::enum_<Space>(m, "Space").value("P0", Space::P0).value("P1", Space::P1);
@@ -63,12 +76,7 @@ PYBIND11_MODULE(_bem, m) {
       .def(py::init([](NodesRef nodes, Space flux, bem::Index leaf_size, double eta, double tol,
                        double preconditioner_tol, double solver_tol, int max_iterations, int product_threads, int rank,
                        int size, Collective allgather, Collective allreduce) {
-             // allgather None: serial; otherwise the collectives of the ranks (mpi4py,
-             // called back with the GIL held by pybind11's function wrapper)
-             std::shared_ptr<const bem::Communicator> comm;
-             if (allgather)
-               comm = std::make_shared<const bem::Communicator>(
-                   bem::Communicator{rank, size, std::move(allgather), std::move(allreduce)});
+             const auto comm = communicator(rank, size, std::move(allgather), std::move(allreduce));
              return std::make_unique<bem::SteklovPoincareOperator>(
                  nodes, flux,
                  bem::SteklovOptions{{leaf_size, eta, tol, false, product_threads, comm},
@@ -94,10 +102,7 @@ PYBIND11_MODULE(_bem, m) {
       .def(py::init([](NodesRef nodes, const bem::Lame& lame, Space flux, bem::Index leaf_size, double eta, double tol,
                        double preconditioner_tol, double solver_tol, int max_iterations, int product_threads, int rank,
                        int size, Collective allgather, Collective allreduce) {
-             std::shared_ptr<const bem::Communicator> comm;
-             if (allgather)
-               comm = std::make_shared<const bem::Communicator>(
-                   bem::Communicator{rank, size, std::move(allgather), std::move(allreduce)});
+             const auto comm = communicator(rank, size, std::move(allgather), std::move(allreduce));
              return std::make_unique<bem::LameSteklovOperator>(
                  nodes, lame, flux,
                  bem::SteklovOptions{{leaf_size, eta, tol, false, product_threads, comm},
@@ -111,10 +116,7 @@ PYBIND11_MODULE(_bem, m) {
       .def(py::init([](VerticesRef vertices, TrianglesRef triangles, const bem::Lame& lame, Space flux,
                        bem::Index leaf_size, double eta, double tol, double solver_tol, int max_iterations,
                        int product_threads, int rank, int size, Collective allgather, Collective allreduce) {
-             std::shared_ptr<const bem::Communicator> comm;
-             if (allgather)
-               comm = std::make_shared<const bem::Communicator>(
-                   bem::Communicator{rank, size, std::move(allgather), std::move(allreduce)});
+             const auto comm = communicator(rank, size, std::move(allgather), std::move(allreduce));
              return bem::lame_surface_steklov_operator(
                  vertices, triangles, lame, flux,
                  bem::SteklovOptions{
@@ -286,10 +288,7 @@ PYBIND11_MODULE(_bem, m) {
       .def(py::init([](VerticesRef vertices, TrianglesRef triangles, bem::Index leaf_size, double eta, double tol,
                        double solver_tol, int max_iterations, int product_threads, int rank, int size,
                        Collective allgather, Collective allreduce, bool single_precision) {
-             std::shared_ptr<const bem::Communicator> comm;
-             if (allgather)
-               comm = std::make_shared<const bem::Communicator>(
-                   bem::Communicator{rank, size, std::move(allgather), std::move(allreduce)});
+             const auto comm = communicator(rank, size, std::move(allgather), std::move(allreduce));
              bem::SteklovOptions options{
                  {leaf_size, eta, tol, false, product_threads, comm}, tol, solver_tol, max_iterations};
              options.hmatrix.single_precision = single_precision;

@@ -80,17 +80,14 @@ def double_layer(
 
     Parameters
     ----------
-    nodes : (n, 2) array_like
-        Boundary nodes, counter-clockwise, first node not repeated.
+    nodes : (n, 2) or (n, 3) array_like
+        The boundary, as in :func:`single_layer`.
     space : {"p1", "p0"}
         Space of the rows (test functions psi_i); the columns are always the P1 hats v_j.
     triangles : (m, 3) array_like of int, optional
-        3D: the triangles of the surface whose vertices are ``nodes`` (n, 3).
+        3D: the surface's triangles, as in :func:`single_layer`.
     kernel : "laplace" or ("lame", E, nu)
-        Laplace's kernel, or Kelvin's of linear elasticity with Young's modulus E and
-        Poisson ratio nu (plane strain in 2D; :mod:`bem_cpp` module docstring): then every
-        node carries d components, dof ``d * node + component``, and the matrix is
-        (d rows, d columns) times as large.
+        As in :func:`single_layer` (Lame: d dofs a node, the matrix d x d times as large).
 
     Returns
     -------
@@ -128,10 +125,10 @@ def hypersingular(
 
     Parameters
     ----------
-    nodes : (n, 2) array_like
-        Boundary nodes, counter-clockwise, first node not repeated.
+    nodes : (n, 2) or (n, 3) array_like
+        The boundary, as in :func:`single_layer`.
     triangles : (m, 3) array_like of int, optional
-        3D: the triangles of the surface whose vertices are ``nodes`` (n, 3).
+        3D: the surface's triangles, as in :func:`single_layer`.
     block : (k,) array_like of int, optional
         Distinct node indices: only W_h[block, block] = E^T W_h E is returned (E the
         injection of the hats of ``block``). In 3D it is integrated over the triangles
@@ -139,10 +136,7 @@ def hypersingular(
         (for the nodes inside a surface patch, the H~^{1/2} metric of the patch).
         Lame: the d components of each of those nodes (sliced from the whole matrix).
     kernel : "laplace" or ("lame", E, nu)
-        Laplace's kernel, or Kelvin's of linear elasticity with Young's modulus E and
-        Poisson ratio nu (plane strain in 2D; :mod:`bem_cpp` module docstring): then every
-        node carries d components, dof ``d * node + component``, and the matrix is
-        (d rows, d columns) times as large.
+        As in :func:`single_layer` (Lame: d dofs a node, the matrix d x d times as large).
 
     Returns
     -------
@@ -181,19 +175,16 @@ def mass(
 
     Parameters
     ----------
-    nodes : (n, 2) array_like
-        Boundary nodes, counter-clockwise, first node not repeated.
+    nodes : (n, 2) or (n, 3) array_like
+        The boundary, as in :func:`single_layer`.
     space : {"p1", "p0"}
         Space of the rows; columns are the P1 hats. ``"p1"`` gives the P1 Gram matrix
         (element matrix h/6 [[2, 1], [1, 2]]), ``"p0"`` the P0-by-P1 matrix with
         M[i, i] = M[i, i+1] = h_i/2.
     triangles : (m, 3) array_like of int, optional
-        3D: the triangles of the surface whose vertices are ``nodes`` (n, 3).
+        3D: the surface's triangles, as in :func:`single_layer`.
     kernel : "laplace" or ("lame", E, nu)
-        Laplace's kernel, or Kelvin's of linear elasticity with Young's modulus E and
-        Poisson ratio nu (plane strain in 2D; :mod:`bem_cpp` module docstring): then every
-        node carries d components, dof ``d * node + component``, and the matrix is
-        (d rows, d columns) times as large.
+        As in :func:`single_layer` (Lame: d dofs a node, the matrix d x d times as large).
 
     Returns
     -------

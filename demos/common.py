@@ -19,10 +19,13 @@ from mpi4py import MPI
 __all__ = [
     "CELLS_HELP",
     "OUTPUTS_HELP",
+    "add_refinement_arguments",
     "demo_parser",
+    "manufactured_row",
     "start_demo",
     "outcome",
     "rank0_print",
+    "refinement_summary",
     "solve_row",
     "write_results",
     "write_solve_outputs",
@@ -47,6 +50,14 @@ def demo_parser(
     out_help = out_help or "folder for results.json"
     parser.add_argument("--out", type=Path, default=Path("out") / name, help=out_help)
     return parser
+
+
+def add_refinement_arguments(parser: argparse.ArgumentParser, max_dofs: int) -> None:
+    """``--steps`` (adaptive refinements, default 12) and ``--max-dofs`` (the largest level,
+    default ``max_dofs``) of the adaptive demos."""
+    parser.add_argument("--steps", type=int, default=12, help="adaptive refinements (default 12)")
+    max_help = f"largest level (default {max_dofs})"
+    parser.add_argument("--max-dofs", type=int, default=max_dofs, help=max_help)
 
 
 def start_demo(
@@ -94,6 +105,51 @@ def solve_row(cells: int, result, **columns: Any) -> dict[str, Any]:
     per side, h), whether and in how many steps ``result`` converged, and ``columns``."""
     row = dict(cells=cells, h=0.5 / cells, converged=bool(result.converged))
     return dict(row, iterations=int(result.iterations), **columns)
+
+
+def refinement_summary(rows: list[dict[str, Any]], min_dofs: int) -> dict[str, Any]:
+    """The ``rows`` of a refinement (adaptive or uniform; per level its ``dofs`` N, energy
+    ``error``, ``estimator`` eta and efficiency ``index``) with their slopes, least-squares
+    fits of log(error) and log(eta) against log(N) over the levels with N >= ``min_dofs``
+    (None with fewer than two), and the band max/min of the efficiency index."""
+    import numpy as np
+
+    fit = [r for r in rows if r["dofs"] >= min_dofs]
+
+    def slope(key: str) -> float | None:
+        if len(fit) < 2:
+            return None
+        n, values = np.log([r["dofs"] for r in fit]), np.log([r[key] for r in fit])
+        return float(np.polyfit(n, values, 1)[0])
+
+    index = [r["index"] for r in rows]
+    return dict(
+        rows=rows,
+        error_slope=slope("error"),
+        estimator_slope=slope("estimator"),
+        index_band=max(index) / min(index),
+    )
+
+
+def manufactured_row(cells: int, problem, result, solution, seconds: float) -> dict[str, Any]:
+    """The :func:`solve_row` of ``result``, the solve of the manufactured ``problem`` of
+    ``solution`` on the mesh of ``cells`` cells per side in ``seconds``: its dofs (on
+    Gamma too), contact and Signorini nodes, and the errors of
+    ``coupling.manufactured.solution_errors``. Collective."""
+    import numpy as np
+
+    from coupling.manufactured import solution_errors
+
+    return solve_row(
+        cells,
+        result,
+        dofs=problem.V.dofmap.index_map.size_global,
+        boundary_dofs=problem.boundary.n_gamma,
+        contact_nodes=int(np.count_nonzero(result.contact)),
+        signorini_nodes=problem.n_signorini,
+        seconds=seconds,
+        **solution_errors(problem, solution, result),
+    )
 
 
 def write_solve_outputs(comm: MPI.Comm, out: Path, problem, result, options) -> list[str]:

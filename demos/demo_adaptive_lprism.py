@@ -23,7 +23,13 @@
 import numpy as np
 from mpi4py import MPI
 
-from common import demo_parser, start_demo, write_results
+from common import (
+    add_refinement_arguments,
+    demo_parser,
+    refinement_summary,
+    start_demo,
+    write_results,
+)
 from coupling.adapt import AdaptOptions, adapt
 from coupling.manufactured import ManufacturedSolution, exterior_field_3d, solution_errors
 from coupling.options import SolverOptions
@@ -39,8 +45,7 @@ parser = demo_parser(
     cells=4,
     cells_help="the first mesh's size is h = 0.5/cells",
 )
-parser.add_argument("--steps", type=int, default=12, help="adaptive refinements (default 12)")
-parser.add_argument("--max-dofs", type=int, default=30000, help="largest level (default 30000)")
+add_refinement_arguments(parser, max_dofs=30000)
 comm = MPI.COMM_WORLD
 args, say = start_demo(parser, comm)
 
@@ -112,13 +117,6 @@ def run(theta: float, max_dofs: int) -> list[dict]:
     return rows
 
 
-def slope(rows: list[dict], key: str, min_dofs: int = 2000) -> float | None:
-    fit = [r for r in rows if r["dofs"] >= min_dofs]
-    if len(fit) < 2:
-        return None
-    return float(np.polyfit(np.log([r["dofs"] for r in fit]), np.log([r[key] for r in fit]), 1)[0])
-
-
 # %% [markdown]
 # ## Adaptive and uniform refinement
 #
@@ -130,18 +128,13 @@ def slope(rows: list[dict], key: str, min_dofs: int = 2000) -> float | None:
 results = {}
 for name, theta in (("adaptive", 0.5), ("uniform", 1.0)):
     say(f"\n{name} (theta = {theta})")
-    rows = run(theta, args.max_dofs)
-    index = [r["index"] for r in rows]
-    results[name] = dict(
-        rows=rows,
-        error_slope=slope(rows, "error", 2000 if theta < 1 else 0),
-        estimator_slope=slope(rows, "estimator", 2000 if theta < 1 else 0),
-        index_band=max(index) / min(index),
+    results[name] = summary = refinement_summary(
+        run(theta, args.max_dofs), 2000 if theta < 1 else 0
     )
+    index = [r["index"] for r in summary["rows"]]
     say(
-        f"slopes: error {results[name]['error_slope']}, eta "
-        f"{results[name]['estimator_slope']}; efficiency index {min(index):.2f} .. "
-        f"{max(index):.2f}"
+        f"slopes: error {summary['error_slope']}, eta {summary['estimator_slope']}; "
+        f"efficiency index {min(index):.2f} .. {max(index):.2f}"
     )
 
 # %% [markdown]

@@ -22,7 +22,13 @@
 import numpy as np
 from mpi4py import MPI
 
-from common import demo_parser, start_demo, write_results
+from common import (
+    add_refinement_arguments,
+    demo_parser,
+    refinement_summary,
+    start_demo,
+    write_results,
+)
 from coupling.adapt import AdaptOptions, adapt
 from coupling.manufactured import (
     ManufacturedSolution,
@@ -41,8 +47,7 @@ parser = demo_parser(
     cells=8,
     cells_help="cells per side of the bounding square of the first mesh",
 )
-parser.add_argument("--steps", type=int, default=12, help="adaptive refinements (default 12)")
-parser.add_argument("--max-dofs", type=int, default=40000, help="largest level (default 40000)")
+add_refinement_arguments(parser, max_dofs=40000)
 comm = MPI.COMM_WORLD
 args, say = start_demo(parser, comm)
 
@@ -107,13 +112,6 @@ def run(solution: ManufacturedSolution, theta: float, max_dofs: int) -> tuple[li
     return rows, levels
 
 
-def slope(rows: list[dict], key: str) -> float | None:
-    fit = [r for r in rows if r["dofs"] >= 1000]
-    if len(fit) < 2:
-        return None
-    return float(np.polyfit(np.log([r["dofs"] for r in fit]), np.log([r[key] for r in fit]), 1)[0])
-
-
 # %% [markdown]
 # ## Adaptive and uniform refinement
 #
@@ -124,18 +122,11 @@ def slope(rows: list[dict], key: str) -> float | None:
 results = {}
 for name, theta in (("adaptive", 0.5), ("uniform", 1.0)):
     say(f"\n{name} (theta = {theta})")
-    rows, _ = run(exact, theta, args.max_dofs)
-    index = [r["index"] for r in rows]
-    results[name] = dict(
-        rows=rows,
-        error_slope=slope(rows, "error"),
-        estimator_slope=slope(rows, "estimator"),
-        index_band=max(index) / min(index),
-    )
+    results[name] = summary = refinement_summary(run(exact, theta, args.max_dofs)[0], 1000)
+    index = [r["index"] for r in summary["rows"]]
     say(
-        f"slopes (N >= 1000): error {results[name]['error_slope']}, "
-        f"eta {results[name]['estimator_slope']}; efficiency index "
-        f"{min(index):.2f} .. {max(index):.2f}"
+        f"slopes (N >= 1000): error {summary['error_slope']}, eta {summary['estimator_slope']}; "
+        f"efficiency index {min(index):.2f} .. {max(index):.2f}"
     )
 
 # %% [markdown]

@@ -8,6 +8,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -81,6 +82,27 @@ def run_cli(
     return subprocess.run(
         [*cmd, *args], capture_output=True, text=True, timeout=timeout, cwd=cwd or ROOT
     )
+
+
+def solved_fields(folder: Path, name: str, text: str) -> dict:
+    """``fembem solve`` (quiet, without solution.xdmf and the figures) of the TOML ``text``
+    written to ``folder/<name>.toml``, run to success into ``folder/<name>``: its fields.npz
+    as a dict."""
+    config = folder / f"{name}.toml"
+    config.write_text(text + "\n[output]\nxdmf = false\nplots = false\n")
+    proc = run_cli("solve", str(config), "--out", str(folder / name), "--quiet")
+    assert proc.returncode == 0, proc.stderr
+    with np.load(folder / name / "fields.npz") as data:
+        return {k: data[k] for k in data.files}
+
+
+def points_table(command: str, out: Path, csv: Path, text: str) -> list[str]:
+    """``fembem COMMAND OUT --points CSV`` (evaluate or exterior) of the points ``text``
+    written to ``csv``, run to success: the lines of its table."""
+    csv.write_text(text)
+    proc = run_cli(command, str(out), "--points", str(csv))
+    assert proc.returncode == 0, proc.stderr
+    return proc.stdout.strip().splitlines()
 
 
 def json_report(command: str, config: Path) -> dict:

@@ -6,6 +6,17 @@ from __future__ import annotations
 from pathlib import Path
 
 
+def box_toml(center: str, width: float, h: float, data: str) -> str:
+    """The configuration of a box about ``center`` ("[x, y, z]") of ``width``, mesh size
+    ``h``, pressed onto its bottom face (Signorini) under Carstensen's material, f = 1 and
+    t0 = -1, with the further lines ``data`` of [data] (u0, ...)."""
+    return (
+        f'[geometry]\nshape = "box"\ncenter = {center}\nwidth = {width}\nh = {h}\n'
+        'signorini = ["bottom"]\n\n[material]\nrho = "carstensen"\n\n'
+        f'[data]\nf = "1"\nt0 = "-1"\n{data}\n'
+    )
+
+
 def _session():
     import gmsh
 
@@ -23,6 +34,20 @@ def _bottom(gmsh, volume_tags):
         if abs(bb[2] - z0) < 1e-6 and abs(bb[5] - z0) < 1e-6:
             out.append(s)
     return out
+
+
+def group_bottom_faces(gmsh, volume: int, bottom: str = "bottom") -> list[int]:
+    """The physical groups of a synchronized OpenCASCADE body (the volume tag ``volume``):
+    its faces in the plane z = 0 the group ``bottom`` (2), the other faces "rest" (3), the
+    volume 10. Returns the bottom faces."""
+    occ = gmsh.model.occ
+    faces = [tag for _, tag in gmsh.model.getEntities(2)]
+    at_z0 = [t for t in faces if abs(occ.getCenterOfMass(2, t)[2]) < 1e-9]
+    rest = [t for t in faces if t not in at_z0]
+    gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, at_z0, 2), bottom)
+    gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, rest, 3), "rest")
+    gmsh.model.addPhysicalGroup(3, [volume], 10)
+    return at_z0
 
 
 def solid_msh(

@@ -63,6 +63,13 @@ def box_builder(exact: ManufacturedSolution, material=MATERIAL):
     return build
 
 
+def adapt_box(comm, solution: ManufacturedSolution, **kwargs):
+    """The adaptive box run (BOX_STEPS refinements, BOX_THETA, BOX_SOLVER) of ``solution``
+    from 4 cubes per side on ``comm``: its levels (``kwargs``: of ``coupling.adapt.adapt``)."""
+    options = AdaptOptions(steps=BOX_STEPS, theta=BOX_THETA)
+    return adapt(box_builder(solution), box_domain(comm, solution), BOX_SOLVER, options, **kwargs)
+
+
 @pytest.fixture(scope="module")
 def box():
     return build_domain(
@@ -230,13 +237,7 @@ def test_transfer_is_exact_for_p1_and_the_gap(box):
 @pytest.fixture(scope="module")
 def box_levels():
     exact = box_contact()
-    levels = adapt(
-        box_builder(exact),
-        box_domain(COMM, exact),
-        BOX_SOLVER,
-        AdaptOptions(steps=BOX_STEPS, theta=BOX_THETA),
-        exact=exact.u,
-    )
+    levels = adapt_box(COMM, exact, exact=exact.u)
     return exact, levels
 
 

@@ -6,39 +6,16 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from conftest import run_cli
+from conftest import run_cli, solved_fields
+from solid_files import box_toml, group_bottom_faces
 
 #: a box at x in [0.7, 1.3], pressed onto its bottom face (4 cubes per side)
-BOX = """[geometry]
-shape = "box"
-center = [1.0, 0.0, 0.0]
-width = 0.6
-h = 0.15
-signorini = ["bottom"]
-
-[material]
-rho = "carstensen"
-
-[data]
-f = "1"
-t0 = "-1"
-u0 = "0.05*(x - 1)"
-
-[output]
-xdmf = false
-plots = false
-"""
+BOX = box_toml("[1.0, 0.0, 0.0]", 0.6, 0.15, 'u0 = "0.05*(x - 1)"')
 
 
 @pytest.fixture(scope="module")
 def box_fields(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("box")
-    config = folder / "box.toml"
-    config.write_text(BOX)
-    proc = run_cli("solve", str(config), "--out", str(folder / "out"), "--quiet")
-    assert proc.returncode == 0, proc.stderr
-    with np.load(folder / "out" / "fields.npz") as data:
-        return {k: data[k] for k in data.files}
+    return solved_fields(tmp_path_factory.mktemp("box"), "box", BOX)
 
 
 def _inputs(fields):
@@ -142,12 +119,7 @@ def _bracket_msh(path):
         foot, upright = occ.addBox(0, 0, 0, 0.6, 0.3, 0.1), occ.addBox(0, 0, 0, 0.1, 0.3, 0.6)
         (body, *_), _ = occ.fuse([(3, foot)], [(3, upright)])
         occ.synchronize()
-        faces = [t for _, t in gmsh.model.getEntities(2)]
-        bottom = [t for t in faces if abs(occ.getCenterOfMass(2, t)[2]) < 1e-9]
-        rest = [t for t in faces if t not in bottom]
-        gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, bottom, 1), "foot")
-        gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, rest, 2), "rest")
-        gmsh.model.addPhysicalGroup(3, [body[1]], 3)
+        group_bottom_faces(gmsh, body[1], "foot")
         gmsh.option.setNumber("Mesh.MeshSizeMax", 0.05)
         gmsh.option.setNumber("General.NumThreads", 1)
         gmsh.model.mesh.generate(3)
@@ -162,15 +134,11 @@ def test_the_default_slice_goes_through_the_signorini_part(tmp_path):
     from coupling.io.body_figure_data import section
 
     _bracket_msh(tmp_path / "bracket.msh")
-    config = tmp_path / "bracket.toml"
-    config.write_text(
-        '[geometry]\nmesh = "bracket.msh"\nsignorini = ["foot"]\n[data]\nf = "1"\n'
-        't0 = "-1"\n[output]\nxdmf = false\nplots = false\n'
+    fields = solved_fields(
+        tmp_path,
+        "bracket",
+        '[geometry]\nmesh = "bracket.msh"\nsignorini = ["foot"]\n[data]\nf = "1"\nt0 = "-1"',
     )
-    proc = run_cli("solve", str(config), "--out", str(tmp_path / "out"), "--quiet")
-    assert proc.returncode == 0, proc.stderr
-    with np.load(tmp_path / "out" / "fields.npz") as data:
-        fields = {k: data[k] for k in data.files}
     s = section(fields)
     assert (s["axis"], s["names"]) == ("y", ("x", "z"))
     assert s["value"] == pytest.approx(0.15, abs=0.02)  # the foot's middle

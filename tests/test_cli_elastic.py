@@ -10,7 +10,7 @@ import json
 import numpy as np
 import pytest
 
-from conftest import run_cli, run_mpi
+from conftest import points_table, run_cli, run_mpi
 
 SQUARE = """[problem]
 equation = "elasticity"
@@ -213,11 +213,8 @@ def test_evaluate_and_exterior_give_the_displacement_components(tmp_path):
     the trace as the point nears Gamma; ``fembem exterior``: u_e and the medium's stress."""
     proc, out = _solve(tmp_path, "run", SQUARE)
     assert proc.returncode == 0, proc.stderr
-    points = tmp_path / "points.csv"
-    points.write_text("x,y\n0,0\n0.25,0.1\n0.2501,0.1\n0.6,0.3\n")
-    proc = run_cli("evaluate", str(out), "--points", str(points))
-    assert proc.returncode == 0, proc.stderr
-    lines = proc.stdout.strip().splitlines()
+    points = "x,y\n0,0\n0.25,0.1\n0.2501,0.1\n0.6,0.3\n"
+    lines = points_table("evaluate", out, tmp_path / "points.csv", points)
     assert lines[0] == "x,y,where,u_x,u_y,ue_x,ue_y"
     rows = [line.split(",") for line in lines[1:]]
     assert [r[2] for r in rows] == ["inside", "boundary", "outside", "outside"]
@@ -226,11 +223,7 @@ def test_evaluate_and_exterior_give_the_displacement_components(tmp_path):
     assert np.allclose(ue, u - [0.0, 0.05 * 0.25], atol=1e-12)  # u0 = (0, 0.05 x) on Gamma_t
     near = np.array(rows[2][5:7], float)
     assert np.abs(near - ue).max() <= 1e-2 * np.abs(ue).max()  # 1e-4 outside the trace
-    outside = tmp_path / "outside.csv"
-    outside.write_text("0.6,0.3\n-0.5,0.2\n")
-    proc = run_cli("exterior", str(out), "--points", str(outside))
-    assert proc.returncode == 0, proc.stderr
-    lines = proc.stdout.strip().splitlines()
+    lines = points_table("exterior", out, tmp_path / "outside.csv", "0.6,0.3\n-0.5,0.2\n")
     assert lines[0] == "x,y,ue_x,ue_y,sigma_xx,sigma_yy,sigma_xy"
     first = np.array(lines[1].split(",")[2:4], float)
     assert np.allclose(first, np.array(rows[3][5:7], float), rtol=1e-12)

@@ -10,24 +10,9 @@ import numpy as np
 import pytest
 
 from conftest import run_cli, run_mpi
-from solid_files import solid_msh
+from solid_files import box_toml, solid_msh
 
-BOX = """[geometry]
-shape = "box"
-center = [0.0, 0.0, 0.0]
-width = 0.5
-h = 0.125
-signorini = ["bottom"]
-
-[material]
-rho = "carstensen"
-
-[data]
-f = "1"
-t0 = "-1"
-u0 = "0.02*x"
-exact = "0.02*x"
-"""
+BOX = box_toml("[0.0, 0.0, 0.0]", 0.5, 0.125, 'u0 = "0.02*x"\nexact = "0.02*x"')
 
 
 def _solve(tmp_path, name, text, ranks=1):

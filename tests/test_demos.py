@@ -180,6 +180,14 @@ def test_contact_box_demo_the_same_on_one_and_two_ranks(tmp_path):
     assert all((tmp_path / "one" / name).is_file() for name in files)
 
 
+def _same_on_two_ranks(serial: dict, parallel: dict, counts: tuple[str, ...]) -> None:
+    """The results of a demo on one and on two ranks: the same ``counts``, the energy to
+    1e-10."""
+    for key in counts:
+        assert parallel[key] == serial[key], key
+    assert parallel["energy"] == pytest.approx(serial["energy"], rel=1e-10)
+
+
 @pytest.mark.mpi
 def test_own_body_demo_the_same_on_one_and_two_ranks(tmp_path):
     serial, _ = run_demo("demo_own_body", tmp_path / "one", "--cells", "6")
@@ -188,9 +196,9 @@ def test_own_body_demo_the_same_on_one_and_two_ranks(tmp_path):
     assert 0 < serial["contact_nodes"] < serial["signorini_dofs"]  # tilted: partly in contact
     # pointwise complementarity follows tol = 1e-8 up to about C0 / h (measured 4e-7 at 8)
     assert serial["complementarity"] <= 1e-5
-    for key in ("dofs", "boundary_dofs", "signorini_dofs", "iterations", "contact_nodes"):
-        assert parallel[key] == serial[key], key
-    assert parallel["energy"] == pytest.approx(serial["energy"], rel=1e-10)
+    _same_on_two_ranks(
+        serial, parallel, ("dofs", "boundary_dofs", "signorini_dofs", "iterations", "contact_nodes")
+    )
     assert (tmp_path / "one" / "block.msh").is_file()
 
 
@@ -241,9 +249,9 @@ def test_elastic_footing_demo_lifts_part_of_its_base_the_same_on_two_ranks(tmp_p
     assert serial["converged"] and 0 < serial["contact_nodes"] < serial["base_nodes"]
     assert serial["complementarity"] <= 1e-6
     assert serial["force_error"] <= 1e-5 * abs(serial["force"][0])
-    for key in ("dofs", "boundary_dofs", "base_nodes", "iterations", "contact_nodes"):
-        assert parallel[key] == serial[key], key
-    assert parallel["energy"] == pytest.approx(serial["energy"], rel=1e-10)
+    _same_on_two_ranks(
+        serial, parallel, ("dofs", "boundary_dofs", "base_nodes", "iterations", "contact_nodes")
+    )
     assert (tmp_path / "one" / "footing.msh").is_file()
 
 

@@ -8,27 +8,18 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from conftest import run_cli
+from conftest import solved_fields
 from test_cli_elastic import BOX, SQUARE
-
-
-def _fields(folder, name, text):
-    config = folder / f"{name}.toml"
-    config.write_text(text + "\n[output]\nxdmf = false\nplots = false\n")
-    proc = run_cli("solve", str(config), "--out", str(folder / name), "--quiet")
-    assert proc.returncode == 0, proc.stderr
-    with np.load(folder / name / "fields.npz") as data:
-        return {k: data[k] for k in data.files}
 
 
 @pytest.fixture(scope="module")
 def square(tmp_path_factory):
-    return _fields(tmp_path_factory.mktemp("square"), "square", SQUARE)
+    return solved_fields(tmp_path_factory.mktemp("square"), "square", SQUARE)
 
 
 @pytest.fixture(scope="module")
 def box(tmp_path_factory):
-    return _fields(tmp_path_factory.mktemp("box"), "box", BOX)
+    return solved_fields(tmp_path_factory.mktemp("box"), "box", BOX)
 
 
 HISTORY = {"iteration": np.zeros(0)}

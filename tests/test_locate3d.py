@@ -10,9 +10,11 @@ import itertools
 import numpy as np
 import pytest
 
+import fem_py.mesh.location
 import fem_py.mesh.location3d
+from fem_py.mesh import interpolate_p1
 from fem_py.mesh.location import lattice_weights
-from fem_py.mesh.location3d import interpolate_p1_tetrahedra, locate_in_tetrahedra, on_surface
+from fem_py.mesh.location3d import locate_in_tetrahedra, on_surface
 
 
 def _cube(n: int):
@@ -52,12 +54,12 @@ def test_points_inside_are_located_and_linear_functions_reproduced():
     assert np.abs(np.einsum("ij,ijk->ik", bary, x[tets[cell]]) - points).max() <= 1e-14
     values = 1.0 + 2.0 * x[:, 0] - x[:, 1] + 0.5 * x[:, 2]
     exact = 1.0 + 2.0 * points[:, 0] - points[:, 1] + 0.5 * points[:, 2]
-    assert np.abs(interpolate_p1_tetrahedra(x, tets, values, points) - exact).max() <= 1e-13
+    assert np.abs(interpolate_p1(x, tets, values, points) - exact).max() <= 1e-13
     # the nodes themselves, and points outside the cube
     assert np.all(locate_in_tetrahedra(x, tets, x)[0] >= 0)
     outside = np.array([[1.01, 0.5, 0.5], [-0.2, 0.1, 0.1], [0.5, 0.5, 2.0]])
     assert np.all(locate_in_tetrahedra(x, tets, outside)[0] == -1)
-    assert np.all(np.isnan(interpolate_p1_tetrahedra(x, tets, values, outside)))
+    assert np.all(np.isnan(interpolate_p1(x, tets, values, outside)))
 
 
 def test_points_on_the_surface_are_found_on_a_triangle():
@@ -92,13 +94,13 @@ def test_nodes_of_the_refined_cube_are_matched_without_a_point_location(monkeypa
         assert len(points) == 0, f"{len(points)} points were located"
         return located(x, tetrahedra, points, **kwargs)
 
-    monkeypatch.setattr(fem_py.mesh.location3d, "locate_in_tetrahedra", no_location)
+    monkeypatch.setattr(fem_py.mesh.location, "locate_in_tetrahedra", no_location)
     np.testing.assert_allclose(
-        interpolate_p1_tetrahedra(x, tets, values, fine, divisions=2), expected, atol=1e-15
+        interpolate_p1(x, tets, values, fine, divisions=2), expected, atol=1e-15
     )
     monkeypatch.undo()
     far = np.array([[3.0, 3.0, 0.5], [1e300, 0.0, 0.0], [-2.0, 0.5, 0.5]])
-    assert np.isnan(interpolate_p1_tetrahedra(x, tets, values, far)).all()
+    assert np.isnan(interpolate_p1(x, tets, values, far)).all()
     # points in the bounding box of two separate tetrahedra, in neither's box or in one's
     # box but outside it
     two = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [5, 5, 5], [6, 5, 5]], float)
@@ -112,7 +114,7 @@ def test_nodes_of_the_refined_cube_are_matched_without_a_point_location(monkeypa
     inner = np.array([[0.3, 0.41, 0.77]])
     c, b = locate_in_tetrahedra(x, tets, inner)
     np.testing.assert_allclose(
-        interpolate_p1_tetrahedra(x, tets, values, inner), b[0] @ values[tets[c[0]]], atol=1e-15
+        interpolate_p1(x, tets, values, inner), b[0] @ values[tets[c[0]]], atol=1e-15
     )
 
 

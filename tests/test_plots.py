@@ -12,7 +12,7 @@ import matplotlib.tri as mtri
 import numpy as np
 import pytest
 
-from conftest import ROOT, run_cli, run_mpi
+from conftest import ROOT, run_cli, run_mpi, solved_fields
 from coupling.io.figure_data import PLOT_FILES, RASTER_PIXELS, PixelGrid, coarsen, rasterise
 
 FEMBEM = str(Path(sys.executable).parent / "fembem")
@@ -286,15 +286,12 @@ def test_a_body_s_figures_are_drawn_by_the_figure_process_in_two_parts(tmp_path)
     from coupling.io.figure_worker import FigureWorker
     from coupling.io.plots import history_arrays
 
-    config = tmp_path / "c.toml"
-    config.write_text(
+    fields = solved_fields(
+        tmp_path,
+        "c",
         '[geometry]\nshape = "box"\ncenter = [0.0, 0.0, 0.0]\nwidth = 0.5\nh = 0.125\n'
-        'signorini = ["bottom"]\n[data]\nt0 = "-1"\n[output]\nxdmf = false\nplots = false\n'
+        'signorini = ["bottom"]\n[data]\nt0 = "-1"',
     )
-    proc = run_cli("solve", str(config), "--out", str(tmp_path / "out"), "--quiet")
-    assert proc.returncode == 0, proc.stderr
-    with np.load(tmp_path / "out" / "fields.npz") as f:
-        fields = dict(f)
     records = [
         SimpleNamespace(iteration=k, energy=-k, step_norm=0.1**k, contact=9) for k in (1, 2)
     ]

@@ -16,6 +16,7 @@ from coupling.app.sizing import size_of_domain
 from fem_py.mesh import GeometrySpec, build_domain, domain_size
 from fem_py.mesh.shapes import grid_counts, grid_partition
 from fem_py.mesh.size_estimate import mesh_size_estimate
+from solid_files import group_bottom_faces
 
 SQUARE = """\
 [geometry]
@@ -83,19 +84,28 @@ def test_gmsh_size_estimate_is_close_below_the_mesh(shape, extra, area):
     tracemalloc.stop()
 
 
-@pytest.mark.parametrize("structured", ["true", "false"])
-def test_a_run_that_cannot_fit_is_refused_before_it_is_built(tmp_path, structured):
-    config = tmp_path / "c.toml"
-    config.write_text(SQUARE.format(shape="square", h=1e-5, d=4e-5, structured=structured))
-    proc = run_cli("solve", str(config), "--out", str(tmp_path / "out"), timeout=60)
+def _refused_before_it_is_built(config):
+    """Checks that ``fembem solve`` of ``config`` (alone in its folder) is refused in one line
+    naming geometry.h, writing nothing, and that ``fembem info`` reports the estimate above
+    the available memory; returns that report."""
+    folder = config.parent
+    proc = run_cli("solve", str(config), "--out", str(folder / "out"), timeout=60)
     assert proc.returncode == 2, proc.stderr
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and "needs about" in lines[0] and "geometry.h" in lines[0], lines
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["c.toml"]
+    assert sorted(p.name for p in folder.iterdir()) == [config.name]
     info = run_cli("info", str(config), "--json", timeout=60)
     assert info.returncode == 0, info.stderr
     report = json.loads(info.stdout)
     assert report["memory_estimate_bytes"] > report["memory_available_bytes"]
+    return report
+
+
+@pytest.mark.parametrize("structured", ["true", "false"])
+def test_a_run_that_cannot_fit_is_refused_before_it_is_built(tmp_path, structured):
+    config = tmp_path / "c.toml"
+    config.write_text(SQUARE.format(shape="square", h=1e-5, d=4e-5, structured=structured))
+    report = _refused_before_it_is_built(config)
     assert report["dofs"] > 2e9  # (0.5 / 1e-5)^2 nodes and more
     assert report["sizes"].startswith("closed form" if structured == "true" else "estimated")
 
@@ -135,13 +145,7 @@ def _block_with_a_hole(gmsh):
     drill = occ.addCylinder(0.3, -0.1, 0.15, 0.0, 0.6, 0.0, 0.08)
     (body,), _ = occ.cut([(3, block)], [(3, drill)])
     occ.synchronize()
-    faces = [tag for _, tag in gmsh.model.getEntities(2)]
-    bottom = [t for t in faces if abs(occ.getCenterOfMass(2, t)[2]) < 1e-9]
-    rest = [t for t in faces if t not in bottom]
-    gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, bottom, 2), "bottom")
-    gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, rest, 3), "rest")
-    gmsh.model.addPhysicalGroup(3, [body[1]], 10)
-    return bottom
+    return group_bottom_faces(gmsh, body[1])
 
 
 def test_gmsh_model_size_of_an_occ_body_before_meshing():
@@ -177,14 +181,6 @@ def test_a_ball_that_cannot_fit_is_refused_before_it_is_meshed(tmp_path):
     # 0.55 (4/3 pi 0.25^3) / h^3 = 2.9e8 dofs: gmsh would mesh it for hours
     config = tmp_path / "c.toml"
     config.write_text(BALL.format(h=5e-4))
-    proc = run_cli("solve", str(config), "--out", str(tmp_path / "out"), timeout=60)
-    assert proc.returncode == 2, proc.stderr
-    lines = proc.stderr.strip().splitlines()
-    assert len(lines) == 1 and "needs about" in lines[0] and "geometry.h" in lines[0], lines
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["c.toml"]
-    info = run_cli("info", str(config), "--json", timeout=60)
-    assert info.returncode == 0, info.stderr
-    report = json.loads(info.stdout)
-    assert report["memory_estimate_bytes"] > report["memory_available_bytes"]
+    report = _refused_before_it_is_built(config)
     assert report["dofs"] > 2e8 and report["dim"] == 3
     assert report["sizes"].startswith("estimated")

@@ -125,6 +125,11 @@ class Cross {
   double norm2_ = 0.0;
 };
 
+constexpr int kSamples = 1;       // sampled rows and columns confirming the stop
+constexpr int kZeroRowTries = 3;  // consecutive zero rows before the samples decide
+
+}  // namespace
+
 Index next_unused(const std::vector<char>& used, Index from) {
   const Index m = static_cast<Index>(used.size());
   for (Index d = 0; d < m; ++d) {
@@ -133,11 +138,6 @@ Index next_unused(const std::vector<char>& used, Index from) {
   }
   return -1;
 }
-
-constexpr int kSamples = 1;       // sampled rows and columns confirming the stop
-constexpr int kZeroRowTries = 3;  // consecutive zero rows before the samples decide
-
-}  // namespace
 
 LowRank aca(Index m, Index n, const Slice& row, const Slice& column, double tol, Index max_rank) {
   max_rank = std::min({max_rank, m, n});

@@ -9,14 +9,7 @@ namespace bem {
 
 void Box::add(Vec2 p) { add(Vec3{p.x, p.y, 0.0}); }
 
-void Box::add(Vec3 p) {
-  x0 = std::min(x0, p.x);
-  x1 = std::max(x1, p.x);
-  y0 = std::min(y0, p.y);
-  y1 = std::max(y1, p.y);
-  z0 = std::min(z0, p.z);
-  z1 = std::max(z1, p.z);
-}
+void Box::add(Vec3 p) { add(Box{p.x, p.x, p.y, p.y, p.z, p.z}); }
 
 void Box::add(const Box& b) {
   x0 = std::min(x0, b.x0);

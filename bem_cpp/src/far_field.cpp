@@ -42,11 +42,11 @@ void PanelArrays::assign(const Polygon& polygon, const Index* panels, std::size_
   }
 }
 
-__attribute__((target_clones("avx2", "default"))) void far_field_points(const Panel& pi, const PanelArrays& panels,
-                                                                        Index j0, Index j1, int* points) {
+__attribute__((target_clones("avx2", "default"))) void far_field_points(
+    const Panel& pi, const PanelArrays& panels, Index j0, Index j1, int* points,
+    const std::array<double, kMaxGaussPoints + 1>& y) {
   // Same test as the scalar far_field_points: the thresholds decrease with p, so the
   // number of failed ones is p - 1 (kMaxFarPoints failed: near field, 0).
-  const auto& y = gauss_thresholds();
   const double* mx = panels.mx.data();
   const double* my = panels.my.data();
   const double* h = panels.h.data();
@@ -65,6 +65,15 @@ __attribute__((target_clones("avx2", "default"))) void far_field_points(const Pa
 }
 
 namespace {
+
+/// sum = term for the first term (First), sum += term for the others.
+template <bool First>
+inline __attribute__((always_inline)) void accumulate(double& sum, double term) {
+  if constexpr (First)
+    sum = term;
+  else
+    sum += term;
+}
 
 /// Tensor Gauss rule (p points per panel) for the pairs (i, js[k]), vectorised over k:
 /// v (log kernel) if WithV, kij (double-layer kernel, normal of panel j) if WithK,
@@ -124,35 +133,21 @@ inline __attribute__((always_inline)) void far_batch(const Panel& pi, const Pane
       for (int k = 0; k < m; ++k) {
         const double rx = oxb[k] + sx, ry = oyb[k] + sy;
         const double r2 = rx * rx + ry * ry;
+        constexpr bool kFirst = decltype(first)::value;
         if constexpr (WithV) {
           const double f = 0.5 * log(r2);
-          if constexpr (decltype(first)::value) {
-            g0[k] = w0b[k] * f;
-            g1[k] = w1b[k] * f;
-          } else {
-            g0[k] += w0b[k] * f;
-            g1[k] += w1b[k] * f;
-          }
+          accumulate<kFirst>(g0[k], w0b[k] * f);
+          accumulate<kFirst>(g1[k], w1b[k] * f);
         }
         if constexpr (WithK) {
           const double inv = 1.0 / r2;
-          if constexpr (decltype(first)::value) {
-            c0[k] = w0b[k] * inv;
-            c1[k] = w1b[k] * inv;
-          } else {
-            c0[k] += w0b[k] * inv;
-            c1[k] += w1b[k] * inv;
-          }
+          accumulate<kFirst>(c0[k], w0b[k] * inv);
+          accumulate<kFirst>(c1[k], w1b[k] * inv);
         }
         if constexpr (WithKji) {
           const double inv = 1.0 / r2;
-          if constexpr (decltype(first)::value) {
-            c0[k] = e0b[k] * inv;
-            c1[k] = e1b[k] * inv;
-          } else {
-            c0[k] += e0b[k] * inv;
-            c1[k] += e1b[k] * inv;
-          }
+          accumulate<kFirst>(c0[k], e0b[k] * inv);
+          accumulate<kFirst>(c1[k], e1b[k] * inv);
         }
       }
     };
@@ -160,12 +155,7 @@ inline __attribute__((always_inline)) void far_batch(const Panel& pi, const Pane
     for (int b = 1; b < p; ++b) sweep(b, std::false_type{});
     // Outer weights: a = 0 assigns, a > 0 accumulates.
     auto add = [&](auto first) {
-      auto acc = [&](double& sum, double term) {
-        if constexpr (decltype(first)::value)
-          sum = term;
-        else
-          sum += term;
-      };
+      auto acc = [&](double& sum, double term) { accumulate<decltype(first)::value>(sum, term); };
 #pragma omp simd
       for (int k = 0; k < m; ++k) {
         if constexpr (WithV) {

@@ -139,15 +139,6 @@ Index unused_argmax(const X& x, const std::vector<char>& used) {
   return best;
 }
 
-Index next_unused(const std::vector<char>& used, Index from) {
-  const Index m = static_cast<Index>(used.size());
-  for (Index d = 0; d < m; ++d) {
-    const Index i = (from + d) % m;
-    if (!used[static_cast<std::size_t>(i)]) return i;
-  }
-  return -1;
-}
-
 constexpr int kZeroGroupTries = 3;  // consecutive groups without a cross before the samples decide
 
 }  // namespace

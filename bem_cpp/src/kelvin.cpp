@@ -17,6 +17,15 @@ Lame lame_from_young(double E, double nu) {
   return {E / (2.0 * (1.0 + nu)), nu};
 }
 
+void check_medium(const Lame& m, const char* nu_note) {
+  std::ostringstream msg;
+  if (!(std::isfinite(m.mu) && m.mu > 0.0))
+    msg << "Lame: the shear modulus mu = " << m.mu << " must be positive: give mu > 0";
+  else if (!(std::isfinite(m.nu) && m.nu > -1.0 && m.nu < 0.5))
+    msg << "Lame: Poisson's ratio nu = " << m.nu << " must lie in (-1, 1/2)" << nu_note << ": give -1 < nu < 0.5";
+  if (!msg.str().empty()) throw std::invalid_argument(msg.str());
+}
+
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;

@@ -14,24 +14,6 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr Index kTile = 32;
 
-void check_medium(const Lame& m) {
-  std::ostringstream msg;
-  if (!(std::isfinite(m.mu) && m.mu > 0.0))
-    msg << "Lame: the shear modulus mu = " << m.mu << " must be positive: give mu > 0";
-  else if (!(std::isfinite(m.nu) && m.nu > -1.0 && m.nu < 0.5))
-    msg << "Lame: Poisson's ratio nu = " << m.nu
-        << " must lie in (-1, 1/2) (at 1/2 the single layer is singular: V n = 0): give -1 < nu < 0.5";
-  if (!msg.str().empty()) throw std::invalid_argument(msg.str());
-}
-
-/// N x N zero matrix, first touched in parallel.
-Matrix zeros(Index N) {
-  Matrix A(N, N);
-#pragma omp parallel for schedule(static)
-  for (Index r = 0; r < N; ++r) A.row(r).setZero();
-  return A;
-}
-
 /// A := A + A^T, tile by tile in parallel (tiles (I, J) and (J, I) belong to one thread);
 /// the result is exactly symmetric.
 void symmetrise(Matrix& A) {
@@ -229,7 +211,7 @@ void direction_blocks(const Panel& pi, const Panel& pj, PairRelation relation, D
 }
 
 Operators assemble(const Polygon& polygon, const Lame& m, const OperatorRequest& request) {
-  check_medium(m);
+  check_medium(m, " (at 1/2 the single layer is singular: V n = 0)");
   const Index n = polygon.size(), N = 2 * n;
   const bool v_p1 = request.single_layer == Space::P1;
   const bool v_p0 = request.single_layer == Space::P0;
@@ -243,11 +225,11 @@ Operators assemble(const Polygon& polygon, const Lame& m, const OperatorRequest&
   // K collects the blocks (test P, trial Q) in the rows of panel P and the blocks
   // (test Q, trial P) transposed in KT, also in the rows of panel P: K = K + KT^T.
   Matrix AV, AW, AK, KT;
-  if (v_p1 || v_p0) AV = zeros(N);
-  if (w) AW = zeros(N);
+  if (v_p1 || v_p0) AV = parallel_zeros(N);
+  if (w) AW = parallel_zeros(N);
   if (with_k) {
-    AK = zeros(N);
-    KT = zeros(N);
+    AK = parallel_zeros(N);
+    KT = parallel_zeros(N);
   }
 
   const double nu = m.nu;

@@ -27,15 +27,6 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr int kL = 0, kX = 1, kY = 2, kMoments = 12;
 constexpr int slab(int moment, int a, int b) { return 4 * moment + 2 * a + b; }
 
-void check_medium(const Lame& m) {
-  std::ostringstream msg;
-  if (!(std::isfinite(m.mu) && m.mu > 0.0))
-    msg << "Lame: the shear modulus mu = " << m.mu << " must be positive: give mu > 0";
-  else if (!(std::isfinite(m.nu) && m.nu > -1.0 && m.nu < 0.5))
-    msg << "Lame: Poisson's ratio nu = " << m.nu << " must lie in (-1, 1/2): give -1 < nu < 0.5";
-  if (!msg.str().empty()) throw std::invalid_argument(msg.str());
-}
-
 /// The far pairs (pi, panel js[k]), k < m <= kFarBatch, by the tensor Gauss rule with p
 /// points per panel, vectorised over k: the 12 moments (shape a on pi, b on panel js[k])
 /// stored to out[slab][js[k]].
@@ -109,26 +100,6 @@ void far_moments_batch(const Panel& pi, const PanelArrays& panels, const Index* 
     for (int k = 0; k < m; ++k) out[s][js[k]] = acc[s][k];
 }
 
-/// far_field_points (far_field.hpp) with the thresholds y, vectorised over the panels.
-void far_points(const Panel& pi, const PanelArrays& panels, std::size_t n,
-                const std::array<double, kMaxGaussPoints + 1>& y, int* points) {
-  const double* mx = panels.mx.data();
-  const double* my = panels.my.data();
-  const double* h = panels.h.data();
-#pragma omp simd
-  for (std::size_t j = 0; j < n; ++j) {
-    const double dx = pi.m.x - mx[j], dy = pi.m.y - my[j];
-    const double d2 = dx * dx + dy * dy, half_sum = 0.5 * (pi.h + h[j]);
-    const double half_h = 0.5 * (pi.h > h[j] ? pi.h : h[j]);
-    int failed = 0;
-    for (int p = 1; p <= kMaxFarPoints; ++p) {
-      const double bound = half_sum + y[static_cast<std::size_t>(p)] * half_h;
-      failed += d2 < bound * bound ? 1 : 0;
-    }
-    points[j] = failed == kMaxFarPoints ? 0 : failed + 1;
-  }
-}
-
 /// gauss_thresholds() (log_integrals.hpp) for the quadrature tolerance q.
 std::array<double, kMaxGaussPoints + 1> thresholds(double q) {
   std::array<double, kMaxGaussPoints + 1> t{};
@@ -195,10 +166,7 @@ void LamePolygonEntries::node_blocks(const DofSet& R, const DofSet& C, double* o
       far_moments_batch(po, arrays, queue[p], queued[p], p, rows);
       queued[p] = 0;
     };
-    if (y)
-      far_points(po, arrays, ni, *y, points.data());
-    else
-      far_field_points(po, arrays, 0, static_cast<Index>(ni), points.data());
+    far_field_points(po, arrays, 0, static_cast<Index>(ni), points.data(), y ? *y : gauss_thresholds());
     const Index po_index = outer[io], po_next = (po_index + 1) % n, po_prev = (po_index + n - 1) % n;
     for (std::size_t ii = 0; ii < ni; ++ii) {
       const Index q = inner[ii];

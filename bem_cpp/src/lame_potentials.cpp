@@ -108,14 +108,6 @@ inline void add_node(const Constants& k, const double* r, const double* n, const
   }
 }
 
-void check_medium(const Lame& m) {
-  if (!(std::isfinite(m.mu) && m.mu > 0.0 && std::isfinite(m.nu) && m.nu > -1.0 && m.nu < 0.5)) {
-    std::ostringstream s;
-    s << "medium: mu = " << m.mu << ", nu = " << m.nu << " are not an elastic medium: give mu > 0 and -1 < nu < 1/2";
-    throw std::invalid_argument(s.str());
-  }
-}
-
 void check_size(const char* name, Index got, Index expected, const char* per) {
   if (got != expected) {
     std::ostringstream s;

@@ -5,28 +5,11 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "bem/block3.hpp"
+
 namespace bem {
 
 namespace {
-
-using Block = double[3][3];
-
-/// [c]_x: the matrix of w -> c x w.
-void cross_matrix(Vec3 c, Block& A) {
-  A[0][0] = A[1][1] = A[2][2] = 0.0;
-  A[0][1] = -c.z;
-  A[0][2] = c.y;
-  A[1][0] = c.z;
-  A[1][2] = -c.x;
-  A[2][0] = -c.y;
-  A[2][1] = c.x;
-}
-
-/// C = A B.
-void product(const Block& A, const Block& B, Block& C) {
-  for (int k = 0; k < 3; ++k)
-    for (int l = 0; l < 3; ++l) C[k][l] = A[k][0] * B[0][l] + A[k][1] * B[1][l] + A[k][2] * B[2][l];
-}
 
 /// The 3 x 3 block of node pair (p, q) of a matrix with node-major dofs: A(3 p + k, 3 q + l) += s B[k][l].
 void add(Matrix& A, Index p, Index q, double s, const Block& B) {
@@ -49,19 +32,10 @@ struct Curls {
   }
 };
 
-void check(const Lame& m) {
-  std::ostringstream msg;
-  if (!(std::isfinite(m.mu) && m.mu > 0.0))
-    msg << "Lame: the shear modulus mu = " << m.mu << " must be positive";
-  else if (!(std::isfinite(m.nu) && m.nu > -1.0 && m.nu < 0.5))
-    msg << "Lame: Poisson's ratio nu = " << m.nu << " must lie in (-1, 1/2)";
-  if (!msg.str().empty()) throw std::invalid_argument(msg.str());
-}
-
 }  // namespace
 
 SurfaceMatrices assemble(const Surface& surface, const Lame& m, const SurfaceRequest& request) {
-  check(m);
+  check_medium(m);
   // As the Laplace assembly (surface_operators.cpp): each unordered pair {tau, sigma} once
   // (tau <= sigma); V and W accumulated as their upper parts H (tau = sigma halved) and
   // completed as H + H^T; K as the rows of tau plus, transposed, the rows of sigma (Kt by the

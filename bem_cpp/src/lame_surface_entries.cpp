@@ -11,23 +11,13 @@
 #include <utility>
 
 #include "bem/aca.hpp"
+#include "bem/block3.hpp"
 #include "bem/far_points.hpp"
 #include "bem/surface_entries.hpp"
 
 namespace bem {
 
 namespace {
-
-using Block = double[3][3];
-
-void check(const Lame& m) {
-  std::ostringstream msg;
-  if (!(std::isfinite(m.mu) && m.mu > 0.0))
-    msg << "Lame: the shear modulus mu = " << m.mu << " must be positive";
-  else if (!(std::isfinite(m.nu) && m.nu > -1.0 && m.nu < 0.5))
-    msg << "Lame: Poisson's ratio nu = " << m.nu << " must lie in (-1, 1/2)";
-  if (!msg.str().empty()) throw std::invalid_argument(msg.str());
-}
 
 /// The coefficients of the header's formulas: 2 U = cu (a3 g I + R), A = a1 R + a0 g I.
 struct Coefficients {
@@ -43,23 +33,6 @@ struct Coefficients {
 /// The moment channels of the far pass: 0: g, 1..6: R_kl for (k, l) = (0, 0), (1, 1), (2, 2),
 /// (0, 1), (0, 2), (1, 2) (PairMoments' order of surface_operators.cpp).
 constexpr int kChannel[3][3] = {{1, 4, 5}, {4, 2, 6}, {5, 6, 3}};
-
-/// [c]_x: w -> c x w.
-void cross_matrix(Vec3 c, Block& A) {
-  A[0][0] = A[1][1] = A[2][2] = 0.0;
-  A[0][1] = -c.z;
-  A[0][2] = c.y;
-  A[1][0] = c.z;
-  A[1][2] = -c.x;
-  A[2][0] = -c.y;
-  A[2][1] = c.x;
-}
-
-/// C = A B.
-void product(const Block& A, const Block& B, Block& C) {
-  for (int k = 0; k < 3; ++k)
-    for (int l = 0; l < 3; ++l) C[k][l] = A[k][0] * B[0][l] + A[k][1] * B[1][l] + A[k][2] * B[2][l];
-}
 
 /// The blocks of one pair of a test triangle (hats i, curls ci) and a trial triangle (hats j,
 /// curls cj) from the moments m(c, a, b) (channel c, test basis a, trial basis b; 3: the
@@ -140,7 +113,7 @@ Index unused_argmax(const double* x, Index n, const std::vector<char>& used) {
 // Near field
 
 LameSurfaceNearField::LameSurfaceNearField(const Surface& s, const Lame& lame, const std::vector<char>& triangles) {
-  check(lame);
+  check_medium(lame);
   const Coefficients c(lame);
   const PairBlocks blocks{c};
   const Index n = s.vertices();
@@ -1004,7 +977,7 @@ class LameBlock : public EntryBlock {
 LameSurfaceEntries::LameSurfaceEntries(const Surface& surface, const Lame& m, Kind kind,
                                        std::shared_ptr<const LameSurfaceNearField> near,
                                        std::shared_ptr<LameSurfaceBlockCache> cache) {
-  check(m);
+  check_medium(m);
   if (!near) throw std::invalid_argument("LameSurfaceEntries: need the near field");
   data_ = std::make_shared<Data>(surface, m, kind, std::move(near), std::move(cache));
 }

@@ -15,14 +15,6 @@ namespace {
 constexpr double kInvPi = 0.318309886183790671537767526745;
 constexpr Index kTile = 32;
 
-/// n x n zero matrix, first touched in parallel (the page faults are shared out).
-Matrix zeros(Index n) {
-  Matrix A(n, n);
-#pragma omp parallel for schedule(static)
-  for (Index r = 0; r < n; ++r) A.row(r).setZero();
-  return A;
-}
-
 /// Adds the blocks of the pairs (i, j), j in [j0, n), stored by columns j, to a row:
 /// the value for the start node of panel j goes to column j, the one for its end node to
 /// column j + 1 (0 for j = n - 1): row[j] += start[j] + end[j - 1] for j in [j0, n)
@@ -63,6 +55,13 @@ void complete_upper_from_pairs(Matrix& U) {
 
 }  // namespace
 
+Matrix parallel_zeros(Index n) {
+  Matrix A(n, n);
+#pragma omp parallel for schedule(static)
+  for (Index r = 0; r < n; ++r) A.row(r).setZero();
+  return A;
+}
+
 Operators assemble(const Polygon& polygon, const OperatorRequest& request) {
   const Index n = polygon.size();
   const bool v_p1 = request.single_layer == Space::P1;
@@ -79,10 +78,10 @@ Operators assemble(const Polygon& polygon, const OperatorRequest& request) {
   // its upper triangle. K (not symmetric) from all pairs (i, j): the pairs j < i need
   // only the double-layer kernel, which is cheap (no logarithm).
   Matrix U, V0, UW, K;
-  if (v_p1) U = zeros(n);
+  if (v_p1) U = parallel_zeros(n);
   if (v_p0) V0.resize(n, n);
-  if (w) UW = zeros(n);
-  if (with_k) K = zeros(n);
+  if (w) UW = parallel_zeros(n);
+  if (with_k) K = parallel_zeros(n);
 
   const PanelArrays arrays(polygon);
   const Vector h = polygon.lengths();

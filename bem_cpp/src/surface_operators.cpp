@@ -76,62 +76,75 @@ void add_moments(const double ca[4][3], const double cb[4][3], const double mv[9
       }
 }
 
-/// A pair rule (singular pairs): one list of point pairs. The kernels are summed against
-/// the monomials (1, s1, t1) x (1, s2, t2) in one vectorised pass (9 moments per kernel),
+/// Scratch of the kernels of one thread (the largest pair rule has 7,776 points).
+std::vector<double>& moment_scratch(std::size_t size) {
+  thread_local std::vector<double> scratch;
+  if (scratch.size() < size) scratch.resize(size);
+  return scratch;
+}
+
+/// The differences d = x - y = (a.q0 - b.q0) + s1 a.e1 + t1 a.e2 - s2 b.e1 - t2 b.e2 at the
+/// point pairs of a pair rule, into dx, dy, dz.
+inline void pair_differences(const Mapped& a, const Mapped& b, const PairRule& r, double* dx, double* dy, double* dz) {
+  const int n = r.size();
+  const double *s1 = r.s1.data(), *t1 = r.t1.data(), *s2 = r.s2.data(), *t2 = r.t2.data();
+  const Vec3 d0 = a.q0 - b.q0;
+#pragma omp simd
+  for (int q = 0; q < n; ++q) {
+    dx[q] = d0.x + s1[q] * a.e1.x + t1[q] * a.e2.x - s2[q] * b.e1.x - t2[q] * b.e2.x;
+    dy[q] = d0.y + s1[q] * a.e1.y + t1[q] * a.e2.y - s2[q] * b.e1.y - t2[q] * b.e2.y;
+    dz[q] = d0.z + s1[q] * a.e1.z + t1[q] * a.e2.z - s2[q] * b.e1.z - t2[q] * b.e2.z;
+  }
+}
+
+/// The moments m[alpha * 3 + beta] of the kernel values f[q] at the points q < n of a pair
+/// rule against the monomials (1, s1, t1) x (1, s2, t2), in one vectorised pass.
+inline void monomial_moments(int n, const double* f, const PairRule& r, double m[9]) {
+  const double *s1 = r.s1.data(), *t1 = r.t1.data(), *s2 = r.s2.data(), *t2 = r.t2.data();
+  double v0 = 0, v1 = 0, v2 = 0, v3 = 0, v4 = 0, v5 = 0, v6 = 0, v7 = 0, v8 = 0;
+#pragma omp simd reduction(+ : v0, v1, v2, v3, v4, v5, v6, v7, v8)
+  for (int q = 0; q < n; ++q) {
+    const double g = f[q], gs = g * s1[q], gt = g * t1[q];
+    v0 += g;
+    v1 += g * s2[q];
+    v2 += g * t2[q];
+    v3 += gs;
+    v4 += gs * s2[q];
+    v5 += gs * t2[q];
+    v6 += gt;
+    v7 += gt * s2[q];
+    v8 += gt * t2[q];
+  }
+  const double v[9] = {v0, v1, v2, v3, v4, v5, v6, v7, v8};
+  for (int j = 0; j < 9; ++j) m[j] = v[j];
+}
+
+/// A pair rule (singular pairs): one list of point pairs. The kernels at every point pair,
+/// then each summed against the monomials (1, s1, t1) x (1, s2, t2) (9 moments per kernel),
 /// and the moments give the entries of every pair of basis functions.
 template <bool kDoubleLayer>
 void accumulate_pairs(const Mapped& a, const Mapped& b, Vec3 na, Vec3 nb, const PairRule& r, Accumulated& acc) {
   const int n = r.size();
-  const double *s1 = r.s1.data(), *t1 = r.t1.data(), *s2 = r.s2.data(), *t2 = r.t2.data(), *w = r.w.data();
-  // d = x - y = (a.q0 - b.q0) + s1 a.e1 + t1 a.e2 - s2 b.e1 - t2 b.e2
-  const Vec3 d0 = a.q0 - b.q0;
-  // the moments [alpha * 3 + beta] of V (v), Kab (k) and Kba (u), as scalars for the reduction
-  double v0 = 0, v1 = 0, v2 = 0, v3 = 0, v4 = 0, v5 = 0, v6 = 0, v7 = 0, v8 = 0;
-  double k0 = 0, k1 = 0, k2 = 0, k3 = 0, k4 = 0, k5 = 0, k6 = 0, k7 = 0, k8 = 0;
-  double u0 = 0, u1 = 0, u2 = 0, u3 = 0, u4 = 0, u5 = 0, u6 = 0, u7 = 0, u8 = 0;
-#pragma omp simd reduction(+ : v0, v1, v2, v3, v4, v5, v6, v7, v8, k0, k1, k2, k3, k4, k5, k6, k7, k8, u0, u1, u2, \
-                               u3, u4, u5, u6, u7, u8)
+  std::vector<double>& scratch = moment_scratch(6 * static_cast<std::size_t>(n));
+  double *dx = scratch.data(), *dy = dx + n, *dz = dy + n, *g = dz + n, *kab = g + n, *kba = kab + n;
+  pair_differences(a, b, r, dx, dy, dz);
+  const double* w = r.w.data();
+#pragma omp simd
   for (int q = 0; q < n; ++q) {
-    const double dx = d0.x + s1[q] * a.e1.x + t1[q] * a.e2.x - s2[q] * b.e1.x - t2[q] * b.e2.x;
-    const double dy = d0.y + s1[q] * a.e1.y + t1[q] * a.e2.y - s2[q] * b.e1.y - t2[q] * b.e2.y;
-    const double dz = d0.z + s1[q] * a.e1.z + t1[q] * a.e2.z - s2[q] * b.e1.z - t2[q] * b.e2.z;
-    const double r2 = dx * dx + dy * dy + dz * dz;
-    const double g = w[q] * kInvTwoPi / std::sqrt(r2);
-    v0 += g;
-    v1 += g * s2[q];
-    v2 += g * t2[q];
-    v3 += g * s1[q];
-    v4 += g * s1[q] * s2[q];
-    v5 += g * s1[q] * t2[q];
-    v6 += g * t1[q];
-    v7 += g * t1[q] * s2[q];
-    v8 += g * t1[q] * t2[q];
+    const double r2 = dx[q] * dx[q] + dy[q] * dy[q] + dz[q] * dz[q];
+    g[q] = w[q] * kInvTwoPi / std::sqrt(r2);
     if constexpr (kDoubleLayer) {
-      const double kab = g * (dx * nb.x + dy * nb.y + dz * nb.z) / r2;
-      const double kba = -g * (dx * na.x + dy * na.y + dz * na.z) / r2;
-      k0 += kab;
-      k1 += kab * s2[q];
-      k2 += kab * t2[q];
-      k3 += kab * s1[q];
-      k4 += kab * s1[q] * s2[q];
-      k5 += kab * s1[q] * t2[q];
-      k6 += kab * t1[q];
-      k7 += kab * t1[q] * s2[q];
-      k8 += kab * t1[q] * t2[q];
-      u0 += kba;
-      u1 += kba * s2[q];
-      u2 += kba * t2[q];
-      u3 += kba * s1[q];
-      u4 += kba * s1[q] * s2[q];
-      u5 += kba * s1[q] * t2[q];
-      u6 += kba * t1[q];
-      u7 += kba * t1[q] * s2[q];
-      u8 += kba * t1[q] * t2[q];
+      kab[q] = g[q] * (dx[q] * nb.x + dy[q] * nb.y + dz[q] * nb.z) / r2;
+      kba[q] = -g[q] * (dx[q] * na.x + dy[q] * na.y + dz[q] * na.z) / r2;
     }
   }
-  const double mv[9] = {v0, v1, v2, v3, v4, v5, v6, v7, v8};
-  const double mk[9] = {k0, k1, k2, k3, k4, k5, k6, k7, k8};
-  const double mt[9] = {u0, u1, u2, u3, u4, u5, u6, u7, u8};
+  // the moments [alpha * 3 + beta] of V (mv), Kab (mk) and Kba (mt)
+  double mv[9], mk[9] = {}, mt[9] = {};
+  monomial_moments(n, g, r, mv);
+  if constexpr (kDoubleLayer) {
+    monomial_moments(n, kab, r, mk);
+    monomial_moments(n, kba, r, mt);
+  }
   double ca[4][3], cb[4][3];
   basis_coefficients(a, ca);
   basis_coefficients(b, cb);
@@ -264,13 +277,6 @@ void moment_kernels(int n, const double* dx, const double* dy, const double* dz,
   }
 }
 
-/// Scratch of the moments of one thread (the largest pair rule has 7,776 points).
-std::vector<double>& moment_scratch(std::size_t size) {
-  thread_local std::vector<double> scratch;
-  if (scratch.size() < size) scratch.resize(size);
-  return scratch;
-}
-
 /// A pair rule: the kernels at every point pair, then each summed against the monomials
 /// (1, s1, t1) x (1, s2, t2): m[c][alpha * 3 + beta].
 template <bool kDoubleLayer>
@@ -280,35 +286,12 @@ void pair_moments(const Mapped& a, const Mapped& b, Vec3 na, Vec3 nb, const Pair
   const std::size_t un = static_cast<std::size_t>(n);
   std::vector<double>& scratch = moment_scratch((4 + kMomentKernels) * un);
   double *dx = scratch.data(), *dy = dx + n, *dz = dy + n, *w = dz + n, *k = w + n;
-  const double *s1 = r.s1.data(), *t1 = r.t1.data(), *s2 = r.s2.data(), *t2 = r.t2.data(), *rw = r.w.data();
-  const Vec3 d0 = a.q0 - b.q0;
+  pair_differences(a, b, r, dx, dy, dz);
+  const double* rw = r.w.data();
 #pragma omp simd
-  for (int q = 0; q < n; ++q) {
-    dx[q] = d0.x + s1[q] * a.e1.x + t1[q] * a.e2.x - s2[q] * b.e1.x - t2[q] * b.e2.x;
-    dy[q] = d0.y + s1[q] * a.e1.y + t1[q] * a.e2.y - s2[q] * b.e1.y - t2[q] * b.e2.y;
-    dz[q] = d0.z + s1[q] * a.e1.z + t1[q] * a.e2.z - s2[q] * b.e1.z - t2[q] * b.e2.z;
-    w[q] = rw[q] * kInvTwoPi;
-  }
+  for (int q = 0; q < n; ++q) w[q] = rw[q] * kInvTwoPi;
   moment_kernels<kDoubleLayer>(n, dx, dy, dz, w, na, nb, k);
-  for (int c = 0; c < count; ++c) {
-    const double* f = k + c * n;
-    double v0 = 0, v1 = 0, v2 = 0, v3 = 0, v4 = 0, v5 = 0, v6 = 0, v7 = 0, v8 = 0;
-#pragma omp simd reduction(+ : v0, v1, v2, v3, v4, v5, v6, v7, v8)
-    for (int q = 0; q < n; ++q) {
-      const double g = f[q], gs = g * s1[q], gt = g * t1[q];
-      v0 += g;
-      v1 += g * s2[q];
-      v2 += g * t2[q];
-      v3 += gs;
-      v4 += gs * s2[q];
-      v5 += gs * t2[q];
-      v6 += gt;
-      v7 += gt * s2[q];
-      v8 += gt * t2[q];
-    }
-    const double v[9] = {v0, v1, v2, v3, v4, v5, v6, v7, v8};
-    for (int j = 0; j < 9; ++j) m[c][j] = v[j];
-  }
+  for (int c = 0; c < count; ++c) monomial_moments(n, k + c * n, r, m[c]);
 }
 
 /// The tensor product of symmetric_rule(degree) with itself as a pair rule (the regular pairs'

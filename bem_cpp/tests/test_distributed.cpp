@@ -122,39 +122,18 @@ TEST(SteklovPoincareOperator, DistributedOverThreadsEqualsTheSerialOperator) {
       const Eigen::MatrixXd ref = serial.apply(Y), ref_flux = serial.flux(Y);
       const int iterations = serial.last_iterations();
       for (int size : {1, 2, 3}) {
-        ThreadGroup group(size);
-        std::vector<Eigen::MatrixXd> out(static_cast<std::size_t>(size)), fl(out);
-        std::vector<std::size_t> bytes(out.size());
-        std::vector<int> its(out.size());
-        std::vector<std::thread> ranks;
-        for (int r = 0; r < size; ++r)
-          ranks.emplace_back([&, r] {
-            SteklovOptions o = serial_options;
-            o.hmatrix.comm = group.communicator(r);
-            o.hmatrix.product_threads = 1;
-            const SteklovPoincareOperator S(X, flux, o);
-            out[static_cast<std::size_t>(r)] = S.apply(Y);
-            fl[static_cast<std::size_t>(r)] = S.flux(Y);
-            its[static_cast<std::size_t>(r)] = S.last_iterations();
-            const SteklovInfo& i = S.info();
-            bytes[static_cast<std::size_t>(r)] = i.nbytes_v + i.nbytes_v0 + i.nbytes_k + i.nbytes_w;
-          });
-        for (std::thread& t : ranks) t.join();
-        for (int r = 0; r < size; ++r) {
-          // the same blocks as the serial operator: round-off of the sums and of CG
-          EXPECT_LT(relative(out[static_cast<std::size_t>(r)], ref), 1e-12);
-          EXPECT_LT(relative(fl[static_cast<std::size_t>(r)], ref_flux), 1e-12);
-          EXPECT_EQ(its[static_cast<std::size_t>(r)], iterations);
-          // every rank has the same bits (collectives formed on one rank each)
-          EXPECT_EQ((out[static_cast<std::size_t>(r)] - out[0]).cwiseAbs().maxCoeff(), 0.0);
-        }
-        // each rank holds about 1/size of the serial operator's H-matrix bytes (the rows
-        // are balanced by bytes up to a leaf, and a block cut by a range boundary keeps its
-        // whole V on both sides): measured 1.00-1.10 / size on 2 and 3 ranks
-        const SteklovInfo& i = serial.info();
-        const double whole = static_cast<double>(i.nbytes_v + i.nbytes_v0 + i.nbytes_k + i.nbytes_w);
-        for (int r = 0; r < size; ++r)
-          EXPECT_LE(static_cast<double>(bytes[static_cast<std::size_t>(r)]), 1.15 * whole / size);
+        const test::RankRuns runs = test::run_on_ranks(size, Y, [&](std::shared_ptr<const Communicator> comm) {
+          SteklovOptions o = serial_options;
+          o.hmatrix.comm = std::move(comm);
+          o.hmatrix.product_threads = 1;
+          return std::make_unique<SteklovPoincareOperator>(X, flux, o);
+        });
+        // the same blocks as the serial operator: round-off of the sums and of CG; each rank
+        // holds about 1/size of the serial operator's H-matrix bytes (the rows are balanced
+        // by bytes up to a leaf, and a block cut by a range boundary keeps its whole V on
+        // both sides): measured 1.00-1.10 / size on 2 and 3 ranks
+        test::expect_serial_results(runs, ref, ref_flux, iterations, test::hmatrix_bytes(serial.info()), 1e-12, false,
+                                    1.15);
       }
     }
   }

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "bem/geometry.hpp"
+#include "bem/steklov_operator.hpp"
 
 namespace bem::test {
 
@@ -30,9 +31,11 @@ inline Points square(Index m, double s = 0.3) {
   return X;
 }
 
-/// L-shape: the square [-s, s]^2 without its upper right quarter, k panels per length s.
-inline Points l_shape(Index k, double s = 0.3) {
-  const double c[6][2] = {{-s, -s}, {s, -s}, {s, 0}, {0, 0}, {0, s}, {-s, s}};
+/// L-shape: the square [-s, s]^2 without its upper right quarter, k panels per length s,
+/// moved to the centre o.
+inline Points l_shape(Index k, double s = 0.3, Vec2 o = {0.0, 0.0}) {
+  const double c[6][2] = {{o.x - s, o.y - s}, {o.x + s, o.y - s}, {o.x + s, o.y},
+                          {o.x, o.y},         {o.x, o.y + s},     {o.x - s, o.y + s}};
   const Index per[6] = {2 * k, k, k, k, k, 2 * k};
   Points X(8 * k, 2);
   Index row = 0;
@@ -68,6 +71,26 @@ inline Points dart(Index k) {
 }
 
 /// Scalar matrix kron I_2 (node-major vector dofs).
+/// The Steklov-Poincare operators' options at the H-matrix tolerance tol with leaves of
+/// leaf_size and admissibility eta: preconditioner 1e-4, V solves to tol / 1000, the
+/// products on one thread (a shared machine).
+inline SteklovOptions steklov_options(double tol, Index leaf_size, double eta) {
+  SteklovOptions o{};
+  o.hmatrix.leaf_size = leaf_size;
+  o.hmatrix.eta = eta;
+  o.hmatrix.tol = tol;
+  o.hmatrix.product_threads = 1;
+  o.preconditioner_tol = 1e-4;
+  o.solver_tol = 1e-3 * tol;
+  o.max_iterations = 1000;
+  return o;
+}
+
+/// The entries A(d i + c, d j + c) of component c of a matrix with d dofs a node (node-major).
+inline Eigen::MatrixXd component(const Eigen::MatrixXd& A, int d, int c) {
+  return A(Eigen::seq(c, Eigen::last, d), Eigen::seq(c, Eigen::last, d));
+}
+
 inline Matrix kron2(const Matrix& A) {
   Matrix B = Matrix::Zero(2 * A.rows(), 2 * A.cols());
   for (Index r = 0; r < A.rows(); ++r)

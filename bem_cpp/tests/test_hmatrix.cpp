@@ -68,12 +68,19 @@ TEST(HMatrix, SymmetricStorageHoldsHalfTheOffDiagonalBlocks) {
   EXPECT_THROW(HMatrix(t0, t1, e, HMatrixOptions{16, 1.0, 1e-8, true}), std::invalid_argument);
 }
 
-TEST(HMatrix, PrincipalSubmatrixIsThatOfTheDenseMatrix) {
-  const Polygon poly(test::circle(600));
+/// A circle of 600 P1 nodes, its cluster tree and the entries of V (for symmetric H-matrices)
+/// and K (for general ones).
+class CircleHMatrix : public ::testing::Test {
+ protected:
+  const Polygon poly{test::circle(600)};
   const Index n = poly.size();
-  auto tree = std::make_shared<const ClusterTree>(ClusterTree::for_space(poly, Space::P1, 16));
-  const OperatorEntries single(poly, Kernel::SingleLayer, Space::P1, Space::P1);
-  const OperatorEntries dbl(poly, Kernel::DoubleLayer, Space::P1, Space::P1);
+  const std::shared_ptr<const ClusterTree> tree =
+      std::make_shared<const ClusterTree>(ClusterTree::for_space(poly, Space::P1, 16));
+  const OperatorEntries single{poly, Kernel::SingleLayer, Space::P1, Space::P1};
+  const OperatorEntries dbl{poly, Kernel::DoubleLayer, Space::P1, Space::P1};
+};
+
+TEST_F(CircleHMatrix, PrincipalSubmatrixIsThatOfTheDenseMatrix) {
   const HMatrix sym(tree, tree, single, HMatrixOptions{16, 1.0, 1e-8, true});
   const HMatrix general(tree, tree, dbl, HMatrixOptions{16, 1.0, 1e-8});
   // every third node, in a scrambled order, and an arc of consecutive nodes
@@ -96,15 +103,10 @@ TEST(HMatrix, PrincipalSubmatrixIsThatOfTheDenseMatrix) {
   EXPECT_THROW(sym.principal_submatrix<double>({n}), std::invalid_argument);
 }
 
-TEST(HMatrix, SinglePrecisionStorageRoundsEachBlockOnce) {
+TEST_F(CircleHMatrix, SinglePrecisionStorageRoundsEachBlockOnce) {
   // The same block tree and factors as double storage, each entry rounded to float (relative
   // 2^-24 = 6e-8): products within a few float round-offs of double storage's, products and
   // principal submatrices those of to_dense() (the entries as held), half the bytes.
-  const Polygon poly(test::circle(600));
-  const Index n = poly.size();
-  auto tree = std::make_shared<const ClusterTree>(ClusterTree::for_space(poly, Space::P1, 16));
-  const OperatorEntries single(poly, Kernel::SingleLayer, Space::P1, Space::P1);
-  const OperatorEntries dbl(poly, Kernel::DoubleLayer, Space::P1, Space::P1);
   for (const bool symmetric : {true, false}) {
     const OperatorEntries& e = symmetric ? single : dbl;
     HMatrixOptions o{16, 1.0, 1e-6, symmetric};

@@ -121,32 +121,38 @@ Data surface_data(const KelvinField& u, const Surface& s, Space space) {
   return out;
 }
 
-/// Largest Euclidean (displacement) or Frobenius (stress) error over the points (rows).
+/// Largest Euclidean (displacement) or Frobenius (`stress`) error over the points (rows of
+/// Z) of the computed values (rows of `computed`: u, or sigma row-major d x d).
 template <class PointsT>
-double displacement_error(const KelvinField& u, const Matrix& U, const PointsT& Z) {
+double field_error(const KelvinField& u, const Matrix& computed, const PointsT& Z, bool stress) {
   double e = 0.0;
   for (Index k = 0; k < Z.rows(); ++k) {
     const double z[3] = {Z(k, 0), Z(k, 1), u.d == 3 ? Z(k, u.d - 1) : 0.0};
-    const auto ue = u.u(z);
+    double exact[9];  // flattened as the rows of `computed`
+    int count = 0;
+    if (stress) {
+      const Mat3 se = u.sigma(z);
+      for (int i = 0; i < u.d; ++i)
+        for (int j = 0; j < u.d; ++j) exact[count++] = se[i][j];
+    } else {
+      const auto ue = u.u(z);
+      for (int c = 0; c < u.d; ++c) exact[count++] = ue[static_cast<std::size_t>(c)];
+    }
     double s = 0.0;
-    for (int c = 0; c < u.d; ++c) s += std::pow(U(k, c) - ue[static_cast<std::size_t>(c)], 2);
+    for (int c = 0; c < count; ++c) s += std::pow(computed(k, c) - exact[c], 2);
     e = std::max(e, std::sqrt(s));
   }
   return e;
 }
 
 template <class PointsT>
+double displacement_error(const KelvinField& u, const Matrix& U, const PointsT& Z) {
+  return field_error(u, U, Z, false);
+}
+
+template <class PointsT>
 double stress_error(const KelvinField& u, const Matrix& S, const PointsT& Z) {
-  double e = 0.0;
-  for (Index k = 0; k < Z.rows(); ++k) {
-    const double z[3] = {Z(k, 0), Z(k, 1), u.d == 3 ? Z(k, u.d - 1) : 0.0};
-    const Mat3 se = u.sigma(z);
-    double s = 0.0;
-    for (int i = 0; i < u.d; ++i)
-      for (int j = 0; j < u.d; ++j) s += std::pow(S(k, u.d * i + j) - se[i][j], 2);
-    e = std::max(e, std::sqrt(s));
-  }
-  return e;
+  return field_error(u, S, Z, true);
 }
 
 /// Points of the circle case: fixed ones at 0.15 .. 1.6 from Gamma (>= h of every refinement), and points at `dist`

@@ -26,17 +26,7 @@ namespace {
 double relative(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) { return (a - b).norm() / b.norm(); }
 
 /// The defaults of bem_cpp/defaults.py (products on one thread: a shared machine).
-SteklovOptions options(double tol) {
-  SteklovOptions o{};
-  o.hmatrix.leaf_size = 48;
-  o.hmatrix.eta = 2.0;
-  o.hmatrix.tol = tol;
-  o.hmatrix.product_threads = 1;
-  o.preconditioner_tol = 1e-4;
-  o.solver_tol = 1e-3 * tol;
-  o.max_iterations = 1000;
-  return o;
-}
+SteklovOptions options(double tol) { return test::steklov_options(tol, 48, 2.0); }
 
 const Lame kSteel{1.0, 0.3};
 
@@ -95,13 +85,7 @@ TEST(LameAca, GroupedAcaSeesBothComponentsOfABlockDiagonalBlock) {
     const Eigen::MatrixXd E = A - r.U * r.V.transpose();
     EXPECT_LT(E.norm(), 10 * tol * A.norm()) << tol;
     // the small component to its own relative accuracy too (it was crossed, not dropped)
-    Eigen::MatrixXd Ey(m, n), Ay(m, n);
-    for (Index i = 0; i < m; ++i)
-      for (Index j = 0; j < n; ++j) {
-        Ey(i, j) = E(2 * i + 1, 2 * j + 1);
-        Ay(i, j) = A(2 * i + 1, 2 * j + 1);
-      }
-    EXPECT_LT(Ey.norm(), 1e4 * tol * Ay.norm()) << tol;
+    EXPECT_LT(test::component(E, 2, 1).norm(), 1e4 * tol * test::component(A, 2, 1).norm()) << tol;
   }
   EXPECT_THROW(grouped_aca(2 * m, 2 * n, std::vector<Index>(3), cg, row, column, 1e-6, 10), std::invalid_argument);
 }
@@ -122,11 +106,7 @@ TEST(LameHMatrix, ProductsMatchTheDenseMatrices) {
                         {l_shape(100), Space::P0}};
   for (const Case& c : cases) {
     const Polygon poly(c.X);
-    OperatorRequest req;
-    req.single_layer = c.flux;
-    req.double_layer = c.flux;
-    req.hypersingular = true;
-    const Operators D = assemble(poly, kSteel, req);
+    const Operators D = assemble(poly, kSteel, {c.flux, c.flux, true});
     const LameSteklovOperator S(c.X, kSteel, c.flux, options(tol));
     ASSERT_EQ(S.size(), 2 * poly.size());
     const Eigen::MatrixXd Y = Eigen::MatrixXd::Random(S.size(), 3);
@@ -151,11 +131,7 @@ TEST(LameHMatrix, ThinPolygonWithStraightSides) {
   const Points X = dart(400);
   const Polygon poly(X);
   for (Space flux : {Space::P1, Space::P0}) {
-    OperatorRequest req;
-    req.single_layer = flux;
-    req.double_layer = flux;
-    req.hypersingular = true;
-    const Operators D = assemble(poly, kSteel, req);
+    const Operators D = assemble(poly, kSteel, {flux, flux, true});
     const LameSteklovOperator S(X, kSteel, flux, options(1e-10));
     const Eigen::MatrixXd Y = Eigen::MatrixXd::Random(S.size(), 2);
     EXPECT_LT(relative(S.double_layer(Y), D.double_layer * Y), 1e-8);
@@ -171,11 +147,7 @@ TEST(LameSteklovOperator, MatchesTheDenseOperator) {
   for (const Points& X : {test::circle(480), l_shape(60)}) {
     const Polygon poly(X);
     for (Space flux : {Space::P1, Space::P0}) {
-      OperatorRequest req;
-      req.single_layer = flux;
-      req.double_layer = flux;
-      req.hypersingular = true;
-      const Operators D = assemble(poly, kSteel, req);
+      const Operators D = assemble(poly, kSteel, {flux, flux, true});
       const Eigen::MatrixXd A = Eigen::MatrixXd(D.double_layer) - kron2(mass(poly, flux));
       const Eigen::MatrixXd V = D.single_layer;
       const Eigen::MatrixXd dense = 0.5 * (Eigen::MatrixXd(D.hypersingular) + A.transpose() * V.llt().solve(A));
@@ -239,39 +211,14 @@ TEST(LameSteklovOperator, DistributedOverThreadsEqualsTheSerialOperator) {
       const Eigen::MatrixXd ref = serial.apply(Y), ref_flux = serial.flux(Y);
       const int iterations = serial.last_iterations();
       for (int size : {1, 2}) {
-        ThreadGroup group(size);
-        std::vector<Eigen::MatrixXd> out(static_cast<std::size_t>(size)), fl(out);
-        std::vector<int> its(out.size());
-        std::vector<std::size_t> bytes(out.size());
-        std::vector<std::thread> ranks;
-        for (int r = 0; r < size; ++r)
-          ranks.emplace_back([&, r] {
-            SteklovOptions o = serial_options;
-            o.hmatrix.comm = group.communicator(r);
-            const LameSteklovOperator S(X, kSteel, flux, o);
-            out[static_cast<std::size_t>(r)] = S.apply(Y);
-            fl[static_cast<std::size_t>(r)] = S.flux(Y);
-            its[static_cast<std::size_t>(r)] = S.last_iterations();
-            const LameSteklovInfo& i = S.info();
-            bytes[static_cast<std::size_t>(r)] = i.nbytes_v + i.nbytes_w + i.nbytes_k + i.nbytes_v0;
-          });
-        for (std::thread& t : ranks) t.join();
-        if (size == 1) {
-          EXPECT_EQ((out[0] - ref).cwiseAbs().maxCoeff(), 0.0);
-          EXPECT_EQ((fl[0] - ref_flux).cwiseAbs().maxCoeff(), 0.0);
-        }
-        for (int r = 0; r < size; ++r) {
-          EXPECT_LT(relative(out[static_cast<std::size_t>(r)], ref), 1e-13);
-          EXPECT_LT(relative(fl[static_cast<std::size_t>(r)], ref_flux), 1e-13);
-          EXPECT_EQ(its[static_cast<std::size_t>(r)], iterations);
-          EXPECT_EQ((out[static_cast<std::size_t>(r)] - out[0]).cwiseAbs().maxCoeff(), 0.0);
-          EXPECT_EQ((fl[static_cast<std::size_t>(r)] - fl[0]).cwiseAbs().maxCoeff(), 0.0);
-        }
+        const test::RankRuns runs = test::run_on_ranks(size, Y, [&](std::shared_ptr<const Communicator> comm) {
+          SteklovOptions o = serial_options;
+          o.hmatrix.comm = std::move(comm);
+          return std::make_unique<LameSteklovOperator>(X, kSteel, flux, o);
+        });
         // each rank holds about 1/size of the H-matrix bytes (measured 1.00-1.10 / size)
-        const LameSteklovInfo& i = serial.info();
-        const double whole = static_cast<double>(i.nbytes_v + i.nbytes_w + i.nbytes_k + i.nbytes_v0);
-        for (int r = 0; r < size; ++r)
-          EXPECT_LE(static_cast<double>(bytes[static_cast<std::size_t>(r)]), 1.15 * whole / size);
+        test::expect_serial_results(runs, ref, ref_flux, iterations, test::hmatrix_bytes(serial.info()), 1e-13, true,
+                                    1.15);
       }
     }
   }

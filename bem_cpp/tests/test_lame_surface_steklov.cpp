@@ -13,6 +13,7 @@
 #include "bem/lame_surface_steklov.hpp"
 #include "bem/surface_entries.hpp"
 #include "bem/surface_near_field.hpp"
+#include "test_helpers.hpp"
 #include "test_ranks.hpp"
 #include "test_surfaces.hpp"
 
@@ -32,17 +33,7 @@ test::Mesh mesh(int shape, int level) {
 }
 const char* kShapes[3] = {"sphere", "cube", "Fichera"};
 
-SteklovOptions options(double tol, Index leaf = 16) {
-  SteklovOptions o{};
-  o.hmatrix.leaf_size = leaf;
-  o.hmatrix.eta = 4.0;
-  o.hmatrix.tol = tol;
-  o.hmatrix.product_threads = 1;
-  o.preconditioner_tol = 1e-4;
-  o.solver_tol = 1e-3 * tol;
-  o.max_iterations = 1000;
-  return o;
-}
+SteklovOptions options(double tol, Index leaf = 16) { return test::steklov_options(tol, leaf, 4.0); }
 
 /// Scalar matrix kron I_3 (node-major vector dofs).
 Eigen::MatrixXd kron3(const Eigen::MatrixXd& A) {
@@ -61,10 +52,7 @@ const SurfaceMatrices& dense(int shape, int level) {
   auto it = cache.find(key);
   if (it == cache.end()) {
     const test::Mesh m = mesh(shape, level);
-    SurfaceRequest request;
-    request.single_layer = Space::P1;
-    request.double_layer = Space::P1;
-    request.hypersingular = true;
+    const SurfaceRequest request{Space::P1, Space::P1, true};
     it = cache.emplace(key, assemble(Surface(m.vertices, m.triangles), kSteel, request)).first;
   }
   return it->second;
@@ -106,14 +94,8 @@ TEST(LameSurfaceAca, GroupedPointAcaSeesEveryComponentOfCoplanarPoints) {
     const Eigen::MatrixXd E = A - F.U * F.V.transpose();
     EXPECT_LT(E.norm(), 10 * tol * A.norm()) << tol;
     // the normal rows and columns alone (a sixth of the norm)
-    Eigen::MatrixXd En(P, P), An(P, P);
-    for (Index p = 0; p < P; ++p)
-      for (Index q = 0; q < P; ++q) {
-        En(p, q) = E(3 * p + 2, 3 * q + 2);
-        An(p, q) = A(3 * p + 2, 3 * q + 2);
-      }
-    EXPECT_LT(En.norm(), 10 * tol * A.norm()) << tol;
-    EXPECT_GT(An.norm(), 0.1 * A.norm());
+    EXPECT_LT(test::component(E, 3, 2).norm(), 10 * tol * A.norm()) << tol;
+    EXPECT_GT(test::component(A, 3, 2).norm(), 0.1 * A.norm());
   }
 }
 
@@ -151,10 +133,7 @@ TEST(LameSurfaceSteklov, CompressedBlocksAtAModerateTolerance) {
   for (int shape = 0; shape < 2; ++shape) {
     const test::Mesh m = shape == 0 ? mesh(0, 3) : test::cube(10, 0.1);
     const Surface s(m.vertices, m.triangles);
-    SurfaceRequest request;
-    request.single_layer = Space::P1;
-    request.double_layer = Space::P1;
-    request.hypersingular = true;
+    const SurfaceRequest request{Space::P1, Space::P1, true};
     const SurfaceMatrices cube = shape == 0 ? SurfaceMatrices{} : assemble(s, kSteel, request);
     const SurfaceMatrices& D = shape == 0 ? dense(0, 3) : cube;
     const LameSurfaceOperators H(s, kSteel, options(tol, 8).hmatrix);
@@ -236,38 +215,12 @@ TEST(LameSurfaceSteklov, DistributedOverThreadsEqualsTheSerialOperator) {
   const Eigen::MatrixXd ref = serial->apply(Y), ref_flux = serial->flux(Y);
   const int iterations = serial->last_iterations();
   for (int size : {1, 2}) {
-    ThreadGroup group(size);
-    std::vector<Eigen::MatrixXd> out(static_cast<std::size_t>(size)), fl(out);
-    std::vector<int> its(out.size());
-    std::vector<std::size_t> bytes(out.size());
-    std::vector<std::thread> ranks;
-    for (int r = 0; r < size; ++r)
-      ranks.emplace_back([&, r] {
-        SteklovOptions o = serial_options;
-        o.hmatrix.comm = group.communicator(r);
-        const auto S = lame_surface_steklov_operator(m.vertices, m.triangles, kSteel, Space::P1, o);
-        out[static_cast<std::size_t>(r)] = S->apply(Y);
-        fl[static_cast<std::size_t>(r)] = S->flux(Y);
-        its[static_cast<std::size_t>(r)] = S->last_iterations();
-        const LameSteklovInfo& i = S->info();
-        bytes[static_cast<std::size_t>(r)] = i.nbytes_v + i.nbytes_w + i.nbytes_k;
-      });
-    for (std::thread& t : ranks) t.join();
-    if (size == 1) {
-      EXPECT_EQ((out[0] - ref).cwiseAbs().maxCoeff(), 0.0);
-      EXPECT_EQ((fl[0] - ref_flux).cwiseAbs().maxCoeff(), 0.0);
-    }
-    for (int r = 0; r < size; ++r) {
-      EXPECT_LT(relative(out[static_cast<std::size_t>(r)], ref), 1e-13);
-      EXPECT_LT(relative(fl[static_cast<std::size_t>(r)], ref_flux), 1e-13);
-      EXPECT_EQ(its[static_cast<std::size_t>(r)], iterations);
-      EXPECT_EQ((out[static_cast<std::size_t>(r)] - out[0]).cwiseAbs().maxCoeff(), 0.0);
-      EXPECT_EQ((fl[static_cast<std::size_t>(r)] - fl[0]).cwiseAbs().maxCoeff(), 0.0);
-    }
-    const LameSteklovInfo& i = serial->info();
-    const double whole = static_cast<double>(i.nbytes_v + i.nbytes_w + i.nbytes_k);
-    for (int r = 0; r < size; ++r)
-      EXPECT_LE(static_cast<double>(bytes[static_cast<std::size_t>(r)]), 1.1 * whole / size);
+    const test::RankRuns runs = test::run_on_ranks(size, Y, [&](std::shared_ptr<const Communicator> comm) {
+      SteklovOptions o = serial_options;
+      o.hmatrix.comm = std::move(comm);
+      return lame_surface_steklov_operator(m.vertices, m.triangles, kSteel, Space::P1, o);
+    });
+    test::expect_serial_results(runs, ref, ref_flux, iterations, test::hmatrix_bytes(serial->info()), 1e-13, true, 1.1);
   }
 }
 

@@ -10,20 +10,7 @@ using namespace bem;
 
 namespace {
 /// The L-shape [0, 0.6]^2 minus [0.3, 0.6]^2 with k panels per 0.3 of side.
-Points l_shape(Index k) {
-  const double c[6][2] = {{0, 0}, {0.6, 0}, {0.6, 0.3}, {0.3, 0.3}, {0.3, 0.6}, {0, 0.6}};
-  const Index per[6] = {2 * k, k, k, k, k, 2 * k};
-  Points X(8 * k, 2);
-  Index row = 0;
-  for (int s = 0; s < 6; ++s)
-    for (Index q = 0; q < per[s]; ++q) {
-      const double w = static_cast<double>(q) / static_cast<double>(per[s]);
-      X(row, 0) = (1 - w) * c[s][0] + w * c[(s + 1) % 6][0];
-      X(row, 1) = (1 - w) * c[s][1] + w * c[(s + 1) % 6][1];
-      ++row;
-    }
-  return X;
-}
+Points l_shape(Index k) { return test::l_shape(k, 0.3, {0.3, 0.3}); }
 
 /// Points at distances 1e-6 ... 1e-2 outside random panel points, and an exterior grid.
 Points targets(const Polygon& poly, Index near, Index grid) {

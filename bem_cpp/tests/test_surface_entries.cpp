@@ -77,11 +77,7 @@ TEST(SurfaceEntries, HMatrixProductsAgreeWithTheDenseOnes) {
   const test::Mesh meshes[3] = {test::icosphere(2, 0.6), test::cube(6, 1.0 / 6), test::fichera(6, 1.0 / 6)};
   for (const test::Mesh& mesh : meshes) {
     const Surface s(mesh.vertices, mesh.triangles);
-    SurfaceRequest request;
-    request.single_layer = Space::P1;
-    request.double_layer = Space::P1;
-    request.hypersingular = true;
-    const SurfaceMatrices dense = assemble(s, request);
+    const SurfaceMatrices dense = assemble(s, {Space::P1, Space::P1, true});
     auto tree = std::make_shared<const ClusterTree>(surface_cluster_tree(s, Space::P1, 8));
     HMatrixOptions options{8, 1.5, 1e-10};
     const HMatrix K(tree, tree, SurfaceEntries(s, SurfaceKernel::DoubleLayer, Space::P1, Space::P1), options);
@@ -105,11 +101,7 @@ TEST(SurfaceEntries, CompressedOperatorsOfTheSteklovOperatorAgreeWithTheDenseOne
   const test::Mesh meshes[3] = {test::icosphere(3, 0.6), test::cube(12, 1.0 / 12), test::fichera(12, 1.0 / 12)};
   for (const test::Mesh& mesh : meshes) {
     const Surface s(mesh.vertices, mesh.triangles);
-    SurfaceRequest request;
-    request.single_layer = Space::P1;
-    request.double_layer = Space::P1;
-    request.hypersingular = true;
-    const SurfaceMatrices dense = assemble(s, request);
+    const SurfaceMatrices dense = assemble(s, {Space::P1, Space::P1, true});
     auto tree = std::make_shared<const ClusterTree>(surface_cluster_tree(s, Space::P1, 16));
     const auto near = std::make_shared<const SurfaceNearField>(s);
     HMatrixOptions options{16, 4.0, 1e-8};

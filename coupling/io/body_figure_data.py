@@ -18,7 +18,7 @@ import numpy as np
 
 from coupling.io.evaluation import exterior_from_fields
 from coupling.options import parse_slice
-from fem_py.mesh.location3d import interpolate_p1_tetrahedra
+from fem_py.mesh import interpolate_p1
 
 __all__ = [
     "BODY_PLOT_FILES",
@@ -109,7 +109,7 @@ def section(fields: dict, plane: str = "auto") -> dict:
     X, Y = np.meshgrid(centre[0] + g, centre[1] + g)
     points = np.empty((X.size, 3))
     points[:, i], points[:, j], points[:, k] = X.ravel(), Y.ravel(), value
-    u = interpolate_p1_tetrahedra(fields["x"], fields["cells"], fields["u"], points)
+    u = interpolate_p1(fields["x"], fields["cells"], fields["u"], points)
     # outside: u_e by the representation formula (accurate close to Gamma) on the coarser
     # grid of every SLICE_EXTERIOR_STRIDE-th pixel; should a pixel centre lie on Gamma to
     # round-off (refused by the formula), those within a pixel of a boundary node are

@@ -182,26 +182,35 @@ def _figure_surface(inputs: BodyFigureInputs):
     nodes, tri, u = inputs.nodes, inputs.triangles, inputs.fields["u"]
     norm = plt.Normalize(float(u.min()), float(u.max()))
     colours = plt.get_cmap("viridis")(norm(u))[tri]  # (t, 3, 4): a colour per corner
-    lo, hi = nodes.min(axis=0), nodes.max(axis=0)
-    corners = nodes[tri]
-    outward = outward_normals(corners)
     fig = plt.figure(figsize=(11, 5))
+    surface_views(fig, nodes[tri], colours, nodes.min(axis=0), nodes.max(axis=0))
+    mappable = plt.cm.ScalarMappable(norm=norm, cmap="viridis")
+    fig.colorbar(mappable, ax=fig.axes, shrink=0.7, label=r"$u_h$ on $\Gamma$")
+    return fig
+
+
+def surface_views(fig, corners: np.ndarray, colours: np.ndarray, lo, hi) -> list:
+    """A closed surface (triangles ``corners`` (t, 3, 3), a colour per corner ``colours``
+    (t, 3, 4)) in the box [lo, hi], seen from above and from below side by side in
+    ``fig``: the two 3D axes (the triangles facing away from the eye are hidden behind the
+    others, so only those facing it are drawn: half the triangles to sort and fill)."""
+    outward = outward_normals(corners)
+    # a flat side keeps a thousandth of the box's largest side
+    aspect = np.maximum(hi - lo, 1e-3 * float((hi - lo).max()))
+    axes = []
     for k, (elev, azim) in enumerate(((25, -60), (-25, 120))):
         ax = fig.add_subplot(1, 2, k + 1, projection="3d")
-        # the triangles facing away from the eye are hidden behind the others (a closed
-        # surface): only those facing it are drawn (half the triangles to sort and fill)
         e, a = np.radians(elev), np.radians(azim)
         eye = np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])
         front = outward @ eye > 0.0
         ax.add_collection(GouraudSurface(corners[front], colours[front]), autolim=False)
         ax.set(xlim=(lo[0], hi[0]), ylim=(lo[1], hi[1]), zlim=(lo[2], hi[2]))
         ax.set(xlabel="$x$", ylabel="$y$", zlabel="$z$")
-        ax.set_box_aspect(hi - lo)
+        ax.set_box_aspect(aspect)
         ax.view_init(elev=elev, azim=azim)
         ax.set_title(f"seen from elevation {elev}, azimuth {azim}", fontsize=9)
-    mappable = plt.cm.ScalarMappable(norm=norm, cmap="viridis")
-    fig.colorbar(mappable, ax=fig.axes, shrink=0.7, label=r"$u_h$ on $\Gamma$")
-    return fig
+        axes.append(ax)
+    return axes
 
 
 def outward_normals(corners: np.ndarray) -> np.ndarray:

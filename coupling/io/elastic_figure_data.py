@@ -287,7 +287,7 @@ def exterior_section(fields: dict, kernel: Any, plane: str = "auto") -> dict:
 
     from coupling.io.body_figure_data import plane_section
     from coupling.options import parse_slice
-    from fem_py.mesh.location3d import interpolate_p1_tetrahedra
+    from fem_py.mesh import interpolate_p1
 
     nodes = fields["boundary_x"]
     lo, hi = nodes.min(axis=0), nodes.max(axis=0)
@@ -304,7 +304,7 @@ def exterior_section(fields: dict, kernel: Any, plane: str = "auto") -> dict:
     points = np.empty((X.size, 3))
     points[:, i], points[:, j], points[:, k] = X.ravel(), Y.ravel(), value
     inside = np.isfinite(
-        interpolate_p1_tetrahedra(fields["x"], fields["cells"], np.zeros(len(fields["x"])), points)
+        interpolate_p1(fields["x"], fields["cells"], np.zeros(len(fields["x"])), points)
     )
     # samples within half a pixel of a boundary node are left out: the formula refuses a
     # point on Gamma, and a sample that close shows nothing the trace does not

@@ -46,6 +46,7 @@ from coupling.io.figure_data import PixelGrid, plane_square, rasterise  # noqa: 
 from coupling.io.gamma_drawing import (  # noqa: E402
     draw_boundary,
     exterior_triangulation,
+    frame_plane,
     signorini_panels,
     true_runs,
 )
@@ -111,13 +112,7 @@ def _figure_deformed_plane(inputs: ElasticFigureInputs):
     lo = np.minimum(moved.min(axis=0), nodes.min(axis=0))
     hi = np.maximum(moved.max(axis=0), nodes.max(axis=0))
     pad = 0.04 * float((hi - lo).max())
-    ax.set(
-        aspect="equal",
-        xlabel="$x$",
-        ylabel="$y$",
-        xlim=(lo[0] - pad, hi[0] + pad),
-        ylim=(lo[1] - pad, hi[1] + pad),
-    )
+    frame_plane(ax, lo - pad, hi + pad)
     ax.set_title(
         f"Deformed body, {_title_factor(inputs)}\n"
         "(dashed: undeformed outline), coloured by the von Mises stress",
@@ -149,7 +144,7 @@ def _feature_edges(nodes: np.ndarray, triangles: np.ndarray) -> np.ndarray:
 def _figure_deformed_body(inputs: ElasticFigureInputs):
     from mpl_toolkits.mplot3d.art3d import Line3DCollection
 
-    from coupling.io.body_figures import GouraudSurface, outward_normals
+    from coupling.io.body_figures import surface_views
 
     d, b = inputs.deformed, inputs.boundary
     corners, nodes = d["corners"], b["boundary_x"]
@@ -157,22 +152,10 @@ def _figure_deformed_body(inputs: ElasticFigureInputs):
     colours = np.repeat(plt.get_cmap(_CMAP)(norm(d["stress"]))[:, None, :], 3, axis=1)
     outline = _feature_edges(nodes, b["boundary_triangles"])
     both = np.vstack([corners.reshape(-1, 3), nodes])
-    lo, hi = both.min(axis=0), both.max(axis=0)
-    outward = outward_normals(corners)
     fig = plt.figure(figsize=(11, 5.2))
-    for k, (elev, azim) in enumerate(((25, -60), (-25, 120))):
-        ax = fig.add_subplot(1, 2, k + 1, projection="3d")
-        e, a = np.radians(elev), np.radians(azim)
-        eye = np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])
-        front = outward @ eye > 0.0  # a closed surface: those facing away are hidden
-        ax.add_collection(GouraudSurface(corners[front], colours[front]), autolim=False)
+    for ax in surface_views(fig, corners, colours, both.min(axis=0), both.max(axis=0)):
         if len(outline):
             ax.add_collection3d(Line3DCollection(outline, colors="0.3", linewidths=0.6))
-        ax.set(xlim=(lo[0], hi[0]), ylim=(lo[1], hi[1]), zlim=(lo[2], hi[2]))
-        ax.set(xlabel="$x$", ylabel="$y$", zlabel="$z$")
-        ax.set_box_aspect(np.maximum(hi - lo, 1e-3 * float((hi - lo).max())))
-        ax.view_init(elev=elev, azim=azim)
-        ax.set_title(f"seen from elevation {elev}, azimuth {azim}", fontsize=9)
     mappable = plt.cm.ScalarMappable(norm=norm, cmap=_CMAP)
     fig.colorbar(
         mappable,
@@ -349,13 +332,7 @@ def _figure_exterior_plane(inputs: ElasticFigureInputs):
         fig.colorbar(shown, ax=ax, shrink=0.85, label=label, **bar)
         ax.fill(*nodes.T, color="white", zorder=2)
         draw_boundary(ax, _contact_fields(b, nodes))
-        ax.set(
-            aspect="equal",
-            xlabel="$x$",
-            ylabel="$y$",
-            xlim=(centre[0] - half, centre[0] + half),
-            ylim=(centre[1] - half, centre[1] + half),
-        )
+        frame_plane(ax, centre - half, centre + half)
     # the direction of u_e: arrows at every _ARROW_STRIDE-th sample of the grid
     step = 2.0 * half / (EXTERIOR_SAMPLES_2D - 1)
     lattice = np.rint((ex["points"] - (centre - half)) / step).astype(np.int64)

@@ -27,7 +27,7 @@ import numpy as np
 import bem_cpp
 from coupling.options import hmatrix_tol
 from fem_py.mesh import interpolate_p1
-from fem_py.mesh.location3d import interpolate_p1_tetrahedra, on_surface
+from fem_py.mesh.location3d import on_surface
 from coupling.io.figure_data import plane_square
 from fem_py.polyline import closest_on_polygon, inside_polygon, polygon_corners, segment_lengths
 
@@ -45,13 +45,21 @@ __all__ = [
 ON_GAMMA = 1e-11
 
 
+def _traces(fields: dict) -> tuple:
+    """The boundary data of bem_cpp's potentials in the run of ``fields``: Gamma's nodes and
+    the traces u_e and du_e/dn."""
+    return fields["boundary_x"], fields["ue"], fields["dn_ue"]
+
+
 def _kernel(fields: dict, kernel: str | tuple | None = None) -> dict:
-    """The keywords of bem_cpp's potentials for the run of ``fields``: its surface, and for
-    elasticity Kelvin's kernel of the medium and the translation a (d,). ``kernel``: the
-    problem's (``SignoriniProblem.kernel``), else read from the fields (``exterior``: the
-    medium's E, nu, written by an elastic run)."""
+    """The keywords of bem_cpp's potentials for the run of ``fields``: its flux space, its
+    surface, and for elasticity Kelvin's kernel of the medium and the translation a (d,).
+    ``kernel``: the problem's (``SignoriniProblem.kernel``), else read from the fields
+    (``exterior``: the medium's E, nu, written by an elastic run)."""
     surface = fields.get("boundary_triangles")
-    out = {} if surface is None else {"triangles": surface}
+    out = {"flux": str(fields["flux_space"])}
+    if surface is not None:
+        out["triangles"] = surface
     if kernel is None and "exterior" in fields:
         kernel = ("lame", *map(float, fields["exterior"]))
     if kernel is None or (isinstance(kernel, str) and kernel == "laplace"):
@@ -78,11 +86,8 @@ def exterior_from_fields(
     by direct sums (docs/method.md section 12).
     """
     return bem_cpp.exterior_potential(
-        fields["boundary_x"],
-        fields["ue"],
-        fields["dn_ue"],
+        *_traces(fields),
         points,
-        flux=str(fields["flux_space"]),
         compression="auto",
         tol=hmatrix_tol(fields["boundary_x"]) if tol is None else tol,
         **_kernel(fields, kernel),
@@ -92,14 +97,7 @@ def exterior_from_fields(
 def exterior_stress_from_fields(fields: dict, points: np.ndarray) -> np.ndarray:
     """The stress sigma(u_e) (m, d, d) of the exterior medium at exterior ``points`` from
     the fields of an elastic run (``bem_cpp.exterior_stress``, docs/method.md section 12)."""
-    return bem_cpp.exterior_stress(
-        fields["boundary_x"],
-        fields["ue"],
-        fields["dn_ue"],
-        points,
-        flux=str(fields["flux_space"]),
-        **_kernel(fields),
-    )
+    return bem_cpp.exterior_stress(*_traces(fields), points, **_kernel(fields))
 
 
 class ExteriorSamples(NamedTuple):
@@ -195,7 +193,7 @@ def _evaluate_in_body(fields: dict, points: np.ndarray) -> dict[str, np.ndarray]
     on = triangle >= 0
     values = _columns(fields["u"])
     u = np.stack(
-        [interpolate_p1_tetrahedra(fields["x"], fields["cells"], c, points) for c in values.T],
+        [interpolate_p1(fields["x"], fields["cells"], c, points) for c in values.T],
         axis=1,
     )
     inside = np.isfinite(u).all(axis=1) & ~on

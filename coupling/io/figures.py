@@ -44,6 +44,7 @@ from coupling.io.gamma_drawing import (  # noqa: E402
     closed,
     draw_boundary,
     exterior_triangulation,
+    frame_plane,
     signorini_panels,
     true_runs,
 )
@@ -189,13 +190,7 @@ def _figure_whole_plane(inputs: FigureInputs):
             )
     fig.colorbar(im, ax=ax, shrink=0.85, label=r"$u_h$ in $\Omega$, $u_e$ outside")
     draw_boundary(ax, fields)
-    ax.set(
-        aspect="equal",
-        xlabel="$x$",
-        ylabel="$y$",
-        xlim=(centre[0] - half, centre[0] + half),
-        ylim=(centre[1] - half, centre[1] + half),
-    )
+    frame_plane(ax, centre - half, centre + half)
     ax.set_title(
         r"Whole plane: $u_h$ in $\Omega$, $u_e$ (representation formula) outside;"
         "\n"

@@ -68,6 +68,12 @@ def true_runs(mask: np.ndarray) -> list[tuple[int, int]]:
     return runs
 
 
+def frame_plane(ax, lo, hi) -> None:
+    """A figure of the plane: equal aspect, the axes named x and y, the view [lo, hi] (the
+    lower left and upper right corners)."""
+    ax.set(aspect="equal", xlabel="$x$", ylabel="$y$", xlim=(lo[0], hi[0]), ylim=(lo[1], hi[1]))
+
+
 def draw_boundary(ax, fields: dict) -> None:
     """Gamma (thin black) and Gamma_s (thick): red where in contact (phi_h = 0 at both
     ends of a panel), white on a black edge where the gap is open; each run of panels one

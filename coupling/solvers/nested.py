@@ -25,7 +25,7 @@ from coupling.solvers.records import Monitor
 from coupling.solvers.solution import Solution, solve
 from fem_py.dofs import gather_p1
 from fem_py.mesh import interpolate_p1
-from fem_py.mesh.location3d import interpolate_p1_tetrahedra, on_surface
+from fem_py.mesh.location3d import on_surface
 from fem_py.polyline import closest_on_polygon
 
 __all__ = ["LevelRecord", "prolong", "solve_nested"]
@@ -60,9 +60,8 @@ def prolong(coarse: Any, coarse_solution: Solution, fine: Any) -> tuple[np.ndarr
     # sorting
     fine_cells = fine.V.mesh.topology.index_map(dim).size_global
     divisions = max(1, round((fine_cells / len(cells)) ** (1.0 / dim)))
-    interpolate = interpolate_p1_tetrahedra if dim == 3 else interpolate_p1
     u = np.stack(
-        [interpolate(x, cells, values[:, k], points, divisions=divisions) for k in range(d)],
+        [interpolate_p1(x, cells, values[:, k], points, divisions=divisions) for k in range(d)],
         axis=1,
     )
     lost = np.isnan(u).any(axis=1)  # on the coarse boundary up to round-off (or outside a

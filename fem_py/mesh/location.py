@@ -1,17 +1,17 @@
 """Point location in a triangle mesh: the triangle that holds each point, and the P1
 interpolation there (vectorised; candidates from a uniform grid of squares, or a k-d tree
 of the triangle centroids on strongly graded meshes). The nodes of a uniform refinement
-are matched by sorting, for triangles and tetrahedra alike (:func:`interpolate_p1_cells`,
-which fem_py.mesh.location3d uses too)."""
+are matched by sorting, for triangles and tetrahedra alike (:func:`interpolate_p1`; the
+tetrahedra are located by fem_py.mesh.location3d)."""
 from __future__ import annotations
 
 import itertools
-from typing import Callable
-
 import numpy as np
 from scipy.spatial import cKDTree
 
-__all__ = ["locate", "interpolate_p1", "lattice_weights", "interpolate_p1_cells"]
+from fem_py.mesh.location3d import locate_in_tetrahedra
+
+__all__ = ["locate", "interpolate_p1", "lattice_weights"]
 
 #: Point location: a grid square holding more triangles than this (a strongly graded
 #: mesh, the squares being as large as the largest triangle) switches :func:`locate` to
@@ -194,42 +194,33 @@ def _at_lattice_points(
 
 def interpolate_p1(
     x: np.ndarray,
-    triangles: np.ndarray,
-    values: np.ndarray,
-    points: np.ndarray,
-    *,
-    divisions: int = 2,
-) -> np.ndarray:
-    """The P1 function of nodal ``values`` at ``points``; NaN outside the mesh.
-
-    Points at nodes and at the lattice points of the ``divisions``-fold uniform refinement
-    (all nodes of such a refinement: nested iteration; 2 gives the edge midpoints) are
-    matched by sorting; the others are located (:func:`locate`)."""
-    x = np.asarray(x, dtype=float)[:, :2]
-    points = np.asarray(points, dtype=float).reshape(-1, 2)
-    return interpolate_p1_cells(x, triangles, values, points, divisions, locate)
-
-
-def interpolate_p1_cells(
-    x: np.ndarray,
     cells: np.ndarray,
     values: np.ndarray,
     points: np.ndarray,
-    divisions: int,
-    locate_cells: Callable[[np.ndarray, np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]],
+    *,
+    divisions: int | None = None,
 ) -> np.ndarray:
-    """The P1 function of nodal ``values`` on the simplices ``cells`` (triangles or
-    tetrahedra) of the nodes ``x`` (N, d) at ``points`` (m, d); NaN outside the mesh: the
-    nodes and lattice points of the ``divisions``-fold refinement matched by sorting, the
-    others located by ``locate_cells(x, cells, points) -> (cell, barycentric)`` (cell -1:
-    in none)."""
+    """The P1 function of nodal ``values`` at ``points``; NaN outside the mesh.
+
+    The mesh: triangles (``cells`` (T, 3), nodes ``x`` (N, 2), or (N, 3) with z left
+    out, points (m, 2)) or tetrahedra (``cells`` (T, 4), x (N, 3), points (m, 3)).
+    Points at nodes and at the lattice points of the ``divisions``-fold uniform refinement
+    (all nodes of such a refinement: nested iteration; 2 gives the edge midpoints; by
+    default 2 on triangles, 1 on tetrahedra) are matched by sorting; the others are
+    located (:func:`locate`, :func:`fem_py.mesh.location3d.locate_in_tetrahedra`)."""
     cells = np.asarray(cells, dtype=np.int64)
+    tetrahedra = cells.ndim == 2 and cells.shape[1] == 4
+    d = 3 if tetrahedra else 2
+    x = np.asarray(x, dtype=float)[:, :d]
+    points = np.asarray(points, dtype=float).reshape(-1, d)
     values = np.asarray(values, dtype=float)
     if len(x) == 0 or len(cells) == 0:
         return np.full(len(points), np.nan)
+    if divisions is None:
+        divisions = 1 if tetrahedra else 2
     out, matched = _at_lattice_points(x, cells, values, points, max(int(divisions), 1))
     rest = np.flatnonzero(~matched)
-    cell, bary = locate_cells(x, cells, points[rest])
+    cell, bary = (locate_in_tetrahedra if tetrahedra else locate)(x, cells, points[rest])
     found = cell >= 0
     out[rest[found]] = np.einsum("ij,ij->i", bary[found], values[cells[cell[found]]])
     return out

@@ -1,9 +1,9 @@
-"""Point location for a body in R^3: the tetrahedron that holds each point (and the P1
-interpolation there), and the points that lie on a triangulated surface (with their
-barycentric coordinates there). Candidates come from a k-d tree of the cells' centroids:
-a point inside a cell is within the cell's largest centroid-to-vertex distance of its
-centroid, so every cell that may hold it is among those within the mesh's largest such
-distance."""
+"""Point location for a body in R^3: the tetrahedron that holds each point (for the P1
+interpolation of fem_py.mesh.location.interpolate_p1), and the points that lie on a
+triangulated surface (with their barycentric coordinates there). Candidates come from a
+k-d tree of the cells' centroids: a point inside a cell is within the cell's largest
+centroid-to-vertex distance of its centroid, so every cell that may hold it is among
+those within the mesh's largest such distance."""
 from __future__ import annotations
 
 import itertools
@@ -11,9 +11,7 @@ import itertools
 import numpy as np
 from scipy.spatial import cKDTree
 
-from fem_py.mesh.location import interpolate_p1_cells
-
-__all__ = ["locate_in_tetrahedra", "interpolate_p1_tetrahedra", "on_surface"]
+__all__ = ["locate_in_tetrahedra", "on_surface"]
 
 
 def _candidates(corners: np.ndarray, points: np.ndarray) -> list[list[int]]:
@@ -93,25 +91,6 @@ def locate_in_tetrahedra(
         if lam[best].min() >= -tol:
             cell[i], bary[i] = kept[near[best]], lam[best]
     return cell, bary
-
-
-def interpolate_p1_tetrahedra(
-    x: np.ndarray,
-    tetrahedra: np.ndarray,
-    values: np.ndarray,
-    points: np.ndarray,
-    *,
-    divisions: int = 1,
-) -> np.ndarray:
-    """The P1 function of nodal ``values`` at ``points`` (m, 3); NaN outside the mesh.
-
-    Points at nodes and at the lattice points of the ``divisions``-fold uniform refinement
-    (2: the edge midpoints, every node of a box with twice the cubes per side: nested
-    iteration) are matched by sorting; the others are located
-    (:func:`locate_in_tetrahedra`)."""
-    x = np.asarray(x, dtype=float)
-    points = np.asarray(points, dtype=float).reshape(-1, 3)
-    return interpolate_p1_cells(x, tetrahedra, values, points, divisions, locate_in_tetrahedra)
 
 
 def on_surface(

@@ -12,19 +12,13 @@ from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from test_adapt_solid import BOX_SOLVER, BOX_STEPS, BOX_THETA, box_builder, box_domain  # noqa: E402
+from test_adapt_solid import adapt_box  # noqa: E402
 
-from coupling.adapt import AdaptOptions, adapt  # noqa: E402
 from coupling.manufactured import box_contact, solution_errors  # noqa: E402
 
 comm = MPI.COMM_WORLD
 exact = box_contact()
-levels = adapt(
-    box_builder(exact),
-    box_domain(comm, exact),
-    BOX_SOLVER,
-    AdaptOptions(steps=BOX_STEPS, theta=BOX_THETA),
-)
+levels = adapt_box(comm, exact)
 rows = []
 for level in levels:
     errors = solution_errors(level.problem, exact, level.solution)

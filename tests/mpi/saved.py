@@ -1,5 +1,7 @@
-"""What the MPI check scripts save of a solve: its numbers and u_h at the nodes sorted by
-coordinates (an order independent of the ranks)."""
+"""What the MPI check scripts save: of a solve its numbers and u_h at the nodes sorted by
+coordinates (an order independent of the ranks); of a check its JSON report."""
+import json
+
 import numpy as np
 
 from coupling.io.outputs import gather_p1
@@ -24,3 +26,10 @@ def save_solve(comm, path: str, result, **extra) -> None:
             converged=result.converged,
             **extra,
         )
+
+
+def save_json(comm, path: str, report) -> None:
+    """Rank 0 of ``comm`` writes ``report`` as JSON to ``path``; not collective."""
+    if comm.rank == 0:
+        with open(path, "w") as fh:
+            json.dump(report, fh)

@@ -11,6 +11,7 @@
 // classical failure of partial pivoting on blocks with unseen non-smooth parts.
 #include <Eigen/Dense>
 #include <functional>
+#include <vector>
 
 #include "bem/geometry.hpp"
 
@@ -31,5 +32,9 @@ LowRank aca(Index m, Index n, const Slice& row, const Slice& column, double tol,
 /// Truncates A = U V^T to the smallest rank r with sum_{i > r} sigma_i^2 <= tol^2 |A|_F^2
 /// (QR of U and V, SVD of R_U R_V^T).
 void recompress(LowRank& a, double tol);
+
+/// The first index i of from, from + 1, ... (cyclically, modulo used.size()) with !used[i],
+/// or -1 when every index is used: the next pivot row the ACAs try after a zero one.
+Index next_unused(const std::vector<char>& used, Index from);
 
 }  // namespace bem

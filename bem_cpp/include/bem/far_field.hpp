@@ -18,8 +18,10 @@ struct PanelArrays {
   std::vector<double> ax, ay, tx, ty, nx, ny, h, mx, my;
 };
 
-/// far_field_points(pi, panel j) for j in [j0, j1), vectorised, into points[j].
-void far_field_points(const Panel& pi, const PanelArrays& panels, Index j0, Index j1, int* points);
+/// far_field_points(pi, panel j, y) (log_integrals.hpp) for j in [j0, j1), vectorised, into
+/// points[j]; y the thresholds of the rule (the dense assembly's by default).
+void far_field_points(const Panel& pi, const PanelArrays& panels, Index j0, Index j1, int* points,
+                      const std::array<double, kMaxGaussPoints + 1>& y = gauss_thresholds());
 
 /// Largest batch of far-field pairs evaluated together.
 constexpr int kFarBatch = 32;

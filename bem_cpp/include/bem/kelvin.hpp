@@ -24,6 +24,10 @@ struct Lame {
 /// std::invalid_argument (ValueError in Python) with a one-line message otherwise.
 Lame lame_from_young(double E, double nu);
 
+/// Throws std::invalid_argument (one line, naming the value and the fix) unless mu > 0 and
+/// nu in (-1, 1/2); `nu_note` follows the range of nu in the message (why 1/2 is excluded).
+void check_medium(const Lame& m, const char* nu_note = "");
+
 /// d x d matrices and d-vectors (d = 2, 3), row-major; entries beyond d unused.
 using Mat3 = std::array<std::array<double, 3>, 3>;
 

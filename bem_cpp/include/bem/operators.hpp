@@ -51,6 +51,10 @@ Matrix mass(const Polygon& polygon, Space space);
 /// K := K + scale * M(space) in place (M is banded: no dense mass matrix is formed).
 void add_mass(const Polygon& polygon, Space space, double scale, Matrix& K);
 
+/// The n x n zero matrix, first touched in parallel (the page faults are shared out among
+/// the threads that then fill it).
+Matrix parallel_zeros(Index n);
+
 // The same on raw nodes, validated by the Polygon constructor (used by the bindings).
 Matrix single_layer(const Eigen::Ref<const Points>& nodes, Space space);
 Matrix double_layer(const Eigen::Ref<const Points>& nodes, Space space);
