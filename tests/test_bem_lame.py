@@ -249,3 +249,28 @@ def test_the_compressed_surface_operator_agrees_with_the_dense_one():
     assert iterations[1] <= iterations[0] + 3, iterations
     with pytest.raises(ValueError, match='needs flux="p1"'):
         bem_cpp.steklov_poincare(X, "p0", triangles=T, kernel=LAME, compression="hmatrix")
+
+
+def test_the_surface_operators_hypersingular_block_equals_the_integrated_one():
+    """The 3D Lame W_h's block on the vector dofs of some nodes (Fichera's corner's lowest
+    face, in a scattered order), read from S_h's H-matrices of Z and W_L: the integrated
+    block (``bem_cpp.hypersingular(..., block=)``) to the H-matrix tolerance, node-major,
+    symmetric to round-off; bad nodes are refused, and the polygon's operator (W_h = D^T X0 D,
+    not held on the nodes) holds none."""
+    X, T = fichera(4, side=0.6)
+    low = np.flatnonzero(np.isclose(X[:, 2], X[:, 2].min()))[::-1]
+    H = bem_cpp.steklov_poincare(X, triangles=T, kernel=LAME, compression="hmatrix", tol=1e-8)
+    assert H.holds_hypersingular and not H.single_precision
+    block = H.hypersingular_block(low)
+    integrated = bem_cpp.hypersingular(X, triangles=T, block=low, kernel=LAME)
+    assert block.shape == integrated.shape == (3 * len(low), 3 * len(low))
+    assert np.linalg.norm(block - integrated) <= 1e-7 * np.linalg.norm(integrated)
+    assert np.abs(block - block.T).max() <= 1e-14 * np.abs(block).max()
+    with pytest.raises(ValueError, match="distinct"):
+        H.hypersingular_block([0, 0])
+    with pytest.raises(ValueError, match="must lie in"):
+        H.hypersingular_block([len(X)])
+    plane = bem_cpp.steklov_poincare(circle(200), kernel=LAME, compression="hmatrix")
+    assert not plane.holds_hypersingular
+    with pytest.raises(TypeError, match="no H-matrix of W_h"):
+        plane.hypersingular_block([0, 1])
