@@ -89,8 +89,9 @@ def test_box_contact_converges():
 def test_box_m_s_from_the_hmatrix_lame_w_h(monkeypatch):
     """With S_h as H-matrices (3D) M_s = E^T W_h E is read from S_h's H-matrices of the Lame
     W_h (Z + 2 mu W_L kron I_3; no dense integration): the integrated block to S_h's tol (1e-4
-    here), and ssn takes the same iterations to the same answer as with the integrated one
-    (the former path, the read refused)."""
+    here; measured 4e-16, the 386 vertices' blocks all dense), and ssn takes the same
+    iterations to the same answer as with the integrated one (the former path, the read
+    refused)."""
     from bem_cpp.compressed import SteklovPoincareOperator
     from coupling.preconditioners import signorini_hypersingular
 
