@@ -179,9 +179,10 @@ class SteklovPoincareOperator(_CompiledOperator):
 
     @property
     def holds_hypersingular(self) -> bool:
-        """Whether W_h is held as an H-matrix on the P1 nodes (a surface's S_h), so that
-        :meth:`hypersingular_block` can read blocks of it."""
-        return hasattr(self._op, "hypersingular_block")
+        """Whether W_h is held as H-matrices on the P1 nodes (a surface's S_h, Laplace's or
+        Lame's), so that :meth:`hypersingular_block` can read blocks of it."""
+        held = getattr(self._op, "holds_hypersingular", None)  # Lame's: its surface's only
+        return hasattr(self._op, "hypersingular_block") if held is None else bool(held)
 
     def hypersingular_block(self, indices: ArrayLike) -> NDArray[np.float64] | SingleMatrix:
         """W_h[indices, indices] = E^T W_h E (k, k) read from the H-matrix of W_h (to its
@@ -189,11 +190,19 @@ class SteklovPoincareOperator(_CompiledOperator):
         only: :attr:`holds_hypersingular`; collective when distributed, the same on every
         rank). In the precision of the blocks: a float64 array, or, when they are held in
         single precision (:attr:`single_precision`), a :class:`bem_cpp.dense.SingleMatrix`
-        (its entries carry the blocks' rounding already; half the memory)."""
+        (its entries carry the blocks' rounding already; half the memory).
+
+        Lame's S_h (3D): ``indices`` are nodes, and the block is the (3 k, 3 k) one of their
+        vector dofs ``3 * node + component``, node-major (Z's principal submatrix plus
+        2 mu W_L's Kronecker I_3; lame_surface_steklov.hpp); its blocks are held in double
+        precision."""
         if not self.holds_hypersingular:
             raise TypeError("hypersingular_block: this S_h holds no H-matrix of W_h on P1 nodes")
-        indices = checks.indices(indices, self._op.size, "indices")
+        d = getattr(self._op, "dimension", 1)  # Lame's operator: d components per node
+        indices = checks.indices(indices, self._op.size // d, "indices")
         if self.single_precision:  # Eigen's column-major array: its transpose, in C order
+            if d != 1:
+                raise TypeError("hypersingular_block: Lame's S_h holds no single precision blocks")
             return SingleMatrix(self._op.hypersingular_block_single(indices).T)
         return self._op.hypersingular_block(indices)
 

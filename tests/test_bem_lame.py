@@ -249,3 +249,29 @@ def test_the_compressed_surface_operator_agrees_with_the_dense_one():
     assert iterations[1] <= iterations[0] + 3, iterations
     with pytest.raises(ValueError, match='needs flux="p1"'):
         bem_cpp.steklov_poincare(X, "p0", triangles=T, kernel=LAME, compression="hmatrix")
+
+
+def test_the_surface_operators_hypersingular_block_equals_the_integrated_one():
+    """The 3D Lame W_h's block on the vector dofs of some nodes (a cap of the sphere of 642
+    vertices, 101 nodes in a scattered order), read from S_h's H-matrices of Z and W_L (tol
+    1e-6: low-rank far blocks, largest rank 44): the integrated block
+    (``bem_cpp.hypersingular(..., block=)``) to the H-matrix tolerance (measured 2.2e-9
+    relative), node-major, symmetric to round-off (5e-17); bad nodes are refused, and the
+    polygon's operator (W_h = D^T X0 D, not held on the nodes) holds none."""
+    X, T = icosphere(3, radius=0.5)
+    cap = np.flatnonzero(X[:, 2] < X[:, 2].min() + 0.15)[::-1]
+    H = bem_cpp.steklov_poincare(X, triangles=T, kernel=LAME, compression="hmatrix", tol=1e-6)
+    assert H.holds_hypersingular and not H.single_precision and H.info.max_rank > 0
+    block = H.hypersingular_block(cap)
+    integrated = bem_cpp.hypersingular(X, triangles=T, block=cap, kernel=LAME)
+    assert block.shape == integrated.shape == (3 * len(cap), 3 * len(cap))
+    assert np.linalg.norm(block - integrated) <= 1e-6 * np.linalg.norm(integrated)
+    assert np.abs(block - block.T).max() <= 1e-14 * np.abs(block).max()
+    with pytest.raises(ValueError, match="distinct"):
+        H.hypersingular_block([0, 0])
+    with pytest.raises(ValueError, match="must lie in"):
+        H.hypersingular_block([len(X)])
+    plane = bem_cpp.steklov_poincare(circle(200), kernel=LAME, compression="hmatrix")
+    assert not plane.holds_hypersingular
+    with pytest.raises(TypeError, match="no H-matrix of W_h"):
+        plane.hypersingular_block([0, 1])

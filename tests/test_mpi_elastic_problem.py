@@ -3,7 +3,8 @@
 and on the 4^3 box the amg preconditioner's inner solve, whose GAMG hierarchy depends on the
 partition, stops at the relative residual coupling.options.AMG_RTOL = 1e-12; on the square
 and the 8^3 box the preconditioner is the lattice's multigrid, one V-cycle the same on any
-number of ranks, which the Newton steps' CG applies as it is)."""
+number of ranks, which the Newton steps' CG applies as it is; with the H-matrix S_h of the
+8^3 box M_s is read from its Lame W_h, collective, the same bits on every rank)."""
 from __future__ import annotations
 
 import numpy as np
@@ -17,8 +18,8 @@ SCRIPT = str(ROOT / "tests" / "mpi" / "elastic_check.py")
 @pytest.mark.mpi
 @pytest.mark.parametrize(
     "dim, operator, cubes",
-    [(2, "dense", 4), (2, "hmatrix", 4), (3, "dense", 4), (3, "dense", 8)],
-    ids=["square-dense", "square-hmatrix", "box-gamg", "box-lattice"],
+    [(2, "dense", 4), (2, "hmatrix", 4), (3, "dense", 4), (3, "dense", 8), (3, "hmatrix", 8)],
+    ids=["square-dense", "square-hmatrix", "box-gamg", "box-lattice", "box-hmatrix"],
 )
 def test_elastic_contact_is_rank_independent(tmp_path, dim, operator, cubes):
     runs = {}

@@ -312,6 +312,12 @@ Eigen::MatrixXd LameSteklovOperator::hypersingular(const Eigen::Ref<const Eigen:
   return parts_.hypersingular(X);
 }
 
+Eigen::MatrixXd LameSteklovOperator::hypersingular_block(const std::vector<Index>& nodes) const {
+  if (!holds_hypersingular())
+    throw std::logic_error("LameSteklovOperator: W_h is not held on the nodes (a polygon's operator)");
+  return parts_.hypersingular_block(nodes);
+}
+
 Eigen::MatrixXd LameSteklovOperator::double_layer(const Eigen::Ref<const Eigen::MatrixXd>& X, bool transpose) const {
   check_rows(X.rows(), transpose ? parts_.single_layer->rows() : size());
   return parts_.double_layer(X, transpose);

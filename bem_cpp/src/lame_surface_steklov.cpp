@@ -33,7 +33,8 @@ Eigen::MatrixXd kron3_apply(const HMatrix& A, const Eigen::Ref<const Eigen::Matr
   return Y;
 }
 
-LameSurfaceOperators::LameSurfaceOperators(const Surface& s, const Lame& m, const HMatrixOptions& options) : mu_(m.mu) {
+LameSurfaceOperators::LameSurfaceOperators(const Surface& s, const Lame& m, const HMatrixOptions& options)
+    : mu_(m.mu), comm_(options.comm) {
   HMatrixOptions o = options;
   o.min_distance = far_distance(s);
   auto tree1 = std::make_shared<const ClusterTree>(surface_cluster_tree(s, Space::P1, o.leaf_size));
@@ -87,6 +88,33 @@ Eigen::MatrixXd LameSurfaceOperators::hypersingular(const Eigen::Ref<const Eigen
   return out;
 }
 
+Eigen::MatrixXd LameSurfaceOperators::hypersingular_block(const std::vector<Index>& nodes) const {
+  const Index k = static_cast<Index>(nodes.size()), n = WL_->rows();
+  for (const Index i : nodes)
+    if (i < 0 || i >= n)
+      throw std::invalid_argument("LameSurfaceOperators::hypersingular_block: a node is out of range");
+  std::vector<Index> dofs(static_cast<std::size_t>(3 * k));
+  for (Index a = 0; a < k; ++a)
+    for (int c = 0; c < 3; ++c) dofs[static_cast<std::size_t>(3 * a + c)] = 3 * nodes[static_cast<std::size_t>(a)] + c;
+  Eigen::MatrixXd block = Z_->principal_submatrix<double>(dofs);
+  Eigen::MatrixXd laplace = WL_->principal_submatrix<double>(nodes);
+  if (comm_ && comm_->size > 1) {
+    // every entry comes from one block of one rank: the sums are exact, in any order
+    const auto counts = [this](Index m) {
+      std::vector<Index> c(static_cast<std::size_t>(comm_->size), m / comm_->size);
+      for (Index r = 0; r < m % comm_->size; ++r) ++c[static_cast<std::size_t>(r)];
+      return c;
+    };
+    block = comm_->allreduce(block, counts(3 * k));
+    laplace = comm_->allreduce(laplace, counts(k));
+  }
+  const double s = 2.0 * mu_;
+  for (Index b = 0; b < k; ++b)
+    for (Index a = 0; a < k; ++a)
+      for (int c = 0; c < 3; ++c) block(3 * a + c, 3 * b + c) += s * laplace(a, b);
+  return block;
+}
+
 Eigen::MatrixXd LameSurfaceOperators::double_layer(const Eigen::Ref<const Eigen::MatrixXd>& X, bool transpose) const {
   Eigen::MatrixXd out = Y_->apply(X, transpose);
   out += kron3_apply(*KL_, X, transpose);
@@ -135,6 +163,7 @@ LameSteklovParts lame_surface_steklov_parts(const Surface& s, const Lame& m, Spa
   parts.single_layer = ops->single_layer();
   parts.hypersingular = [ops](const Eigen::MatrixXd& X) { return ops->hypersingular(X); };
   parts.double_layer = [ops](const Eigen::MatrixXd& X, bool transpose) { return ops->double_layer(X, transpose); };
+  parts.hypersingular_block = [ops](const std::vector<Index>& nodes) { return ops->hypersingular_block(nodes); };
 
   const auto t0 = std::chrono::steady_clock::now();
   // M_h = Gram kron I_3, and the scalar Gram matrix's factor for C0

@@ -236,6 +236,9 @@ TEST(LameSteklovOperator, Refusals) {
   EXPECT_EQ(S.dimension(), 2);
   EXPECT_THROW(S.apply(Eigen::MatrixXd::Ones(64, 1)), std::invalid_argument);
   EXPECT_THROW(S.flux(Eigen::MatrixXd::Ones(127, 1)), std::invalid_argument);
+  // W_h = D_h^T X0 D_h is not held on the nodes: no block to read
+  EXPECT_FALSE(S.holds_hypersingular());
+  EXPECT_THROW(S.hypersingular_block({0, 1}), std::logic_error);
   // beyond the critical scale V_h is indefinite: a Lame message, not the Laplace one
   const Points big = test::circle(64, 3.0);
   try {

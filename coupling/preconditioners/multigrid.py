@@ -75,18 +75,19 @@ def signorini_hypersingular(
     nodes, and E the ``gap`` map's directions there (``fem_py.boundary.blocked.GapMap``)."""
     if boundary.signorini.size == 0:
         return np.zeros((0, 0))
-    if kernel == "laplace" and getattr(S, "holds_hypersingular", False):
-        return S.hypersingular_block(boundary.signorini)
-    W = array_from_root(
-        comm,
-        lambda: bem_cpp.hypersingular(
-            boundary.nodes,
-            triangles=getattr(boundary, "triangles", None),  # None: a polygon (2D)
-            block=boundary.signorini,
-            kernel=kernel,
-        ),
-        all_cores=True,
-    )
+    if getattr(S, "holds_hypersingular", False):
+        W = S.hypersingular_block(boundary.signorini)  # Lame's: (d k, d k), node-major
+    else:
+        W = array_from_root(
+            comm,
+            lambda: bem_cpp.hypersingular(
+                boundary.nodes,
+                triangles=getattr(boundary, "triangles", None),  # None: a polygon (2D)
+                block=boundary.signorini,
+                kernel=kernel,
+            ),
+            all_cores=True,
+        )
     if kernel == "laplace":
         return W
     d = boundary.components

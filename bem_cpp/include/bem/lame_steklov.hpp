@@ -60,6 +60,7 @@
 #include <atomic>
 #include <functional>
 #include <memory>
+#include <vector>
 
 #include "bem/hmatrix.hpp"
 #include "bem/kelvin.hpp"
@@ -94,6 +95,9 @@ struct LameSteklovParts {
   std::function<Eigen::MatrixXd(const Eigen::MatrixXd&)> preconditioner;
   Eigen::MatrixXd deflation;  ///< Q (N, r): C = C0 + Q (Q^T V Q)^{-1} Q^T
   LameSteklovInfo info;       ///< the parts' set-up times and bytes
+  /// nodes -> the principal submatrix of W_h on their d k vector dofs (node-major), read from
+  /// W_h's H-matrices; empty where W_h is not held on the nodes (the polygon's: D_h^T X0 D_h).
+  std::function<Eigen::MatrixXd(const std::vector<Index>&)> hypersingular_block;
 };
 
 /// The parts on a polygon (d = 2). Throws std::invalid_argument for an invalid medium.
@@ -119,6 +123,13 @@ class LameSteklovOperator {
   /// W_h X and K_h X (transpose: K_h^T Psi, Psi with N rows).
   Eigen::MatrixXd hypersingular(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
   Eigen::MatrixXd double_layer(const Eigen::Ref<const Eigen::MatrixXd>& X, bool transpose = false) const;
+  /// Whether hypersingular_block can read W_h's blocks (the surface's operator, d = 3).
+  bool holds_hypersingular() const { return static_cast<bool>(parts_.hypersingular_block); }
+  /// The principal submatrix of W_h on the d k vector dofs {d i + c} of the k distinct nodes
+  /// `nodes` (d k, d k) node-major, from the H-matrices of W_h (to their tolerance), without
+  /// integrating it again; collective when distributed, the same bits on every rank. Throws
+  /// std::logic_error where W_h is not held that way (holds_hypersingular() false).
+  Eigen::MatrixXd hypersingular_block(const std::vector<Index>& nodes) const;
   /// C R for residuals R (N rows).
   Eigen::MatrixXd precondition(const Eigen::MatrixXd& R) const;
   const HMatrix& single_layer() const { return *parts_.single_layer; }

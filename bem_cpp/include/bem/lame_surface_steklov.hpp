@@ -57,6 +57,13 @@ class LameSurfaceOperators {
   /// W_h X and K_h X (transpose: K_h^T X), X (3 n, k) node-major; collective if distributed.
   Eigen::MatrixXd hypersingular(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
   Eigen::MatrixXd double_layer(const Eigen::Ref<const Eigen::MatrixXd>& X, bool transpose = false) const;
+  /// The principal submatrix of W_h on the vector dofs {3 i + c : i in nodes, c = 0, 1, 2}
+  /// (3 k, 3 k) node-major: Z's on those dofs plus 2 mu (W_L's on the nodes) kron I_3, read
+  /// from the H-matrices (HMatrix::principal_submatrix; to their tolerance). Distributed:
+  /// collective, each part summed over the ranks (exact: every entry comes from one block of
+  /// one rank) before they are combined, so every rank gets the serial formula's bits from
+  /// the same blocks. Throws std::invalid_argument for a repeated or out-of-range node.
+  Eigen::MatrixXd hypersingular_block(const std::vector<Index>& nodes) const;
   const LameSurfaceInfo& info() const { return info_; }
   std::size_t nbytes() const { return info_.nbytes_v + info_.nbytes_k + info_.nbytes_w; }
   /// The parts (tests): Y, Z and the Laplace K_L, W_L.
@@ -67,6 +74,7 @@ class LameSurfaceOperators {
 
  private:
   double mu_;
+  std::shared_ptr<const Communicator> comm_;
   std::shared_ptr<const HMatrix> V_, Z_, Y_, KL_, WL_;
   LameSurfaceInfo info_;
 };
