@@ -84,9 +84,11 @@ demo: setup
 bench: setup
 	$(PY) bench/bem_assembly.py
 	$(PY) bench/steklov_mpi.py
+	$(PY) bench/steklov_mpi.py --shapes box --sizes 32 64 --layouts 1x1 1x2 2x1
 	$(PY) bench/pgpm_profile.py
 	$(PY) -m bench.peers
 	$(PY) bench/strong_scaling.py --output bench/scaling.md
+	$(PY) bench/strong_scaling.py --shape box --method ssn --repeat 2 --output bench/scaling_box.md
 	$(PY) bench/outputs.py
 	$(PY) bench/speed.py
 	$(PY) bench/solid.py

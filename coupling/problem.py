@@ -24,6 +24,7 @@ from types import MappingProxyType
 from typing import Any, Mapping
 
 import numpy as np
+from petsc4py import PETSc
 
 import bem_cpp
 from fem_py.forms.elasticity import lame_parameters
@@ -142,6 +143,8 @@ class SignoriniProblem:
                 "free to slide along it (the rotation of a disk or a ball): the solution is "
                 'not unique; use "stick", or bond a part of the boundary'
             )
+        if d == 1 and self.gap.size == self.boundary.n_gamma:
+            _check_free_constant(self.forms)
         timings["forms"] = time.perf_counter() - tic
 
         tic = time.perf_counter()
@@ -283,3 +286,33 @@ def _translation(a: Any, d: int) -> np.ndarray:
     if values.shape != (d,) or not np.all(np.isfinite(values)):
         raise ValueError(f"a, the translation at infinity, needs {d} finite components, got {a!r}")
     return values
+
+
+def _check_free_constant(forms: Any) -> None:
+    """Refuse a scalar problem whose gap lives at every boundary node (Gamma_s = Gamma, no
+    arc end pins it) unless int f dx > 0 (collective: the same on every rank).
+
+    Then (u + c, phi - c) leaves z = T u + E phi unchanged, and with it G(u) and every term
+    of J_h (2.4) but the body load's, which changes by -c int f dx; phi - c >= 0 bounds c
+    from above only. So J_h is unbounded below for int f < 0 (no solution), constant along
+    c <= min phi for int f = 0 (no unique one), and for int f > 0 its minimiser has
+    min phi = 0.
+    """
+    b = forms.assemble_load()
+    try:
+        total, size = b.sum(), b.norm(PETSc.NormType.NORM_1)
+    finally:
+        b.destroy()
+    if total <= 1e-12 * size:
+        effect = (
+            "lowers the energy without bound (no solution)"
+            if total < 0
+            else "leaves the energy unchanged (no unique solution)"
+        )
+        raise ValueError(
+            f"the Signorini part is the whole boundary and the body load int f dx = {total:.3g}"
+            f" is not positive: adding a constant to the gap and subtracting it from u {effect}"
+            "; give a load f with a positive integral, or keep a part of the boundary out of "
+            "[geometry] signorini"
+        )
+
