@@ -315,4 +315,3 @@ def _check_free_constant(forms: Any) -> None:
             "; give a load f with a positive integral, or keep a part of the boundary out of "
             "[geometry] signorini"
         )
-
