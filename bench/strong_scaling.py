@@ -82,7 +82,8 @@ def worker(shape: str, cells: int, method: str) -> None:
     comm = MPI.COMM_WORLD
     options = SolverOptions(method=method)
     comm.Barrier()
-    with threadpool_limits(threads_per_rank(comm)):  # as the fembem command does
+    threads = threads_per_rank(comm)  # collective
+    with threadpool_limits(threads):  # as the fembem command does
         tic = time.perf_counter()
         solution = {"square": square_contact, "box": box_contact}[shape]()
         problem = manufactured_problem(comm, solution, make_material("carstensen"), cells=cells)
@@ -117,7 +118,7 @@ def worker(shape: str, cells: int, method: str) -> None:
                     "boundary_dofs": problem.boundary.n_gamma,
                     "method": method,
                     "shape": shape,
-                    "threads": threads_per_rank(comm),
+                    "threads": threads,
                     "subdomains": 0 if coarse is None else coarse.n_subdomains,
                     "preconditioner": type(B).__name__,
                     "iterations_count": result.iterations,
