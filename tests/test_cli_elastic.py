@@ -215,19 +215,47 @@ def test_evaluate_and_exterior_give_the_displacement_components(tmp_path):
     assert proc.returncode == 0, proc.stderr
     points = "x,y\n0,0\n0.25,0.1\n0.2501,0.1\n0.6,0.3\n"
     lines = points_table("evaluate", out, tmp_path / "points.csv", points)
-    assert lines[0] == "x,y,where,u_x,u_y,ue_x,ue_y"
+    assert lines[0] == "x,y,where,u_x,u_y,ue_x,ue_y,sigma_xx,sigma_yy,sigma_xy"
     rows = [line.split(",") for line in lines[1:]]
     assert [r[2] for r in rows] == ["inside", "boundary", "outside", "outside"]
-    assert rows[0][5:] == ["", ""] and rows[2][3:5] == ["", ""]
+    assert rows[0][5:7] == ["", ""] and rows[2][3:5] == ["", ""]
+    # the stress: the body's inside, none on Gamma (two sides), the medium's outside
+    assert np.isfinite(np.array(rows[0][7:], float)).all() and rows[1][7:] == ["", "", ""]
     u, ue = np.array(rows[1][3:5], float), np.array(rows[1][5:7], float)
     assert np.allclose(ue, u - [0.0, 0.05 * 0.25], atol=1e-12)  # u0 = (0, 0.05 x) on Gamma_t
     near = np.array(rows[2][5:7], float)
     assert np.abs(near - ue).max() <= 1e-2 * np.abs(ue).max()  # 1e-4 outside the trace
     lines = points_table("exterior", out, tmp_path / "outside.csv", "0.6,0.3\n-0.5,0.2\n")
     assert lines[0] == "x,y,ue_x,ue_y,sigma_xx,sigma_yy,sigma_xy"
-    first = np.array(lines[1].split(",")[2:4], float)
-    assert np.allclose(first, np.array(rows[3][5:7], float), rtol=1e-12)
+    first = np.array(lines[1].split(",")[2:], float)
+    assert np.allclose(first, np.array(rows[3][5:], float), rtol=1e-12)  # u_e and sigma
     assert all(np.isfinite(np.array(line.split(","), float)).all() for line in lines[1:])
+
+
+@pytest.mark.parametrize("d", [2, 3])
+def test_the_body_stress_of_an_affine_displacement_is_hookes(tmp_path, d):
+    """``evaluate``'s stress inside the body: for u = G x (every P1 cell the same strain)
+    and a linear elastic body, sigma = lambda tr(eps) I + 2 mu eps with Lame's lambda, mu
+    of E, nu (textbook formulas, not the code's bulk and deviatoric split), to round-off."""
+    from coupling.app.from_config import run_material
+    from coupling.io.evaluation import evaluate
+    from coupling.io.outputs import load_fields
+
+    text = BOX if d == 3 else SQUARE.replace('model = "hencky"', 'model = "linear-elastic"')
+    text = text.replace('bulk = 2.0\nshear = "1 + 1/(1 + s)"', "E = 2.5\nnu = 0.25")
+    proc, out = _solve(tmp_path, "run", text, 1, "--set", "output.plots=false")
+    assert proc.returncode == 0, proc.stderr
+    fields = dict(load_fields(out))
+    G = np.arange(1.0, d * d + 1).reshape(d, d) / 10 - 0.3
+    fields["u"] = fields["x"] @ G.T
+    points = np.full((2, d), 0.05)
+    points[1, 0] = -0.1
+    sigma = evaluate(fields, points, run_material(out, d))["sigma"]
+    E, nu = 2.5, 0.25
+    lam, mu = E * nu / ((1 + nu) * (1 - 2 * nu)), E / (2 * (1 + nu))
+    eps = 0.5 * (G + G.T)
+    hooke = lam * np.trace(eps) * np.eye(d) + 2 * mu * eps
+    assert np.abs(sigma - hooke).max() <= 1e-13 * np.abs(hooke).max()
 
 
 def test_info_counts_the_elastic_unknowns_as_the_run_does(tmp_path):

@@ -26,7 +26,7 @@ HISTORY = {"iteration": np.zeros(0)}
 
 
 def test_von_mises_against_closed_forms():
-    from coupling.io.elastic_figure_data import von_mises
+    from coupling.io.stress import von_mises
     from fem_py.forms.elasticity import hencky, linear_elastic
 
     E, nu, e = 2.0, 0.25, 1e-3
@@ -151,7 +151,7 @@ def test_plane_elastic_figures_are_drawn_without_mpi(square, tmp_path):
 
 
 def test_cell_gradients_of_an_affine_field_are_exact():
-    from coupling.io.elastic_figure_data import cell_gradients
+    from coupling.io.stress import cell_gradients
 
     rng = np.random.default_rng(1)
     for d in (2, 3):
@@ -198,7 +198,8 @@ def test_write_outputs_draws_the_elastic_figures_in_this_process(tmp_path):
 def test_the_medium_s_stress_is_that_of_its_displacement(square):
     """exterior.png's stress: the von Mises stress of sigma(u_e) by the representation
     formula equals that of the plane-strain stress of u_e's central differences."""
-    from coupling.io.elastic_figure_data import equivalent_stress, exterior_von_mises
+    from coupling.io.elastic_figure_data import exterior_von_mises
+    from coupling.io.stress import equivalent_stress
     from coupling.io.evaluation import exterior_from_fields
     from fem_py.forms.elasticity import lame_parameters
 

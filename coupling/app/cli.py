@@ -472,11 +472,9 @@ def _exterior(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
         ue = exterior_from_fields(fields, points)
         columns, names = [ue], _names("ue", ue)
         if "exterior" in fields:  # elasticity: the medium's stress too
-            d = points.shape[1]
-            sigma = exterior_stress_from_fields(fields, points)
-            pairs = [("xyz".index(c[0]), "xyz".index(c[1])) for c in STRESS_COMPONENTS[d]]
-            columns.append(np.stack([sigma[:, i, j] for i, j in pairs], axis=1))
-            names += [f"sigma_{c}" for c in STRESS_COMPONENTS[d]]
+            sigma, stress_names = _stress_columns(exterior_stress_from_fields(fields, points))
+            columns.append(sigma)
+            names += stress_names
     except ValueError as err:  # a point inside Omega or on Gamma
         raise ValueError(f"--points {args.points}: {err}") from None
     _write_table(",".join([header, *names]) + "\n" + _rows(given, *columns), args.out)
@@ -495,15 +493,30 @@ def _write_table(table: str, out: str | None) -> None:
 
 
 def _evaluate(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
+    from coupling.app.from_config import run_material
     from coupling.io.evaluation import evaluate
 
     fields, points, given, header = _result_points(args)
-    values = evaluate(fields, points)
+    elastic = "exterior" in fields
+    material = run_material(Path(args.result_dir), points.shape[1]) if elastic else None
+    values = evaluate(fields, points, material)
     u, ue = values["u"], values["ue"]
-    names = ",".join([header, "where", *_names("u", u), *_names("ue", ue)])
+    columns, names = [u, ue], [header, "where", *_names("u", u), *_names("ue", ue)]
+    if "sigma" in values:  # elasticity: the body's stress inside, the medium's outside
+        sigma, stress_names = _stress_columns(values["sigma"])
+        columns.append(sigma)
+        names += stress_names
     where = [f"{xy},{w}" for xy, w in zip(given, values["where"])]
-    _write_table(names + "\n" + _rows(where, u, ue), args.out)
+    _write_table(",".join(names) + "\n" + _rows(where, *columns), args.out)
     return EXIT_OK
+
+
+def _stress_columns(sigma: np.ndarray) -> tuple[np.ndarray, list[str]]:
+    """The CSV columns of the stress tensors ``sigma`` (m, d, d): the components of
+    :data:`STRESS_COMPONENTS` and their names sigma_xx, ..."""
+    components = STRESS_COMPONENTS[sigma.shape[-1]]
+    pairs = [("xyz".index(c[0]), "xyz".index(c[1])) for c in components]
+    return np.stack([sigma[:, i, j] for i, j in pairs], axis=1), [f"sigma_{c}" for c in components]
 
 
 def _check_jacobian(args: argparse.Namespace, interrupts: InterruptHandler) -> int:

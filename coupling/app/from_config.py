@@ -14,6 +14,8 @@ from coupling.options import (
     NESTED_COARSENING,
     NESTED_COARSENING_3D,
     NESTED_MIN_DOFS,
+    MaterialOptions,
+    ProblemOptions,
     RunConfig,
     SolverOptions,
 )
@@ -26,6 +28,7 @@ __all__ = [
     "coarser_configs",
     "kernel_of",
     "material_from_config",
+    "run_material",
     "problem_on_domain",
     "problem_from_config",
 ]
@@ -143,6 +146,25 @@ def material_from_config(config: RunConfig, dim: int = 2) -> Any:
             return hencky(m.bulk, m.shear, dim)
         return linear_elastic(m.E, m.nu, dim)
     return make_material(m.rho, p=m.p, eps=m.eps)
+
+
+def run_material(folder: Path, dim: int) -> Any:
+    """The body's material of the finished run whose results are in ``folder``, from the
+    configuration its summary.json keeps (``fembem evaluate``'s stress of a body)."""
+    import json
+
+    summary = json.loads((Path(folder) / "summary.json").read_text())
+    if "config" not in summary:
+        raise ValueError(
+            f"{Path(folder) / 'summary.json'} holds no configuration: the body's stress needs "
+            "the run's material; solve again with this version of fembem"
+        )
+    stored = summary["config"]  # validated by the run, every key (RunConfig.as_dict)
+    sections = {
+        "problem": ProblemOptions(**stored["problem"]),
+        "material": MaterialOptions(**stored["material"]),
+    }
+    return material_from_config(RunConfig(**sections), dim)
 
 
 def _data(value: Any, components: int) -> Any:

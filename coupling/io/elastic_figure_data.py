@@ -5,9 +5,10 @@ iteration history, on rank 0:
 
 - :func:`elastic_inputs`: the deformed body, the displacement magnified by
   :func:`magnification` (the largest displacement about a tenth of the body's size),
-  coloured by the von Mises stress of sigma(u_h) per cell (:func:`von_mises`, from the
-  P1 gradient and the material): in 2D rasterised on a :class:`PixelGrid` of the
-  deformed body (a size independent of the mesh), in 3D on the surface triangles (the
+  coloured by the von Mises stress of sigma(u_h) per cell
+  (:func:`coupling.io.stress.von_mises`, from the P1 gradient and the material): in 2D
+  rasterised on a :class:`PixelGrid` of the deformed body (a size independent of the
+  mesh), in 3D on the surface triangles (the
   stress of the tetrahedron under each); the boundary arrays of signorini.png; the
   history arrays of history.png;
 - :func:`exterior_section`: u_e and the von Mises stress of sigma(u_e) of the medium on
@@ -28,18 +29,16 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from coupling.io.figure_data import PixelGrid, rasterise
+from coupling.io.stress import cell_gradients, equivalent_stress, von_mises
 
 __all__ = [
     "ELASTIC_PLOT_FILES",
     "ElasticFigureInputs",
-    "cell_gradients",
     "elastic_inputs",
-    "equivalent_stress",
     "exterior_section",
     "exterior_von_mises",
     "magnification",
     "surface_cells",
-    "von_mises",
 ]
 
 #: The figures of an elastic run, in the order they are written.
@@ -54,8 +53,6 @@ EXTERIOR_SAMPLES_2D, EXTERIOR_SAMPLES_3D = 81, 49
 #: triangle pairs (2 s measured at 49 x 49 samples and 3,072 triangles), but at least
 #: 25 samples along a side (8 s at 64^3 cubes).
 EXTERIOR_PAIRS_3D, EXTERIOR_SAMPLES_3D_MIN = 49 * 49 * 3072, 25
-#: Cells whose gradients are computed at once (bounds the scratch memory).
-_CHUNK = 1 << 18
 #: The boundary arrays that signorini.png draws.
 _BOUNDARY_FIELDS = ("boundary_x", "boundary_u", "ue", "pressure", "phi", "active", "signorini")
 
@@ -83,71 +80,6 @@ class ElasticFigureInputs(NamedTuple):
     exterior: dict | None
     history: dict
     tol: float
-
-
-def cell_gradients(x: np.ndarray, cells: np.ndarray, u: np.ndarray) -> np.ndarray:
-    """The gradient (m, d, d) of the vector P1 field ``u`` (N, d) on each simplex of
-    ``cells`` (m, d + 1): [c, i, j] = du_i/dx_j, from the edges out of the first vertex,
-    the inverse of their matrix written out (its adjugate over its determinant: a tenth
-    of the time of a batched solve)."""
-    x, u = np.asarray(x, dtype=float), np.asarray(u, dtype=float)
-    d = x.shape[1]
-    out = np.empty((len(cells), d, d))
-    for start in range(0, len(cells), _CHUNK):
-        c = cells[start : start + _CHUNK]
-        edges = x[c[:, 1:]] - x[c[:, :1]]  # (m, d, d): row k the edge to vertex k + 1
-        rise = u[c[:, 1:]] - u[c[:, :1]]  # (m, d, d): row k the change of u along it
-        # rise[k, i] = sum_j grad[i, j] edges[k, j], so grad = rise^T edges^-T
-        out[start : start + _CHUNK] = np.einsum("mki,mjk->mij", rise, _inverse(edges))
-    return out
-
-
-def _inverse(a: np.ndarray) -> np.ndarray:
-    """The inverses of the 2 x 2 or 3 x 3 matrices ``a`` (m, d, d), by their adjugates."""
-    if a.shape[-1] == 2:
-        adj = np.empty_like(a)
-        adj[:, 0, 0], adj[:, 1, 1] = a[:, 1, 1], a[:, 0, 0]
-        adj[:, 0, 1], adj[:, 1, 0] = -a[:, 0, 1], -a[:, 1, 0]
-    else:  # the columns of the adjugate: cross products of the rows
-        r0, r1, r2 = a[:, 0], a[:, 1], a[:, 2]
-        adj = np.stack([np.cross(r1, r2), np.cross(r2, r0), np.cross(r0, r1)], axis=2)
-    det = np.einsum("mj,mj->m", a[:, 0], adj[:, :, 0])  # (a adj)_00 = det a
-    return adj / det[:, None, None]
-
-
-def von_mises(gradients: np.ndarray, material: Any) -> np.ndarray:
-    """The von Mises stress sqrt(3/2 dev sigma : dev sigma) of sigma(u) (m,), from the
-    gradients (m, d, d) and the elastic ``material``
-    (:class:`fem_py.forms.elasticity.ElasticMaterial`: sigma = kappa tr eps I +
-    2 mu(|dev eps|) dev eps, docs/method.md section 12), dev the 3D deviator.
-
-    In 2D (plane strain) the out-of-plane stress is sigma_zz = (kappa - mu) tr eps: for
-    linear elasticity lambda tr eps, the plane-strain value; for a Hencky body the same
-    expression with the secant shear modulus mu(|dev eps|) (the planar model defines
-    no sigma_zz of its own).
-    """
-    d = gradients.shape[-1]
-    eps = 0.5 * (gradients + gradients.transpose(0, 2, 1))
-    trace = np.trace(eps, axis1=1, axis2=2)
-    eye = np.eye(d)
-    dev = eps - trace[:, None, None] / d * eye
-    rho = np.broadcast_to(
-        np.asarray(material.deviatoric.rho_np(np.sqrt(np.einsum("mij,mij->m", dev, dev))), float),
-        trace.shape,
-    )  # 2 mu(|dev eps|)
-    sigma = np.zeros((len(eps), 3, 3))
-    sigma[:, :d, :d] = (material.bulk * trace)[:, None, None] * eye + rho[:, None, None] * dev
-    if d == 2:
-        sigma[:, 2, 2] = (material.bulk - 0.5 * rho) * trace
-    return equivalent_stress(sigma)
-
-
-def equivalent_stress(sigma: np.ndarray) -> np.ndarray:
-    """The von Mises stress sqrt(3/2 dev sigma : dev sigma) (m,) of the stress tensors
-    ``sigma`` (m, 3, 3), dev the 3D deviator."""
-    mean = np.trace(sigma, axis1=1, axis2=2) / 3.0
-    deviator = sigma - mean[:, None, None] * np.eye(3)
-    return np.sqrt(1.5 * np.einsum("mij,mij->m", deviator, deviator))
 
 
 def exterior_von_mises(fields: dict, points: np.ndarray, kernel: Any) -> np.ndarray:

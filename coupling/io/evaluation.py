@@ -12,6 +12,13 @@ Each point is located against the mesh of fields.npz (P1 triangles,
 
 Values that do not apply are NaN (empty in the CSV).
 
+An elastic run (given its ``material``) also gets the stress ``sigma`` (m, d, d): inside,
+the body's sigma(u_h) of the cell holding the point (u_h is P1: its stress is constant on
+a cell; :func:`coupling.io.stress.stress_tensors`); outside, the medium's
+sigma(u_e) by the representation formula (``bem_cpp.exterior_stress``); NaN on Gamma,
+where the two sides' stresses differ (their tractions are the boundary arrays of
+fields.npz).
+
 A body in R^3 (fields with ``x`` (N, 3), ``cells`` and ``boundary_triangles``): points
 are x, y, z; on Gamma means within ``ON_GAMMA`` times the diameter of the plane of one of
 Gamma's triangles, over it (values linear on the triangle); inside means in one of the
@@ -20,14 +27,16 @@ formula on Gamma's triangles gives u_e (docs/method.md section 11).
 """
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
 import bem_cpp
 from coupling.options import hmatrix_tol
 from fem_py.mesh import interpolate_p1
-from fem_py.mesh.location3d import on_surface
+from fem_py.mesh.location import locate
+from fem_py.mesh.location3d import locate_in_tetrahedra, on_surface
+from coupling.io.stress import cell_gradients, stress_tensors
 from coupling.io.figure_data import plane_square
 from fem_py.polyline import closest_on_polygon, inside_polygon, polygon_corners, segment_lengths
 
@@ -135,15 +144,41 @@ def exterior_samples(
     return ExteriorSamples(grid, exterior_from_fields(fields, grid, kernel=kernel))
 
 
-def evaluate(fields: dict, points: np.ndarray) -> dict[str, np.ndarray]:
+def evaluate(fields: dict, points: np.ndarray, material: Any = None) -> dict[str, np.ndarray]:
     """``where`` ("inside", "boundary" or "outside"), ``u`` and ``ue`` at ``points`` (m, 2)
-    ((m, 3) for a body in R^3).
+    ((m, 3) for a body in R^3); with the elastic run's ``material`` also ``sigma``
+    (m, d, d) (module docstring).
 
     ``fields`` is the content of fields.npz (:func:`coupling.io.outputs.load_fields`).
     """
-    if fields["x"].shape[1] == 3:
-        return _evaluate_in_body(fields, points)
-    points = np.asarray(points, dtype=float).reshape(-1, 2)
+    d = fields["x"].shape[1]
+    points = np.asarray(points, dtype=float).reshape(-1, d)
+    values = (_evaluate_in_body if d == 3 else _evaluate_in_plane)(fields, points)
+    if material is not None:
+        values["sigma"] = _stress(fields, points, values["where"], material)
+    return values
+
+
+def _stress(fields: dict, points: np.ndarray, where: np.ndarray, material: Any) -> np.ndarray:
+    """sigma (m, d, d) at ``points``: the body's inside, the medium's outside, NaN on Gamma."""
+    x, u = np.asarray(fields["x"], dtype=float), _columns(fields["u"])
+    d = x.shape[1]
+    sigma = np.full((len(points), d, d), np.nan)
+    inside = np.flatnonzero(where == "inside")
+    if inside.size:
+        cells = fields["cells"] if d == 3 else fields["triangles"]
+        cell, _ = (locate_in_tetrahedra if d == 3 else locate)(x, cells, points[inside])
+        found = cell >= 0
+        gradients = cell_gradients(x, cells[cell[found]], u)
+        sigma[inside[found]] = stress_tensors(gradients, material)[:, :d, :d]
+    outside = where == "outside"
+    if outside.any():
+        sigma[outside] = exterior_stress_from_fields(fields, points[outside])
+    return sigma
+
+
+def _evaluate_in_plane(fields: dict, points: np.ndarray) -> dict[str, np.ndarray]:
+    """:func:`evaluate` for the fields of a planar run, without the stress."""
     nodes = fields["boundary_x"]
     diameter = float(np.linalg.norm(nodes.max(axis=0) - nodes.min(axis=0)))
     dist, seg, t = closest_on_polygon(points, nodes)
@@ -185,8 +220,8 @@ def _squeezed(values: np.ndarray) -> np.ndarray:
 
 
 def _evaluate_in_body(fields: dict, points: np.ndarray) -> dict[str, np.ndarray]:
-    """:func:`evaluate` for the fields of a body in R^3 (module docstring)."""
-    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    """:func:`evaluate` for the fields of a body in R^3 (module docstring), without the
+    stress."""
     nodes, surface = fields["boundary_x"], fields["boundary_triangles"]
     diameter = float(np.linalg.norm(nodes.max(axis=0) - nodes.min(axis=0)))
     triangle, bary = on_surface(nodes, surface, points, ON_GAMMA * diameter)
