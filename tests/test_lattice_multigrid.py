@@ -111,18 +111,26 @@ def test_the_vector_prolongation_is_the_scalar_one_kronecker_the_identity(dim):
         obj.destroy()
 
 
+def _lattice_preconditioner(V, lattice, material=None) -> MultigridPreconditioner:
+    """B_Omega on ``lattice`` (the stiffness of ``material``, an elastic one, or the Laplace
+    one), no Signorini block."""
+    stiffness = None if material is None else material.stiffness_integrand
+    return MultigridPreconditioner(
+        V,
+        0.7,
+        np.zeros((0, 0)),
+        lattice=lattice,
+        rtol=AMG_RTOL,
+        max_iterations=AMG_MAX_ITERATIONS,
+        stiffness=stiffness,
+    )
+
+
 @pytest.fixture(scope="module")
 def box16():
     domain = build_domain(COMM, GeometrySpec("box", width=0.5, h=0.5 / 16, signorini=["bottom"]))
     V = fem.FunctionSpace(domain.mesh, ("CG", 1))
-    B = MultigridPreconditioner(
-        V,
-        0.7,
-        np.zeros((0, 0)),
-        lattice=domain.lattice,
-        rtol=AMG_RTOL,
-        max_iterations=AMG_MAX_ITERATIONS,
-    )
+    B = _lattice_preconditioner(V, domain.lattice)
     yield V, B
     B.destroy()
 
@@ -197,15 +205,7 @@ def test_the_elastic_cycle_is_symmetric_positive_definite(spec, levels, lowest):
     V = fem.VectorFunctionSpace(domain.mesh, ("CG", 1))
     d = domain.dim
     assert V.dofmap.index_map_bs == d  # node-major dofs: node * d + component
-    B = MultigridPreconditioner(
-        V,
-        0.7,
-        np.zeros((0, 0)),
-        lattice=domain.lattice,
-        rtol=AMG_RTOL,
-        max_iterations=AMG_MAX_ITERATIONS,
-        stiffness=linear_elastic(2.5, 0.25, d).stiffness_integrand,
-    )
+    B = _lattice_preconditioner(V, domain.lattice, linear_elastic(2.5, 0.25, d))
     pc = B._ksp.getPC()
     assert pc.getType() == "mg" and pc.getMGLevels() == levels
     for level, p in enumerate(B._hierarchy.prolongations, start=1):
