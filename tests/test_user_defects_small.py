@@ -34,7 +34,9 @@ def test_an_unnamed_physical_group_is_given_by_its_number_without_warning(tmp_pa
 def test_the_printed_length_of_all_is_the_whole_boundary(tmp_path):
     """Item 8: "all" is closed: its printed length includes the closing segment."""
     toml = '[geometry]\nh = 0.0625\nsubdomain_size = 0.125\nsignorini = "all"\n'
-    toml += "[output]\nplots = false\nxdmf = false\n"
+    # a load that presses the body on: with the gap on the whole boundary int f dx > 0 is
+    # what makes the solution unique (tests/test_free_constant.py)
+    toml += '[data]\nf = "1"\n[output]\nplots = false\nxdmf = false\n'
     proc, summary = _solve(tmp_path, toml)
     assert summary["signorini_lengths"] == pytest.approx([2.0])
     assert "fembem: Signorini arcs of length 2\n" in proc.stdout + proc.stderr
