@@ -9,6 +9,7 @@
 #include <memory>
 
 #include "bem/boundary_operators.hpp"
+#include "bem/heap.hpp"
 #include "bem/kelvin.hpp"
 #include "bem/lame_polygon.hpp"
 #include "bem/lame_potentials.hpp"
@@ -115,16 +116,18 @@ PYBIND11_MODULE(_bem, m) {
            py::arg("rank"), py::arg("size"), py::arg("allgather"), py::arg("allreduce"), Release())
       .def(py::init([](VerticesRef vertices, TrianglesRef triangles, const bem::Lame& lame, Space flux,
                        bem::Index leaf_size, double eta, double tol, double solver_tol, int max_iterations,
-                       int product_threads, int rank, int size, Collective allgather, Collective allreduce) {
+                       int product_threads, int rank, int size, Collective allgather, Collective allreduce,
+                       bool single_precision) {
              const auto comm = communicator(rank, size, std::move(allgather), std::move(allreduce));
-             return bem::lame_surface_steklov_operator(
-                 vertices, triangles, lame, flux,
-                 bem::SteklovOptions{
-                     {leaf_size, eta, tol, false, product_threads, comm}, tol, solver_tol, max_iterations});
+             bem::SteklovOptions options{
+                 {leaf_size, eta, tol, false, product_threads, comm}, tol, solver_tol, max_iterations};
+             options.hmatrix.single_precision = single_precision;
+             return bem::lame_surface_steklov_operator(vertices, triangles, lame, flux, options);
            }),
            py::arg("vertices"), py::arg("triangles"), py::arg("lame"), py::arg("flux"), py::arg("leaf_size"),
            py::arg("eta"), py::arg("tol"), py::arg("solver_tol"), py::arg("max_iterations"), py::arg("product_threads"),
-           py::arg("rank"), py::arg("size"), py::arg("allgather"), py::arg("allreduce"), Release())
+           py::arg("rank"), py::arg("size"), py::arg("allgather"), py::arg("allreduce"),
+           py::arg("single_precision") = false, Release())
       .def("apply", &bem::LameSteklovOperator::apply, py::arg("x"), py::arg("solver_tol") = 0.0, Release())
       .def("flux", &bem::LameSteklovOperator::flux, py::arg("x"), py::arg("solver_tol") = 0.0, Release())
       .def("hypersingular_block", &bem::LameSteklovOperator::hypersingular_block, py::arg("nodes"), Release())
@@ -154,6 +157,7 @@ PYBIND11_MODULE(_bem, m) {
         Release());
   m.def("hypersingular", py::overload_cast<NodesRef>(&bem::hypersingular), py::arg("nodes"), Release());
   m.def("single_matvec", &bem::single_matvec, py::arg("matrix"), py::arg("x"), Release());
+  m.def("release_free_heap", &bem::release_free_heap, Release());
   m.def("mass", py::overload_cast<NodesRef, Space>(&bem::mass), py::arg("nodes"), py::arg("space"), Release());
   m.def("steklov_poincare", py::overload_cast<NodesRef, Space>(&bem::steklov_poincare), py::arg("nodes"),
         py::arg("flux"), Release());

@@ -194,15 +194,13 @@ class SteklovPoincareOperator(_CompiledOperator):
 
         Lame's S_h (3D): ``indices`` are nodes, and the block is the (3 k, 3 k) one of their
         vector dofs ``3 * node + component``, node-major (Z's principal submatrix plus
-        2 mu W_L's Kronecker I_3; lame_surface_steklov.hpp); its blocks are held in double
-        precision."""
+        2 mu W_L's Kronecker I_3; lame_surface_steklov.hpp), a float64 array in either
+        precision of the blocks (the gap's frames still turn it, ``coupling``'s M_s)."""
         if not self.holds_hypersingular:
             raise TypeError("hypersingular_block: this S_h holds no H-matrix of W_h on P1 nodes")
         d = getattr(self._op, "dimension", 1)  # Lame's operator: d components per node
         indices = checks.indices(indices, self._op.size // d, "indices")
-        if self.single_precision:  # Eigen's column-major array: its transpose, in C order
-            if d != 1:
-                raise TypeError("hypersingular_block: Lame's S_h holds no single precision blocks")
+        if self.single_precision and d == 1:  # Eigen's column-major: its transpose, C order
             return SingleMatrix(self._op.hypersingular_block_single(indices).T)
         return self._op.hypersingular_block(indices)
 
@@ -381,6 +379,7 @@ def _compressed_operator(
         ),
         single_precision=params.get("single_precision", False),
     )
+    _bem.release_free_heap()  # the set-up's freed scratch back to the system (bem/heap.hpp)
     if timings is not None:
         timings.update(setup=op.info.setup_seconds)
     return op
@@ -412,8 +411,11 @@ def _lame_steklov_poincare(
     if compression == "hmatrix":
         if surface and flux != "p1":
             raise ValueError('compression="hmatrix" on a surface needs flux="p1"')
+        tol = checks.tolerance(tol)
         layout = dict(
-            leaf_size=defaults.HMATRIX_SURFACE_LEAF_SIZE, eta=defaults.HMATRIX_SURFACE_ETA
+            leaf_size=defaults.HMATRIX_SURFACE_LEAF_SIZE,
+            eta=defaults.HMATRIX_SURFACE_ETA,
+            single_precision=tol >= defaults.HMATRIX_SINGLE_PRECISION_MIN_TOL,
         )
         if not surface:
             layout = dict(
@@ -426,7 +428,7 @@ def _lame_steklov_poincare(
             (*geometry, lame, space),
             comm,
             timings,
-            tol=checks.tolerance(tol),
+            tol=tol,
             **layout,
         )
     d = checks.components(lame, geometry)

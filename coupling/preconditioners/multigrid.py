@@ -44,6 +44,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 import bem_cpp
+from bem_cpp.dense import SingleMatrix
 from coupling.options import AMG_OPTIONS
 from coupling.preconditioners.base import DenseSignoriniBlock
 from coupling.preconditioners.lattice_multigrid import LatticeHierarchy, lattice_levels
@@ -92,8 +93,24 @@ def signorini_hypersingular(
         return W
     d = boundary.components
     rows = (d * np.asarray(boundary.signorini)[:, None] + np.arange(d)).ravel()
-    E = gap.matrix[rows].toarray()  # the directions of the gap unknowns at those entries
-    return E.T @ W @ E
+    E = gap.matrix[rows].tocsc()  # the directions of the gap unknowns at those entries
+    single = getattr(S, "single_precision", False)
+    M = _turned(W, E, np.float32 if single else np.float64)
+    return SingleMatrix(M) if single else M
+
+
+def _turned(W: np.ndarray, E: Any, dtype: Any, rows: int = 512) -> np.ndarray:
+    """E^T W E (m x m) of a dense symmetric W (n x n) and a sparse E (n x m, CSC), in
+    ``dtype``, a block of ``rows`` rows at a time: besides W and the result, one block
+    (rows x n) at a time, where the dense E and the whole product E^T W would take two more
+    n x m arrays (M_s of the elastic box at 48^3 cubes: 0.35 GB each). Every rank that calls
+    it with the same arrays gets the same bits."""
+    m = E.shape[1]
+    out = np.empty((m, m), dtype=dtype)
+    for start in range(0, m, rows):
+        block = E[:, start : start + rows].T @ W  # (rows, n): the rows' E^T W
+        out[start : start + block.shape[0]] = (E.T @ block.T).T
+    return out
 
 
 #: The options prefix of the inner solve's KSP (its options live in PETSc's database only
