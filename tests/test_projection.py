@@ -336,3 +336,24 @@ def test_a_dense_signorini_block_holds_a_fortran_ordered_metric_without_a_copy()
     g = np.random.default_rng(11).standard_normal(n)
     np.testing.assert_array_equal(block.matvec_signorini(g), reference.matvec_signorini(g))
     np.testing.assert_allclose(block.apply_signorini(g), reference.apply_signorini(g), rtol=1e-13)
+
+
+def test_a_free_block_is_solved_through_the_bought_inverse():
+    """Once the exact projection holds W = M^{-1}, a Newton step's M_II^{-1} (fewer than
+    half the nodes active) comes through W and W_AA's factor, the block-inverse identity,
+    with no factor of M_II made: M_II's own solve to round-off."""
+    rng = np.random.default_rng(3)
+    n = 40
+    A = rng.standard_normal((n, n))
+    M = A @ A.T / n + np.eye(n)
+    P = SignoriniProjection(
+        M, "exact", rho_in=0.0, max_iterations=0, inverse=lambda: np.linalg.inv(M)
+    )
+    P(np.ones(n), np.ones(n))  # nothing active: solved through W, which it buys
+    free = np.ones(n, dtype=bool)
+    free[::4] = False
+    b = rng.standard_normal(np.count_nonzero(free))
+    block = P.free_factor(free)
+    assert not isinstance(block, DenseBlockFactor)
+    exact = np.linalg.solve(M[np.ix_(free, free)], b)
+    assert np.linalg.norm(block.solve(b) - exact) <= 1e-12 * np.linalg.norm(exact)

@@ -176,9 +176,11 @@ def dense_metric(metric: np.ndarray | SingleMatrix) -> np.ndarray | SingleMatrix
 
 def cholesky_of(metric: np.ndarray | SingleMatrix) -> tuple[np.ndarray, bool]:
     """The Cholesky factor (``scipy.linalg.cho_factor``'s) of a dense SPD M: of a float64
-    copy factored in place for a :class:`bem_cpp.dense.SingleMatrix`, else of a copy."""
+    copy factored in place for a :class:`bem_cpp.dense.SingleMatrix` (through its
+    transpose, a Fortran-ordered view of the symmetric copy, which LAPACK takes as it is:
+    the C-ordered copy would be copied once more), else of a copy."""
     if isinstance(metric, SingleMatrix):
-        return scipy.linalg.cho_factor(metric.to_dense(), overwrite_a=True)
+        return scipy.linalg.cho_factor(metric.to_dense().T, lower=True, overwrite_a=True)
     return scipy.linalg.cho_factor(metric)
 
 

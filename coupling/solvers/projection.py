@@ -49,6 +49,18 @@ class BlockFactor(Protocol):
         """M_II^{-1} b."""
 
 
+class _InverseBlock(NamedTuple):
+    """M_II^{-1} through M^{-1} (the projection's :meth:`SignoriniProjection._solve_free`)."""
+
+    projection: "SignoriniProjection"
+    free: np.ndarray
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        full = np.zeros(self.free.size)
+        full[self.free] = b
+        return self.projection._solve_free(full, self.free)[self.free]
+
+
 class DenseBlockFactor(NamedTuple):
     """A dense Cholesky factor, as ``scipy.linalg.cho_factor`` gives it."""
 
@@ -209,10 +221,18 @@ class SignoriniProjection:
         dense Schur complement (:class:`bem_cpp.sparse.SparseCholesky`); else M_II is
         factored densely. The last one is kept: the exact projection's last free set is
         the prediction that a Newton step solves on, and the next prediction often keeps
-        it (:func:`coupling.solvers.ssn.newton_direction`)."""
+        it (:func:`coupling.solvers.ssn.newton_direction`). Once the exact projection has
+        bought W = M^{-1} (:meth:`_solve_free`) and fewer than half the nodes are active,
+        M_II^{-1} is applied through W and W_AA's factor instead: the same block inverse,
+        without a second dense n_s x n_s array."""
         if _kept_for(self._free, free):
             return self._free[1]
         self._free = None  # the old factor goes before the new one is made
+        n_active = int(np.count_nonzero(~free))
+        if self._inverse is not None and self._sparse is None and n_active < free.size - n_active:
+            # W = M^{-1} is bought: M_II^{-1} through it and W_AA's factor, as the exact
+            # projection solves (no second n_s^2 array: 0.27 GB at 48^3 elastic cubes)
+            return _InverseBlock(self, free.copy())
         if self._sparse is None:
             factor: BlockFactor = DenseBlockFactor(_principal_cholesky(self.M, free))
         else:
