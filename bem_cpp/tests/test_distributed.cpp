@@ -106,6 +106,29 @@ TEST(HMatrix, RowRestrictedBlocksCoverTheRowsAndGiveTheirProducts) {
   });
 }
 
+TEST(HMatrix, GivenRowBoundsAreTheOnesItComputes) {
+  // a distributed matrix built on the bounds its caller already has (rank_triangles) holds
+  // what it holds on the bounds it computes; bounds of another size or sum are refused
+  const Polygon poly(test::circle(600));
+  auto tree = std::make_shared<const ClusterTree>(ClusterTree::for_space(poly, Space::P1, 16));
+  const OperatorEntries e(poly, Kernel::SingleLayer, Space::P1, Space::P1);
+  test::ThreadGroup group(2);  // no collective is called: the matrices are not applied
+  for (int rank : {0, 1}) {
+    HMatrixOptions o{16, 1.0, 1e-8, true};
+    o.comm = group.communicator(rank);
+    const std::vector<Index> bounds = distributed_row_bounds(*tree, *tree, o, 2);
+    const HMatrix computed(tree, tree, e, o), given(tree, tree, e, o, bounds);
+    EXPECT_EQ(given.row_begin(), bounds[static_cast<std::size_t>(rank)]);
+    EXPECT_EQ(given.row_end(), bounds[static_cast<std::size_t>(rank) + 1]);
+    EXPECT_EQ(given.row_begin(), computed.row_begin());
+    EXPECT_EQ(given.row_end(), computed.row_end());
+    EXPECT_EQ(given.blocks().size(), computed.blocks().size());
+    EXPECT_EQ(given.to_dense(), computed.to_dense());
+    EXPECT_THROW(HMatrix(tree, tree, e, o, std::vector<Index>{0, poly.size()}), std::invalid_argument);
+    EXPECT_THROW(HMatrix(tree, tree, e, o, std::vector<Index>{0, 5, poly.size() - 1}), std::invalid_argument);
+  }
+}
+
 TEST(SteklovPoincareOperator, DistributedOverThreadsEqualsTheSerialOperator) {
   const double tol = 1e-10;
   for (const Points& X : {test::circle(700), test::square(160)}) {
