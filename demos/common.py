@@ -1,5 +1,6 @@
-"""The preamble the demos share: their command line, printing on rank 0, results.json
-and the outputs of a solve.
+"""The preamble the demos share: their command line, printing on rank 0, results.json,
+the gmsh files of the demos that build their own body, the sweep of manufactured solves
+over meshes and the outputs of a solve.
 
 Every demo takes ``--cells N`` (its mesh size) and ``--out DIR`` (default
 ``out/<demo name>``) and writes the numbers it prints to DIR/results.json, which the
