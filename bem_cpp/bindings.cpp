@@ -42,6 +42,31 @@ using Collective = std::function<Eigen::MatrixXd(const Eigen::MatrixXd&, const s
 
 namespace {
 
+/// `name`: the Lame exterior displacement or stress (`field`, bem/lame_potentials.hpp) on the
+/// raw arrays of a polygon's (n, 2) nodes or of a surface's (n, 3) vertices and (m, 3)
+/// triangles (validated as Polygon and Surface do).
+void def_lame_exterior_field(py::module_& m, const char* name, bem::LameField field) {
+  using LameRef = const bem::Lame&;
+  using PointsRef3 = const Eigen::Ref<const bem::Vertices>&;
+  m.def(
+      name,
+      [field](NodesRef nodes, LameRef lame, VectorRef dirichlet, VectorRef traction, NodesRef points, VectorRef a,
+              Space space) {
+        return bem::exterior_field(field, bem::Polygon(nodes), lame, dirichlet, traction, points, a, space);
+      },
+      py::arg("nodes"), py::arg("lame"), py::arg("dirichlet"), py::arg("traction"), py::arg("points"), py::arg("a"),
+      py::arg("traction_space"), Release());
+  m.def(
+      name,
+      [field](VerticesRef vertices, TrianglesRef triangles, LameRef lame, VectorRef dirichlet, VectorRef traction,
+              PointsRef3 points, VectorRef a, Space space) {
+        return bem::exterior_field(field, bem::Surface(vertices, triangles), lame, dirichlet, traction, points, a,
+                                   space);
+      },
+      py::arg("vertices"), py::arg("triangles"), py::arg("lame"), py::arg("dirichlet"), py::arg("traction"),
+      py::arg("points"), py::arg("a"), py::arg("traction_space"), Release());
+}
+
 /// The operators' communicator: none (serial) when allgather is None, otherwise the
 /// collectives of the ranks (mpi4py, called back with the GIL held by pybind11's function
 /// wrapper).
@@ -248,26 +273,8 @@ PYBIND11_MODULE(_bem, m) {
         py::arg("vertices"), py::arg("triangles"), py::arg("lame"), py::arg("space"), Release());
   m.def("lame_hypersingular", py::overload_cast<VerticesRef, TrianglesRef, LameRef>(&bem::hypersingular),
         py::arg("vertices"), py::arg("triangles"), py::arg("lame"), Release());
-  using PointsRef3 = const Eigen::Ref<const bem::Vertices>&;
-  m.def("lame_exterior_displacement",
-        py::overload_cast<NodesRef, LameRef, VectorRef, VectorRef, NodesRef, VectorRef, Space>(
-            &bem::exterior_displacement),
-        py::arg("nodes"), py::arg("lame"), py::arg("dirichlet"), py::arg("traction"), py::arg("points"), py::arg("a"),
-        py::arg("traction_space"), Release());
-  m.def("lame_exterior_displacement",
-        py::overload_cast<VerticesRef, TrianglesRef, LameRef, VectorRef, VectorRef, PointsRef3, VectorRef, Space>(
-            &bem::exterior_displacement),
-        py::arg("vertices"), py::arg("triangles"), py::arg("lame"), py::arg("dirichlet"), py::arg("traction"),
-        py::arg("points"), py::arg("a"), py::arg("traction_space"), Release());
-  m.def("lame_exterior_stress",
-        py::overload_cast<NodesRef, LameRef, VectorRef, VectorRef, NodesRef, VectorRef, Space>(&bem::exterior_stress),
-        py::arg("nodes"), py::arg("lame"), py::arg("dirichlet"), py::arg("traction"), py::arg("points"), py::arg("a"),
-        py::arg("traction_space"), Release());
-  m.def("lame_exterior_stress",
-        py::overload_cast<VerticesRef, TrianglesRef, LameRef, VectorRef, VectorRef, PointsRef3, VectorRef, Space>(
-            &bem::exterior_stress),
-        py::arg("vertices"), py::arg("triangles"), py::arg("lame"), py::arg("dirichlet"), py::arg("traction"),
-        py::arg("points"), py::arg("a"), py::arg("traction_space"), Release());
+  def_lame_exterior_field(m, "lame_exterior_displacement", bem::LameField::Displacement);
+  def_lame_exterior_field(m, "lame_exterior_stress", bem::LameField::Stress);
   m.def(
       "lame_operators",
       [](NodesRef nodes, LameRef lame, Space space) {

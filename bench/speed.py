@@ -66,6 +66,18 @@ KINDS = ("cold", "nested")
 TARGET_OUTPUTS, TARGET_FINE_STEPS, TARGET_FINE_CG = 0.10, 3, 30
 
 
+def cell_sizes(parser: argparse.ArgumentParser, text: str) -> list[int]:
+    """``--sizes``: the comma-separated cells per side of the square (at least 8: subdomains
+    of 4 cells), or ``parser.error`` (also bench.peers)."""
+    try:
+        sizes = [int(s) for s in text.split(",")]
+    except ValueError:
+        parser.error(f"--sizes must be comma-separated integers, got {text!r}")
+    if any(s < 8 for s in sizes):
+        parser.error("--sizes: at least 8 cells per side (subdomains of 4 cells)")
+    return sizes
+
+
 def manufactured_data(expanded: bool = False) -> dict[str, str]:
     """The [data] expressions (f, t0, u0) of ``square_contact`` with the carstensen
     material: f = -div(rho(|grad u|) grad u), t0 = (rho(|grad u|) grad u - grad u_e).n,
@@ -457,12 +469,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.poisson:
         print(json.dumps(poisson_pipeline(args.poisson, args.poisson_dim)))
         return 0
-    try:
-        sizes = [int(s) for s in args.sizes.split(",")]
-    except ValueError:
-        parser.error(f"--sizes must be comma-separated integers, got {args.sizes!r}")
-    if any(s < 8 for s in sizes):
-        parser.error("--sizes: at least 8 cells per side (subdomains of 4 cells)")
+    sizes = cell_sizes(parser, args.sizes)
 
     def names(option: str, text: str, allowed: tuple[str, ...]) -> tuple[str, ...]:
         chosen = tuple(text.split(","))

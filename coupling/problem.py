@@ -143,8 +143,10 @@ class SignoriniProblem:
                 "free to slide along it (the rotation of a disk or a ball): the solution is "
                 'not unique; use "stick", or bond a part of the boundary'
             )
+        load = None  # b_f, assembled here when the check needs it, else with the loads
         if d == 1 and self.gap.size == self.boundary.n_gamma:
-            _check_free_constant(self.forms)
+            load = self.forms.assemble_load()
+            _check_free_constant(load)
         timings["forms"] = time.perf_counter() - tic
 
         tic = time.perf_counter()
@@ -171,7 +173,7 @@ class SignoriniProblem:
             self.forms,
             self.boundary,
             self.S,
-            self.forms.assemble_load(),
+            self.forms.assemble_load() if load is None else load,
             m_t + s_0,
             gap=self.gap,
         )
@@ -288,9 +290,10 @@ def _translation(a: Any, d: int) -> np.ndarray:
     return values
 
 
-def _check_free_constant(forms: Any) -> None:
+def _check_free_constant(load: PETSc.Vec) -> None:
     """Refuse a scalar problem whose gap lives at every boundary node (Gamma_s = Gamma, no
-    arc end pins it) unless int f dx > 0 (collective: the same on every rank).
+    arc end pins it) unless int f dx > 0, the sum of the assembled body load ``load`` (b_f,
+    which the functional then takes; collective: the same on every rank).
 
     Then (u + c, phi - c) leaves z = T u + E phi unchanged, and with it G(u) and every term
     of J_h (2.4) but the body load's, which changes by -c int f dx; phi - c >= 0 bounds c
@@ -298,11 +301,7 @@ def _check_free_constant(forms: Any) -> None:
     c <= min phi for int f = 0 (no unique one), and for int f > 0 its minimiser has
     min phi = 0.
     """
-    b = forms.assemble_load()
-    try:
-        total, size = b.sum(), b.norm(PETSc.NormType.NORM_1)
-    finally:
-        b.destroy()
+    total, size = load.sum(), load.norm(PETSc.NormType.NORM_1)
     if total <= 1e-12 * size:
         effect = (
             "lowers the energy without bound (no solution)"

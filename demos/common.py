@@ -1,5 +1,6 @@
-"""The preamble the demos share: their command line, printing on rank 0, results.json
-and the outputs of a solve.
+"""The preamble the demos share: their command line, printing on rank 0, results.json,
+the gmsh files of the demos that build their own body, the sweep of manufactured solves
+over meshes and the outputs of a solve.
 
 Every demo takes ``--cells N`` (its mesh size) and ``--out DIR`` (default
 ``out/<demo name>``) and writes the numbers it prints to DIR/results.json, which the
@@ -12,21 +13,22 @@ import argparse
 import json
 import sys
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Sequence
 
 from mpi4py import MPI
 
 __all__ = [
     "CELLS_HELP",
     "OUTPUTS_HELP",
-    "add_refinement_arguments",
+    "begin_demo",
     "demo_parser",
-    "manufactured_row",
+    "solve_manufactured",
     "start_demo",
     "outcome",
     "rank0_print",
     "refinement_summary",
     "solve_row",
+    "write_gmsh_file",
     "write_results",
     "write_solve_outputs",
 ]
@@ -52,12 +54,28 @@ def demo_parser(
     return parser
 
 
-def add_refinement_arguments(parser: argparse.ArgumentParser, max_dofs: int) -> None:
-    """``--steps`` (adaptive refinements, default 12) and ``--max-dofs`` (the largest level,
-    default ``max_dofs``) of the adaptive demos."""
-    parser.add_argument("--steps", type=int, default=12, help="adaptive refinements (default 12)")
-    max_help = f"largest level (default {max_dofs})"
-    parser.add_argument("--max-dofs", type=int, default=max_dofs, help=max_help)
+def begin_demo(
+    comm: MPI.Comm,
+    name: str,
+    description: str,
+    *,
+    cells: int,
+    cells_help: str = CELLS_HELP,
+    out_help: str = "",
+    max_dofs: int | None = None,
+) -> tuple[argparse.Namespace, Callable[..., None]]:
+    """The command line of a demo with the common arguments alone, parsed, and the demo
+    started: :func:`demo_parser` (``--cells``, ``--out``), with ``max_dofs`` (the adaptive
+    demos) ``--steps`` (adaptive refinements, default 12) and ``--max-dofs`` (the largest
+    level, default ``max_dofs``) too, then :func:`start_demo`. A demo with arguments of its
+    own builds its parser with :func:`demo_parser` and calls :func:`start_demo`."""
+    parser = demo_parser(name, description, cells=cells, cells_help=cells_help, out_help=out_help)
+    if max_dofs is not None:
+        steps_help = "adaptive refinements (default 12)"
+        parser.add_argument("--steps", type=int, default=12, help=steps_help)
+        max_help = f"largest level (default {max_dofs})"
+        parser.add_argument("--max-dofs", type=int, default=max_dofs, help=max_help)
+    return start_demo(parser, comm)
 
 
 def start_demo(
@@ -131,39 +149,56 @@ def refinement_summary(rows: list[dict[str, Any]], min_dofs: int) -> dict[str, A
     )
 
 
-def manufactured_row(cells: int, problem, result, solution, seconds: float) -> dict[str, Any]:
-    """The :func:`solve_row` of ``result``, the solve of the manufactured ``problem`` of
-    ``solution`` on the mesh of ``cells`` cells per side in ``seconds``: its dofs (on
-    Gamma too), contact and Signorini nodes, and the errors of
-    ``coupling.manufactured.solution_errors``. Collective."""
+def solve_manufactured(
+    comm: MPI.Comm, solution, material, cells: Sequence[int], options
+) -> tuple[list[dict[str, Any]], Any, Any]:
+    """Solve the manufactured problem of ``solution`` (``coupling.manufactured``) with
+    ``material`` and ``options`` on the meshes of ``cells`` cells per side in turn: (a row
+    per mesh, the problem and the result of the last). A row is the :func:`solve_row` of
+    the solve with its dofs (on Gamma too), contact and Signorini nodes, seconds (assembly
+    and solve) and the errors of ``coupling.manufactured.solution_errors``. Collective."""
+    import time
+
     import numpy as np
 
-    from coupling.manufactured import solution_errors
+    from coupling.manufactured import manufactured_problem, solution_errors
+    from coupling.solvers import solve
 
-    return solve_row(
-        cells,
-        result,
-        dofs=problem.V.dofmap.index_map.size_global,
-        boundary_dofs=problem.boundary.n_gamma,
-        contact_nodes=int(np.count_nonzero(result.contact)),
-        signorini_nodes=problem.n_signorini,
-        seconds=seconds,
-        **solution_errors(problem, solution, result),
-    )
+    rows = []
+    for n in cells:
+        tic = time.perf_counter()
+        problem = manufactured_problem(comm, solution, material, cells=n)
+        result = solve(problem, options)
+        row = solve_row(
+            n,
+            result,
+            dofs=problem.V.dofmap.index_map.size_global,
+            boundary_dofs=problem.boundary.n_gamma,
+            contact_nodes=int(np.count_nonzero(result.contact)),
+            signorini_nodes=problem.n_signorini,
+            seconds=time.perf_counter() - tic,
+            **solution_errors(problem, solution, result),
+        )
+        rows.append(row)
+    return rows, problem, result
 
 
-def write_solve_outputs(comm: MPI.Comm, out: Path, problem, result, options) -> list[str]:
+def write_solve_outputs(
+    comm: MPI.Comm, out: Path, problem, result, options, results: dict[str, Any]
+) -> list[str]:
     """Write what ``fembem solve`` writes for ``result`` (``coupling.io.outputs``:
     summary.json with the seconds of every stage, fields.npz, solution.xdmf and the PNG
-    figures) into ``out``, emptied first; return the file names. Collective."""
+    figures) into ``out``, emptied first, and the demo's ``results`` (:func:`write_results`);
+    return the file names. Collective."""
     from coupling.io.atomic import prepare_output_dir
     from coupling.io.outputs import write_outputs
 
     prepare_output_dir(comm, out, force=True)
     timings = {**problem.timings, **result.timings}
-    return write_outputs(
+    files = write_outputs(
         comm, out, problem, result, tol=options.tol, timings=timings, xdmf=True, plots=True
     )
+    return [*files, write_results(comm, out, results).name]
 
 
 def write_results(comm: MPI.Comm, out: Path, results: dict[str, Any]) -> Path:
@@ -174,3 +209,28 @@ def write_results(comm: MPI.Comm, out: Path, results: dict[str, Any]) -> Path:
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(json.dumps(results, indent=2))
     return path
+
+
+def write_gmsh_file(
+    comm: MPI.Comm, path: Path, build: Callable[[Any, float], None], *, h: float, dim: int
+) -> Path:
+    """On rank 0: the gmsh model that ``build(gmsh, h)`` makes in a fresh gmsh session
+    (``fem_py.mesh.gmsh_mesh.gmsh_session``; h the mesh size, for the point sizes of a
+    built-in kernel's model), meshed in ``dim`` dimensions with cells of size at most ``h``
+    on one thread (the same mesh on every run) and written to ``path``, its
+    folder created; the other ranks wait for the file, and an exception there is raised on
+    every rank (``fem_py.parallel.run_on_root``). Return ``path``. Collective."""
+    from fem_py.mesh.gmsh_mesh import gmsh_session
+    from fem_py.parallel import run_on_root
+
+    def write() -> None:
+        with gmsh_session() as gmsh:
+            gmsh.option.setNumber("General.NumThreads", 1)
+            build(gmsh, h)
+            gmsh.option.setNumber("Mesh.MeshSizeMax", h)
+            gmsh.model.mesh.generate(dim)
+            Path(path).parent.mkdir(parents=True, exist_ok=True)
+            gmsh.write(str(path))
+
+    run_on_root(comm, write)
+    return Path(path)

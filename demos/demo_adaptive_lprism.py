@@ -23,69 +23,53 @@
 import numpy as np
 from mpi4py import MPI
 
-from common import (
-    add_refinement_arguments,
-    demo_parser,
-    refinement_summary,
-    start_demo,
-    write_results,
-)
+from common import begin_demo, refinement_summary, write_gmsh_file, write_results
 from coupling.adapt import AdaptOptions, adapt
-from coupling.manufactured import ManufacturedSolution, exterior_field_3d, solution_errors
+from coupling.manufactured import ManufacturedSolution, exterior_field_3d, lshape_corner
+from coupling.manufactured import solution_errors
 from coupling.options import SolverOptions
 from coupling.problem import SignoriniProblem
 from fem_py.forms import make_material
 from fem_py.mesh import GeometrySpec, build_domain
-from fem_py.mesh.gmsh_mesh import gmsh_session
-from fem_py.parallel import run_on_root
 
-parser = demo_parser(
-    "demo_adaptive_lprism",
-    "Adaptive refinement at the re-entrant edge of an L-shaped prism.",
-    cells=4,
-    cells_help="the first mesh's size is h = 0.5/cells",
-)
-add_refinement_arguments(parser, max_dofs=30000)
+description = "Adaptive refinement at the re-entrant edge of an L-shaped prism."
+cells_help = "the first mesh's size is h = 0.5/cells"
 comm = MPI.COMM_WORLD
-args, say = start_demo(parser, comm)
+args, say = begin_demo(
+    comm, "demo_adaptive_lprism", description, cells=4, cells_help=cells_help, max_dofs=30000
+)
 
 # %% [markdown]
 # ## The body and the singular solution
 #
 # gmsh writes the prism (one physical volume, one physical surface group) on rank 0;
 # `[geometry] mesh` reads it. u does not depend on z; as in the 2D demo,
-# beta = atan2(x - y, -(x + y)) puts the branch cut of atan2 in the removed quarter.
+# beta = atan2(x - y, -(x + y)) puts the branch cut of atan2 in the removed quarter: u is
+# that of `coupling.manufactured.lshape_corner`.
 
 # %%
-CORNER = "(x**2 + y**2)**(1/3)*cos(2/3*atan2(x - y, -(x + y)))"
+CORNER = lshape_corner().u
 exact = ManufacturedSolution(
     "mesh", 0.5, (0.0, 0.0, 0.0), (), CORNER, exterior_field_3d((-0.1, -0.1, 0.0))
 )
 material = make_material("linear")
-mesh_file = args.out / "lprism.msh"
 
 
-def write_prism(h: float) -> None:
-    with gmsh_session() as gmsh:
-        gmsh.option.setNumber("General.NumThreads", 1)
-        occ = gmsh.model.occ
-        q = 0.25
-        occ.cut(
-            [(3, occ.addBox(-q, -q, -q, 2 * q, 2 * q, 2 * q))],
-            [(3, occ.addBox(0, 0, -q, q, q, 2 * q))],
-        )
-        occ.synchronize()
-        volumes = [v for _, v in gmsh.model.getEntities(3)]
-        surfaces = [s for _, s in gmsh.model.getEntities(2)]
-        gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, surfaces, 1), "surface")
-        gmsh.model.setPhysicalName(3, gmsh.model.addPhysicalGroup(3, volumes, 2), "omega")
-        gmsh.option.setNumber("Mesh.MeshSizeMax", h)
-        gmsh.model.mesh.generate(3)
-        mesh_file.parent.mkdir(parents=True, exist_ok=True)
-        gmsh.write(str(mesh_file))
+def build_prism(gmsh, h: float) -> None:
+    occ = gmsh.model.occ
+    q = 0.25
+    occ.cut(
+        [(3, occ.addBox(-q, -q, -q, 2 * q, 2 * q, 2 * q))],
+        [(3, occ.addBox(0, 0, -q, q, q, 2 * q))],
+    )
+    occ.synchronize()
+    volumes = [v for _, v in gmsh.model.getEntities(3)]
+    surfaces = [s for _, s in gmsh.model.getEntities(2)]
+    gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, surfaces, 1), "surface")
+    gmsh.model.setPhysicalName(3, gmsh.model.addPhysicalGroup(3, volumes, 2), "omega")
 
 
-run_on_root(comm, lambda: write_prism(0.5 / args.cells))
+mesh_file = write_gmsh_file(comm, args.out / "lprism.msh", build_prism, h=0.5 / args.cells, dim=3)
 
 
 def build(domain):

@@ -22,17 +22,11 @@
 import numpy as np
 from mpi4py import MPI
 
-from common import (
-    add_refinement_arguments,
-    demo_parser,
-    refinement_summary,
-    start_demo,
-    write_results,
-)
+from common import begin_demo, refinement_summary, write_results
 from coupling.adapt import AdaptOptions, adapt
 from coupling.manufactured import (
     ManufacturedSolution,
-    exterior_field,
+    lshape_corner,
     lshape_corner_contact,
     solution_errors,
 )
@@ -41,26 +35,22 @@ from coupling.problem import SignoriniProblem
 from fem_py.forms import make_material
 from fem_py.mesh import GeometrySpec, build_domain
 
-parser = demo_parser(
-    "demo_adaptive_lshape",
-    "Adaptive refinement at the re-entrant corner of an L-shape.",
-    cells=8,
-    cells_help="cells per side of the bounding square of the first mesh",
-)
-add_refinement_arguments(parser, max_dofs=40000)
+description = "Adaptive refinement at the re-entrant corner of an L-shape."
+cells_help = "cells per side of the bounding square of the first mesh"
 comm = MPI.COMM_WORLD
-args, say = start_demo(parser, comm)
+args, say = begin_demo(
+    comm, "demo_adaptive_lshape", description, cells=8, cells_help=cells_help, max_dofs=40000
+)
 
 # %% [markdown]
 # ## The singular solution
 #
 # With beta = atan2(x - y, -(x + y)) (zero along the direction (-1, -1), into Omega),
 # theta = beta + 3 pi/4 and sin(2 theta/3) = cos(2 beta/3): the branch cut of atan2
-# lies in the removed quarter.
+# lies in the removed quarter (`coupling.manufactured.lshape_corner`).
 
 # %%
-CORNER = "(x**2 + y**2)**(1/3)*cos(2/3*atan2(x - y, -(x + y)))"
-exact = ManufacturedSolution("lshape", 0.5, (0.0, 0.0), (), CORNER, exterior_field((-0.1, -0.1)))
+exact = lshape_corner()
 material = make_material("linear")
 
 

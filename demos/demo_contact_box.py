@@ -25,28 +25,20 @@
 # the same.
 
 # %%
-import time
-
 import numpy as np
 from mpi4py import MPI
 
-from common import OUTPUTS_HELP, demo_parser, manufactured_row, start_demo, write_results
-from common import write_solve_outputs
-from coupling.manufactured import box_contact, manufactured_problem
+from common import OUTPUTS_HELP, begin_demo, solve_manufactured, write_solve_outputs
+from coupling.manufactured import box_contact
 from coupling.options import SolverOptions
-from coupling.solvers import solve
 from fem_py.forms import make_material
 
 description = "Signorini contact on a box in R^3 (manufactured solution, known contact set)."
-parser = demo_parser(
-    "demo_contact_box",
-    description,
-    cells=16,
-    cells_help="cubes per side of the finest box mesh (h = 0.5/cells)",
-    out_help=OUTPUTS_HELP,
-)
+cells_help = "cubes per side of the finest box mesh (h = 0.5/cells)"
 comm = MPI.COMM_WORLD
-args, say = start_demo(parser, comm)
+args, say = begin_demo(
+    comm, "demo_contact_box", description, cells=16, cells_help=cells_help, out_help=OUTPUTS_HELP
+)
 
 # %% [markdown]
 # ## The exact solution
@@ -73,12 +65,8 @@ say(f"Signorini face {face.name!r}: exact gap {face.gap}, contact exactly where 
 
 # %%
 options = SolverOptions()  # the defaults: ssn, preconditioner "auto" (amg in 3D), tol 1e-8
-rows = []
-for cells in (args.cells // 4, args.cells // 2, args.cells):
-    tic = time.perf_counter()
-    problem = manufactured_problem(comm, solution, material, cells=cells)
-    result = solve(problem, options)
-    rows.append(manufactured_row(cells, problem, result, solution, time.perf_counter() - tic))
+meshes = (args.cells // 4, args.cells // 2, args.cells)
+rows, problem, result = solve_manufactured(comm, solution, material, meshes, options)
 
 say(
     f"\n{'h':>9} {'dofs':>6} {'Gamma':>5} {'its':>4} {'|u-u_h|_1':>10} {'max|u-u_h|':>10} "
@@ -111,7 +99,5 @@ for key, values in rates.items():
 
 # %%
 out = args.out
-files = write_solve_outputs(comm, out, problem, result, options)
-results = write_results(comm, out, dict(rows=rows, rates=rates))
-say(f"\nfiles:  {', '.join(sorted(files))} in {out}")
-say(f"errors: {results}")
+files = write_solve_outputs(comm, out, problem, result, options, dict(rows=rows, rates=rates))
+say(f"\nfiles:  {', '.join(sorted(files))} in {out} (the errors in results.json)")

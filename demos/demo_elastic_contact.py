@@ -33,7 +33,7 @@ import time
 import numpy as np
 from mpi4py import MPI
 
-from common import OUTPUTS_HELP, demo_parser, start_demo, write_results, write_solve_outputs
+from common import OUTPUTS_HELP, begin_demo, write_solve_outputs
 from coupling.manufactured_elastic import elastic_contact
 from coupling.options import SolverOptions
 from coupling.problem import SignoriniProblem
@@ -42,15 +42,16 @@ from fem_py.forms.elasticity import hencky
 from fem_py.mesh import GeometrySpec, build_domain
 
 description = "Elastic contact with a known contact set: errors over three meshes."
-parser = demo_parser(
+cells_help = "cells per side of the finest square mesh (h = 0.5/cells)"
+comm = MPI.COMM_WORLD
+args, say = begin_demo(
+    comm,
     "demo_elastic_contact",
     description,
     cells=64,
-    cells_help="cells per side of the finest square mesh (h = 0.5/cells)",
+    cells_help=cells_help,
     out_help=OUTPUTS_HELP,
 )
-comm = MPI.COMM_WORLD
-args, say = start_demo(parser, comm)
 
 # %% [markdown]
 # ## Three meshes
@@ -116,7 +117,5 @@ for key, values in rates.items():
 # (deformed.png, signorini.png, exterior.png, history.png).
 
 # %%
-files = write_solve_outputs(comm, args.out, problem, result, options)
-results = write_results(comm, args.out, dict(rows=rows, rates=rates))
-say(f"\nfiles:  {', '.join(sorted(files))} in {args.out}")
-say(f"errors: {results}")
+files = write_solve_outputs(comm, args.out, problem, result, options, dict(rows=rows, rates=rates))
+say(f"\nfiles:  {', '.join(sorted(files))} in {args.out} (the errors in results.json)")

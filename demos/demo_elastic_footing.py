@@ -27,8 +27,7 @@
 import numpy as np
 from mpi4py import MPI
 
-from common import OUTPUTS_HELP, demo_parser, outcome, start_demo, write_results
-from common import write_solve_outputs
+from common import OUTPUTS_HELP, begin_demo, outcome, write_gmsh_file, write_solve_outputs
 from coupling.io.quantities import (
     boundary_flux,
     complementarity,
@@ -40,49 +39,46 @@ from coupling.problem import SignoriniProblem
 from coupling.solvers import solve
 from fem_py.forms.elasticity import hencky
 from fem_py.mesh import GeometrySpec, build_domain
-from fem_py.mesh.gmsh_mesh import gmsh_session
 
 description = "An elastic footing from gmsh in an elastic medium, part of its base lifting."
-parser = demo_parser(
+comm = MPI.COMM_WORLD
+args, say = begin_demo(
+    comm,
     "demo_elastic_footing",
     description,
     cells=3,
     cells_help="h = 0.15/cells",
     out_help=OUTPUTS_HELP,
 )
-comm = MPI.COMM_WORLD
-args, say = start_demo(parser, comm)
-h = 0.15 / args.cells
-args.out.mkdir(parents=True, exist_ok=True)
-msh_file = args.out / "footing.msh"
 
 # %% [markdown]
 # ## Build and mesh the footing with gmsh (rank 0)
 #
 # `occ.fuse` joins the slab and the column; the faces of the result are told apart by
 # their centres of mass: the base's lies on z = 0. Every surface and the volume carry a
-# physical group.
+# physical group. `write_gmsh_file` (demos/common.py) meshes the model and writes the file.
 
 # %%
-if comm.rank == 0:
-    with gmsh_session() as gmsh:
-        occ = gmsh.model.occ
-        slab = occ.addBox(0.0, 0.0, 0.0, 0.6, 0.4, 0.15)
-        column = occ.addBox(0.2, 0.1, 0.15, 0.2, 0.2, 0.15)
-        (body,), _ = occ.fuse([(3, slab)], [(3, column)])
-        occ.synchronize()
-        groups = {"base": [], "sides": []}
-        for _, tag in gmsh.model.getEntities(2):
-            centre = occ.getCenterOfMass(2, tag)
-            groups["base" if abs(centre[2]) < 1e-9 else "sides"].append(tag)
-        for number, (name, tags) in enumerate(groups.items(), start=1):
-            gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, tags, number), name)
-        gmsh.model.setPhysicalName(3, gmsh.model.addPhysicalGroup(3, [body[1]], 10), "footing")
-        gmsh.option.setNumber("Mesh.MeshSizeMax", h)
-        gmsh.option.setNumber("General.NumThreads", 1)  # the same mesh on every run
-        gmsh.model.mesh.generate(3)
-        gmsh.write(str(msh_file))
-comm.barrier()
+
+
+def build_footing(gmsh, h: float) -> None:
+    occ = gmsh.model.occ
+    slab = occ.addBox(0.0, 0.0, 0.0, 0.6, 0.4, 0.15)
+    column = occ.addBox(0.2, 0.1, 0.15, 0.2, 0.2, 0.15)
+    (body,), _ = occ.fuse([(3, slab)], [(3, column)])
+    occ.synchronize()
+    groups = {"base": [], "sides": []}
+    for _, tag in gmsh.model.getEntities(2):
+        centre = occ.getCenterOfMass(2, tag)
+        groups["base" if abs(centre[2]) < 1e-9 else "sides"].append(tag)
+    for number, (name, tags) in enumerate(groups.items(), start=1):
+        gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, tags, number), name)
+    gmsh.model.setPhysicalName(3, gmsh.model.addPhysicalGroup(3, [body[1]], 10), "footing")
+
+
+msh_file = write_gmsh_file(
+    comm, args.out / "footing.msh", build_footing, h=0.15 / args.cells, dim=3
+)
 
 # %% [markdown]
 # ## Read, solve, check
@@ -146,6 +142,5 @@ say(
 # "Warp By Vector").
 
 # %%
-files = write_solve_outputs(comm, args.out, problem, result, options)
-write_results(comm, args.out, facts)
+files = write_solve_outputs(comm, args.out, problem, result, options, facts)
 say(f"files: {', '.join(sorted(files))} in {args.out}")

@@ -25,7 +25,7 @@
 import numpy as np
 from mpi4py import MPI
 
-from common import demo_parser, solve_row, start_demo, write_results
+from common import begin_demo, solve_row, write_results
 from coupling.manufactured import (
     ManufacturedSolution,
     exterior_field,
@@ -38,9 +38,10 @@ from fem_py.forms import make_material
 
 description = "Linear transmission problem, known solution."
 cells_help = "cells per side of the finest mesh; the others have N/2, N/4"
-parser = demo_parser("demo_linear_transmission", description, cells=128, cells_help=cells_help)
 comm = MPI.COMM_WORLD
-args, say = start_demo(parser, comm)
+args, say = begin_demo(
+    comm, "demo_linear_transmission", description, cells=128, cells_help=cells_help
+)
 
 # %% [markdown]
 # ## The exact solution

@@ -22,10 +22,8 @@ from mpi4py import MPI
 
 from common import (
     OUTPUTS_HELP,
-    demo_parser,
+    begin_demo,
     outcome,
-    start_demo,
-    write_results,
     write_solve_outputs,
 )
 from coupling.manufactured import lshape_contact, manufactured_problem, solution_errors
@@ -34,9 +32,8 @@ from coupling.solvers import solve
 from fem_py.forms import make_material
 
 description = "L-shaped domain with two Signorini arcs."
-parser = demo_parser("demo_lshape", description, cells=128, out_help=OUTPUTS_HELP)
 comm = MPI.COMM_WORLD
-args, say = start_demo(parser, comm)
+args, say = begin_demo(comm, "demo_lshape", description, cells=128, out_help=OUTPUTS_HELP)
 
 # %% [markdown]
 # ## Solve
@@ -98,17 +95,13 @@ say(f"nodes in the wrong state away from the switch points: {errors['contact_mis
 
 # %%
 out = args.out
-files = write_solve_outputs(comm, out, problem, result, options)
-results = write_results(
-    comm,
-    out,
-    dict(
-        cells=args.cells,
-        converged=bool(result.converged),
-        iterations=int(result.iterations),
-        errors=errors,
-        arcs=arcs,
-    ),
+results = dict(
+    cells=args.cells,
+    converged=bool(result.converged),
+    iterations=int(result.iterations),
+    errors=errors,
+    arcs=arcs,
 )
+files = write_solve_outputs(comm, out, problem, result, options, results)
 say(f"\nplots:  {', '.join(str(out / f) for f in files if f.endswith('.png'))}")
-say(f"fields: {out / 'fields.npz'}, numbers: {results}")
+say(f"fields: {out / 'fields.npz'}, numbers: {out / 'results.json'}")

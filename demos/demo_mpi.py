@@ -23,16 +23,15 @@ import time
 import numpy as np
 from mpi4py import MPI
 
-from common import demo_parser, start_demo, write_results
+from common import begin_demo, write_results
 from coupling.io.outputs import gather_p1
 from coupling.manufactured import manufactured_problem, solution_errors, square_contact
 from coupling.options import SolverOptions
 from coupling.solvers import solve
 from fem_py.forms import make_material
 
-parser = demo_parser("demo_mpi", "The contact problem on several MPI ranks.", cells=128)
 world = MPI.COMM_WORLD
-args, say = start_demo(parser, world)
+args, say = begin_demo(world, "demo_mpi", "The contact problem on several MPI ranks.", cells=128)
 
 
 def solve_on(comm: MPI.Comm):

@@ -20,12 +20,10 @@
 # .msh file, the outputs and results.json go to DIR), or under `mpirun -n 2`.
 
 # %%
-import gmsh
 import numpy as np
 from mpi4py import MPI
 
-from common import OUTPUTS_HELP, demo_parser, outcome, start_demo, write_results
-from common import write_solve_outputs
+from common import OUTPUTS_HELP, begin_demo, outcome, write_gmsh_file, write_solve_outputs
 from coupling.app.sizing import check_memory
 from coupling.io.quantities import boundary_flux, complementarity, far_field_coefficient
 from coupling.options import SolverOptions
@@ -36,14 +34,10 @@ from fem_py.mesh import GeometrySpec, build_domain
 from fem_py.mesh.size_estimate import gmsh_model_size
 
 description = "A block with a hole from a gmsh OpenCASCADE model, Signorini on a named face."
-parser = demo_parser(
-    "demo_own_body", description, cells=8, cells_help="h = 0.3/cells", out_help=OUTPUTS_HELP
-)
 comm = MPI.COMM_WORLD
-args, say = start_demo(parser, comm)
-h = 0.3 / args.cells
-args.out.mkdir(parents=True, exist_ok=True)
-msh_file = args.out / "block.msh"
+args, say = begin_demo(
+    comm, "demo_own_body", description, cells=8, cells_help="h = 0.3/cells", out_help=OUTPUTS_HELP
+)
 
 # %% [markdown]
 # ## Build and mesh the body with gmsh (rank 0)
@@ -54,11 +48,12 @@ msh_file = args.out / "block.msh"
 # not read). Before gmsh meshes, `gmsh_model_size` estimates the mesh from the model's
 # volume and areas and `check_memory` refuses, in one line, a mesh size h whose run
 # could not fit in memory (a 3D mesh of too small an h takes gmsh minutes to hours).
+# `write_gmsh_file` (demos/common.py) then meshes the model and writes the file.
 
 # %%
-if comm.rank == 0:
-    gmsh.initialize(readConfigFiles=False)
-    gmsh.option.setNumber("General.Terminal", 0)
+
+
+def build_block(gmsh, h: float) -> None:
     occ = gmsh.model.occ
     block = occ.addBox(0.0, 0.0, 0.0, 0.6, 0.4, 0.3)
     drill = occ.addCylinder(0.3, -0.1, 0.15, 0.0, 0.6, 0.0, 0.08)
@@ -77,12 +72,9 @@ if comm.rank == 0:
         gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, tags, number), name)
     gmsh.model.setPhysicalName(3, gmsh.model.addPhysicalGroup(3, [body[1]], 10), "body")
     check_memory(gmsh_model_size(h, signorini=["bottom"]), comm.size, plots=True)
-    gmsh.option.setNumber("Mesh.MeshSizeMax", h)
-    gmsh.option.setNumber("General.NumThreads", 1)  # the same mesh on every run
-    gmsh.model.mesh.generate(3)
-    gmsh.write(str(msh_file))
-    gmsh.finalize()
-comm.barrier()
+
+
+msh_file = write_gmsh_file(comm, args.out / "block.msh", build_block, h=0.3 / args.cells, dim=3)
 
 # %% [markdown]
 # ## Read, solve, check
@@ -128,6 +120,5 @@ say(
 # (u_h and the named faces, for ParaView).
 
 # %%
-files = write_solve_outputs(comm, args.out, problem, result, options)
-write_results(comm, args.out, facts)
+files = write_solve_outputs(comm, args.out, problem, result, options, facts)
 say(f"files: {', '.join(sorted(files))} in {args.out}")

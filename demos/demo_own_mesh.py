@@ -20,11 +20,10 @@
 # %%
 import math
 
-import gmsh
 import numpy as np
 from mpi4py import MPI
 
-from common import demo_parser, outcome, start_demo, write_results
+from common import begin_demo, outcome, write_gmsh_file, write_results
 from coupling.manufactured import disk_contact, solution_errors
 from coupling.options import SolverOptions
 from coupling.problem import SignoriniProblem
@@ -34,26 +33,24 @@ from fem_py.mesh import GeometrySpec, build_domain
 
 description = "A disk read from a gmsh .msh file with named physical groups."
 out_help = "folder for the .msh file, the figure and results.json"
-parser = demo_parser(
-    "demo_own_mesh", description, cells=64, cells_help="h = 0.5/cells", out_help=out_help
-)
 comm = MPI.COMM_WORLD
-args, say = start_demo(parser, comm)
-h = 0.5 / args.cells
-args.out.mkdir(parents=True, exist_ok=True)
-msh_file = args.out / "disk.msh"
+args, say = begin_demo(
+    comm, "demo_own_mesh", description, cells=64, cells_help="h = 0.5/cells", out_help=out_help
+)
 
 # %% [markdown]
 # ## Write the mesh file with gmsh
 #
 # Three points on the circle cut it into circle arcs; the lower one is the group
 # "contact", the two others the group "free". Every element of the file is a linear
-# triangle (MSH 4.1; 2.2 is read as well).
+# triangle (MSH 4.1; 2.2 is read as well). `write_gmsh_file` (demos/common.py) meshes
+# the model on rank 0 and writes the file.
 
 # %%
-if comm.rank == 0:
-    gmsh.initialize(readConfigFiles=False)
-    gmsh.option.setNumber("General.Terminal", 0)
+h = 0.5 / args.cells
+
+
+def build_disk(gmsh, h: float) -> None:
     geo = gmsh.model.geo
     R = 0.25
     centre = geo.addPoint(0, 0, 0, h)
@@ -65,11 +62,9 @@ if comm.rank == 0:
     gmsh.model.setPhysicalName(1, gmsh.model.addPhysicalGroup(1, [arcs[0]], 1), "contact")
     gmsh.model.setPhysicalName(1, gmsh.model.addPhysicalGroup(1, arcs[1:], 2), "free")
     gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, [surface], 3), "omega")
-    gmsh.option.setNumber("Mesh.MeshSizeMax", h)
-    gmsh.model.mesh.generate(2)
-    gmsh.write(str(msh_file))
-    gmsh.finalize()
-comm.barrier()
+
+
+msh_file = write_gmsh_file(comm, args.out / "disk.msh", build_disk, h=h, dim=2)
 
 # %% [markdown]
 # ## Read, partition, solve

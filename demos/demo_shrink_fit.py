@@ -33,7 +33,7 @@ import time
 import numpy as np
 from mpi4py import MPI
 
-from common import OUTPUTS_HELP, demo_parser, start_demo, write_results, write_solve_outputs
+from common import OUTPUTS_HELP, begin_demo, write_solve_outputs
 from coupling.io.quantities import boundary_flux, elastic_boundary_fields
 from coupling.options import SolverOptions
 from coupling.problem import SignoriniProblem
@@ -42,15 +42,11 @@ from fem_py.forms.elasticity import linear_elastic
 from fem_py.mesh import GeometrySpec, build_domain
 
 description = "A shrink fit against Lamé's closed form (plane strain, unilateral interface)."
-parser = demo_parser(
-    "demo_shrink_fit",
-    description,
-    cells=32,
-    cells_help="b/h on the finest mesh of the disk",
-    out_help=OUTPUTS_HELP,
-)
+cells_help = "b/h on the finest mesh of the disk"
 comm = MPI.COMM_WORLD
-args, say = start_demo(parser, comm)
+args, say = begin_demo(
+    comm, "demo_shrink_fit", description, cells=32, cells_help=cells_help, out_help=OUTPUTS_HELP
+)
 
 # %% [markdown]
 # ## The data
@@ -125,7 +121,6 @@ say(f"rate of the pressure error: {', '.join(f'{v:.2f}' for v in rates)}")
 # shrunk by the fit).
 
 # %%
-files = write_solve_outputs(comm, args.out, problem, result, options)
-results = write_results(comm, args.out, dict(rows=rows, rates=rates, p_exact=p_exact))
-say(f"\nfiles:  {', '.join(sorted(files))} in {args.out}")
-say(f"errors: {results}")
+results = dict(rows=rows, rates=rates, p_exact=p_exact)
+files = write_solve_outputs(comm, args.out, problem, result, options, results)
+say(f"\nfiles:  {', '.join(sorted(files))} in {args.out} (the errors in results.json)")

@@ -24,37 +24,32 @@
 # whose linear systems are solved by CG preconditioned with the substructuring
 # preconditioner of section 4 (subdomains of size d = 4h here). Set
 # `options = SolverOptions(method="pgpm")` below for the paper's method alone (about 190
-# iterations here). The problem is assembled once (`manufactured_problem` returns a
-# `coupling.problem.SignoriniProblem`); `coupling.solvers.solve(problem, options)` solves it.
+# iterations here). On each mesh `solve_manufactured` (demos/common.py) assembles the
+# problem once (`coupling.manufactured.manufactured_problem` returns a
+# `coupling.problem.SignoriniProblem`) and `coupling.solvers.solve(problem, options)` solves it.
 #
 # Run it with `make demo` or `python demos/demo_signorini_square.py [--cells N] [--out DIR]`
 # (the figures, fields and results.json go to DIR, default out/demo_signorini_square).
 
 # %%
-import time
-
 import numpy as np
 from mpi4py import MPI
 
 from common import (
     OUTPUTS_HELP,
-    demo_parser,
-    manufactured_row,
-    start_demo,
-    write_results,
+    begin_demo,
+    solve_manufactured,
     write_solve_outputs,
 )
-from coupling.manufactured import manufactured_problem, square_contact
+from coupling.manufactured import square_contact
 from coupling.options import SolverOptions
-from coupling.solvers import solve
 from fem_py.forms import make_material
 
 description = (
     "Nonlinear Signorini contact on a square (manufactured solution with a known contact set)."
 )
-parser = demo_parser("demo_signorini_square", description, cells=128, out_help=OUTPUTS_HELP)
 comm = MPI.COMM_WORLD
-args, say = start_demo(parser, comm)
+args, say = begin_demo(comm, "demo_signorini_square", description, cells=128, out_help=OUTPUTS_HELP)
 
 # %% [markdown]
 # ## The material and the exact solution
@@ -87,12 +82,8 @@ say(
 
 # %%
 options = SolverOptions()  # the defaults: ssn, substructuring B, tol = 1e-8
-rows = []
-for cells in (args.cells // 2, args.cells):
-    tic = time.perf_counter()
-    problem = manufactured_problem(comm, solution, material, cells=cells)
-    result = solve(problem, options)
-    rows.append(manufactured_row(cells, problem, result, solution, time.perf_counter() - tic))
+meshes = (args.cells // 2, args.cells)
+rows, problem, result = solve_manufactured(comm, solution, material, meshes, options)
 
 say(
     f"\n{'h':>9} {'dofs':>7} {'its':>5} {'|u-u_h|_1':>10} {'max|u-u_h|':>10} "
@@ -118,9 +109,8 @@ say(f"energy-norm convergence rate: {rate:.2f} (theory: 1)")
 
 # %%
 out = args.out
-files = write_solve_outputs(comm, out, problem, result, options)
-results = write_results(comm, out, dict(rows=rows, energy_rate=rate))
+files = write_solve_outputs(comm, out, problem, result, options, dict(rows=rows, energy_rate=rate))
 say(f"\nplots:  {', '.join(str(out / f) for f in files if f.endswith('.png'))}")
 say(f"fields: {out / 'fields.npz'} (u on the mesh; gap, u_e, du_e/dn, contact set on Gamma)")
 say(f"        {out / 'solution.xdmf'} (u_h and the subdomains, for ParaView)")
-say(f"errors: {results}")
+say(f"errors: {out / 'results.json'}")

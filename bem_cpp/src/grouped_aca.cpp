@@ -217,24 +217,26 @@ LowRank grouped_aca(Index m, Index n, const std::vector<Index>& row_group, const
     // Confirm on `samples` sampled groups of columns and of rows, alternately: a residual
     // whose norm, scaled to the block, fails the test gives the next cross.
     bool found = false;
-    for (int s = 0; s < samples && !found && x.rank() < max_rank; ++s) {
-      cols.with(random_index(n), group);
-      for (Index j : group) {
-        if (found || x.rank() >= max_rank) break;
-        column(j, c.data());
-        x.residual_column(j, c, gc);
-        if (!(norm(c) * std::sqrt(static_cast<double>(n)) > tol * x.norm())) continue;
-        found = cross_of_column(j) >= 0;
+    // whether residual row (by_row) or column k, its norm scaled to the block, fails the test
+    auto fails = [&](bool by_row, Index k) {
+      if (by_row) {
+        row(k, r.data());
+        x.residual_row(k, r, gr);
+        return norm(r) * std::sqrt(static_cast<double>(m)) > tol * x.norm();
       }
-      rows.with(random_index(m), group);
-      for (Index q : group) {
-        if (found || x.rank() >= max_rank) break;
-        row(q, r.data());
-        x.residual_row(q, r, gr);
-        if (!(norm(r) * std::sqrt(static_cast<double>(m)) > tol * x.norm())) continue;
-        found = cross_of_row(q) >= 0;
+      column(k, c.data());
+      x.residual_column(k, c, gc);
+      return norm(c) * std::sqrt(static_cast<double>(n)) > tol * x.norm();
+    };
+    for (int s = 0; s < samples && !found && x.rank() < max_rank; ++s)
+      for (const bool by_row : {false, true}) {  // a group of columns, then one of rows
+        (by_row ? rows : cols).with(random_index(by_row ? m : n), group);
+        for (Index k : group) {
+          if (found || x.rank() >= max_rank) break;
+          if (!fails(by_row, k)) continue;
+          found = (by_row ? cross_of_row(k) : cross_of_column(k)) >= 0;
+        }
       }
-    }
     if (!found) break;
     empty_groups = 0;
     i = unused_argmax(x.last_u(), row_used);

@@ -168,13 +168,13 @@ std::vector<Index> distributed_row_bounds(const ClusterTree& rows, const Cluster
 }
 
 HMatrix::HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const ClusterTree> cols,
-                 const EntrySource& entries, const HMatrixOptions& options)
-    : HMatrix(std::move(rows), std::move(cols), options, Unfilled{}) {
+                 const EntrySource& entries, const HMatrixOptions& options, const std::vector<Index>& row_bounds)
+    : HMatrix(std::move(rows), std::move(cols), options, row_bounds, Unfilled{}) {
   build(entries, options);
 }
 
 HMatrix::HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const ClusterTree> cols,
-                 const HMatrixOptions& options, Unfilled)
+                 const HMatrixOptions& options, const std::vector<Index>& row_bounds, Unfilled)
     : rows_(std::move(rows)),
       cols_(std::move(cols)),
       single_(options.single_precision),
@@ -184,7 +184,10 @@ HMatrix::HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const 
   if (comm_) {
     if (comm_->size < 1 || comm_->rank < 0 || comm_->rank >= comm_->size || !comm_->allgather || !comm_->allreduce)
       throw std::invalid_argument("HMatrix: the communicator needs 0 <= rank < size and both collectives");
-    const std::vector<Index> bounds = distributed_row_bounds(*rows_, *cols_, options, comm_->size);
+    const std::vector<Index> bounds =
+        row_bounds.empty() ? distributed_row_bounds(*rows_, *cols_, options, comm_->size) : row_bounds;
+    if (static_cast<int>(bounds.size()) != comm_->size + 1 || bounds.front() != 0 || bounds.back() != rows_->size())
+      throw std::invalid_argument("HMatrix: row_bounds need 0 = b_0 <= ... <= b_size = rows");
     row_begin_ = bounds[static_cast<std::size_t>(comm_->rank)];
     row_end_ = bounds[static_cast<std::size_t>(comm_->rank) + 1];
     row_counts_ = counts(bounds);
@@ -333,11 +336,15 @@ void HMatrix::hold(Block& b) const {
 std::vector<std::shared_ptr<const HMatrix>> HMatrix::family(std::shared_ptr<const ClusterTree> rows,
                                                             std::shared_ptr<const ClusterTree> cols,
                                                             const EntrySource& entries, int count,
-                                                            const HMatrixOptions& options) {
+                                                            const HMatrixOptions& options,
+                                                            const std::vector<Index>& row_bounds) {
   if (count < 1) throw std::invalid_argument("HMatrix::family: need count >= 1");
+  const std::vector<Index> bounds = row_bounds.empty() && options.comm && options.comm->size >= 1
+                                        ? distributed_row_bounds(*rows, *cols, options, options.comm->size)
+                                        : row_bounds;
   std::vector<std::shared_ptr<HMatrix>> out;
   for (int w = 0; w < count; ++w) {
-    out.push_back(std::shared_ptr<HMatrix>(new HMatrix(rows, cols, options, Unfilled{})));
+    out.push_back(std::shared_ptr<HMatrix>(new HMatrix(rows, cols, options, bounds, Unfilled{})));
     out.back()->plan(options);
   }
   const HMatrix& first = *out.front();

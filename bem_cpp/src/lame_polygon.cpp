@@ -89,10 +89,9 @@ void adjacent_direction_blocks(const Panel& pi, const Panel& pj, PairRelation re
       Ixy[k][m] = fa * g1.xy[m] + fb * g2.xy[k];
     }
   // Shape functions as c0 + c1 * (distance from the common node), as adjacent_blocks.
-  const double ci[2][2] = {i_vertex_at_end ? 0.0 : 1.0, i_vertex_at_end ? 1.0 / a : -1.0 / a,
-                           i_vertex_at_end ? 1.0 : 0.0, i_vertex_at_end ? -1.0 / a : 1.0 / a};
-  const double cj[2][2] = {i_vertex_at_end ? 1.0 : 0.0, i_vertex_at_end ? -1.0 / b : 1.0 / b,
-                           i_vertex_at_end ? 0.0 : 1.0, i_vertex_at_end ? 1.0 / b : -1.0 / b};
+  const AdjacentShapes shapes(a, b, i_vertex_at_end);
+  const auto& ci = shapes.ci;
+  const auto& cj = shapes.cj;
   for (int al = 0; al < 2; ++al)
     for (int be = 0; be < 2; ++be) {
       double xx = 0, xy = 0;
@@ -186,28 +185,18 @@ DirectionMoments direction_segment_moments(Vec2 p, Vec2 a, Vec2 e, double h) {
 }
 
 void direction_blocks(const Panel& pi, const Panel& pj, PairRelation relation, DirectionBlocks& out) {
-  switch (relation) {
-    case PairRelation::Coincident: {
-      // g = t t^T on the whole square; int phi_a = h/2.
-      const double q = 0.25 * pi.h * pi.h;
-      for (int a = 0; a < 2; ++a)
-        for (int b = 0; b < 2; ++b) {
-          out.xx[a][b] = q * pi.t.x * pi.t.x;
-          out.xy[a][b] = q * pi.t.x * pi.t.y;
-        }
-      return;
-    }
-    case PairRelation::EndToStart:
-    case PairRelation::StartToEnd:
-      return adjacent_direction_blocks(pi, pj, relation, out);
-    case PairRelation::Separated:
-      break;
-  }
-  const int p = far_field_points(pi, pj);
-  if (p > 0)
-    far_direction_blocks(pi, pj, p, out);
-  else
-    near_direction_blocks(pi, pj, out);
+  const auto coincident = [&] {
+    // g = t t^T on the whole square; int phi_a = h/2.
+    const double q = 0.25 * pi.h * pi.h;
+    for (int a = 0; a < 2; ++a)
+      for (int b = 0; b < 2; ++b) {
+        out.xx[a][b] = q * pi.t.x * pi.t.x;
+        out.xy[a][b] = q * pi.t.x * pi.t.y;
+      }
+  };
+  integrate_pair(
+      pi, pj, relation, coincident, [&] { adjacent_direction_blocks(pi, pj, relation, out); },
+      [&](int p) { far_direction_blocks(pi, pj, p, out); }, [&] { near_direction_blocks(pi, pj, out); });
 }
 
 Operators assemble(const Polygon& polygon, const Lame& m, const OperatorRequest& request) {
@@ -244,10 +233,7 @@ Operators assemble(const Polygon& polygon, const Lame& m, const OperatorRequest&
     for (Index Q = P; Q < n; ++Q) {
       const Panel& pq = polygon.panel(Q);
       const Index nodeQ[2] = {Q, (Q + 1) % n};
-      const PairRelation rel = Q == P                 ? PairRelation::Coincident
-                               : Q == P + 1           ? PairRelation::EndToStart
-                               : P == 0 && Q == n - 1 ? PairRelation::StartToEnd
-                                                      : PairRelation::Separated;
+      const PairRelation rel = panel_relation(P, Q, n);
       PairBlocks lap;
       pair_blocks(pp, pq, rel, with_k, lap);
       DirectionBlocks dir;
@@ -289,32 +275,35 @@ Operators assemble(const Polygon& polygon, const Lame& m, const OperatorRequest&
           Z[1][0] = ck * (yy - ek * L0);
           Z[1][1] = -ck * xy;
         };
-        // Test P (shape a), trial node b of Q.
-        for (int a = 0; a < 2; ++a) {
-          const double L0 = lap.v[a][0] + lap.v[a][1];
-          const double xx = dir.xx[a][0] + dir.xx[a][1], xy = dir.xy[a][0] + dir.xy[a][1];
+        // The test shape of one panel (the sums L0, xx, xy of its moments over the other
+        // panel's shapes) against the trial nodes c of the other panel (its length h, the
+        // Laplace entries kl[c]): the blocks (test, trial[c]) of AK, or (to_kt) stored
+        // transposed in KT at (trial[c], test).
+        auto add_k = [&](double L0, double xx, double xy, const double(&kl)[2], double h, Index test,
+                         const Index(&trial)[2], bool to_kt) {
           double Z[2][2];
           z_block(L0, xx, xy, 2 * quarter - xx, Z);
-          const Index row = k_p1 ? nodeP[a] : P;
-          for (int b = 0; b < 2; ++b) {
-            const double s = sigma[b] / pq.h, kl = lap.kij[a][b] / kPi;
-            const double blk[2][2] = {{kl + s * Z[0][0], s * Z[0][1]}, {s * Z[1][0], kl + s * Z[1][1]}};
-            add_block(AK, row, nodeQ[b], 1.0, blk);
+          for (int c = 0; c < 2; ++c) {
+            const double s = sigma[c] / h, k = kl[c] / kPi;
+            const double blk[2][2] = {{k + s * Z[0][0], s * Z[0][1]}, {s * Z[1][0], k + s * Z[1][1]}};
+            if (!to_kt) {
+              add_block(AK, test, trial[c], 1.0, blk);
+              continue;
+            }
+            const double blkT[2][2] = {{blk[0][0], blk[1][0]}, {blk[0][1], blk[1][1]}};
+            add_block(KT, trial[c], test, 1.0, blkT);
           }
-        }
+        };
+        // Test P (shape a), trial node b of Q.
+        for (int a = 0; a < 2; ++a)
+          add_k(lap.v[a][0] + lap.v[a][1], dir.xx[a][0] + dir.xx[a][1], dir.xy[a][0] + dir.xy[a][1], lap.kij[a], pq.h,
+                k_p1 ? nodeP[a] : P, nodeQ, false);
         // Test Q (shape b), trial node a of P, stored transposed.
         if (Q != P)
           for (int b = 0; b < 2; ++b) {
-            const double L0 = lap.v[0][b] + lap.v[1][b];
-            const double xx = dir.xx[0][b] + dir.xx[1][b], xy = dir.xy[0][b] + dir.xy[1][b];
-            double Z[2][2];
-            z_block(L0, xx, xy, 2 * quarter - xx, Z);
-            const Index col = k_p1 ? nodeQ[b] : Q;
-            for (int a = 0; a < 2; ++a) {
-              const double s = sigma[a] / pp.h, kl = lap.kji[b][a] / kPi;
-              const double blkT[2][2] = {{kl + s * Z[0][0], s * Z[1][0]}, {s * Z[0][1], kl + s * Z[1][1]}};
-              add_block(KT, nodeP[a], col, 1.0, blkT);
-            }
+            const double kl[2] = {lap.kji[b][0], lap.kji[b][1]};
+            add_k(lap.v[0][b] + lap.v[1][b], dir.xx[0][b] + dir.xx[1][b], dir.xy[0][b] + dir.xy[1][b], kl, pp.h,
+                  k_p1 ? nodeQ[b] : Q, nodeP, true);
           }
       }
     }

@@ -80,21 +80,19 @@ void far_moments_batch(const Panel& pi, const PanelArrays& panels, const Index* 
       for (int k = 0; k < m; ++k)
         for (int s = 0; s < kMoments; ++s) acc[s][k] = 0.0;
     }
+    // slab (moment, a, b) += the weight of shape a at this point of pi times the inner sum
+    // of the moment against shape b
+    const double* const inner[3][2] = {{l0, l1}, {x0, x1}, {y0, y1}};
+    const double wi[2] = {wi0, wi1};
+    for (int moment = kL; moment <= kY; ++moment)
+      for (int sa = 0; sa < 2; ++sa)
+        for (int sb = 0; sb < 2; ++sb) {
+          double* const out_s = acc[slab(moment, sa, sb)];
+          const double* const in = inner[moment][sb];
+          const double w = wi[sa];
 #pragma omp simd
-    for (int k = 0; k < m; ++k) {
-      acc[slab(kL, 0, 0)][k] += wi0 * l0[k];
-      acc[slab(kL, 0, 1)][k] += wi0 * l1[k];
-      acc[slab(kL, 1, 0)][k] += wi1 * l0[k];
-      acc[slab(kL, 1, 1)][k] += wi1 * l1[k];
-      acc[slab(kX, 0, 0)][k] += wi0 * x0[k];
-      acc[slab(kX, 0, 1)][k] += wi0 * x1[k];
-      acc[slab(kX, 1, 0)][k] += wi1 * x0[k];
-      acc[slab(kX, 1, 1)][k] += wi1 * x1[k];
-      acc[slab(kY, 0, 0)][k] += wi0 * y0[k];
-      acc[slab(kY, 0, 1)][k] += wi0 * y1[k];
-      acc[slab(kY, 1, 0)][k] += wi1 * y0[k];
-      acc[slab(kY, 1, 1)][k] += wi1 * y1[k];
-    }
+          for (int k = 0; k < m; ++k) out_s[k] += w * in[k];
+        }
   }
   for (int s = 0; s < kMoments; ++s)
     for (int k = 0; k < m; ++k) out[s][js[k]] = acc[s][k];
@@ -160,24 +158,13 @@ void LamePolygonEntries::node_blocks(const DofSet& R, const DofSet& C, double* o
     const Panel& po = polygon_.panel(outer[io]);
     double* rows[kMoments];
     for (int s = 0; s < kMoments; ++s) rows[s] = table.data() + (s * no + io) * ni;
-    Index queue[kMaxFarPoints + 1][kFarBatch];
-    int queued[kMaxFarPoints + 1] = {};
-    auto flush = [&](int p) {
-      far_moments_batch(po, arrays, queue[p], queued[p], p, rows);
-      queued[p] = 0;
-    };
+    FarBatches far([&](int p, const Index* js, int m) { far_moments_batch(po, arrays, js, m, p, rows); });
     far_field_points(po, arrays, 0, static_cast<Index>(ni), points.data(), y ? *y : gauss_thresholds());
-    const Index po_index = outer[io], po_next = (po_index + 1) % n, po_prev = (po_index + n - 1) % n;
     for (std::size_t ii = 0; ii < ni; ++ii) {
-      const Index q = inner[ii];
-      const PairRelation rel = q == po_index  ? PairRelation::Coincident
-                               : q == po_next ? PairRelation::EndToStart
-                               : q == po_prev ? PairRelation::StartToEnd
-                                              : PairRelation::Separated;
+      const PairRelation rel = panel_relation(outer[io], inner[ii], n);
       const int p = rel == PairRelation::Separated ? points[ii] : 0;
       if (p > 0) {
-        queue[p][queued[p]++] = static_cast<Index>(ii);
-        if (queued[p] == kFarBatch) flush(p);
+        far.push(p, static_cast<Index>(ii));
         continue;
       }
       const Panel& pq = polygon_.panel(inner[ii]);
@@ -190,8 +177,7 @@ void LamePolygonEntries::node_blocks(const DofSet& R, const DofSet& C, double* o
           rows[slab(kY, a, b)][ii] = dir.xy[a][b];
         }
     }
-    for (int p = 1; p <= kMaxFarPoints; ++p)
-      if (queued[p] > 0) flush(p);
+    far.finish();
   }
   // The sums over the shape terms of each pair of nodes: the table's strides for (row
   // panel, column panel) and for the shapes (a on the row panel, b on the column panel).
@@ -316,21 +302,8 @@ class LameBlock : public EntryBlock {
         rows_(e.nodes(e.row_space(), rmap_.nodes.data(), rmap_.size())),
         cols_(e.nodes(e.col_space(), cmap_.nodes.data(), cmap_.size())) {}
 
-  void row(Index i, double* out) const override {
-    const auto t0 = std::chrono::steady_clock::now();
-    const Index p = rmap_.place[static_cast<std::size_t>(i)];
-    const double* both = cached(rmap_, p, cols_, cmap_, k_, true, *row_slot_, *row_store_);
-    std::copy_n(both + rmap_.component[static_cast<std::size_t>(i)] * k_, k_, out);
-    e_.count(false, elapsed(t0));
-  }
-
-  void column(Index j, double* out) const override {
-    const auto t0 = std::chrono::steady_clock::now();
-    const Index p = cmap_.place[static_cast<std::size_t>(j)];
-    const double* both = cached(cmap_, p, rows_, rmap_, m_, false, *col_slot_, *col_store_);
-    std::copy_n(both + cmap_.component[static_cast<std::size_t>(j)] * m_, m_, out);
-    e_.count(false, elapsed(t0));
-  }
+  void row(Index i, double* out) const override { line(true, i, out); }
+  void column(Index j, double* out) const override { line(false, j, out); }
 
   /// ACA with the components of a node as a group (grouped_aca.hpp).
   bool low_rank(double tol, LowRank& out) const override {
@@ -361,6 +334,18 @@ class LameBlock : public EntryBlock {
   }
 
  private:
+  /// Row i of the block (by_row) or column i, from the cached rows (columns) of both
+  /// components of its node.
+  void line(bool by_row, Index i, double* out) const {
+    const auto t0 = std::chrono::steady_clock::now();
+    const NodeMap& own = by_row ? rmap_ : cmap_;
+    const Index count = by_row ? k_ : m_;
+    const Index p = own.place[static_cast<std::size_t>(i)];
+    const double* both = by_row ? cached(rmap_, p, cols_, cmap_, k_, true, *row_slot_, *row_store_)
+                                : cached(cmap_, p, rows_, rmap_, m_, false, *col_slot_, *col_store_);
+    std::copy_n(both + own.component[static_cast<std::size_t>(i)] * count, count, out);
+    e_.count(false, elapsed(t0));
+  }
   static long elapsed(std::chrono::steady_clock::time_point t0) {
     return static_cast<long>(
         std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count());

@@ -387,56 +387,21 @@ Mat3 lame_double_layer_gradient_kernel(const Lame& m, int d, const double* r, co
   return out;
 }
 
-Matrix exterior_displacement(const Polygon& polygon, const Lame& medium, const Eigen::Ref<const Vector>& dirichlet,
-                             const Eigen::Ref<const Vector>& traction, const Eigen::Ref<const Points>& points,
-                             const Eigen::Ref<const Vector>& a, Space traction_space) {
+Matrix exterior_field(LameField field, const Polygon& polygon, const Lame& medium,
+                      const Eigen::Ref<const Vector>& dirichlet, const Eigen::Ref<const Vector>& traction,
+                      const Eigen::Ref<const Points>& points, const Eigen::Ref<const Vector>& a, Space traction_space) {
+  if (field == LameField::Stress)
+    return evaluate<true>(polygon, medium, dirichlet, traction, points, a, traction_space);
   return evaluate<false>(polygon, medium, dirichlet, traction, points, a, traction_space);
 }
 
-Matrix exterior_displacement(const Surface& surface, const Lame& medium, const Eigen::Ref<const Vector>& dirichlet,
-                             const Eigen::Ref<const Vector>& traction, const Eigen::Ref<const Vertices>& points,
-                             const Eigen::Ref<const Vector>& a, Space traction_space) {
+Matrix exterior_field(LameField field, const Surface& surface, const Lame& medium,
+                      const Eigen::Ref<const Vector>& dirichlet, const Eigen::Ref<const Vector>& traction,
+                      const Eigen::Ref<const Vertices>& points, const Eigen::Ref<const Vector>& a,
+                      Space traction_space) {
+  if (field == LameField::Stress)
+    return evaluate<true>(surface, medium, dirichlet, traction, points, a, traction_space);
   return evaluate<false>(surface, medium, dirichlet, traction, points, a, traction_space);
-}
-
-Matrix exterior_stress(const Polygon& polygon, const Lame& medium, const Eigen::Ref<const Vector>& dirichlet,
-                       const Eigen::Ref<const Vector>& traction, const Eigen::Ref<const Points>& points,
-                       const Eigen::Ref<const Vector>& a, Space traction_space) {
-  return evaluate<true>(polygon, medium, dirichlet, traction, points, a, traction_space);
-}
-
-Matrix exterior_stress(const Surface& surface, const Lame& medium, const Eigen::Ref<const Vector>& dirichlet,
-                       const Eigen::Ref<const Vector>& traction, const Eigen::Ref<const Vertices>& points,
-                       const Eigen::Ref<const Vector>& a, Space traction_space) {
-  return evaluate<true>(surface, medium, dirichlet, traction, points, a, traction_space);
-}
-
-Matrix exterior_displacement(const Eigen::Ref<const Points>& nodes, const Lame& medium,
-                             const Eigen::Ref<const Vector>& dirichlet, const Eigen::Ref<const Vector>& traction,
-                             const Eigen::Ref<const Points>& points, const Eigen::Ref<const Vector>& a,
-                             Space traction_space) {
-  return evaluate<false>(Polygon(nodes), medium, dirichlet, traction, points, a, traction_space);
-}
-
-Matrix exterior_displacement(VerticesRef vertices, TrianglesRef triangles, const Lame& medium,
-                             const Eigen::Ref<const Vector>& dirichlet, const Eigen::Ref<const Vector>& traction,
-                             const Eigen::Ref<const Vertices>& points, const Eigen::Ref<const Vector>& a,
-                             Space traction_space) {
-  return evaluate<false>(Surface(vertices, triangles), medium, dirichlet, traction, points, a, traction_space);
-}
-
-Matrix exterior_stress(const Eigen::Ref<const Points>& nodes, const Lame& medium,
-                       const Eigen::Ref<const Vector>& dirichlet, const Eigen::Ref<const Vector>& traction,
-                       const Eigen::Ref<const Points>& points, const Eigen::Ref<const Vector>& a,
-                       Space traction_space) {
-  return evaluate<true>(Polygon(nodes), medium, dirichlet, traction, points, a, traction_space);
-}
-
-Matrix exterior_stress(VerticesRef vertices, TrianglesRef triangles, const Lame& medium,
-                       const Eigen::Ref<const Vector>& dirichlet, const Eigen::Ref<const Vector>& traction,
-                       const Eigen::Ref<const Vertices>& points, const Eigen::Ref<const Vector>& a,
-                       Space traction_space) {
-  return evaluate<true>(Surface(vertices, triangles), medium, dirichlet, traction, points, a, traction_space);
 }
 
 }  // namespace bem

@@ -240,6 +240,20 @@ std::size_t LameSurfaceNearField::nbytes() const {
 // ---------------------------------------------------------------------------------------
 // Cache
 
+namespace {
+
+/// Moves the block of `key` out of `blocks` into `block` and forgets it: false if none.
+template <typename Blocks, typename Block>
+bool take_block(Blocks& blocks, const LameSurfaceBlockCache::Key& key, Block& block) {
+  const auto it = blocks.find(key);
+  if (it == blocks.end()) return false;
+  block = std::move(it->second);
+  blocks.erase(it);
+  return true;
+}
+
+}  // namespace
+
 void LameSurfaceBlockCache::put_dense(const Key& key, Eigen::MatrixXd block) {
   std::lock_guard<std::mutex> lock(mutex_);
   dense_[key] = std::move(block);
@@ -252,20 +266,12 @@ void LameSurfaceBlockCache::put_low_rank(const Key& key, LowRank block) {
 
 bool LameSurfaceBlockCache::take_dense(const Key& key, Eigen::MatrixXd& block) {
   std::lock_guard<std::mutex> lock(mutex_);
-  const auto it = dense_.find(key);
-  if (it == dense_.end()) return false;
-  block = std::move(it->second);
-  dense_.erase(it);
-  return true;
+  return take_block(dense_, key, block);
 }
 
 bool LameSurfaceBlockCache::take_low_rank(const Key& key, LowRank& block) {
   std::lock_guard<std::mutex> lock(mutex_);
-  const auto it = low_rank_.find(key);
-  if (it == low_rank_.end()) return false;
-  block = std::move(it->second);
-  low_rank_.erase(it);
-  return true;
+  return take_block(low_rank_, key, block);
 }
 
 void LameSurfaceBlockCache::clear() {
@@ -545,40 +551,38 @@ Eigen::MatrixXd sums_vector(const Eigen::MatrixXd& F, Index n) {
   return out;
 }
 
-/// D^T S: out (3 m x r), row 3 pos + k += c_k S(a, :), c the curl of the part's hat.
-Eigen::MatrixXd divergence_map(const Surface& s, const std::vector<Part>& parts, Index m, const Eigen::MatrixXd& S) {
-  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(3 * m, S.cols());
+/// (3 m x r): for each part a and each hat d of it (its position pos, c its surface curl),
+/// the rows 3 pos + (0..2) of the result += add(c, a) (3 x r).
+template <typename Add>
+Eigen::MatrixXd by_hat_curls(const Surface& s, const std::vector<Part>& parts, Index m, Index r, Add add) {
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(3 * m, r);
   for (std::size_t a = 0; a < parts.size(); ++a) {
     const Part& part = parts[a];
     const Triangle& T = s.triangle(part.triangle);
-    for (int d = 0; d < part.count; ++d) {
-      const Vec3 c = surface_curl(T, part.basis[d]);
-      const Index r = 3 * part.position[d];
-      out.row(r) += c.x * S.row(static_cast<Index>(a));
-      out.row(r + 1) += c.y * S.row(static_cast<Index>(a));
-      out.row(r + 2) += c.z * S.row(static_cast<Index>(a));
-    }
+    for (int d = 0; d < part.count; ++d)
+      add(surface_curl(T, part.basis[d]), static_cast<Index>(a), out.middleRows(3 * part.position[d], 3));
   }
   return out;
 }
 
+/// D^T S: out (3 m x r), row 3 pos + k += c_k S(a, :), c the curl of the part's hat.
+Eigen::MatrixXd divergence_map(const Surface& s, const std::vector<Part>& parts, Index m, const Eigen::MatrixXd& S) {
+  return by_hat_curls(s, parts, m, S.cols(), [&S](const Vec3& c, Index a, auto rows) {
+    rows.row(0) += c.x * S.row(a);
+    rows.row(1) += c.y * S.row(a);
+    rows.row(2) += c.z * S.row(a);
+  });
+}
+
 /// Cx^T T: out (3 m x r), rows 3 pos + (0..2) += -c x T(3 a + (0..2), :).
 Eigen::MatrixXd curl_map(const Surface& s, const std::vector<Part>& parts, Index m, const Eigen::MatrixXd& T) {
-  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(3 * m, T.cols());
-  for (std::size_t a = 0; a < parts.size(); ++a) {
-    const Part& part = parts[a];
-    const Triangle& tri = s.triangle(part.triangle);
-    const Index i = 3 * static_cast<Index>(a);
-    for (int d = 0; d < part.count; ++d) {
-      const Vec3 c = surface_curl(tri, part.basis[d]);
-      const Index r = 3 * part.position[d];
-      // -(c x t) = t x c
-      out.row(r) += c.z * T.row(i + 1) - c.y * T.row(i + 2);
-      out.row(r + 1) += c.x * T.row(i + 2) - c.z * T.row(i);
-      out.row(r + 2) += c.y * T.row(i) - c.x * T.row(i + 1);
-    }
-  }
-  return out;
+  return by_hat_curls(s, parts, m, T.cols(), [&T](const Vec3& c, Index a, auto rows) {
+    const Index i = 3 * a;
+    // -(c x t) = t x c
+    rows.row(0) += c.z * T.row(i + 1) - c.y * T.row(i + 2);
+    rows.row(1) += c.x * T.row(i + 2) - c.z * T.row(i);
+    rows.row(2) += c.y * T.row(i) - c.x * T.row(i + 1);
+  });
 }
 
 /// F kron I_3: (m x r) -> (3 m x 3 r), entry (3 i + k, 3 t + k) = F(i, t).

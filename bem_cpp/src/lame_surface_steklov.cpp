@@ -40,9 +40,12 @@ LameSurfaceOperators::LameSurfaceOperators(const Surface& s, const Lame& m, cons
   auto tree1 = std::make_shared<const ClusterTree>(surface_cluster_tree(s, Space::P1, o.leaf_size));
   auto tree3 = std::make_shared<const ClusterTree>(lame_surface_cluster_tree(s, o.leaf_size));
   // distributed: the near pairs of this rank's rows alone (V_h, Z symmetric, Y on the
-  // vector tree; K_L, and W_L symmetric, on the scalar one)
-  const std::vector<char> mine =
-      rank_triangles(s, o, {{tree3.get(), true}, {tree3.get(), false}, {tree1.get(), false}, {tree1.get(), true}});
+  // vector tree; K_L, and W_L symmetric, on the scalar one), the matrices then built on
+  // the same row bounds
+  const std::vector<Index> rows_vz = surface_row_bounds(*tree3, o, true), rows_y = surface_row_bounds(*tree3, o, false);
+  const std::vector<Index> rows_k = surface_row_bounds(*tree1, o, false), rows_w = surface_row_bounds(*tree1, o, true);
+  const std::vector<char> mine = rank_triangles(
+      s, o, {{tree3.get(), rows_vz}, {tree3.get(), rows_y}, {tree1.get(), rows_k}, {tree1.get(), rows_w}});
   auto t0 = std::chrono::steady_clock::now();
   const auto near = std::make_shared<const LameSurfaceNearField>(s, m, mine);
   const auto laplace_near = std::make_shared<const SurfaceNearField>(s, false, mine);
@@ -53,7 +56,7 @@ LameSurfaceOperators::LameSurfaceOperators(const Surface& s, const Lame& m, cons
   t0 = std::chrono::steady_clock::now();
   o.symmetric = true;
   const LameSurfaceEntries vz(s, m, LameSurfaceEntries::Kind::SingleLayer, near, cache);
-  const auto VZ = HMatrix::family(tree3, tree3, vz, 2, o);
+  const auto VZ = HMatrix::family(tree3, tree3, vz, 2, o, rows_vz);
   V_ = VZ[0];
   Z_ = VZ[1];
   info_.single_layer_seconds = seconds_since(t0);
@@ -61,16 +64,16 @@ LameSurfaceOperators::LameSurfaceOperators(const Surface& s, const Lame& m, cons
   t0 = std::chrono::steady_clock::now();
   o.symmetric = false;
   const LameSurfaceEntries y(s, m, LameSurfaceEntries::Kind::DoubleLayer, near, cache);
-  Y_ = std::make_shared<const HMatrix>(tree3, tree3, y, o);
+  Y_ = std::make_shared<const HMatrix>(tree3, tree3, y, o, rows_y);
   cache->clear();
   KL_ = std::make_shared<const HMatrix>(
-      tree1, tree1, SurfaceEntries(s, SurfaceKernel::DoubleLayer, Space::P1, Space::P1, laplace_near), o);
+      tree1, tree1, SurfaceEntries(s, SurfaceKernel::DoubleLayer, Space::P1, Space::P1, laplace_near), o, rows_k);
   info_.double_layer_seconds = seconds_since(t0);
 
   t0 = std::chrono::steady_clock::now();
   o.symmetric = true;
   WL_ = std::make_shared<const HMatrix>(
-      tree1, tree1, SurfaceEntries(s, SurfaceKernel::Hypersingular, Space::P1, Space::P1, laplace_near), o);
+      tree1, tree1, SurfaceEntries(s, SurfaceKernel::Hypersingular, Space::P1, Space::P1, laplace_near), o, rows_w);
   info_.hypersingular_seconds = seconds_since(t0);
 
   const LameSurfaceTimes tv = vz.times(), ty = y.times();
@@ -96,18 +99,9 @@ Eigen::MatrixXd LameSurfaceOperators::hypersingular_block(const std::vector<Inde
   std::vector<Index> dofs(static_cast<std::size_t>(3 * k));
   for (Index a = 0; a < k; ++a)
     for (int c = 0; c < 3; ++c) dofs[static_cast<std::size_t>(3 * a + c)] = 3 * nodes[static_cast<std::size_t>(a)] + c;
-  Eigen::MatrixXd block = Z_->principal_submatrix<double>(dofs);
-  Eigen::MatrixXd laplace = WL_->principal_submatrix<double>(nodes);
-  if (comm_ && comm_->size > 1) {
-    // every entry comes from one block of one rank: the sums are exact, in any order
-    const auto counts = [this](Index m) {
-      std::vector<Index> c(static_cast<std::size_t>(comm_->size), m / comm_->size);
-      for (Index r = 0; r < m % comm_->size; ++r) ++c[static_cast<std::size_t>(r)];
-      return c;
-    };
-    block = comm_->allreduce(block, counts(3 * k));
-    laplace = comm_->allreduce(laplace, counts(k));
-  }
+  // every entry comes from one block of one rank: the sums are exact, in any order
+  Eigen::MatrixXd block = sum_of_held_entries(comm_, Z_->principal_submatrix<double>(dofs));
+  const Eigen::MatrixXd laplace = sum_of_held_entries(comm_, WL_->principal_submatrix<double>(nodes));
   const double s = 2.0 * mu_;
   for (Index b = 0; b < k; ++b)
     for (Index a = 0; a < k; ++a)

@@ -335,10 +335,9 @@ void adjacent_equal_blocks(const Panel& pi, const Panel& pj, PairRelation relati
     }
 
   // Shape functions as c0 + c1 * (distance from the common node).
-  const double ci[2][2] = {i_vertex_at_end ? 0.0 : 1.0, i_vertex_at_end ? 1.0 / a : -1.0 / a,
-                           i_vertex_at_end ? 1.0 : 0.0, i_vertex_at_end ? -1.0 / a : 1.0 / a};
-  const double cj[2][2] = {i_vertex_at_end ? 1.0 : 0.0, i_vertex_at_end ? -1.0 / b : 1.0 / b,
-                           i_vertex_at_end ? 0.0 : 1.0, i_vertex_at_end ? 1.0 / b : -1.0 / b};
+  const AdjacentShapes shapes(a, b, i_vertex_at_end);
+  const auto& ci = shapes.ci;
+  const auto& cj = shapes.cj;
   for (int al = 0; al < 2; ++al)
     for (int be = 0; be < 2; ++be) {
       double v = 0, kij = 0, kji = 0;
@@ -389,20 +388,9 @@ void far_blocks(const Panel& pi, const Panel& pj, int p, bool with_k, PairBlocks
 }
 
 void pair_blocks(const Panel& pi, const Panel& pj, PairRelation relation, bool with_k, PairBlocks& out) {
-  switch (relation) {
-    case PairRelation::Coincident:
-      return coincident_blocks(pi, out);
-    case PairRelation::EndToStart:
-    case PairRelation::StartToEnd:
-      return adjacent_blocks(pi, pj, relation, out);
-    case PairRelation::Separated:
-      break;
-  }
-  const int p = far_field_points(pi, pj);
-  if (p > 0)
-    far_blocks(pi, pj, p, with_k, out);
-  else
-    near_blocks(pi, pj, with_k, out);
+  integrate_pair(
+      pi, pj, relation, [&] { coincident_blocks(pi, out); }, [&] { adjacent_blocks(pi, pj, relation, out); },
+      [&](int p) { far_blocks(pi, pj, p, with_k, out); }, [&] { near_blocks(pi, pj, with_k, out); });
 }
 
 PointPanelMoments point_panel_moments(Vec2 z, const Panel& p) {

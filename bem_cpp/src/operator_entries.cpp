@@ -24,13 +24,6 @@ Terms terms(Space space, Index i, Index n) {
   return {{(i + n - 1) % n, i}, {1, 0}};
 }
 
-PairRelation relation(Index p, Index q, Index n) {
-  if (p == q) return PairRelation::Coincident;
-  if (q == (p + 1) % n) return PairRelation::EndToStart;
-  if (q == (p + n - 1) % n) return PairRelation::StartToEnd;
-  return PairRelation::Separated;
-}
-
 std::vector<Index> sorted_panels(Space space, const Index* dofs, Index m, Index n, std::vector<Index> panels) {
   panels.clear();
   if (m == 1) {  // one dof (a row or column of ACA): two panels, or one for P0
@@ -126,29 +119,24 @@ void OperatorEntries::block(const DofSet& R, const DofSet& C, double* out, Index
       }
     for (std::size_t io = 0; io < outer.size(); ++io) {
       const Panel& po = polygon_.panel(outer[io]);
-      Index queue[kMaxFarPoints + 1][kFarBatch];
-      int queued[kMaxFarPoints + 1] = {};
-      auto flush = [&](int p) {
-        far_blocks_batch(po, arrays, queue[p], queued[p], p, !with_k, with_k, col, 1.0, 1.0);
-        queued[p] = 0;
-      };
+      FarBatches far([&](int p, const Index* js, int m) {
+        far_blocks_batch(po, arrays, js, m, p, !with_k, with_k, col, 1.0, 1.0);
+      });
       far_field_points(po, arrays, 0, static_cast<Index>(ni), points.data());
       for (std::size_t ii = 0; ii < ni; ++ii) {
         const Index q = inner[ii];
-        const PairRelation rel = relation(outer[io], q, n);
+        const PairRelation rel = panel_relation(outer[io], q, n);
         const Panel& pq = polygon_.panel(q);
         const int p = rel == PairRelation::Separated ? points[ii] : 0;
         if (p > 0) {
-          queue[p][queued[p]++] = static_cast<Index>(ii);
-          if (queued[p] == kFarBatch) flush(p);
+          far.push(p, static_cast<Index>(ii));
           continue;
         }
         pair_blocks(po, pq, rel, with_k, B);
         for (int a = 0; a < 2; ++a)
           for (int b = 0; b < 2; ++b) col.v[a][b][ii] = with_k ? B.kij[a][b] : B.v[a][b];
       }
-      for (int p = 1; p <= kMaxFarPoints; ++p)
-        if (queued[p] > 0) flush(p);
+      far.finish();
       for (int a = 0; a < 2; ++a)
         for (int b = 0; b < 2; ++b)
           for (std::size_t ii = 0; ii < ni; ++ii) {
@@ -168,27 +156,20 @@ void OperatorEntries::block(const DofSet& R, const DofSet& C, double* out, Index
       for (int b = 0; b < 2; ++b) col.kij[a][b] = store.data() + (2 * a + b) * np;
     for (std::size_t iq = 0; iq < nq; ++iq) {
       const Panel& pq = polygon_.panel(Q[iq]);
-      Index queue[kMaxFarPoints + 1][kFarBatch];
-      int queued[kMaxFarPoints + 1] = {};
-      auto flush = [&](int p) {
-        far_kji_batch(pq, R.arrays, queue[p], queued[p], p, col, 1.0);
-        queued[p] = 0;
-      };
+      FarBatches far([&](int p, const Index* js, int m) { far_kji_batch(pq, R.arrays, js, m, p, col, 1.0); });
       for (std::size_t ip = 0; ip < np; ++ip) {
         const Panel& pp = polygon_.panel(P[ip]);
-        const PairRelation rel = relation(P[ip], Q[iq], n);
+        const PairRelation rel = panel_relation(P[ip], Q[iq], n);
         const int p = rel == PairRelation::Separated ? far_field_points(pp, pq) : 0;
         if (p > 0) {
-          queue[p][queued[p]++] = static_cast<Index>(ip);
-          if (queued[p] == kFarBatch) flush(p);
+          far.push(p, static_cast<Index>(ip));
           continue;
         }
         pair_blocks(pp, pq, rel, true, B);
         for (int a = 0; a < 2; ++a)
           for (int b = 0; b < 2; ++b) col.kij[a][b][ip] = B.kij[a][b];
       }
-      for (int p = 1; p <= kMaxFarPoints; ++p)
-        if (queued[p] > 0) flush(p);
+      far.finish();
       for (int a = 0; a < 2; ++a)
         for (int b = 0; b < 2; ++b)
           for (std::size_t ip = 0; ip < np; ++ip) at(a, b, ip, iq) = scale * col.kij[a][b][ip];

@@ -109,25 +109,17 @@ Operators assemble(const Polygon& polygon, const OperatorRequest& request) {
     //    1/pi (K) of the operators: far pairs are queued by number of Gauss points and
     //    evaluated in vector batches, the others one by one.
     const Panel& pi = polygon.panel(i);
-    const Index i1 = (i + 1) % n, i0 = (i + n - 1) % n;
+    const Index i1 = (i + 1) % n;
     auto compute = [&](Index j0, Index j1, bool v, bool k) {
       far_field_points(pi, arrays, j0, j1, points);
-      Index queue[kMaxFarPoints + 1][kFarBatch];
-      int queued[kMaxFarPoints + 1] = {};
-      auto flush = [&](int p) {
-        far_blocks_batch(pi, arrays, queue[p], queued[p], p, v, k, col, -kInvPi, kInvPi);
-        queued[p] = 0;
-      };
+      FarBatches far(
+          [&](int p, const Index* js, int m) { far_blocks_batch(pi, arrays, js, m, p, v, k, col, -kInvPi, kInvPi); });
       PairBlocks B;
       for (Index j = j0; j < j1; ++j) {
-        const PairRelation rel = j == i    ? PairRelation::Coincident
-                                 : j == i1 ? PairRelation::EndToStart
-                                 : j == i0 ? PairRelation::StartToEnd
-                                           : PairRelation::Separated;
+        const PairRelation rel = panel_relation(i, j, n);
         const int p = rel == PairRelation::Separated ? points[j] : 0;
         if (p > 0) {
-          queue[p][queued[p]++] = j;
-          if (queued[p] == kFarBatch) flush(p);
+          far.push(p, j);
           continue;
         }
         pair_blocks(pi, polygon.panel(j), rel, k, B);
@@ -137,8 +129,7 @@ Operators assemble(const Polygon& polygon, const OperatorRequest& request) {
             if (k) col.kij[a][b][j] = kInvPi * B.kij[a][b];
           }
       }
-      for (int p = 1; p <= kMaxFarPoints; ++p)
-        if (queued[p] > 0) flush(p);
+      far.finish();
     };
     if (with_v || with_k) compute(i, n, with_v, with_k);
     if (with_k) compute(0, i, false, true);

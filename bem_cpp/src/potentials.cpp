@@ -125,25 +125,20 @@ Vector exterior_potential(const Polygon& polygon, const Eigen::Ref<const Vector>
       const Vec2 z{points(i, 0), points(i, 1)};
       point_far_field_points(z, arrays, rule.data());
       double sum = 0.0;  // pi (K w - V psi)(z)
-      Index queue[kMaxFarPoints + 1][kFarBatch];
-      int queued[kMaxFarPoints + 1] = {};
-      auto flush = [&](int p) {
-        sum += far_point_sum(z, arrays, queue[p], queued[p], p, l0.data(), l1.data(), d0.data(), d1.data());
-        queued[p] = 0;
-      };
+      FarBatches far([&](int p, const Index* js, int count) {
+        sum += far_point_sum(z, arrays, js, count, p, l0.data(), l1.data(), d0.data(), d1.data());
+      });
       for (Index j = 0; j < n; ++j) {
         const int p = rule[static_cast<std::size_t>(j)];
         if (p > 0) {
-          queue[p][queued[p]++] = j;
-          if (queued[p] == kFarBatch) flush(p);
+          far.push(p, j);
           continue;
         }
         const PointPanelMoments q = point_panel_moments(z, polygon.panel(j));  // closed form
         const auto k = static_cast<std::size_t>(j);
         sum += l0[k] * q.log[0] + l1[k] * q.log[1] + d0[k] * q.dl[0] + d1[k] * q.dl[1];
       }
-      for (int p = 1; p <= kMaxFarPoints; ++p)
-        if (queued[p] > 0) flush(p);
+      far.finish();
       // u = a + (K w - V psi)/2, -V psi = (1/pi) int log|z - y| psi, K w = (1/pi) int ... w
       u(i) = a + 0.5 * kInvPi * sum;
     }

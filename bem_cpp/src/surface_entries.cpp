@@ -40,20 +40,8 @@ class SurfaceBlock : public EntryBlock {
     near_cols_ = dl ? &near->double_layer_transpose() : near_rows_;
   }
 
-  void row(Index i, double* out) const override {
-    std::fill(out, out + k_, 0.0);
-    const std::vector<Part> own = parts(s_, rows_, I_ + i, 1);
-    for (const Part& r : own)
-      for (const Part& c : col_parts_) add(r, c, out, 0, 1);
-    if (near_rows_) add_near(*near_rows_, I_[i], col_positions(), out, 1);
-  }
-  void column(Index j, double* out) const override {
-    std::fill(out, out + m_, 0.0);
-    const std::vector<Part> own = parts(s_, cols_, J_ + j, 1);
-    for (const Part& r : row_parts_)
-      for (const Part& c : own) add(r, c, out, 1, 0);
-    if (near_cols_) add_near(*near_cols_, J_[j], row_positions(), out, 1);
-  }
+  void row(Index i, double* out) const override { line(true, i, out); }
+  void column(Index j, double* out) const override { line(false, j, out); }
   /// With the near field apart: the far pairs as Q_r^T A Q_c, A the point kernel of the far
   /// pairs (zero on the near ones; the double layer's pair by pair, double_layer_all), the
   /// near pairs from the sparse near field.
@@ -429,6 +417,16 @@ class SurfaceBlock : public EntryBlock {
   }
   /// dof -> position in the block, of the rows and of the columns (built when first asked:
   /// the low-rank blocks need none).
+  /// Row i of the block (by_row: A(I[i], J)) or column i (A(I, J[i])) into out: the pairs
+  /// of the far field with the parts of its own dof, then its near part.
+  void line(bool by_row, Index i, double* out) const {
+    std::fill(out, out + (by_row ? k_ : m_), 0.0);
+    const std::vector<Part> own = by_row ? parts(s_, rows_, I_ + i, 1) : parts(s_, cols_, J_ + i, 1);
+    for (const Part& r : by_row ? own : row_parts_)
+      for (const Part& c : by_row ? col_parts_ : own) add(r, c, out, by_row ? 0 : 1, by_row ? 1 : 0);
+    const RowSparse* near = by_row ? near_rows_ : near_cols_;
+    if (near) add_near(*near, by_row ? I_[i] : J_[i], by_row ? col_positions() : row_positions(), out, 1);
+  }
   const std::unordered_map<Index, Index>& row_positions() const {
     if (row_position_.empty())
       for (Index p = 0; p < m_; ++p) row_position_[I_[p]] = p;

@@ -51,15 +51,19 @@ std::vector<std::vector<Index>> near_pairs(const Surface& s, const std::vector<c
   return out;
 }
 
+std::vector<Index> surface_row_bounds(const ClusterTree& tree, const HMatrixOptions& options, bool symmetric) {
+  if (!options.comm || options.comm->size == 1) return {};
+  HMatrixOptions o = options;
+  o.symmetric = symmetric;
+  return distributed_row_bounds(tree, tree, o, options.comm->size);
+}
+
 std::vector<char> rank_triangles(const Surface& s, const HMatrixOptions& options,
-                                 const std::vector<std::pair<const ClusterTree*, bool>>& matrices) {
+                                 const std::vector<std::pair<const ClusterTree*, std::vector<Index>>>& matrices) {
   if (!options.comm || options.comm->size == 1) return {};
   std::vector<char> vertices(static_cast<std::size_t>(s.vertices()), 0);
   const auto rank = static_cast<std::size_t>(options.comm->rank);
-  for (const auto& [tree, symmetric] : matrices) {
-    HMatrixOptions o = options;
-    o.symmetric = symmetric;
-    const std::vector<Index> bounds = distributed_row_bounds(*tree, *tree, o, options.comm->size);
+  for (const auto& [tree, bounds] : matrices) {
     const Index dofs = tree->size() / s.vertices();
     for (Index k = bounds[rank]; k < bounds[rank + 1]; ++k)
       vertices[static_cast<std::size_t>(tree->permutation()[static_cast<std::size_t>(k)] / dofs)] = 1;

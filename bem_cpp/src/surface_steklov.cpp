@@ -19,22 +19,25 @@ SurfaceSteklovOperator::SurfaceSteklovOperator(VerticesRef vertices, TrianglesRe
   o.min_distance = far_distance(surface_);
   auto tree1 = std::make_shared<const ClusterTree>(surface_cluster_tree(surface_, Space::P1, o.leaf_size));
   // the near pairs integrated once for the three matrices (distributed: those of this
-  // rank's rows of V_h, W_h (symmetric) and K_h alone)
+  // rank's rows of V_h, W_h (symmetric) and K_h alone, the matrices then built on the
+  // same row bounds)
   const auto t1 = std::chrono::steady_clock::now();
+  const std::vector<Index> rows_vw = surface_row_bounds(*tree1, o, true), rows_k = surface_row_bounds(*tree1, o, false);
   const auto near = std::make_shared<const SurfaceNearField>(
-      surface_, false, rank_triangles(surface_, o, {{tree1.get(), true}, {tree1.get(), false}}));
+      surface_, false, rank_triangles(surface_, o, {{tree1.get(), rows_vw}, {tree1.get(), rows_k}}));
   info_.near_field_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
   o.symmetric = true;
   // V and W from one ACA of the single-layer kernel per block
   const auto t2 = std::chrono::steady_clock::now();
   const auto VW = HMatrix::family(
-      tree1, tree1, SurfaceEntries(surface_, SurfaceKernel::SingleLayer, Space::P1, Space::P1, near, true), 2, o);
+      tree1, tree1, SurfaceEntries(surface_, SurfaceKernel::SingleLayer, Space::P1, Space::P1, near, true), 2, o,
+      rows_vw);
   V_ = VW[0];
   W_ = VW[1];
   const auto t3 = std::chrono::steady_clock::now();
   o.symmetric = false;
   K_ = std::make_shared<const HMatrix>(
-      tree1, tree1, SurfaceEntries(surface_, SurfaceKernel::DoubleLayer, Space::P1, Space::P1, near), o);
+      tree1, tree1, SurfaceEntries(surface_, SurfaceKernel::DoubleLayer, Space::P1, Space::P1, near), o, rows_k);
   const auto t4 = std::chrono::steady_clock::now();
   info_.single_layer_seconds = std::chrono::duration<double>(t3 - t2).count();
   info_.double_layer_seconds = std::chrono::duration<double>(t4 - t3).count();
@@ -70,14 +73,8 @@ Eigen::MatrixXd SurfaceSteklovOperator::hypersingular(const Eigen::Ref<const Eig
 }
 
 Eigen::MatrixXd SurfaceSteklovOperator::hypersingular_block(const std::vector<Index>& indices) const {
-  const Eigen::MatrixXd partial = W_->principal_submatrix<double>(indices);
-  const std::shared_ptr<const Communicator>& comm = options_.hmatrix.comm;
-  if (!comm || comm->size == 1) return partial;
   // every entry comes from one block of one rank: the sum is exact, in any order
-  const Index m = partial.rows();
-  std::vector<Index> counts(static_cast<std::size_t>(comm->size), m / comm->size);
-  for (Index r = 0; r < m % comm->size; ++r) ++counts[static_cast<std::size_t>(r)];
-  return comm->allreduce(partial, counts);
+  return sum_of_held_entries(options_.hmatrix.comm, W_->principal_submatrix<double>(indices));
 }
 
 Eigen::MatrixXf SurfaceSteklovOperator::hypersingular_block_single(const std::vector<Index>& indices) const {

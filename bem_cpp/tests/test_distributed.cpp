@@ -52,63 +52,80 @@ TEST(ClusterTree, PartitionByCostBalancesTheCost) {
 }
 
 TEST(HMatrix, RowRestrictedBlocksCoverTheRowsAndGiveTheirProducts) {
-  for (const Points& X : {test::circle(600), test::square(150)}) {
-    const Polygon poly(X);
+  test::for_each_operator_case([](const Polygon& poly, Space s, Kernel kernel) {
     const Index n = poly.size();
-    for (Space s : {Space::P0, Space::P1}) {
-      for (Kernel kernel : {Kernel::SingleLayer, Kernel::DoubleLayer}) {
-        const bool symmetric = kernel == Kernel::SingleLayer;
-        const Space cols = symmetric ? s : Space::P1;
-        auto tr = std::make_shared<const ClusterTree>(ClusterTree::for_space(poly, s, 16));
-        auto tc = cols == s ? tr : std::make_shared<const ClusterTree>(ClusterTree::for_space(poly, cols, 16));
-        const OperatorEntries e(poly, kernel, s, cols);
-        const HMatrixOptions o{16, 1.0, 1e-8, symmetric};
-        const HMatrix whole(tr, tc, e, o);  // symmetric storage for V
-        const Eigen::MatrixXd Xr = Eigen::MatrixXd::Random(n, 3);
-        const Eigen::MatrixXd AX = whole.apply(Xr), AtX = whole.apply(Xr, true);
-        for (int parts : {2, 3}) {
-          const std::vector<Index> b = tr->partition(parts);
-          Eigen::MatrixXd D = Eigen::MatrixXd::Zero(n, n), Y = D.leftCols(3), Yt = Y;
-          Eigen::MatrixXi cover = Eigen::MatrixXi::Zero(n, n);  // permuted orders
-          for (int r = 0; r < parts; ++r) {
-            const HMatrix local(tr, tc, e, o, b[r], b[r + 1]);
-            EXPECT_TRUE(local.row_restricted());
-            for (const HMatrix::Block& blk : local.blocks()) {
-              EXPECT_GE(blk.r0, b[r]);
-              EXPECT_LE(blk.r0 + blk.m, b[r + 1]);
-              cover.block(blk.r0, blk.c0, blk.m, blk.k).array() += 1;
-              if (symmetric && blk.row_cluster != blk.col_cluster)
-                cover.block(blk.c0, blk.r0, blk.k, blk.m).array() += 1;
-            }
-            if (!symmetric) {  // exactly the local rows
-              EXPECT_EQ(cover.middleRows(b[r], b[r + 1] - b[r]).minCoeff(), 1);
-              EXPECT_EQ(cover.sum(), b[r + 1] * n);
-              const Eigen::MatrixXd L = local.apply_local(Xr);
-              for (Index k = b[r]; k < b[r + 1]; ++k) {
-                const Index i = tr->permutation()[static_cast<std::size_t>(k)];
-                EXPECT_LE((L.row(k - b[r]) - AX.row(i)).norm(), 1e-13 * AX.norm() / std::sqrt(double(n)));
-              }
-            } else {
-              EXPECT_THROW(local.apply_local(Xr), std::logic_error);
-            }
-            D += local.to_dense();
-            const Eigen::MatrixXd P = local.apply_partial(Xr, false), Pt = local.apply_partial(Xr, true);
-            for (Index k = 0; k < n; ++k) {
-              Y.row(tr->permutation()[static_cast<std::size_t>(k)]) += P.row(k);
-              Yt.row(tc->permutation()[static_cast<std::size_t>(k)]) += Pt.row(k);
-            }
-            EXPECT_THROW(local.apply(Xr), std::logic_error);
-          }
-          // every entry held once (V: a block above the diagonal also stands for its
-          // transpose), the same entries as the whole matrix, products to round-off
-          EXPECT_EQ(cover.minCoeff(), 1);
-          EXPECT_EQ(cover.maxCoeff(), 1);
-          EXPECT_LE((D - whole.to_dense()).norm(), 1e-15 * D.norm());
-          EXPECT_LT(relative(Y, AX), 1e-13);
-          EXPECT_LT(relative(Yt, AtX), 1e-13);
+    const bool symmetric = kernel == Kernel::SingleLayer;
+    const Space cols = symmetric ? s : Space::P1;
+    auto tr = std::make_shared<const ClusterTree>(ClusterTree::for_space(poly, s, 16));
+    auto tc = cols == s ? tr : std::make_shared<const ClusterTree>(ClusterTree::for_space(poly, cols, 16));
+    const OperatorEntries e(poly, kernel, s, cols);
+    const HMatrixOptions o{16, 1.0, 1e-8, symmetric};
+    const HMatrix whole(tr, tc, e, o);  // symmetric storage for V
+    const Eigen::MatrixXd Xr = Eigen::MatrixXd::Random(n, 3);
+    const Eigen::MatrixXd AX = whole.apply(Xr), AtX = whole.apply(Xr, true);
+    for (int parts : {2, 3}) {
+      const std::vector<Index> b = tr->partition(parts);
+      Eigen::MatrixXd D = Eigen::MatrixXd::Zero(n, n), Y = D.leftCols(3), Yt = Y;
+      Eigen::MatrixXi cover = Eigen::MatrixXi::Zero(n, n);  // permuted orders
+      for (int r = 0; r < parts; ++r) {
+        const HMatrix local(tr, tc, e, o, b[r], b[r + 1]);
+        EXPECT_TRUE(local.row_restricted());
+        for (const HMatrix::Block& blk : local.blocks()) {
+          EXPECT_GE(blk.r0, b[r]);
+          EXPECT_LE(blk.r0 + blk.m, b[r + 1]);
+          cover.block(blk.r0, blk.c0, blk.m, blk.k).array() += 1;
+          if (symmetric && blk.row_cluster != blk.col_cluster) cover.block(blk.c0, blk.r0, blk.k, blk.m).array() += 1;
         }
+        if (!symmetric) {  // exactly the local rows
+          EXPECT_EQ(cover.middleRows(b[r], b[r + 1] - b[r]).minCoeff(), 1);
+          EXPECT_EQ(cover.sum(), b[r + 1] * n);
+          const Eigen::MatrixXd L = local.apply_local(Xr);
+          for (Index k = b[r]; k < b[r + 1]; ++k) {
+            const Index i = tr->permutation()[static_cast<std::size_t>(k)];
+            EXPECT_LE((L.row(k - b[r]) - AX.row(i)).norm(), 1e-13 * AX.norm() / std::sqrt(double(n)));
+          }
+        } else {
+          EXPECT_THROW(local.apply_local(Xr), std::logic_error);
+        }
+        D += local.to_dense();
+        const Eigen::MatrixXd P = local.apply_partial(Xr, false), Pt = local.apply_partial(Xr, true);
+        for (Index k = 0; k < n; ++k) {
+          Y.row(tr->permutation()[static_cast<std::size_t>(k)]) += P.row(k);
+          Yt.row(tc->permutation()[static_cast<std::size_t>(k)]) += Pt.row(k);
+        }
+        EXPECT_THROW(local.apply(Xr), std::logic_error);
       }
+      // every entry held once (V: a block above the diagonal also stands for its
+      // transpose), the same entries as the whole matrix, products to round-off
+      EXPECT_EQ(cover.minCoeff(), 1);
+      EXPECT_EQ(cover.maxCoeff(), 1);
+      EXPECT_LE((D - whole.to_dense()).norm(), 1e-15 * D.norm());
+      EXPECT_LT(relative(Y, AX), 1e-13);
+      EXPECT_LT(relative(Yt, AtX), 1e-13);
     }
+  });
+}
+
+TEST(HMatrix, GivenRowBoundsAreTheOnesItComputes) {
+  // a distributed matrix built on the bounds its caller already has (rank_triangles) holds
+  // what it holds on the bounds it computes; bounds of another size or sum are refused
+  const Polygon poly(test::circle(600));
+  auto tree = std::make_shared<const ClusterTree>(ClusterTree::for_space(poly, Space::P1, 16));
+  const OperatorEntries e(poly, Kernel::SingleLayer, Space::P1, Space::P1);
+  test::ThreadGroup group(2);  // no collective is called: the matrices are not applied
+  for (int rank : {0, 1}) {
+    HMatrixOptions o{16, 1.0, 1e-8, true};
+    o.comm = group.communicator(rank);
+    const std::vector<Index> bounds = distributed_row_bounds(*tree, *tree, o, 2);
+    const HMatrix computed(tree, tree, e, o), given(tree, tree, e, o, bounds);
+    EXPECT_EQ(given.row_begin(), bounds[static_cast<std::size_t>(rank)]);
+    EXPECT_EQ(given.row_end(), bounds[static_cast<std::size_t>(rank) + 1]);
+    EXPECT_EQ(given.row_begin(), computed.row_begin());
+    EXPECT_EQ(given.row_end(), computed.row_end());
+    EXPECT_EQ(given.blocks().size(), computed.blocks().size());
+    EXPECT_EQ(given.to_dense(), computed.to_dense());
+    EXPECT_THROW(HMatrix(tree, tree, e, o, std::vector<Index>{0, poly.size()}), std::invalid_argument);
+    EXPECT_THROW(HMatrix(tree, tree, e, o, std::vector<Index>{0, 5, poly.size() - 1}), std::invalid_argument);
   }
 }
 

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "bem/geometry.hpp"
+#include "bem/operator_entries.hpp"
 #include "bem/steklov_operator.hpp"
 
 namespace bem::test {
@@ -74,6 +75,18 @@ inline Points dart(Index k) {
 /// The Steklov-Poincare operators' options at the H-matrix tolerance tol with leaves of
 /// leaf_size and admissibility eta: preconditioner 1e-4, V solves to tol / 1000, the
 /// products on one thread (a shared machine).
+/// f(polygon, rows, kernel) for the circle of 600 panels and the square of 150 a side, each
+/// with P0 and P1 rows and the single- and double-layer kernels: the cases of the H-matrix
+/// tests of the 2D operators.
+template <typename F>
+void for_each_operator_case(F&& f) {
+  for (const Points& X : {circle(600), square(150)}) {
+    const Polygon poly(X);
+    for (Space s : {Space::P0, Space::P1})
+      for (Kernel kernel : {Kernel::SingleLayer, Kernel::DoubleLayer}) f(poly, s, kernel);
+  }
+}
+
 inline SteklovOptions steklov_options(double tol, Index leaf_size, double eta) {
   SteklovOptions o{};
   o.hmatrix.leaf_size = leaf_size;

@@ -21,25 +21,20 @@ std::shared_ptr<const HMatrix> hmatrix(const Polygon& poly, Kernel kernel, Space
 }  // namespace
 
 TEST(HMatrix, ApproximatesVAndKToTheTolerance) {
-  for (const Points& X : {test::circle(600), test::square(150)}) {
-    const Polygon poly(X);
+  test::for_each_operator_case([](const Polygon& poly, Space s, Kernel kernel) {
     const Index n = poly.size();
-    for (Space s : {Space::P0, Space::P1}) {
-      for (Kernel kernel : {Kernel::SingleLayer, Kernel::DoubleLayer}) {
-        const Eigen::MatrixXd A = kernel == Kernel::SingleLayer ? single_layer(poly, s) : double_layer(poly, s);
-        const auto H = hmatrix(poly, kernel, s, 1e-8);
-        EXPECT_LT((H->to_dense() - A).norm(), 1e-8 * A.norm());
-        // Products agree with the dense approximation, for blocks of vectors and transposed.
-        const Eigen::MatrixXd Xr = Eigen::MatrixXd::Random(n, 3);
-        const Eigen::MatrixXd Hd = H->to_dense();
-        EXPECT_LT((H->apply(Xr) - Hd * Xr).norm(), 1e-13 * (Hd * Xr).norm());
-        EXPECT_LT((H->apply(Xr, true) - Hd.transpose() * Xr).norm(), 1e-13 * (Hd * Xr).norm());
-        // Compression: less than the dense n^2 doubles.
-        EXPECT_LT(H->nbytes(), static_cast<std::size_t>(n * n) * sizeof(double));
-        EXPECT_GT(H->max_rank(), 0);
-      }
-    }
-  }
+    const Eigen::MatrixXd A = kernel == Kernel::SingleLayer ? single_layer(poly, s) : double_layer(poly, s);
+    const auto H = hmatrix(poly, kernel, s, 1e-8);
+    EXPECT_LT((H->to_dense() - A).norm(), 1e-8 * A.norm());
+    // Products agree with the dense approximation, for blocks of vectors and transposed.
+    const Eigen::MatrixXd Xr = Eigen::MatrixXd::Random(n, 3);
+    const Eigen::MatrixXd Hd = H->to_dense();
+    EXPECT_LT((H->apply(Xr) - Hd * Xr).norm(), 1e-13 * (Hd * Xr).norm());
+    EXPECT_LT((H->apply(Xr, true) - Hd.transpose() * Xr).norm(), 1e-13 * (Hd * Xr).norm());
+    // Compression: less than the dense n^2 doubles.
+    EXPECT_LT(H->nbytes(), static_cast<std::size_t>(n * n) * sizeof(double));
+    EXPECT_GT(H->max_rank(), 0);
+  });
 }
 
 TEST(HMatrix, SymmetricStorageHoldsHalfTheOffDiagonalBlocks) {

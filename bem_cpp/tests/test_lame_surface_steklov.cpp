@@ -249,7 +249,7 @@ TEST(LameSurfaceSteklov, EachRankIntegratesTheNearPairsOfItsRowsAlone) {
       HMatrixOptions f = o;
       f.min_distance = far_distance(s);
       const ClusterTree tree = surface_cluster_tree(s, Space::P1, f.leaf_size);
-      mine[static_cast<std::size_t>(r)] = rank_triangles(s, f, {{&tree, false}});
+      mine[static_cast<std::size_t>(r)] = rank_triangles(s, f, {{&tree, surface_row_bounds(tree, f, false)}});
     });
   for (std::thread& t : ranks) t.join();
   for (Index t = 0; t < s.size(); ++t)

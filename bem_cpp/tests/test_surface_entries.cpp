@@ -20,6 +20,16 @@ std::vector<Index> every_other(Index n, Index start) {
   return out;
 }
 
+/// f(surface, its dense P1 operators) on a sphere of radius 0.6 (the icosahedron refined
+/// `level` times), the unit cube and Fichera's corner of n squares per side of a face.
+template <typename F>
+void on_three_surfaces(int level, int n, F&& f) {
+  for (const test::Mesh& mesh : {test::icosphere(level, 0.6), test::cube(n, 1.0 / n), test::fichera(n, 1.0 / n)}) {
+    const Surface s(mesh.vertices, mesh.triangles);
+    f(s, assemble(s, {Space::P1, Space::P1, true}));
+  }
+}
+
 }  // namespace
 
 TEST(SurfaceEntries, RowsColumnsAndBlocksAreThoseOfTheDenseMatrices) {
@@ -74,10 +84,7 @@ TEST(SurfaceEntries, HMatrixProductsAgreeWithTheDenseOnes) {
   // the 2D H-matrix code on 3D trees (a sphere, a cube, Fichera's corner): on surfaces this
   // small the admissible blocks stay dense (a low-rank block pays from a rank of half its
   // size); the compressed blocks are checked on a larger sphere by tests/test_bem_surface.py
-  const test::Mesh meshes[3] = {test::icosphere(2, 0.6), test::cube(6, 1.0 / 6), test::fichera(6, 1.0 / 6)};
-  for (const test::Mesh& mesh : meshes) {
-    const Surface s(mesh.vertices, mesh.triangles);
-    const SurfaceMatrices dense = assemble(s, {Space::P1, Space::P1, true});
+  on_three_surfaces(2, 6, [](const Surface& s, const SurfaceMatrices& dense) {
     auto tree = std::make_shared<const ClusterTree>(surface_cluster_tree(s, Space::P1, 8));
     HMatrixOptions options{8, 1.5, 1e-10};
     const HMatrix K(tree, tree, SurfaceEntries(s, SurfaceKernel::DoubleLayer, Space::P1, Space::P1), options);
@@ -90,7 +97,7 @@ TEST(SurfaceEntries, HMatrixProductsAgreeWithTheDenseOnes) {
       const Eigen::MatrixXd exact = *A * X;
       EXPECT_LE((H->apply(X) - exact).norm(), 1e-8 * exact.norm());
     }
-  }
+  });
 }
 
 TEST(SurfaceEntries, CompressedOperatorsOfTheSteklovOperatorAgreeWithTheDenseOnes) {
@@ -98,10 +105,7 @@ TEST(SurfaceEntries, CompressedOperatorsOfTheSteklovOperatorAgreeWithTheDenseOne
   // on surfaces large enough for low-rank blocks: flat faces (the double-layer kernel
   // vanishes between coplanar points) and a re-entrant corner as well as the sphere (ACA
   // on the double layer's own kernel failed from 16 squares per side: tests/test_bem_surface.py)
-  const test::Mesh meshes[3] = {test::icosphere(3, 0.6), test::cube(12, 1.0 / 12), test::fichera(12, 1.0 / 12)};
-  for (const test::Mesh& mesh : meshes) {
-    const Surface s(mesh.vertices, mesh.triangles);
-    const SurfaceMatrices dense = assemble(s, {Space::P1, Space::P1, true});
+  on_three_surfaces(3, 12, [](const Surface& s, const SurfaceMatrices& dense) {
     auto tree = std::make_shared<const ClusterTree>(surface_cluster_tree(s, Space::P1, 16));
     const auto near = std::make_shared<const SurfaceNearField>(s);
     HMatrixOptions options{16, 4.0, 1e-8};
@@ -120,7 +124,7 @@ TEST(SurfaceEntries, CompressedOperatorsOfTheSteklovOperatorAgreeWithTheDenseOne
       const Eigen::MatrixXd exact = *A[c] * X;
       EXPECT_LE((H[c]->apply(X) - exact).norm(), 1e-7 * exact.norm());
     }
-  }
+  });
 }
 
 TEST(FarPoints, SumOverPartsAddsEachPartsConsecutiveRows) {

@@ -14,6 +14,7 @@ from bench.peers.solvers import BY_NAME, FULL_SIZES, QUICK_SIZES
 from bench.peers.tables import plot
 from bench.peers.targets import targets
 from bench.peers.worker import worker
+from bench.speed import cell_sizes
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -69,12 +70,7 @@ def main(argv: list[str] | None = None) -> int:
         worker(json.loads(args.worker))
         return 0
     if args.sizes:
-        try:
-            sizes = [int(s) for s in args.sizes.split(",")]
-        except ValueError:
-            parser.error(f"--sizes must be comma-separated integers, got {args.sizes!r}")
-        if any(s < 8 for s in sizes):
-            parser.error("--sizes: at least 8 cells per side (subdomains of 4 cells)")
+        cell_sizes(parser, args.sizes)
     if args.solvers:
         unknown = sorted(set(args.solvers.split(",")) - set(BY_NAME))
         if unknown:

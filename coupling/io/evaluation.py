@@ -33,9 +33,8 @@ import numpy as np
 
 import bem_cpp
 from coupling.options import hmatrix_tol
-from fem_py.mesh import interpolate_p1
-from fem_py.mesh.location import locate
-from fem_py.mesh.location3d import locate_in_tetrahedra, on_surface
+from fem_py.mesh.location import P1Points
+from fem_py.mesh.location3d import on_surface
 from coupling.io.stress import cell_gradients, stress_tensors
 from coupling.io.figure_data import plane_square
 from fem_py.polyline import closest_on_polygon, inside_polygon, polygon_corners, segment_lengths
@@ -153,32 +152,36 @@ def evaluate(fields: dict, points: np.ndarray, material: Any = None) -> dict[str
     """
     d = fields["x"].shape[1]
     points = np.asarray(points, dtype=float).reshape(-1, d)
-    values = (_evaluate_in_body if d == 3 else _evaluate_in_plane)(fields, points)
+    values, located, of = (_evaluate_in_body if d == 3 else _evaluate_in_plane)(fields, points)
     if material is not None:
-        values["sigma"] = _stress(fields, points, values["where"], material)
+        cell = np.full(len(points), -1, dtype=np.int64)
+        cell[of] = located.cells()
+        values["sigma"] = _stress(fields, points, values["where"], cell, material)
     return values
 
 
-def _stress(fields: dict, points: np.ndarray, where: np.ndarray, material: Any) -> np.ndarray:
-    """sigma (m, d, d) at ``points``: the body's inside, the medium's outside, NaN on Gamma."""
+def _stress(
+    fields: dict, points: np.ndarray, where: np.ndarray, cell: np.ndarray, material: Any
+) -> np.ndarray:
+    """sigma (m, d, d) at ``points``: the body's inside (``cell`` (m,), the cell of the
+    mesh that holds each point, -1 none), the medium's outside, NaN on Gamma."""
     x, u = np.asarray(fields["x"], dtype=float), _columns(fields["u"])
     d = x.shape[1]
     sigma = np.full((len(points), d, d), np.nan)
-    inside = np.flatnonzero(where == "inside")
+    inside = np.flatnonzero((where == "inside") & (cell >= 0))
     if inside.size:
         cells = fields["cells"] if d == 3 else fields["triangles"]
-        cell, _ = (locate_in_tetrahedra if d == 3 else locate)(x, cells, points[inside])
-        found = cell >= 0
-        gradients = cell_gradients(x, cells[cell[found]], u)
-        sigma[inside[found]] = stress_tensors(gradients, material)[:, :d, :d]
+        gradients = cell_gradients(x, cells[cell[inside]], u)
+        sigma[inside] = stress_tensors(gradients, material)[:, :d, :d]
     outside = where == "outside"
     if outside.any():
         sigma[outside] = exterior_stress_from_fields(fields, points[outside])
     return sigma
 
 
-def _evaluate_in_plane(fields: dict, points: np.ndarray) -> dict[str, np.ndarray]:
-    """:func:`evaluate` for the fields of a planar run, without the stress."""
+def _evaluate_in_plane(fields: dict, points: np.ndarray) -> tuple[dict, P1Points, np.ndarray]:
+    """:func:`evaluate` for the fields of a planar run, without the stress; with the
+    location in the mesh of the points it interpolated u_h at, and their indices."""
     nodes = fields["boundary_x"]
     diameter = float(np.linalg.norm(nodes.max(axis=0) - nodes.min(axis=0)))
     dist, seg, t = closest_on_polygon(points, nodes)
@@ -188,7 +191,8 @@ def _evaluate_in_plane(fields: dict, points: np.ndarray) -> dict[str, np.ndarray
     inside = inside_polygon(points, nodes) & ~on
     outside = ~inside & ~on
     values = _columns(fields["u"])
-    u_h = [interpolate_p1(fields["x"], fields["triangles"], c, points[inside]) for c in values.T]
+    located = P1Points(fields["x"], fields["triangles"], points[inside])
+    u_h = [located.interpolate(c) for c in values.T]
     u, ue = _empty(len(points), fields)
     u[inside] = np.stack(u_h, axis=1)
     nxt = (seg[on] + 1) % len(nodes)
@@ -199,7 +203,7 @@ def _evaluate_in_plane(fields: dict, points: np.ndarray) -> dict[str, np.ndarray
     if outside.any():
         ue[outside] = _columns(exterior_from_fields(fields, points[outside]))
     where = np.where(inside, "inside", np.where(on, "boundary", "outside"))
-    return {"where": where, "u": _squeezed(u), "ue": _squeezed(ue)}
+    return {"where": where, "u": _squeezed(u), "ue": _squeezed(ue)}, located, np.flatnonzero(inside)
 
 
 def _columns(values: np.ndarray) -> np.ndarray:
@@ -219,18 +223,16 @@ def _squeezed(values: np.ndarray) -> np.ndarray:
     return values[:, 0] if values.shape[1] == 1 else values
 
 
-def _evaluate_in_body(fields: dict, points: np.ndarray) -> dict[str, np.ndarray]:
+def _evaluate_in_body(fields: dict, points: np.ndarray) -> tuple[dict, P1Points, np.ndarray]:
     """:func:`evaluate` for the fields of a body in R^3 (module docstring), without the
-    stress."""
+    stress; with the location in the mesh of the points (all) and their indices."""
     nodes, surface = fields["boundary_x"], fields["boundary_triangles"]
     diameter = float(np.linalg.norm(nodes.max(axis=0) - nodes.min(axis=0)))
     triangle, bary = on_surface(nodes, surface, points, ON_GAMMA * diameter)
     on = triangle >= 0
     values = _columns(fields["u"])
-    u = np.stack(
-        [interpolate_p1(fields["x"], fields["cells"], c, points) for c in values.T],
-        axis=1,
-    )
+    located = P1Points(fields["x"], fields["cells"], points)
+    u = np.stack([located.interpolate(c) for c in values.T], axis=1)
     inside = np.isfinite(u).all(axis=1) & ~on
     outside = ~inside & ~on
     u[outside] = np.nan
@@ -241,4 +243,4 @@ def _evaluate_in_body(fields: dict, points: np.ndarray) -> dict[str, np.ndarray]
     if outside.any():
         ue[outside] = _columns(exterior_from_fields(fields, points[outside]))
     where = np.where(inside, "inside", np.where(on, "boundary", "outside"))
-    return {"where": where, "u": _squeezed(u), "ue": _squeezed(ue)}
+    return {"where": where, "u": _squeezed(u), "ue": _squeezed(ue)}, located, np.arange(len(points))

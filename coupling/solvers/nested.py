@@ -24,7 +24,7 @@ from coupling.options import SolverOptions
 from coupling.solvers.records import Monitor
 from coupling.solvers.solution import Solution, solve
 from fem_py.dofs import gather_p1
-from fem_py.mesh import interpolate_p1
+from fem_py.mesh.location import P1Points
 from fem_py.mesh.location3d import on_surface
 from fem_py.polyline import closest_on_polygon
 
@@ -60,10 +60,8 @@ def prolong(coarse: Any, coarse_solution: Solution, fine: Any) -> tuple[np.ndarr
     # sorting
     fine_cells = fine.V.mesh.topology.index_map(dim).size_global
     divisions = max(1, round((fine_cells / len(cells)) ** (1.0 / dim)))
-    u = np.stack(
-        [interpolate_p1(x, cells, values[:, k], points, divisions=divisions) for k in range(d)],
-        axis=1,
-    )
+    located = P1Points(x, cells, points, divisions=divisions)  # once for the d components
+    u = np.stack([located.interpolate(values[:, k]) for k in range(d)], axis=1)
     lost = np.isnan(u).any(axis=1)  # on the coarse boundary up to round-off (or outside a
     if lost.any():  # coarse curved surface): the nearest coarse node
         u[lost] = values[cKDTree(x).query(points[lost])[1]]

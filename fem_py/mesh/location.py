@@ -11,7 +11,7 @@ from scipy.spatial import cKDTree
 
 from fem_py.mesh.location3d import locate_in_tetrahedra
 
-__all__ = ["locate", "interpolate_p1", "lattice_weights"]
+__all__ = ["locate", "interpolate_p1", "lattice_weights", "P1Points"]
 
 #: Point location: a grid square holding more triangles than this (a strongly graded
 #: mesh, the squares being as large as the largest triangle) switches :func:`locate` to
@@ -161,20 +161,18 @@ def lattice_weights(divisions: int, corners: int = 3) -> np.ndarray:
     return np.array([c for c in w if max(c) < n], dtype=float).reshape(-1, corners) / n
 
 
-def _at_lattice_points(
-    x: np.ndarray, cells: np.ndarray, values: np.ndarray, points: np.ndarray, divisions: int
-) -> tuple[np.ndarray, np.ndarray]:
-    """(values, matched) at the points that coincide, up to 1 / GRID_LEVELS of the mesh's
-    extent, with a node (the nodal value) or a lattice point of a cell (triangles or
-    tetrahedra) for ``divisions`` (the P1 value there: the same weights of the corner
-    values): every node of an n-fold uniform refinement of the mesh, by sorting instead of
-    a point location."""
-    weights = lattice_weights(divisions, cells.shape[1])
+def _lattice_match(
+    x: np.ndarray, cells: np.ndarray, points: np.ndarray, weights: np.ndarray
+) -> np.ndarray:
+    """(m,): for each point that coincides, up to 1 / GRID_LEVELS of the mesh's extent,
+    with a node or a lattice point of a cell (triangles or tetrahedra; ``weights`` of
+    :func:`lattice_weights`), its index in the nodes followed by the cells' lattice points
+    (:func:`_lattice_values`); -1 for the others: every node of an n-fold uniform
+    refinement of the mesh, by sorting instead of a point location."""
     d = x.shape[1]
-    coords, known = x, values
+    coords = x
     if len(weights):  # not for divisions = 1: the nodes alone (no cells' corners gathered)
         coords = np.concatenate([x, np.matmul(weights, x[cells]).reshape(-1, d)])
-        known = np.concatenate([values, (values[cells] @ weights.T).ravel()])
     origin = x.min(axis=0)
     quantum = max(float(np.ptp(x, axis=0).max()), 1e-300) / GRID_LEVELS[d]
     keys = _grid_keys(coords, origin, quantum)
@@ -187,9 +185,79 @@ def _at_lattice_points(
     at = np.empty(len(wanted), dtype=np.int64)
     at[by_key] = np.minimum(np.searchsorted(keys, wanted[by_key]), len(keys) - 1)
     matched = (keys[at] == wanted) & (wanted >= 0)
-    out = np.full(len(points), np.nan)
-    out[matched] = known[order[at[matched]]]
-    return out, matched
+    return np.where(matched, order[at], -1)
+
+
+def _lattice_values(values: np.ndarray, cells: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """The P1 function of nodal ``values`` at the nodes, then at the cells' lattice points
+    (the same weights of the corner values), as :func:`_lattice_match` numbers them."""
+    if not len(weights):
+        return values
+    return np.concatenate([values, (values[cells] @ weights.T).ravel()])
+
+
+class P1Points:
+    """Points located once in a mesh of triangles or tetrahedra, for the P1 interpolation
+    of any number of functions on it (:func:`interpolate_p1` of one) and the cells that
+    hold them.
+
+    The mesh: triangles (``cells`` (T, 3), nodes ``x`` (N, 2), or (N, 3) with z left
+    out, points (m, 2)) or tetrahedra (``cells`` (T, 4), x (N, 3), points (m, 3)).
+    Points at nodes and at the lattice points of the ``divisions``-fold uniform refinement
+    (all nodes of such a refinement: nested iteration; 2 gives the edge midpoints; by
+    default 2 on triangles, 1 on tetrahedra) are matched by sorting; the others are
+    located (:func:`locate`, :func:`fem_py.mesh.location3d.locate_in_tetrahedra`)."""
+
+    def __init__(
+        self, x: np.ndarray, cells: np.ndarray, points: np.ndarray, *, divisions: int | None = None
+    ):
+        cells = np.asarray(cells, dtype=np.int64)
+        self._tetrahedra = cells.ndim == 2 and cells.shape[1] == 4
+        d = 3 if self._tetrahedra else 2
+        self._x, self._cells = np.asarray(x, dtype=float)[:, :d], cells
+        self._points = np.asarray(points, dtype=float).reshape(-1, d)
+        self._empty = len(self._x) == 0 or len(cells) == 0
+        m = len(self._points)
+        self._lattice, self._weights = np.full(m, -1, dtype=np.int64), np.zeros((0, d + 1))
+        self._rest = np.arange(m)
+        self._cell, self._bary = np.full(m, -1, dtype=np.int64), np.zeros((m, d + 1))
+        if self._empty:
+            return
+        if divisions is None:
+            divisions = 1 if self._tetrahedra else 2
+        self._weights = lattice_weights(max(int(divisions), 1), cells.shape[1])
+        self._lattice = _lattice_match(self._x, cells, self._points, self._weights)
+        self._rest = np.flatnonzero(self._lattice < 0)
+        self._cell, self._bary = self._locate(self._points[self._rest])
+
+    def _locate(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return (locate_in_tetrahedra if self._tetrahedra else locate)(self._x, self._cells, points)
+
+    def interpolate(self, values: np.ndarray) -> np.ndarray:
+        """(m,): the P1 function of nodal ``values`` (N,) at the points; NaN outside the
+        mesh."""
+        out = np.full(len(self._points), np.nan)
+        if self._empty:
+            return out
+        values = np.asarray(values, dtype=float)
+        matched = self._lattice >= 0
+        out[matched] = _lattice_values(values, self._cells, self._weights)[self._lattice[matched]]
+        found = self._cell >= 0
+        corners = values[self._cells[self._cell[found]]]
+        out[self._rest[found]] = np.einsum("ij,ij->i", self._bary[found], corners)
+        return out
+
+    def cells(self) -> np.ndarray:
+        """(m,): the cell that holds each point, -1 outside the mesh: as located, and for
+        the points matched by sorting (a node, a point on a side) the cell :func:`locate`
+        (or ``locate_in_tetrahedra``) gives, located now."""
+        cell = np.full(len(self._points), -1, dtype=np.int64)
+        if self._empty:
+            return cell
+        cell[self._rest] = self._cell
+        matched = np.flatnonzero(self._lattice >= 0)
+        cell[matched] = self._locate(self._points[matched])[0]
+        return cell
 
 
 def interpolate_p1(
@@ -200,27 +268,7 @@ def interpolate_p1(
     *,
     divisions: int | None = None,
 ) -> np.ndarray:
-    """The P1 function of nodal ``values`` at ``points``; NaN outside the mesh.
-
-    The mesh: triangles (``cells`` (T, 3), nodes ``x`` (N, 2), or (N, 3) with z left
-    out, points (m, 2)) or tetrahedra (``cells`` (T, 4), x (N, 3), points (m, 3)).
-    Points at nodes and at the lattice points of the ``divisions``-fold uniform refinement
-    (all nodes of such a refinement: nested iteration; 2 gives the edge midpoints; by
-    default 2 on triangles, 1 on tetrahedra) are matched by sorting; the others are
-    located (:func:`locate`, :func:`fem_py.mesh.location3d.locate_in_tetrahedra`)."""
-    cells = np.asarray(cells, dtype=np.int64)
-    tetrahedra = cells.ndim == 2 and cells.shape[1] == 4
-    d = 3 if tetrahedra else 2
-    x = np.asarray(x, dtype=float)[:, :d]
-    points = np.asarray(points, dtype=float).reshape(-1, d)
-    values = np.asarray(values, dtype=float)
-    if len(x) == 0 or len(cells) == 0:
-        return np.full(len(points), np.nan)
-    if divisions is None:
-        divisions = 1 if tetrahedra else 2
-    out, matched = _at_lattice_points(x, cells, values, points, max(int(divisions), 1))
-    rest = np.flatnonzero(~matched)
-    cell, bary = (locate_in_tetrahedra if tetrahedra else locate)(x, cells, points[rest])
-    found = cell >= 0
-    out[rest[found]] = np.einsum("ij,ij->i", bary[found], values[cells[cell[found]]])
-    return out
+    """The P1 function of nodal ``values`` at ``points``; NaN outside the mesh
+    (:class:`P1Points`, the mesh and ``divisions`` as there; for several functions at the
+    same points, locate them once with :class:`P1Points`)."""
+    return P1Points(x, cells, points, divisions=divisions).interpolate(values)

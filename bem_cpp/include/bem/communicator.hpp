@@ -5,6 +5,7 @@
 // rank calls them in the same order with the same counts.
 #include <Eigen/Dense>
 #include <functional>
+#include <memory>
 #include <vector>
 
 #include "bem/geometry.hpp"
@@ -23,5 +24,19 @@ struct Communicator {
   /// `counts`) and MPI_Allgatherv copies it.
   std::function<Eigen::MatrixXd(const Eigen::MatrixXd& partial, const std::vector<Index>& counts)> allreduce;
 };
+
+/// The sum over the ranks of `comm` of the (m, k) blocks `partial`, each entry of which
+/// one rank alone holds (the others hold 0 there: e.g. a principal submatrix of a
+/// distributed HMatrix, whose blocks no two ranks share), so that the sum is exact in any
+/// order; the rows are reduced in even shares (Communicator::allreduce). Without a
+/// communicator of more than one rank: `partial` itself. Collective.
+inline Eigen::MatrixXd sum_of_held_entries(const std::shared_ptr<const Communicator>& comm,
+                                           const Eigen::MatrixXd& partial) {
+  if (!comm || comm->size == 1) return partial;
+  const Index m = partial.rows();
+  std::vector<Index> counts(static_cast<std::size_t>(comm->size), m / comm->size);
+  for (Index r = 0; r < m % comm->size; ++r) ++counts[static_cast<std::size_t>(r)];
+  return comm->allreduce(partial, counts);
+}
 
 }  // namespace bem

@@ -2,6 +2,7 @@
 // Far-field panel pairs in vector batches (src/far_field.cpp): the tensor Gauss rule of
 // far_blocks (log_integrals.hpp) evaluated for many panels j of one panel i at once,
 // with the loop over j vectorised; used by the assembly (operators.cpp).
+#include <utility>
 #include <vector>
 
 #include "bem/geometry.hpp"
@@ -25,6 +26,35 @@ void far_field_points(const Panel& pi, const PanelArrays& panels, Index j0, Inde
 
 /// Largest batch of far-field pairs evaluated together.
 constexpr int kFarBatch = 32;
+
+/// The far pairs of one panel or point, queued by their number of Gauss points p and
+/// handed to `evaluate(p, js, m)` (the m <= kFarBatch queued indices js, all of p points)
+/// whenever kFarBatch of one p are queued, and the rest by finish(): the batches of
+/// far_blocks_batch, far_kji_batch, far_point_sum and their like.
+template <typename Evaluate>
+class FarBatches {
+ public:
+  explicit FarBatches(Evaluate evaluate) : evaluate_(std::move(evaluate)) {}
+  /// Queue the pair `index` of 1 <= p <= kMaxFarPoints points.
+  void push(int p, Index index) {
+    queue_[p][queued_[p]++] = index;
+    if (queued_[p] == kFarBatch) flush(p);
+  }
+  /// Evaluate every pair still queued.
+  void finish() {
+    for (int p = 1; p <= kMaxFarPoints; ++p)
+      if (queued_[p] > 0) flush(p);
+  }
+
+ private:
+  void flush(int p) {
+    evaluate_(p, static_cast<const Index*>(queue_[p]), queued_[p]);
+    queued_[p] = 0;
+  }
+  Evaluate evaluate_;
+  Index queue_[kMaxFarPoints + 1][kFarBatch];
+  int queued_[kMaxFarPoints + 1] = {};
+};
 
 /// Blocks v and kij of the pairs (i, j) for one panel i, stored by columns j:
 /// v[a][b][j], kij[a][b][j].

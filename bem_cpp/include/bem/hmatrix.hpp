@@ -114,8 +114,11 @@ class HMatrix {
     Index rank() const { return std::max(factors.rank(), static_cast<Index>(u_single.cols())); }
   };
 
+  /// With a communicator, `row_bounds` are the ranks' ranges when the caller has them
+  /// already (distributed_row_bounds of these trees and options, e.g. from choosing the
+  /// near field of its rows, rank_triangles); empty: computed here.
   HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const ClusterTree> cols, const EntrySource& entries,
-          const HMatrixOptions& options);
+          const HMatrixOptions& options, const std::vector<Index>& row_bounds = {});
   /// The rows [row_begin, row_end) of the permuted row order only (no communicator:
   /// apply_local and apply_partial; apply() needs all rows).
   HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const ClusterTree> cols, const EntrySource& entries,
@@ -124,10 +127,12 @@ class HMatrix {
   /// each block's entries from one EntryBlock (matrix 0: all/low_rank, the others:
   /// companion_all/companion_low_rank): matrices that share their work block by block, as
   /// the surface V_h and W_h (one ACA of the single-layer kernel, surface_entries.hpp).
+  /// `row_bounds` as in the constructor (computed once for the family when empty).
   static std::vector<std::shared_ptr<const HMatrix>> family(std::shared_ptr<const ClusterTree> rows,
                                                             std::shared_ptr<const ClusterTree> cols,
                                                             const EntrySource& entries, int count,
-                                                            const HMatrixOptions& options);
+                                                            const HMatrixOptions& options,
+                                                            const std::vector<Index>& row_bounds = {});
 
   Index rows() const { return rows_->size(); }
   Index cols() const { return cols_->size(); }
@@ -168,9 +173,10 @@ class HMatrix {
  private:
   std::shared_ptr<const ClusterTree> rows_, cols_;
   struct Unfilled {};
-  /// The rows of this rank (communicator) without any block yet.
+  /// The rows of this rank (communicator; its range from `row_bounds`, computed when
+  /// empty) without any block yet.
   HMatrix(std::shared_ptr<const ClusterTree> rows, std::shared_ptr<const ClusterTree> cols,
-          const HMatrixOptions& options, Unfilled);
+          const HMatrixOptions& options, const std::vector<Index>& row_bounds, Unfilled);
   void build(const EntrySource& entries, const HMatrixOptions& options);
   /// The leaves of the block tree in the held rows (entries not yet computed).
   void plan(const HMatrixOptions& options);

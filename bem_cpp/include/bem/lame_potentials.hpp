@@ -63,44 +63,24 @@ constexpr double kPanelSplitLengths = 1.5;
 std::array<double, 3> lame_double_layer_kernel(const Lame& m, int d, const double* r, const double* n, const double* w);
 Mat3 lame_double_layer_gradient_kernel(const Lame& m, int d, const double* r, const double* n, const double* w);
 
-/// u_e at the (k, d) points of Omega_e, as a (k, d) matrix. dirichlet: the d n nodal values of
-/// the P1 trace v, node-major (d * node + component); traction: d n (P1, nodal) or d m (P0,
-/// per panel / triangle) values of t = sigma(u_e) n, node-major; a: d values. Throws
+/// The field of the exterior medium that exterior_field evaluates.
+enum class LameField {
+  Displacement,  ///< u_e, a (k, d) matrix
+  Stress,        ///< sigma(u_e), a (k, d * d) matrix: row-major d x d per point (symmetric)
+};
+
+/// `field` at the (k, d) points of Omega_e. dirichlet: the d n nodal values of the P1 trace v,
+/// node-major (d * node + component); traction: d n (P1, nodal) or d m (P0, per panel /
+/// triangle) values of t = sigma(u_e) n, node-major; a: d values. Throws
 /// std::invalid_argument (one line) for a point inside Omega or on Gamma (within 1e-12 of the
 /// bounding-box diameter), wrong sizes, non-finite data or an invalid medium (mu > 0,
 /// -1 < nu < 1/2).
-Matrix exterior_displacement(const Polygon& polygon, const Lame& medium, const Eigen::Ref<const Vector>& dirichlet,
-                             const Eigen::Ref<const Vector>& traction, const Eigen::Ref<const Points>& points,
-                             const Eigen::Ref<const Vector>& a, Space traction_space);
-Matrix exterior_displacement(const Surface& surface, const Lame& medium, const Eigen::Ref<const Vector>& dirichlet,
-                             const Eigen::Ref<const Vector>& traction, const Eigen::Ref<const Vertices>& points,
-                             const Eigen::Ref<const Vector>& a, Space traction_space);
-
-/// sigma(u_e) at the points, as a (k, d * d) matrix: row-major d x d per point (symmetric).
-/// Arguments and refusals as exterior_displacement.
-Matrix exterior_stress(const Polygon& polygon, const Lame& medium, const Eigen::Ref<const Vector>& dirichlet,
-                       const Eigen::Ref<const Vector>& traction, const Eigen::Ref<const Points>& points,
-                       const Eigen::Ref<const Vector>& a, Space traction_space);
-Matrix exterior_stress(const Surface& surface, const Lame& medium, const Eigen::Ref<const Vector>& dirichlet,
-                       const Eigen::Ref<const Vector>& traction, const Eigen::Ref<const Vertices>& points,
-                       const Eigen::Ref<const Vector>& a, Space traction_space);
-
-/// The same on raw arrays (for the bindings): the polygon's (n, 2) nodes, or the surface's
-/// (n, 3) vertices and (m, 3) triangles (validated as Polygon and Surface do).
-Matrix exterior_displacement(const Eigen::Ref<const Points>& nodes, const Lame& medium,
-                             const Eigen::Ref<const Vector>& dirichlet, const Eigen::Ref<const Vector>& traction,
-                             const Eigen::Ref<const Points>& points, const Eigen::Ref<const Vector>& a,
-                             Space traction_space);
-Matrix exterior_displacement(VerticesRef vertices, TrianglesRef triangles, const Lame& medium,
-                             const Eigen::Ref<const Vector>& dirichlet, const Eigen::Ref<const Vector>& traction,
-                             const Eigen::Ref<const Vertices>& points, const Eigen::Ref<const Vector>& a,
-                             Space traction_space);
-Matrix exterior_stress(const Eigen::Ref<const Points>& nodes, const Lame& medium,
-                       const Eigen::Ref<const Vector>& dirichlet, const Eigen::Ref<const Vector>& traction,
-                       const Eigen::Ref<const Points>& points, const Eigen::Ref<const Vector>& a, Space traction_space);
-Matrix exterior_stress(VerticesRef vertices, TrianglesRef triangles, const Lame& medium,
-                       const Eigen::Ref<const Vector>& dirichlet, const Eigen::Ref<const Vector>& traction,
-                       const Eigen::Ref<const Vertices>& points, const Eigen::Ref<const Vector>& a,
-                       Space traction_space);
+Matrix exterior_field(LameField field, const Polygon& polygon, const Lame& medium,
+                      const Eigen::Ref<const Vector>& dirichlet, const Eigen::Ref<const Vector>& traction,
+                      const Eigen::Ref<const Points>& points, const Eigen::Ref<const Vector>& a, Space traction_space);
+Matrix exterior_field(LameField field, const Surface& surface, const Lame& medium,
+                      const Eigen::Ref<const Vector>& dirichlet, const Eigen::Ref<const Vector>& traction,
+                      const Eigen::Ref<const Vertices>& points, const Eigen::Ref<const Vector>& a,
+                      Space traction_space);
 
 }  // namespace bem

@@ -115,6 +115,28 @@ enum class PairRelation {
   StartToEnd,  ///< the start node of panel i is the end node of panel j
 };
 
+/// The relation of panels i and j of a closed polygon of n panels (panel i runs from node i
+/// to node i + 1 mod n).
+inline PairRelation panel_relation(Index i, Index j, Index n) {
+  if (i == j) return PairRelation::Coincident;
+  if (j == (i + 1) % n) return PairRelation::EndToStart;
+  if (j == (i + n - 1) % n) return PairRelation::StartToEnd;
+  return PairRelation::Separated;
+}
+
+/// The shape functions of two adjacent panels of lengths a (panel i) and b (panel j) as
+/// c0 + c1 * (distance from their common node): ci[shape][0 or 1] on panel i, cj on panel
+/// j, the common node the end of panel i (i_vertex_at_end, PairRelation::EndToStart) or its
+/// start. The coefficients of the adjacent pairs' monomial moments.
+struct AdjacentShapes {
+  double ci[2][2], cj[2][2];
+  AdjacentShapes(double a, double b, bool i_vertex_at_end)
+      : ci{{i_vertex_at_end ? 0.0 : 1.0, i_vertex_at_end ? 1.0 / a : -1.0 / a},
+           {i_vertex_at_end ? 1.0 : 0.0, i_vertex_at_end ? -1.0 / a : 1.0 / a}},
+        cj{{i_vertex_at_end ? 1.0 : 0.0, i_vertex_at_end ? -1.0 / b : 1.0 / b},
+           {i_vertex_at_end ? 0.0 : 1.0, i_vertex_at_end ? 1.0 / b : -1.0 / b}} {}
+};
+
 /// Blocks of a panel pair, choosing the method from the relation and the distance.
 /// With with_k = false only v is computed (kij, kji are left unset).
 void pair_blocks(const Panel& pi, const Panel& pj, PairRelation relation, bool with_k, PairBlocks& out);
@@ -145,6 +167,30 @@ inline int far_field_points(const Panel& pi, const Panel& pj, const std::array<d
   return 0;
 }
 inline int far_field_points(const Panel& pi, const Panel& pj) { return far_field_points(pi, pj, gauss_thresholds()); }
+
+/// The integration of a panel pair chosen by its relation and distance, as pair_blocks and
+/// direction_blocks (lame_polygon.hpp) choose it: coincident() for the same panel,
+/// adjacent() for two panels with a common node, far(p) for a separated pair that the
+/// tensor Gauss rule of p = far_field_points(pi, pj) > 0 points integrates, near() for the
+/// other separated pairs.
+template <typename Coincident, typename Adjacent, typename Far, typename Near>
+void integrate_pair(const Panel& pi, const Panel& pj, PairRelation relation, Coincident&& coincident,
+                    Adjacent&& adjacent, Far&& far, Near&& near) {
+  switch (relation) {
+    case PairRelation::Coincident:
+      return coincident();
+    case PairRelation::EndToStart:
+    case PairRelation::StartToEnd:
+      return adjacent();
+    case PairRelation::Separated:
+      break;
+  }
+  const int p = far_field_points(pi, pj);
+  if (p > 0)
+    far(p);
+  else
+    near();
+}
 
 /// Integrals of one panel seen from a point z off the panel, trial shape b = 0, 1:
 ///   log[b] = int_p log|z - y| phi_b(y) ds_y,   dl[b] = int_p (z - y).n/|z - y|^2 phi_b(y) ds_y.

@@ -24,14 +24,20 @@ using RowSparse = Eigen::SparseMatrix<double, Eigen::RowMajor, Index>;
 std::vector<std::vector<Index>> near_pairs(const Surface& s, const std::vector<char>& triangles = {});
 
 /// The triangles whose near pairs one rank of a distributed operator needs: those with a
-/// vertex in the rank's rows (distributed_row_bounds) of one of the H-matrices `matrices`
-/// (each its cluster tree, of the vertices or of their d node-major dofs, and whether it is
-/// symmetric) built with `options`. A near field of these triangles' pairs alone is exact
-/// in the rows and columns of every such vertex, the only ones the rank's blocks read, and
-/// costs about 1 / P of the whole. Empty (every triangle) when `options` has no
-/// communicator of more than one rank.
+/// vertex in the rank's rows of one of the H-matrices `matrices` (each its cluster tree, of
+/// the vertices or of their d node-major dofs, and the ranks' row bounds, its
+/// distributed_row_bounds, which its constructor then takes as they are) built with
+/// `options`. A near field of these triangles' pairs alone is exact in the rows and
+/// columns of every such vertex, the only ones the rank's blocks read, and costs about
+/// 1 / P of the whole. Empty (every triangle) when `options` has no communicator of more
+/// than one rank.
 std::vector<char> rank_triangles(const Surface& s, const HMatrixOptions& options,
-                                 const std::vector<std::pair<const ClusterTree*, bool>>& matrices);
+                                 const std::vector<std::pair<const ClusterTree*, std::vector<Index>>>& matrices);
+
+/// The ranks' row bounds of a distributed HMatrix on `tree` (rows and columns) with
+/// `options`, symmetric or not (distributed_row_bounds); empty without a communicator of
+/// more than one rank.
+std::vector<Index> surface_row_bounds(const ClusterTree& tree, const HMatrixOptions& options, bool symmetric);
 
 class SurfaceNearField {
  public:
