@@ -26,6 +26,22 @@ M_s's own factor only where a step solves with the whole M_s), n_s the Signorini
 unknowns, which grow like N^(2/3).
 Fitted to whole `fembem solve` runs of the box with figures and XDMF (16^3 .. 128^3
 cubes) and library runs (12^3 .. 24^3; docs/design/memory.md, "Bodies in R^3").
+
+The elastic equation (``[problem] equation = "elasticity"``) is the same model with its
+own constants (:func:`memory_constants`): :func:`equation_size` gives the counts d per
+node (N, n and n_s the unknowns) and ``DomainSize.components`` = d, which selects the
+constants and settles ``"auto"`` as the solve does, on the boundary nodes n / d at the
+Lame S_h's crossover (bem_cpp.defaults: 1,000 nodes of a polygon, 2,000 vertices of a
+surface). On the plane the scalar constants hold per unknown (DOF_BYTES_ELASTIC a tenth
+more: the vector forms) and the dense Lame operators are five (2 n_v)^2 arrays as
+Laplace's. On a body: 9 KB per unknown (three times the scalar 3 KB: 45 matrix entries per
+row, the lattice multigrid's levels of the vector space), the dense Lame operators nine
+(3 n_v)^2 arrays, the H-matrix S_h 55 KB per boundary unknown (its blocks in double
+precision; about 8x the Laplace S_h per vertex) and M_s = E^T W_h E, read from the
+H-matrices but held as a dense float64 n_s x n_s block, with one factor as large:
+SIGNORINI_BYTES_ELASTIC_3D n_s^2 on every rank. Fitted to whole `fembem solve` runs of
+bench/elastic.py's square (8,450 .. 2.1e6 dofs) and box (6^3 .. 48^3 cubes), figures and
+XDMF (docs/design/memory.md, "Elasticity (2026-12-07)").
 """
 from __future__ import annotations
 
@@ -84,19 +100,19 @@ SIGNORINI_BYTES_3D = 4.0 + 8.0
 #: The constants of the elastic equation (``[problem] equation = "elasticity"``), per
 #: unknown (d per node), per boundary unknown n (d per node of Gamma) and per gap unknown
 #: n_s; fitted to whole `fembem solve` runs of bench/elastic.py's square and box with
-#: figures and XDMF (docs/design/memory.md, "Elasticity (2026-12-07)", which names the runs
-#: each constant is fitted to). The plane: 1,150 B per unknown (the square at 526,338 and
-#: 994,050 dofs, H-matrix S_h); the dense Lame operators five (2 n)^2 arrays as Laplace's
-#: (the square at 132,098 and 526,338 dofs with the dense S_h: 1.01-1.02x without
-#: refitting); the H-matrix S_h and M_s are below 4% of any peak measured (n <= 8,200,
-#: n_s <= 2,050) and keep the scalar 8 KB and the 3D 16 B.
+#: figures and XDMF (docs/design/memory.md, "Elasticity (2026-12-07)", which lists the
+#: runs). The plane: 1,150 B per unknown (the square at 526,338 .. 2,101,250 dofs with the
+#: H-matrix S_h: 1.09-1.10 KB measured, rounded up); the dense Lame operators five
+#: (2 n_v)^2 arrays as Laplace's (the dense S_h asked for at 132,098 and 526,338 dofs:
+#: 1.04, 1.06x); the H-matrix S_h and M_s are below 3% of any peak measured (n <= 8,192,
+#: n_s <= 2,046): the scalar 8 KB and the body's 16 B, not fitted.
 DOF_BYTES_ELASTIC = 1.15e3
 BOUNDARY_BYTES_ELASTIC = 5 * 8.0
 HMATRIX_BOUNDARY_BYTES_ELASTIC = 8e3
 SIGNORINI_BYTES_ELASTIC = 16.0
 #: The body: 9 KB per unknown and 55 KB per boundary unknown (the Lame H-matrix S_h, about
 #: 8x the Laplace S_h per vertex, its blocks in double precision), least squares over the
-#: box's H-matrix runs at 16^3 (forced), 20^3, 24^3, 32^3 and 48^3 cubes, rounded up; the
+#: box's H-matrix runs from 16^3 to 48^3 cubes (8.4 KB and 48 KB), rounded up; the
 #: dense Lame operators nine (3 n)^2 arrays, 72 n^2 bytes (the box at 12^3 .. 20^3 cubes,
 #: dense); M_s = E^T W_h E in double precision and one factor of a block as large,
 #: 16 n_s^2 bytes on every rank (fixed, not fitted: 0.7 GB of the 48^3 run's 6 GB).
