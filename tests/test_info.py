@@ -343,3 +343,23 @@ def test_memory_estimate_of_elasticity_uses_its_constants_and_the_lame_crossover
         + sizing.SIGNORINI_BYTES_3D * 15**4,
         rel=1e-12,
     )
+
+
+def test_info_of_an_elastic_box_counts_the_lame_s_h_on_its_nodes(tmp_path):
+    """`fembem info` of the elastic 32^3 box (closed form): 3 unknowns per node, the Lame
+    H-matrix S_h from 2,000 boundary vertices on, its tolerance from the 6,146 vertices as
+    the solve sets it (coupling.options.hmatrix_tol), and the elastic model's estimate."""
+    from types import SimpleNamespace
+
+    from coupling.app.sizing import equation_size, memory_estimate
+    from fem_py.mesh.solid import box_size
+
+    config = _elastic_config(tmp_path / "box.toml", 3, 0.5 / 32)
+    report = json.loads(run_cli("info", str(config), "--json").stdout)
+    assert report["sizes"] == "closed form" and report["components"] == 3
+    assert (report["dofs"], report["boundary_dofs"]) == (3 * 33**3, 3 * 6_146)
+    assert report["boundary_operator"] == "hmatrix"
+    assert report["hmatrix_tol"] == pytest.approx(0.25 / 6_146)
+    elastic = SimpleNamespace(problem=SimpleNamespace(equation="elasticity", tangential="slip"))
+    size = equation_size(box_size(32, 0.5, ["bottom"]), elastic)
+    assert report["memory_estimate_bytes"] == memory_estimate(size, 1)
