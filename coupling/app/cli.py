@@ -165,7 +165,7 @@ def build_parser() -> argparse.ArgumentParser:
         "the choices the run will make (solver, preconditioner, S_h dense or a hierarchical "
         "matrix with its tolerance, the coarser levels of a nested solve) and the estimated "
         "peak memory of `fembem solve`. --json prints every field: dofs, boundary_dofs, "
-        "signorini_dofs, subdomains, h_min, h_max, dim, memory_estimate_bytes, "
+        "signorini_dofs, subdomains, h_min, h_max, dim, components, memory_estimate_bytes, "
         "memory_available_bytes, mpi_ranks, sizes, domain, method, preconditioner, "
         "boundary_operator, hmatrix_tol, nested_levels (their h), adaptive_steps.",
     )

@@ -32,16 +32,17 @@ own constants (:func:`memory_constants`): :func:`equation_size` gives the counts
 node (N, n and n_s the unknowns) and ``DomainSize.components`` = d, which selects the
 constants and settles ``"auto"`` as the solve does, on the boundary nodes n / d at the
 Lame S_h's crossover (bem_cpp.defaults: 1,000 nodes of a polygon, 2,000 vertices of a
-surface). On the plane the scalar constants hold per unknown (DOF_BYTES_ELASTIC a tenth
-more: the vector forms) and the dense Lame operators are five (2 n_v)^2 arrays as
-Laplace's. On a body: 9 KB per unknown (three times the scalar 3 KB: 45 matrix entries per
-row, the lattice multigrid's levels of the vector space), the dense Lame operators nine
-(3 n_v)^2 arrays, the H-matrix S_h 55 KB per boundary unknown (its blocks in double
-precision; about 8x the Laplace S_h per vertex) and M_s = E^T W_h E, read from the
-H-matrices but held as a dense float64 n_s x n_s block, with one factor as large:
-SIGNORINI_BYTES_ELASTIC_3D n_s^2 on every rank. Fitted to whole `fembem solve` runs of
-bench/elastic.py's square (8,450 .. 2.1e6 dofs) and box (6^3 .. 48^3 cubes), figures and
-XDMF (docs/design/memory.md, "Elasticity (2026-12-07)").
+surface). On the plane the scalar constants hold (DOF_BYTES_ELASTIC a tenth more per
+unknown) and the dense Lame operators are five (2 n_v)^2 arrays as Laplace's. On a body
+the dense Lame operators are nine (3 n_v)^2 arrays, M_s = E^T W_h E (read from the
+H-matrices of S_h, held as a dense float64 n_s x n_s block) and one factor as large are
+SIGNORINI_BYTES_ELASTIC_3D n_s^2 on every rank, and the Lame H-matrix S_h (its blocks in
+double precision, about 8x the Laplace S_h per vertex) is three quarters of the peak: its
+bytes per boundary unknown grow with n (60 KB at 20^3 cubes, 90 KB at 32^3 and 40^3), which
+the least squares of DOF_BYTES_ELASTIC_3D (9 KB) and HMATRIX_BOUNDARY_BYTES_ELASTIC_3D
+(55 KB) share between the two terms: refit both together (bench/elastic_memory.py --fit).
+Fitted to whole `fembem solve` runs of bench/elastic.py's square (2,178 .. 2.1e6 dofs) and
+box (6^3 .. 48^3 cubes), figures and XDMF (docs/design/memory.md, "Elasticity (2026-12-07)").
 """
 from __future__ import annotations
 
