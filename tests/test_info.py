@@ -337,6 +337,7 @@ def test_memory_estimate_of_elasticity_uses_its_constants_and_the_lame_crossover
     size = sizing.equation_size(box_size(16, 0.5, ["bottom"]), config)
     assert (size.components, size.dofs, size.boundary_dofs) == (3, 3 * 17**3, 3 * 1_538)
     assert size.signorini_dofs == 3 * 15**2  # "slip": the normal gap and two slips
+    assert sizing.equation_size(size, config) is size  # the counts are the equation's
     base = sizing.PROCESS_BYTES + sizing.DOF_BYTES_ELASTIC_3D * size.dofs
     base += sizing.SIGNORINI_BYTES_ELASTIC_3D * size.signorini_dofs**2
     dense = sizing.memory_estimate(size, 1, plots=False, boundary_operator="dense")

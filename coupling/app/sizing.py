@@ -204,8 +204,10 @@ def _gb(n: float) -> str:
 def equation_size(size: DomainSize, config: RunConfig) -> DomainSize:
     """The unknowns of ``config``'s equation on a domain of ``size`` (P1 node counts): the
     same for the scalar equation; for elasticity d per node, and d gap unknowns per
-    Signorini node with ``"slip"`` (the normal gap and the slips), one with ``"stick"``."""
-    if config.problem.equation == "scalar":
+    Signorini node with ``"slip"`` (the normal gap and the slips), one with ``"stick"``;
+    ``size.components`` = d (counts that are already the equation's are returned as
+    they are)."""
+    if config.problem.equation == "scalar" or size.components > 1:
         return size
     d = size.dim
     gaps = d if config.problem.tangential == "slip" else 1
