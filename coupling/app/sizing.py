@@ -111,12 +111,14 @@ DOF_BYTES_ELASTIC = 1.15e3
 BOUNDARY_BYTES_ELASTIC = 5 * 8.0
 HMATRIX_BOUNDARY_BYTES_ELASTIC = 8e3
 SIGNORINI_BYTES_ELASTIC = 16.0
-#: The body: 9 KB per unknown and 55 KB per boundary unknown (the Lame H-matrix S_h, about
-#: 8x the Laplace S_h per vertex, its blocks in double precision), least squares over the
-#: box's H-matrix runs from 16^3 to 48^3 cubes (8.4 KB and 48 KB), rounded up; the
-#: dense Lame operators nine (3 n)^2 arrays, 72 n^2 bytes (the box at 12^3 .. 20^3 cubes,
-#: dense); M_s = E^T W_h E in double precision and one factor of a block as large,
-#: 16 n_s^2 bytes on every rank (fixed, not fitted: 0.7 GB of the 48^3 run's 6 GB).
+#: The body: 9 KB per unknown and 55 KB per boundary unknown (the Lame H-matrix S_h, its
+#: blocks in double precision), least squares over the box's one-rank H-matrix runs from
+#: 16^3 to 48^3 cubes (bench/elastic_memory.json: 8.4 KB and 48 KB), rounded up. S_h is
+#: three quarters of the peak at 32^3 and 40^3 and its bytes per boundary unknown grow
+#: with n, so the two share it: refit both together (bench/elastic_memory.py --fit) when
+#: S_h changes. The dense Lame operators nine (3 n_v)^2 arrays, 72 n^2 bytes (the box at
+#: 12^3 .. 20^3 cubes, dense); M_s = E^T W_h E in double precision and one factor of a
+#: block as large, 16 n_s^2 bytes on every rank (not fitted: 0.7 GB of the 48^3 run's 6 GB).
 DOF_BYTES_ELASTIC_3D = 9e3
 BOUNDARY_BYTES_ELASTIC_3D = 9 * 8.0
 HMATRIX_BOUNDARY_BYTES_ELASTIC_3D = 55e3
