@@ -165,7 +165,7 @@ def build_parser() -> argparse.ArgumentParser:
         "the choices the run will make (solver, preconditioner, S_h dense or a hierarchical "
         "matrix with its tolerance, the coarser levels of a nested solve) and the estimated "
         "peak memory of `fembem solve`. --json prints every field: dofs, boundary_dofs, "
-        "signorini_dofs, subdomains, h_min, h_max, dim, memory_estimate_bytes, "
+        "signorini_dofs, subdomains, h_min, h_max, dim, components, memory_estimate_bytes, "
         "memory_available_bytes, mpi_ranks, sizes, domain, method, preconditioner, "
         "boundary_operator, hmatrix_tol, nested_levels (their h), adaptive_steps.",
     )
@@ -381,7 +381,8 @@ def _info(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
 
     from coupling.app.from_config import domain_from_config, estimated_size, planned_size
     from coupling.app.info import info_lines, info_report
-    from coupling.app.sizing import memory_available, memory_estimate, size_of_domain
+    from coupling.app.sizing import equation_size, memory_available, memory_estimate
+    from coupling.app.sizing import size_of_domain
 
     comm = MPI.COMM_WORLD
     config = _problem_inputs(args)
@@ -393,7 +394,7 @@ def _info(args: argparse.Namespace, interrupts: InterruptHandler) -> int:
         if (
             size is None
             or memory_estimate(
-                size,
+                equation_size(size, config),
                 comm.size,
                 plots=config.output.plots,
                 boundary_operator=config.solver.boundary_operator,

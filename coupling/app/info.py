@@ -53,7 +53,9 @@ def info_report(comm: Any, config: RunConfig, *, size: Any, how: str) -> dict[st
         "method": solver.method,
         "preconditioner": preconditioner_kind(solver.preconditioner, dim, components),
         "boundary_operator": operator,
-        "hmatrix_tol": _hmatrix_tol(size.boundary_dofs, dim) if operator == "hmatrix" else None,
+        "hmatrix_tol": (
+            _hmatrix_tol(size.boundary_dofs // components, dim) if operator == "hmatrix" else None
+        ),
         "nested_levels": [float(c.geometry.h) for c in levels],
         "adaptive_steps": config.adapt.steps,
     }
@@ -61,7 +63,8 @@ def info_report(comm: Any, config: RunConfig, *, size: Any, how: str) -> dict[st
 
 def _hmatrix_tol(boundary_dofs: int, dim: int) -> float:
     """The tolerance of the H-matrix S_h (``coupling.options.hmatrix_tol``, from the count
-    of boundary dofs instead of the nodes)."""
+    of boundary nodes instead of their coordinates; the elastic S_h's too: its nodes, not
+    its d unknowns per node)."""
     if dim == 2:
         return HMATRIX_TOL
     return min(HMATRIX_TOL_3D_MAX, HMATRIX_TOL_3D_SCALE / max(int(boundary_dofs), 1))

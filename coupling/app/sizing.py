@@ -26,6 +26,23 @@ M_s's own factor only where a step solves with the whole M_s), n_s the Signorini
 unknowns, which grow like N^(2/3).
 Fitted to whole `fembem solve` runs of the box with figures and XDMF (16^3 .. 128^3
 cubes) and library runs (12^3 .. 24^3; docs/design/memory.md, "Bodies in R^3").
+
+The elastic equation (``[problem] equation = "elasticity"``) is the same model with its
+own constants (:func:`memory_constants`): :func:`equation_size` gives the counts d per
+node (N, n and n_s the unknowns) and ``DomainSize.components`` = d, which selects the
+constants and settles ``"auto"`` as the solve does, on the boundary nodes n / d at the
+Lame S_h's crossover (bem_cpp.defaults: 1,000 nodes of a polygon, 2,000 vertices of a
+surface). On the plane the scalar constants hold (DOF_BYTES_ELASTIC a tenth more per
+unknown) and the dense Lame operators are five (2 n_v)^2 arrays as Laplace's. On a body
+the dense Lame operators are nine (3 n_v)^2 arrays, M_s = E^T W_h E (read from the
+H-matrices of S_h, held as a dense float64 n_s x n_s block) and one factor as large are
+SIGNORINI_BYTES_ELASTIC_3D n_s^2 on every rank, and the Lame H-matrix S_h (its blocks in
+double precision, about 8x the Laplace S_h per vertex) is three quarters of the peak: its
+bytes per boundary unknown grow with n (60 KB at 20^3 cubes, 90 KB at 32^3 and 40^3), which
+the least squares of DOF_BYTES_ELASTIC_3D (9 KB) and HMATRIX_BOUNDARY_BYTES_ELASTIC_3D
+(55 KB) share between the two terms: refit both together (bench/elastic_memory.py --fit).
+Fitted to whole `fembem solve` runs of bench/elastic.py's square (2,178 .. 2.1e6 dofs) and
+box (6^3 .. 48^3 cubes), figures and XDMF (docs/design/memory.md, "Elasticity (2026-12-07)").
 """
 from __future__ import annotations
 
@@ -48,6 +65,16 @@ __all__ = [
     "BOUNDARY_BYTES_3D",
     "HMATRIX_BOUNDARY_BYTES_3D",
     "SIGNORINI_BYTES_3D",
+    "DOF_BYTES_ELASTIC",
+    "DOF_BYTES_ELASTIC_3D",
+    "BOUNDARY_BYTES_ELASTIC",
+    "BOUNDARY_BYTES_ELASTIC_3D",
+    "HMATRIX_BOUNDARY_BYTES_ELASTIC",
+    "HMATRIX_BOUNDARY_BYTES_ELASTIC_3D",
+    "SIGNORINI_BYTES_ELASTIC",
+    "SIGNORINI_BYTES_ELASTIC_3D",
+    "MemoryConstants",
+    "memory_constants",
     "memory_estimate",
     "memory_available",
     "check_memory",
@@ -71,21 +98,88 @@ HMATRIX_BOUNDARY_BYTES_3D = 20e3
 SIGNORINI_BYTES_3D = 4.0 + 8.0
 
 
+#: The constants of the elastic equation (``[problem] equation = "elasticity"``), per
+#: unknown (d per node), per boundary unknown n (d per node of Gamma) and per gap unknown
+#: n_s; fitted to whole `fembem solve` runs of bench/elastic.py's square and box with
+#: figures and XDMF (docs/design/memory.md, "Elasticity (2026-12-07)", which lists the
+#: runs). The plane: 1,150 B per unknown (the square at 526,338 .. 2,101,250 dofs with the
+#: H-matrix S_h: 1.09-1.10 KB measured, rounded up); the dense Lame operators five
+#: (2 n_v)^2 arrays as Laplace's (the dense S_h asked for at 132,098 and 526,338 dofs:
+#: 1.04, 1.06x); the H-matrix S_h and M_s are below 3% of any peak measured (n <= 8,192,
+#: n_s <= 2,046): the scalar 8 KB and the body's 16 B, not fitted.
+DOF_BYTES_ELASTIC = 1.15e3
+BOUNDARY_BYTES_ELASTIC = 5 * 8.0
+HMATRIX_BOUNDARY_BYTES_ELASTIC = 8e3
+SIGNORINI_BYTES_ELASTIC = 16.0
+#: The body: 9 KB per unknown and 55 KB per boundary unknown (the Lame H-matrix S_h, its
+#: blocks in double precision), least squares over the box's one-rank H-matrix runs from
+#: 16^3 to 48^3 cubes (bench/elastic_memory.json: 8.4 KB and 48 KB), rounded up. S_h is
+#: three quarters of the peak at 32^3 and 40^3 and its bytes per boundary unknown grow
+#: with n, so the two share it: refit both together (bench/elastic_memory.py --fit) when
+#: S_h changes. The dense Lame operators nine (3 n_v)^2 arrays, 72 n^2 bytes (the box at
+#: 12^3 .. 20^3 cubes, dense); M_s = E^T W_h E in double precision and one factor of a
+#: block as large, 16 n_s^2 bytes on every rank (not fitted: 0.7 GB of the 48^3 run's 6 GB).
+DOF_BYTES_ELASTIC_3D = 9e3
+BOUNDARY_BYTES_ELASTIC_3D = 9 * 8.0
+HMATRIX_BOUNDARY_BYTES_ELASTIC_3D = 55e3
+SIGNORINI_BYTES_ELASTIC_3D = 16.0
+
+
+@dataclasses.dataclass(frozen=True)
+class MemoryConstants:
+    """The fitted bytes of one equation on one kind of domain: per dof, per n^2 (the dense
+    boundary matrices), per boundary dof n (the H-matrix S_h) and per n_s^2 (the dense M_s
+    of the amg preconditioner; 0 where the model has none)."""
+
+    dof: float
+    dense_boundary: float
+    hmatrix_boundary: float
+    signorini: float
+
+
+def memory_constants(components: int, dim: int) -> MemoryConstants:
+    """The constants of the scalar equation (``components`` 1) or of elasticity (d) in
+    ``dim`` dimensions (read from the module's names at each call: they can be updated)."""
+    if components == 1 and dim == 2:
+        return MemoryConstants(DOF_BYTES, BOUNDARY_BYTES, HMATRIX_BOUNDARY_BYTES, 0.0)
+    if components == 1:
+        return MemoryConstants(
+            DOF_BYTES_3D, BOUNDARY_BYTES_3D, HMATRIX_BOUNDARY_BYTES_3D, SIGNORINI_BYTES_3D
+        )
+    if dim == 2:
+        return MemoryConstants(
+            DOF_BYTES_ELASTIC,
+            BOUNDARY_BYTES_ELASTIC,
+            HMATRIX_BOUNDARY_BYTES_ELASTIC,
+            SIGNORINI_BYTES_ELASTIC,
+        )
+    return MemoryConstants(
+        DOF_BYTES_ELASTIC_3D,
+        BOUNDARY_BYTES_ELASTIC_3D,
+        HMATRIX_BOUNDARY_BYTES_ELASTIC_3D,
+        SIGNORINI_BYTES_ELASTIC_3D,
+    )
+
+
 def memory_estimate(
     size: DomainSize, ranks: int = 1, *, plots: bool = True, boundary_operator: str = "auto"
 ) -> int:
     """Bytes of peak resident memory of a solve of ``size`` on ``ranks`` ranks (all ranks
-    together), with or without the plots, for ``[solver] boundary_operator``."""
-    solid = size.dim == 3
+    together), with or without the plots, for ``[solver] boundary_operator``; ``size`` the
+    counts of the equation (:func:`equation_size`: ``size.components`` unknowns per node)."""
+    c = memory_constants(size.components, size.dim)
     per_rank = PROCESS_BYTES + (PLOT_PROCESS_BYTES if plots else 0.0)
-    per_dof = (DOF_BYTES_3D if solid else DOF_BYTES) + (PLOT_DOF_BYTES if plots else 0.0)
+    per_dof = c.dof + (PLOT_DOF_BYTES if plots else 0.0)
     n = float(size.boundary_dofs)
-    if boundary_operator_kind(boundary_operator, size.boundary_dofs, size.dim) == "hmatrix":
-        boundary = (HMATRIX_BOUNDARY_BYTES_3D if solid else HMATRIX_BOUNDARY_BYTES) * n
+    # "auto" decides on the boundary nodes, with the crossover of the equation's kernel
+    kernel = "laplace" if size.components == 1 else "lame"
+    nodes = size.boundary_dofs // size.components
+    if boundary_operator_kind(boundary_operator, nodes, size.dim, kernel=kernel) == "hmatrix":
+        boundary = c.hmatrix_boundary * n
     else:
-        boundary = (BOUNDARY_BYTES_3D if solid else BOUNDARY_BYTES) * n**2
-    if solid:  # the dense M_s of the amg preconditioner, on every rank
-        boundary += ranks * SIGNORINI_BYTES_3D * float(size.signorini_dofs) ** 2
+        boundary = c.dense_boundary * n**2
+    # the dense M_s of the amg preconditioner, on every rank
+    boundary += ranks * c.signorini * float(size.signorini_dofs) ** 2
     return int(ranks * per_rank + per_dof * size.dofs + boundary)
 
 
@@ -112,13 +206,16 @@ def _gb(n: float) -> str:
 def equation_size(size: DomainSize, config: RunConfig) -> DomainSize:
     """The unknowns of ``config``'s equation on a domain of ``size`` (P1 node counts): the
     same for the scalar equation; for elasticity d per node, and d gap unknowns per
-    Signorini node with ``"slip"`` (the normal gap and the slips), one with ``"stick"``."""
-    if config.problem.equation == "scalar":
+    Signorini node with ``"slip"`` (the normal gap and the slips), one with ``"stick"``;
+    ``size.components`` = d (counts that are already the equation's are returned as
+    they are)."""
+    if config.problem.equation == "scalar" or size.components > 1:
         return size
     d = size.dim
     gaps = d if config.problem.tangential == "slip" else 1
     return dataclasses.replace(
         size,
+        components=d,
         dofs=d * size.dofs,
         boundary_dofs=d * size.boundary_dofs,
         signorini_dofs=gaps * size.signorini_dofs,

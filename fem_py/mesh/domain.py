@@ -114,6 +114,10 @@ class DomainSize:
         The shortest and the longest fine facet.
     dim
         2 (a planar domain) or 3 (a body).
+    components
+        Unknowns per node: 1 (the P1 counts above); d once the counts are those of the
+        elastic equation (``coupling.app.sizing.equation_size``: dofs and boundary_dofs d
+        per node).
     """
 
     dofs: int
@@ -123,6 +127,7 @@ class DomainSize:
     h_min: float
     h_max: float
     dim: int = 2
+    components: int = 1
 
 
 def is_positive_number(val: Any) -> bool:
