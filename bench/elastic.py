@@ -31,7 +31,7 @@ if __package__ in (None, ""):  # run as a script: the repository's root on the p
     sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from bench.solid import STAGES  # noqa: E402
-from bench.speed import _measured, linear_pipeline, run_solve  # noqa: E402
+from bench.speed import linear_pipeline, run_child, run_solve  # noqa: E402
 
 DEFAULT_SIZES = {2: (64, 128, 256), 3: (8, 16, 32)}
 
@@ -94,10 +94,7 @@ def run_pipeline(cells: int, dim: int) -> dict:
     """:func:`elasticity_pipeline` in its own process: wall time and its inner timings."""
     cmd = [sys.executable, str(Path(__file__).resolve()), "--pipeline", str(cells)]
     cmd += ["--dim", str(dim)]
-    status, out, err, wall, peak = _measured(cmd)
-    if status != 0:
-        raise RuntimeError(f"the elasticity pipeline failed: {err.strip().splitlines()[-1:]}")
-    return {"wall": wall, "peak_bytes": peak, **json.loads(out.strip().splitlines()[-1])}
+    return run_child(cmd, "elasticity pipeline")
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -187,9 +187,15 @@ def run_poisson(cells: int, dim: int = 2) -> dict:
     inner timings."""
     cmd = [sys.executable, str(Path(__file__).resolve()), "--poisson", str(cells)]
     cmd += ["--poisson-dim", str(dim)]
+    return run_child(cmd, "Poisson pipeline")
+
+
+def run_child(cmd: list[str], what: str) -> dict:
+    """A pipeline's child process ``cmd``: its wall time, its peak memory and the JSON
+    record it prints last; a RuntimeError naming ``what`` if it fails."""
     status, out, err, wall, peak = _measured(cmd)
     if status != 0:
-        raise RuntimeError(f"the Poisson pipeline failed: {err.strip().splitlines()[-1:]}")
+        raise RuntimeError(f"the {what} failed: {err.strip().splitlines()[-1:]}")
     return {"wall": wall, "peak_bytes": peak, **json.loads(out.strip().splitlines()[-1])}
 
 

@@ -98,18 +98,24 @@ def test_memory_estimate_of_a_box_within_1_5x_of_the_peak(tmp_path):
     assert 1 / 1.5 <= estimate / peak <= 1.5, (estimate, peak)
 
 
-def test_a_run_that_cannot_fit_is_refused(tmp_path):
-    config = tmp_path / "c.toml"
-    config.write_text(
-        BASE.format(shape="square", h=1e-5, d=1 / 16, structured="true", signorini='["bottom"]')
-    )
-    out = tmp_path / "out"
+def _assert_refused_before_the_mesh(config):
+    """`fembem solve` of ``config`` (alone in its folder) ends in one line, exit 2, naming
+    geometry.h and the memory available, with nothing written."""
+    out = config.parent / "out"
     proc = run_cli("solve", str(config), "--out", str(out), timeout=60)
     assert proc.returncode == 2
     (line,) = proc.stderr.strip().splitlines()
     assert line.startswith("fembem: error: the run needs about ") and "geometry.h" in line
     assert "GB are available" in line
-    assert not out.exists() and sorted(p.name for p in tmp_path.iterdir()) == ["c.toml"]
+    assert not out.exists() and sorted(p.name for p in config.parent.iterdir()) == [config.name]
+
+
+def test_a_run_that_cannot_fit_is_refused(tmp_path):
+    config = tmp_path / "c.toml"
+    config.write_text(
+        BASE.format(shape="square", h=1e-5, d=1 / 16, structured="true", signorini='["bottom"]')
+    )
+    _assert_refused_before_the_mesh(config)
     report = json.loads(run_cli("info", str(config), "--json").stdout)
     assert report["dofs"] == 50001**2 and report["memory_estimate_bytes"] > 1e11
 
@@ -304,13 +310,7 @@ def test_an_elastic_run_that_cannot_fit_is_refused(tmp_path, dim, structured):
         config.write_text(
             config.read_text().replace("[geometry]\n", "[geometry]\nstructured = false\n")
         )
-    out = tmp_path / "out"
-    proc = run_cli("solve", str(config), "--out", str(out), timeout=60)
-    assert proc.returncode == 2
-    (line,) = proc.stderr.strip().splitlines()
-    assert line.startswith("fembem: error: the run needs about ") and "geometry.h" in line
-    assert "GB are available" in line
-    assert not out.exists() and sorted(p.name for p in tmp_path.iterdir()) == ["c.toml"]
+    _assert_refused_before_the_mesh(config)
     info = run_cli("info", str(config), "--json", timeout=60)
     assert info.returncode == 0, info.stderr
     report = json.loads(info.stdout)
