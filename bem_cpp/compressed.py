@@ -14,7 +14,7 @@ from numpy.typing import ArrayLike, NDArray
 import bem_cpp._bem as _bem
 from bem_cpp import checks, defaults
 from bem_cpp.collectives import mpi_collectives
-from bem_cpp.dense import SingleMatrix
+from bem_cpp.dense import SingleMatrix, release_free_heap
 from bem_cpp.operators import cholesky, lame_cholesky
 
 
@@ -379,7 +379,7 @@ def _compressed_operator(
         ),
         single_precision=params.get("single_precision", False),
     )
-    _bem.release_free_heap()  # the set-up's freed scratch back to the system (bem/heap.hpp)
+    release_free_heap()  # the set-up's freed scratch back to the system
     if timings is not None:
         timings.update(setup=op.info.setup_seconds)
     return op

@@ -12,7 +12,7 @@ from numpy.typing import NDArray
 
 import bem_cpp._bem as _bem
 
-__all__ = ["SingleMatrix"]
+__all__ = ["SingleMatrix", "release_free_heap"]
 
 #: Rows of A[np.ix_(rows, cols)] gathered at a time (a band of 256 x n_s floats).
 _ROWS_PER_BAND = 256
@@ -84,3 +84,14 @@ class SingleMatrix(scipy.sparse.linalg.LinearOperator):
 
     def __array__(self, dtype: Any = None) -> NDArray:
         return self.to_dense() if dtype is None else self.to_dense().astype(dtype, copy=False)
+
+
+def release_free_heap() -> bool:
+    """Return the memory the C library's heaps keep after large temporaries are freed to
+    the system (glibc's ``malloc_trim``; bem/heap.hpp); True if some was returned.
+
+    An H-matrix set-up's near fields, or a dense block's products taken a block of rows at
+    a time, leave many freed allocations in the heaps, which the later large arrays
+    (mapped anew) cannot reuse: the elastic box at 48^3 cubes held 1.1 GB more without
+    it (docs/design/elasticity.md). Cheap (milliseconds); call it after such a stage."""
+    return bool(_bem.release_free_heap())

@@ -9,7 +9,7 @@ import numpy as np
 import scipy.linalg
 import scipy.sparse.linalg
 
-from bem_cpp.dense import SingleMatrix
+from bem_cpp.dense import SingleMatrix, release_free_heap
 
 __all__ = [
     "Preconditioner",
@@ -140,6 +140,7 @@ class DenseSignoriniBlock:
                 else np.zeros((0, 0))
             )
             self._signorini_factor = None
+            release_free_heap()  # the factor's pages, which the C library may keep
         return self._signorini_inverse
 
     @property

@@ -44,7 +44,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 import bem_cpp
-from bem_cpp.dense import SingleMatrix
+from bem_cpp.dense import SingleMatrix, release_free_heap
 from coupling.options import AMG_OPTIONS
 from coupling.preconditioners.base import DenseSignoriniBlock
 from coupling.preconditioners.lattice_multigrid import LatticeHierarchy, lattice_levels
@@ -96,6 +96,8 @@ def signorini_hypersingular(
     E = gap.matrix[rows].tocsc()  # the directions of the gap unknowns at those entries
     single = getattr(S, "single_precision", False)
     M = _turned(W, E, np.float32 if single else np.float64)
+    del W
+    release_free_heap()  # the blocks of rows' scratch: 1.1 GB at 48^3 cubes
     return SingleMatrix(M) if single else M
 
 
