@@ -35,14 +35,15 @@ Lame S_h's crossover (bem_cpp.defaults: 1,000 nodes of a polygon, 2,000 vertices
 surface). On the plane the scalar constants hold (DOF_BYTES_ELASTIC a tenth more per
 unknown) and the dense Lame operators are five (2 n_v)^2 arrays as Laplace's. On a body
 the dense Lame operators are nine (3 n_v)^2 arrays, M_s = E^T W_h E (read from the
-H-matrices of S_h, held as a dense float64 n_s x n_s block) and one factor as large are
-SIGNORINI_BYTES_ELASTIC_3D n_s^2 on every rank, and the Lame H-matrix S_h (its blocks in
-double precision, about 8x the Laplace S_h per vertex) is three quarters of the peak: its
-bytes per boundary unknown grow with n (60 KB at 20^3 cubes, 90 KB at 32^3 and 40^3), which
-the least squares of DOF_BYTES_ELASTIC_3D (9 KB) and HMATRIX_BOUNDARY_BYTES_ELASTIC_3D
-(55 KB) share between the two terms: refit both together (bench/elastic_memory.py --fit).
+H-matrices of S_h; single precision with them) and M_s^{-1} are SIGNORINI_BYTES_ELASTIC_3D
+n_s^2 on every rank, and the Lame H-matrix S_h (its blocks in single precision at the 3D
+tolerances, as the Laplace S_h's) is the largest part of the peak; the least squares of
+DOF_BYTES_ELASTIC_3D (2.5 KB) and HMATRIX_BOUNDARY_BYTES_ELASTIC_3D (50 KB) share it between
+the two terms (n / N falls only from 0.26 to 0.12 over the runs): refit both together
+(bench/elastic_memory.py --fit) when S_h changes.
 Fitted to whole `fembem solve` runs of bench/elastic.py's square (2,178 .. 2.1e6 dofs) and
-box (6^3 .. 48^3 cubes), figures and XDMF (docs/design/memory.md, "Elasticity (2026-12-07)").
+box (6^3 .. 48^3 cubes), figures and XDMF (docs/design/memory.md, "Elasticity (2026-12-07)"
+and "Refitted after the 48^3 cuts").
 """
 from __future__ import annotations
 
@@ -111,17 +112,17 @@ DOF_BYTES_ELASTIC = 1.15e3
 BOUNDARY_BYTES_ELASTIC = 5 * 8.0
 HMATRIX_BOUNDARY_BYTES_ELASTIC = 8e3
 SIGNORINI_BYTES_ELASTIC = 16.0
-#: The body: 9 KB per unknown and 55 KB per boundary unknown (the Lame H-matrix S_h, its
-#: blocks in double precision), least squares over the box's one-rank H-matrix runs from
-#: 16^3 to 48^3 cubes (bench/elastic_memory.json: 8.4 KB and 48 KB), rounded up. S_h is
-#: three quarters of the peak at 32^3 and 40^3 and its bytes per boundary unknown grow
-#: with n, so the two share it: refit both together (bench/elastic_memory.py --fit) when
-#: S_h changes. The dense Lame operators nine (3 n_v)^2 arrays, 72 n^2 bytes (the box at
-#: 12^3 .. 20^3 cubes, dense); M_s = E^T W_h E in double precision and one factor of a
-#: block as large, 16 n_s^2 bytes on every rank (not fitted: 0.7 GB of the 48^3 run's 6 GB).
-DOF_BYTES_ELASTIC_3D = 9e3
+#: The body: 2.5 KB per unknown and 50 KB per boundary unknown (the Lame H-matrix S_h, its
+#: blocks in single precision), least squares over the box's one-rank H-matrix runs from
+#: 20^3 to 48^3 cubes after the 48^3 cuts (bench/elastic_memory.json: 2.3 KB and 48.5 KB),
+#: rounded up; the two share S_h (its bytes per boundary unknown grow with n): refit both
+#: together (bench/elastic_memory.py --fit) when S_h changes. The dense Lame operators nine
+#: (3 n_v)^2 arrays, 72 n^2 bytes (the box at 12^3 .. 20^3 cubes, dense); M_s = E^T W_h E
+#: and M_s^{-1} (or a factor), 16 n_s^2 bytes on every rank (not fitted; 12 with M_s in
+#: single precision, the H-matrix runs: 0.5 GB of the 48^3 run's 3.8 GB).
+DOF_BYTES_ELASTIC_3D = 2.5e3
 BOUNDARY_BYTES_ELASTIC_3D = 9 * 8.0
-HMATRIX_BOUNDARY_BYTES_ELASTIC_3D = 55e3
+HMATRIX_BOUNDARY_BYTES_ELASTIC_3D = 50e3
 SIGNORINI_BYTES_ELASTIC_3D = 16.0
 
 
