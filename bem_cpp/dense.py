@@ -92,6 +92,8 @@ def release_free_heap() -> bool:
 
     An H-matrix set-up's near fields, or a dense block's products taken a block of rows at
     a time, leave many freed allocations in the heaps, which the later large arrays
-    (mapped anew) cannot reuse: the elastic box at 48^3 cubes held 1.1 GB more without
-    it (docs/design/elasticity.md). Cheap (milliseconds); call it after such a stage."""
+    (mapped anew) cannot reuse: 0.21 of the 0.55 GB resident after the Lame S_h's set-up
+    on the 24^3 box's surface, 0.44 GB when M_s^{-1} replaces its factor in the 48^3 box's
+    run (docs/design/elasticity.md, "The 48^3 peak"). Cheap (milliseconds); call it after
+    such a stage."""
     return bool(_bem.release_free_heap())
