@@ -403,7 +403,8 @@ def table(
             + _verdict(speedup, c["triad"], independent)
         )
         if independent is not None:
-            fraction = round(speedup / independent, 2)
+            # of the ratios as printed, as _verdict compares them
+            fraction = round(round(speedup, 2) / round(independent, 2), 2)
             text += (
                 f"{fraction:.0%} of the independent parts' speed-up (the box's target: at "
                 f"least {PARTS_FRACTION_TARGET:.0%}): "
