@@ -37,6 +37,7 @@ __all__ = [
     "OutputOptions",
     "RunConfig",
     "hmatrix_tol",
+    "hmatrix_tol_for",
     "parse_slice",
 ]
 
@@ -265,11 +266,17 @@ ESTIMATOR_HMATRIX_TOL_3D = 1e-6
 
 def hmatrix_tol(nodes: Any) -> float:
     """The H-matrix tolerance of the boundary operators on the boundary nodes ``nodes``
-    (N_Gamma, dim): ``HMATRIX_TOL`` in 2D; in 3D see ``HMATRIX_TOL_3D_SCALE``."""
-    boundary_dofs, dim = np.shape(nodes)
+    (N_Gamma, dim): :func:`hmatrix_tol_for` their count."""
+    return hmatrix_tol_for(*np.shape(nodes))
+
+
+def hmatrix_tol_for(boundary_nodes: int, dim: int) -> float:
+    """The H-matrix tolerance of the boundary operators on ``boundary_nodes`` nodes of a
+    boundary in R^``dim`` (the elastic operators' too: their nodes, not their d unknowns
+    per node): ``HMATRIX_TOL`` in 2D; in 3D see ``HMATRIX_TOL_3D_SCALE``."""
     if dim == 2:
         return HMATRIX_TOL
-    return min(HMATRIX_TOL_3D_MAX, HMATRIX_TOL_3D_SCALE / max(int(boundary_dofs), 1))
+    return min(HMATRIX_TOL_3D_MAX, HMATRIX_TOL_3D_SCALE / max(int(boundary_nodes), 1))
 
 
 #: The adaptive loop splits a subdomain (``fem_py.mesh.grading``) once its diameter over its

@@ -12,12 +12,7 @@ from __future__ import annotations
 import dataclasses
 from typing import Any
 
-from coupling.options import (
-    HMATRIX_TOL,
-    HMATRIX_TOL_3D_MAX,
-    HMATRIX_TOL_3D_SCALE,
-    RunConfig,
-)
+from coupling.options import RunConfig, hmatrix_tol_for
 
 __all__ = ["info_report", "info_lines"]
 
@@ -54,20 +49,13 @@ def info_report(comm: Any, config: RunConfig, *, size: Any, how: str) -> dict[st
         "preconditioner": preconditioner_kind(solver.preconditioner, dim, components),
         "boundary_operator": operator,
         "hmatrix_tol": (
-            _hmatrix_tol(size.boundary_dofs // components, dim) if operator == "hmatrix" else None
+            hmatrix_tol_for(size.boundary_dofs // components, dim)
+            if operator == "hmatrix"
+            else None
         ),
         "nested_levels": [float(c.geometry.h) for c in levels],
         "adaptive_steps": config.adapt.steps,
     }
-
-
-def _hmatrix_tol(boundary_dofs: int, dim: int) -> float:
-    """The tolerance of the H-matrix S_h (``coupling.options.hmatrix_tol``, from the count
-    of boundary nodes instead of their coordinates; the elastic S_h's too: its nodes, not
-    its d unknowns per node)."""
-    if dim == 2:
-        return HMATRIX_TOL
-    return min(HMATRIX_TOL_3D_MAX, HMATRIX_TOL_3D_SCALE / max(int(boundary_dofs), 1))
 
 
 def _bytes(n: float) -> str:
